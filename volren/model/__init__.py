@@ -1,0 +1,21 @@
+"""The data model: volumes, transfer functions, camera, render settings, scenes.
+
+Pure numpy and the standard library: nothing here imports VTK, PyVista, moderngl or Qt, so the
+model can be used and tested anywhere.
+"""
+
+from volren.model.camera import Camera
+from volren.model.settings import BlendMode, RenderSettings
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.volume import TetVolume, UniformVolume, Volume, VolumeKind
+
+__all__ = [
+    "BlendMode",
+    "Camera",
+    "RenderSettings",
+    "TetVolume",
+    "TransferFunction1D",
+    "UniformVolume",
+    "Volume",
+    "VolumeKind",
+]

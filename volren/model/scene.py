@@ -1,0 +1,141 @@
+"""A scene: what to render (volume, transfer function), from where (camera) and how (settings).
+
+Scene files are versioned JSON (see `Scene.to_dict`); the volume is referenced by path, the
+transfer function is stored inline. Reading and writing files is `volren.io.scene_io`'s job.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from volren.errors import VolrenError
+from volren.model.camera import Camera
+from volren.model.settings import RenderSettings
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.volume import Volume
+
+SCENE_FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class OrbitView:
+    """DESIGN.md's camera description: reset on the data bounds, then azimuth, elevation, zoom."""
+
+    azimuth: float = 0.0
+    elevation: float = 0.0
+    zoom: float = 1.0
+    parallel: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("azimuth", "elevation", "zoom"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+                raise VolrenError(f"camera {name} must be a finite number, got {value!r}")
+        if self.zoom <= 0:
+            raise VolrenError(f"camera zoom must be positive, got {self.zoom!r}")
+        if not isinstance(self.parallel, bool):
+            raise VolrenError(f"camera parallel must be true or false, got {self.parallel!r}")
+
+    def camera(self, bounds: Sequence[float], aspect: float = 1.0) -> Camera:
+        return Camera.orbit(bounds, self.azimuth, self.elevation, self.zoom, self.parallel, aspect)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"azimuth": self.azimuth, "elevation": self.elevation, "zoom": self.zoom, "parallel": self.parallel}
+
+
+def camera_from_dict(data: Mapping[str, Any]) -> OrbitView | Camera:
+    """An explicit camera when the dict has a 'position', else an orbit description."""
+    if not isinstance(data, Mapping):
+        raise VolrenError(f"'camera' must be a JSON object, got {type(data).__name__}")
+    if "position" in data:
+        return Camera.from_dict(dict(data))
+    unknown = set(data) - {"azimuth", "elevation", "zoom", "parallel"}
+    if unknown:
+        raise VolrenError(f"unknown camera keys {sorted(unknown)}; use azimuth, elevation, zoom, parallel")
+    return OrbitView(**data)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything `volren render` needs; `volume` is filled in by the loader, not serialized."""
+
+    volume_path: str | None
+    transfer_function: TransferFunction1D
+    camera: OrbitView | Camera = OrbitView()
+    settings: RenderSettings = RenderSettings()
+    scalars: str | None = None
+    renderer: str = "vtk"
+    size: tuple[int, int] = (512, 512)
+    volume: Volume | None = None
+    extra: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        w, h = self.size
+        if not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in (w, h)):
+            raise VolrenError(f"scene size must be two positive integers, got {self.size!r}")
+        object.__setattr__(self, "size", (w, h))
+
+    def resolved_camera(self, bounds: Sequence[float] | None = None) -> Camera:
+        """The camera to render with; an orbit view needs the volume's bounds."""
+        if isinstance(self.camera, Camera):
+            return self.camera
+        if bounds is None:
+            if self.volume is None:
+                raise VolrenError("the scene has no volume to place the camera on")
+            bounds = self.volume.bounds
+        w, h = self.size
+        return self.camera.camera(bounds, w / h)
+
+    def with_volume(self, volume: Volume) -> Scene:
+        return replace(self, volume=volume)
+
+    def to_dict(self) -> dict[str, Any]:
+        data: dict[str, Any] = dict(self.extra)
+        data.update(
+            {
+                "version": SCENE_FORMAT_VERSION,
+                "volume": {"path": self.volume_path, "scalars": self.scalars},
+                "transfer_function": self.transfer_function.to_dict(),
+                "camera": self.camera.to_dict(),
+                "settings": self.settings.to_dict(),
+                "renderer": self.renderer,
+                "size": list(self.size),
+            }
+        )
+        return data
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Scene:
+        """Build from scene JSON whose 'transfer_function' is already an inline dict."""
+        if not isinstance(data, Mapping):
+            raise VolrenError(f"a scene must be a JSON object, got {type(data).__name__}")
+        version = data.get("version")
+        if not isinstance(version, int) or isinstance(version, bool):
+            raise VolrenError(f"scene 'version' must be an integer, got {version!r}")
+        if version > SCENE_FORMAT_VERSION:
+            raise VolrenError(
+                f"scene format version {version} is newer than this volren reads (up to "
+                f"{SCENE_FORMAT_VERSION}); upgrade volren"
+            )
+        volume = data.get("volume") or {}
+        if not isinstance(volume, Mapping):
+            raise VolrenError("scene 'volume' must be an object with 'path' and optional 'scalars'")
+        if "transfer_function" not in data:
+            raise VolrenError("scene has no 'transfer_function'")
+        size = data.get("size", [512, 512])
+        if not isinstance(size, Sequence) or isinstance(size, str) or len(size) != 2:
+            raise VolrenError(f"scene 'size' must be [width, height], got {size!r}")
+        known = {"version", "volume", "transfer_function", "camera", "settings", "renderer", "size"}
+        return cls(
+            volume_path=volume.get("path"),
+            scalars=volume.get("scalars"),
+            transfer_function=TransferFunction1D.from_dict(data["transfer_function"]),
+            camera=camera_from_dict(data.get("camera", {})),
+            settings=RenderSettings.from_dict(data.get("settings", {})),
+            renderer=str(data.get("renderer", "vtk")),
+            size=(size[0], size[1]),
+            extra={k: v for k, v in data.items() if k not in known},
+        )

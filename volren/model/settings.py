@@ -1,0 +1,86 @@
+"""Render settings shared by every renderer (DESIGN.md's CLI flags map onto these fields)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field, fields, replace
+from enum import StrEnum
+from typing import Any
+
+from volren.errors import VolrenError
+
+
+class BlendMode(StrEnum):
+    """How samples along a ray combine."""
+
+    COMPOSITE = "composite"  # emission-absorption, front to back
+    MAXIMUM = "maximum"  # maximum intensity projection
+    MINIMUM = "minimum"  # minimum intensity projection
+    AVERAGE = "average"  # mean value along the ray
+
+    @classmethod
+    def parse(cls, value: str | BlendMode) -> BlendMode:
+        aliases = {"max": "maximum", "mip": "maximum", "min": "minimum", "mean": "average"}
+        text = str(value).lower()
+        try:
+            return cls(aliases.get(text, text))
+        except ValueError:
+            names = ", ".join(m.value for m in cls)
+            raise VolrenError(f"unknown blend mode {value!r}; choose one of {names}") from None
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """Quality and appearance settings; renderer-specific extras go in `options`.
+
+    `step` is the sample distance in units of the volume's characteristic length: the mean voxel
+    spacing for uniform grids, the mean tetrahedron edge for meshes. Shading parameters follow
+    vtkVolumeProperty (and its defaults).
+    """
+
+    step: float = 0.5
+    preintegration: bool = False
+    shade: bool = False
+    ambient: float = 0.1
+    diffuse: float = 0.7
+    specular: float = 0.2
+    specular_power: float = 10.0
+    blend_mode: BlendMode = BlendMode.COMPOSITE
+    jitter: bool = False
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "blend_mode", BlendMode.parse(self.blend_mode))
+        object.__setattr__(self, "options", dict(self.options))
+        for name in ("step", "ambient", "diffuse", "specular", "specular_power"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise VolrenError(f"render setting {name} must be a number, got {value!r}")
+            if not math.isfinite(value) or value < 0:
+                raise VolrenError(f"render setting {name} must be finite and >= 0, got {value!r}")
+        if self.step <= 0:
+            raise VolrenError(f"render setting step must be positive, got {self.step!r}")
+        for name in ("preintegration", "shade", "jitter"):
+            if not isinstance(getattr(self, name), bool):
+                raise VolrenError(f"render setting {name} must be true or false, got {getattr(self, name)!r}")
+
+    def with_(self, **changes: Any) -> RenderSettings:
+        """A copy with some fields changed; unknown names are an error that lists the valid ones."""
+        names = {f.name for f in fields(self)}
+        unknown = set(changes) - names
+        if unknown:
+            raise VolrenError(f"unknown render settings {sorted(unknown)}; valid: {sorted(names)}")
+        return replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        data = asdict(self)
+        data["blend_mode"] = str(self.blend_mode)
+        data["options"] = dict(self.options)
+        return data
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> RenderSettings:
+        if not isinstance(data, Mapping):
+            raise VolrenError(f"render settings must be a JSON object, got {type(data).__name__}")
+        return cls().with_(**dict(data))

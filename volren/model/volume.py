@@ -1,0 +1,241 @@
+"""Volumes: a uniform grid of samples, or a tetrahedral mesh with values at its points.
+
+Axis order: `UniformVolume.values` is indexed ``values[k, j, i]`` (z, y, x), C-contiguous, so x
+varies fastest in memory exactly as in VTK and in an OpenGL 3D texture. Spacing, origin and
+bounds are given in (x, y, z) order. Sample ``[k, j, i]`` sits at ``origin + (i, j, k) * spacing``.
+
+Non-finite values (NaN, +-Inf) are kept as they are, counted, and left out of the value range;
+every renderer treats them as transparent.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import ClassVar, Literal, TypeAlias
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.errors import VolrenError
+
+VolumeKind: TypeAlias = Literal["uniform", "tet"]
+
+#: Data types kept exactly as given; anything else is converted (and the conversion noted).
+KEPT_DTYPES = (np.uint8, np.int16, np.uint16, np.float32, np.float64)
+
+_CONVERSIONS = {
+    np.dtype(np.bool_): np.uint8,
+    np.dtype(np.int8): np.int16,
+    np.dtype(np.float16): np.float32,
+}
+
+
+def normalize_dtype(values: NDArray, what: str) -> tuple[NDArray, tuple[str, ...]]:
+    """Return `values` in a kept dtype, and a note when a conversion was needed.
+
+    Wide integers go to float64, which is exact up to 2**53: no real scalar field comes close.
+    """
+    dtype = values.dtype
+    if any(dtype == np.dtype(kept) for kept in KEPT_DTYPES):
+        return values, ()
+    if dtype in _CONVERSIONS:
+        target = np.dtype(_CONVERSIONS[dtype])
+    elif np.issubdtype(dtype, np.integer):
+        target = np.dtype(np.float64)
+    elif np.issubdtype(dtype, np.floating):
+        target = np.dtype(np.float64)
+    else:
+        raise VolrenError(f"{what}: scalar type {dtype} is not numeric")
+    return values.astype(target), (f"{what}: {dtype} values converted to {target}",)
+
+
+def finite_range(values: NDArray) -> tuple[tuple[float, float], int]:
+    """(min, max) over the finite values, and how many values are not finite."""
+    if np.issubdtype(values.dtype, np.integer):
+        return (float(values.min()), float(values.max())), 0
+    finite = np.isfinite(values)
+    n_bad = int(values.size - np.count_nonzero(finite))
+    if n_bad == values.size:
+        return (0.0, 0.0), n_bad
+    good = values[finite] if n_bad else values
+    return (float(good.min()), float(good.max())), n_bad
+
+
+def _as_triple(value, what: str) -> tuple[float, float, float]:
+    arr = np.asarray(value, dtype=np.float64).reshape(-1)
+    if arr.size == 1:
+        arr = np.repeat(arr, 3)
+    if arr.size != 3 or not np.all(np.isfinite(arr)):
+        raise VolrenError(f"{what} must be three finite numbers, got {value!r}")
+    return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
+@dataclass(frozen=True, eq=False)
+class UniformVolume:
+    """Samples on a regular, axis-aligned grid (VTK image data)."""
+
+    values: NDArray
+    spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    name: str = "volume"
+    notes: tuple[str, ...] = ()
+    value_range: tuple[float, float] = field(init=False)
+    nonfinite_count: int = field(init=False)
+
+    kind: ClassVar[VolumeKind] = "uniform"
+
+    def __post_init__(self) -> None:
+        values = np.asarray(self.values)
+        if values.ndim != 3:
+            raise VolrenError(f"{self.name}: a uniform volume needs 3D values, got shape {values.shape}")
+        if values.size == 0:
+            raise VolrenError(f"{self.name}: the grid is empty (shape {values.shape})")
+        if min(values.shape) < 2:
+            nx, ny, nz = values.shape[::-1]
+            raise VolrenError(
+                f"{self.name}: volume rendering needs at least 2 samples along each axis, "
+                f"got {nx}x{ny}x{nz}"
+            )
+        values, conversion = normalize_dtype(values, self.name)
+        values = np.ascontiguousarray(values)
+        spacing = _as_triple(self.spacing, f"{self.name}: spacing")
+        if min(spacing) <= 0:
+            raise VolrenError(f"{self.name}: spacing must be positive, got {spacing}")
+        origin = _as_triple(self.origin, f"{self.name}: origin")
+        value_range, n_bad = finite_range(values)
+        if n_bad == values.size:
+            raise VolrenError(f"{self.name}: no finite values (all {n_bad} are NaN or Inf)")
+        notes = tuple(self.notes) + conversion
+        if n_bad:
+            notes += (f"{self.name}: {n_bad} non-finite values (NaN/Inf), rendered transparent",)
+        for name, value in (
+            ("values", values),
+            ("spacing", spacing),
+            ("origin", origin),
+            ("notes", notes),
+            ("value_range", value_range),
+            ("nonfinite_count", n_bad),
+        ):
+            object.__setattr__(self, name, value)
+
+    @classmethod
+    def from_xyz(cls, values_xyz: NDArray, **kwargs) -> UniformVolume:
+        """Build from an array indexed ``[i, j, k]`` (x, y, z), as PyVista's reshape(order='F') gives."""
+        return cls(np.ascontiguousarray(np.asarray(values_xyz).transpose(2, 1, 0)), **kwargs)
+
+    @property
+    def dimensions(self) -> tuple[int, int, int]:
+        """Number of samples along x, y, z."""
+        nz, ny, nx = self.values.shape
+        return (nx, ny, nz)
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float, float, float]:
+        """(xmin, xmax, ymin, ymax, zmin, zmax), VTK's order."""
+        out = []
+        for o, s, n in zip(self.origin, self.spacing, self.dimensions):
+            out += [o, o + s * (n - 1)]
+        return tuple(out)  # type: ignore[return-value]
+
+    @property
+    def mean_spacing(self) -> float:
+        """The unit of the `step` render setting on uniform grids."""
+        return float(np.mean(self.spacing))
+
+    @property
+    def characteristic_length(self) -> float:
+        """Length that `RenderSettings.step` is measured in."""
+        return self.mean_spacing
+
+    def __repr__(self) -> str:
+        nx, ny, nz = self.dimensions
+        return (
+            f"UniformVolume({self.name!r}, {nx}x{ny}x{nz} {self.values.dtype}, "
+            f"spacing={self.spacing}, range={self.value_range})"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class TetVolume:
+    """A tetrahedral mesh with a scalar value at each point (linear inside each tetrahedron)."""
+
+    points: NDArray
+    tets: NDArray
+    values: NDArray
+    name: str = "mesh"
+    notes: tuple[str, ...] = ()
+    value_range: tuple[float, float] = field(init=False)
+    nonfinite_count: int = field(init=False)
+
+    kind: ClassVar[VolumeKind] = "tet"
+
+    def __post_init__(self) -> None:
+        points = np.ascontiguousarray(np.asarray(self.points, dtype=np.float64))
+        tets = np.asarray(self.tets)
+        values = np.asarray(self.values)
+        if points.ndim != 2 or points.shape[1] != 3:
+            raise VolrenError(f"{self.name}: points must have shape (n, 3), got {points.shape}")
+        if tets.ndim != 2 or tets.shape[1] != 4:
+            raise VolrenError(f"{self.name}: tets must have shape (m, 4), got {tets.shape}")
+        if len(tets) == 0 or len(points) == 0:
+            raise VolrenError(f"{self.name}: the mesh is empty ({len(points)} points, {len(tets)} tetrahedra)")
+        if not np.issubdtype(tets.dtype, np.integer):
+            raise VolrenError(f"{self.name}: tetrahedron indices must be integers, got {tets.dtype}")
+        tets = np.ascontiguousarray(tets, dtype=np.int64)
+        if tets.min() < 0 or tets.max() >= len(points):
+            raise VolrenError(
+                f"{self.name}: tetrahedra refer to points outside 0..{len(points) - 1} "
+                f"(indices {tets.min()}..{tets.max()})"
+            )
+        if not np.all(np.isfinite(points)):
+            raise VolrenError(f"{self.name}: point coordinates contain NaN or Inf")
+        if values.shape != (len(points),):
+            raise VolrenError(
+                f"{self.name}: need one scalar per point ({len(points)}), got shape {values.shape}"
+            )
+        values, conversion = normalize_dtype(values, self.name)
+        values = np.ascontiguousarray(values)
+        value_range, n_bad = finite_range(values)
+        if n_bad == values.size:
+            raise VolrenError(f"{self.name}: no finite values (all {n_bad} are NaN or Inf)")
+        notes = tuple(self.notes) + conversion
+        if n_bad:
+            notes += (f"{self.name}: {n_bad} non-finite point values (NaN/Inf), rendered transparent",)
+        for name, value in (
+            ("points", points),
+            ("tets", tets),
+            ("values", values),
+            ("notes", notes),
+            ("value_range", value_range),
+            ("nonfinite_count", n_bad),
+        ):
+            object.__setattr__(self, name, value)
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float, float, float]:
+        """(xmin, xmax, ymin, ymax, zmin, zmax) of the points, VTK's order."""
+        lo = self.points.min(axis=0)
+        hi = self.points.max(axis=0)
+        return (lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
+
+    @property
+    def mean_edge_length(self) -> float:
+        """Mean length of the six edges of every tetrahedron: the unit of the `step` setting."""
+        p = self.points[self.tets]
+        pairs = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+        lengths = [np.linalg.norm(p[:, a] - p[:, b], axis=1) for a, b in pairs]
+        return float(np.mean(lengths))
+
+    @property
+    def characteristic_length(self) -> float:
+        """Length that `RenderSettings.step` is measured in."""
+        return self.mean_edge_length
+
+    def __repr__(self) -> str:
+        return (
+            f"TetVolume({self.name!r}, {len(self.points)} points, {len(self.tets)} tets, "
+            f"{self.values.dtype}, range={self.value_range})"
+        )
+
+
+Volume: TypeAlias = UniformVolume | TetVolume

@@ -1,0 +1,236 @@
+"""The renderer contract: what every renderer (built-in or plugin) provides.
+
+A renderer holds a volume, a transfer function and settings, and turns a camera into an image:
+``render(camera, width, height)`` returns a float32 (H, W, 4) array of premultiplied linear RGBA
+composited over black, row 0 at the top (DESIGN.md). Renderers never see files or PyVista
+objects, only `volren.model` objects.
+
+Third parties implement `Renderer` (most simply by subclassing `RendererBase`) and register the
+class under the entry-point group ``volren.renderers``.
+"""
+
+from __future__ import annotations
+
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.errors import VolrenError
+from volren.model.camera import Camera
+from volren.model.settings import BlendMode, RenderSettings
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.volume import Volume, VolumeKind
+
+#: Called with the fraction done in [0, 1]; it may raise to cancel the frame.
+ProgressCallback = Callable[[float], None]
+
+MAX_IMAGE_SIDE = 16384
+
+
+@dataclass(frozen=True)
+class KindSupport:
+    """What a renderer can do with one kind of volume."""
+
+    tf_dims: frozenset[int] = frozenset({1})
+    preintegration: bool = False
+    shading: bool = False
+    blend_modes: frozenset[BlendMode] = frozenset({BlendMode.COMPOSITE})
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """The volume kinds a renderer accepts and, per kind, what it supports."""
+
+    kinds: Mapping[VolumeKind, KindSupport]
+    backend: str = "cpu"
+    summary: str = ""
+
+    @property
+    def volume_kinds(self) -> frozenset[str]:
+        return frozenset(self.kinds)
+
+    def unsupported_reason(
+        self,
+        volume_kind: str,
+        tf_dim: int = 1,
+        settings: RenderSettings | None = None,
+    ) -> str | None:
+        """Why this renderer cannot draw such a scene, or None when it can."""
+        support = self.kinds.get(volume_kind)  # type: ignore[call-overload]
+        if support is None:
+            kinds = ", ".join(sorted(self.kinds)) or "none"
+            return f"does not render {volume_kind} volumes (only {kinds})"
+        if tf_dim not in support.tf_dims:
+            return f"does not support {tf_dim}D transfer functions on {volume_kind} volumes"
+        if settings is not None:
+            if settings.preintegration and not support.preintegration:
+                return f"has no pre-integration for {volume_kind} volumes"
+            if settings.shade and not support.shading:
+                return f"has no shading for {volume_kind} volumes"
+            if settings.blend_mode not in support.blend_modes:
+                modes = ", ".join(sorted(str(m) for m in support.blend_modes))
+                return f"has no {settings.blend_mode} blend mode for {volume_kind} volumes (only {modes})"
+        return None
+
+    def describe(self) -> str:
+        parts = []
+        for kind, s in sorted(self.kinds.items()):
+            extras = [f"{'/'.join(str(d) for d in sorted(s.tf_dims))}D TF"]
+            if s.preintegration:
+                extras.append("pre-integration")
+            if s.shading:
+                extras.append("shading")
+            extras.append("blend " + "/".join(sorted(str(m) for m in s.blend_modes)))
+            parts.append(f"{kind} ({', '.join(extras)})")
+        return "; ".join(parts)
+
+
+@dataclass(frozen=True)
+class FrameStats:
+    """What the last frame cost: time, and renderer-specific work counters."""
+
+    ms: float
+    width: int
+    height: int
+    counters: Mapping[str, float] = field(default_factory=dict)
+
+
+@runtime_checkable
+class Renderer(Protocol):
+    """The structural contract a renderer class satisfies."""
+
+    name: ClassVar[str]
+    capabilities: ClassVar[Capabilities]
+
+    def set_volume(self, volume: Volume) -> None: ...
+
+    def set_transfer_function(self, tf: TransferFunction1D) -> None: ...
+
+    def set_settings(self, settings: RenderSettings) -> None: ...
+
+    def render(
+        self, camera: Camera, width: int, height: int, progress: ProgressCallback | None = None
+    ) -> NDArray[np.float32]: ...
+
+    def release(self) -> None: ...
+
+
+class RendererBase(ABC):
+    """State keeping, validation and timing shared by renderers; subclasses implement `_render`.
+
+    Subclasses may override the `_volume_changed`, `_tf_changed` and `_settings_changed` hooks to
+    invalidate only what an edit affects.
+    """
+
+    name: ClassVar[str] = ""
+    capabilities: ClassVar[Capabilities]
+
+    def __init__(self) -> None:
+        self._volume: Volume | None = None
+        self._tf: TransferFunction1D | None = None
+        self._settings = RenderSettings()
+        self._released = False
+        self.last_frame: FrameStats | None = None
+
+    # ------------------------------------------------------------------------- state
+    @property
+    def volume(self) -> Volume | None:
+        return self._volume
+
+    @property
+    def transfer_function(self) -> TransferFunction1D | None:
+        return self._tf
+
+    @property
+    def settings(self) -> RenderSettings:
+        return self._settings
+
+    def set_volume(self, volume: Volume) -> None:
+        self._check_alive()
+        reason = self.capabilities.unsupported_reason(volume.kind)
+        if reason:
+            raise VolrenError(f"renderer {self.name} {reason}")
+        self._volume = volume
+        self._volume_changed()
+
+    def set_transfer_function(self, tf: TransferFunction1D) -> None:
+        self._check_alive()
+        if not isinstance(tf, TransferFunction1D):
+            raise VolrenError(f"renderer {self.name} needs a TransferFunction1D, got {type(tf).__name__}")
+        self._tf = tf
+        self._tf_changed()
+
+    def set_settings(self, settings: RenderSettings) -> None:
+        self._check_alive()
+        self._check_options(settings.options)
+        self._settings = settings
+        self._settings_changed()
+
+    #: Renderer-specific option names and their meaning (RenderSettings.options).
+    option_help: ClassVar[Mapping[str, str]] = {}
+
+    def _check_options(self, options: Mapping[str, Any]) -> None:
+        unknown = set(options) - set(self.option_help)
+        if unknown:
+            valid = ", ".join(sorted(self.option_help)) or "none"
+            raise VolrenError(f"renderer {self.name} has no option(s) {sorted(unknown)}; valid: {valid}")
+
+    def _volume_changed(self) -> None:
+        """Hook: the volume was replaced."""
+
+    def _tf_changed(self) -> None:
+        """Hook: the transfer function was replaced (edits bump tf.version instead)."""
+
+    def _settings_changed(self) -> None:
+        """Hook: the settings were replaced."""
+
+    # ------------------------------------------------------------------------ render
+    def render(
+        self, camera: Camera, width: int, height: int, progress: ProgressCallback | None = None
+    ) -> NDArray[np.float32]:
+        """Render one frame: float32 (H, W, 4) premultiplied RGBA over black, row 0 at the top."""
+        self._check_alive()
+        width, height = int(width), int(height)
+        if not (1 <= width <= MAX_IMAGE_SIDE and 1 <= height <= MAX_IMAGE_SIDE):
+            raise VolrenError(f"image size must lie in 1..{MAX_IMAGE_SIDE} per side, got {width}x{height}")
+        if self._volume is None:
+            raise VolrenError(f"renderer {self.name}: no volume set")
+        if self._tf is None:
+            raise VolrenError(f"renderer {self.name}: no transfer function set")
+        reason = self.capabilities.unsupported_reason(self._volume.kind, 1, self._settings)
+        if reason:
+            raise VolrenError(f"renderer {self.name} {reason}")
+        start = time.perf_counter()
+        image, counters = self._render(camera, width, height, progress)
+        ms = (time.perf_counter() - start) * 1000.0
+        if image.shape != (height, width, 4) or image.dtype != np.float32:
+            raise RuntimeError(
+                f"renderer {self.name} returned {image.dtype} {image.shape}, expected float32 {(height, width, 4)}"
+            )
+        self.last_frame = FrameStats(ms, width, height, dict(counters))
+        return image
+
+    @abstractmethod
+    def _render(
+        self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
+    ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
+        """Draw a frame; return the image and work counters (e.g. samples taken)."""
+
+    def release(self) -> None:
+        """Free every GPU/VTK resource; the renderer cannot render afterwards."""
+        self._released = True
+
+    def _check_alive(self) -> None:
+        if self._released:
+            raise VolrenError(f"renderer {self.name} was released")
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
