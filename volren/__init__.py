@@ -1,0 +1,27 @@
+"""volren: volume rendering of uniform grids and tetrahedral meshes.
+
+    import volren
+    rgba = volren.render("head.mhd", "bone.json", renderer="vtk", size=(512, 512), azimuth=30)
+
+Importing volren is cheap: VTK, PyVista, numba and Qt load only when something needs them.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__version__ = "0.1.0"
+
+__all__ = ["VolrenError", "__version__", "render"]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "render":
+        from volren.api import render
+
+        return render
+    if name == "VolrenError":
+        from volren.errors import VolrenError
+
+        return VolrenError
+    raise AttributeError(f"module 'volren' has no attribute {name!r}")

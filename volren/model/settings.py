@@ -57,10 +57,9 @@ class RenderSettings:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise VolrenError(f"render setting {name} must be a number, got {value!r}")
-            if not math.isfinite(value) or value < 0:
-                raise VolrenError(f"render setting {name} must be finite and >= 0, got {value!r}")
-        if self.step <= 0:
-            raise VolrenError(f"render setting step must be positive, got {self.step!r}")
+            if not math.isfinite(value) or value < 0 or (name == "step" and value == 0):
+                bound = "positive" if name == "step" else ">= 0"
+                raise VolrenError(f"render setting {name} must be finite and {bound}, got {value!r}")
         for name in ("preintegration", "shade", "jitter"):
             if not isinstance(getattr(self, name), bool):
                 raise VolrenError(f"render setting {name} must be true or false, got {getattr(self, name)!r}")

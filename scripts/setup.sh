@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Set up volren on a Debian/Ubuntu machine; safe to run again (it only does what is missing).
+#   1. system libraries for OpenGL through EGL (Mesa llvmpipe without a GPU), Qt and, for the
+#      tests, a virtual X server;
+#   2. a virtual environment in .venv with volren installed in editable mode (re-installed when
+#      pyproject.toml changes).
+# Usage: scripts/setup.sh [--tests]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+with_tests=0
+[ "${1:-}" = "--tests" ] && with_tests=1
+
+packages=(
+  # OpenGL through EGL: without these VTK segfaults and moderngl cannot make a context
+  libegl1 libgl1 libgl1-mesa-dri
+  # X11/xcb and friends used by the VTK and Qt wheels
+  libx11-6 libx11-xcb1 libxext6 libxkbcommon0 libxkbcommon-x11-0 libxcb1 libxcb-icccm4
+  libxcb-image0 libxcb-keysyms1 libxcb-randr0 libxcb-render0 libxcb-render-util0 libxcb-shape0
+  libxcb-shm0 libxcb-sync1 libxcb-util1 libxcb-xfixes0 libxcb-xinerama0 libxcb-xkb1
+  libdbus-1-3 libfontconfig1 libfreetype6 libglib2.0-0
+)
+if [ "$with_tests" = 1 ]; then
+  packages+=(xvfb xauth)
+fi
+
+missing=()
+if command -v dpkg-query >/dev/null 2>&1; then
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+fi
+if [ "${#missing[@]}" -gt 0 ]; then
+  echo "setup: installing system packages: ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1 && sudo="sudo"
+  if command -v apt-get >/dev/null 2>&1; then
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  else
+    echo "setup: no apt-get here; please install the equivalents of: ${missing[*]}" >&2
+  fi
+fi
+
+python=${PYTHON:-python3}
+if ! "$python" -c 'import sys; sys.exit(sys.version_info < (3, 11))' 2>/dev/null; then
+  echo "setup: volren needs Python 3.11 or newer ($python is $("$python" --version 2>&1))" >&2
+  exit 1
+fi
+if [ ! -x .venv/bin/python ]; then
+  echo "setup: creating .venv"
+  "$python" -m venv .venv
+fi
+stamp=.venv/.volren-installed
+hash=$(sha256sum pyproject.toml | cut -d' ' -f1)
+installed=$(cat "$stamp" 2>/dev/null || true)   # "<pyproject hash> <extras>"
+extras=$([ "$with_tests" = 1 ] && echo test || echo none)
+if [ "${installed%% *}" != "$hash" ] || { [ "$extras" = test ] && [ "${installed#* }" != test ]; }; then
+  echo "setup: installing volren and its dependencies into .venv"
+  .venv/bin/python -m pip install -q --upgrade pip
+  if [ "$extras" = test ]; then
+    .venv/bin/python -m pip install -q -e ".[test]"
+  else
+    .venv/bin/python -m pip install -q -e .
+  fi
+  echo "$hash $extras" > "$stamp"
+fi

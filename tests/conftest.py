@@ -1,0 +1,48 @@
+"""Shared fixtures: where the shared datasets are, and skipping what this machine cannot run."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+SHARED = REPO.parent / "shared"
+SHARED_DATA = SHARED / "data"
+SHARED_SCENES = SHARED / "scenes"
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    """../shared/data, or skip: the real datasets are not part of the repository."""
+    if not SHARED_DATA.is_dir():
+        pytest.skip(f"shared datasets not found at {SHARED_DATA}")
+    return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def shared_scenes() -> Path:
+    if not SHARED_SCENES.is_dir():
+        pytest.skip(f"shared scenes not found at {SHARED_SCENES}")
+    return SHARED_SCENES
+
+
+def load_scene_tf(name: str):
+    """A transfer function from ../shared/scenes/<name>.json."""
+    from volren.model.transfer_function import TransferFunction1D
+
+    path = SHARED_SCENES / f"{name}.json"
+    if not path.exists():
+        pytest.skip(f"scene {path} not found")
+    return TransferFunction1D.from_dict(json.loads(path.read_text()))
+
+
+@pytest.fixture(scope="session")
+def opengl() -> None:
+    """Skip when no EGL context can be made here (the reason names the packages to install)."""
+    from volren.renderers.opengl import opengl_problem
+
+    problem = opengl_problem()
+    if problem:
+        pytest.skip(problem)

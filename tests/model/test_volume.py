@@ -1,0 +1,101 @@
+"""UniformVolume / TetVolume: layout, dtypes, value ranges, validation; tetrahedron repair."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from volren.errors import VolrenError
+from volren.model.tet_repair import repair_tets, signed_volumes
+from volren.model.volume import TetVolume, UniformVolume
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.uint16, np.float32, np.float64])
+def test_kept_dtypes_stay_as_given(dtype):
+    values = np.arange(2 * 3 * 4).reshape(2, 3, 4).astype(dtype)
+    volume = UniformVolume(values, spacing=(1, 2, 3), origin=(-1, 0, 1))
+    assert volume.values.dtype == dtype and not volume.notes
+    assert volume.dimensions == (4, 3, 2)
+    assert volume.bounds == (-1, 2, 0, 4, 1, 4)
+    assert volume.value_range == (0, 23)
+    assert volume.mean_spacing == 2.0
+
+
+@pytest.mark.parametrize("dtype, kept", [(np.int8, np.int16), (np.int32, np.float64), (np.float16, np.float32)])
+def test_other_dtypes_are_converted_with_a_note(dtype, kept):
+    volume = UniformVolume(np.ones((2, 2, 2), dtype=dtype), name="x.vti")
+    assert volume.values.dtype == kept
+    assert "converted" in volume.notes[0] and "x.vti" in volume.notes[0]
+
+
+def test_from_xyz_transposes_to_zyx():
+    xyz = np.arange(24).reshape(4, 3, 2)  # [i, j, k]
+    volume = UniformVolume.from_xyz(xyz)
+    assert volume.dimensions == (4, 3, 2)
+    assert volume.values[1, 2, 3] == xyz[3, 2, 1]
+
+
+def test_nonfinite_values_are_counted_and_left_out_of_the_range():
+    values = np.zeros((3, 3, 3), np.float32)
+    values[0, 0, 0], values[1, 1, 1], values[2, 2, 2] = np.nan, np.inf, 5.0
+    volume = UniformVolume(values, name="nan.vti")
+    assert volume.nonfinite_count == 2 and volume.value_range == (0.0, 5.0)
+    assert any("2 non-finite" in n for n in volume.notes)
+
+
+@pytest.mark.parametrize(
+    "values, kwargs, message",
+    [
+        (np.zeros((2, 2)), {}, "3D values"),
+        (np.zeros((0, 2, 2)), {}, "empty"),
+        (np.zeros((1, 5, 5)), {}, "at least 2 samples"),
+        (np.full((2, 2, 2), np.nan), {}, "no finite values"),
+        (np.zeros((2, 2, 2)), {"spacing": (1, 0, 1)}, "positive"),
+        (np.zeros((2, 2, 2)), {"origin": (0, np.nan, 0)}, "finite"),
+        (np.array([["a"]] * 2 * 2).reshape(2, 2, 1).repeat(2, 2), {}, "not numeric"),
+    ],
+)
+def test_bad_uniform_volumes(values, kwargs, message):
+    with pytest.raises(VolrenError, match=message):
+        UniformVolume(values, name="bad.vti", **kwargs)
+
+
+UNIT_TET = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+
+
+def test_tet_volume_basics():
+    volume = TetVolume(UNIT_TET, [[0, 1, 2, 3]], np.array([0, 1, 2, 3], np.float32))
+    assert volume.bounds == (0, 1, 0, 1, 0, 1)
+    assert volume.mean_edge_length == pytest.approx((3 + 3 * np.sqrt(2)) / 6)
+    assert volume.values.dtype == np.float32
+
+
+@pytest.mark.parametrize(
+    "tets, values, message",
+    [
+        ([[0, 1, 2, 4]], [0, 0, 0, 0], "outside"),
+        ([[0, 1, 2]], [0, 0, 0, 0], r"\(m, 4\)"),
+        (np.zeros((0, 4), int), [0, 0, 0, 0], "empty"),
+        ([[0, 1, 2, 3]], [0, 0, 0], "one scalar per point"),
+        ([[0.0, 1, 2, 3]], [0, 0, 0, 0], "integers"),
+    ],
+)
+def test_bad_tet_volumes(tets, values, message):
+    with pytest.raises(VolrenError, match=message):
+        TetVolume(UNIT_TET, np.asarray(tets), np.asarray(values, float), name="bad.vtu")
+
+
+def test_repair_drops_flat_and_reorients_inverted_tets():
+    points = np.vstack([UNIT_TET, [[1, 1, 0]]])
+    tets = np.array([[0, 1, 2, 3], [0, 2, 1, 3], [0, 1, 2, 4], [0, 1, 1, 3]])
+    result = repair_tets(points, tets)
+    assert result.dropped_degenerate == 2  # coplanar points 0,1,2,4 and a repeated vertex
+    assert result.reoriented == 1
+    assert np.all(signed_volumes(points, result.tets) > 0)
+    assert np.allclose(signed_volumes(points, result.tets), 1 / 6)
+
+
+def test_repair_is_scale_invariant():
+    tiny = UNIT_TET * 1e-6
+    result = repair_tets(tiny, np.array([[0, 1, 2, 3]]))
+    assert result.dropped_degenerate == 0

@@ -1,0 +1,119 @@
+"""`volren.render`: one call from a volume (or a file, or a PyVista dataset) to an RGBA image."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from os import PathLike
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.errors import VolrenError
+from volren.model.camera import Camera
+from volren.model.settings import RenderSettings
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.volume import TetVolume, UniformVolume, Volume
+from volren.renderers.base import ProgressCallback
+
+VIRIDIS = [
+    [0.0, 0.267, 0.005, 0.329],
+    [0.25, 0.230, 0.322, 0.546],
+    [0.5, 0.128, 0.567, 0.551],
+    [0.75, 0.369, 0.789, 0.383],
+    [1.0, 0.993, 0.906, 0.144],
+]
+
+
+def default_transfer_function(volume: Volume) -> TransferFunction1D:
+    """What a volume looks like before anyone edits its TF: viridis colours over the value range,
+    opacity ramping from 0 at the bottom tenth to 0.3 at the top, per voxel (or tet edge) thickness."""
+    lo, hi = volume.value_range
+    span = hi - lo if hi > lo else 1.0
+    color = [[lo + x * span, r, g, b] for x, r, g, b in VIRIDIS]
+    opacity = [[lo, 0.0], [lo + 0.1 * span, 0.0], [hi, 0.3]]
+    return TransferFunction1D(color, opacity, volume.characteristic_length)
+
+
+def as_volume(volume: Any, scalars: str | None = None) -> Volume:
+    """A model volume from a model volume, a path, or a PyVista dataset."""
+    if isinstance(volume, UniformVolume | TetVolume):
+        return volume
+    from volren import io
+
+    if isinstance(volume, str | PathLike):
+        return io.load_volume(volume, scalars=scalars)
+    return io.from_pyvista(volume, scalars=scalars)
+
+
+def as_transfer_function(tf: Any, volume: Volume) -> TransferFunction1D:
+    """A TF from a TF, a path, a TF JSON dict, or None (the default for this volume)."""
+    if tf is None:
+        return default_transfer_function(volume)
+    if isinstance(tf, TransferFunction1D):
+        return tf
+    if isinstance(tf, Mapping):
+        return TransferFunction1D.from_dict(tf)
+    if isinstance(tf, str | PathLike):
+        from volren import io
+
+        return io.load_transfer_function(tf)
+    raise VolrenError(f"cannot use a {type(tf).__name__} as a transfer function")
+
+
+def parse_size(size: Any) -> tuple[int, int]:
+    """(w, h) from an int, a (w, h) pair or 'W' / 'WxH' text."""
+    if isinstance(size, str):
+        parts = size.lower().split("x")
+        try:
+            values = [int(p) for p in parts]
+        except ValueError:
+            raise VolrenError(f"image size must look like 512 or 640x480, got {size!r}") from None
+    elif isinstance(size, int):
+        values = [size]
+    else:
+        values = list(size)
+    if len(values) == 1:
+        values = values * 2
+    if len(values) != 2 or not all(isinstance(v, int | np.integer) and v > 0 for v in values):
+        raise VolrenError(f"image size must be one or two positive integers, got {size!r}")
+    return int(values[0]), int(values[1])
+
+
+def render(
+    volume: Any,
+    tf: Any = None,
+    renderer: str = "vtk",
+    size: Any = (512, 512),
+    azimuth: float = 0.0,
+    elevation: float = 0.0,
+    zoom: float = 1.0,
+    parallel: bool = False,
+    camera: Camera | None = None,
+    scalars: str | None = None,
+    progress: ProgressCallback | None = None,
+    **settings: Any,
+) -> NDArray[np.float32]:
+    """Render offscreen; returns float32 (H, W, 4) premultiplied RGBA over black, row 0 on top.
+
+    `volume` may be a UniformVolume/TetVolume, a file path or a PyVista dataset; `tf` a
+    TransferFunction1D, a TF JSON path or dict, or None for a default. The camera is DESIGN.md's
+    orbit (reset on the bounds, then azimuth, elevation, zoom) unless `camera` is given. Other
+    keyword arguments are RenderSettings fields (step, preintegration, shade, blend_mode, ...).
+    """
+    from volren.renderers.registry import registry
+
+    vol = as_volume(volume, scalars)
+    transfer = as_transfer_function(tf, vol)
+    width, height = parse_size(size)
+    for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
+        if not math.isfinite(value):
+            raise VolrenError(f"{name} must be finite, got {value}")
+    render_settings = RenderSettings().with_(**settings)
+    cam = camera or Camera.orbit(vol.bounds, azimuth, elevation, zoom, parallel, width / height)
+    with registry.create(renderer) as r:
+        r.set_volume(vol)
+        r.set_transfer_function(transfer)
+        r.set_settings(render_settings)
+        return r.render(cam, width, height, progress)

@@ -1,0 +1,1 @@
+"""The `volren` command. It never imports Qt unless `volren view` runs."""

@@ -1,0 +1,71 @@
+"""Entry point of the `volren` command: parses arguments, runs a subcommand, reports errors.
+
+Errors people can cause print as one line ``volren: error: ...`` with exit status 1; usage
+errors exit with 2 (argparse); anything unexpected prints one line and exits with 3 unless
+``--traceback`` asks for the full story.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from collections.abc import Sequence
+
+from volren import __version__
+from volren.cli import demo_cmd, render_cmd, renderers_cmd, view_cmd
+from volren.errors import VolrenError
+
+COMMANDS = (renderers_cmd, render_cmd, view_cmd, demo_cmd)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="volren", description="Volume rendering of uniform grids and tetrahedral meshes."
+    )
+    parser.add_argument("--version", action="version", version=f"volren {__version__}")
+    parser.add_argument("--traceback", action="store_true", help="show the full traceback on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for command in COMMANDS:
+        command.add_parser(sub)
+    return parser
+
+
+def _one_line_warnings(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"volren: warning: {message}", file=sys.stderr)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    previous = warnings.showwarning
+    warnings.showwarning = _one_line_warnings
+    try:
+        return int(args.run(args) or 0)
+    except VolrenError as exc:
+        if args.traceback:
+            raise
+        print(f"volren: error: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("volren: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # never a traceback by default (DESIGN.md)
+        if args.traceback:
+            raise
+        text = " ".join(str(exc).split())
+        print(
+            f"volren: internal error: {type(exc).__name__}: {text} (run with --traceback for details)",
+            file=sys.stderr,
+        )
+        return 3
+    finally:
+        warnings.showwarning = previous
+
+
+def entry_point() -> None:
+    sys.exit(main())
+
+
+if __name__ == "__main__":
+    entry_point()

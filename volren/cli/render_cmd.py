@@ -1,0 +1,162 @@
+"""`volren render`: one offscreen frame to a PNG (and optionally the float RGBA array).
+
+Flags follow DESIGN.md. With ``--scene SCENE.json`` the scene supplies the volume, TF, camera,
+settings, renderer and size; flags given explicitly override it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from volren.errors import VolrenError
+from volren.model.scene import OrbitView, Scene
+from volren.model.settings import BlendMode, RenderSettings
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("render", help="render a volume offscreen to a PNG")
+    p.add_argument("input", nargs="?", help="volume file or DICOM folder (optional with --scene)")
+    p.add_argument("-o", "--output", help="PNG file to write")
+    p.add_argument("--scene", help="scene JSON with volume, TF, camera and settings")
+    p.add_argument("--renderer", help="renderer name (see `volren renderers`; default vtk)")
+    p.add_argument("--tf", help="transfer function JSON (DESIGN.md format or a ParaView preset)")
+    p.add_argument("--scalars", help="name of the point array to render")
+    p.add_argument("--size", help="image size W or WxH (default 512)")
+    p.add_argument("--azimuth", type=float, help="degrees, after the camera reset")
+    p.add_argument("--elevation", type=float, help="degrees, after the azimuth")
+    p.add_argument("--zoom", type=float, help="zoom factor, after the elevation")
+    p.add_argument("--parallel", action="store_true", default=None, help="parallel projection")
+    p.add_argument("--step", type=float, help="sample distance in mean voxel spacings / tet edges")
+    p.add_argument("--preintegration", action=argparse.BooleanOptionalAction, help="pre-integrated TF")
+    p.add_argument("--shade", action=argparse.BooleanOptionalAction, help="Blinn-Phong shading")
+    p.add_argument("--blend", choices=[m.value for m in BlendMode], help="blend mode (default composite)")
+    p.add_argument(
+        "--option", action="append", default=[], metavar="KEY=VALUE", help="renderer-specific option"
+    )
+    p.add_argument("--save-array", metavar="OUT.npy", help="also save float32 (H, W, 4) RGBA, row 0 on top")
+    p.add_argument("--transparent", action="store_true", help="PNG with alpha instead of over black")
+    raw = p.add_argument_group("headerless raw input")
+    raw.add_argument("--raw-shape", help="NX,NY,NZ")
+    raw.add_argument("--raw-dtype", default="uint8", help="numpy dtype, e.g. uint8, int16, float32")
+    raw.add_argument("--raw-byte-order", choices=["little", "big"], default="little")
+    raw.add_argument("--raw-spacing", default="1,1,1", help="SX,SY,SZ")
+    p.set_defaults(run=run)
+
+
+def _triple(text: str, what: str, kind=float) -> tuple:
+    try:
+        values = tuple(kind(v) for v in text.replace("x", ",").split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 3:
+        raise VolrenError(f"{what} must be three comma-separated numbers, got {text!r}")
+    return values
+
+
+def parse_options(items: list[str]) -> dict[str, Any]:
+    """KEY=VALUE pairs; VALUE is read as JSON when it parses, else kept as text."""
+    options = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise VolrenError(f"--option needs KEY=VALUE, got {item!r}")
+        try:
+            options[key] = json.loads(value)
+        except json.JSONDecodeError:
+            options[key] = value
+    return options
+
+
+def _load_input(args: argparse.Namespace):
+    from volren import io
+
+    kwargs: dict[str, Any] = {"scalars": args.scalars}
+    if args.raw_shape:
+        kwargs.update(
+            shape=_triple(args.raw_shape, "--raw-shape", int),
+            dtype=args.raw_dtype,
+            byte_order=args.raw_byte_order,
+            spacing=_triple(args.raw_spacing, "--raw-spacing"),
+        )
+    return io.load_volume(args.input, **kwargs)
+
+
+def build_scene(args: argparse.Namespace) -> Scene:
+    """The scene to render: from --scene and/or INPUT, with explicit flags applied on top."""
+    from volren import io
+    from volren.api import as_transfer_function, parse_size
+
+    if args.scene:
+        scene = io.load_scene(args.scene, load_volume=args.input is None)
+        if args.input is not None:
+            scene = replace(scene, volume=_load_input(args), volume_path=args.input)
+    elif args.input is not None:
+        volume = _load_input(args)
+        scene = Scene(args.input, as_transfer_function(None, volume), volume=volume, scalars=args.scalars)
+    else:
+        raise VolrenError("give an INPUT volume or --scene SCENE.json")
+    if args.tf:
+        scene = replace(scene, transfer_function=io.load_transfer_function(args.tf))
+    if args.renderer:
+        scene = replace(scene, renderer=args.renderer)
+    if args.size:
+        scene = replace(scene, size=parse_size(args.size))
+    orbit_flags = {
+        "azimuth": args.azimuth,
+        "elevation": args.elevation,
+        "zoom": args.zoom,
+        "parallel": args.parallel,
+    }
+    if any(v is not None for v in orbit_flags.values()):
+        base = scene.camera if isinstance(scene.camera, OrbitView) else OrbitView()
+        scene = replace(scene, camera=replace(base, **{k: v for k, v in orbit_flags.items() if v is not None}))
+    changes: dict[str, Any] = {
+        "step": args.step,
+        "preintegration": args.preintegration,
+        "shade": args.shade,
+        "blend_mode": args.blend,
+    }
+    changes = {k: v for k, v in changes.items() if v is not None}
+    if args.option:
+        changes["options"] = {**scene.settings.options, **parse_options(args.option)}
+    if changes:
+        scene = replace(scene, settings=scene.settings.with_(**changes))
+    return scene
+
+
+def run(args: argparse.Namespace) -> int:
+    from volren import io
+    from volren.cli.progress import progress_bar
+    from volren.renderers.registry import registry
+
+    if not args.output and not args.save_array:
+        raise VolrenError("give -o OUT.png (and/or --save-array OUT.npy)")
+    for target in (args.output, args.save_array):
+        if target and not Path(target).parent.exists():
+            raise VolrenError(f"{target}: the folder {Path(target).parent} does not exist")
+    scene = build_scene(args)
+    width, height = scene.size
+    camera = scene.resolved_camera()
+    renderer = registry.create(scene.renderer)
+    try:
+        renderer.set_volume(scene.volume)
+        renderer.set_transfer_function(scene.transfer_function)
+        renderer.set_settings(scene.settings if isinstance(scene.settings, RenderSettings) else RenderSettings())
+        with progress_bar(f"{scene.renderer} {width}x{height}") as progress:
+            image = renderer.render(camera, width, height, progress)
+        stats = renderer.last_frame
+    finally:
+        renderer.release()
+    if args.output:
+        io.save_image(image, args.output, transparent=args.transparent)
+    if args.save_array:
+        np.save(args.save_array, image)
+    written = " ".join(str(p) for p in (args.output, args.save_array) if p)
+    print(f"{scene.renderer}: {width}x{height} in {stats.ms:.1f} ms -> {written}")
+    return 0

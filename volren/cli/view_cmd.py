@@ -1,0 +1,25 @@
+"""`volren view [INPUT]`: the desktop app (imports Qt only when run)."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("view", help="open the desktop app (a bundled sample when no INPUT)")
+    p.add_argument("input", nargs="?", help="volume file, DICOM folder or scene JSON")
+    p.add_argument("--tf", help="transfer function JSON")
+    p.add_argument("--scalars", help="name of the point array to render")
+    p.add_argument("--renderer", help="renderer to start with")
+    p.add_argument(
+        "--screenshot",
+        metavar="OUT.png",
+        help="wait for the first full-quality frame, save a screenshot of the window and exit",
+    )
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    app_main = importlib.import_module("volren.app.main")
+    return app_main.run(args.input, tf=args.tf, scalars=args.scalars, renderer=args.renderer, screenshot=args.screenshot)
