@@ -125,16 +125,20 @@ def sample_transfer_functions() -> dict[str, TransferFunction1D]:
         [0.75, 0.369, 0.789, 0.383],
         [1.0, 0.993, 0.906, 0.144],
     ]
-    ml = TransferFunction1D(viridis, [[0.0, 0.0], [0.45, 0.0], [0.55, 0.35], [1.0, 0.6]], 0.05)
+    # A soft shell around the 0.5 isosurface shows the signal's rings, the classic ML view.
+    ml = TransferFunction1D(viridis, [[0.0, 0.0], [0.4, 0.0], [0.5, 0.7], [0.6, 0.0], [1.0, 0.0]], 0.05)
     bone = [
         [-1000.0, 0.0, 0.0, 0.0],
-        [-100.0, 0.55, 0.25, 0.15],
-        [40.0, 0.88, 0.6, 0.5],
+        [20.0, 0.75, 0.25, 0.15],
+        [44.0, 1.0, 0.7, 0.35],
         [400.0, 1.0, 0.94, 0.85],
         [1000.0, 1.0, 1.0, 1.0],
     ]
+    # Brain (about 12 HU) transparent, the denser inner ellipsoids (28-44 HU) bright, the skull faint.
     ct = TransferFunction1D(
-        bone, [[-1000.0, 0.0], [-200.0, 0.0], [0.0, 0.04], [60.0, 0.08], [300.0, 0.1], [900.0, 0.8]], 0.03
+        bone,
+        [[-1000.0, 0.0], [16.0, 0.0], [28.0, 0.25], [44.0, 0.5], [80.0, 0.02], [1000.0, 0.08]],
+        0.03,
     )
     cool_warm = [[-1.0, 0.23, 0.299, 0.754], [0.5, 0.865, 0.865, 0.865], [2.0, 0.706, 0.016, 0.15]]
     cyl = TransferFunction1D(cool_warm, [[-1.0, 0.3], [0.3, 0.02], [0.7, 0.02], [2.0, 0.6]], 0.1)

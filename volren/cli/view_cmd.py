@@ -22,4 +22,11 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     app_main = importlib.import_module("volren.app.main")
-    return app_main.run(args.input, tf=args.tf, scalars=args.scalars, renderer=args.renderer, screenshot=args.screenshot)
+    return app_main.run(
+        args.input,
+        tf=args.tf,
+        scalars=args.scalars,
+        renderer=args.renderer,
+        screenshot=args.screenshot,
+        traceback=args.traceback,
+    )

@@ -1,0 +1,156 @@
+"""Fixtures for the desktop-app tests: offscreen Qt, a small window, fake renderers, a sample.
+
+Qt must be told to run offscreen before the QApplication exists, hence the environment is set at
+import time (pytest imports conftest files before any fixture creates the application).
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable, Iterator, Mapping
+from typing import Any, ClassVar
+
+os.environ["QT_QPA_PLATFORM"] = "offscreen"
+os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="volren-xdg-"))
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+pytest.importorskip("PyQt5.QtWidgets", reason="PyQt5 is not installed")
+pytest.importorskip("pytestqt", reason="pytest-qt is not installed")
+
+from volren.app.loading import LoadedInput  # noqa: E402
+from volren.errors import VolrenError  # noqa: E402
+from volren.model.volume import UniformVolume  # noqa: E402
+from volren.renderers.base import Capabilities, KindSupport, RendererBase  # noqa: E402
+from volren.renderers.registry import registry  # noqa: E402
+from volren.samples import marschner_lobb, sample_transfer_functions  # noqa: E402
+
+#: Small windows keep every frame cheap.
+WINDOW_SIZE = (360, 300)
+#: Generous: the first VTK frame creates an EGL context; later frames take tens of ms.
+FRAME_TIMEOUT_MS = 20000
+
+
+_vtk_reason: list[str | None] = []
+
+
+def vtk_unusable() -> str | None:
+    """Why the vtk renderer cannot draw here (no EGL, ...), or None; checked once."""
+    if not _vtk_reason:
+        try:
+            with registry.create("vtk") as r:
+                r.set_volume(marschner_lobb(5))
+                r.set_transfer_function(sample_transfer_functions()["marschner_lobb"])
+                from volren.model.camera import Camera
+
+                r.render(Camera.orbit(r.volume.bounds), 4, 4)
+            _vtk_reason.append(None)
+        except Exception as exc:  # noqa: BLE001
+            _vtk_reason.append(f"the vtk renderer cannot render here: {exc}")
+    return _vtk_reason[0]
+
+
+@pytest.fixture(scope="session")
+def ml_volume() -> UniformVolume:
+    return marschner_lobb()
+
+
+@pytest.fixture
+def sample(ml_volume) -> LoadedInput:
+    """The Marschner-Lobb sample built in memory (no file reading needed)."""
+    return LoadedInput(ml_volume, sample_transfer_functions()["marschner_lobb"], source="marschner_lobb")
+
+
+@pytest.fixture
+def error_boxes(monkeypatch) -> list[tuple[str, str]]:
+    """Record QMessageBox.critical calls instead of opening a modal box."""
+    from PyQt5.QtWidgets import QMessageBox
+
+    calls: list[tuple[str, str]] = []
+
+    def critical(parent, title, text, *args, **kwargs):
+        calls.append((title, text))
+        return QMessageBox.Ok
+
+    monkeypatch.setattr(QMessageBox, "critical", critical)
+    return calls
+
+
+@pytest.fixture
+def make_window(qtbot, error_boxes) -> Iterator[Callable[..., Any]]:
+    """Build shown MainWindows (closed and shut down after the test)."""
+    from volren.app.main_window import MainWindow
+
+    reason = vtk_unusable()
+    if reason:
+        pytest.skip(reason)
+    made = []
+
+    def make(**kwargs: Any) -> MainWindow:
+        w = MainWindow(**kwargs)
+        w.resize(*WINDOW_SIZE)
+        qtbot.addWidget(w)
+        w.show()
+        made.append(w)
+        return w
+
+    yield make
+    for w in made:
+        w.shutdown()
+
+
+@pytest.fixture
+def window(make_window):
+    return make_window()
+
+
+@pytest.fixture
+def loaded_window(window, sample, qtbot):
+    """A window showing the sample with the vtk renderer, first full frame already on screen."""
+    with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        window.apply_loaded(sample, "vtk")
+    return window
+
+
+# ---------------------------------------------------------------------------- fake renderers
+class FakeRenderer(RendererBase):
+    """A constant-colour renderer that records what it was given (and on which thread)."""
+
+    name: ClassVar[str] = "fake"
+    capabilities: ClassVar[Capabilities] = Capabilities(kinds={"uniform": KindSupport()}, summary="test double")
+    color: ClassVar[tuple[float, float, float, float]] = (0.4, 0.2, 0.1, 0.5)
+    calls: ClassVar[list[dict[str, Any]]] = []
+
+    def _render(self, camera, width, height, progress) -> tuple[np.ndarray, Mapping[str, float]]:
+        type(self).calls.append({"camera": camera, "tf": self.transfer_function.copy(), "size": (width, height)})
+        image = np.empty((height, width, 4), np.float32)
+        image[...] = self.color
+        return image, {}
+
+
+class TetOnlyRenderer(FakeRenderer):
+    name: ClassVar[str] = "fake_tet_only"
+    capabilities: ClassVar[Capabilities] = Capabilities(kinds={"tet": KindSupport()}, summary="tet only")
+
+
+class BrokenRenderer(FakeRenderer):
+    name: ClassVar[str] = "fake_broken"
+
+    def _render(self, camera, width, height, progress):
+        raise VolrenError("fake_broken: the shader did not compile\n(line 3)")
+
+
+@pytest.fixture
+def fake_renderers() -> Iterator[dict[str, type]]:
+    """Register the fake renderers in-process; unregistered afterwards."""
+    classes = {cls.name: cls for cls in (FakeRenderer, TetOnlyRenderer, BrokenRenderer)}
+    FakeRenderer.calls.clear()
+    for name, cls in classes.items():
+        registry.register(name, cls, replace=True)
+    try:
+        yield classes
+    finally:
+        for name in classes:
+            registry.unregister(name)

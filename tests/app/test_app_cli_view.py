@@ -1,0 +1,75 @@
+"""`volren view --screenshot` end to end, in a subprocess: a real X window under Xvfb, and errors."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.qt
+
+
+def _io_available() -> bool:
+    from volren import io
+
+    return all(hasattr(io, f) for f in ("load_volume", "load_transfer_function", "load_scene"))
+
+
+needs_io = pytest.mark.skipif(not _io_available(), reason="volren.io (load_volume & co.) is not available yet")
+
+XVFB_PACKAGES = (
+    "xvfb xauth libxkbcommon-x11-0 libxcb-icccm4 libxcb-image0 libxcb-keysyms1 libxcb-render-util0 "
+    "libxcb-shape0 libxcb-xinerama0 libdbus-1-3 libfontconfig1 libglib2.0-0"
+)
+
+
+def view(args: list[str], env: dict[str, str], prefix: list[str] = ()) -> subprocess.CompletedProcess:
+    cmd = [*prefix, sys.executable, "-m", "volren.cli.main", "view", *args]
+    return subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=240)
+
+
+def chromatic_fraction(path: Path) -> float:
+    """Share of pixels with clearly coloured (not grey) values: the UI and background are grey."""
+    from PIL import Image
+
+    rgb = np.asarray(Image.open(path).convert("RGB")).astype(int)
+    return float(np.mean(rgb.max(axis=-1) - rgb.min(axis=-1) > 40))
+
+
+@pytest.mark.xvfb
+@needs_io
+def test_view_screenshot_of_a_real_x_window(tmp_path):
+    if shutil.which("xvfb-run") is None:
+        pytest.skip(f"xvfb-run is not on PATH (Debian packages: {XVFB_PACKAGES})")
+    out = tmp_path / "view.png"
+    env = dict(os.environ, QT_QPA_PLATFORM="xcb")
+    result = view(["--screenshot", str(out)], env, prefix=["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24"])
+    assert result.returncode == 0, f"exit {result.returncode}: {result.stderr[-2000:]}"
+    from PIL import Image
+
+    with Image.open(out) as image:
+        assert image.format == "PNG" and image.width >= 400 and image.height >= 300
+    assert chromatic_fraction(out) > 0.02, "the screenshot shows no rendered volume"
+
+
+def test_view_with_an_unknown_renderer_fails_in_one_line(tmp_path):
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+    result = view(["--renderer", "no_such_renderer", "--screenshot", str(tmp_path / "x.png")], env)
+    assert result.returncode == 1
+    assert result.stderr.strip().count("\n") == 0 and "no_such_renderer" in result.stderr
+    assert not (tmp_path / "x.png").exists()
+
+
+@needs_io
+def test_view_screenshot_of_a_missing_file_fails_in_one_line(tmp_path):
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+    result = view([str(tmp_path / "missing.vti"), "--screenshot", str(tmp_path / "x.png")], env)
+    assert result.returncode == 1
+    lines = [line for line in result.stderr.splitlines() if line.startswith("volren:")]
+    assert len(lines) == 1 and "missing.vti" in lines[0], result.stderr
+    assert not (tmp_path / "x.png").exists()

@@ -1,0 +1,156 @@
+"""The app's Qt-free parts: view state, camera gestures, pixel conversion, renderer choice."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from volren.app import interaction
+from volren.app.imaging import adaptive_preview_scale, composite_rgb8, preview_size
+from volren.app.renderer_choice import RendererOption, pick_renderer, renderer_options
+from volren.app.state import Change, ViewState, default_camera
+from volren.model.camera import Camera
+from volren.samples import marschner_lobb, sample_transfer_functions
+
+BOUNDS = (-1.0, 1.0, -1.0, 1.0, -1.0, 1.0)
+
+
+@pytest.fixture
+def state() -> tuple[ViewState, list[Change]]:
+    s = ViewState()
+    changes: list[Change] = []
+    s.subscribe(changes.append)
+    volume = marschner_lobb(9)
+    s.load(volume, sample_transfer_functions()["marschner_lobb"], default_camera(volume), source="ml")
+    return s, changes
+
+
+def test_state_announces_each_change(state):
+    s, changes = state
+    assert changes == [Change("volume", False)]
+    s.set_camera(s.camera.zoom(2.0))
+    s.set_renderer("reference")
+    s.set_renderer("reference")  # no change, no announcement
+    s.transfer_function.set_opacity_unit_distance(0.2)  # in-place edit
+    assert [c.what for c in changes[1:]] == ["camera", "renderer", "tf"]
+    assert not any(c.interactive for c in changes)
+
+
+def test_changes_during_an_interaction_are_interactive(state):
+    s, changes = state
+    s.begin_interaction()
+    s.set_camera(s.camera.azimuth(5))
+    s.transfer_function.set_opacity_unit_distance(0.3)
+    s.end_interaction()
+    with s.interaction():
+        s.set_camera(s.camera.azimuth(5))
+    assert changes[1:] == [
+        Change("camera", True),
+        Change("tf", True),
+        Change("interaction", False),
+        Change("camera", True),
+    ]
+
+
+def test_replacing_the_tf_unhooks_the_old_one(state):
+    s, changes = state
+    old = s.transfer_function
+    s.set_transfer_function(old.copy())
+    n = len(changes)
+    old.set_opacity_unit_distance(0.5)
+    assert len(changes) == n, "edits of a TF no longer shown must not trigger frames"
+
+
+def test_reset_uses_the_scene_convention(state):
+    s, _ = state
+    s.set_camera(s.camera.azimuth(40).dolly(2))
+    s.reset_camera(aspect=1.5)
+    assert s.camera == Camera.orbit(s.volume.bounds, 30, 20, 1, False, 1.5)
+
+
+def test_rotate_follows_vtk_trackball():
+    cam = Camera.orbit(BOUNDS)
+    # a drag across the whole width is 200 degrees of azimuth (mouse right -> negative azimuth)
+    turned = interaction.rotate(cam, 100, 0, 100, 100, BOUNDS)
+    expected = cam.azimuth(-200).orthogonalize_view_up().reset_clipping_range(BOUNDS)
+    assert np.allclose(turned.position, expected.position)
+    # dragging down raises the camera (Qt's y points down)
+    up = interaction.rotate(cam, 0, 10, 100, 100, BOUNDS)
+    assert up.position[1] > cam.position[1]
+    assert abs(np.dot(up.view_up, up.direction)) < 1e-12
+    assert interaction.rotate(cam, 0, 0, 100, 100, BOUNDS) == cam.reset_clipping_range(BOUNDS)
+
+
+def test_dolly_and_wheel_factors():
+    cam = Camera.orbit(BOUNDS)
+    assert interaction.wheel_dolly_factor(120) == pytest.approx(1.1**2)
+    assert interaction.drag_dolly_factor(-50, 100) == pytest.approx(1.1**10)
+    closer = interaction.dolly(cam, 2.0, BOUNDS)
+    assert closer.distance == pytest.approx(cam.distance / 2)
+    assert closer.clipping_range[0] < closer.distance - math.sqrt(3), "near plane must stay in front of the data"
+    flat = Camera.orbit(BOUNDS, parallel=True)
+    zoomed = interaction.dolly(flat, 2.0, BOUNDS)
+    assert zoomed.parallel_scale == pytest.approx(flat.parallel_scale / 2) and zoomed.distance == flat.distance
+
+
+def test_pan_moves_the_scene_with_the_mouse():
+    cam = Camera.orbit(BOUNDS)
+    moved = interaction.pan(cam, 10, 0, 100, BOUNDS)
+    side = np.cross(cam.direction, cam.view_up)  # screen right
+    shift = np.subtract(moved.focal_point, cam.focal_point)
+    # the camera moves left, so the scene appears to move right
+    assert np.dot(shift, side) == pytest.approx(-10 * interaction.world_per_pixel(cam, 100))
+    assert np.allclose(np.subtract(moved.position, cam.position), shift)
+
+
+def test_composite_over_background():
+    rgba = np.zeros((2, 3, 4), np.float32)
+    rgba[0, 0] = (0.5, 0.25, 0.0, 0.5)  # premultiplied
+    rgba[1, 2] = (1.0, 1.0, 1.0, 1.0)
+    out = composite_rgb8(rgba, (0.2, 0.4, 0.6))
+    assert out.dtype == np.uint8 and out.shape == (2, 3, 3) and out.flags.c_contiguous
+    assert tuple(out[0, 0]) == (153, 115, 77)  # rgb + (1 - a) * bg
+    assert tuple(out[0, 1]) == (51, 102, 153)
+    assert tuple(out[1, 2]) == (255, 255, 255)
+    assert tuple(composite_rgb8(rgba)[0, 0]) == (128, 64, 0)
+    assert preview_size(641, 480, 0.5) == (320, 240) and preview_size(1, 1, 0.5) == (1, 1)
+
+
+def test_preview_scale_adapts_to_renderer_cost():
+    assert adaptive_preview_scale(None, 10000) == 0.5
+    assert adaptive_preview_scale(1e-5, 100_000) == 0.5  # 1 ms full frames: a quarter of the pixels
+    slow = adaptive_preview_scale(400 / 700_000, 700_000)  # 400 ms full frames
+    assert slow == pytest.approx((50 / 400) ** 0.5) and 0.1 < slow < 0.5
+    assert adaptive_preview_scale(18000 / 700_000, 700_000) == 0.1  # the reference renderer: 18 s
+
+
+def test_pick_renderer_keeps_current_else_prefers_vtk():
+    opts = [RendererOption("reference", None), RendererOption("vtk", None), RendererOption("slicer", "no tets")]
+    assert pick_renderer(opts, "reference") == "reference"
+    assert pick_renderer(opts, "slicer") == "vtk"
+    assert pick_renderer([RendererOption("a", "x"), RendererOption("b", None)], "a") == "b"
+    assert pick_renderer([RendererOption("a", "x")], "a") is None
+
+
+def test_renderer_options_lists_every_registered_renderer():
+    from volren.renderers.registry import registry
+
+    options, _warnings = renderer_options("uniform")
+    assert [o.name for o in options] == registry.names()
+    assert next(o for o in options if o.name == "vtk").enabled
+
+
+def test_the_qt_free_modules_do_not_import_qt():
+    code = (
+        "import sys\n"
+        "import volren.app, volren.app.state, volren.app.interaction, volren.app.imaging\n"
+        "import volren.app.loading, volren.app.renderer_choice\n"
+        "bad = [m for m in sys.modules if m.startswith(('PyQt5', 'qtpy', 'pyvistaqt'))]\n"
+        "assert not bad, bad\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr

@@ -1,0 +1,329 @@
+"""The main window under pytest-qt (offscreen): frames, gestures, renderers, files, screenshots."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PyQt5.QtCore import QMimeData, QPoint, QPointF, Qt, QUrl
+from PyQt5.QtGui import QDragEnterEvent, QDropEvent, QImage, QWheelEvent
+from PyQt5.QtWidgets import QApplication
+
+from volren.app.imaging import preview_size
+from volren.app.loading import LoadedInput
+from volren.app.state import default_camera
+from volren.errors import VolrenError
+from volren.model.transfer_function import TransferFunction1D
+from volren.samples import sample_transfer_functions
+
+pytestmark = [pytest.mark.qt, pytest.mark.vtk]
+
+#: Generous: the first VTK frame creates an EGL context; later frames take tens of ms.
+FRAME_TIMEOUT_MS = 20000
+
+
+def _io_available() -> bool:
+    from volren import io
+
+    return all(hasattr(io, f) for f in ("load_volume", "load_transfer_function", "load_scene"))
+
+
+needs_io = pytest.mark.skipif(not _io_available(), reason="volren.io (load_volume & co.) is not available yet")
+
+
+def frame_pixels(window) -> np.ndarray:
+    frame = window.viewport.frame
+    assert frame is not None
+    return frame.rgb
+
+
+def not_background(window) -> int:
+    """How many pixels of the shown frame differ clearly from the background colour."""
+    bg = np.round(np.asarray(window.state.background) * 255)
+    return int(np.count_nonzero(np.abs(frame_pixels(window).astype(float) - bg).max(axis=-1) > 30))
+
+
+def test_window_opens_on_sample_and_shows_first_full_frame(loaded_window, error_boxes):
+    w = loaded_window
+    frame = w.viewport.frame
+    assert frame.full and frame.renderer == "vtk"
+    assert (frame.width, frame.height) == w.viewport.pixel_size()
+    assert not_background(w) > 0.05 * frame.width * frame.height, "the volume is not visible"
+    assert "vtk" in w.frame_label.text() and f"{frame.width} x {frame.height}" in w.frame_label.text()
+    assert "ms" in w.frame_label.text()
+    assert w.chooser.currentText() == "vtk"
+    assert "marschner_lobb" in w.windowTitle()
+    assert error_boxes == []
+
+
+def drag(qtbot, widget, button, start: QPoint, moves: list[QPoint]) -> None:
+    """Press, move and release on `widget` (positions in its coordinates), as real input does.
+
+    The events go to the widget's QWindow: in Qt 5 QTest's QWidget overload of mouseMove only
+    moves the cursor, which delivers nothing on the offscreen platform, whereas the QWindow
+    overload feeds the window-system queue, so press, moves and release arrive with the button
+    state a real drag has.
+    """
+    window = widget.window().windowHandle()
+
+    def to_window(p: QPoint) -> QPoint:
+        return widget.mapTo(widget.window(), p)
+
+    qtbot.mousePress(window, button, pos=to_window(start))
+    for p in moves:
+        qtbot.mouseMove(window, to_window(p))
+    qtbot.mouseRelease(window, button, pos=to_window(moves[-1]))
+
+
+def test_drag_rotates_with_preview_frames_then_one_full_frame(loaded_window, qtbot, error_boxes):
+    w = loaded_window
+    before = w.state.camera
+    frames = []
+    w.frameShown.connect(frames.append)
+    c = w.viewport.rect().center()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        drag(qtbot, w.viewport, Qt.LeftButton, c, [c + QPoint(10 * i, 3 * i) for i in range(1, 6)])
+    after = w.state.camera
+    assert not np.allclose(after.position, before.position), "left-drag did not rotate"
+    assert np.allclose(after.focal_point, before.focal_point)
+    assert abs(np.dot(after.view_up, after.direction)) < 1e-9, "view up not orthogonalized"
+    full_size = w.viewport.pixel_size()
+    previews = [f for f in frames if not f.full]
+    assert previews, "no reduced-cost frame while dragging"
+    # at most a quarter of the pixels (fewer if this machine renders slowly), same aspect
+    half_w, half_h = preview_size(*full_size, 0.5)
+    assert all(1 <= f.width <= half_w and 1 <= f.height <= half_h for f in previews)
+    assert all(abs(f.width / f.height - full_size[0] / full_size[1]) < 0.1 for f in previews)
+    last = frames[-1]
+    assert last.full and (last.width, last.height) == full_size
+    assert last.camera == after
+    assert frames.index(previews[0]) < frames.index(last)
+    assert error_boxes == []
+
+
+def test_right_drag_and_wheel_dolly_middle_drag_pans(loaded_window, qtbot):
+    w = loaded_window
+    c = w.viewport.rect().center()
+    d0 = w.state.camera.distance
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        drag(qtbot, w.viewport, Qt.RightButton, c, [c + QPoint(0, -20), c + QPoint(0, -40)])
+    d1 = w.state.camera.distance
+    assert d1 < d0, "dragging up with the right button should dolly in"
+
+    wheel = QWheelEvent(
+        QPointF(c),
+        QPointF(w.viewport.mapToGlobal(c)),
+        QPoint(),
+        QPoint(0, -120),
+        Qt.NoButton,
+        Qt.NoModifier,
+        Qt.NoScrollPhase,
+        False,
+    )
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        QApplication.sendEvent(w.viewport, wheel)
+    assert w.state.camera.distance == pytest.approx(d1 * 1.1**2), "a wheel notch back dollies out by 1.1^2"
+
+    focal = np.array(w.state.camera.focal_point)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        drag(qtbot, w.viewport, Qt.MiddleButton, c, [c + QPoint(15, 0), c + QPoint(30, 0)])
+    assert not np.allclose(w.state.camera.focal_point, focal), "middle-drag did not pan"
+
+
+def test_r_resets_the_view(loaded_window, qtbot):
+    w = loaded_window
+    c = w.viewport.rect().center()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        drag(qtbot, w.viewport, Qt.LeftButton, c, [c + QPoint(50, 20)])
+    assert w.state.camera != default_camera(w.state.volume, w.viewport.aspect())
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        qtbot.keyClick(w.viewport, Qt.Key_R)
+    assert w.state.camera == default_camera(w.state.volume, w.viewport.aspect())
+
+
+def test_resize_renders_at_the_new_size(loaded_window, qtbot):
+    w = loaded_window
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.resize(420, 330)
+    assert (blocker.args[0].width, blocker.args[0].height) == w.viewport.pixel_size()
+
+
+def test_switching_renderer_keeps_camera_and_tf(loaded_window, fake_renderers, qtbot, error_boxes):
+    w = loaded_window
+    w._refresh_renderers()  # the fakes were registered after the window was made
+    camera, tf = w.state.camera, w.state.transfer_function
+    index = w.chooser.findText("fake")
+    assert index >= 0 and w.chooser.is_enabled("fake")
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.chooser.setCurrentIndex(index)
+        w.chooser.activated.emit(index)
+    assert blocker.args[0].renderer == "fake" and w.state.renderer == "fake"
+    assert w.state.camera is camera and w.state.transfer_function is tf
+    seen = fake_renderers["fake"].calls[-1]
+    assert seen["camera"] == camera and seen["tf"] == tf
+    assert seen["size"] == w.viewport.pixel_size()
+    assert "fake" in w.frame_label.text()
+
+    vtk_index = w.chooser.findText("vtk")
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.chooser.setCurrentIndex(vtk_index)
+        w.chooser.activated.emit(vtk_index)
+    assert blocker.args[0].renderer == "vtk" and blocker.args[0].camera == camera
+    assert error_boxes == []
+
+
+def test_renderer_that_cannot_draw_the_volume_is_disabled_with_tooltip(make_window, fake_renderers, sample, qtbot):
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.apply_loaded(sample, "vtk")
+    assert "fake_tet_only" in w.chooser.names()
+    assert not w.chooser.is_enabled("fake_tet_only")
+    assert "does not render uniform volumes" in w.chooser.tooltip("fake_tet_only")
+    assert w.chooser.is_enabled("vtk") and w.chooser.is_enabled("fake")
+    # picking the disabled entry anyway (e.g. by keyboard) changes nothing
+    w.chooser.activated.emit(w.chooser.findText("fake_tet_only"))
+    assert w.state.renderer == "vtk"
+
+
+def test_renderer_that_raises_reports_and_falls_back(loaded_window, fake_renderers, qtbot, error_boxes):
+    w = loaded_window
+    w._refresh_renderers()
+    camera = w.state.camera
+    index = w.chooser.findText("fake_broken")
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.chooser.setCurrentIndex(index)
+        w.chooser.activated.emit(index)
+    assert len(error_boxes) == 1
+    title, text = error_boxes[0]
+    assert "\n" not in text and "shader did not compile" in text and "vtk" in text
+    assert w.state.renderer == "vtk" and w.chooser.currentText() == "vtk"
+    assert blocker.args[0].renderer == "vtk" and w.state.camera is camera
+
+
+def test_requested_renderer_that_cannot_draw_is_an_error(make_window, fake_renderers, sample, qtbot, error_boxes):
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.apply_loaded(sample, "fake_tet_only")
+    assert blocker.args[0].renderer == "vtk"
+    assert len(error_boxes) == 1 and "fake_tet_only does not render uniform volumes" in error_boxes[0][1]
+
+
+def fake_load(path, tf, scalars):
+    """An injected loader: 'good*' files load a small volume, anything else fails like a reader."""
+    from volren.samples import marschner_lobb
+
+    if str(path).endswith("good.vti"):
+        return LoadedInput(marschner_lobb(17), sample_transfer_functions()["marschner_lobb"], source="good.vti")
+    raise VolrenError(f"{path}: not a VTK XML image file")
+
+
+def test_opening_a_bad_file_keeps_the_volume_and_reports_one_line(make_window, sample, qtbot, error_boxes, tmp_path):
+    w = make_window(load=fake_load)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.apply_loaded(sample, "vtk")
+    volume, frame = w.state.volume, w.viewport.frame
+    with qtbot.waitSignal(w.loadFinished, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.open_input(tmp_path / "bad.vti")
+    assert blocker.args == [False]
+    assert w.state.volume is volume and w.viewport.frame is frame
+    assert len(error_boxes) == 1 and "bad.vti" in error_boxes[0][1] and "\n" not in error_boxes[0][1]
+    assert not w.busy_bar.isVisible()
+
+
+def test_dropping_a_file_opens_it_off_the_gui_thread(make_window, sample, qtbot, tmp_path, error_boxes):
+    w = make_window(load=fake_load)
+    path = tmp_path / "good.vti"
+    mime = QMimeData()
+    mime.setUrls([QUrl.fromLocalFile(str(path))])
+    enter = QDragEnterEvent(QPoint(20, 20), Qt.CopyAction, mime, Qt.LeftButton, Qt.NoModifier)
+    QApplication.sendEvent(w, enter)
+    assert enter.isAccepted(), "the window refuses a local file"
+    drop = QDropEvent(QPointF(20, 20), Qt.CopyAction, mime, Qt.LeftButton, Qt.NoModifier)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        QApplication.sendEvent(w, drop)  # Qt delivers a drop only after an accepted drag-enter
+        assert w.busy_bar.isVisibleTo(w)  # the busy indicator shows while the loader runs
+    assert w.state.volume.dimensions == (17, 17, 17) and w.state.source == "good.vti"
+    assert error_boxes == []
+
+
+def test_save_screenshot_writes_a_png_of_the_viewport_size(loaded_window, tmp_path):
+    w = loaded_window
+    path = tmp_path / "shot.png"
+    assert w.save_screenshot(path)
+    image = QImage(str(path))
+    assert not image.isNull()
+    assert (image.width(), image.height()) == w.viewport.pixel_size()
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    whole = tmp_path / "window.png"
+    assert w.save_screenshot(whole, whole_window=True)
+    assert (QImage(str(whole)).width(), QImage(str(whole)).height()) == (w.width(), w.height())
+
+
+def test_save_screenshot_to_a_bad_place_reports(loaded_window, tmp_path, error_boxes):
+    assert not loaded_window.save_screenshot(tmp_path / "missing" / "dir" / "x.png")
+    assert len(error_boxes) == 1 and "x.png" in error_boxes[0][1]
+
+
+def test_in_place_tf_edit_renders_again(loaded_window, qtbot):
+    w = loaded_window
+    before = frame_pixels(w).copy()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.state.transfer_function.set_opacity_points([[0.0, 0.0], [1.0, 0.0]])  # fully transparent
+    assert not np.array_equal(frame_pixels(w), before)
+    assert not_background(w) == 0
+
+
+@needs_io
+def test_opens_the_bundled_sample_by_default(window, qtbot, error_boxes):
+    with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        window.open_input()
+    assert window.state.source == "sample marschner_lobb" and window.state.volume.dimensions == (41, 41, 41)
+    assert not_background(window) > 0
+    assert error_boxes == []
+
+
+@needs_io
+def test_opening_a_scene_then_a_tf_file(window, qtbot, tmp_path, error_boxes):
+    from volren import io
+    from volren.model.scene import OrbitView, Scene
+    from volren.samples import sample_paths
+
+    volume_path, tf_path = sample_paths("marschner_lobb")
+    scene_path = tmp_path / "scene.json"
+    view = OrbitView(azimuth=90.0, elevation=10.0, zoom=1.5)
+    io.save_scene(Scene(str(volume_path), io.load_transfer_function(tf_path), view, renderer="vtk"), scene_path)
+    with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        window.open_input(scene_path)
+    volume = window.state.volume
+    assert window.state.camera == view.camera(volume.bounds, window.viewport.aspect())
+    assert window.state.source == "scene.json"
+
+    tf = TransferFunction1D.ramp(0.0, 1.0, 0.5, (1.0, 0.0, 0.0), 0.05)
+    io.save_transfer_function(tf, tmp_path / "red.json")
+    with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        window.open_input(tmp_path / "red.json")
+    assert window.state.volume is volume and window.state.transfer_function == tf
+    red = frame_pixels(window)[..., 0].astype(int) - frame_pixels(window)[..., 1]
+    assert np.count_nonzero(red > 60) > 100, "the red TF is not what is shown"
+    assert error_boxes == []
+
+
+@needs_io
+def test_opening_a_corrupt_file_with_the_real_readers(loaded_window, qtbot, error_boxes, tmp_path):
+    w = loaded_window
+    volume = w.state.volume
+    bad = tmp_path / "corrupt.vti"
+    bad.write_bytes(b"this is not a VTK file\x00\x01")
+    with qtbot.waitSignal(w.loadFinished, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.open_input(bad)
+    assert blocker.args == [False] and w.state.volume is volume
+    assert len(error_boxes) == 1 and "corrupt.vti" in error_boxes[0][1] and "\n" not in error_boxes[0][1]
+
+
+@needs_io
+def test_run_with_screenshot_in_process(qapp, tmp_path):
+    from volren.app.main import run
+
+    out = tmp_path / "window.png"
+    assert run(renderer="vtk", screenshot=out, size=(400, 320)) == 0
+    image = QImage(str(out))
+    assert (image.width(), image.height()) == (400, 320)

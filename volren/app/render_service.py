@@ -1,0 +1,309 @@
+"""Rendering off the GUI thread: one worker thread owns the renderer; the newest request wins.
+
+Why a dedicated thread rather than a pool: VTK and OpenGL objects belong to the thread that made
+their context, so the renderer is created, fed (volume, TF, settings), used and released in the
+same worker thread for its whole life. The GUI thread only ever hands over immutable requests.
+
+Why "newest only": while the mouse drags, requests come faster than frames. A request waits in a
+one-slot mailbox; a newer one replaces it, and a renderer that reports progress is interrupted
+as soon as a newer request is waiting (its progress callback raises). So the frame being drawn
+always belongs to the latest camera, and the GUI never waits for the renderer.
+
+The transfer function is the one mutable input; each request carries a private copy made on the
+GUI thread, keyed by (identity, version) of the original so the renderer is updated only when the
+TF actually changed.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from PyQt5.QtCore import QObject, QThread, pyqtSignal, pyqtSlot
+
+from volren.app.imaging import composite_rgb8
+from volren.model.camera import Camera
+from volren.model.settings import RenderSettings
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.volume import Volume
+from volren.renderers.base import Renderer
+
+
+@dataclass(frozen=True, eq=False)
+class RenderRequest:
+    """Everything one frame needs; immutable apart from `tf`, which is a private copy."""
+
+    serial: int
+    renderer: str
+    volume: Volume
+    tf: TransferFunction1D
+    tf_key: tuple[int, int]
+    settings: RenderSettings
+    camera: Camera
+    width: int
+    height: int
+    full: bool
+    background: tuple[float, float, float]
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """A finished frame, already converted to 8-bit RGB over the background."""
+
+    serial: int
+    renderer: str
+    width: int
+    height: int
+    ms: float
+    full: bool
+    rgb: NDArray[np.uint8]
+    camera: Camera
+
+
+#: Frames slower than this report their progress, at most this often.
+PROGRESS_INTERVAL_S = 0.25
+
+
+class _Superseded(Exception):
+    """Raised from the progress callback to abandon a frame nobody will see."""
+
+
+class _Mailbox:
+    """One slot shared by the GUI thread (puts) and the worker (takes); put replaces."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._request: RenderRequest | None = None
+        self.closed = False
+
+    def put(self, request: RenderRequest) -> None:
+        with self._lock:
+            if not self.closed:
+                self._request = request
+
+    def take(self) -> RenderRequest | None:
+        with self._lock:
+            request, self._request = self._request, None
+            return None if self.closed else request
+
+    def waiting(self) -> bool:
+        with self._lock:
+            return self._request is not None or self.closed
+
+    def close(self) -> None:
+        with self._lock:
+            self.closed = True
+            self._request = None
+
+
+RendererFactory = Callable[[str], Renderer]
+
+
+def _registry_factory(name: str) -> Renderer:
+    from volren.renderers.registry import registry
+
+    return registry.create(name)
+
+
+class RenderWorker(QObject):
+    """Lives in the render thread; owns the renderer and what was last given to it."""
+
+    frameReady = pyqtSignal(object)  # Frame
+    failed = pyqtSignal(object, str)  # RenderRequest, one-line reason
+    progressed = pyqtSignal(int, str, float)  # serial, renderer, fraction done (slow frames only)
+
+    def __init__(self, mailbox: _Mailbox, factory: RendererFactory = _registry_factory) -> None:
+        super().__init__()
+        self._mailbox = mailbox
+        self._factory = factory
+        self._renderer: Renderer | None = None
+        self._renderer_name: str | None = None
+        self._volume: Volume | None = None
+        self._tf_key: tuple[int, int] | None = None
+        self._settings: RenderSettings | None = None
+
+    @pyqtSlot()
+    def process(self) -> None:
+        """Render what waits in the mailbox until it is empty (extra wake-ups find it empty)."""
+        while True:
+            request = self._mailbox.take()
+            if request is None:
+                return
+            try:
+                frame = self._render(request)
+            except Exception as exc:  # noqa: BLE001 - a renderer must not take the app down
+                if isinstance(exc, _Superseded) or self._mailbox.waiting():
+                    continue  # interrupted (or failing) on the way to a newer frame
+                self._release()  # a renderer that raised may be in any state: start afresh
+                self.failed.emit(request, _one_line(exc))
+                continue
+            self.frameReady.emit(frame)
+
+    def _sync(self, request: RenderRequest) -> Renderer:
+        if self._renderer is None or self._renderer_name != request.renderer:
+            self._release()
+            self._renderer = self._factory(request.renderer)
+            self._renderer_name = request.renderer
+        renderer = self._renderer
+        if self._settings != request.settings:
+            renderer.set_settings(request.settings)
+            self._settings = request.settings
+        if self._volume is not request.volume:
+            renderer.set_volume(request.volume)
+            self._volume = request.volume
+        if self._tf_key != request.tf_key:
+            renderer.set_transfer_function(request.tf)
+            self._tf_key = request.tf_key
+        return renderer
+
+    def _render(self, request: RenderRequest) -> Frame:
+        renderer = self._sync(request)
+
+        start = time.perf_counter()
+        last_report = [start]
+
+        def progress(fraction: float) -> None:
+            if self._mailbox.waiting():
+                raise _Superseded()
+            now = time.perf_counter()
+            if now - last_report[0] > PROGRESS_INTERVAL_S:  # only slow frames, and not too often
+                last_report[0] = now
+                self.progressed.emit(request.serial, request.renderer, float(fraction))
+
+        image = renderer.render(request.camera, request.width, request.height, progress)
+        elapsed = (time.perf_counter() - start) * 1000.0
+        stats = getattr(renderer, "last_frame", None)
+        ms = float(getattr(stats, "ms", elapsed) or elapsed)
+        image = np.asarray(image)
+        if image.shape != (request.height, request.width, 4):
+            raise RuntimeError(f"renderer returned shape {image.shape}, expected {(request.height, request.width, 4)}")
+        rgb = composite_rgb8(image, request.background)
+        return Frame(
+            request.serial, request.renderer, request.width, request.height, ms, request.full, rgb, request.camera
+        )
+
+    def _release(self) -> None:
+        renderer, self._renderer = self._renderer, None
+        self._renderer_name = None
+        self._volume = self._tf_key = self._settings = None
+        if renderer is not None:
+            try:
+                renderer.release()
+            except Exception as exc:  # noqa: BLE001 - releasing must not fail the next frame
+                print(f"volren: warning: releasing the renderer failed: {_one_line(exc)}", file=sys.stderr)
+
+    @pyqtSlot()
+    def stop(self) -> None:
+        """Release the renderer here, in its own thread, then end the thread's event loop."""
+        self._release()
+        thread = self.thread()
+        if thread is not None:
+            thread.quit()
+
+
+def _one_line(exc: BaseException) -> str:
+    from volren.errors import VolrenError
+
+    text = " ".join(str(exc).split())
+    if isinstance(exc, VolrenError):
+        return text
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+#: Threads that did not stop in time are kept here: destroying a running QThread aborts the process.
+_orphans: list[tuple[QThread, RenderWorker]] = []
+
+
+class RenderService(QObject):
+    """The GUI thread's handle on the render thread: submit requests, receive frames."""
+
+    frameReady = pyqtSignal(object)  # Frame
+    renderFailed = pyqtSignal(object, str)  # RenderRequest, one-line reason
+    progressed = pyqtSignal(int, str, float)  # serial, renderer, fraction done (slow frames only)
+    _wake = pyqtSignal()
+    _stop = pyqtSignal()
+
+    def __init__(self, parent: QObject | None = None, factory: RendererFactory = _registry_factory) -> None:
+        super().__init__(parent)
+        self._mailbox = _Mailbox()
+        self._serial = 0
+        self._running = True
+        self._thread = QThread()
+        self._thread.setObjectName("volren-render")
+        self._worker = RenderWorker(self._mailbox, factory)
+        self._worker.moveToThread(self._thread)
+        self._wake.connect(self._worker.process)
+        self._stop.connect(self._worker.stop)
+        self._worker.frameReady.connect(self._on_frame)
+        self._worker.failed.connect(self._on_failed)
+        self._worker.progressed.connect(self._on_progress)
+        self._thread.start()
+
+    @property
+    def latest_serial(self) -> int:
+        """The serial of the newest request; a frame with this serial is up to date."""
+        return self._serial
+
+    def submit(
+        self,
+        renderer: str,
+        volume: Volume,
+        tf: TransferFunction1D,
+        settings: RenderSettings,
+        camera: Camera,
+        width: int,
+        height: int,
+        full: bool = True,
+        background: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ) -> int:
+        """Queue a frame, replacing any request not yet started; returns its serial."""
+        if not self._running:
+            return self._serial
+        self._serial += 1
+        request = RenderRequest(
+            self._serial,
+            renderer,
+            volume,
+            tf.copy(),
+            (id(tf), tf.version),
+            settings,
+            camera,
+            int(width),
+            int(height),
+            full,
+            background,
+        )
+        self._mailbox.put(request)
+        self._wake.emit()
+        return self._serial
+
+    @pyqtSlot(object)
+    def _on_frame(self, frame: Frame) -> None:
+        if self._running:
+            self.frameReady.emit(frame)
+
+    @pyqtSlot(int, str, float)
+    def _on_progress(self, serial: int, renderer: str, fraction: float) -> None:
+        if self._running and serial == self._serial:
+            self.progressed.emit(serial, renderer, fraction)
+
+    @pyqtSlot(object, str)
+    def _on_failed(self, request: RenderRequest, message: str) -> None:
+        if self._running:
+            self.renderFailed.emit(request, message)
+
+    def shutdown(self, timeout_ms: int = 30000) -> None:
+        """Drop waiting requests, release the renderer in its thread and stop the thread."""
+        if not self._running:
+            return
+        self._running = False
+        self._mailbox.close()
+        self._stop.emit()
+        if not self._thread.wait(timeout_ms):
+            print("volren: warning: the renderer did not stop in time", file=sys.stderr)
+            _orphans.append((self._thread, self._worker))

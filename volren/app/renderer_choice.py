@@ -1,0 +1,68 @@
+"""Which renderers can draw what is loaded, and what to use instead (no Qt).
+
+The chooser lists every registered renderer so people see what exists; the ones that cannot draw
+the loaded volume (or failed to import) are disabled with the reason. The app never leaves a
+volume without a usable renderer: `pick_renderer` keeps the current one when it can, else takes
+a compatible one in a fixed order of preference.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+from volren.model.settings import RenderSettings
+from volren.renderers.registry import RendererRegistry
+from volren.renderers.registry import registry as default_registry
+
+#: Fast interactive renderers first; `reference` is exact but slow.
+PREFERENCE = ("vtk",)
+
+
+@dataclass(frozen=True)
+class RendererOption:
+    """One entry of the chooser: enabled when `reason` is None."""
+
+    name: str
+    reason: str | None
+
+    @property
+    def enabled(self) -> bool:
+        return self.reason is None
+
+
+def renderer_options(
+    volume_kind: str | None,
+    settings: RenderSettings | None = None,
+    registry: RendererRegistry = default_registry,
+) -> tuple[list[RendererOption], list[str]]:
+    """Every registered renderer with why it cannot draw `volume_kind` (None: it can).
+
+    Also returns the warnings the registry raised while importing renderers (a broken plugin), so
+    the app can show them instead of letting them escape; the registry reports each one once.
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        if volume_kind is None:
+            reasons: dict[str, str | None] = {}
+            for name in registry.names():
+                try:
+                    registry.get(name)
+                    reasons[name] = None
+                except Exception as exc:  # noqa: BLE001 - any import failure disables the entry
+                    reasons[name] = str(exc)
+        else:
+            reasons = registry.compatible(volume_kind, 1, settings)
+    options = [RendererOption(name, reasons.get(name)) for name in registry.names()]
+    return options, [str(w.message) for w in caught]
+
+
+def pick_renderer(options: list[RendererOption], current: str | None) -> str | None:
+    """`current` when it is usable, else the first usable one in PREFERENCE order, else any."""
+    usable = [o.name for o in options if o.enabled]
+    if current in usable:
+        return current
+    for name in PREFERENCE:
+        if name in usable:
+            return name
+    return usable[0] if usable else None

@@ -1,0 +1,106 @@
+"""When to render, and at what cost: state changes -> frame requests.
+
+Interactive changes (a drag in progress) get an immediate preview frame with at most a quarter of
+the pixels (half of each side, scaled up for display; fewer when the renderer is slow, so that a
+preview stays within about 50 ms), and restart a short settle timer; when no
+input has come for `settle_ms`, one full-quality frame follows. Every other change (a new
+volume, another renderer, a reset view) asks for a full-quality frame at once.
+
+This is the only place that builds requests, so other panels (TF editors) get the same policy
+just by changing the `ViewState` inside `state.begin_interaction()` / `end_interaction()`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from PyQt5.QtCore import QObject, QTimer
+
+from volren.app.imaging import adaptive_preview_scale, preview_size
+from volren.app.render_service import Frame, RenderService
+from volren.app.state import Change, ViewState
+
+#: Input quiet for this long means the gesture stopped: render at full quality.
+SETTLE_MS = 150
+#: Largest side scale of preview frames (0.5: a quarter of the pixels).
+PREVIEW_SCALE = 0.5
+#: What a preview frame may cost; slower renderers get coarser previews.
+PREVIEW_BUDGET_MS = 50.0
+
+
+class FrameScheduler(QObject):
+    """Subscribes to a `ViewState` and submits frames to a `RenderService`."""
+
+    def __init__(
+        self,
+        state: ViewState,
+        service: RenderService,
+        viewport_size: Callable[[], tuple[int, int]],
+        parent: QObject | None = None,
+        settle_ms: int = SETTLE_MS,
+        preview_scale: float = PREVIEW_SCALE,
+    ) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._service = service
+        self._viewport_size = viewport_size
+        self.preview_scale = preview_scale
+        self.preview_budget_ms = PREVIEW_BUDGET_MS
+        self._cost: tuple[str, float] | None = None  # (renderer, ms per pixel) of the last frame
+        self._timer = QTimer(self)
+        self._timer.setSingleShot(True)
+        self._timer.setInterval(settle_ms)
+        self._timer.timeout.connect(self.request_full)
+        self._requested_any = False
+        self._unsubscribe = state.subscribe(self._on_change)
+
+    def _on_change(self, change: Change) -> None:
+        if change.what == "interaction":  # a gesture ended: full quality once input is quiet
+            self._timer.start()
+        elif change.interactive:
+            self.request_preview()
+            self._timer.start()
+        else:
+            self._timer.stop()
+            self.request_full()
+
+    def viewport_resized(self) -> None:
+        """A resize is like a gesture: preview now, full quality when the resizing stops."""
+        if not self._requested_any:
+            self.request_full()
+            return
+        self.request_preview()
+        self._timer.start()
+
+    def note_frame(self, frame: Frame) -> None:
+        """Remember what the renderer's last frame cost, to size the next previews."""
+        self._cost = (frame.renderer, frame.ms / max(frame.width * frame.height, 1))
+
+    def current_preview_scale(self) -> float:
+        width, height = self._viewport_size()
+        cost = self._cost[1] if self._cost and self._cost[0] == self._state.renderer else None
+        return adaptive_preview_scale(cost, width * height, self.preview_budget_ms, self.preview_scale)
+
+    def request_preview(self) -> int | None:
+        return self._request(full=False)
+
+    def request_full(self) -> int | None:
+        self._timer.stop()
+        return self._request(full=True)
+
+    def _request(self, full: bool) -> int | None:
+        s = self._state
+        width, height = self._viewport_size()
+        if s.volume is None or s.transfer_function is None or s.camera is None or width < 1 or height < 1:
+            return None
+        if not full:
+            width, height = preview_size(width, height, self.current_preview_scale())
+        self._requested_any = True
+        return self._service.submit(
+            s.renderer, s.volume, s.transfer_function, s.settings, s.camera, width, height, full, s.background
+        )
+
+    def detach(self) -> None:
+        """Stop listening (the window is closing)."""
+        self._timer.stop()
+        self._unsubscribe()

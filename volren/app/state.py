@@ -1,0 +1,196 @@
+"""`ViewState`: what the app shows, as a plain observable object (no Qt).
+
+Widgets never own the volume, the transfer function or the camera; they read them from one
+`ViewState` and change them through its setters. Every change is announced to the subscribers as
+a `Change`, so the viewport, the renderer chooser, the frame scheduler and (later) the
+transfer-function editors all stay in step without knowing about each other.
+
+Changes made while an interaction is in progress (a mouse drag in the viewport, later a drag in a
+TF editor) are flagged `interactive`: the frame scheduler answers them with cheap preview frames
+and renders one full-quality frame once the input stops.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Literal
+
+from volren.model.camera import Camera
+from volren.model.settings import RenderSettings
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.volume import Volume
+
+#: The parts of the state a `Change` can name.
+What = Literal["volume", "tf", "camera", "settings", "renderer", "background", "interaction"]
+
+#: The scene camera convention (DESIGN.md): azimuth 30, elevation 20, zoom 1 after the reset.
+DEFAULT_VIEW = (30.0, 20.0, 1.0)
+#: Dark grey: volumes fading to transparent stay distinguishable from the window background.
+DEFAULT_BACKGROUND = (0.1, 0.1, 0.12)
+
+
+@dataclass(frozen=True)
+class Change:
+    """One announcement: which part changed, and whether it came from an ongoing interaction.
+
+    `what == "interaction"` with `interactive == False` says an interaction just ended.
+    """
+
+    what: What
+    interactive: bool = False
+
+
+Listener = Callable[[Change], None]
+
+
+def default_camera(volume: Volume, aspect: float = 1.0, parallel: bool = False) -> Camera:
+    """The camera the scenes use (Camera.orbit with 30/20/1), fitted to the viewport's aspect."""
+    azimuth, elevation, zoom = DEFAULT_VIEW
+    return Camera.orbit(volume.bounds, azimuth, elevation, zoom, parallel, aspect)
+
+
+class ViewState:
+    """Volume, transfer function, camera, settings, renderer name and background of one view."""
+
+    def __init__(self, renderer: str = "vtk", settings: RenderSettings | None = None) -> None:
+        self._volume: Volume | None = None
+        self._tf: TransferFunction1D | None = None
+        self._camera: Camera | None = None
+        self._settings = settings or RenderSettings()
+        self._renderer = renderer
+        self._background: tuple[float, float, float] = DEFAULT_BACKGROUND
+        self._listeners: list[Listener] = []
+        self._tf_unhook: Callable[[], None] | None = None
+        self._interaction_depth = 0
+        #: What is loaded, for titles and messages (a file name or "sample ...").
+        self.source = ""
+
+    # ------------------------------------------------------------------ observation
+    def subscribe(self, listener: Listener) -> Callable[[], None]:
+        """Call `listener(change)` after every change; returns a function that unsubscribes."""
+        self._listeners.append(listener)
+
+        def unsubscribe() -> None:
+            if listener in self._listeners:
+                self._listeners.remove(listener)
+
+        return unsubscribe
+
+    def _emit(self, what: What, interactive: bool | None = None) -> None:
+        change = Change(what, self.interacting if interactive is None else interactive)
+        for listener in list(self._listeners):
+            listener(change)
+
+    # ------------------------------------------------------------------ interaction
+    @property
+    def interacting(self) -> bool:
+        return self._interaction_depth > 0
+
+    def begin_interaction(self) -> None:
+        """Changes from now until `end_interaction` are previews of a gesture in progress."""
+        self._interaction_depth += 1
+
+    def end_interaction(self) -> None:
+        if self._interaction_depth == 0:
+            return
+        self._interaction_depth -= 1
+        if self._interaction_depth == 0:
+            self._emit("interaction", interactive=False)
+
+    @contextmanager
+    def interaction(self) -> Iterator[None]:
+        """A one-shot interactive change (a wheel step): preview now, full quality once input stops."""
+        self._interaction_depth += 1
+        try:
+            yield
+        finally:
+            self._interaction_depth -= 1
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def volume(self) -> Volume | None:
+        return self._volume
+
+    @property
+    def transfer_function(self) -> TransferFunction1D | None:
+        return self._tf
+
+    @property
+    def camera(self) -> Camera | None:
+        return self._camera
+
+    @property
+    def settings(self) -> RenderSettings:
+        return self._settings
+
+    @property
+    def renderer(self) -> str:
+        return self._renderer
+
+    @property
+    def background(self) -> tuple[float, float, float]:
+        return self._background
+
+    # ------------------------------------------------------------------ setters
+    def load(
+        self,
+        volume: Volume,
+        tf: TransferFunction1D,
+        camera: Camera,
+        settings: RenderSettings | None = None,
+        source: str = "",
+        renderer: str | None = None,
+    ) -> None:
+        """Replace the whole scene at once (one "volume" change, so one new frame).
+
+        The renderer changes in the same step, so no frame is requested from a renderer that
+        cannot draw the new volume, nor from the new renderer with the old volume.
+        """
+        self._volume = volume
+        self._hook_tf(tf)
+        self._camera = camera
+        if settings is not None:
+            self._settings = settings
+        if renderer is not None:
+            self._renderer = renderer
+        self.source = source
+        self._emit("volume", interactive=False)
+
+    def set_transfer_function(self, tf: TransferFunction1D) -> None:
+        """Use another TF object; in-place edits of the current one are announced as well."""
+        self._hook_tf(tf)
+        self._emit("tf")
+
+    def _hook_tf(self, tf: TransferFunction1D) -> None:
+        if self._tf_unhook is not None:
+            self._tf_unhook()
+        self._tf = tf
+        self._tf_unhook = tf.on_change(lambda _tf: self._emit("tf"))
+
+    def set_camera(self, camera: Camera) -> None:
+        self._camera = camera
+        self._emit("camera")
+
+    def set_settings(self, settings: RenderSettings) -> None:
+        self._settings = settings
+        self._emit("settings")
+
+    def set_renderer(self, name: str) -> None:
+        if name == self._renderer:
+            return
+        self._renderer = name
+        self._emit("renderer", interactive=False)
+
+    def set_background(self, rgb: tuple[float, float, float]) -> None:
+        self._background = (float(rgb[0]), float(rgb[1]), float(rgb[2]))
+        self._emit("background")
+
+    def reset_camera(self, aspect: float = 1.0) -> None:
+        """Back to the scene camera (30/20/1), keeping the projection type."""
+        if self._volume is None:
+            return
+        parallel = self._camera.parallel if self._camera is not None else False
+        self._camera = default_camera(self._volume, aspect, parallel)
+        self._emit("camera", interactive=False)

@@ -1,0 +1,157 @@
+"""The viewport: paints the latest frame and turns mouse gestures into camera changes.
+
+Every renderer draws offscreen into an array, so the viewport is a plain QWidget that paints a
+QImage; no renderer needs a window of its own, and switching renderers never rebuilds widgets.
+Frames keep their aspect ratio (a frame made before a resize is letterboxed until its successor
+arrives) and preview frames are scaled up smoothly.
+
+Gestures follow VTK's trackball camera (see `interaction`): left-drag rotates, right-drag or the
+wheel dollies, middle-drag (or shift + left-drag) pans, 'r' resets the view. The viewport only
+changes the `ViewState`; the frame scheduler decides what to render.
+"""
+
+from __future__ import annotations
+
+from PyQt5.QtCore import QPoint, QRectF, QSize, Qt, pyqtSignal
+from PyQt5.QtGui import QColor, QImage, QKeyEvent, QMouseEvent, QPainter, QPaintEvent, QResizeEvent, QWheelEvent
+from PyQt5.QtWidgets import QSizePolicy, QWidget
+
+from volren.app import interaction
+from volren.app.render_service import Frame
+from volren.app.state import ViewState
+
+_GESTURES = {Qt.LeftButton: "rotate", Qt.RightButton: "dolly", Qt.MiddleButton: "pan"}
+
+
+class Viewport(QWidget):
+    """Shows frames of the `ViewState` it edits; `resized` and `resetRequested` go to the window."""
+
+    resized = pyqtSignal()
+    resetRequested = pyqtSignal()
+
+    def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._frame: Frame | None = None
+        self._image: QImage | None = None
+        self._drag_button: int | None = None
+        self._drag_gesture: str | None = None
+        self._last_pos = QPoint()
+        self.placeholder = "No volume"
+        self.setFocusPolicy(Qt.StrongFocus)
+        self.setAttribute(Qt.WA_OpaquePaintEvent)
+        self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
+        self.setMinimumSize(64, 64)
+        self.setToolTip("Left-drag: rotate; right-drag or wheel: zoom; middle-drag: pan; R: reset view")
+
+    # ------------------------------------------------------------------ frames
+    @property
+    def frame(self) -> Frame | None:
+        return self._frame
+
+    def pixel_size(self) -> tuple[int, int]:
+        """The size full-quality frames are rendered at: device pixels."""
+        ratio = self.devicePixelRatioF()
+        return max(0, round(self.width() * ratio)), max(0, round(self.height() * ratio))
+
+    def aspect(self) -> float:
+        w, h = self.width(), self.height()
+        return w / h if w > 0 and h > 0 else 1.0
+
+    def show_frame(self, frame: Frame) -> None:
+        """Display `frame` (its pixel buffer is kept alive as long as the QImage)."""
+        self._frame = frame
+        self._image = QImage(frame.rgb.data, frame.width, frame.height, 3 * frame.width, QImage.Format_RGB888)
+        self.update()
+
+    def clear_frame(self) -> None:
+        self._frame = None
+        self._image = None
+        self.update()
+
+    def sizeHint(self) -> QSize:
+        return QSize(640, 480)
+
+    def paintEvent(self, event: QPaintEvent) -> None:
+        painter = QPainter(self)
+        r, g, b = self._state.background
+        painter.fillRect(self.rect(), QColor.fromRgbF(r, g, b))
+        if self._image is None:
+            painter.setPen(QColor(200, 200, 200))
+            painter.drawText(self.rect(), Qt.AlignCenter, self.placeholder)
+            return
+        painter.setRenderHint(QPainter.SmoothPixmapTransform, True)
+        painter.drawImage(self._target_rect(), self._image)
+
+    def _target_rect(self) -> QRectF:
+        """The largest rectangle with the frame's aspect, centred in the widget."""
+        assert self._frame is not None
+        fw, fh = self._frame.width, self._frame.height
+        scale = min(self.width() / fw, self.height() / fh)
+        w, h = fw * scale, fh * scale
+        return QRectF((self.width() - w) / 2.0, (self.height() - h) / 2.0, w, h)
+
+    def resizeEvent(self, event: QResizeEvent) -> None:
+        super().resizeEvent(event)
+        self.resized.emit()
+
+    # ------------------------------------------------------------------ gestures
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        gesture = _GESTURES.get(event.button())
+        if self._drag_button is not None or gesture is None or self._state.camera is None:
+            return super().mousePressEvent(event)
+        if gesture == "rotate" and event.modifiers() & Qt.ShiftModifier:
+            gesture = "pan"
+        self._drag_button = event.button()
+        self._drag_gesture = gesture
+        self._last_pos = event.pos()
+        self._state.begin_interaction()
+        event.accept()
+
+    def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        if self._drag_gesture is None:
+            return super().mouseMoveEvent(event)
+        pos = event.pos()
+        dx, dy = pos.x() - self._last_pos.x(), pos.y() - self._last_pos.y()
+        self._last_pos = pos
+        if dx or dy:
+            self._apply(self._drag_gesture, dx, dy)
+        event.accept()
+
+    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
+        if self._drag_button is None or event.button() != self._drag_button:
+            return super().mouseReleaseEvent(event)
+        self._drag_button = None
+        self._drag_gesture = None
+        self._state.end_interaction()
+        event.accept()
+
+    def wheelEvent(self, event: QWheelEvent) -> None:
+        cam, volume = self._state.camera, self._state.volume
+        delta = event.angleDelta().y()
+        if cam is None or volume is None or delta == 0:
+            return super().wheelEvent(event)
+        with self._state.interaction():
+            self._state.set_camera(interaction.dolly(cam, interaction.wheel_dolly_factor(delta), volume.bounds))
+        event.accept()
+
+    def keyPressEvent(self, event: QKeyEvent) -> None:
+        # Reached only when the window's 'R' shortcut did not take the key (e.g. window not active).
+        if event.key() == Qt.Key_R and event.modifiers() in (Qt.NoModifier, Qt.KeypadModifier):
+            self.resetRequested.emit()
+            event.accept()
+            return
+        super().keyPressEvent(event)
+
+    def _apply(self, gesture: str, dx: int, dy: int) -> None:
+        cam, volume = self._state.camera, self._state.volume
+        if cam is None or volume is None:
+            return
+        w, h = max(self.width(), 1), max(self.height(), 1)
+        if gesture == "rotate":
+            cam = interaction.rotate(cam, dx, dy, w, h, volume.bounds)
+        elif gesture == "dolly":
+            cam = interaction.dolly(cam, interaction.drag_dolly_factor(dy, h), volume.bounds)
+        else:
+            cam = interaction.pan(cam, dx, dy, h, volume.bounds)
+        self._state.set_camera(cam)

@@ -1,0 +1,1 @@
+"""Measuring renderers: error metrics against `reference`, cached reference images, benchmarks."""

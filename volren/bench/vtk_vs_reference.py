@@ -1,0 +1,82 @@
+"""Measure the `vtk` renderer against `reference` on the shared scenes (python -m volren.bench.vtk_vs_reference).
+
+For each dataset and TF style in ../shared/scenes: the RMSE / max / PSNR of `vtk` against
+`reference`, and the median time per frame of each (the reference's time is that of its one,
+uncached render). Prints a Markdown table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from pathlib import Path
+
+from volren.bench.metrics import image_error
+from volren.bench.reference_cache import reference_image
+from volren.model.camera import Camera
+from volren.model.settings import RenderSettings
+from volren.model.transfer_function import TransferFunction1D
+
+#: dataset -> (file under shared/data, scalars, azimuth, elevation, zoom), from shared/scenes/README.md
+SCENES = {
+    "ironProt": ("uniform/ironProt.vtk", "scalars", 30, 20, 1.0),
+    "bonsai": ("uniform/bonsai.vti", "ImageFile", 30, 20, 1.0),
+    "engine": ("uniform/engine.vti", "ImageFile", 30, 20, 1.0),
+    "aneurism": ("uniform/aneurism.vti", "ImageFile", 30, 20, 1.0),
+    "spx": ("tets/spx.vtk", "scalars", 30, 20, 1.0),
+    "bluntfin": ("tets/bluntfin_tets.vtu", "Density", 30, 20, 1.4),
+    "oxygen": ("tets/oxygen_post_tets.vtu", "VelocityMagnitude", 30, 45, 1.3),
+}
+STYLES = ("smooth", "spiky", "opaque")
+
+
+def time_frames(renderer, camera, width, height, frames: int) -> tuple[float, object]:
+    image = renderer.render(camera, width, height)  # warm-up: uploads, compilation
+    times = []
+    for _ in range(frames):
+        start = time.perf_counter()
+        image = renderer.render(camera, width, height)
+        times.append((time.perf_counter() - start) * 1000.0)
+    return statistics.median(times), image
+
+
+def main(argv: list[str] | None = None) -> None:
+    from volren.io import load_volume
+    from volren.renderers.registry import registry
+
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--shared", default=str(Path(__file__).resolve().parents[2].parent / "shared"))
+    parser.add_argument("--size", type=int, default=512)
+    parser.add_argument("--datasets", default=",".join(SCENES))
+    parser.add_argument("--styles", default=",".join(STYLES))
+    parser.add_argument("--frames", type=int, default=5)
+    parser.add_argument("--step", type=float, default=0.5)
+    args = parser.parse_args(argv)
+    shared = Path(args.shared)
+    size = args.size
+    print(f"| dataset | TF | vtk ms/frame | reference ms | RMSE | max abs | PSNR dB |")
+    print("|---|---|---|---|---|---|---|")
+    for dataset in args.datasets.split(","):
+        path, scalars, az, el, zoom = SCENES[dataset]
+        volume = load_volume(shared / "data" / path, scalars=scalars)
+        camera = Camera.orbit(volume.bounds, az, el, zoom)
+        for style in args.styles.split(","):
+            tf = TransferFunction1D.from_dict(json.loads((shared / "scenes" / f"{dataset}-{style}.json").read_text()))
+            settings = RenderSettings(step=args.step)
+            start = time.perf_counter()
+            reference = reference_image(volume, tf, camera, size, size, settings)
+            ref_ms = (time.perf_counter() - start) * 1000.0
+            with registry.create("vtk") as renderer:
+                renderer.set_volume(volume)
+                renderer.set_transfer_function(tf)
+                renderer.set_settings(settings)
+                ms, image = time_frames(renderer, camera, size, size, args.frames)
+            err = image_error(image, reference)
+            print(f"| {dataset} | {style} | {ms:.1f} | {ref_ms:.0f} | {err.rmse:.5f} | {err.max_abs:.4f} | {err.psnr:.1f} |",
+                  flush=True)
+
+
+if __name__ == "__main__":
+    main()
