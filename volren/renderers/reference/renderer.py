@@ -1,0 +1,236 @@
+"""The `reference` renderer: DESIGN.md's optical model integrated in float64 until it converges.
+
+Why: every error in the project (benchmarks, renderer tests) is measured against this renderer,
+so it favours accuracy over speed, and says so when it could not reach its tolerance.
+
+How: one ray per pixel centre (`Camera.pixel_rays`: origins on the near plane), clipped to the far
+plane as well. Uniform grids go through `uniform.render_uniform` (trilinear, per-cell cubics), meshes
+through `tets.render_tets` (screen-space binning, exact ray-tetrahedron clipping); both hand their
+per-ray intervals to `ray_integral.integrate_ray`, which refines each ray until two successive
+levels agree to `tolerance` (see that module for the quadrature). The image is processed in blocks
+of rows, one parallel numba kernel call per block, with `progress` called after each block.
+
+RenderSettings.jitter is ignored (the reference is deterministic) and preintegration is not
+offered (the reference integrates the TF exactly; callers comparing against a pre-integrating
+renderer render the reference with preintegration off).
+
+Counters of a frame (`last_frame.counters`): samples (TF evaluations), rays, rays_hit, intervals
+(cells or tetrahedra crossed, summed over rays), unconverged_rays, max_level and mean_level (over
+the rays that hit data; level 0 is the initial step), subdivision_cap_hits, and for meshes
+candidates (pixel-list entries) and flat_or_nonfinite_tets.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.errors import VolrenError, VolrenWarning
+from volren.model.camera import Camera
+from volren.model.settings import BlendMode
+from volren.model.volume import TetVolume, UniformVolume
+from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, RendererBase
+from volren.renderers.reference.ray_integral import AVERAGE, COMPOSITE, MAXIMUM, MINIMUM
+from volren.renderers.reference.shading import shade_params
+from volren.renderers.reference.tets import bin_rows, prepare_tets, render_tets, tet_boxes
+from volren.renderers.reference.tf_eval import pack_tf
+from volren.renderers.reference.uniform import render_uniform
+
+DEFAULT_TOLERANCE = 1e-5
+DEFAULT_MAX_LEVELS = 10
+#: Rays per parallel work item: small, because ray costs vary a lot across the image.
+CHUNK_SIZE = 4
+#: Target number of row blocks (progress calls) per frame.
+BLOCKS = 16
+
+_MODES = {
+    BlendMode.COMPOSITE: COMPOSITE,
+    BlendMode.MAXIMUM: MAXIMUM,
+    BlendMode.MINIMUM: MINIMUM,
+    BlendMode.AVERAGE: AVERAGE,
+}
+
+_SUPPORT = KindSupport(
+    tf_dims=frozenset({1}),
+    preintegration=False,
+    shading=True,
+    blend_modes=frozenset(BlendMode),
+)
+
+
+def _ray_far(camera: Camera, dirs: NDArray) -> NDArray:
+    """Distance along each ray from the near plane (where it starts) to the far plane."""
+    near, far = camera.clipping_range
+    cos = dirs @ np.asarray(camera.direction, dtype=np.float64)
+    return (far - near) / cos
+
+
+class ReferenceRenderer(RendererBase):
+    """Float64 ray integration of DESIGN.md's optical model, refined per ray until converged."""
+
+    name: ClassVar[str] = "reference"
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        kinds={"uniform": _SUPPORT, "tet": _SUPPORT},
+        backend="cpu",
+        summary="float64 ray integration refined until converged; the truth for error metrics",
+    )
+    option_help: ClassVar[Mapping[str, str]] = {
+        "tolerance": f"per-ray convergence tolerance, max abs RGBA change between levels (default {DEFAULT_TOLERANCE})",
+        "max_levels": f"most refinement levels per ray, each halving the step (>= 2, default {DEFAULT_MAX_LEVELS})",
+    }
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._prepared: tuple | None = None
+        #: The last frame in float64 (H, W, 4), before rounding to float32: for exact tests.
+        self.last_rgba64: NDArray[np.float64] | None = None
+
+    # ------------------------------------------------------------------------- state
+    def _volume_changed(self) -> None:
+        self._prepared = None
+
+    def _check_options(self, options: Mapping[str, Any]) -> None:
+        super()._check_options(options)
+        self._read_options(options)
+
+    @staticmethod
+    def _read_options(options: Mapping[str, Any]) -> tuple[float, int]:
+        tol = options.get("tolerance", DEFAULT_TOLERANCE)
+        levels = options.get("max_levels", DEFAULT_MAX_LEVELS)
+        if isinstance(tol, bool) or not isinstance(tol, int | float) or not (math.isfinite(tol) and tol > 0):
+            raise VolrenError(f"renderer reference: option tolerance must be a positive number, got {tol!r}")
+        if isinstance(levels, bool) or not isinstance(levels, int) or not (2 <= levels <= 24):
+            raise VolrenError(f"renderer reference: option max_levels must be an integer in 2..24, got {levels!r}")
+        return float(tol), int(levels)
+
+    def _prepare(self) -> tuple:
+        if self._prepared is None:
+            vol = self._volume
+            if isinstance(vol, UniformVolume):
+                values = np.ascontiguousarray(vol.values, dtype=np.float64)
+                b = np.asarray(vol.bounds, dtype=np.float64)
+                self._prepared = (
+                    values,
+                    np.asarray(vol.origin, dtype=np.float64),
+                    np.asarray(vol.spacing, dtype=np.float64),
+                    np.ascontiguousarray(b[0::2]),
+                    np.ascontiguousarray(b[1::2]),
+                    vol.characteristic_length,
+                )
+            else:
+                assert isinstance(vol, TetVolume)
+                values = np.ascontiguousarray(vol.values, dtype=np.float64)
+                faces = prepare_tets(vol.points, vol.tets, values)
+                self._prepared = (faces, vol.characteristic_length)
+        return self._prepared
+
+    # ------------------------------------------------------------------------ render
+    def _render(
+        self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
+    ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
+        vol = self._volume
+        settings = self._settings
+        tol, max_levels = self._read_options(settings.options)
+        mode = _MODES[settings.blend_mode]
+        tf = pack_tf(self._tf)
+        prepared = self._prepare()
+        length = prepared[-1]
+        lo, hi = vol.value_range
+        spar = shade_params(settings, camera, hi - lo, length)
+        h0 = float(settings.step) * length
+
+        origins, dirs = camera.pixel_rays(width, height)
+        origins = np.ascontiguousarray(origins.reshape(-1, 3))
+        dirs = np.ascontiguousarray(dirs.reshape(-1, 3))
+        tfar = np.ascontiguousarray(_ray_far(camera, dirs))
+        n = width * height
+        out = np.zeros((n, 4))
+        stats = np.zeros((n, 5), np.int64)
+        extra: dict[str, float] = {}
+
+        if isinstance(vol, UniformVolume):
+            values, org, sp, blo, bhi, _ = prepared
+
+            def kernel(a: int, b: int) -> None:
+                render_uniform(
+                    origins[a:b], dirs[a:b], tfar[a:b], values, org, sp, blo, bhi,
+                    tf, spar, mode, h0, tol, max_levels, out[a:b], stats[a:b],
+                )  # fmt: skip
+
+        else:
+            (normals, anchors, sigma, tvals, grads, ok, flat), _ = prepared
+            boxes = self._boxes(camera, width, height, vol, ok)
+            extra["candidates"] = 0.0
+            extra["flat_or_nonfinite_tets"] = float(np.count_nonzero(~ok))
+
+            def kernel(a: int, b: int) -> None:
+                offsets, cand = bin_rows(boxes, width, a // width, b // width)
+                extra["candidates"] += len(cand)
+                render_tets(
+                    origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, normals, anchors, sigma,
+                    tvals, grads, tf, spar, mode, h0, tol, max_levels, out[a:b], stats[a:b],
+                )  # fmt: skip
+
+        rows = max(1, math.ceil(height / BLOCKS))
+        old_chunk = numba.get_parallel_chunksize()
+        numba.set_parallel_chunksize(CHUNK_SIZE)
+        try:
+            for y0 in range(0, height, rows):
+                y1 = min(height, y0 + rows)
+                kernel(y0 * width, y1 * width)
+                if progress is not None:
+                    progress(y1 / height)
+        finally:
+            numba.set_parallel_chunksize(old_chunk)
+
+        # only rounding can take a channel out of [0, 1] or rgb above alpha: clamp that
+        rgba = np.clip(out, 0.0, 1.0)
+        rgba[:, :3] = np.minimum(rgba[:, :3], rgba[:, 3:4])
+        self.last_rgba64 = rgba.reshape(height, width, 4)
+        image = self.last_rgba64.astype(np.float32)
+
+        hit = stats[:, 4] > 0
+        unconverged = int(stats[:, 2].sum())
+        counters: dict[str, float] = {
+            "samples": float(stats[:, 0].sum()),
+            "rays": float(n),
+            "rays_hit": float(np.count_nonzero(hit)),
+            "intervals": float(stats[:, 4].sum()),
+            "unconverged_rays": float(unconverged),
+            "max_level": float(stats[:, 1].max(initial=0)),
+            "mean_level": float(stats[hit, 1].mean()) if hit.any() else 0.0,
+            "subdivision_cap_hits": float(stats[:, 3].sum()),
+            "tolerance": tol,
+            **extra,
+        }
+        if unconverged:
+            warnings.warn(
+                f"reference renderer: {unconverged} of {n} rays did not converge to {tol:g} "
+                f"within {max_levels} levels (their finest level is used)",
+                VolrenWarning,
+                stacklevel=3,
+            )
+        return image, counters
+
+    @staticmethod
+    def _boxes(camera: Camera, width: int, height: int, vol: TetVolume, ok: NDArray) -> NDArray:
+        """Pixel boxes of the projected tetrahedra (see `tets.tet_boxes`)."""
+        pts = np.concatenate([vol.points, np.ones((len(vol.points), 1))], axis=1)
+        view = camera.view_matrix()
+        clip = pts @ (camera.projection_matrix(width / height) @ view).T
+        w = clip[:, 3]
+        safe = np.where(w > 0, w, 1.0)
+        px = (clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5
+        py = (1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5
+        depth = -(pts @ view[2])
+        near, far = camera.clipping_range
+        return tet_boxes(
+            np.ascontiguousarray(px), np.ascontiguousarray(py), np.ascontiguousarray(w),
+            np.ascontiguousarray(depth), vol.tets, ok, width, height, near, far,
+        )  # fmt: skip

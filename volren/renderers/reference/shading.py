@@ -1,0 +1,98 @@
+"""Blinn-Phong shading of a sample, with vtkVolumeProperty's parameters and one headlight.
+
+Why: DESIGN.md's optical model shades the TF colour with a local illumination model when shading
+is on; the reference has to pin down exactly which one so that every renderer can match it.
+
+The formulas (all vectors unit length, world space):
+
+    L = -camera.direction                  directional headlight, from the data toward the camera
+    V = -ray direction                     toward the eye (L == V for a parallel camera)
+    H = normalize(L + V)
+    g = grad s                             uniform: central differences at grid points in world
+                                           units (one-sided at the borders), interpolated
+                                           trilinearly like the scalars; tets: the constant
+                                           gradient of the linear field in each tetrahedron
+    no shading where |g| <= 1e-6 * (value-range span) / characteristic length
+                                           (or g is not finite): the colour stays c
+    N = -g / |g|
+    if N.L < 0: N = -N                     two-sided lighting (VTK's default)
+    c_shaded = clamp(c * (ka + kd * (N.L)) + ks * max(N.H, 0)^p, 0, 1)   per channel
+
+with ka, kd, ks, p = ambient, diffuse, specular, specular_power from RenderSettings. The opacity is
+not changed by shading; the shaded colour replaces c in the emission q = c * tau.
+
+`light_setup` gives the per-frame (L) and `half_vector` the per-ray (H) vectors; `shade` applies
+the formula to one sample. `ShadeParams` is the tuple (on, ka, kd, ks, p, gthr, lx, ly, lz).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from volren.model.camera import Camera
+from volren.model.settings import RenderSettings
+
+#: |grad s| below this fraction of (value-range span / characteristic length) counts as zero.
+GRADIENT_EPS = 1e-6
+
+
+def shade_params(settings: RenderSettings, camera: Camera, span: float, length: float) -> tuple:
+    """(on, ka, kd, ks, p, gthr, lx, ly, lz) for the kernels."""
+    light = -np.asarray(camera.direction, dtype=np.float64)
+    gthr = GRADIENT_EPS * float(span) / float(length)
+    return (
+        bool(settings.shade),
+        float(settings.ambient),
+        float(settings.diffuse),
+        float(settings.specular),
+        float(settings.specular_power),
+        gthr,
+        float(light[0]),
+        float(light[1]),
+        float(light[2]),
+    )
+
+
+@njit(cache=True)
+def half_vector(sp, dx, dy, dz):
+    """H = normalize(L + V) with V = -d for a ray of unit direction d."""
+    hx = sp[6] - dx
+    hy = sp[7] - dy
+    hz = sp[8] - dz
+    n = math.sqrt(hx * hx + hy * hy + hz * hz)
+    if n > 0.0:
+        return hx / n, hy / n, hz / n
+    return 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def _clamp01(x):
+    if x < 0.0:
+        return 0.0
+    if x > 1.0:
+        return 1.0
+    return x
+
+
+@njit(cache=True)
+def shade(sp, r, g, b, gx, gy, gz, hx, hy, hz):
+    """Shaded colour of TF colour (r, g, b) at a sample with gradient (gx, gy, gz)."""
+    mag = math.sqrt(gx * gx + gy * gy + gz * gz)
+    if not (mag > sp[5]) or not math.isfinite(mag):
+        return r, g, b
+    nx = -gx / mag
+    ny = -gy / mag
+    nz = -gz / mag
+    ndl = nx * sp[6] + ny * sp[7] + nz * sp[8]
+    if ndl < 0.0:
+        nx = -nx
+        ny = -ny
+        nz = -nz
+        ndl = -ndl
+    ndh = nx * hx + ny * hy + nz * hz
+    spec = sp[3] * max(ndh, 0.0) ** sp[4]
+    k = sp[1] + sp[2] * ndl
+    return _clamp01(r * k + spec), _clamp01(g * k + spec), _clamp01(b * k + spec)
