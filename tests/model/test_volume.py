@@ -28,6 +28,13 @@ def test_other_dtypes_are_converted_with_a_note(dtype, kept):
     assert "converted" in volume.notes[0] and "x.vti" in volume.notes[0]
 
 
+def test_byte_swapped_values_keep_their_type():
+    big = np.arange(8, dtype=">i2").reshape(2, 2, 2)
+    volume = UniformVolume(big)
+    assert volume.values.dtype == np.int16 and volume.values.dtype.isnative and not volume.notes
+    assert volume.values[1, 1, 1] == 7
+
+
 def test_from_xyz_transposes_to_zyx():
     xyz = np.arange(24).reshape(4, 3, 2)  # [i, j, k]
     volume = UniformVolume.from_xyz(xyz)

@@ -13,7 +13,16 @@ changes the `ViewState`; the frame scheduler decides what to render.
 from __future__ import annotations
 
 from PyQt5.QtCore import QPoint, QRectF, QSize, Qt, pyqtSignal
-from PyQt5.QtGui import QColor, QImage, QKeyEvent, QMouseEvent, QPainter, QPaintEvent, QResizeEvent, QWheelEvent
+from PyQt5.QtGui import (
+    QColor,
+    QImage,
+    QKeyEvent,
+    QMouseEvent,
+    QPainter,
+    QPaintEvent,
+    QResizeEvent,
+    QWheelEvent,
+)
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 from volren.app import interaction

@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     shared = Path(args.shared)
     size = args.size
-    print(f"| dataset | TF | vtk ms/frame | reference ms | RMSE | max abs | PSNR dB |")
+    print("| dataset | TF | vtk ms/frame | reference ms | RMSE | max abs | PSNR dB |")
     print("|---|---|---|---|---|---|---|")
     for dataset in args.datasets.split(","):
         path, scalars, az, el, zoom = SCENES[dataset]

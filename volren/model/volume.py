@@ -34,7 +34,10 @@ def normalize_dtype(values: NDArray, what: str) -> tuple[NDArray, tuple[str, ...
     """Return `values` in a kept dtype, and a note when a conversion was needed.
 
     Wide integers go to float64, which is exact up to 2**53: no real scalar field comes close.
+    Byte-swapped data (e.g. big-endian int16 from a file) is brought to native order, type kept.
     """
+    if not values.dtype.isnative:
+        values = values.astype(values.dtype.newbyteorder("="))
     dtype = values.dtype
     if any(dtype == np.dtype(kept) for kept in KEPT_DTYPES):
         return values, ()

@@ -37,8 +37,8 @@ from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, R
 from volren.renderers.opengl import require_opengl
 from volren.renderers.vtk_mappers import _vtk
 from volren.renderers.vtk_mappers.convert import image_data, unstructured_grid
-from volren.vtk_messages import vtk_messages
 from volren.renderers.vtk_mappers.transfer import replace_nonfinite, uniform_functions, unstructured_functions
+from volren.vtk_messages import vtk_messages
 
 ALL_BLEND_MODES = frozenset(BlendMode)
 
@@ -278,7 +278,7 @@ class VtkRenderer(RendererBase):
             self._window.Render()
             self._window.GetRGBACharPixelData(0, 0, width - 1, height - 1, 0, pixels)
         if messages.errors:
-            raise VolrenError(f"VTK failed to render: {messages.first_error()[:300]}")
+            raise VolrenError(f"VTK failed to render: {messages.errors[0].text[:300]}")
         if pixels.GetNumberOfTuples() != width * height:
             raise VolrenError(f"VTK returned {pixels.GetNumberOfTuples()} pixels for a {width}x{height} frame")
         rgba = _vtk.vtk_to_numpy(pixels).reshape(height, width, 4)[::-1]

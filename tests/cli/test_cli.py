@@ -1,0 +1,128 @@
+"""`volren` on the command line: in process and as a subprocess, good and bad input."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from volren.cli.main import main
+from volren.samples import sample_paths
+
+pytestmark = pytest.mark.usefixtures("opengl")
+
+
+@pytest.fixture(scope="module")
+def ml_sample():
+    return sample_paths("marschner_lobb")
+
+
+def test_renderers_lists_the_builtins_with_capabilities(capsys):
+    assert main(["renderers"]) == 0
+    out = capsys.readouterr().out
+    assert "vtk" in out and "reference" in out and "uniform" in out and "tet" in out
+
+
+def test_render_writes_png_and_array_and_prints_one_line(tmp_path, capsys, ml_sample):
+    volume, tf = ml_sample
+    png, npy = tmp_path / "out.png", tmp_path / "out.npy"
+    code = main(["render", str(volume), "--tf", str(tf), "-o", str(png), "--size", "40x30",
+                 "--azimuth", "30", "--elevation", "20", "--save-array", str(npy)])
+    assert code == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1 and out[0].startswith("vtk: 40x30 in ") and "ms" in out[0]
+    assert Image.open(png).size == (40, 30)
+    array = np.load(npy)
+    assert array.shape == (30, 40, 4) and array.dtype == np.float32
+    # The PNG is the array over black, 8 bits.
+    pixels = np.asarray(Image.open(png).convert("RGB"), dtype=float) / 255
+    assert np.abs(pixels - np.clip(array[..., :3], 0, 1)).max() <= 1 / 255 + 1e-6
+    # The same through the Python API.
+    import volren
+
+    api = volren.render(volume, tf, size=(40, 30), azimuth=30, elevation=20)
+    assert np.array_equal(api, array)
+
+
+def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
+    volume, tf = ml_sample
+    scene = {
+        "version": 1,
+        "volume": {"path": str(volume)},
+        "transfer_function": json.loads(Path(tf).read_text()),
+        "camera": {"azimuth": 30, "elevation": 20, "zoom": 1.2},
+        "settings": {"step": 0.5},
+        "renderer": "vtk",
+        "size": [24, 24],
+    }
+    scene_path = tmp_path / "scene.json"
+    scene_path.write_text(json.dumps(scene))
+    assert main(["render", "--scene", str(scene_path), "--save-array", str(tmp_path / "a.npy")]) == 0
+    assert main(["render", "--scene", str(scene_path), "--size", "16", "--azimuth", "120",
+                 "--save-array", str(tmp_path / "b.npy")]) == 0
+    a, b = np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy")
+    assert a.shape == (24, 24, 4) and b.shape == (16, 16, 4)
+    direct = tmp_path / "c.npy"
+    assert main(["render", str(volume), "--tf", str(tf), "--size", "24", "--azimuth", "30",
+                 "--elevation", "20", "--zoom", "1.2", "--save-array", str(direct)]) == 0
+    assert np.array_equal(a, np.load(direct))
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["render", "{missing}", "-o", "{out}"], "missing.vti"),
+        (["render", "{volume}", "-o", "{out}", "--renderer", "nope"], "unknown renderer 'nope'"),
+        (["render", "{volume}", "-o", "{out}", "--size", "0"], "image size"),
+        (["render", "{volume}", "-o", "{out}", "--tf", "{missing}"], "missing.vti"),
+        (["render", "{volume}", "-o", "{out}", "--option", "mapper=warp"], "unknown vtk mapper"),
+        (["render", "{volume}", "-o", "{out}", "--step", "-1"], "step"),
+        (["render", "{volume}", "-o", "{tmp}/no/such/dir/x.png"], "does not exist"),
+        (["render", "{volume}"], "-o OUT.png"),
+        (["render", "-o", "{out}"], "INPUT"),
+    ],
+)
+def test_bad_input_gives_one_line_and_exit_1(tmp_path, capsys, ml_sample, args, message):
+    fill = {"missing": str(tmp_path / "missing.vti"), "out": str(tmp_path / "x.png"),
+            "volume": str(ml_sample[0]), "tmp": str(tmp_path)}
+    code = main([a.format(**fill) for a in args])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1
+    assert len(err) == 1 and err[0].startswith("volren: error: ") and message in err[0], err
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONWARNINGS="ignore")
+    return subprocess.run([sys.executable, "-m", "volren.cli.main", *args], capture_output=True,
+                          text=True, timeout=120, env=env)
+
+
+def test_subprocess_missing_file_is_one_line_and_nonzero(tmp_path):
+    result = run_cli("render", str(tmp_path / "nothing.nrrd"), "-o", str(tmp_path / "x.png"))
+    assert result.returncode == 1
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "nothing.nrrd" in lines[0] and "Traceback" not in result.stderr
+
+
+def test_subprocess_render_and_console_script(tmp_path, ml_sample):
+    result = run_cli("render", str(ml_sample[0]), "-o", str(tmp_path / "x.png"), "--size", "16")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith("vtk: 16x16 in ")
+    script = Path(sys.executable).parent / "volren"
+    if script.exists():
+        version = subprocess.run([str(script), "--version"], capture_output=True, text=True, timeout=60)
+        assert version.stdout.startswith("volren ")
+
+
+def test_usage_errors_exit_2(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["render", "--blend", "xray"])
+    assert exc.value.code == 2
+    capsys.readouterr()

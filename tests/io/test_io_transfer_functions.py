@@ -1,0 +1,246 @@
+"""Transfer-function files: our JSON round trip, its errors, and ParaView preset import."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
+from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
+
+from volren.errors import VolrenError
+from volren.io import load_transfer_function, save_transfer_function
+from volren.model.transfer_function import TransferFunction1D
+
+
+def write(path: Path, content) -> Path:
+    path.write_text(content if isinstance(content, str) else json.dumps(content))
+    return path
+
+
+def fails(path: Path, *fragments: str, **kwargs) -> None:
+    with pytest.raises(VolrenError) as info:
+        load_transfer_function(path, **kwargs)
+    message = str(info.value)
+    assert message.startswith(f"{path}:"), message
+    for fragment in fragments:
+        assert fragment in message, message
+
+
+# ----------------------------------------------------------------------------------- our format
+
+
+def test_round_trip_keeps_unknown_keys(tmp_path):
+    tf = TransferFunction1D([[0, 0, 0, 1], [10, 1, 0.5, 0]], [[0, 0], [4, 0.2], [10, 0.9]], 0.25)
+    tf.extra["painted_by"] = {"tool": "editor", "strokes": [1, 2]}
+    save_transfer_function(tf, tmp_path / "tf.json")
+    saved = json.loads((tmp_path / "tf.json").read_text())
+    assert saved["version"] == 1 and saved["kind"] == "1d"
+    back = load_transfer_function(tmp_path / "tf.json")
+    assert back == tf
+    assert back.extra == {"painted_by": {"tool": "editor", "strokes": [1, 2]}}
+    save_transfer_function(back, tmp_path / "again.json")
+    assert json.loads((tmp_path / "again.json").read_text()) == saved
+
+
+def test_shared_scene_tfs_load(shared_scenes):
+    for path in sorted(shared_scenes.glob("*.json")):
+        tf = load_transfer_function(path)
+        assert tf.opacity_unit_distance > 0
+
+
+def test_newer_version_is_refused(tmp_path):
+    path = write(
+        tmp_path / "new.json", {"version": 2, "kind": "1d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]}
+    )
+    fails(path, "transfer-function format version 2 is newer than this volren reads (up to 1)")
+
+
+@pytest.mark.parametrize(
+    "content, fragment",
+    [
+        (
+            '{"version": 1, "color": [[0, 1, 1, 1]],\n "opacity": [[0, 1]]\n "x": 1}',
+            "invalid JSON at line 3, column 2",
+        ),
+        ("", "empty file"),
+        ("[1, 2, 3]", "a JSON list that is not a list of ParaView presets"),
+        ('"just a string"', "a transfer function must be a JSON object, got str"),
+        ({"version": 1, "opacity": [[0, 1]]}, "missing 'color' list"),
+        ({"version": 1, "color": "red", "opacity": [[0, 1]]}, "colour points must be numbers"),
+        (
+            {"version": 1, "color": [[0, 1, 1]], "opacity": [[0, 1]]},
+            "colour points must be a non-empty list of 4-tuples",
+        ),
+        ({"version": 1, "color": [[0, 1, 1, 2]], "opacity": [[0, 1]]}, "colour values must lie in [0, 1]"),
+        ({"version": "1", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]}, "'version' must be an integer"),
+        (
+            {"version": 1, "kind": "2d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]},
+            "kind '2d' is not supported",
+        ),
+        (
+            {"version": 1, "color": [[0, 1, 1, 1]], "opacity": [[0, 1]], "opacity_unit_distance": -1},
+            "must be positive",
+        ),
+    ],
+)
+def test_malformed_files(tmp_path, content, fragment):
+    fails(write(tmp_path / "bad.json", content), fragment)
+
+
+def test_missing_and_binary_files(tmp_path):
+    fails(tmp_path / "nope.json", "no such file")
+    (tmp_path / "bin.json").write_bytes(b"\xff\xfe\x00garbage\x80")
+    fails(tmp_path / "bin.json", "not a text (UTF-8) file")
+    fails(tmp_path, "is a folder")
+
+
+def test_save_errors(tmp_path):
+    tf = TransferFunction1D.ramp(0, 1)
+    with pytest.raises(VolrenError, match="cannot write"):
+        save_transfer_function(tf, tmp_path / "missing-folder" / "tf.json")
+    with pytest.raises(VolrenError, match="expected a TransferFunction1D"):
+        save_transfer_function({"color": []}, tmp_path / "tf.json")
+
+
+# ------------------------------------------------------------------------------ ParaView presets
+
+RGB = [-1.0, 0.1, 0.2, 0.9, 0.0, 1.0, 1.0, 1.0, 0.5, 0.9, 0.1, 0.1, 2.0, 0.2, 0.8, 0.2]
+# x, alpha, midpoint, sharpness: non-default midpoints and sharpness, as ParaView's editor writes them
+POINTS = [
+    -1.0,
+    0.0,
+    0.5,
+    0.0,
+    -0.2,
+    0.8,
+    0.2,
+    0.9,
+    0.6,
+    0.1,
+    0.7,
+    0.3,
+    1.2,
+    0.4,
+    0.35,
+    0.0,
+    2.0,
+    1.0,
+    0.5,
+    0.0,
+]
+
+
+def vtk_functions(rgb, points, space: str):
+    ctf = vtkColorTransferFunction()
+    getattr(ctf, f"SetColorSpaceTo{space}")()
+    ctf.SetHSVWrap(False)
+    for i in range(0, len(rgb), 4):
+        ctf.AddRGBPoint(*rgb[i : i + 4])
+    pwf = vtkPiecewiseFunction()
+    for i in range(0, len(points), 4):
+        pwf.AddPoint(*points[i : i + 4])
+    return ctf, pwf
+
+
+def assert_matches_vtk(tf: TransferFunction1D, ctf, pwf, lo: float, hi: float) -> None:
+    xs = np.linspace(lo, hi, 5001)
+    rgb, alpha = tf.sample(xs)
+    np.testing.assert_allclose(rgb, [ctf.GetColor(x) for x in xs], atol=1e-3, rtol=0)
+    np.testing.assert_allclose(alpha, [pwf.GetValue(x) for x in xs], atol=1e-3, rtol=0)
+
+
+@pytest.mark.parametrize("space", ["RGB", "HSV", "Lab", "Diverging"])
+def test_preset_matches_vtk(tmp_path, space):
+    # ParaView's own writer leaves trailing commas; the loader must accept them
+    text = json.dumps([{"Name": "test", "ColorSpace": space, "RGBPoints": RGB, "Points": POINTS}], indent=1)
+    text = text.replace("]\n }", "],\n },").replace("}\n]", "},\n]")
+    assert ",\n]" in text
+    tf = load_transfer_function(write(tmp_path / "preset.json", text))
+    assert_matches_vtk(tf, *vtk_functions(RGB, POINTS, space), -1.5, 2.5)
+    assert tf.extra == {"name": "test"}
+
+
+def test_cool_to_warm_diverging_preset(tmp_path):
+    cool_to_warm = {
+        "Name": "Cool to Warm",
+        "ColorSpace": "Diverging",
+        "NanColor": [1, 1, 0],
+        "RGBPoints": [
+            0,
+            0.231373,
+            0.298039,
+            0.752941,
+            0.5,
+            0.865003,
+            0.865003,
+            0.865003,
+            1,
+            0.705882,
+            0.0156863,
+            0.14902,
+        ],
+        "Points": [0, 0, 0.5, 0, 1, 1, 0.5, 0],
+    }
+    tf = load_transfer_function(write(tmp_path / "ctw.json", cool_to_warm))
+    assert_matches_vtk(
+        tf, *vtk_functions(cool_to_warm["RGBPoints"], cool_to_warm["Points"], "Diverging"), -0.2, 1.2
+    )
+    assert len(tf.opacity_points) == 2  # linear opacity stays two nodes
+    assert 2 < len(tf.color_points) < 400  # curved colours are sampled, not every table entry kept
+
+
+def test_linear_parts_stay_exact(tmp_path):
+    preset = {"Name": "lin", "ColorSpace": "RGB", "RGBPoints": [0, 0, 0, 0, 1, 1, 0, 0, 3, 1, 1, 1],
+              "Points": [0, 0, 0.5, 0, 1, 0.5, 0.5, 0, 3, 1, 0.5, 0]}  # fmt: skip
+    tf = load_transfer_function(write(tmp_path / "lin.json", preset))
+    np.testing.assert_array_equal(tf.color_points, [[0, 0, 0, 0], [1, 1, 0, 0], [3, 1, 1, 1]])
+    np.testing.assert_array_equal(tf.opacity_points, [[0, 0], [1, 0.5], [3, 1]])
+
+
+def test_preset_without_opacity_gets_a_ramp(tmp_path):
+    path = write(tmp_path / "p.json", {"Name": "gray", "RGBPoints": [2, 0, 0, 0, 6, 1, 1, 1]})
+    tf = load_transfer_function(path)
+    np.testing.assert_array_equal(tf.opacity_points, [[2, 0], [6, 1]])
+
+
+def test_preset_by_name(tmp_path):
+    presets = [{"Name": n, "RGBPoints": [0, v, v, v, 1, 1, 1, 1]} for n, v in (("a", 0.0), ("b", 0.5))]
+    path = write(tmp_path / "many.json", presets)
+    assert load_transfer_function(path).color_points[0, 1] == 0.0  # the first by default
+    assert load_transfer_function(path, name="b").color_points[0, 1] == 0.5
+    fails(path, "no preset named 'c'; available: 'a', 'b'", name="c")
+    fails(
+        write(tmp_path / "ours.json", TransferFunction1D.ramp(0, 1).to_dict()),
+        "name= does not apply",
+        name="a",
+    )
+
+
+@pytest.mark.parametrize(
+    "preset, fragment",
+    [
+        ({"Name": "x", "IndexedColors": [1, 0, 0]}, "preset 'x' is an indexed (categorical) colour map"),
+        ({"Name": "x", "ColorSpace": "RGB"}, "preset 'x' has no 'RGBPoints'"),
+        ({"Name": "x", "RGBPoints": [0, 1, 1]}, "'RGBPoints' must hold groups of 4 numbers, got 3 numbers"),
+        ({"Name": "x", "RGBPoints": [0, 1, 1, "a"]}, "'RGBPoints' must be a list of numbers"),
+        (
+            {"Name": "x", "RGBPoints": [1, 0, 0, 0, 0, 1, 1, 1]},
+            "the x values of 'RGBPoints' must not decrease",
+        ),
+        ({"Name": "x", "RGBPoints": [0, 0, 0, 2]}, "must lie in [0, 1]"),
+        ({"Name": "x", "RGBPoints": [0, 0, 0, 0], "ColorSpace": "CMYK"}, "unknown ColorSpace 'CMYK'"),
+        (
+            {"Name": "x", "RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1], "Points": [0, 0, 0.5]},
+            "'Points' must hold groups of 4",
+        ),
+        (
+            {"Name": "x", "RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1], "UseLogScale": True},
+            "UseLogScale needs positive",
+        ),
+    ],
+)
+def test_malformed_presets(tmp_path, preset, fragment):
+    fails(write(tmp_path / "bad.json", [preset]), fragment)

@@ -1,0 +1,355 @@
+"""The one place in volren.io that imports VTK and PyVista.
+
+Everything else in the package sees plain numpy through `DatasetView` and the helpers below, so the
+rules about what VTK does (which reader, how its messages are caught, how cells are split into
+tetrahedra, how ParaView's colour and opacity interpolation behave) live in one module.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+import pyvista as pv
+from numpy.typing import NDArray
+from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
+from vtkmodules.vtkIOImage import (
+    vtkDICOMImageReader,
+    vtkMetaImageReader,
+    vtkNIFTIImageReader,
+    vtkNrrdReader,
+    vtkSLCReader,
+)
+from vtkmodules.vtkIOLegacy import vtkStructuredPointsReader, vtkUnstructuredGridReader
+from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLUnstructuredGridReader
+from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
+
+try:  # VTK >= 9.6 moved the static cell-type helpers here
+    from vtkmodules.vtkCommonDataModel import vtkCellTypeUtilities as _CellTypes
+except ImportError:  # pragma: no cover - older VTK
+    from vtkmodules.vtkCommonDataModel import vtkCellTypes as _CellTypes
+
+VTK_TETRA = 10
+
+# --------------------------------------------------------------------------- VTK's messages
+
+from volren.vtk_messages import MessageLog, VtkMessage, vtk_messages  # noqa: E402,F401  (re-exported)
+
+# ------------------------------------------------------------------------------- dataset views
+
+
+@dataclass(frozen=True)
+class DatasetView:
+    """What a VTK dataset holds, as numpy; `handle` is the dataset for later VTK work."""
+
+    handle: Any
+    kind: Literal["image", "unstructured"]
+    n_points: int
+    n_cells: int
+    point_arrays: Mapping[str, NDArray]
+    cell_arrays: Mapping[str, NDArray]
+    field_arrays: Mapping[str, NDArray]
+    active_point: str | None = None
+    active_cell: str | None = None
+    # image data only
+    dimensions: tuple[int, int, int] = (0, 0, 0)
+    spacing: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    direction: NDArray | None = None
+    # unstructured grids only
+    n_connectivity: int = 0
+    type_name: str = ""
+
+
+def _arrays(data: Any) -> dict[str, NDArray]:
+    out = {}
+    for name in data.keys():
+        try:
+            arr = data[name]
+        except (KeyError, ValueError, TypeError):  # arrays pyvista cannot wrap (e.g. unnamed)
+            continue
+        out[str(name)] = np.asarray(arr)
+    return out
+
+
+def _active_name(data: Any) -> str | None:
+    try:
+        name = data.active_scalars_name
+    except AttributeError:  # pragma: no cover - older pyvista
+        return None
+    return str(name) if name else None
+
+
+def as_dataset(obj: Any) -> Any | None:
+    """A pyvista dataset for a pyvista or raw VTK object, or None when it is not a dataset."""
+    if isinstance(obj, pv.DataSet):
+        return obj
+    try:
+        wrapped = pv.wrap(obj)
+    except (TypeError, NotImplementedError, ValueError, AttributeError):
+        return None
+    return wrapped if isinstance(wrapped, pv.DataSet) else None
+
+
+def view(dataset: Any) -> DatasetView:
+    """A `DatasetView` of a pyvista dataset: image data stays a grid, anything else becomes cells."""
+    common: dict[str, Any] = {}
+    if isinstance(dataset, pv.ImageData):
+        x0, _, y0, _, z0, _ = dataset.extent
+        spacing = tuple(float(s) for s in dataset.spacing)
+        # VTK places point (i, j, k) of an extent starting at (x0, y0, z0) at origin + (x0 + i) * s.
+        origin = tuple(float(o + e * s) for o, e, s in zip(dataset.origin, (x0, y0, z0), spacing))
+        common = {
+            "kind": "image",
+            "dimensions": tuple(int(d) for d in dataset.dimensions),
+            "spacing": spacing,
+            "origin": origin,
+            "direction": np.asarray(getattr(dataset, "direction_matrix", np.eye(3)), dtype=np.float64),
+        }
+    else:
+        if not isinstance(dataset, pv.UnstructuredGrid):
+            dataset = dataset.cast_to_unstructured_grid()
+        common = {"kind": "unstructured", "n_connectivity": int(dataset.cell_connectivity.size)}
+    return DatasetView(
+        handle=dataset,
+        n_points=int(dataset.n_points),
+        n_cells=int(dataset.n_cells),
+        point_arrays=_arrays(dataset.point_data),
+        cell_arrays=_arrays(dataset.cell_data),
+        field_arrays=_arrays(dataset.field_data),
+        active_point=_active_name(dataset.point_data),
+        active_cell=_active_name(dataset.cell_data),
+        type_name=type(dataset).__name__,
+        **common,
+    )
+
+
+def cell_to_point(v: DatasetView) -> DatasetView:
+    """Average cell data onto the points (VTK's vtkCellDataToPointData)."""
+    with vtk_messages():
+        converted = v.handle.cell_data_to_point_data()
+    return view(converted)
+
+
+# ----------------------------------------------------------------------------------- readers
+
+ReaderName = Literal[
+    "vti", "vtu", "legacy-image", "legacy-unstructured", "metaimage", "nrrd", "nifti", "slc", "dicom"
+]
+
+
+@dataclass
+class ReadResult:
+    """A reader's output, what VTK said while reading, and reader-specific facts (`info`)."""
+
+    view: DatasetView | None
+    log: MessageLog
+    info: dict[str, Any] = field(default_factory=dict)
+
+
+def _matrix(m: Any) -> NDArray | None:
+    if m is None:
+        return None
+    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)], dtype=np.float64)
+
+
+def _make_reader(reader: ReaderName) -> Any:
+    if reader == "vti":
+        return vtkXMLImageDataReader()
+    if reader == "vtu":
+        return vtkXMLUnstructuredGridReader()
+    if reader in ("legacy-image", "legacy-unstructured"):
+        r = vtkStructuredPointsReader() if reader == "legacy-image" else vtkUnstructuredGridReader()
+        # Legacy readers keep only the first array of each attribute kind unless told otherwise.
+        for flag in ("Scalars", "Vectors", "Normals", "Tensors", "ColorScalars", "TCoords", "Fields"):
+            getattr(r, f"ReadAll{flag}On")()
+        return r
+    if reader == "metaimage":
+        return vtkMetaImageReader()
+    if reader == "nrrd":
+        return vtkNrrdReader()
+    if reader == "nifti":
+        return vtkNIFTIImageReader()
+    if reader == "slc":
+        return vtkSLCReader()
+    if reader == "dicom":
+        return vtkDICOMImageReader()
+    raise ValueError(f"unknown reader {reader!r}")  # pragma: no cover - programming error
+
+
+def read(path: Path, reader: ReaderName) -> ReadResult:
+    """Run one VTK reader on `path` (a folder for DICOM) with its messages caught."""
+    r = _make_reader(reader)
+    info: dict[str, Any] = {}
+    with vtk_messages() as log:
+        if reader == "dicom":
+            r.SetDirectoryName(str(path))
+        else:
+            r.SetFileName(str(path))
+        r.Update()
+        output = r.GetOutputDataObject(0)
+    if reader == "nifti":
+        info.update(
+            qform=_matrix(r.GetQFormMatrix()),
+            sform=_matrix(r.GetSFormMatrix()),
+            slope=float(r.GetRescaleSlope()),
+            intercept=float(r.GetRescaleIntercept()),
+        )
+    elif reader == "dicom":
+        info.update(
+            position=tuple(float(x) for x in r.GetImagePositionPatient()),
+            orientation=tuple(float(x) for x in r.GetImageOrientationPatient()),
+        )
+    dataset = as_dataset(output) if output is not None else None
+    return ReadResult(view(dataset) if dataset is not None else None, log, info)
+
+
+# ----------------------------------------------------------------------------------- writing
+
+
+def image_data(values: NDArray, spacing: Sequence[float], origin: Sequence[float], name: str) -> Any:
+    """A pyvista ImageData with `values[k, j, i]` as its active point scalars `name`."""
+    nz, ny, nx = values.shape
+    grid = pv.ImageData(dimensions=(nx, ny, nz), spacing=tuple(spacing), origin=tuple(origin))
+    grid.point_data[name] = np.ascontiguousarray(values).reshape(-1)  # x fastest, as VTK stores it
+    grid.set_active_scalars(name)
+    return grid
+
+
+def tet_grid(points: NDArray, tets: NDArray, values: NDArray, name: str) -> Any:
+    """A pyvista UnstructuredGrid of tetrahedra with point scalars `name`."""
+    cells = np.hstack([np.full((len(tets), 1), 4, dtype=np.int64), np.asarray(tets, dtype=np.int64)]).reshape(
+        -1
+    )
+    grid = pv.UnstructuredGrid(
+        cells, np.full(len(tets), pv.CellType.TETRA, dtype=np.uint8), np.asarray(points)
+    )
+    grid.point_data[name] = values
+    grid.set_active_scalars(name)
+    return grid
+
+
+def save(dataset: Any, path: Path) -> MessageLog:
+    """Write with pyvista (the writer follows the suffix); what VTK printed comes back."""
+    with vtk_messages() as log:
+        dataset.save(path)
+    return log
+
+
+# ----------------------------------------------------------------------------- cells to tets
+
+
+@dataclass(frozen=True)
+class TetCells:
+    """Tetrahedra over the dataset's own points, and what was converted or dropped to get them."""
+
+    points: NDArray[np.float64]
+    tets: NDArray[np.int64]
+    tetrahedralized: dict[int, int]  # VTK cell type -> number of such cells split into tets
+    dropped: dict[int, int]  # VTK cell type -> number of cells dropped (not 3D)
+
+
+def cell_type_dimension(cell_type: int) -> int:
+    return int(_CellTypes.GetDimension(int(cell_type)))
+
+
+def cell_type_class(cell_type: int) -> str:
+    return str(_CellTypes.GetClassNameFromTypeId(int(cell_type)))
+
+
+def tetrahedralize(v: DatasetView) -> TetCells:
+    """Tetrahedra of the 3D cells; lower-dimensional cells are dropped and counted."""
+    grid = v.handle
+    points = np.asarray(grid.points, dtype=np.float64)
+    types = np.asarray(grid.celltypes)
+    if types.size == 0:
+        return TetCells(points, np.zeros((0, 4), np.int64), {}, {})
+    unique, counts = np.unique(types, return_counts=True)
+    dims = {int(t): cell_type_dimension(int(t)) for t in unique}
+    dropped = {int(t): int(c) for t, c in zip(unique, counts) if dims[int(t)] != 3}
+    converted = {int(t): int(c) for t, c in zip(unique, counts) if dims[int(t)] == 3 and t != VTK_TETRA}
+    if not dropped and not converted:  # the common case: nothing but tetrahedra
+        tets = np.asarray(grid.cell_connectivity, dtype=np.int64).reshape(-1, 4)
+        return TetCells(points, tets, {}, {})
+    keep = np.flatnonzero(np.isin(types, [t for t, d in dims.items() if d == 3]))
+    if keep.size == 0:
+        return TetCells(points, np.zeros((0, 4), np.int64), {}, dropped)
+    with vtk_messages():
+        # extract_cells renumbers the points; its vtkOriginalPointIds map them back, so the
+        # tetrahedra index the dataset's own points (and their values) unchanged.
+        solid = grid.extract_cells(keep)
+        tetra = solid.triangulate() if converted else solid
+    tet_types = np.asarray(tetra.celltypes)
+    conn = np.asarray(tetra.cell_connectivity, dtype=np.int64)
+    # pyvista renamed `offset` to `cell_offsets` in 0.47
+    offsets = np.asarray(
+        tetra.cell_offsets if hasattr(type(tetra), "cell_offsets") else tetra.offset, np.int64
+    )
+    sizes = np.diff(offsets)
+    is_tet = (tet_types == VTK_TETRA) & (sizes == 4)
+    starts = offsets[:-1][is_tet]
+    local = conn[starts[:, None] + np.arange(4)]
+    original_ids = np.asarray(tetra.point_data["vtkOriginalPointIds"], dtype=np.int64)
+    return TetCells(points, original_ids[local], converted, dropped)
+
+
+# ----------------------------------------------------------------- ParaView colour interpolation
+
+_COLOR_SPACES: dict[str, Callable[[vtkColorTransferFunction], None]] = {
+    "rgb": vtkColorTransferFunction.SetColorSpaceToRGB,
+    "hsv": vtkColorTransferFunction.SetColorSpaceToHSV,
+    "lab": vtkColorTransferFunction.SetColorSpaceToLab,
+    "cielab": vtkColorTransferFunction.SetColorSpaceToLab,
+    "lab/ciede2000": vtkColorTransferFunction.SetColorSpaceToLabCIEDE2000,
+    "ciede2000": vtkColorTransferFunction.SetColorSpaceToLabCIEDE2000,
+    "diverging": vtkColorTransferFunction.SetColorSpaceToDiverging,
+    "step": vtkColorTransferFunction.SetColorSpaceToStep,
+}
+
+COLOR_SPACES = tuple(sorted(_COLOR_SPACES))
+
+
+Table = Callable[[float, float, int], NDArray]
+
+
+def color_table(
+    nodes: Sequence[Sequence[float]],
+    color_space: str = "RGB",
+    hsv_wrap: bool = False,
+    log_scale: bool = False,
+) -> Table:
+    """vtkColorTransferFunction through [x, r, g, b] nodes: table(x0, x1, n) -> (n, 3) colours.
+
+    Tables, not single values: VTK's Lab/CIEDE2000 space rebuilds its colour path on every call.
+    """
+    ctf = vtkColorTransferFunction()
+    _COLOR_SPACES[color_space.lower()](ctf)
+    ctf.SetHSVWrap(bool(hsv_wrap))
+    if log_scale:
+        ctf.SetScaleToLog10()
+    for x, r, g, b in nodes:
+        ctf.AddRGBPoint(float(x), float(r), float(g), float(b))
+
+    def table(x0: float, x1: float, n: int) -> NDArray:
+        out = np.zeros(3 * n, dtype=np.float64)
+        ctf.GetTable(float(x0), float(x1), int(n), out)
+        return out.reshape(n, 3)
+
+    return table
+
+
+def opacity_table(nodes: Sequence[Sequence[float]]) -> Table:
+    """vtkPiecewiseFunction through [x, a, midpoint, sharpness] nodes: table(x0, x1, n) -> (n, 1)."""
+    pwf = vtkPiecewiseFunction()
+    for x, a, mid, sharp in nodes:
+        pwf.AddPoint(float(x), float(a), float(mid), float(sharp))
+
+    def table(x0: float, x1: float, n: int) -> NDArray:
+        out = np.zeros(n, dtype=np.float64)
+        pwf.GetTable(float(x0), float(x1), int(n), out)
+        return out.reshape(n, 1)
+
+    return table

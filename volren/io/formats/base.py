@@ -1,0 +1,88 @@
+"""What every file format module provides, and the record a volume passes through on its way in.
+
+Loading is: `inspect` the header ourselves (garbage, truncation, sizes; nothing VTK-specific), let
+one VTK reader read the file, `check_output` for what the reader got wrong without saying so (and
+undo what it misread), then `adjust` the grid for what the reader knows but does not apply
+(origins kept in side matrices, value scaling, axis flips).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.io._pv import DatasetView, ReaderName, ReadResult
+from volren.io.limits import DataLayout
+
+HEAD_BYTES = 1 << 16
+
+
+@dataclass
+class Grid:
+    """A uniform grid between the reader and the model: values[k, j, i], geometry in xyz.
+
+    `notes` are repairs and things ignored (each also becomes a VolrenWarning); `info` notes only
+    record what loading did.
+    """
+
+    values: NDArray
+    spacing: tuple[float, float, float]
+    origin: tuple[float, float, float]
+    direction: NDArray | None = None
+    notes: list[str] = field(default_factory=list)
+    info: list[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Inspection:
+    """What a header said: which reader to use, on what, and facts for the later steps."""
+
+    reader: ReaderName
+    target: Path
+    layout: DataLayout | None = None
+    facts: dict[str, Any] = field(default_factory=dict)
+
+
+def _no_check(path: Path, view: DatasetView, result: ReadResult, inspection: Inspection) -> DatasetView:
+    return view
+
+
+def _no_adjust(grid: Grid, result: ReadResult, inspection: Inspection) -> Grid:
+    return grid
+
+
+@dataclass(frozen=True)
+class FileFormat:
+    """A file format volren reads: its suffixes and the three format-specific steps.
+
+    `check_output` raises for what the reader got wrong without saying so, and returns the view,
+    corrected where the reader misread something it could have read right.
+    """
+
+    name: str
+    suffixes: tuple[str, ...]
+    inspect: Callable[[Path], Inspection]
+    check_output: Callable[[Path, DatasetView, ReadResult, Inspection], DatasetView] = _no_check
+    adjust: Callable[[Grid, ReadResult, Inspection], Grid] = _no_adjust
+
+
+def read_head(path: Path, n: int = HEAD_BYTES) -> bytes:
+    with open(path, "rb") as f:
+        return f.read(n)
+
+
+def quote(text: str | bytes, limit: int = 40) -> str:
+    """A short, printable rendering of header text for messages (garbage stays one clean line)."""
+    if isinstance(text, bytes):
+        text = text.decode("latin-1")
+    clean = "".join(c if c.isprintable() and ord(c) < 127 else "?" for c in text.strip())
+    return repr(clean[:limit] + ("..." if len(clean) > limit else ""))
+
+
+def is_identity(direction: NDArray | None) -> bool:
+    return direction is None or bool(np.allclose(direction, np.eye(3), atol=1e-6))

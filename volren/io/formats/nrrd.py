@@ -1,0 +1,177 @@
+"""NRRD (.nrrd with the data attached, .nhdr with a separate data file).
+
+Quirks of vtkNrrdReader (VTK 9.7), each handled here:
+- it hangs forever on a header whose last line has no line break (a file cut inside its header,
+  or a magic line followed by garbage), and aborts (std::bad_alloc) on absurd sizes: the header
+  is parsed and checked before the reader sees it;
+- it guesses that a first axis of 9 samples or fewer is a vector axis ("sizes: 7 5 4" comes back
+  as a 5x4x1 grid of 7-component vectors); when the header says that axis is spatial, the grid
+  is put back;
+- it keeps only the lengths of 'space directions' (the rotation is reported as ignored);
+- for raw data in a left-handed 'space' (LAS) it flips the rows, and gzip data it never
+  byte-swaps (big-endian gzip comes back garbled): both are undone. (Its gzip and ASCII paths
+  do not flip LAS rows.)
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from volren.errors import file_error
+from volren.io._pv import DatasetView, ReadResult
+from volren.io.formats.base import FileFormat, Grid, Inspection, quote, read_head
+from volren.io.limits import DataLayout, product
+
+_TYPES = {
+    1: ("signed char", "int8", "int8_t", "uchar", "unsigned char", "uint8", "uint8_t"),
+    2: ("short", "short int", "signed short", "signed short int", "int16", "int16_t", "ushort",
+        "unsigned short", "unsigned short int", "uint16", "uint16_t"),
+    4: ("int", "signed int", "int32", "int32_t", "uint", "unsigned int", "uint32", "uint32_t", "float"),
+    8: ("longlong", "long long", "long long int", "signed long long", "signed long long int", "int64",
+        "int64_t", "ulonglong", "unsigned long long", "unsigned long long int", "uint64", "uint64_t",
+        "double"),
+}  # fmt: skip
+_TYPE_SIZES = {name: size for size, names in _TYPES.items() for name in names}
+_RAW = ("raw",)
+_HEADER_LIMIT = 1 << 20
+_SPATIAL_KINDS = ("domain", "space", "time", "none", "???")
+_LEFT_HANDED = ("left-anterior-superior", "las", "3d-left-handed")
+
+
+def _header(path: Path) -> tuple[dict[str, str], int]:
+    """Fields (keys lower-cased, spaces removed) and the offset of the first byte after the header."""
+    head = read_head(path, _HEADER_LIMIT)
+    if not re.match(rb"NRRD000\d\r?\n", head):
+        raise file_error(path, "not a NRRD file (it does not start with a 'NRRD000x' magic line)")
+    fields: dict[str, str] = {}
+    offset = 0
+    lines = head.split(b"\n")
+    for number, raw in enumerate(lines):
+        is_last = number == len(lines) - 1
+        if is_last and raw:  # the file (or our read limit) ends inside a header line
+            raise file_error(
+                path,
+                "truncated: the NRRD header's last line has no line break (VTK's reader would hang on it)",
+            )
+        offset += len(raw) + (0 if is_last else 1)
+        line = raw.decode("latin-1").rstrip("\r")
+        if number == 0 or line.startswith("#"):
+            continue
+        if not line:
+            return fields, offset
+        if ":=" in line:
+            continue  # key/value pairs: free-form metadata
+        key, sep, value = line.partition(": ")
+        if not sep:
+            raise file_error(
+                path, f"not a valid NRRD header: line {number + 1} {quote(line)} is not 'field: value'"
+            )
+        fields[key.strip().lower().replace(" ", "")] = value.strip()
+    return fields, -1  # no blank line: a detached header that ends at end of file
+
+
+def _directions(text: str) -> np.ndarray | None:
+    """The 'space directions' vectors, one per row; None unless there are three 3-vectors."""
+    vectors = re.findall(r"\(([^)]*)\)", text)
+    if len(vectors) != 3:
+        return None
+    rows = np.array([[float(v) for v in vec.split(",")] for vec in vectors], dtype=np.float64)
+    return rows if rows.shape == (3, 3) else None
+
+
+def _geometry(fields: dict[str, str], dims: tuple[int, ...]) -> dict:
+    """What the later steps need: spacing and direction per axis, and VTK's misreadings to undo."""
+    directions = _directions(fields.get("spacedirections", ""))
+    if directions is not None:
+        spacing = np.linalg.norm(directions, axis=1)
+        direction = (directions / np.where(spacing == 0, 1, spacing)[:, None]).T  # columns = axes
+    else:
+        direction = None
+        try:
+            spacing = np.array([float(v) for v in fields.get("spacings", "").split()] or [1.0, 1.0, 1.0])
+        except ValueError:
+            spacing = np.ones(3)
+    kinds = fields.get("kinds", "").lower().split()
+    first_is_spatial = len(dims) == 3 and (not kinds or kinds[0] in _SPATIAL_KINDS)
+    vtk_splits_first = len(dims) > 3 or (bool(dims) and dims[0] <= 9)
+    return {
+        "direction": direction,
+        "spacing": tuple(float(s) if s > 0 else 1.0 for s in spacing[:3]),
+        "sizes": dims,
+        "unsplit": first_is_spatial and vtk_splits_first and len(spacing) == 3,
+    }
+
+
+def inspect(path: Path) -> Inspection:
+    fields, header_end = _header(path)
+    for key in ("type", "dimension", "sizes", "encoding"):
+        if key not in fields:
+            raise file_error(path, f"not a valid NRRD header: it has no '{key}' field")
+    try:
+        dims = tuple(int(v) for v in fields["sizes"].split())
+    except ValueError:
+        raise file_error(path, f"malformed NRRD sizes {fields['sizes']!r}") from None
+    if not dims or min(dims) <= 0:
+        raise file_error(path, f"malformed NRRD sizes {fields['sizes']!r}")
+    type_name = fields["type"].lower()
+    if type_name not in _TYPE_SIZES:
+        raise file_error(path, f"unsupported NRRD type {fields['type']!r}")
+    nbytes = product(dims) * _TYPE_SIZES[type_name]
+    try:
+        facts = _geometry(fields, dims)
+    except ValueError:
+        raise file_error(
+            path, f"malformed NRRD space directions {quote(fields['spacedirections'])}"
+        ) from None
+    encoding = fields["encoding"].lower()
+    if encoding in _RAW and fields.get("space", "").lower() in _LEFT_HANDED:
+        # VTK flips its rows: our y, or our z when it took our x for vector components
+        facts["flip_axis"] = 0 if facts["unsplit"] else 1
+    facts["swap_bytes"] = (
+        encoding in ("gzip", "gz") and fields.get("endian") == "big" and _TYPE_SIZES[type_name] > 1
+    )
+    layout = DataLayout(dims, type_name, nbytes)
+    data_name = fields.get("datafile", "")
+    if header_end < 0 and not data_name:
+        raise file_error(
+            path, "truncated: the NRRD header is not ended by a blank line and names no data file"
+        )
+    if encoding not in _RAW or data_name.upper().startswith("LIST") or " " in data_name:
+        return Inspection("nrrd", path, layout, facts)  # compressed or text: VTK reports short data
+    try:
+        skip, line_skip = int(fields.get("byteskip", "0") or 0), int(fields.get("lineskip", "0") or 0)
+    except ValueError:
+        raise file_error(path, "malformed NRRD header: byte skip and line skip must be integers") from None
+    if skip < 0 or line_skip != 0:
+        return Inspection("nrrd", path, layout, facts)
+    data_file, offset = (path.parent / data_name, skip) if data_name else (path, header_end + skip)
+    return Inspection("nrrd", path, DataLayout(dims, type_name, nbytes, data_file, offset, nbytes), facts)
+
+
+def check_output(path: Path, view: DatasetView, result: ReadResult, inspection: Inspection) -> DatasetView:
+    """Undo VTK's guess that a short first axis holds vector components."""
+    facts = inspection.facts
+    if not facts.get("unsplit") or view.dimensions[2] != 1:
+        return view
+    nx, ny, nz = facts["sizes"]
+    arrays = {name: a.reshape(-1) for name, a in view.point_arrays.items()}  # same memory order
+    return replace(
+        view, point_arrays=arrays, dimensions=(nx, ny, nz), spacing=facts["spacing"], n_points=nx * ny * nz
+    )
+
+
+def adjust(grid: Grid, result: ReadResult, inspection: Inspection) -> Grid:
+    """Undo VTK's row flip and missing byte swap; pass the ignored rotation on to be reported."""
+    if "flip_axis" in inspection.facts:
+        grid.values = np.ascontiguousarray(np.flip(grid.values, axis=inspection.facts["flip_axis"]))
+    if inspection.facts.get("swap_bytes"):
+        grid.values = grid.values.byteswap()
+    grid.direction = inspection.facts.get("direction")
+    return grid
+
+
+NRRD = FileFormat("NRRD", (".nrrd", ".nhdr"), inspect, check_output, adjust)

@@ -1,0 +1,77 @@
+"""Rendered images to files: PNG (8-bit, through Pillow) and .npy (the float image as is).
+
+Renderers return premultiplied linear RGBA floats composited over black (DESIGN.md). An opaque
+PNG composites that over a background colour, rgb + (1 - a) * bg, which is exact for
+premultiplied colour; a transparent PNG stores straight colour, rgb / a, as PNG expects.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from PIL import Image
+
+from volren.errors import VolrenError, file_error
+
+
+def _rgba(rgba: ArrayLike, path: Path) -> NDArray[np.float64]:
+    image = np.asarray(rgba)
+    if image.ndim != 3 or image.shape[2] != 4 or image.shape[0] == 0 or image.shape[1] == 0:
+        raise VolrenError(f"{path}: an image must be an (H, W, 4) RGBA array, got shape {image.shape}")
+    if image.dtype.kind != "f":
+        raise VolrenError(f"{path}: an image must be float RGBA in [0, 1], got {image.dtype}")
+    return np.nan_to_num(image.astype(np.float64), nan=0.0, posinf=1.0, neginf=0.0)
+
+
+def _to_8bit(values: NDArray) -> NDArray[np.uint8]:
+    return np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def to_png_pixels(
+    rgba: ArrayLike,
+    background: Sequence[float] = (0.0, 0.0, 0.0),
+    transparent: bool = False,
+    path: Path = Path("image"),
+) -> NDArray[np.uint8]:
+    """The 8-bit RGB (or straight RGBA when `transparent`) pixels `save_image` writes."""
+    image = _rgba(rgba, path)
+    rgb, alpha = image[..., :3], image[..., 3:]
+    if transparent:
+        a = np.clip(alpha, 0.0, 1.0)
+        straight = np.divide(rgb, a, out=np.zeros_like(rgb), where=a > 0)
+        return np.concatenate([_to_8bit(straight), _to_8bit(a)], axis=2)
+    bg = np.asarray(background, dtype=np.float64).reshape(-1)
+    if bg.size != 3 or not np.all(np.isfinite(bg)):
+        raise VolrenError(f"{path}: background must be three numbers (r, g, b) in [0, 1], got {background!r}")
+    return _to_8bit(rgb + (1.0 - alpha) * bg)
+
+
+def save_image(
+    rgba: ArrayLike,
+    path: str | Path,
+    background: Sequence[float] = (0.0, 0.0, 0.0),
+    transparent: bool = False,
+) -> None:
+    """Write a premultiplied float RGBA image as PNG: opaque over `background`, or with alpha."""
+    path = Path(path)
+    pixels = to_png_pixels(rgba, background, transparent, path)
+    try:
+        Image.fromarray(pixels).save(path, format="PNG")  # RGB or RGBA from the last axis
+    except (OSError, ValueError) as exc:
+        raise file_error(path, f"cannot write the PNG: {exc}") from None
+
+
+def save_array(rgba: ArrayLike, path: str | Path) -> None:
+    """Write the float32 (H, W, 4) premultiplied RGBA image itself as .npy."""
+    path = Path(path)
+    image = np.asarray(rgba)
+    if image.ndim != 3 or image.shape[2] != 4:
+        raise VolrenError(f"{path}: an image must be an (H, W, 4) RGBA array, got shape {image.shape}")
+    try:
+        with open(path, "wb") as f:
+            np.save(f, image.astype(np.float32, copy=False))
+    except OSError as exc:
+        raise file_error(path, f"cannot write: {exc.strerror}") from None

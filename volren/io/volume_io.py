@@ -1,0 +1,103 @@
+"""`load_volume`: any supported file (or DICOM folder) to a model volume, or one clear error.
+
+The steps, in order, each able to stop with a one-line VolrenError naming the file: the path
+exists and is not empty; its format is known; its header is sane and fits in memory and its data
+is as long as the header says (checked by volren, so no VTK reader sees a file that would crash
+or hang it); the VTK reader runs with its messages caught; what the reader returned is checked
+again; then the dataset becomes a model volume.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from numpy.typing import DTypeLike
+
+from volren.errors import VolrenError, file_error
+from volren.io import _pv, vtk_messages
+from volren.io.dataset import grid_from_view, tets_from_view, volume_from_grid
+from volren.io.formats import SUPPORTED, find_format
+from volren.io.formats.raw import load_raw
+from volren.io.limits import check_layout
+from volren.model.volume import TetVolume, UniformVolume
+
+_RAW_DEFAULTS = {
+    "dtype": None,
+    "byte_order": "little",
+    "spacing": (1.0, 1.0, 1.0),
+    "origin": (0.0, 0.0, 0.0),
+    "header_bytes": 0,
+}
+
+
+def _existing(path: Path) -> None:
+    if not path.exists():
+        raise file_error(path, "no such file or folder")
+    if path.is_file() and path.stat().st_size == 0:
+        raise file_error(path, "empty file (0 bytes)")
+    if not path.is_file() and not path.is_dir():
+        raise file_error(path, "not a regular file or folder")
+
+
+def load_volume(
+    path: str | Path,
+    scalars: str | None = None,
+    *,
+    shape: Sequence[int] | None = None,
+    dtype: DTypeLike | None = None,
+    byte_order: str = "little",
+    spacing: Sequence[float] = (1.0, 1.0, 1.0),
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
+    header_bytes: int = 0,
+) -> UniformVolume | TetVolume:
+    """Load a volume file; the volume's `name` is the file name (the folder's, for DICOM).
+
+    Formats: .vti, .vtk (legacy structured points or unstructured grid), .vtu, .nrrd/.nhdr,
+    .mhd/.mha, .nii/.nii.gz, .slc, DICOM (a folder, or one .dcm file meaning its folder), and
+    headerless raw data: any file when `shape` = (nx, ny, nz) is given, with `dtype`,
+    `byte_order` ('little', 'big'), `spacing`, `origin` and `header_bytes` describing it.
+    `scalars` names the array to render; None takes the active (else first) point array.
+    """
+    path = Path(path)
+    _existing(path)
+    name = path.name
+    if shape is not None:
+        if path.is_dir():
+            raise file_error(path, "is a folder; headerless raw data (shape=...) must be a file")
+        grid = load_raw(path, shape, dtype, byte_order, spacing, origin, header_bytes)
+        return volume_from_grid(grid, name)
+    given = {
+        "dtype": dtype,
+        "byte_order": byte_order,
+        "spacing": tuple(spacing),
+        "origin": tuple(origin),
+        "header_bytes": header_bytes,
+    }
+    if given != _RAW_DEFAULTS:
+        extra = ", ".join(f"{k}=" for k in given if given[k] != _RAW_DEFAULTS[k])
+        raise file_error(path, f"{extra} describe headerless raw data only; give shape=(nx, ny, nz) too")
+    fmt = find_format(path)
+    if fmt is None:
+        raise file_error(path, "headerless raw data: give shape=(nx, ny, nz) and dtype= to read it")
+    inspection = fmt.inspect(path)
+    name = inspection.target.name  # a DICOM series is named after its folder
+    if inspection.layout is not None:
+        check_layout(path, inspection.layout)
+    result = _pv.read(inspection.target, inspection.reader)
+    problem = vtk_messages.problem(result.log, inspection.target)
+    if problem:
+        raise file_error(path, problem)
+    view = result.view
+    if view is None:
+        raise file_error(path, f"the VTK reader returned nothing (is it really {fmt.name}?)")
+    view = fmt.check_output(path, view, result, inspection)
+    source = str(path)
+    if view.kind == "image":
+        grid = fmt.adjust(grid_from_view(view, scalars, source, name), result, inspection)
+        return volume_from_grid(grid, name)
+    if inspection.reader in ("vtu", "legacy-unstructured"):
+        return tets_from_view(view, scalars, source, name)
+    raise VolrenError(
+        f"{path}: the reader returned {view.type_name}, which volren cannot render; volren reads {SUPPORTED}"
+    )
