@@ -15,7 +15,7 @@ from pathlib import Path
 from numpy.typing import DTypeLike
 
 from volren.errors import VolrenError, file_error
-from volren.io import _pv, vtk_messages
+from volren.io import _pv, reader_messages
 from volren.io.dataset import grid_from_view, tets_from_view, volume_from_grid
 from volren.io.formats import SUPPORTED, find_format
 from volren.io.formats.raw import load_raw
@@ -85,7 +85,7 @@ def load_volume(
     if inspection.layout is not None:
         check_layout(path, inspection.layout)
     result = _pv.read(inspection.target, inspection.reader)
-    problem = vtk_messages.problem(result.log, inspection.target)
+    problem = reader_messages.problem(result.log, inspection.target)
     if problem:
         raise file_error(path, problem)
     view = result.view

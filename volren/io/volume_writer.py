@@ -6,7 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from volren.errors import VolrenError, file_error
-from volren.io import _pv, vtk_messages
+from volren.io import _pv, reader_messages
 from volren.model.volume import TetVolume, UniformVolume, Volume
 
 SCALARS_NAME = "values"
@@ -28,6 +28,6 @@ def save_volume(volume: Volume, path: str | Path) -> None:
         log = _pv.save(to_pyvista(volume), path)
     except (ValueError, OSError, TypeError) as exc:
         raise file_error(path, f"cannot write: {' '.join(str(exc).split())}") from None
-    problem = vtk_messages.problem(log, path)
+    problem = reader_messages.problem(log, path)
     if problem:
         raise file_error(path, f"cannot write: {problem}")
