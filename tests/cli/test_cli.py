@@ -126,3 +126,11 @@ def test_usage_errors_exit_2(capsys):
         main(["render", "--blend", "xray"])
     assert exc.value.code == 2
     capsys.readouterr()
+
+
+def test_demo_renders_every_sample_with_each_renderer(tmp_path, capsys):
+    assert main(["demo", "--out", str(tmp_path), "--size", "24", "--renderers", "vtk"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 3 and all("ms per frame" in line for line in lines)
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == [
+        "hollow_cylinder_vtk.png", "marschner_lobb_vtk.png", "phantom_ct_vtk.png"]

@@ -55,7 +55,7 @@ def test_newer_version_is_refused(tmp_path):
     path = write(
         tmp_path / "new.json", {"version": 2, "kind": "1d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]}
     )
-    fails(path, "transfer-function format version 2 is newer than this volren reads (up to 1)")
+    fails(path, "transfer function format version 2 is newer than this volren reads (up to 1)")
 
 
 @pytest.mark.parametrize(

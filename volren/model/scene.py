@@ -13,6 +13,7 @@ from typing import Any
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.file_version import check_format_version
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import Volume
@@ -110,16 +111,7 @@ class Scene:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Scene:
         """Build from scene JSON whose 'transfer_function' is already an inline dict."""
-        if not isinstance(data, Mapping):
-            raise VolrenError(f"a scene must be a JSON object, got {type(data).__name__}")
-        version = data.get("version")
-        if not isinstance(version, int) or isinstance(version, bool):
-            raise VolrenError(f"scene 'version' must be an integer, got {version!r}")
-        if version > SCENE_FORMAT_VERSION:
-            raise VolrenError(
-                f"scene format version {version} is newer than this volren reads (up to "
-                f"{SCENE_FORMAT_VERSION}); upgrade volren"
-            )
+        check_format_version(data, "scene", SCENE_FORMAT_VERSION)
         volume = data.get("volume") or {}
         if not isinstance(volume, Mapping):
             raise VolrenError("scene 'volume' must be an object with 'path' and optional 'scalars'")

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from volren.errors import VolrenError
+from volren.model.file_version import check_format_version
 
 #: Opacities are clamped to this before taking the logarithm (DESIGN.md).
 MAX_OPACITY = 1.0 - 1e-6
@@ -201,16 +202,7 @@ class TransferFunction1D:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> TransferFunction1D:
         """Read DESIGN.md's TF JSON; errors are VolrenErrors without the file name (callers add it)."""
-        if not isinstance(data, Mapping):
-            raise VolrenError(f"a transfer function must be a JSON object, got {type(data).__name__}")
-        version = data.get("version", TF_FORMAT_VERSION)
-        if not isinstance(version, int) or isinstance(version, bool):
-            raise VolrenError(f"'version' must be an integer, got {version!r}")
-        if version > TF_FORMAT_VERSION:
-            raise VolrenError(
-                f"transfer-function format version {version} is newer than this volren reads "
-                f"(up to {TF_FORMAT_VERSION}); upgrade volren"
-            )
+        check_format_version(data, "transfer function", TF_FORMAT_VERSION, default=TF_FORMAT_VERSION)
         kind = data.get("kind", "1d")
         if kind != "1d":
             raise VolrenError(f"transfer-function kind {kind!r} is not supported here (expected '1d')")

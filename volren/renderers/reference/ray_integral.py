@@ -61,8 +61,6 @@ from numba import njit
 from volren.renderers.reference.shading import half_vector, shade
 from volren.renderers.reference.tf_eval import (
     color,
-    count_at_most,
-    count_below,
     interval_width,
     mean_extinction,
     opacity,
@@ -190,8 +188,8 @@ def _cuts_in_span(c, bp, ua, ub, fa, fb, out, n):
     """Append the breakpoint crossings of the monotone span [ua, ub] to out[n:], in order of u."""
     lo = min(fa, fb)
     hi = max(fa, fb)
-    i0 = count_at_most(bp, lo)  # first breakpoint > lo
-    i1 = count_below(bp, hi)  # one past the last breakpoint < hi
+    i0 = np.searchsorted(bp, lo, side="right")  # first breakpoint > lo
+    i1 = np.searchsorted(bp, hi, side="left")  # one past the last breakpoint < hi
     if fa < fb:
         for i in range(i0, i1):
             if out.shape[0] > n:
@@ -469,3 +467,18 @@ def integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, sp, dx, dy, dz
             return pr, pg, pb, pa, samples, level, True, caps
         last = diff
     return pr, pg, pb, pa, samples, max_levels - 1, False, caps
+
+
+@njit(cache=True)
+def store_pixel(out, stats, q, result, m):
+    """Write one ray's integrate_ray `result` and its interval count `m` into row q."""
+    r, g, b, a, samples, level, converged, caps = result
+    out[q, 0] = r
+    out[q, 1] = g
+    out[q, 2] = b
+    out[q, 3] = a
+    stats[q, 0] = samples
+    stats[q, 1] = level
+    stats[q, 2] = 0 if converged else 1
+    stats[q, 3] = caps
+    stats[q, 4] = m

@@ -39,7 +39,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from volren.renderers.reference.ray_integral import integrate_ray
+from volren.renderers.reference.ray_integral import integrate_ray, store_pixel
 
 #: A tetrahedron with |6V| <= FLAT_TOL * (longest edge)^3 has no volume and is dropped.
 FLAT_TOL = 1e-12
@@ -325,15 +325,5 @@ def render_tets(
                 G[e, 0, 0] = grads[t, 0]
                 G[e, 1, 0] = grads[t, 1]
                 G[e, 2, 0] = grads[t, 2]
-        r, g, b, a, ns, lev, conv, caps = integrate_ray(
-            ta, tb, P, G, m, mode, h0, tol, max_levels, tf, spar, dx, dy, dz
-        )
-        out[q, 0] = r
-        out[q, 1] = g
-        out[q, 2] = b
-        out[q, 3] = a
-        stats[q, 0] = ns
-        stats[q, 1] = lev
-        stats[q, 2] = 0 if conv else 1
-        stats[q, 3] = caps
-        stats[q, 4] = m
+        result = integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, spar, dx, dy, dz)
+        store_pixel(out, stats, q, result, m)

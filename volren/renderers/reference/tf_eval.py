@@ -26,7 +26,7 @@ Taylor series in e = (wb - wa) / (wb + wa) where that difference would cancel. I
 optical depth exact as the opacity approaches 1, where tau has a logarithmic spike that the
 midpoint rule resolves only at first order.
 
-For the adaptive integrator, `count_below` / `count_at_most` locate the breakpoints a span of
+For the adaptive integrator, np.searchsorted locates the breakpoints a span of
 values crosses (the integrator splits the ray exactly there, so the TF is linear on every piece it
 integrates), and `interval_width` gives the width of the breakpoint interval a value lies in (how
 narrow the TF feature is, which sets how finely a piece is subdivided).
@@ -65,15 +65,7 @@ def pack_tf(tf: TransferFunction1D) -> PackedTF:
 @njit(cache=True)
 def find_interval(xs, s):
     """k with xs[k] <= s < xs[k+1]; requires xs[0] <= s < xs[-1]."""
-    lo = 0
-    hi = xs.shape[0] - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if xs[mid] <= s:
-            lo = mid
-        else:
-            hi = mid
-    return lo
+    return np.searchsorted(xs, s, side="right") - 1
 
 
 @njit(cache=True)
@@ -144,34 +136,6 @@ def mean_extinction(aa, ab, unit):
         phi_b = wb * math.log1p(-ab) - wb
         mean = -(phi_b - phi_a) / (wb - wa)
     return mean / unit
-
-
-@njit(cache=True)
-def count_below(xs, v):
-    """Number of xs < v (xs sorted)."""
-    lo = 0
-    hi = xs.shape[0]
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if xs[mid] < v:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@njit(cache=True)
-def count_at_most(xs, v):
-    """Number of xs <= v (xs sorted)."""
-    lo = 0
-    hi = xs.shape[0]
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if xs[mid] <= v:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
 
 
 @njit(cache=True)

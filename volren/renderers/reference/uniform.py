@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from volren.renderers.reference.ray_integral import integrate_ray
+from volren.renderers.reference.ray_integral import integrate_ray, store_pixel
 
 
 @njit(cache=True)
@@ -218,15 +218,5 @@ def render_uniform(orig, dirs, tfar, V, org, sp, lo, hi, tf, spar, mode, h0, tol
         P = np.empty((cap, 4))
         G = np.empty((cap if shading else 0, 3, 4))
         m = build_intervals(ox, oy, oz, dx, dy, dz, t0, t1, V, org, sp, shading, ta, tb, P, G)
-        r, g, b, a, ns, lev, conv, caps = integrate_ray(
-            ta, tb, P, G, m, mode, h0, tol, max_levels, tf, spar, dx, dy, dz
-        )
-        out[p, 0] = r
-        out[p, 1] = g
-        out[p, 2] = b
-        out[p, 3] = a
-        stats[p, 0] = ns
-        stats[p, 1] = lev
-        stats[p, 2] = 0 if conv else 1
-        stats[p, 3] = caps
-        stats[p, 4] = m
+        result = integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, spar, dx, dy, dz)
+        store_pixel(out, stats, p, result, m)

@@ -76,20 +76,21 @@ def _integrator(settings) -> Any:
     return _vtk.vtkUnstructuredGridLinearRayIntegrator()
 
 
-def _ug_raycast(h: float, settings) -> Any:
-    mapper = _vtk.vtkUnstructuredGridVolumeRayCastMapper()
+def _image_order_tet_mapper(cls: type, settings) -> Any:
+    """A ray-casting unstructured mapper: one ray per pixel, our choice of ray integrator."""
+    mapper = cls()
     mapper.SetAutoAdjustSampleDistances(0)
     mapper.SetImageSampleDistance(1.0)
     mapper.SetRayIntegrator(_integrator(settings))
     return mapper
+
+
+def _ug_raycast(h: float, settings) -> Any:
+    return _image_order_tet_mapper(_vtk.vtkUnstructuredGridVolumeRayCastMapper, settings)
 
 
 def _ug_zsweep(h: float, settings) -> Any:
-    mapper = _vtk.vtkUnstructuredGridVolumeZSweepMapper()
-    mapper.SetAutoAdjustSampleDistances(0)
-    mapper.SetImageSampleDistance(1.0)
-    mapper.SetRayIntegrator(_integrator(settings))
-    return mapper
+    return _image_order_tet_mapper(_vtk.vtkUnstructuredGridVolumeZSweepMapper, settings)
 
 
 def _ug_projected(h: float, settings) -> Any:

@@ -8,8 +8,12 @@ The unstructured mappers (ray cast, projected tetrahedra, ZSweep) differ twice (
 ../shared/scenes/README.md):
 - they read the opacity value y as an extinction y / d per unit length, where our model has
   -ln(1 - a) / d; so we hand them y = -ln(1 - min(a, 1 - 1e-6)), and since that is not linear in
-  s where a is, we add nodes inside each interval where the opacity changes until linear
-  interpolation of y is close to the exact curve;
+  s where a is, we add nodes inside each interval where the opacity changes. Their spacing
+  follows the curvature of y(a) = -ln(1 - a): y'' = 1 / (1 - a)^2, so with 1 - a shrinking by a
+  factor q = 1 / (1 + sqrt(8 eps)) from node to node, linear interpolation of y between nodes is
+  within eps of the exact curve (eps = MAX_EXTINCTION_ERROR). That takes 9 nodes for a ramp to
+  0.7 and 100 for a ramp to 1, where spacing them evenly in s would take hundreds: VTK's
+  integrators pay for every node a ray crosses;
 - they read the opacity function only at colour nodes, so every node carries both a colour and
   an opacity.
 
@@ -27,8 +31,8 @@ from numpy.typing import NDArray
 from volren.model.transfer_function import MAX_OPACITY, TransferFunction1D
 from volren.renderers.vtk_mappers._vtk import vtkColorTransferFunction, vtkPiecewiseFunction
 
-#: Largest step of -ln(1 - a) between neighbouring nodes handed to the unstructured mappers.
-MAX_EXTINCTION_STEP = 0.02
+#: Largest error of -ln(1 - a) between the nodes handed to the unstructured mappers.
+MAX_EXTINCTION_ERROR = 0.002
 MAX_SUBDIVISIONS = 256
 
 
@@ -59,48 +63,90 @@ def _transparent_below(xs: NDArray, alphas: NDArray, tf: TransferFunction1D, dat
     return xs, alphas
 
 
+def _functions() -> tuple[vtkColorTransferFunction, vtkPiecewiseFunction]:
+    """Empty VTK functions that keep two nodes at one x: a step in the TF stays a step."""
+    color = vtkColorTransferFunction()
+    color.SetColorSpaceToRGB()
+    color.AllowDuplicateScalarsOn()
+    opacity = vtkPiecewiseFunction()
+    opacity.AllowDuplicateScalarsOn()
+    return color, opacity
+
+
 def uniform_functions(
     tf: TransferFunction1D, data_lo: float, sentinel: float | None = None
 ) -> tuple[vtkColorTransferFunction, vtkPiecewiseFunction]:
     """Colour and opacity functions for VTK's uniform-grid mappers (our convention as is)."""
-    color = vtkColorTransferFunction()
-    color.SetColorSpaceToRGB()
+    color, opacity = _functions()
     for x, r, g, b in tf.color_points:
         color.AddRGBPoint(x, r, g, b)
     xs, alphas = tf.opacity_points[:, 0], tf.opacity_points[:, 1]
     if sentinel is not None:
         xs, alphas = _transparent_below(xs, alphas, tf, data_lo, sentinel)
-    opacity = vtkPiecewiseFunction()
     for x, a in zip(xs, alphas):
         opacity.AddPoint(x, a)
     return color, opacity
 
 
-def extinction_nodes(tf: TransferFunction1D) -> NDArray[np.float64]:
-    """Node positions at which -ln(1 - a) interpolates linearly within MAX_EXTINCTION_STEP."""
+def _opacity_steps(a0: float, a1: float) -> NDArray[np.float64]:
+    """Opacities strictly between a0 and a1 (ascending) where linear interpolation of
+    -ln(1 - a) stays within MAX_EXTINCTION_ERROR of the curve."""
+    lo, hi = sorted((min(a0, MAX_OPACITY), min(a1, MAX_OPACITY)))
+    shrink = 1.0 / (1.0 + np.sqrt(8.0 * MAX_EXTINCTION_ERROR))
+    count = np.log((1.0 - hi) / (1.0 - lo)) / np.log(shrink) if hi > lo else 0.0
+    k = np.arange(1, min(int(np.ceil(count)), MAX_SUBDIVISIONS))
+    steps = 1.0 - (1.0 - lo) * shrink**k
+    return steps if a1 >= a0 else steps[::-1]
+
+
+def _one_sided(x: NDArray, xp: NDArray, fp: NDArray, side: str) -> NDArray:
+    """Piecewise-linear fp(xp) at x, taking the left or right limit where xp repeats (a step)."""
+    if side == "right":
+        return np.interp(x, xp, fp)
+    return np.interp(-x, -xp[::-1], fp[::-1])
+
+
+def _limits(tf: TransferFunction1D, xs: NDArray, side: str) -> NDArray:
+    """(n, 4) [r, g, b, a] of the TF just left or right of each x."""
+    c, o = tf.color_points, tf.opacity_points
+    rgb = [_one_sided(xs, c[:, 0], c[:, k], side) for k in (1, 2, 3)]
+    return np.stack(rgb + [_one_sided(xs, o[:, 0], o[:, 1], side)], axis=1)
+
+
+def extinction_nodes(tf: TransferFunction1D) -> tuple[NDArray, NDArray]:
+    """Node positions (ascending; repeated at steps) and [r, g, b, a] there: the TF's breakpoints
+    plus the nodes each opacity ramp needs (see _opacity_steps)."""
     xs = tf.breakpoints()
-    nodes = [xs[:1]]
-    for x0, x1 in zip(xs[:-1], xs[1:]):
-        y = -np.log1p(-np.minimum(tf.sample(np.array([x0, x1]))[1], MAX_OPACITY))
-        pieces = int(min(MAX_SUBDIVISIONS, max(1, np.ceil(abs(y[1] - y[0]) / MAX_EXTINCTION_STEP))))
-        nodes.append(np.linspace(x0, x1, pieces + 1)[1:])
-    return np.concatenate(nodes)
+    left, right = _limits(tf, xs, "left"), _limits(tf, xs, "right")
+    out_x: list[float] = []
+    out_v: list[NDArray] = []
+    for i, x in enumerate(xs):
+        if i > 0:  # the ramp from the previous breakpoint's right value to this one's left value
+            x0, v0, v1 = xs[i - 1], right[i - 1], left[i]
+            for a in _opacity_steps(v0[3], v1[3]):
+                t = (a - v0[3]) / (v1[3] - v0[3])
+                out_x.append(x0 + t * (x - x0))
+                out_v.append(v0 + t * (v1 - v0))
+        out_x.append(x)
+        out_v.append(left[i])
+        if not np.array_equal(left[i], right[i]):
+            out_x.append(x)
+            out_v.append(right[i])
+    return np.array(out_x), np.array(out_v)
 
 
 def unstructured_functions(
     tf: TransferFunction1D, data_lo: float, sentinel: float | None = None
 ) -> tuple[vtkColorTransferFunction, vtkPiecewiseFunction]:
     """Colour and opacity functions for VTK's unstructured mappers (extinction convention)."""
-    xs = extinction_nodes(tf)
-    rgb, alphas = tf.sample(xs)
+    xs, values = extinction_nodes(tf)
+    rgb, alphas = values[:, :3], values[:, 3]
     if sentinel is not None:
         xs2, alphas = _transparent_below(xs, alphas, tf, data_lo, sentinel)
         rgb = np.stack([np.interp(xs2, xs, rgb[:, c]) for c in range(3)], axis=1)
         xs = xs2
     extinction = -np.log1p(-np.minimum(alphas, MAX_OPACITY))
-    color = vtkColorTransferFunction()
-    color.SetColorSpaceToRGB()
-    opacity = vtkPiecewiseFunction()
+    color, opacity = _functions()
     for x, (r, g, b), y in zip(xs, rgb, extinction):
         color.AddRGBPoint(x, r, g, b)
         opacity.AddPoint(x, y)

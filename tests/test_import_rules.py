@@ -1,0 +1,68 @@
+"""DESIGN.md's import rules: app, cli -> renderers, io -> model; model pure numpy; no Qt in
+renderers or the CLI; io and renderers independent. Checked statically (every import statement)
+and at run time (what `import volren` and the CLI actually load)."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "volren"
+HEAVY = ("vtk", "vtkmodules", "pyvista", "pyvistaqt", "moderngl", "PyQt5", "numba", "matplotlib")
+
+
+def imported_modules(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            names.add(node.module)
+    return names
+
+
+def imports_of(subpackage: str) -> dict[Path, set[str]]:
+    return {p: imported_modules(p) for p in (PACKAGE / subpackage).rglob("*.py")}
+
+
+def offending(subpackage: str, forbidden: tuple[str, ...]) -> list[str]:
+    return [
+        f"{path.relative_to(PACKAGE)} imports {name}"
+        for path, names in imports_of(subpackage).items()
+        for name in names
+        if any(name == f or name.startswith(f + ".") for f in forbidden)
+    ]
+
+
+@pytest.mark.parametrize(
+    "subpackage, forbidden",
+    [
+        ("model", HEAVY + ("volren.io", "volren.renderers", "volren.app", "volren.cli")),
+        ("renderers", ("PyQt5", "pyvistaqt", "pyvista", "volren.io", "volren.app", "volren.cli")),
+        ("io", ("PyQt5", "pyvistaqt", "moderngl", "volren.renderers", "volren.app", "volren.cli")),
+        ("cli", ("PyQt5", "pyvistaqt", "volren.app")),
+    ],
+)
+def test_static_import_rules(subpackage, forbidden):
+    assert offending(subpackage, forbidden) == []
+
+
+def loaded_after(code: str) -> list[str]:
+    probe = f"{code}\nimport sys\nprint(' '.join(m for m in {HEAVY!r} if m in sys.modules))"
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    return result.stdout.split()
+
+
+def test_importing_volren_and_the_model_is_light():
+    assert loaded_after("import volren, volren.model, volren.model.scene, volren.errors") == []
+
+
+def test_the_cli_runs_without_qt():
+    loaded = loaded_after("from volren.cli.main import main\nmain(['renderers'])")
+    assert "PyQt5" not in loaded and "pyvistaqt" not in loaded
