@@ -12,18 +12,11 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.colormaps import VIRIDIS, color_stops
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import TetVolume, UniformVolume, Volume
 from volren.renderers.base import ProgressCallback
-
-VIRIDIS = [
-    [0.0, 0.267, 0.005, 0.329],
-    [0.25, 0.230, 0.322, 0.546],
-    [0.5, 0.128, 0.567, 0.551],
-    [0.75, 0.369, 0.789, 0.383],
-    [1.0, 0.993, 0.906, 0.144],
-]
 
 
 def default_transfer_function(volume: Volume) -> TransferFunction1D:
@@ -31,7 +24,7 @@ def default_transfer_function(volume: Volume) -> TransferFunction1D:
     opacity ramping from 0 at the bottom tenth to 0.3 at the top, per voxel (or tet edge) thickness."""
     lo, hi = volume.value_range
     span = hi - lo if hi > lo else 1.0
-    color = [[lo + x * span, r, g, b] for x, r, g, b in VIRIDIS]
+    color = color_stops(VIRIDIS, lo, lo + span)
     opacity = [[lo, 0.0], [lo + 0.1 * span, 0.0], [hi, 0.3]]
     return TransferFunction1D(color, opacity, volume.characteristic_length)
 

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from volren.model.colormaps import VIRIDIS, color_stops
 from volren.model.tet_repair import repair_tets
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import TetVolume, UniformVolume
@@ -93,10 +94,7 @@ def hollow_cylinder(n_r: int = 5, n_theta: int = 32, n_z: int = 12) -> TetVolume
             jn = (j + 1) % n_theta
             for k in range(n_z - 1):
                 v = {
-                    (a, b, c): index[i + a, (j, jn)[b], k + c]
-                    for a in (0, 1)
-                    for b in (0, 1)
-                    for c in (0, 1)
+                    (a, b, c): index[i + a, (j, jn)[b], k + c] for a in (0, 1) for b in (0, 1) for c in (0, 1)
                 }
                 for path in _KUHN_PATHS:
                     tets.append([v[p] for p in path])
@@ -118,15 +116,10 @@ for _order in ((0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
 
 def sample_transfer_functions() -> dict[str, TransferFunction1D]:
     """Transfer functions that show each sample well."""
-    viridis = [
-        [0.0, 0.267, 0.005, 0.329],
-        [0.25, 0.230, 0.322, 0.546],
-        [0.5, 0.128, 0.567, 0.551],
-        [0.75, 0.369, 0.789, 0.383],
-        [1.0, 0.993, 0.906, 0.144],
-    ]
     # A soft shell around the 0.5 isosurface shows the signal's rings, the classic ML view.
-    ml = TransferFunction1D(viridis, [[0.0, 0.0], [0.4, 0.0], [0.5, 0.7], [0.6, 0.0], [1.0, 0.0]], 0.05)
+    ml = TransferFunction1D(
+        color_stops(VIRIDIS, 0.0, 1.0), [[0.0, 0.0], [0.4, 0.0], [0.5, 0.7], [0.6, 0.0], [1.0, 0.0]], 0.05
+    )
     bone = [
         [-1000.0, 0.0, 0.0, 0.0],
         [20.0, 0.75, 0.25, 0.15],

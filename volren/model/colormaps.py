@@ -1,0 +1,17 @@
+"""Colour maps as transfer-function colour stops (x in [0, 1], r, g, b), scaled onto a range."""
+
+from __future__ import annotations
+
+#: matplotlib's viridis at five evenly spaced stops (perceptually uniform, colour-blind safe).
+VIRIDIS = (
+    (0.0, 0.267, 0.005, 0.329),
+    (0.25, 0.230, 0.322, 0.546),
+    (0.5, 0.128, 0.567, 0.551),
+    (0.75, 0.369, 0.789, 0.383),
+    (1.0, 0.993, 0.906, 0.144),
+)
+
+
+def color_stops(stops, lo: float, hi: float) -> list[list[float]]:
+    """The stops with x mapped from [0, 1] onto [lo, hi]: TransferFunction1D colour points."""
+    return [[lo + x * (hi - lo), r, g, b] for x, r, g, b in stops]
