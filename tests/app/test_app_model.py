@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from volren.app import interaction
-from volren.app.imaging import adaptive_preview_scale, composite_rgb8, preview_size
+from volren.app.imaging import adaptive_preview_scale, preview_size
 from volren.app.renderer_choice import RendererOption, pick_renderer, renderer_options
 from volren.app.state import Change, ViewState, default_camera
+from volren.io.image_io import to_png_pixels
 from volren.model.camera import Camera
 from volren.samples import marschner_lobb, sample_transfer_functions
 
@@ -111,12 +112,12 @@ def test_composite_over_background():
     rgba = np.zeros((2, 3, 4), np.float32)
     rgba[0, 0] = (0.5, 0.25, 0.0, 0.5)  # premultiplied
     rgba[1, 2] = (1.0, 1.0, 1.0, 1.0)
-    out = composite_rgb8(rgba, (0.2, 0.4, 0.6))
+    out = to_png_pixels(rgba, (0.2, 0.4, 0.6))
     assert out.dtype == np.uint8 and out.shape == (2, 3, 3) and out.flags.c_contiguous
     assert tuple(out[0, 0]) == (153, 115, 77)  # rgb + (1 - a) * bg
     assert tuple(out[0, 1]) == (51, 102, 153)
     assert tuple(out[1, 2]) == (255, 255, 255)
-    assert tuple(composite_rgb8(rgba)[0, 0]) == (128, 64, 0)
+    assert tuple(to_png_pixels(rgba)[0, 0]) == (128, 64, 0)
     assert preview_size(641, 480, 0.5) == (320, 240) and preview_size(1, 1, 0.5) == (1, 1)
 
 

@@ -1,31 +1,11 @@
-"""Renderer output -> displayable pixels (no Qt).
+"""Sizes of the frames the app asks for (no Qt).
 
-Renderers return premultiplied linear RGBA composited over black (DESIGN.md). Over another
-background colour b the displayed colour is rgb + (1 - a) b, which needs no division because the
-colour is already premultiplied. No gamma is applied: VTK and ParaView show their framebuffer
-values as they are, and the app should look like them.
+Frames become displayable pixels through `volren.io.image_io.to_png_pixels`, the same conversion
+screenshots use: rgb + (1 - a) * background, no gamma (VTK and ParaView show their framebuffer
+values as they are, and the app should look like them).
 """
 
 from __future__ import annotations
-
-from collections.abc import Sequence
-
-import numpy as np
-from numpy.typing import NDArray
-
-
-def composite_rgb8(rgba: NDArray[np.floating], background: Sequence[float] = (0.0, 0.0, 0.0)) -> NDArray[np.uint8]:
-    """(H, W, 4) premultiplied float RGBA -> C-contiguous (H, W, 3) uint8 RGB over `background`."""
-    if rgba.ndim != 3 or rgba.shape[2] != 4:
-        raise ValueError(f"expected an (H, W, 4) RGBA image, got shape {rgba.shape}")
-    rgb = rgba[..., :3].astype(np.float32, copy=False)
-    bg = np.asarray(background, dtype=np.float32).reshape(1, 1, 3)
-    if np.any(bg):
-        alpha = np.clip(rgba[..., 3:4].astype(np.float32, copy=False), 0.0, 1.0)
-        rgb = rgb + (1.0 - alpha) * bg
-    out = np.clip(rgb * 255.0 + 0.5, 0.0, 255.0)
-    out = np.nan_to_num(out, nan=0.0)
-    return np.ascontiguousarray(out.astype(np.uint8))
 
 
 def preview_size(width: int, height: int, scale: float) -> tuple[int, int]:

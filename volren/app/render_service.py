@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 from PyQt5.QtCore import QObject, QThread, pyqtSignal, pyqtSlot
 
-from volren.app.imaging import composite_rgb8
+from volren.io.image_io import to_png_pixels
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
@@ -182,7 +182,7 @@ class RenderWorker(QObject):
         image = np.asarray(image)
         if image.shape != (request.height, request.width, 4):
             raise RuntimeError(f"renderer returned shape {image.shape}, expected {(request.height, request.width, 4)}")
-        rgb = composite_rgb8(image, request.background)
+        rgb = to_png_pixels(image, request.background)
         return Frame(
             request.serial, request.renderer, request.width, request.height, ms, request.full, rgb, request.camera
         )
