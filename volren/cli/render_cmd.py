@@ -12,8 +12,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from volren.errors import VolrenError
 from volren.model.scene import OrbitView, Scene
 from volren.model.settings import BlendMode, RenderSettings
@@ -156,7 +154,7 @@ def run(args: argparse.Namespace) -> int:
     if args.output:
         io.save_image(image, args.output, transparent=args.transparent)
     if args.save_array:
-        np.save(args.save_array, image)
+        io.save_array(image, args.save_array)
     written = " ".join(str(p) for p in (args.output, args.save_array) if p)
     print(f"{scene.renderer}: {width}x{height} in {stats.ms:.1f} ms -> {written}")
     return 0
