@@ -165,3 +165,37 @@ def test_missing_opengl_libraries_name_the_debian_packages(monkeypatch):
             opengl.require_opengl()
     finally:
         opengl.opengl_problem.cache_clear()
+
+
+def test_step_changes_apply_in_place(vtk_renderer):
+    x = np.linspace(0, 1, 24, dtype=np.float32)
+    volume = UniformVolume(np.broadcast_to(x[None, None, :] * x[None, :, None], (24, 24, 24)).copy())
+    tf = TransferFunction1D([[0, 1, 1, 1]], [[0.3, 0.0], [0.31, 1.0], [0.33, 1.0], [0.34, 0.0]])
+    camera = Camera.orbit(volume.bounds, 30, 20, 1.0)
+    vtk_renderer.set_volume(volume)
+    vtk_renderer.set_transfer_function(tf)
+    images = {}
+    for step in (1.0, 0.125):
+        vtk_renderer.set_settings(RenderSettings(step=step))
+        images[step] = vtk_renderer.render(camera, 32, 32)
+        assert vtk_renderer.last_frame.counters["sample_distance"] == pytest.approx(step)
+        with registry.create("vtk") as fresh:
+            fresh.set_volume(volume)
+            fresh.set_transfer_function(tf)
+            fresh.set_settings(RenderSettings(step=step))
+            assert np.array_equal(fresh.render(camera, 32, 32), images[step])
+    assert not np.array_equal(images[1.0], images[0.125])  # the thin shell needs the fine step
+
+
+def test_step_changes_keep_the_mesh_mapper(vtk_renderer):
+    vtk_renderer.set_volume(lattice_tets(2))
+    vtk_renderer.set_transfer_function(TransferFunction1D.constant(0.3))
+    camera = Camera.orbit((0, 2, 0, 2, 0, 2), 30, 20)
+    vtk_renderer.render(camera, 16, 16)
+    mapper = vtk_renderer._mapper
+    vtk_renderer.set_settings(RenderSettings(step=2.0))
+    vtk_renderer.render(camera, 16, 16)
+    assert vtk_renderer._mapper is mapper
+    vtk_renderer.set_settings(RenderSettings(step=2.0, preintegration=True))
+    vtk_renderer.render(camera, 16, 16)
+    assert vtk_renderer._mapper is not mapper  # a new ray integrator is a new mapper

@@ -43,29 +43,24 @@ from volren.vtk_messages import vtk_messages
 ALL_BLEND_MODES = frozenset(BlendMode)
 
 
-def _smart(h: float, settings) -> Any:
-    """The genuine smart mapper: VTK locks its sample distance to the data spacing (h unused)."""
+def _smart(settings) -> Any:
+    """The genuine smart mapper: VTK locks its sample distance to the data spacing."""
     mapper = _vtk.vtkSmartVolumeMapper()
     mapper.SetAutoAdjustSampleDistances(0)
     mapper.SetInteractiveAdjustSampleDistances(0)
-    mapper.SetSampleDistance(h)
     return mapper
 
 
-def _gpu(h: float, settings) -> Any:
+def _gpu(settings) -> Any:
     mapper = _vtk.vtkOpenGLGPUVolumeRayCastMapper()
     mapper.SetAutoAdjustSampleDistances(0)
-    mapper.SetSampleDistance(h)
-    mapper.SetUseJittering(int(settings.jitter))
     return mapper
 
 
-def _fixed_point(h: float, settings) -> Any:
+def _fixed_point(settings) -> Any:
     mapper = _vtk.vtkFixedPointVolumeRayCastMapper()
     mapper.SetAutoAdjustSampleDistances(0)
     mapper.SetLockSampleDistanceToInputSpacing(0)
-    mapper.SetSampleDistance(h)
-    mapper.SetInteractiveSampleDistance(h)
     mapper.SetImageSampleDistance(1.0)
     return mapper
 
@@ -85,21 +80,21 @@ def _image_order_tet_mapper(cls: type, settings) -> Any:
     return mapper
 
 
-def _ug_raycast(h: float, settings) -> Any:
+def _ug_raycast(settings) -> Any:
     return _image_order_tet_mapper(_vtk.vtkUnstructuredGridVolumeRayCastMapper, settings)
 
 
-def _ug_zsweep(h: float, settings) -> Any:
+def _ug_zsweep(settings) -> Any:
     return _image_order_tet_mapper(_vtk.vtkUnstructuredGridVolumeZSweepMapper, settings)
 
 
-def _ug_projected(h: float, settings) -> Any:
+def _ug_projected(settings) -> Any:
     if settings.preintegration:
         raise VolrenError("the vtk projected-tetrahedra mapper has no pre-integration; use mapper=raycast or zsweep")
     return _vtk.vtkOpenGLProjectedTetrahedraMapper()
 
 
-MapperFactory = Callable[[float, Any], Any]
+MapperFactory = Callable[[Any], Any]
 
 #: mapper option value -> (volume kind, factory, blend modes it supports)
 MAPPERS: dict[str, tuple[str, MapperFactory, frozenset[BlendMode]]] = {
@@ -112,6 +107,8 @@ MAPPERS: dict[str, tuple[str, MapperFactory, frozenset[BlendMode]]] = {
     "projected": ("tet", _ug_projected, frozenset({BlendMode.COMPOSITE})),
 }
 DEFAULT_MAPPER = {"uniform": "auto", "tet": "raycast"}
+#: The mappers that sample at our step (the others step cell to cell, or choose their own).
+STEPPED_MAPPERS = frozenset({"gpu", "fixed_point"})
 
 _BLEND_SETTERS = {
     BlendMode.COMPOSITE: "SetBlendModeToComposite",
@@ -217,22 +214,29 @@ class VtkRenderer(RendererBase):
         settings = self._settings
         if settings.blend_mode not in blend_modes:
             raise VolrenError(f"vtk mapper {name!r} has no {settings.blend_mode} blend mode")
-        h = settings.step * self._volume.characteristic_length
-        key = (name, h, settings.preintegration, settings.jitter)
+        # Only what is fixed when a mapper is made decides whether to make a new one: a new step
+        # (cheap frames while dragging, a benchmark sweep) must not rebuild a mesh mapper.
+        key = (name, settings.preintegration)
         if key != self._mapper_key:
             if self._mapper is not None:
                 self._mapper.ReleaseGraphicsResources(self._window)
-            self._mapper = factory(h, settings)
+            self._mapper = factory(settings)
             self._mapper.SetInputData(self._dataset)
             self._actor.SetMapper(self._mapper)
             self._mapper_key = key
-            self._tf_key = None
             self._needs_warmup = name == "projected"
+        if name in STEPPED_MAPPERS:
+            h = settings.step * self._volume.characteristic_length
+            self._mapper.SetSampleDistance(h)
+            if name == "fixed_point":
+                self._mapper.SetInteractiveSampleDistance(h)
+            else:
+                self._mapper.SetUseJittering(int(settings.jitter))
         getattr(self._mapper, _BLEND_SETTERS[settings.blend_mode])()
 
     def _ensure_property(self) -> None:
         tf, settings, prop = self._tf, self._settings, self._property
-        key = (tf.version, self._sentinel, self._mapper_key)
+        key = (tf.version, self._sentinel)  # the conversion depends on the volume kind, reset with it
         if key != self._tf_key:
             build = unstructured_functions if self._volume.kind == "tet" else uniform_functions
             color, opacity = build(tf, self._volume.value_range[0], self._sentinel)
@@ -287,8 +291,8 @@ class VtkRenderer(RendererBase):
         if progress is not None:
             progress(1.0)
         counters: dict[str, float] = {}
-        if self._mapper_key[0] not in ("smart", "raycast", "zsweep", "projected"):
-            counters["sample_distance"] = self._mapper_key[1]
+        if self._mapper_key[0] in STEPPED_MAPPERS:
+            counters["sample_distance"] = self._mapper.GetSampleDistance()
         return np.ascontiguousarray(image), counters
 
     def release(self) -> None:
