@@ -16,7 +16,7 @@ from volren.model.colormaps import VIRIDIS, color_stops
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import TetVolume, UniformVolume, Volume
-from volren.renderers.base import ProgressCallback
+from volren.renderers.base import ProgressCallback, Renderer
 
 
 def default_transfer_function(volume: Volume) -> TransferFunction1D:
@@ -74,6 +74,24 @@ def parse_size(size: Any) -> tuple[int, int]:
     return int(values[0]), int(values[1])
 
 
+def prepared_renderer(
+    name: str, volume: Volume, tf: TransferFunction1D, settings: RenderSettings | None = None
+) -> Renderer:
+    """A new renderer `name` holding the volume, TF and settings; use it as a context manager
+    (or call release()) so its GPU/VTK resources are freed."""
+    from volren.renderers.registry import registry
+
+    renderer = registry.create(name)
+    try:
+        renderer.set_volume(volume)
+        renderer.set_transfer_function(tf)
+        renderer.set_settings(settings or RenderSettings())
+    except BaseException:
+        renderer.release()
+        raise
+    return renderer
+
+
 def render(
     volume: Any,
     tf: Any = None,
@@ -95,8 +113,6 @@ def render(
     orbit (reset on the bounds, then azimuth, elevation, zoom) unless `camera` is given. Other
     keyword arguments are RenderSettings fields (step, preintegration, shade, blend_mode, ...).
     """
-    from volren.renderers.registry import registry
-
     vol = as_volume(volume, scalars)
     transfer = as_transfer_function(tf, vol)
     width, height = parse_size(size)
@@ -105,8 +121,5 @@ def render(
             raise VolrenError(f"{name} must be finite, got {value}")
     render_settings = RenderSettings().with_(**settings)
     cam = camera or Camera.orbit(vol.bounds, azimuth, elevation, zoom, parallel, width / height)
-    with registry.create(renderer) as r:
-        r.set_volume(vol)
-        r.set_transfer_function(transfer)
-        r.set_settings(render_settings)
+    with prepared_renderer(renderer, vol, transfer, render_settings) as r:
         return r.render(cam, width, height, progress)

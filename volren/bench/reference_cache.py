@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from volren.api import prepared_renderer
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
@@ -73,17 +74,12 @@ def reference_image(volume: Volume, tf: TransferFunction1D, camera: Camera, widt
                     settings: RenderSettings | None = None, progress: ProgressCallback | None = None,
                     folder: Path | None = None) -> NDArray[np.float32]:
     """The `reference` renderer's image of this scene, from the cache when it was rendered before."""
-    from volren.renderers.registry import registry
-
     settings = reference_settings(settings or RenderSettings())
     folder = folder or cache_folder()
     path = folder / f"{scene_key(volume, tf, camera, width, height, settings)}.npy"
     if path.exists():
         return np.load(path)
-    with registry.create("reference") as renderer:
-        renderer.set_volume(volume)
-        renderer.set_transfer_function(tf)
-        renderer.set_settings(settings)
+    with prepared_renderer("reference", volume, tf, settings) as renderer:
         image = renderer.render(camera, width, height, progress)
     folder.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp.npy")

@@ -13,6 +13,7 @@ import statistics
 import time
 from pathlib import Path
 
+from volren.api import prepared_renderer
 from volren.bench.metrics import image_error
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
@@ -43,7 +44,6 @@ def time_frames(renderer, camera, width, height, frames: int) -> tuple[float, ob
 
 def main(argv: list[str] | None = None) -> None:
     from volren.io import load_volume
-    from volren.renderers.registry import registry
 
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--shared", default=str(Path(__file__).resolve().parents[2].parent / "shared"))
@@ -65,15 +65,10 @@ def main(argv: list[str] | None = None) -> None:
             tf = TransferFunction1D.from_dict(json.loads((shared / "scenes" / f"{dataset}-{style}.json").read_text()))
             settings = RenderSettings(step=args.step)
             start = time.perf_counter()
-            with registry.create("reference") as reference_renderer:
-                reference_renderer.set_volume(volume)
-                reference_renderer.set_transfer_function(tf)
+            with prepared_renderer("reference", volume, tf) as reference_renderer:
                 reference = reference_renderer.render(camera, size, size)
             ref_ms = (time.perf_counter() - start) * 1000.0
-            with registry.create("vtk") as renderer:
-                renderer.set_volume(volume)
-                renderer.set_transfer_function(tf)
-                renderer.set_settings(settings)
+            with prepared_renderer("vtk", volume, tf, settings) as renderer:
                 ms, image = time_frames(renderer, camera, size, size, args.frames)
             err = image_error(image, reference)
             print(f"| {dataset} | {style} | {ms:.1f} | {ref_ms:.0f} | {err.rmse:.5f} | {err.max_abs:.4f} | {err.psnr:.1f} |",

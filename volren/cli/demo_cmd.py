@@ -24,7 +24,7 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from volren import io
-    from volren.api import parse_size
+    from volren.api import parse_size, prepared_renderer
     from volren.cli.progress import progress_bar
     from volren.model.camera import Camera
     from volren.renderers.registry import registry
@@ -52,9 +52,7 @@ def run(args: argparse.Namespace) -> int:
                 continue
             target = out / f"{sample}_{name}.png"
             try:
-                with registry.create(name) as renderer:
-                    renderer.set_volume(volume)
-                    renderer.set_transfer_function(tf)
+                with prepared_renderer(name, volume, tf) as renderer:
                     with progress_bar(f"{sample} {name}") as progress:
                         renderer.render(camera.azimuth(-10.0), width, height, progress)
                     first_ms = renderer.last_frame.ms

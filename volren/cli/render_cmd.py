@@ -14,7 +14,7 @@ from typing import Any
 
 from volren.errors import VolrenError
 from volren.model.scene import OrbitView, Scene
-from volren.model.settings import BlendMode, RenderSettings
+from volren.model.settings import BlendMode
 
 
 def add_parser(sub) -> None:
@@ -130,8 +130,8 @@ def build_scene(args: argparse.Namespace) -> Scene:
 
 def run(args: argparse.Namespace) -> int:
     from volren import io
+    from volren.api import prepared_renderer
     from volren.cli.progress import progress_bar
-    from volren.renderers.registry import registry
 
     if not args.output and not args.save_array:
         raise VolrenError("give -o OUT.png (and/or --save-array OUT.npy)")
@@ -141,16 +141,10 @@ def run(args: argparse.Namespace) -> int:
     scene = build_scene(args)
     width, height = scene.size
     camera = scene.resolved_camera()
-    renderer = registry.create(scene.renderer)
-    try:
-        renderer.set_volume(scene.volume)
-        renderer.set_transfer_function(scene.transfer_function)
-        renderer.set_settings(scene.settings if isinstance(scene.settings, RenderSettings) else RenderSettings())
+    with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
         with progress_bar(f"{scene.renderer} {width}x{height}") as progress:
             image = renderer.render(camera, width, height, progress)
         stats = renderer.last_frame
-    finally:
-        renderer.release()
     if args.output:
         io.save_image(image, args.output, transparent=args.transparent)
     if args.save_array:
