@@ -119,3 +119,10 @@ def test_sampling_stays_in_range(xs, alphas, queries):
     rgb, alpha = tf.sample(queries)
     assert np.all((alpha >= 0) & (alpha <= 1)) and np.all((rgb >= 0) & (rgb <= 1))
     assert np.all(np.isfinite(tf.extinction(queries)))
+
+
+def test_absurdly_small_unit_distance_is_refused():
+    """13.8 / d_u (an opaque value's extinction) must stay finite in every table and integrator."""
+    with pytest.raises(VolrenError, match="absurdly small"):
+        TransferFunction1D.constant(1.0, opacity_unit_distance=1e-308)
+    assert TransferFunction1D.constant(1.0, opacity_unit_distance=1e-30).opacity_unit_distance == 1e-30

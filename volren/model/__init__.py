@@ -1,7 +1,8 @@
 """The data model: volumes, transfer functions, camera, render settings, scenes.
 
 Pure numpy and the standard library: nothing here imports VTK, PyVista, moderngl or Qt, so the
-model can be used and tested anywhere.
+model can be used and tested anywhere. The one exception is `model.preintegration` (imported on
+its own, not from here), whose table kernels use numba.
 """
 
 from volren.model.camera import Camera

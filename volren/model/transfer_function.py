@@ -23,6 +23,9 @@ from volren.model.file_version import check_format_version
 
 #: Opacities are clamped to this before taking the logarithm (DESIGN.md).
 MAX_OPACITY = 1.0 - 1e-6
+#: Shorter unit distances would make the extinction of opaque values (13.8 / d_u) overflow in
+#: tables and integrators; no physical length is this small.
+MIN_UNIT_DISTANCE = 1e-30
 TF_FORMAT_VERSION = 1
 
 _versions = itertools.count(1)
@@ -92,6 +95,8 @@ class TransferFunction1D:
             raise VolrenError(f"opacity_unit_distance must be a number, got {value!r}") from None
         if not math.isfinite(unit) or unit <= 0:
             raise VolrenError(f"opacity_unit_distance must be positive and finite, got {value!r}")
+        if unit < MIN_UNIT_DISTANCE:
+            raise VolrenError(f"opacity_unit_distance {value!r} is absurdly small (at least {MIN_UNIT_DISTANCE:g})")
         return unit
 
     # ------------------------------------------------------------------------------ state
@@ -118,6 +123,17 @@ class TransferFunction1D:
     def breakpoints(self) -> NDArray[np.float64]:
         """Sorted distinct x of all control points: between two of them everything is linear."""
         return np.unique(np.concatenate([self._color[:, 0], self._opacity[:, 0]]))
+
+    def linear_cuts(self) -> NDArray[np.float64]:
+        """`breakpoints` plus the values where the opacity crosses the clamp 1 - 1e-6: between two
+        cuts colour, opacity and the clamped opacity (hence the extinction's form) are smooth."""
+        ox, oa = self._opacity[:, 0], self._opacity[:, 1]
+        crossings = [
+            ox[k] + (MAX_OPACITY - oa[k]) / (oa[k + 1] - oa[k]) * (ox[k + 1] - ox[k])
+            for k in range(len(ox) - 1)
+            if ox[k + 1] > ox[k] and min(oa[k], oa[k + 1]) < MAX_OPACITY < max(oa[k], oa[k + 1])
+        ]
+        return np.unique(np.concatenate([self.breakpoints(), np.asarray(crossings, dtype=np.float64)]))
 
     # ------------------------------------------------------------------------------ edits
     def set_color_points(self, points: ArrayLike) -> None:

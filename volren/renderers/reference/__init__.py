@@ -6,31 +6,15 @@ two successive levels agree to a tolerance. Modules: `tf_eval` (exact TF evaluat
 (Blinn-Phong headlight), `uniform` (trilinear grids), `tets` (tetrahedral meshes) and `renderer`
 (the `ReferenceRenderer` class).
 
-numba's on-disk cache (``cache=True``) checks only the source file of the function it compiled,
-not the modules that function calls into, so a kernel in `uniform.py` would keep running an old
-copy of `ray_integral.py` after an edit. `_drop_stale_numba_cache` therefore removes this
-package's cache files whenever any of its sources is newer than them.
+numba's on-disk cache does not notice edits to the modules a kernel calls into, so stale cache
+files are dropped on import (`volren.numba_cache`).
 """
 
 from pathlib import Path
 
+from volren.numba_cache import drop_stale_cache
 
-def _drop_stale_numba_cache() -> None:
-    here = Path(__file__).resolve().parent
-    cache = here / "__pycache__"
-    try:
-        newest = max(p.stat().st_mtime for p in here.glob("*.py"))
-        stale = [p for p in cache.glob("*.nb[ic]") if p.stat().st_mtime < newest]
-    except (OSError, ValueError):
-        return
-    for path in stale:
-        try:
-            path.unlink()
-        except OSError:
-            pass
-
-
-_drop_stale_numba_cache()
+drop_stale_cache(Path(__file__).parent)
 
 from volren.renderers.reference.renderer import ReferenceRenderer  # noqa: E402
 

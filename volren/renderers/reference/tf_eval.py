@@ -53,13 +53,8 @@ def pack_tf(tf: TransferFunction1D) -> PackedTF:
     ox = np.ascontiguousarray(opacity[:, 0], dtype=np.float64)
     oa = np.ascontiguousarray(opacity[:, 1], dtype=np.float64)
     bp = np.ascontiguousarray(tf.breakpoints(), dtype=np.float64)
-    clamp = []
-    for k in range(len(ox) - 1):
-        a0, a1 = oa[k], oa[k + 1]
-        if ox[k + 1] > ox[k] and min(a0, a1) < MAX_OPACITY < max(a0, a1):
-            clamp.append(ox[k] + (MAX_OPACITY - a0) / (a1 - a0) * (ox[k + 1] - ox[k]))
-    cuts = np.unique(np.concatenate([bp, np.asarray(clamp, dtype=np.float64)]))
-    return (cx, crgb, ox, oa, bp, float(tf.opacity_unit_distance), np.ascontiguousarray(cuts))
+    cuts = np.ascontiguousarray(tf.linear_cuts(), dtype=np.float64)
+    return (cx, crgb, ox, oa, bp, float(tf.opacity_unit_distance), cuts)
 
 
 @njit(cache=True)

@@ -1,0 +1,209 @@
+"""`volren bench preint`: time and accuracy of the pre-integration tables (seed 000's Table 1).
+
+For each table size n: seconds for the brute-force O(n^3) table (only where the previous size
+predicts it finishes within the limit), the exact O(n^2) table (incremental subrange
+integration), Engel's approximate integral-function table and the 3D table for 64 lengths, all
+with n_t = n (no oversampling, as in seed 000's Table 1), each
+the median of several runs, and each one's max error over random entries against the continuous
+integral (`preint_oracle`, float64, adaptive). A second table gives that error for the exact table
+as a function of n and n_t (oversampling). Also the time of a repeated (cached) request.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.bench.preint_oracle import continuous_entries
+from volren.model.preintegration import (
+    LengthAxis,
+    TableCache,
+    preintegrate,
+    preintegrate_approximate,
+    preintegrate_brute_force,
+)
+from volren.model.preintegration.tables import MAX_TABLE_BYTES
+from volren.model.transfer_function import TransferFunction1D
+
+DEFAULT_SIZES = (32, 64, 128, 256, 512, 1024, 2048, 4096)
+DEFAULT_OVERSAMPLING = (1, 2, 4, 8)
+DEFAULT_ERROR_SIZES = (64, 256, 1024)
+
+
+@dataclass
+class SizeRow:
+    """One line of the main table; None where a column was not measured."""
+
+    n: int
+    brute_s: float | None = None
+    exact_s: float = 0.0
+    approx_s: float = 0.0
+    table3d_s: float | None = None
+    cached_ms: float = 0.0
+    errors: dict[str, float | None] = field(default_factory=dict)
+
+
+def median_seconds(work: Callable[[], object], repeats: int) -> float:
+    """Median wall time of `repeats` runs after one warm-up run (compilation, first-touch memory)."""
+    work()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        work()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def sample_entries(n: int, count: int, rng: np.random.Generator) -> NDArray[np.int64]:
+    """(count, 2) random (front, back) indices, a tenth of them on or next to the diagonal."""
+    idx = rng.integers(0, n, size=(count, 2))
+    near = max(1, count // 10)
+    idx[:near, 1] = np.clip(idx[:near, 0] + rng.integers(-1, 2, size=near), 0, n - 1)
+    return idx
+
+
+def values_of(idx: NDArray, n: int, lo: float, hi: float) -> NDArray[np.float64]:
+    return lo + (hi - lo) * (idx / (n - 1))
+
+
+def max_error(table: NDArray, idx: NDArray, truth: NDArray) -> float:
+    return float(np.abs(table[idx[:, 0], idx[:, 1]].astype(np.float64) - truth).max())
+
+
+def measure_size(
+    tf: TransferFunction1D,
+    n: int,
+    step: float,
+    lengths: int,
+    entries: int,
+    repeats: int,
+    run_brute: bool,
+    rng: np.random.Generator,
+) -> SizeRow:
+    lo, hi = tf.value_range
+    row = SizeRow(n)
+    idx = sample_entries(n, entries, rng)
+    values = values_of(idx, n, lo, hi)
+    truth = continuous_entries(tf, values[:, 0], values[:, 1], step)
+
+    exact = preintegrate(tf, n, step, oversampling=1, cache=None)
+    row.exact_s = median_seconds(lambda: preintegrate(tf, n, step, oversampling=1, cache=None), repeats)
+    row.errors["exact"] = max_error(exact, idx, truth)
+    approx = preintegrate_approximate(tf, n, step, oversampling=1)
+    row.approx_s = median_seconds(lambda: preintegrate_approximate(tf, n, step, oversampling=1), repeats)
+    row.errors["approximate"] = max_error(approx, idx, truth)
+    if run_brute:
+        start = time.perf_counter()
+        brute = preintegrate_brute_force(tf, n, step, oversampling=1)
+        row.brute_s = time.perf_counter() - start
+        row.errors["brute"] = max_error(brute, idx, truth)  # type: ignore[arg-type]
+        row.errors["exact_vs_brute"] = float(np.abs(exact.astype(np.float64) - brute).max())  # type: ignore[union-attr]
+
+    axis = LengthAxis(max_length=4 * step, count=lengths)
+    if lengths * n * n * 16 <= MAX_TABLE_BYTES:
+        layers = axis.lengths
+        row.table3d_s = median_seconds(lambda: preintegrate(tf, n, lengths=layers, oversampling=1, cache=None), max(1, repeats // 2))
+        table3d = preintegrate(tf, n, lengths=layers, oversampling=1, cache=None)
+        pick = rng.integers(0, lengths, size=len(idx))
+        truth3d = np.stack(
+            [continuous_entries(tf, values[k : k + 1, 0], values[k : k + 1, 1], layers[pick[k]])[0] for k in range(len(idx))]
+        )
+        got = table3d[pick, idx[:, 0], idx[:, 1]].astype(np.float64)
+        row.errors["3d"] = float(np.abs(got - truth3d).max())
+
+    cache = TableCache()
+    preintegrate(tf, n, step, oversampling=1, cache=cache)
+    start = time.perf_counter()
+    preintegrate(tf, n, step, oversampling=1, cache=cache)
+    row.cached_ms = (time.perf_counter() - start) * 1e3
+    return row
+
+
+def size_rows(
+    tf: TransferFunction1D,
+    sizes: Sequence[int],
+    step: float,
+    lengths: int,
+    entries: int,
+    repeats: int,
+    brute_limit_s: float,
+    seed: int = 0,
+) -> Iterator[SizeRow]:
+    """Rows of the main table, one size at a time (so a caller can show progress)."""
+    rng = np.random.default_rng(seed)
+    preintegrate_brute_force(tf, 3, step, oversampling=1)  # compile outside the timed run
+    last_brute: tuple[int, float] | None = None
+    for n in sizes:
+        predicted = 0.0 if last_brute is None else last_brute[1] * (n / last_brute[0]) ** 3
+        row = measure_size(tf, n, step, lengths, entries, repeats, predicted <= brute_limit_s, rng)
+        if row.brute_s is not None:
+            last_brute = (n, row.brute_s)
+        yield row
+
+
+def oversampling_errors(
+    tf: TransferFunction1D, sizes: Sequence[int], factors: Sequence[int], step: float, entries: int, seed: int = 1
+) -> dict[tuple[int, int], float]:
+    """Max error of the exact table against the continuous integral per (n, oversampling)."""
+    rng = np.random.default_rng(seed)
+    lo, hi = tf.value_range
+    out = {}
+    for n in sizes:
+        idx = sample_entries(n, entries, rng)
+        values = values_of(idx, n, lo, hi)
+        truth = continuous_entries(tf, values[:, 0], values[:, 1], step)
+        for m in factors:
+            out[(n, m)] = max_error(preintegrate(tf, n, step, oversampling=m, cache=None), idx, truth)
+    return out
+
+
+def _fmt_s(value: float | None) -> str:
+    if value is None:
+        return "-"
+    return f"{value * 1e3:.2f} ms" if value < 1 else f"{value:.2f} s"
+
+
+def _fmt_e(value: float | None) -> str:
+    return "-" if value is None else f"{value:.1e}"
+
+
+def format_size_table(rows: Sequence[SizeRow], lengths: int) -> str:
+    head = (
+        f"| n | brute force O(n^3) | exact O(n^2) | approximate | 3D, {lengths} lengths | cached request "
+        "| max err exact | max err approx. | max err 3D | max err brute | max exact - brute |"
+    )
+    lines = [head, "|" + "---|" * 11]
+    for r in rows:
+        e = r.errors
+        lines.append(
+            f"| {r.n} | {_fmt_s(r.brute_s)} | {_fmt_s(r.exact_s)} | {_fmt_s(r.approx_s)} | {_fmt_s(r.table3d_s)} "
+            f"| {r.cached_ms:.3f} ms | {_fmt_e(e.get('exact'))} | {_fmt_e(e.get('approximate'))} "
+            f"| {_fmt_e(e.get('3d'))} | {_fmt_e(e.get('brute'))} | {_fmt_e(e.get('exact_vs_brute'))} |"
+        )
+    return "\n".join(lines)
+
+
+def format_oversampling_table(errors: dict[tuple[int, int], float]) -> str:
+    sizes = sorted({n for n, _ in errors})
+    factors = sorted({m for _, m in errors})
+    lines = ["| n \\ n_t | " + " | ".join(f"n_t = {m}(n-1)+1" for m in factors) + " |", "|" + "---|" * (len(factors) + 1)]
+    for n in sizes:
+        lines.append(f"| {n} | " + " | ".join(_fmt_e(errors[(n, m)]) for m in factors) + " |")
+    return "\n".join(lines)
+
+
+def default_tf_path() -> Path:
+    """The engine's spiky TF from ../shared/scenes when present (two opacity spikes narrower than
+    the bins of small tables), else the bundled Marschner-Lobb sample's TF."""
+    shared = Path(__file__).resolve().parents[2].parent / "shared" / "scenes" / "engine-spiky.json"
+    if shared.is_file():
+        return shared
+    from volren.samples import sample_paths
+
+    return sample_paths("marschner_lobb")[1]
