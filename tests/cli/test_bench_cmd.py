@@ -68,17 +68,17 @@ def test_preint_bench_prints_and_writes_both_tables(tmp_path, capsys, sample_tf)
     assert out.read_text() == text
 
     header = next(line for line in text.splitlines() if line.startswith("| n |"))
-    assert len(header.strip().strip("|").split("|")) == 11
+    assert len(header.strip().strip("|").split("|")) == 12
     exact_errors = {}
     for n in ("8", "16"):
         (cells,) = rows(text, n)[:1]
-        assert len(cells) == 11, cells
-        # brute force, exact, approximate, 3D: all measured at these small sizes
-        times = [seconds(c) for c in cells[1:5]]
+        assert len(cells) == 12, cells
+        # brute force, exact, approximate, 3D, lighting: all measured at these small sizes
+        times = [seconds(c) for c in cells[1:6]]
         assert all(math.isfinite(t) and t > 0 for t in times), cells
-        cached = re.fullmatch(r"(\d+\.\d{3}) ms", cells[5])
-        assert cached and math.isfinite(float(cached[1])), cells[5]
-        exact, approx, err3d, brute, exact_vs_brute = (error(c) for c in cells[6:11])
+        cached = re.fullmatch(r"(\d+\.\d{3}) ms", cells[6])
+        assert cached and math.isfinite(float(cached[1])), cells[6]
+        exact, approx, err3d, brute, exact_vs_brute = (error(c) for c in cells[7:12])
         assert all(0 <= e <= 1 for e in (exact, approx, err3d, brute)), cells
         # the O(n^2) table is the brute-force table, to float32 rounding
         assert exact_vs_brute <= 1e-6, cells

@@ -2,7 +2,8 @@
 
 For each table size n: seconds for the brute-force O(n^3) table (only where the previous size
 predicts it finishes within the limit), the exact O(n^2) table (incremental subrange
-integration), Engel's approximate integral-function table and the 3D table for 64 lengths, all
+integration), Engel's approximate integral-function table, the 3D table for 64 lengths and the
+lighting tables (front and back weighted), all
 with n_t = n (no oversampling, as in seed 000's Table 1), each
 the median of several runs, and each one's max error over random entries against the continuous
 integral (`preint_oracle`, float64, adaptive). A second table gives that error for the exact table
@@ -24,6 +25,7 @@ from volren.bench.preint_oracle import continuous_entries
 from volren.model.preintegration import (
     LengthAxis,
     TableCache,
+    lighting_tables,
     preintegrate,
     preintegrate_approximate,
     preintegrate_brute_force,
@@ -34,6 +36,8 @@ from volren.model.transfer_function import TransferFunction1D
 DEFAULT_SIZES = (32, 64, 128, 256, 512, 1024, 2048, 4096)
 DEFAULT_OVERSAMPLING = (1, 2, 4, 8)
 DEFAULT_ERROR_SIZES = (64, 256, 1024)
+#: 3D tables above this size are not timed (n = 2048 with 64 lengths would be 4 GiB).
+BENCH_3D_BYTES = 1 << 30
 
 
 @dataclass
@@ -45,6 +49,7 @@ class SizeRow:
     exact_s: float = 0.0
     approx_s: float = 0.0
     table3d_s: float | None = None
+    lighting_s: float = 0.0
     cached_ms: float = 0.0
     errors: dict[str, float | None] = field(default_factory=dict)
 
@@ -95,6 +100,7 @@ def measure_size(
     exact = preintegrate(tf, n, step, oversampling=1, cache=None)
     row.exact_s = median_seconds(lambda: preintegrate(tf, n, step, oversampling=1, cache=None), repeats)
     row.errors["exact"] = max_error(exact, idx, truth)
+    row.lighting_s = median_seconds(lambda: lighting_tables(tf, n, step, oversampling=1, cache=None), repeats)
     approx = preintegrate_approximate(tf, n, step, oversampling=1)
     row.approx_s = median_seconds(lambda: preintegrate_approximate(tf, n, step, oversampling=1), repeats)
     row.errors["approximate"] = max_error(approx, idx, truth)
@@ -106,7 +112,7 @@ def measure_size(
         row.errors["exact_vs_brute"] = float(np.abs(exact.astype(np.float64) - brute).max())  # type: ignore[union-attr]
 
     axis = LengthAxis(max_length=4 * step, count=lengths)
-    if lengths * n * n * 16 <= MAX_TABLE_BYTES:
+    if lengths * n * n * 16 <= min(BENCH_3D_BYTES, MAX_TABLE_BYTES):
         layers = axis.lengths
         row.table3d_s = median_seconds(lambda: preintegrate(tf, n, lengths=layers, oversampling=1, cache=None), max(1, repeats // 2))
         table3d = preintegrate(tf, n, lengths=layers, oversampling=1, cache=None)
@@ -175,14 +181,15 @@ def _fmt_e(value: float | None) -> str:
 
 def format_size_table(rows: Sequence[SizeRow], lengths: int) -> str:
     head = (
-        f"| n | brute force O(n^3) | exact O(n^2) | approximate | 3D, {lengths} lengths | cached request "
+        f"| n | brute force O(n^3) | exact O(n^2) | approximate | 3D, {lengths} lengths | lighting | cached request "
         "| max err exact | max err approx. | max err 3D | max err brute | max exact - brute |"
     )
-    lines = [head, "|" + "---|" * 11]
+    lines = [head, "|" + "---|" * 12]
     for r in rows:
         e = r.errors
         lines.append(
             f"| {r.n} | {_fmt_s(r.brute_s)} | {_fmt_s(r.exact_s)} | {_fmt_s(r.approx_s)} | {_fmt_s(r.table3d_s)} "
+            f"| {_fmt_s(r.lighting_s)} "
             f"| {r.cached_ms:.3f} ms | {_fmt_e(e.get('exact'))} | {_fmt_e(e.get('approximate'))} "
             f"| {_fmt_e(e.get('3d'))} | {_fmt_e(e.get('brute'))} | {_fmt_e(e.get('exact_vs_brute'))} |"
         )

@@ -35,7 +35,7 @@ def add_parser(sub) -> None:
     p.add_argument("--sizes", type=_int_list(2), default=None, help="table sizes n (default 32,64,...,4096)")
     p.add_argument("--step", type=float, default=0.5, help="segment length in world units (default 0.5)")
     p.add_argument("--lengths", type=int, default=64, help="lengths of the 3D table (default 64)")
-    p.add_argument("--entries", type=int, default=200, help="random entries checked per size (default 200)")
+    p.add_argument("--entries", type=int, default=500, help="random entries checked per size (default 500)")
     p.add_argument("--repeats", type=int, default=5, help="timed runs per table, median reported (default 5)")
     p.add_argument("--brute-limit", type=float, default=60.0, help="skip brute force predicted above this many s")
     p.add_argument("--oversampling", type=_int_list(1), default=None, help="n_t factors for the error table (1,2,4,8)")

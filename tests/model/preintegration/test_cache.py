@@ -82,7 +82,7 @@ def test_equivalent_spellings_of_a_request_share_one_entry(computations):
     cache = TableCache()
     tf = smooth()
     a = preintegrate(tf, 8, step=0.5, cache=cache)
-    auto = -(-tables_module.AUTO_MIN_BINS // 7)
+    auto = -(-(tables_module.AUTO_MIN_ENTRIES - 1) // 7)
     b = preintegrate(tf, 8, step=0.5, oversampling=auto, value_range=tf.value_range, cache=cache)
     c = preintegrate(tf, 8, lengths=[0.25, 0.5], cache=cache)
     d = preintegrate(tf, 8, lengths=np.array([0.25, 0.5]), cache=cache)

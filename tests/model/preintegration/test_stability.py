@@ -48,7 +48,7 @@ UNITS = log_uniform(-6, 6)
 STEPS = log_uniform(-6, 6)
 #: Where tiny and single-value ranges sit: small, ordinary and large magnitudes.
 CENTRES = st.one_of(st.sampled_from([0.0, 1.0, -7.25, 1e6, -1e12, 1e30]), st.floats(-1e6, 1e6))
-#: Explicit small oversampling, or None: the default, at least 1024 bins.
+#: Explicit small oversampling, or None: the default, at least 1024 TF entries.
 OVERSAMPLING = st.one_of(st.integers(1, 3), st.none())
 
 

@@ -188,7 +188,7 @@ def subrange_tables(tau, color, m, n, lengths, weighted, out, out_back):
         sg = np.empty((wn, 4))
         pg = np.empty((wn, 4))
         res = np.empty((2, count, n, 4))
-        back = np.empty((2, count if weighted else 0, n, 4))
+        back = np.empty((2, count, n if weighted else 0, 4))  # empty unless weighted
         for d in range(count):
             r = r0 + d
             _bins(tau, color, lengths[li] / (r * m), weighted, trans, col, centre)
@@ -200,7 +200,7 @@ def subrange_tables(tau, color, m, n, lengths, weighted, out, out_back):
                 _block_composites(tr, cl, r * m, sc, st, pc, pt)
                 if weighted:
                     _ramped_block_composites(tr, cl, ce, m, r * m, sg, pg)
-                _entries(m, n, r, weighted, sc, st, pc, pt, sg, pg, res[side, d], back[side, d] if weighted else back[side, 0:0, 0])
+                _entries(m, n, r, weighted, sc, st, pc, pt, sg, pg, res[side, d], back[side, d])
         # write: forward entry i of diagonal r is (i, i + r); reversed entry i is (n-1-i, n-1-i-r)
         for i in range(n - r0):
             for d in range(min(count, n - r0 - i)):

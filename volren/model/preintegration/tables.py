@@ -14,7 +14,7 @@ value span covers, each as a homogeneous slab of the entry's length divided amon
 optical depth (hence the opacity) is exact for any n; the colour treats each bin as homogeneous,
 an error that falls as n_t^-2 and grows with the optical depth of one bin (measured by
 `volren bench preint` and tests/model/preintegration/test_accuracy.py). It depends on n_t, not
-on n, so `oversampling` (by default enough for n_t > AUTO_MIN_BINS) makes a small table exact at
+on n, so `oversampling` (by default enough for n_t >= AUTO_MIN_ENTRIES) makes a small table exact at
 its entries to the same degree as a large one. The diagonal is the homogeneous segment's closed
 form: alpha = 1 - exp(-tau(s) L), colour = c(s) alpha.
 
@@ -53,9 +53,9 @@ from volren.model.transfer_function import TransferFunction1D
 MAX_TABLE_BYTES = 4 << 30
 #: Most bins (n_t - 1) the value axis may be split into.
 MAX_BINS = 1 << 16
-#: With oversampling=None, small tables get at least this many bins (n_t - 1): the error falls
-#: as n_t^-2 whatever n is, and below ~1000 bins thick segments lose 1e-3 and more.
-AUTO_MIN_BINS = 1024
+#: With oversampling=None, small tables are computed on at least this many TF entries n_t: the
+#: error falls as n_t^-2 whatever n is, and below ~1000 entries thick segments lose 1e-3 and more.
+AUTO_MIN_ENTRIES = 1024
 
 #: The cache `preintegrate` and `lighting_tables` use unless given another (or None).
 TABLE_CACHE = TableCache()
@@ -158,7 +158,7 @@ def _spec(
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 2:
         raise VolrenError(f"a pre-integration table needs an integer size n >= 2, got {n!r}")
     if oversampling is None:
-        oversampling = -(-AUTO_MIN_BINS // (n - 1))
+        oversampling = -(-(AUTO_MIN_ENTRIES - 1) // (n - 1))
     if isinstance(oversampling, bool) or not isinstance(oversampling, (int, np.integer)) or oversampling < 1:
         raise VolrenError(f"oversampling must be an integer >= 1, got {oversampling!r}")
     if oversampling * (n - 1) > MAX_BINS:
@@ -212,7 +212,7 @@ def _exact_tables(
     centre = _emission_centre(depth)
     back[:, k, k, 3] = centre * alpha
     back[:, k, k, :3] = diag_color[None] * (centre * alpha)[..., None]
-    np.minimum(back, out, out=back)  # float32 rounding of centre * alpha against alpha
+    back[:, k, k] = np.minimum(back[:, k, k], out[:, k, k])  # float32 rounding of centre * alpha
     return out, back
 
 
