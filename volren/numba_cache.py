@@ -11,12 +11,14 @@ from __future__ import annotations
 from pathlib import Path
 
 
-def drop_stale_cache(package_dir: str | Path) -> None:
-    """Delete the package's numba cache files (``__pycache__/*.nbi``, ``*.nbc``) older than its newest source."""
+def drop_stale_cache(package_dir: str | Path, *dependencies: str | Path) -> None:
+    """Delete the package's numba cache files (``__pycache__/*.nbi``, ``*.nbc``) older than the
+    newest source in it or in the `dependencies` (folders of modules its kernels call into)."""
     here = Path(package_dir).resolve()
     cache = here / "__pycache__"
+    folders = [here, *(Path(d).resolve() for d in dependencies)]
     try:
-        newest = max(p.stat().st_mtime for p in here.glob("*.py"))
+        newest = max(p.stat().st_mtime for folder in folders for p in folder.glob("*.py"))
         stale = [p for p in cache.glob("*.nb[ic]") if p.stat().st_mtime < newest]
     except (OSError, ValueError):
         return

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 
@@ -21,3 +22,14 @@ def emission_centre(x):
     if x < 1e-3:
         return 0.5 - x / 12.0 + x * x * x / 720.0
     return 1.0 / x - 1.0 / math.expm1(x)
+
+
+@njit(cache=True)
+def emission_centres(depths):
+    """`emission_centre` of every optical depth in a float64 array (any shape)."""
+    out = np.empty_like(depths)
+    flat_in = depths.ravel()
+    flat_out = out.ravel()
+    for k in range(flat_in.shape[0]):
+        flat_out[k] = emission_centre(flat_in[k])
+    return out

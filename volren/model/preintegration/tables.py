@@ -45,6 +45,7 @@ from volren.errors import VolrenError
 from volren.model.preintegration.approximate import integral_function_table
 from volren.model.preintegration.brute_force import brute_force_tables
 from volren.model.preintegration.cache import TableCache
+from volren.model.preintegration.segment_math import emission_centres
 from volren.model.preintegration.subrange import subrange_tables
 from volren.model.preintegration.tf_bins import point_values, tf_bins
 from volren.model.transfer_function import TransferFunction1D
@@ -180,16 +181,6 @@ def _spec(
 
 
 # ----------------------------------------------------------------------------- computation
-def _emission_centre(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    """numpy twin of `segment_math.emission_centre`."""
-    thin = x < 1e-3
-    xs = np.where(thin, 1.0, x)
-    xt = np.where(thin, x, 0.0)
-    with np.errstate(over="ignore"):
-        thick = 1.0 / xs - 1.0 / np.expm1(xs)
-    return np.where(thin, 0.5 - xt / 12.0 + xt**3 / 720.0, thick)
-
-
 def _exact_tables(
     tf: TransferFunction1D, spec: TableSpec, weighted: bool, brute_force: bool = False
 ) -> tuple[NDArray[np.float32], NDArray[np.float32] | None]:
@@ -209,7 +200,7 @@ def _exact_tables(
     out[:, k, k, :3] = diag_color[None] * alpha[..., None]
     if not weighted:
         return out, None
-    centre = _emission_centre(depth)
+    centre = emission_centres(np.ascontiguousarray(depth))
     back[:, k, k, 3] = centre * alpha
     back[:, k, k, :3] = diag_color[None] * (centre * alpha)[..., None]
     back[:, k, k] = np.minimum(back[:, k, k], out[:, k, k])  # float32 rounding of centre * alpha

@@ -14,7 +14,8 @@ from pathlib import Path
 
 from volren.numba_cache import drop_stale_cache
 
-drop_stale_cache(Path(__file__).parent)
+# the kernels also call into model.preintegration.segment_math (the emission centre)
+drop_stale_cache(Path(__file__).parent, Path(__file__).parents[2] / "model" / "preintegration")
 
 from volren.renderers.reference.renderer import ReferenceRenderer  # noqa: E402
 

@@ -58,6 +58,7 @@ import math
 import numpy as np
 from numba import njit
 
+from volren.model.preintegration.segment_math import emission_centre
 from volren.renderers.reference.shading import half_vector, shade
 from volren.renderers.reference.tf_eval import (
     color,
@@ -119,15 +120,6 @@ def critical_points(c, length):
     elif r2 == r2 and r2 < r1:
         r1, r2 = r2, r1
     return r1, r2
-
-
-@njit(cache=True)
-def emission_centre(od):
-    """Where, as a fraction of a homogeneous piece of optical depth od, the light that leaves
-    its front was emitted on average: 1/od - 1/(exp(od) - 1) (1/2 for a thin piece)."""
-    if od < 1e-3:
-        return 0.5 - od / 12.0 + od * od * od / 720.0
-    return 1.0 / od - 1.0 / math.expm1(od)
 
 
 @njit(cache=True)
