@@ -1,0 +1,3 @@
+#version 430
+#include "cycle_b.glsl"
+void main() {}

@@ -1,0 +1,2 @@
+// Includes cycle_a.glsl back: a cycle.
+#include "cycle_a.glsl"

@@ -1,0 +1,4 @@
+#include "common.glsl"
+int a_value() {
+    return COMMON_MARKER + 1; // A_MARKER
+}

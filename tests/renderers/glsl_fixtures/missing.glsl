@@ -1,0 +1,4 @@
+#version 430
+
+#include "does_not_exist.glsl"
+void main() {}

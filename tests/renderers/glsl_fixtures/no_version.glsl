@@ -1,0 +1,2 @@
+// No version line here.
+void main() {}

@@ -1,0 +1,1 @@
+const int ONLY_HERE = 3; // ONLY_HERE_MARKER

@@ -1,0 +1,3 @@
+#version 330
+#include "only_here.glsl"
+void main() {}
