@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,6 +33,8 @@ from volren.model.preintegration import (
 )
 from volren.model.preintegration.tables import MAX_TABLE_BYTES
 from volren.model.transfer_function import TransferFunction1D
+
+T = TypeVar("T")
 
 DEFAULT_SIZES = (32, 64, 128, 256, 512, 1024, 2048, 4096)
 DEFAULT_OVERSAMPLING = (1, 2, 4, 8)
@@ -54,15 +57,16 @@ class SizeRow:
     errors: dict[str, float | None] = field(default_factory=dict)
 
 
-def median_seconds(work: Callable[[], object], repeats: int) -> float:
-    """Median wall time of `repeats` runs after one warm-up run (compilation, first-touch memory)."""
-    work()
+def median_seconds(work: Callable[[], T], repeats: int) -> tuple[float, T]:
+    """Median wall time of `repeats` runs after one warm-up run (compilation, first-touch
+    memory), and the result of the last run (so the measured table need not be built again)."""
+    result = work()
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        work()
+        result = work()
         times.append(time.perf_counter() - start)
-    return statistics.median(times)
+    return statistics.median(times), result
 
 
 def sample_entries(n: int, count: int, rng: np.random.Generator) -> NDArray[np.int64]:
@@ -97,12 +101,10 @@ def measure_size(
     values = values_of(idx, n, lo, hi)
     truth = continuous_entries(tf, values[:, 0], values[:, 1], step)
 
-    exact = preintegrate(tf, n, step, oversampling=1, cache=None)
-    row.exact_s = median_seconds(lambda: preintegrate(tf, n, step, oversampling=1, cache=None), repeats)
+    row.exact_s, exact = median_seconds(lambda: preintegrate(tf, n, step, oversampling=1, cache=None), repeats)
     row.errors["exact"] = max_error(exact, idx, truth)
-    row.lighting_s = median_seconds(lambda: lighting_tables(tf, n, step, oversampling=1, cache=None), repeats)
-    approx = preintegrate_approximate(tf, n, step, oversampling=1)
-    row.approx_s = median_seconds(lambda: preintegrate_approximate(tf, n, step, oversampling=1), repeats)
+    row.lighting_s, _ = median_seconds(lambda: lighting_tables(tf, n, step, oversampling=1, cache=None), repeats)
+    row.approx_s, approx = median_seconds(lambda: preintegrate_approximate(tf, n, step, oversampling=1), repeats)
     row.errors["approximate"] = max_error(approx, idx, truth)
     if run_brute:
         start = time.perf_counter()
@@ -114,8 +116,9 @@ def measure_size(
     axis = LengthAxis(max_length=4 * step, count=lengths)
     if lengths * n * n * 16 <= min(BENCH_3D_BYTES, MAX_TABLE_BYTES):
         layers = axis.lengths
-        row.table3d_s = median_seconds(lambda: preintegrate(tf, n, lengths=layers, oversampling=1, cache=None), max(1, repeats // 2))
-        table3d = preintegrate(tf, n, lengths=layers, oversampling=1, cache=None)
+        row.table3d_s, table3d = median_seconds(
+            lambda: preintegrate(tf, n, lengths=layers, oversampling=1, cache=None), max(1, repeats // 2)
+        )
         pick = rng.integers(0, lengths, size=len(idx))
         truth3d = np.stack(
             [continuous_entries(tf, values[k : k + 1, 0], values[k : k + 1, 1], layers[pick[k]])[0] for k in range(len(idx))]
