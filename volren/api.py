@@ -15,6 +15,11 @@ from volren.model.camera import Camera
 from volren.model.colormaps import VIRIDIS, color_stops
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import (
+    TransferFunction,
+    TransferFunction2D,
+    transfer_function_from_dict,
+)
 from volren.model.volume import TetVolume, UniformVolume, Volume
 from volren.renderers.base import ProgressCallback, Renderer
 
@@ -40,14 +45,14 @@ def as_volume(volume: Any, scalars: str | None = None) -> Volume:
     return io.from_pyvista(volume, scalars=scalars)
 
 
-def as_transfer_function(tf: Any, volume: Volume) -> TransferFunction1D:
-    """A TF from a TF, a path, a TF JSON dict, or None (the default for this volume)."""
+def as_transfer_function(tf: Any, volume: Volume) -> TransferFunction:
+    """A TF (1D or 2D) from a TF, a path, a TF JSON dict, or None (the default, 1D, for this volume)."""
     if tf is None:
         return default_transfer_function(volume)
-    if isinstance(tf, TransferFunction1D):
+    if isinstance(tf, TransferFunction1D | TransferFunction2D):
         return tf
     if isinstance(tf, Mapping):
-        return TransferFunction1D.from_dict(tf)
+        return transfer_function_from_dict(tf)
     if isinstance(tf, str | PathLike):
         from volren import io
 
@@ -75,7 +80,7 @@ def parse_size(size: Any) -> tuple[int, int]:
 
 
 def prepared_renderer(
-    name: str, volume: Volume, tf: TransferFunction1D, settings: RenderSettings | None = None
+    name: str, volume: Volume, tf: TransferFunction, settings: RenderSettings | None = None
 ) -> Renderer:
     """A new renderer `name` holding the volume, TF and settings; use it as a context manager
     (or call release()) so its GPU/VTK resources are freed."""
@@ -109,9 +114,10 @@ def render(
     """Render offscreen; returns float32 (H, W, 4) premultiplied RGBA over black, row 0 on top.
 
     `volume` may be a UniformVolume/TetVolume, a file path or a PyVista dataset; `tf` a
-    TransferFunction1D, a TF JSON path or dict, or None for a default. The camera is DESIGN.md's
-    orbit (reset on the bounds, then azimuth, elevation, zoom) unless `camera` is given. Other
-    keyword arguments are RenderSettings fields (step, preintegration, shade, blend_mode, ...).
+    TransferFunction1D or TransferFunction2D, a TF JSON path or dict, or None for a default. The
+    camera is DESIGN.md's orbit (reset on the bounds, then azimuth, elevation, zoom) unless
+    `camera` is given. Other keyword arguments are RenderSettings fields (step, preintegration,
+    shade, blend_mode, ...).
     """
     vol = as_volume(volume, scalars)
     transfer = as_transfer_function(tf, vol)

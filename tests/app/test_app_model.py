@@ -155,3 +155,29 @@ def test_the_qt_free_modules_do_not_import_qt():
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
+
+
+def test_loading_a_2d_tf_is_refused_in_one_line(tmp_path):
+    """The app has no 2D TF editor yet: a 2D TF file, a scene with one, or a 2D override is a
+    clear one-line error (shown by the window), never a crash."""
+    from volren import io
+    from volren.app.loading import load_input
+    from volren.errors import VolrenError
+    from volren.model import TFWidget, TransferFunction2D
+    from volren.model.scene import Scene
+    from volren.samples import sample_paths
+
+    tf = TransferFunction2D((0.0, 1.0), (0.0, 1.0), [TFWidget.box((0.2, 0.8), (0.0, 1.0), (1.0, 1.0, 1.0), 0.5)])
+    io.save_transfer_function(tf, tmp_path / "tf2d.json")
+    volume_path, _ = sample_paths("marschner_lobb")
+    io.save_scene(Scene(str(volume_path), tf, renderer="reference"), tmp_path / "scene.json")
+    for path, tf_path in (
+        (tmp_path / "tf2d.json", None),
+        (tmp_path / "scene.json", None),
+        (volume_path, tmp_path / "tf2d.json"),
+    ):
+        with pytest.raises(VolrenError) as info:
+            load_input(path, tf_path)
+        message = str(info.value)
+        assert "2D transfer function" in message and "1D transfer functions only" in message, message
+        assert "\n" not in message and message.startswith(str(tf_path or path))

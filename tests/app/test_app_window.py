@@ -320,6 +320,21 @@ def test_opening_a_corrupt_file_with_the_real_readers(loaded_window, qtbot, erro
 
 
 @needs_io
+def test_opening_a_2d_tf_is_refused_and_keeps_the_view(loaded_window, qtbot, error_boxes, tmp_path):
+    from volren import io
+    from volren.model import TFWidget, TransferFunction2D
+
+    w = loaded_window
+    volume, tf = w.state.volume, w.state.transfer_function
+    tf2 = TransferFunction2D((0.0, 1.0), (0.0, 1.0), [TFWidget.box((0.2, 0.8), (0.0, 1.0), (1.0, 1.0, 1.0), 0.5)])
+    io.save_transfer_function(tf2, tmp_path / "tf2d.json")
+    with qtbot.waitSignal(w.loadFinished, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.open_input(tmp_path / "tf2d.json")
+    assert blocker.args == [False] and w.state.volume is volume and w.state.transfer_function is tf
+    assert len(error_boxes) == 1 and "2D transfer function" in error_boxes[0][1] and "\n" not in error_boxes[0][1]
+
+
+@needs_io
 def test_run_with_screenshot_in_process(qapp, tmp_path):
     from volren.app.main import run
 

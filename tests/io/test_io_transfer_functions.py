@@ -77,8 +77,8 @@ def test_newer_version_is_refused(tmp_path):
         ({"version": 1, "color": [[0, 1, 1, 2]], "opacity": [[0, 1]]}, "colour values must lie in [0, 1]"),
         ({"version": "1", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]}, "'version' must be an integer"),
         (
-            {"version": 1, "kind": "2d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]},
-            "kind '2d' is not supported",
+            {"version": 1, "kind": "3d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]},
+            "unknown transfer-function kind '3d'",
         ),
         (
             {"version": 1, "color": [[0, 1, 1, 1]], "opacity": [[0, 1]], "opacity_unit_distance": -1},

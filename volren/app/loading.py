@@ -64,14 +64,26 @@ def _is_scene_json(path: Path) -> bool:
     return isinstance(data, dict) and ("volume" in data or "transfer_function" in data)
 
 
+def _only_1d(tf, source: PathArg):
+    """`tf` itself; a 2D TF is refused in one line (the app has no 2D TF editor yet)."""
+    if tf is not None and tf.dims != 1:
+        raise VolrenError(
+            f"{source}: holds a {tf.dims}D transfer function, and the app shows 1D transfer functions only "
+            "for now; render it with `volren render --renderer reference`"
+        )
+    return tf
+
+
 def load_input(
     path: PathArg | None = None,
     tf: PathArg | None = None,
     scalars: str | None = None,
 ) -> LoadedInput:
-    """Read `path` (default: the bundled sample) and optionally a TF file that overrides its TF."""
+    """Read `path` (default: the bundled sample) and optionally a TF file that overrides its TF.
+
+    2D transfer functions (in a TF file or a scene) are refused with a VolrenError for now."""
     io = _io()
-    override = io.load_transfer_function(tf) if tf is not None else None
+    override = _only_1d(io.load_transfer_function(tf), tf) if tf is not None else None
     if path is None:
         from volren.samples import sample_paths
 
@@ -86,13 +98,13 @@ def load_input(
                 raise VolrenError(f"{p}: the scene names no volume")
             return LoadedInput(
                 scene.volume,
-                override or scene.transfer_function,
+                override or _only_1d(scene.transfer_function, p),
                 scene.camera,
                 scene.settings,
                 scene.renderer,
                 source=p.name,
             )
-        return LoadedInput(None, io.load_transfer_function(p), source=p.name)
+        return LoadedInput(None, _only_1d(io.load_transfer_function(p), p), source=p.name)
     volume = io.load_volume(p, scalars=scalars)
     if override is None:
         from volren.api import default_transfer_function

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from volren.api import prepared_renderer
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
-from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import TetVolume, UniformVolume, Volume
 from volren.renderers.base import ProgressCallback
 
@@ -57,7 +57,7 @@ def reference_settings(settings: RenderSettings) -> RenderSettings:
     )
 
 
-def scene_key(volume: Volume, tf: TransferFunction1D, camera: Camera, width: int, height: int,
+def scene_key(volume: Volume, tf: TransferFunction, camera: Camera, width: int, height: int,
               settings: RenderSettings) -> str:
     payload = {
         "reference_version": REFERENCE_VERSION,
@@ -70,7 +70,7 @@ def scene_key(volume: Volume, tf: TransferFunction1D, camera: Camera, width: int
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 
-def reference_image(volume: Volume, tf: TransferFunction1D, camera: Camera, width: int, height: int,
+def reference_image(volume: Volume, tf: TransferFunction, camera: Camera, width: int, height: int,
                     settings: RenderSettings | None = None, progress: ProgressCallback | None = None,
                     folder: Path | None = None) -> NDArray[np.float32]:
     """The `reference` renderer's image of this scene, from the cache when it was rendered before."""

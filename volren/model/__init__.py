@@ -8,6 +8,7 @@ its own, not from here), whose table kernels use numba.
 from volren.model.camera import Camera
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TFWidget, TransferFunction, TransferFunction2D
 from volren.model.volume import TetVolume, UniformVolume, Volume, VolumeKind
 
 __all__ = [
@@ -15,7 +16,10 @@ __all__ = [
     "Camera",
     "RenderSettings",
     "TetVolume",
+    "TFWidget",
+    "TransferFunction",
     "TransferFunction1D",
+    "TransferFunction2D",
     "UniformVolume",
     "Volume",
     "VolumeKind",

@@ -15,7 +15,7 @@ from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.file_version import check_format_version
 from volren.model.settings import RenderSettings
-from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TransferFunction, transfer_function_from_dict
 from volren.model.volume import Volume
 
 SCENE_FORMAT_VERSION = 1
@@ -64,7 +64,7 @@ class Scene:
     """Everything `volren render` needs; `volume` is filled in by the loader, not serialized."""
 
     volume_path: str | None
-    transfer_function: TransferFunction1D
+    transfer_function: TransferFunction  # TransferFunction1D or TransferFunction2D
     camera: OrbitView | Camera = OrbitView()
     settings: RenderSettings = RenderSettings()
     scalars: str | None = None
@@ -124,7 +124,7 @@ class Scene:
         return cls(
             volume_path=volume.get("path"),
             scalars=volume.get("scalars"),
-            transfer_function=TransferFunction1D.from_dict(data["transfer_function"]),
+            transfer_function=transfer_function_from_dict(data["transfer_function"]),
             camera=camera_from_dict(data.get("camera", {})),
             settings=RenderSettings.from_dict(data.get("settings", {})),
             renderer=str(data.get("renderer", "vtk")),

@@ -13,7 +13,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -50,6 +50,9 @@ def _points(data: ArrayLike, width: int, what: str) -> NDArray[np.float64]:
 
 class TransferFunction1D:
     """Colour and opacity control points over the data value, with change notification."""
+
+    #: The TF's dimension: renderers check it against their capabilities (`KindSupport.tf_dims`).
+    dims: ClassVar[int] = 1
 
     def __init__(
         self,

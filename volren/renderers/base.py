@@ -24,6 +24,7 @@ from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TransferFunction, TransferFunction2D
 from volren.model.volume import Volume, VolumeKind
 
 #: Called with the fraction done in [0, 1]; it may raise to cancel the frame.
@@ -40,6 +41,9 @@ class KindSupport:
     preintegration: bool = False
     shading: bool = False
     blend_modes: frozenset[BlendMode] = frozenset({BlendMode.COMPOSITE})
+    #: The blend modes available with a 2D TF (where 2 is in tf_dims): maximum / minimum /
+    #: average project the value alone, which leaves no gradient to look a 2D TF up with.
+    blend_modes_2d: frozenset[BlendMode] = frozenset({BlendMode.COMPOSITE})
 
 
 @dataclass(frozen=True)
@@ -75,6 +79,12 @@ class Capabilities:
             if settings.blend_mode not in support.blend_modes:
                 modes = ", ".join(sorted(str(m) for m in support.blend_modes))
                 return f"has no {settings.blend_mode} blend mode for {volume_kind} volumes (only {modes})"
+            if tf_dim == 2 and settings.blend_mode not in support.blend_modes_2d:
+                modes = ", ".join(sorted(str(m) for m in support.blend_modes_2d & support.blend_modes))
+                return (
+                    f"has no {settings.blend_mode} blend mode with 2D transfer functions on {volume_kind} "
+                    f"volumes (only {modes})"
+                )
         return None
 
     def describe(self) -> str:
@@ -86,6 +96,9 @@ class Capabilities:
             if s.shading:
                 extras.append("shading")
             extras.append("blend " + "/".join(sorted(str(m) for m in s.blend_modes)))
+            modes_2d = s.blend_modes_2d & s.blend_modes
+            if 2 in s.tf_dims and modes_2d != s.blend_modes:
+                extras.append("2D TF blend " + ("/".join(sorted(str(m) for m in modes_2d)) or "none"))
             parts.append(f"{kind} ({', '.join(extras)})")
         return "; ".join(parts)
 
@@ -109,7 +122,7 @@ class Renderer(Protocol):
 
     def set_volume(self, volume: Volume) -> None: ...
 
-    def set_transfer_function(self, tf: TransferFunction1D) -> None: ...
+    def set_transfer_function(self, tf: TransferFunction) -> None: ...
 
     def set_settings(self, settings: RenderSettings) -> None: ...
 
@@ -132,7 +145,7 @@ class RendererBase(ABC):
 
     def __init__(self) -> None:
         self._volume: Volume | None = None
-        self._tf: TransferFunction1D | None = None
+        self._tf: TransferFunction | None = None
         self._settings = RenderSettings()
         self._released = False
         self.last_frame: FrameStats | None = None
@@ -143,7 +156,7 @@ class RendererBase(ABC):
         return self._volume
 
     @property
-    def transfer_function(self) -> TransferFunction1D | None:
+    def transfer_function(self) -> TransferFunction | None:
         return self._tf
 
     @property
@@ -158,10 +171,22 @@ class RendererBase(ABC):
         self._volume = volume
         self._volume_changed()
 
-    def set_transfer_function(self, tf: TransferFunction1D) -> None:
+    def set_transfer_function(self, tf: TransferFunction) -> None:
+        """Use `tf` (a TransferFunction1D or TransferFunction2D); a TF of a dimension this renderer
+        cannot draw (on the current volume's kind, or on any kind before a volume is set) is refused."""
         self._check_alive()
-        if not isinstance(tf, TransferFunction1D):
-            raise VolrenError(f"renderer {self.name} needs a TransferFunction1D, got {type(tf).__name__}")
+        if not isinstance(tf, TransferFunction1D | TransferFunction2D):
+            raise VolrenError(
+                f"renderer {self.name} needs a TransferFunction1D or TransferFunction2D, got {type(tf).__name__}"
+            )
+        if self._volume is not None:
+            reason = self.capabilities.unsupported_reason(self._volume.kind, tf.dims)
+        elif not any(tf.dims in support.tf_dims for support in self.capabilities.kinds.values()):
+            reason = f"does not support {tf.dims}D transfer functions"
+        else:
+            reason = None
+        if reason:
+            raise VolrenError(f"renderer {self.name} {reason}")
         self._tf = tf
         self._tf_changed()
 
@@ -202,7 +227,7 @@ class RendererBase(ABC):
             raise VolrenError(f"renderer {self.name}: no volume set")
         if self._tf is None:
             raise VolrenError(f"renderer {self.name}: no transfer function set")
-        reason = self.capabilities.unsupported_reason(self._volume.kind, 1, self._settings)
+        reason = self.capabilities.unsupported_reason(self._volume.kind, self._tf.dims, self._settings)
         if reason:
             raise VolrenError(f"renderer {self.name} {reason}")
         start = time.perf_counter()

@@ -7,7 +7,9 @@ How: one ray per pixel centre (`Camera.pixel_rays`: origins on the near plane), 
 plane as well. Uniform grids go through `uniform.render_uniform` (trilinear, per-cell cubics), meshes
 through `tets.render_tets` (screen-space binning, exact ray-tetrahedron clipping); both hand their
 per-ray intervals to `ray_integral.integrate_ray`, which refines each ray until two successive
-levels agree to `tolerance` (see that module for the quadrature). The image is processed in blocks
+levels agree to `tolerance` (see that module for the quadrature). A 2D TF (uniform grids,
+composite) goes through `tf2d.render_uniform_2d` instead, which refines by the same rule (see
+that module: the 2D TF is sampled, not cut into linear pieces). The image is processed in blocks
 of rows, one parallel numba kernel call per block, with `progress` called after each block.
 
 RenderSettings.jitter is ignored (the reference is deterministic) and preintegration is not
@@ -25,6 +27,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any, ClassVar
 
 import numba
@@ -39,6 +42,7 @@ from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, R
 from volren.renderers.reference.ray_integral import AVERAGE, COMPOSITE, MAXIMUM, MINIMUM
 from volren.renderers.reference.shading import shade_params
 from volren.renderers.reference.tets import bin_rows, prepare_tets, render_tets, tet_boxes
+from volren.renderers.reference.tf2d import pack_tf2d, render_uniform_2d
 from volren.renderers.reference.tf_eval import pack_tf
 from volren.renderers.reference.uniform import render_uniform
 
@@ -62,6 +66,8 @@ _SUPPORT = KindSupport(
     shading=True,
     blend_modes=frozenset(BlendMode),
 )
+#: Uniform grids also take 2D TFs (composite only: `tf2d`).
+_UNIFORM_SUPPORT = replace(_SUPPORT, tf_dims=frozenset({1, 2}), blend_modes_2d=frozenset({BlendMode.COMPOSITE}))
 
 
 def _ray_far(camera: Camera, dirs: NDArray) -> NDArray:
@@ -76,7 +82,7 @@ class ReferenceRenderer(RendererBase):
 
     name: ClassVar[str] = "reference"
     capabilities: ClassVar[Capabilities] = Capabilities(
-        kinds={"uniform": _SUPPORT, "tet": _SUPPORT},
+        kinds={"uniform": _UNIFORM_SUPPORT, "tet": _SUPPORT},
         backend="cpu",
         summary="float64 ray integration refined until converged; the truth for error metrics",
     )
@@ -138,7 +144,8 @@ class ReferenceRenderer(RendererBase):
         settings = self._settings
         tol, max_levels = self._read_options(settings.options)
         mode = _MODES[settings.blend_mode]
-        tf = pack_tf(self._tf)
+        two_d = self._tf.dims == 2
+        tf = pack_tf2d(self._tf) if two_d else pack_tf(self._tf)
         prepared = self._prepare()
         length = prepared[-1]
         lo, hi = vol.value_range
@@ -154,7 +161,16 @@ class ReferenceRenderer(RendererBase):
         stats = np.zeros((n, 5), np.int64)
         extra: dict[str, float] = {}
 
-        if isinstance(vol, UniformVolume):
+        if isinstance(vol, UniformVolume) and two_d:
+            values, org, sp, blo, bhi, _ = prepared
+
+            def kernel(a: int, b: int) -> None:
+                render_uniform_2d(
+                    origins[a:b], dirs[a:b], tfar[a:b], values, org, sp, blo, bhi,
+                    tf, spar, h0, tol, max_levels, out[a:b], stats[a:b],
+                )  # fmt: skip
+
+        elif isinstance(vol, UniformVolume):
             values, org, sp, blo, bhi, _ = prepared
 
             def kernel(a: int, b: int) -> None:

@@ -1,0 +1,562 @@
+"""Reference integration of a 2D transfer function (value x gradient magnitude) on uniform grids.
+
+Why: a 2D TF's integrand along a ray is not piecewise linear in s (widgets are Gaussian,
+triangular or box-shaped over (s, |grad s|), and |grad s| varies along the ray on its own), so the
+1D path's exact cuts and exact mean extinction do not apply. This module integrates it by
+refinement instead, with the same exact-exponential pieces and the same convergence rule, and
+leaves the 1D path (`ray_integral`, `uniform.render_uniform`) untouched.
+
+The TF is evaluated exactly as `TransferFunction2D.sample` defines it (`eval_tf2d`: the widget
+formulas, clamping to the TF's rectangle, a = 1 - prod(1 - a_i), c = sum a_i c_i / sum a_i), at
+s = the trilinear interpolant and g = |grad s|, where grad s is exactly the gradient the shading
+uses: central differences at the grid points in world units (one-sided at the borders),
+interpolated trilinearly like the scalars (`uniform.build_intervals` with its gradient cubics on).
+Non-finite s or g (next to NaN voxels) is transparent, like `sample`.
+
+Per ray (composite only; the capabilities offer no other blend mode with a 2D TF):
+1. Cuts, per interval (cell): critical points of s and crossings of the value edges of the box
+   widgets and of the triangles' centre lines s = s0 (exact roots, `ray_integral._interval_cuts`);
+   crossings of |grad s| with the box widgets' gradient edges and the triangles' gradient_max
+   (the opacity jumps there), and with the no-shading threshold when shading (the colour jumps
+   there); crossings of the triangles' edges |s - s0| = (w / gm) |grad s|; and, when the TF has
+   a Gaussian or a triangle, the critical points of |grad s|. Along the interval |grad s|^2 and
+   (s - s0)^2 - (w / gm)^2 |grad s|^2 are polynomials of degree 6, so all of these are found
+   (`_poly_crossings`: the roots of each derivative bound the monotone spans of the one before
+   it). Edges outside the TF's rectangle are dropped (the TF is clamped, so nothing jumps there).
+   Between two cuts the integrand is smooth apart from the clamp at the rectangle's edges, s and
+   |grad s| are monotone, and every box or triangle is either present throughout or absent.
+2. The level-0 partition: interval k is split into ceil(len / h0) equal pieces intersected with
+   the cuts; each piece is subdivided so that, for every widget whose support box (a Gaussian's
+   to 6 standard deviations) meets the piece's span of (s, g) (exact, from its ends: both are
+   monotone), s changes by at most FRACTION of the widget's value scale and g by at most
+   FRACTION of its gradient scale (Gaussian: its standard deviations; triangle: its half-width
+   at the piece's largest g, at least 1/64 of half_width, and gradient_max; box: none, it is
+   constant between cuts), and when shading the normal turns by at most SHADING_TURN; at most
+   MAX_SUBDIVISION sub-pieces (hits counted).
+3. Level L bisects every level-0 sub-piece L times (as in the 1D path).
+4. A sub-piece of length l: tau from the TF at its midpoint, x = tau l, alpha = 1 - exp(-x),
+   colour from the TF (shaded when shading is on) at the emission centre u_e = l (1/x - 1/(e^x-1))
+   (the midpoint's colour where the TF is transparent at u_e), C += T alpha c, T *= exp(-x).
+   Exact for homogeneous pieces; second order where the integrand is smooth.
+5. Stop when T < MIN_TRANSMITTANCE; levels until two successive ones agree by the 1D path's rule
+   (`ray_integral.integrate_ray`: change < tol after a change < ASYMPTOTIC_RATIO tol; level 1
+   must change by less than tol / ASYMPTOTIC_RATIO), with the change between two levels measured
+   per channel as the sum over the intervals of the change of each interval's share of the
+   pixel, so changes in different cells cannot cancel and stop a ray early by accident.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from volren.model.preintegration.segment_math import emission_centre
+from volren.model.transfer_function import MAX_OPACITY
+from volren.model.transfer_function_2d import TransferFunction2D
+from volren.renderers.reference.ray_integral import (
+    ASYMPTOTIC_RATIO,
+    FRACTION,
+    MAX_SUBDIVISION,
+    MIN_TRANSMITTANCE,
+    SHADING_TURN,
+    _interval_cuts,
+    _normal_turn,
+    cubic,
+    store_pixel,
+)
+from volren.renderers.reference.shading import half_vector, shade
+from volren.renderers.reference.uniform import build_intervals, clip_box
+
+GAUSSIAN, TRIANGLE, BOX = 0, 1, 2
+_TYPES = {"gaussian": GAUSSIAN, "triangle": TRIANGLE, "box": BOX}
+#: A Gaussian counts as present within this many standard deviations (exp(-18) ~ 1.5e-8).
+GAUSSIAN_REACH = 6.0
+#: A triangle's value scale near its apex is at least this fraction of its half_width.
+TRIANGLE_MIN_SCALE = 1.0 / 64.0
+
+PackedTF2D = tuple  # (types, params, rgb, peak, rect, unit, value_cuts, gradient_cuts, support)
+
+
+def pack_tf2d(tf: TransferFunction2D) -> PackedTF2D:
+    """The TF as arrays for the kernels:
+
+    types (n,) int64        GAUSSIAN, TRIANGLE or BOX per widget
+    params (n, 4)           gaussian (s0, g0, ws, wg); triangle (s0, w, gm, 0);
+                            box (s_lo, s_hi, g_lo, g_hi)
+    rgb (n, 3), peak (n,)   colour and peak opacity
+    rect (3,)               (lo, hi, gmax): the TF's rectangle, inputs are clamped to it
+    unit                    opacity_unit_distance
+    value_cuts              sorted box value edges and triangle centres inside (lo, hi)
+    gradient_cuts           sorted box gradient edges and triangle tops inside (0, gmax)
+    support (n, 4)          (s_min, s_max, g_min, g_max) outside which a widget is ~0
+    """
+    widgets = tf.widgets
+    n = len(widgets)
+    types = np.zeros(n, np.int64)
+    params = np.zeros((n, 4))
+    rgb = np.zeros((n, 3))
+    peak = np.zeros(n)
+    support = np.zeros((n, 4))
+    lo, hi = tf.value_range
+    gmax = tf.gradient_range[1]
+    vcuts: list[float] = []
+    gcuts: list[float] = []
+    for i, w in enumerate(widgets):
+        types[i] = _TYPES[w.type]
+        rgb[i] = w.color
+        peak[i] = w.opacity
+        if w.type == "gaussian":
+            (s0, g0), (ws, wg) = w.center, w.width  # type: ignore[misc]
+            params[i] = (s0, g0, ws, wg)
+            r = GAUSSIAN_REACH
+            support[i] = (s0 - r * ws, s0 + r * ws, g0 - r * wg, g0 + r * wg)
+        elif w.type == "triangle":
+            s0, hw, gm = w.value, w.half_width, w.gradient_max
+            params[i] = (s0, hw, gm, 0.0)
+            support[i] = (s0 - hw, s0 + hw, 0.0, gm)  # type: ignore[operator]
+            vcuts.append(s0)  # type: ignore[arg-type]  # a kink along the centre line
+            gcuts.append(gm)  # type: ignore[arg-type]
+        else:
+            (s_lo, s_hi), (g_lo, g_hi) = w.value_range, w.gradient_range  # type: ignore[misc]
+            params[i] = (s_lo, s_hi, g_lo, g_hi)
+            support[i] = (s_lo, s_hi, g_lo, g_hi)
+            vcuts += [s_lo, s_hi]
+            gcuts += [g_lo, g_hi]
+    value_cuts = np.unique(np.asarray([v for v in vcuts if lo < v < hi], dtype=np.float64))
+    gradient_cuts = np.unique(np.asarray([g for g in gcuts if 0.0 < g < gmax], dtype=np.float64))
+    rect = np.array([lo, hi, gmax], dtype=np.float64)
+    return (
+        types,
+        params,
+        rgb,
+        peak,
+        rect,
+        float(tf.opacity_unit_distance),
+        value_cuts,
+        gradient_cuts,
+        support,
+    )
+
+
+@njit(cache=True)
+def widget_opacity(kind, p, peak, s, g):
+    """a_i(s, g) of one widget (the formulas of `model.transfer_function_2d`)."""
+    if kind == GAUSSIAN:
+        ds = (s - p[0]) / p[2]
+        dg = (g - p[1]) / p[3]
+        return peak * math.exp(-0.5 * ds * ds - 0.5 * dg * dg)
+    if kind == BOX:
+        if p[0] <= s <= p[1] and p[2] <= g <= p[3]:
+            return peak
+        return 0.0
+    d = abs(s - p[0])
+    h = p[1] * g / p[2]
+    if g < 0.0 or g > p[2] or d > h:
+        return 0.0
+    if h > 0.0:
+        return peak * (1.0 - d / h)
+    return peak
+
+
+@njit(cache=True)
+def eval_tf2d(tf, s, g):
+    """(r, g, b, a) of the 2D TF at value s and gradient magnitude g (colour not premultiplied)."""
+    if not (math.isfinite(s) and math.isfinite(g)):
+        return 0.0, 0.0, 0.0, 0.0
+    types = tf[0]
+    params = tf[1]
+    rgb = tf[2]
+    peak = tf[3]
+    rect = tf[4]
+    s = min(max(s, rect[0]), rect[1])
+    g = min(max(g, 0.0), rect[2])
+    transmit = 1.0
+    weight = 0.0
+    r = 0.0
+    gr = 0.0
+    b = 0.0
+    for i in range(types.shape[0]):
+        a = widget_opacity(types[i], params[i], peak[i], s, g)
+        if a > 0.0:
+            transmit *= 1.0 - a
+            weight += a
+            r += a * rgb[i, 0]
+            gr += a * rgb[i, 1]
+            b += a * rgb[i, 2]
+    alpha = min(max(1.0 - transmit, 0.0), 1.0)
+    if weight > 0.0:
+        r = min(max(r / weight, 0.0), 1.0)
+        gr = min(max(gr / weight, 0.0), 1.0)
+        b = min(max(b / weight, 0.0), 1.0)
+    return r, gr, b, alpha
+
+
+@njit(cache=True)
+def _grad_mag(gk, u):
+    gx = cubic(gk[0], u)
+    gy = cubic(gk[1], u)
+    gz = cubic(gk[2], u)
+    return math.sqrt(gx * gx + gy * gy + gz * gz)
+
+
+@njit(cache=True)
+def _poly(c, deg, u):
+    """c[0] + c[1] u + ... + c[deg] u^deg (Horner)."""
+    v = c[deg]
+    for i in range(deg - 1, -1, -1):
+        v = v * u + c[i]
+    return v
+
+
+@njit(cache=True)
+def _poly_root(c, deg, ua, ub, fa, fb):
+    """The root in (ua, ub) of a polynomial monotone there with values fa, fb of opposite signs
+    (Illinois, then bisection to full precision)."""
+    side = 0
+    for _ in range(200):
+        u = (ua * fb - ub * fa) / (fb - fa)
+        if not (ua < u < ub):
+            u = 0.5 * (ua + ub)
+            if not (ua < u < ub):
+                return u
+        f = _poly(c, deg, u)
+        if f == 0.0:
+            return u
+        if (f > 0.0) == (fb > 0.0):
+            ub = u
+            fb = f
+            if side == -1:
+                fa *= 0.5
+            side = -1
+        else:
+            ua = u
+            fa = f
+            if side == 1:
+                fb *= 0.5
+            side = 1
+    return 0.5 * (ua + ub)
+
+
+@njit(cache=True)
+def _magnitude_poly(gk, out):
+    """Coefficients (degree 6) of |grad s|^2 along the interval, from the three gradient cubics."""
+    for i in range(7):
+        out[i] = 0.0
+    for axis in range(3):
+        c = gk[axis]
+        for i in range(4):
+            for j in range(4):
+                out[i + j] += c[i] * c[j]
+
+
+@njit(cache=True)
+def _poly_crossings(poly, length, level, out):
+    """Every u in (0, length) where the polynomial (coefficients poly[0..deg], deg = len - 1) crosses
+    `level`, ascending: the roots of each derivative split the interval into monotone spans for
+    the one before it, from the linear derivative down to the polynomial itself. Fills out (if
+    long enough), returns the count."""
+    deg = poly.shape[0] - 1
+    # row d holds the d-th derivative's coefficients (degree deg - d)
+    der = np.zeros((deg + 1, deg + 1))
+    for i in range(deg + 1):
+        der[0, i] = poly[i]
+    der[0, 0] -= level
+    for d in range(1, deg + 1):
+        for i in range(deg + 1 - d):
+            der[d, i] = der[d - 1, i + 1] * (i + 1)
+    knots = np.empty(deg + 2)
+    roots = np.empty(deg + 2)
+    nroots = 0  # roots of the derivative one order up, strictly inside (0, length), ascending
+    for d in range(deg - 1, -1, -1):
+        c = der[d]
+        order = deg - d
+        nk = 0
+        knots[nk] = 0.0
+        nk += 1
+        for i in range(nroots):
+            knots[nk] = roots[i]
+            nk += 1
+        knots[nk] = length
+        nk += 1
+        n = 0
+        ua = knots[0]
+        fa = _poly(c, order, ua)
+        for i in range(1, nk):
+            ub = knots[i]
+            fb = _poly(c, order, ub)
+            if ub > ua and ((fa < 0.0 < fb) or (fb < 0.0 < fa)):
+                roots[n] = _poly_root(c, order, ua, ub, fa, fb)
+                n += 1
+            elif fb == 0.0 and i < nk - 1 and (n == 0 or roots[n - 1] < ub):
+                roots[n] = ub  # a root exactly on a knot
+                n += 1
+            ua = ub
+            fa = fb
+        nroots = n
+    for i in range(nroots):
+        if out.shape[0] > i:
+            out[i] = roots[i]
+    return nroots
+
+
+@njit(cache=True)
+def _interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
+    """Cut points of one interval (see the module docstring), unsorted, `length` among them;
+    fills out when long enough, returns the count."""
+    n = _interval_cuts(c, length, tf[6], out)
+    gcuts = tf[7]
+    smooth = False  # a Gaussian or a triangle: cut where |grad s| turns, too
+    for i in range(tf[0].shape[0]):
+        if tf[0][i] != BOX:
+            smooth = True
+    if gcuts.shape[0] > 0 or shading or smooth:
+        h2 = np.empty(7)
+        _magnitude_poly(gk, h2)
+        for i in range(gcuts.shape[0]):
+            e = gcuts[i]
+            n += _poly_crossings(h2, length, e * e, out[n:] if n < out.shape[0] else out[:0])
+        if shading:
+            n += _poly_crossings(h2, length, thr2, out[n:] if n < out.shape[0] else out[:0])
+        if smooth:
+            dh2 = np.empty(6)
+            for i in range(6):
+                dh2[i] = h2[i + 1] * (i + 1)
+            n += _poly_crossings(dh2, length, 0.0, out[n:] if n < out.shape[0] else out[:0])
+        edge = np.empty(7)
+        for i in range(tf[0].shape[0]):
+            if tf[0][i] == TRIANGLE:
+                # the edges |s - s0| = (w / gm) g: roots of (s - s0)^2 - (w / gm)^2 |grad s|^2
+                p = tf[1][i]
+                k2 = (p[1] / p[2]) ** 2
+                for j in range(7):
+                    edge[j] = -k2 * h2[j]
+                for a in range(4):
+                    ca = c[a] - p[0] if a == 0 else c[a]
+                    for b in range(4):
+                        cb = c[b] - p[0] if b == 0 else c[b]
+                        edge[a + b] += ca * cb
+                n += _poly_crossings(edge, length, 0.0, out[n:] if n < out.shape[0] else out[:0])
+    return n
+
+
+@njit(cache=True)
+def compute_cuts_2d(ta, tb, P, G, m, tf, shading, thr):
+    """CSR of the sorted cut points of every interval: (offsets (m + 1), cuts)."""
+    offsets = np.zeros(m + 1, np.int64)
+    empty = np.empty(0)
+    thr2 = thr * thr
+    for k in range(m):
+        length = tb[k] - ta[k]
+        count = 0
+        if length > 0.0:
+            count = _interval_cuts_2d(P[k], G[k], length, tf, shading, thr2, empty)
+        offsets[k + 1] = offsets[k] + count
+    cuts = np.empty(offsets[m])
+    for k in range(m):
+        length = tb[k] - ta[k]
+        if length > 0.0:
+            part = cuts[offsets[k] : offsets[k + 1]]
+            _interval_cuts_2d(P[k], G[k], length, tf, shading, thr2, part)
+            part.sort()
+    return offsets, cuts
+
+
+@njit(cache=True)
+def _subdivision(tf, s0, s1, g0, gm, g1):
+    """Sub-pieces a piece needs at level 0 for the widgets its (s, g) span meets (step 2)."""
+    rect = tf[4]
+    types = tf[0]
+    params = tf[1]
+    support = tf[8]
+    cs0 = min(max(s0, rect[0]), rect[1])
+    cs1 = min(max(s1, rect[0]), rect[1])
+    cg0 = min(max(g0, 0.0), rect[2])
+    cgm = min(max(gm, 0.0), rect[2])
+    cg1 = min(max(g1, 0.0), rect[2])
+    if not (math.isfinite(cg0) and math.isfinite(cgm) and math.isfinite(cg1)):
+        return 1.0  # a gradient next to a NaN voxel: transparent there, nothing to resolve
+    ds = abs(cs1 - cs0)
+    dg = abs(cgm - cg0) + abs(cg1 - cgm)
+    slo = min(cs0, cs1)
+    shi = max(cs0, cs1)
+    glo = min(cg0, min(cgm, cg1))
+    ghi = max(cg0, max(cgm, cg1))
+    q = 1.0
+    for i in range(types.shape[0]):
+        kind = types[i]
+        if kind == BOX:
+            continue
+        if shi < support[i, 0] or slo > support[i, 1] or ghi < support[i, 2] or glo > support[i, 3]:
+            continue
+        p = params[i]
+        if kind == GAUSSIAN:
+            fs = p[2]
+            fg = p[3]
+        else:
+            fs = p[1] * max(min(ghi / p[2], 1.0), TRIANGLE_MIN_SCALE)
+            fg = p[2]
+        q = max(q, max(ds / (FRACTION * fs), dg / (FRACTION * fg)))
+    return q
+
+
+@njit(cache=True)
+def _share(parts, k, r, g, b, a):
+    parts[k, 0] = r
+    parts[k, 1] = g
+    parts[k, 2] = b
+    parts[k, 3] = a
+
+
+@njit(cache=True)
+def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz, parts):
+    """One level of the ray's composite; parts[k] receives interval k's share of (r, g, b, a)."""
+    unit = tf[5]
+    shading = sp[0]
+    mult = 1 << level
+    T = 1.0
+    cr = 0.0
+    cg = 0.0
+    cb = 0.0
+    samples = 0
+    caps = 0
+    parts[:m] = 0.0
+    for k in range(m):
+        length = tb[k] - ta[k]
+        if not (length > 0.0):
+            continue
+        r0, g0, b0, T0 = cr, cg, cb, T
+        c = P[k]
+        gk = G[k]
+        n = max(1, int(math.ceil(length / h0)))
+        piece = length / n
+        ci = offsets[k]
+        cend = offsets[k + 1]
+        p = 1
+        u0 = 0.0
+        while u0 < length:
+            # next boundary: a piece end or a cut, whichever comes first
+            while ci < cend and cuts[ci] <= u0:
+                ci += 1
+            ucut = cuts[ci] if ci < cend else length
+            upiece = p * piece if p < n else length
+            if upiece <= u0:
+                p += 1
+                continue
+            if ucut < upiece:
+                u1 = ucut
+                ci += 1
+            else:
+                u1 = upiece
+                p += 1
+                if ucut == upiece:
+                    ci += 1
+            umid = 0.5 * (u0 + u1)
+            q = _subdivision(
+                tf, cubic(c, u0), cubic(c, u1), _grad_mag(gk, u0), _grad_mag(gk, umid), _grad_mag(gk, u1)
+            )
+            if shading:
+                q = max(q, _normal_turn(gk, u0, umid, u1, sp[5]) / SHADING_TURN)
+            if q > MAX_SUBDIVISION:
+                nsub = MAX_SUBDIVISION
+                caps += 1
+            else:
+                nsub = int(math.ceil(q))
+            nsub *= mult
+            sub = (u1 - u0) / nsub
+            for j in range(nsub):
+                um = u0 + (j + 0.5) * sub
+                r, g, b, a = eval_tf2d(tf, cubic(c, um), _grad_mag(gk, um))
+                samples += 1
+                if not (a > 0.0):
+                    continue
+                od = -math.log1p(-min(a, MAX_OPACITY)) / unit * sub
+                alpha = -math.expm1(-od)
+                ue = u0 + (j + emission_centre(od)) * sub
+                re, ge, be, ae = eval_tf2d(tf, cubic(c, ue), _grad_mag(gk, ue))
+                if ae > 0.0:
+                    r, g, b = re, ge, be
+                    uc = ue
+                else:
+                    uc = um
+                if shading:
+                    r, g, b = shade(
+                        sp, r, g, b, cubic(gk[0], uc), cubic(gk[1], uc), cubic(gk[2], uc), hx, hy, hz
+                    )
+                w = T * alpha
+                cr += w * r
+                cg += w * g
+                cb += w * b
+                T *= math.exp(-od)
+                if T < MIN_TRANSMITTANCE:
+                    _share(parts, k, cr - r0, cg - g0, cb - b0, T0 - T)
+                    return cr, cg, cb, 1.0 - T, samples, caps
+            u0 = u1
+        _share(parts, k, cr - r0, cg - g0, cb - b0, T0 - T)
+    return cr, cg, cb, 1.0 - T, samples, caps
+
+
+@njit(cache=True)
+def integrate_ray_2d(ta, tb, P, G, m, h0, tol, max_levels, tf, sp, dx, dy, dz):
+    """Composite RGBA of one ray with a 2D TF and its statistics, as `ray_integral.integrate_ray`."""
+    if m == 0:
+        return 0.0, 0.0, 0.0, 0.0, 0, 0, True, 0
+    hx, hy, hz = half_vector(sp, dx, dy, dz)
+    offsets, cuts = compute_cuts_2d(ta, tb, P, G, m, tf, sp[0], sp[5])
+    prev = np.zeros((m, 4))
+    parts = np.zeros((m, 4))
+    pr = pg = pb = pa = 0.0
+    samples = 0
+    caps = 0
+    last = math.inf
+    for level in range(max_levels):
+        pr, pg, pb, pa, n, c = _composite_level_2d(
+            ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz, parts
+        )
+        samples += n
+        caps += c
+        # the change between levels, summed over the intervals without cancellation
+        diff = 0.0
+        for ch in range(4):
+            change = 0.0
+            for k in range(m):
+                change += abs(parts[k, ch] - prev[k, ch])
+            diff = max(diff, change)
+        prev, parts = parts, prev
+        if level == 0:
+            continue
+        if level == 1:
+            done = diff < tol / ASYMPTOTIC_RATIO
+        else:
+            done = diff < tol and last < ASYMPTOTIC_RATIO * tol
+        if done:
+            return pr, pg, pb, pa, samples, level, True, caps
+        last = diff
+    return pr, pg, pb, pa, samples, max_levels - 1, False, caps
+
+
+@njit(parallel=True, cache=True)
+def render_uniform_2d(orig, dirs, tfar, V, org, sp, lo, hi, tf, spar, h0, tol, max_levels, out, stats):
+    """One block of rays with a 2D TF (composite): out (n, 4) float64 RGBA; stats as
+    `uniform.render_uniform`."""
+    n = orig.shape[0]
+    nz, ny, nx = V.shape
+    cap = nx + ny + nz + 4
+    for p in prange(n):
+        ox, oy, oz = orig[p, 0], orig[p, 1], orig[p, 2]
+        dx, dy, dz = dirs[p, 0], dirs[p, 1], dirs[p, 2]
+        t0, t1 = clip_box(ox, oy, oz, dx, dy, dz, lo, hi, 0.0, tfar[p])
+        for c in range(4):
+            out[p, c] = 0.0
+        for c in range(5):
+            stats[p, c] = 0
+        if not (t1 > t0):
+            continue
+        ta = np.empty(cap)
+        tb = np.empty(cap)
+        P = np.empty((cap, 4))
+        G = np.empty((cap, 3, 4))
+        m = build_intervals(ox, oy, oz, dx, dy, dz, t0, t1, V, org, sp, True, ta, tb, P, G)
+        result = integrate_ray_2d(ta, tb, P, G, m, h0, tol, max_levels, tf, spar, dx, dy, dz)
+        store_pixel(out, stats, p, result, m)
