@@ -146,3 +146,24 @@ def test_unwritable_out_file_is_an_error_after_printing(tmp_path, capsys, sample
     assert rows(captured.out, "8") and not target.exists()
     last = captured.err.rstrip().split("\n")[-1].split("\r")[-1]  # after the cleared progress bar
     assert last.startswith("volren: error: ") and str(target) in last and "cannot write" in last
+
+
+@pytest.mark.usefixtures("opengl")
+def test_bench_slicer_prints_a_row_per_setting(shared_data, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("VOLREN_REFERENCE_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "table.md"
+    code = main(["bench", "slicer", "--shared", str(shared_data.parent), "--datasets", "bonsai", "--styles",
+                 "spiky", "--steps", "2", "--size", "16", "--frames", "1", "--out", str(out)])
+    assert code == 0
+    table = rows(out.read_text(), "bonsai")
+    assert [r[2] for r in table] == ["slicer march post", "slicer march pre", "vtk"]
+    for r in table:
+        assert float(r[4]) > 0 and 0 <= float(r[5]) < 0.5  # ms per frame, RMSE
+    assert "slicer march pre" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, message", [(["--steps", "0"], "--steps"), (["--datasets", "spx"], "non-uniform"),
+                                           (["--paths", "raycast"], "--paths")])
+def test_bench_slicer_bad_arguments(shared_data, args, message, capsys):
+    assert main(["bench", "slicer", "--shared", str(shared_data.parent), *args]) != 0
+    assert message in capsys.readouterr().err

@@ -1,6 +1,7 @@
 """`volren bench ...`: benchmarks that print numbers (medians of several runs), never pass/fail.
 
-`volren bench preint` measures the pre-integration tables (`volren.bench.preint`).
+`volren bench preint` measures the pre-integration tables (`volren.bench.preint`); `volren bench
+slicer` times `slicer` and `vtk` against `reference` on the shared scenes (`volren.bench.slicer_table`).
 """
 
 from __future__ import annotations
@@ -42,6 +43,16 @@ def add_parser(sub) -> None:
     p.add_argument("--error-sizes", type=_int_list(2), default=None, help="sizes for the error table (64,256,1024)")
     p.add_argument("--out", help="also write the tables to this Markdown file")
     p.set_defaults(run=run_preint)
+    s = kinds.add_parser("slicer", help="slicer and vtk: ms per frame and RMSE against reference per step")
+    s.add_argument("--shared", help="the shared folder with data/ and scenes/ (default: ../shared beside the repo)")
+    s.add_argument("--datasets", default="bonsai,engine", help="comma-separated (default bonsai,engine)")
+    s.add_argument("--styles", default="smooth,spiky,opaque", help="TF styles (default smooth,spiky,opaque)")
+    s.add_argument("--steps", default="1,0.5,0.25", help="sample steps (default 1,0.5,0.25)")
+    s.add_argument("--paths", default="march", help="slicer paths: march, slices or both (default march)")
+    s.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
+    s.add_argument("--frames", type=int, default=5, help="timed frames per setting, median reported (default 5)")
+    s.add_argument("--out", help="also write the table to this Markdown file")
+    s.set_defaults(run=run_slicer)
 
 
 def run_preint(args: argparse.Namespace) -> int:
@@ -89,6 +100,57 @@ def run_preint(args: argparse.Namespace) -> int:
     if args.out:
         try:
             Path(args.out).write_text(text + "\n")
+        except OSError as exc:
+            raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
+    return 0
+
+
+def _float_list(text: str, what: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise VolrenError(f"{what} must be comma-separated numbers, got {text!r}") from None
+    if not values or not all(v > 0 and math.isfinite(v) for v in values):
+        raise VolrenError(f"{what} must be positive finite numbers, got {text!r}")
+    return values
+
+
+def run_slicer(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from volren.bench import slicer_table
+    from volren.bench.vtk_vs_reference import SCENES
+
+    shared = Path(args.shared) if args.shared else Path(__file__).resolve().parents[2].parent / "shared"
+    if not (shared / "data").is_dir() or not (shared / "scenes").is_dir():
+        raise VolrenError(f"{shared}: no data/ and scenes/ folders there (give --shared)")
+    datasets = [d for d in args.datasets.split(",") if d]
+    unknown = [d for d in datasets if d not in SCENES or SCENES[d][0].startswith("tets/")]
+    if unknown:
+        grids = ", ".join(n for n, s in SCENES.items() if not s[0].startswith("tets/"))
+        raise VolrenError(f"unknown or non-uniform datasets {unknown}; choose from {grids}")
+    steps = _float_list(args.steps, "--steps")
+    paths = [p for p in args.paths.split(",") if p]
+    if not paths or any(p not in ("march", "slices") for p in paths):
+        raise VolrenError(f"--paths must name march and/or slices, got {args.paths!r}")
+    if args.size < 8 or args.frames < 1:
+        raise VolrenError("--size must be at least 8 and --frames at least 1")
+    styles = [s for s in args.styles.split(",") if s]
+    total = len(datasets) * len(styles) * len(slicer_table.configs(steps, paths))
+    lines = [slicer_table.HEADER]
+    print(slicer_table.HEADER)
+    with tqdm(total=total, desc="settings", leave=False) as bar:
+
+        def report(row: dict) -> None:
+            line = slicer_table.markdown_row(row)
+            lines.append(line)
+            tqdm.write(line)
+            bar.update()
+
+        slicer_table.run(shared, datasets, styles, steps, paths, args.size, args.frames, report)
+    if args.out:
+        try:
+            Path(args.out).write_text("\n".join(lines) + "\n")
         except OSError as exc:
             raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
     return 0

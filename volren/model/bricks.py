@@ -166,6 +166,25 @@ class BrickGrid:
                 bad[b] = _reduce_axis(nonfinite, np.logical_or, 1, istarts)
         return cls(vmin, vmax, bad, brick, (nx, ny, nz), _spacing(spacing), _spacing(origin, "origin"))
 
+    def dilated(self, reach: int = 1) -> BrickGrid:
+        """The grid whose every brick holds the min/max over itself and its neighbours up to
+        `reach` bricks away (along each axis, diagonals included).
+
+        Why: a pre-integrated segment starting in a brick may end in a neighbour, and its table
+        entry covers every value between its two ends. A brick that is invisible in the dilated
+        grid therefore starts only segments of zero opacity, when segments are at most `reach`
+        bricks long.
+        """
+        if isinstance(reach, bool) or not isinstance(reach, (int, np.integer)) or reach < 0:
+            raise VolrenError(f"brick dilation reach must be a non-negative integer, got {reach!r}")
+        vmin, vmax, bad = self.vmin, self.vmax, self.has_nonfinite
+        for axis in range(3):
+            for _ in range(int(reach)):
+                vmin, vmax, bad = (_shift_reduce(a, f, axis) for a, f in
+                                   ((vmin, np.minimum), (vmax, np.maximum), (bad, np.logical_or)))
+        grid = BrickGrid(vmin, vmax, bad, self.brick, self.dimensions, self.spacing, self.origin)
+        return grid
+
     # ------------------------------------------------------------------------------ geometry
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -208,7 +227,12 @@ class BrickGrid:
 
     # ------------------------------------------------------------------------ classification
     def max_opacity(self, tf: TransferFunction1D) -> NDArray[np.float64]:
-        """The largest opacity `tf` takes on [vmin, vmax] of every brick (0 for empty bricks)."""
+        """The largest opacity `tf` takes on [vmin, vmax] of every brick (0 for empty bricks); for
+        a 2D TF an upper bound over every gradient magnitude (`_max_opacity_2d`)."""
+        if getattr(tf, "dims", 1) == 2:
+            lo = np.where(self.empty, 0.0, self.vmin)
+            hi = np.where(self.empty, 0.0, self.vmax)
+            return np.where(self.empty, 0.0, _max_opacity_2d(tf, lo, hi))
         points = tf.opacity_points
         xs, alphas = points[:, 0], np.clip(points[:, 1], 0.0, 1.0)
         lo = np.where(self.empty, 0.0, self.vmin).reshape(-1)
@@ -291,3 +315,37 @@ def _range_max(
         row = table[lv]
         out[sel] = np.maximum(row[first[sel]], row[stop[sel] - (1 << lv)])
     return out
+
+
+def _shift_reduce(a: NDArray, ufunc: np.ufunc, axis: int) -> NDArray:
+    """`ufunc` of every element with its two neighbours along `axis` (edges reduce with fewer)."""
+    out = a.copy()
+    lead = [slice(None)] * 3
+    trail = [slice(None)] * 3
+    lead[axis], trail[axis] = slice(1, None), slice(None, -1)
+    out[tuple(trail)] = ufunc(out[tuple(trail)], a[tuple(lead)])
+    out[tuple(lead)] = ufunc(out[tuple(lead)], a[tuple(trail)])
+    return out
+
+
+def _max_opacity_2d(tf, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.float64]:
+    """An upper bound of a 2D TF's opacity over values in [lo, hi] and every gradient magnitude:
+    each widget's exact maximum there (its peak point clamped into the region), combined as the
+    widgets combine, 1 - prod(1 - a_i), which only grows with each a_i."""
+    t_lo, t_hi = tf.value_range
+    g_max = tf.gradient_range[1]
+    s_lo = np.clip(lo, t_lo, t_hi)  # the TF is constant beyond its rectangle
+    s_hi = np.clip(hi, t_lo, t_hi)
+    transmit = np.ones(np.shape(lo))
+    for widget in tf.widgets:
+        if widget.type == "box":
+            (b_lo, b_hi), c_lo = widget.value_range, widget.gradient_range[0]
+            overlap = (s_lo <= b_hi) & (s_hi >= b_lo) & (c_lo <= g_max)
+            peak = np.where(overlap, widget.opacity, 0.0)
+        elif widget.type == "gaussian":
+            (s0, g0), _ = widget.center, widget.width
+            peak = widget.opacity_at(np.clip(s0, s_lo, s_hi), min(g0, g_max))
+        else:  # triangle: widest at the top of its gradient range (or of the TF's)
+            peak = widget.opacity_at(np.clip(widget.value, s_lo, s_hi), min(widget.gradient_max, g_max))
+        transmit *= 1.0 - peak
+    return 1.0 - transmit

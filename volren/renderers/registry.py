@@ -26,6 +26,7 @@ OWN_DISTRIBUTION = "volren"
 BUILTIN_ENTRY_POINTS = {
     "vtk": "volren.renderers.vtk_mappers.renderer:VtkRenderer",
     "reference": "volren.renderers.reference.renderer:ReferenceRenderer",
+    "slicer": "volren.renderers.slicer.renderer:SlicerRenderer",
 }
 
 

@@ -83,6 +83,9 @@ class TableCache:
             return value
 
     def clear(self) -> None:
+        """Drop every table and start the hit/miss counts afresh."""
         with self._lock:
             self._items.clear()
             self._bytes = 0
+            self.hits = 0
+            self.misses = 0

@@ -1,0 +1,658 @@
+"""The `slicer` renderer: view-aligned sample planes through a 3D texture, with moderngl.
+
+Why two paths over the same planes (option `path`):
+- `slices` is the book's slicer (section 3.3): polygons where the planes cut the volume's box,
+  computed on the CPU (`proxy_geometry`), rasterized front to back and blended "under".
+- `march` walks the same planes per pixel in a compute shader. It visits exactly the same sample
+  points, so it gives the same image, but a ray can stop when it is opaque and jump over empty
+  bricks, which blending cannot do cheaply.
+Both classify the segment between two consecutive planes with `shaders/common.glsl`: post-
+classified 1D TF (opacity corrected for the segment's length), pre-integrated 1D TF (a table for
+the plane spacing, corrected per segment for the real length along the ray, seed 003) with
+interpolated pre-integrated lighting (Lum et al.) when shading, or a post-classified 2D TF. The
+segment from where a ray enters the box to its first plane and the one from its last plane to the
+exit are integrated too (in the slice path the polygons are cut from a slightly grown box, so the
+planes just before the box own the entry segments), so a homogeneous block looks the same at every
+step.
+
+What is not redone: the volume texture is uploaded when the volume changes, the gradient texture
+only when shading or a 2D TF first needs it, TF tables and the brick mask when the TF version (or
+the table size or plane spacing) changes. `uploads` counts each kind; frame counters say what a
+frame did (samples fetched, brick jumps, rays stopped early, fragments, passes).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.errors import VolrenError
+from volren.model.bricks import BrickGrid
+from volren.model.camera import Camera
+from volren.model.settings import BlendMode
+from volren.model.volume import UniformVolume
+from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, RendererBase
+from volren.renderers.glsl import compile_program, load_shader
+from volren.renderers.opengl import require_opengl
+from volren.renderers.slicer import textures
+from volren.renderers.slicer.proxy_geometry import slice_polygons, triangle_fan
+
+SHADER_DIR = Path(__file__).resolve().parent / "shaders"
+#: |grad s| below this fraction of (value span / characteristic length) counts as no gradient
+#: (DESIGN.md, the reference's threshold).
+GRADIENT_EPS = 1e-6
+PATHS = ("march", "slices")
+#: (values, gradient magnitudes) of the 2D TF texture.
+TF2D_TABLE_SIZE = (512, 256)
+_BLEND_CODES = {BlendMode.COMPOSITE: 0, BlendMode.MAXIMUM: 1, BlendMode.MINIMUM: 2, BlendMode.AVERAGE: 3}
+_ALL_MODES = frozenset(BlendMode)
+_LOCAL_SIZE = 8
+
+
+@dataclass(frozen=True)
+class SlicerOptions:
+    """RenderSettings.options of the slicer, checked."""
+
+    path: str = "march"
+    table_size: int = 512
+    empty_space_skipping: bool = True
+    early_termination: bool = True
+    termination_alpha: float = 0.999
+    brick_size: int = 16
+    jitter_seed: int = 1
+    termination_interval: int = 16
+    volume_format: str = "float"
+
+    @classmethod
+    def parse(cls, options: Mapping[str, Any]) -> SlicerOptions:
+        out = cls(**dict(options))
+        if out.path not in PATHS:
+            raise VolrenError(f"slicer option path must be one of {', '.join(PATHS)}, got {out.path!r}")
+        for name, low in (("table_size", 2), ("brick_size", 1), ("jitter_seed", 1), ("termination_interval", 1)):
+            value = getattr(out, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < low:
+                raise VolrenError(f"slicer option {name} must be an integer >= {low}, got {value!r}")
+        if out.volume_format not in ("float", "native"):
+            raise VolrenError(f"slicer option volume_format must be float or native, got {out.volume_format!r}")
+        if out.table_size > 4096:
+            raise VolrenError(f"slicer option table_size must be at most 4096, got {out.table_size}")
+        for name in ("empty_space_skipping", "early_termination"):
+            if not isinstance(getattr(out, name), bool):
+                raise VolrenError(f"slicer option {name} must be true or false, got {getattr(out, name)!r}")
+        alpha = out.termination_alpha
+        if isinstance(alpha, bool) or not isinstance(alpha, int | float) or not (0.0 < alpha <= 1.0):
+            raise VolrenError(f"slicer option termination_alpha must lie in (0, 1], got {alpha!r}")
+        return out
+
+
+def _mat4(m: NDArray) -> bytes:
+    """A numpy (row-major) 4x4 matrix as GLSL's column-major float32 bytes."""
+    return np.ascontiguousarray(np.asarray(m, dtype=np.float64).T, dtype=np.float32).tobytes()
+
+
+class SlicerRenderer(RendererBase):
+    """View-aligned slicing of uniform volumes on the GPU (or Mesa llvmpipe)."""
+
+    name: ClassVar[str] = "slicer"
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        kinds={
+            "uniform": KindSupport(
+                tf_dims=frozenset({1, 2}), preintegration=True, shading=True, blend_modes=_ALL_MODES
+            )
+        },
+        backend="opengl",
+        summary="moderngl view-aligned slicing: pre-integration, lighting, empty-space skipping",
+    )
+    option_help: ClassVar[Mapping[str, str]] = {
+        "path": "march (default): a compute shader walks the slice planes per pixel, with early "
+        "termination and brick skipping; slices: the planes as blended polygons",
+        "table_size": "entries per axis of the pre-integration table (default 512)",
+        "empty_space_skipping": "skip bricks whose values map to zero opacity (default true)",
+        "early_termination": "stop a ray once its opacity reaches termination_alpha (default true)",
+        "termination_alpha": "opacity at which early termination stops a ray (default 0.999)",
+        "brick_size": "cells per brick edge for empty-space skipping (default 16)",
+        "jitter_seed": "seed of the per-pixel jitter when jitter is on (default 1)",
+        "termination_interval": "slices between early-termination passes in the slices path (default 16)",
+        "volume_format": "float (default): the volume as normalised float32; native: 8-bit data as an 8-bit "
+        "texture (a quarter of the memory; Mesa llvmpipe then rounds every interpolated value)",
+    }
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._ctx: Any = None
+        self._objects: list[Any] = []  # every GL object made, for release()
+        self._programs: dict[tuple, Any] = {}
+        self._volume_tex: Any = None
+        self._volume_info: textures.VolumeTexture | None = None
+        self._gradient_tex: Any = None
+        self._gradient_scale = 1.0
+        self._bricks: BrickGrid | None = None
+        self._tables: dict[str, tuple[tuple, Any]] = {}
+        self._targets: dict[str, tuple[tuple, Any]] = {}
+        self._mask_state: tuple[tuple, NDArray[np.bool_]] | None = None
+        self._mask_tex: Any = None
+        #: How often each kind of data went to the GPU (or was rebuilt) since the renderer was made.
+        self.uploads: dict[str, int] = {"volume": 0, "gradient": 0, "tables": 0, "brick_mask": 0}
+
+    # ------------------------------------------------------------------------ GL objects
+    def _context(self) -> Any:
+        if self._ctx is None:
+            require_opengl()
+            import moderngl
+
+            try:
+                self._ctx = moderngl.create_standalone_context(backend="egl", require=430)
+            except Exception:
+                self._ctx = moderngl.create_standalone_context(backend="egl")
+        return self._ctx
+
+    def _track(self, obj: Any) -> Any:
+        self._objects.append(obj)
+        return obj
+
+    def _drop(self, obj: Any) -> None:
+        if obj is not None:
+            obj.release()
+            self._objects = [o for o in self._objects if o is not obj]
+
+    @property
+    def gl_objects(self) -> list[Any]:
+        """The GL objects this renderer holds (tests check that `release` frees them all)."""
+        return list(self._objects)
+
+    def _program(self, kind: str, defines: Mapping[str, int]) -> Any:
+        key = (kind, tuple(sorted(defines.items())))
+        program = self._programs.get(key)
+        if program is None:
+            ctx = self._context()
+            if kind == "march":
+                if ctx.version_code < 430:
+                    raise VolrenError(
+                        f"slicer path march needs OpenGL 4.3 compute shaders; this driver offers "
+                        f"{ctx.version_code / 100:.1f}: use the option path=slices"
+                    )
+                program = compile_program(ctx, compute=load_shader("march.comp.glsl", defines, [SHADER_DIR]))
+            elif kind == "slices":
+                program = compile_program(
+                    ctx,
+                    vertex=load_shader("slice.vert.glsl", {}, [SHADER_DIR]),
+                    fragment=load_shader("slice.frag.glsl", defines, [SHADER_DIR]),
+                )
+            else:
+                program = compile_program(
+                    ctx,
+                    vertex=load_shader("terminate.vert.glsl", {}, [SHADER_DIR]),
+                    fragment=load_shader("terminate.frag.glsl", {}, [SHADER_DIR]),
+                )
+            self._programs[key] = self._track(program)
+        return program
+
+    # ------------------------------------------------------------------------------ hooks
+    def _volume_changed(self) -> None:
+        for name in ("_volume_tex", "_gradient_tex"):
+            self._drop(getattr(self, name))
+            setattr(self, name, None)
+        for _key, obj in self._tables.values():
+            self._drop(obj)
+        self._tables.clear()
+        self._volume_info = None
+        self._bricks = None
+        self._mask_state = None
+
+    # --------------------------------------------------------------------------- volume
+    def _uniform_volume(self) -> UniformVolume:
+        volume = self._volume
+        assert isinstance(volume, UniformVolume)
+        return volume
+
+    def _ensure_volume(self, opts: SlicerOptions) -> textures.VolumeTexture:
+        native = opts.volume_format == "native"
+        if self._volume_tex is not None and (self._volume_info is None or (self._volume_info.dtype == "f1") != (
+            native and self._uniform_volume().values.dtype == np.uint8
+        )):
+            self._drop(self._volume_tex)
+            self._volume_tex = None
+        if self._volume_tex is None:
+            volume = self._uniform_volume()
+            info = textures.volume_texture(volume, native)
+            nz, ny, nx = info.data.shape
+            limit = self._context().info["GL_MAX_3D_TEXTURE_SIZE"]
+            if max(nx, ny, nz) > limit:
+                raise VolrenError(
+                    f"slicer: the volume is {nx}x{ny}x{nz}, but this OpenGL driver allows 3D textures "
+                    f"of at most {limit} per side"
+                )
+            tex = self._context().texture3d((nx, ny, nz), 1, np.ascontiguousarray(info.data), dtype=info.dtype)
+            tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+            self._volume_tex = self._track(tex)
+            self._volume_info = info
+            self.uploads["volume"] += 1
+        assert self._volume_info is not None
+        return self._volume_info
+
+    def _ensure_gradient(self) -> Any:
+        if self._gradient_tex is None:
+            volume = self._uniform_volume()
+            data, scale = textures.gradient_texture(volume)
+            nz, ny, nx = volume.values.shape
+            tex = self._context().texture3d((nx, ny, nz), 3, data, dtype="f2")
+            tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+            self._gradient_tex = self._track(tex)
+            self._gradient_scale = scale
+            self.uploads["gradient"] += 1
+        return self._gradient_tex
+
+    def _table(self, name: str, key: tuple, build) -> Any:
+        """The texture `name`, rebuilt only when `key` (TF version, sizes, spacing) changes."""
+        held = self._tables.get(name)
+        if held is not None and held[0] == key:
+            return held[1]
+        if held is not None:
+            self._drop(held[1])
+        data = np.ascontiguousarray(build(), dtype=np.float32)
+        is_mask = name == "brick_mask"
+        if not is_mask:
+            tex = self._context().texture((data.shape[1], data.shape[0]), data.shape[2], data, dtype="f4")
+            tex.repeat_x = tex.repeat_y = False
+        else:  # brick mask (bz, by, bx), one byte per brick
+            bz, by, bx = data.shape
+            tex = self._context().texture3d((bx, by, bz), 1, (data * 255).astype(np.uint8), dtype="f1")
+            tex.filter = (self._nearest(), self._nearest())
+            tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+        self._tables[name] = (key, self._track(tex))
+        self.uploads["brick_mask" if is_mask else "tables"] += 1
+        return tex
+
+    @staticmethod
+    def _nearest() -> int:
+        import moderngl
+
+        return moderngl.NEAREST
+
+    def _target(self, name: str, width: int, height: int) -> Any:
+        """A float RGBA texture (march) or framebuffer with depth (slices) of the frame's size."""
+        key = (width, height)
+        held = self._targets.get(name)
+        if held is not None and held[0] == key:
+            return held[1]
+        if held is not None:
+            for obj in held[1] if isinstance(held[1], tuple) else (held[1],):
+                self._drop(obj)
+        ctx = self._context()
+        colour = self._track(ctx.texture((width, height), 4, dtype="f4"))
+        colour.filter = (self._nearest(), self._nearest())
+        if name == "march":
+            value: Any = colour
+        else:
+            depth = self._track(ctx.depth_renderbuffer((width, height)))
+            fbo = self._track(ctx.framebuffer(color_attachments=[colour], depth_attachment=depth))
+            term = self._track(ctx.framebuffer(color_attachments=[], depth_attachment=depth))
+            value = (fbo, term, colour, depth)
+        self._targets[name] = (key, value)
+        return value
+
+    # ----------------------------------------------------------------------- frame setup
+    def _mode(self) -> int:
+        """0 post-classified 1D TF, 1 pre-integrated 1D TF, 2 post-classified 2D TF."""
+        if getattr(self._tf, "dims", 1) == 2:
+            return 2
+        return 1 if self._settings.preintegration else 0
+
+    def _spacing(self) -> float:
+        return float(self._settings.step) * self._uniform_volume().mean_spacing
+
+    def _options(self) -> SlicerOptions:
+        return SlicerOptions.parse(self._settings.options)
+
+    def _skip_reach(self, spacing: float, brick: int) -> int:
+        """Bricks a segment can reach beyond its own: segments are at most 2 spacings long (the
+        entry segment with jitter) and cross planes at most 60 degrees off the view axis."""
+        volume = self._uniform_volume()
+        return max(1, math.ceil(4.0 * spacing / (brick * min(volume.spacing))))
+
+    def _brick_mask(self, opts: SlicerOptions, spacing: float) -> dict[str, float]:
+        """Classify the bricks for the current TF (dilated so that pre-integrated segments
+        reaching into a neighbour are covered) and upload the mask when it changed."""
+        volume = self._uniform_volume()
+        if self._bricks is None or self._bricks.brick != opts.brick_size:
+            self._bricks = BrickGrid.from_volume(volume, opts.brick_size)
+            self._mask_state = None
+        grid = self._bricks
+        tf = self._tf
+        assert tf is not None
+        reach = self._skip_reach(spacing, opts.brick_size)
+        key = (tf.version, opts.brick_size, reach)
+        if self._mask_state is None or self._mask_state[0] != key:
+            self._mask_state = (key, grid.dilated(reach).visible(tf))
+        visible = self._mask_state[1]
+        self._mask_tex = self._table("brick_mask", key, lambda: (~visible).astype(np.float32))
+        stats = grid.stats(visible)
+        return {"bricks": stats.n_bricks, "bricks_empty": stats.n_bricks - stats.n_visible}
+
+    def _defines(self, opts: SlicerOptions) -> dict[str, int]:
+        s = self._settings
+        composite = s.blend_mode == BlendMode.COMPOSITE
+        return {
+            "CLASSIFY": self._mode() if composite else 0,
+            "SHADE": int(s.shade and composite),
+            "BLEND": _BLEND_CODES[s.blend_mode],
+            "SKIP": int(opts.empty_space_skipping and composite),
+            "NONFINITE": int(self._uniform_volume().nonfinite_count > 0),
+        }
+
+    def _set(self, program: Any, name: str, value: Any) -> None:
+        if name in program:
+            program[name].value = value
+
+    def _bind(self, program: Any, defines: Mapping[str, int], camera: Camera, opts: SlicerOptions) -> int:
+        """Set the uniforms and textures both paths share; returns the next free texture unit."""
+        volume = self._uniform_volume()
+        info = self._ensure_volume(opts)
+        tf = self._tf
+        assert tf is not None
+        spacing = self._spacing()
+        box_min = np.array(volume.bounds[0::2])
+        box_max = np.array(volume.bounds[1::2])
+        dims = np.array(volume.dimensions, dtype=np.float64)
+        sp = np.array(volume.spacing)
+        scale = 1.0 / (sp * dims)
+        offset = (0.5 - np.array(volume.origin) / sp) / dims
+        view_dir = np.asarray(camera.direction, dtype=np.float64)
+        s = self._settings
+        unit = 0
+        self._volume_tex.use(location=unit)
+        self._set(program, "u_volume", unit)
+        unit += 1
+        self._set(program, "u_value_map", tuple(float(v) for v in info.value_map))
+        self._set(program, "u_box_min", tuple(box_min))
+        self._set(program, "u_box_max", tuple(box_max))
+        self._set(program, "u_world_to_tex_scale", tuple(scale))
+        self._set(program, "u_world_to_tex_offset", tuple(offset))
+        self._set(program, "u_view_dir", tuple(view_dir))
+        self._set(program, "u_plane_base", float(view_dir @ box_min))
+        self._set(program, "u_spacing", spacing)
+        self._set(program, "u_jitter_seed", int(opts.jitter_seed) if s.jitter else 0)
+        self._set(program, "u_light", tuple(-view_dir))
+        lo, hi = info.lo, info.hi
+        mode = defines["CLASSIFY"]
+        n = opts.table_size
+        if mode == 0:
+            tex = self._table("post", (tf.version, lo, hi), lambda: textures.post_tf_table(tf, lo, hi))
+            tex.use(location=unit)
+            self._set(program, "u_tf", unit)
+            self._set(program, "u_tf_size", float(textures.POST_TF_SIZE))
+            unit += 1
+        elif mode == 1:
+            if defines["SHADE"]:
+                key = (tf.version, lo, hi, n, spacing)
+                pair: dict[str, NDArray] = {}
+
+                def front() -> NDArray:
+                    pair["front"], pair["back"] = textures.lighting_textures(tf, lo, hi, n, spacing)
+                    return pair["front"]
+
+                front_tex = self._table("light_front", key, front)
+                back_tex = self._table(
+                    "light_back", key, lambda: pair.get("back", textures.lighting_textures(tf, lo, hi, n, spacing)[1])
+                )
+                front_tex.use(location=unit)
+                back_tex.use(location=unit + 1)
+                self._set(program, "u_preint", unit)
+                self._set(program, "u_preint_back", unit + 1)
+                unit += 2
+            else:
+                tex = self._table("preint", (tf.version, lo, hi, n, spacing),
+                                  lambda: textures.preintegration_table(tf, lo, hi, n, spacing))
+                tex.use(location=unit)
+                self._set(program, "u_preint", unit)
+                unit += 1
+            self._set(program, "u_preint_size", float(n))
+        elif mode == 2:
+            n_values, n_gradients = TF2D_TABLE_SIZE
+            tex = self._table("tf2d", (tf.version, lo, hi), lambda: textures.tf2d_table(tf, lo, hi, n_values, n_gradients))
+            tex.use(location=unit)
+            self._set(program, "u_tf2d", unit)
+            self._set(program, "u_tf2d_size", (float(n_values), float(n_gradients)))
+            self._set(program, "u_tf2d_gradient_max", float(tf.gradient_range[1]))
+            unit += 1
+        if defines["SHADE"] or mode == 2:
+            self._ensure_gradient().use(location=unit)
+            self._set(program, "u_gradient", unit)
+            self._set(program, "u_gradient_scale", float(self._gradient_scale))
+            unit += 1
+        if defines["SHADE"]:
+            self._set(program, "u_ambient", float(s.ambient))
+            self._set(program, "u_diffuse", float(s.diffuse))
+            self._set(program, "u_specular", float(s.specular))
+            self._set(program, "u_specular_power", float(s.specular_power))
+            span = float(volume.value_range[1] - volume.value_range[0])
+            self._set(program, "u_gradient_threshold", GRADIENT_EPS * span / volume.characteristic_length)
+        if defines["SKIP"]:
+            grid_bricks = self._bricks
+            assert grid_bricks is not None
+            self._mask_tex.use(location=unit)
+            self._set(program, "u_brick_mask", unit)
+            self._set(program, "u_brick_origin", tuple(float(v) for v in volume.origin))
+            self._set(program, "u_brick_size", tuple(float(opts.brick_size * h) for h in volume.spacing))
+            bz, by, bx = grid_bricks.shape
+            self._set(program, "u_brick_count", (bx, by, bz))
+            unit += 1
+        return unit
+
+    # ------------------------------------------------------------------------------ render
+    def _render(
+        self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
+    ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
+        # Other renderers (another slicer, VTK) make their own contexts current on this thread.
+        with self._context():
+            return self._render_current(camera, width, height, progress)
+
+    def _render_current(
+        self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
+    ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
+        opts = self._options()
+        if self._settings.preintegration and getattr(self._tf, "dims", 1) == 2:
+            raise VolrenError("slicer: pre-integration needs a 1D transfer function; switch it off for 2D TFs")
+        defines = self._defines(opts)
+        counters: dict[str, float] = {}
+        before = dict(self.uploads)
+        if defines["SKIP"]:
+            counters.update(self._brick_mask(opts, self._spacing()))
+        world_to_clip = camera.projection_matrix(width / height) @ camera.view_matrix()
+        if opts.path == "march":
+            raw = self._march(defines, camera, opts, width, height, world_to_clip, counters)
+        else:
+            raw = self._slices(defines, camera, opts, width, height, world_to_clip, counters)
+        if progress is not None:
+            progress(1.0)
+        for kind, count in self.uploads.items():
+            counters[f"uploaded_{kind}"] = count - before[kind]
+        error = self._ctx.error
+        if error != "GL_NO_ERROR":
+            raise VolrenError(f"slicer: OpenGL reported {error} while drawing the frame")
+        image = raw[::-1]  # GL rows start at the bottom
+        if self._settings.blend_mode != BlendMode.COMPOSITE:
+            image = self._project_to_rgba(image)
+        return np.ascontiguousarray(image, dtype=np.float32), counters
+
+    def _march(self, defines, camera, opts, width, height, world_to_clip, counters) -> NDArray[np.float32]:
+        program = self._program("march", defines)
+        self._bind(program, defines, camera, opts)
+        program["u_clip_to_world"].write(_mat4(np.linalg.inv(world_to_clip)))
+        termination = opts.termination_alpha if opts.early_termination else 2.0
+        self._set(program, "u_termination", float(termination))
+        image = self._target("march", width, height)
+        image.bind_to_image(0, read=False, write=True)
+        held = self._tables.get("counters")
+        if held is None:
+            buffer = self._track(self._context().buffer(reserve=16))
+            self._tables["counters"] = ((), buffer)
+        else:
+            buffer = held[1]
+        buffer.write(np.zeros(4, dtype=np.uint32).tobytes())
+        buffer.bind_to_storage_buffer(1)
+        program.run(math.ceil(width / _LOCAL_SIZE), math.ceil(height / _LOCAL_SIZE), 1)
+        self._ctx.memory_barrier()
+        samples, brick_steps, terminated, hit = np.frombuffer(buffer.read(), dtype=np.uint32)
+        counters.update(samples=int(samples), brick_steps=int(brick_steps), rays_terminated=int(terminated),
+                        rays_hit=int(hit), passes=1)
+        raw = np.frombuffer(image.read(), dtype=np.float32).reshape(height, width, 4)
+        return raw
+
+    def _slices(self, defines, camera, opts, width, height, world_to_clip, counters) -> NDArray[np.float32]:
+        import moderngl
+
+        ctx = self._context()
+        volume = self._uniform_volume()
+        program = self._program("slices", defines)
+        self._bind(program, defines, camera, opts)
+        program["u_world_to_clip"].write(_mat4(world_to_clip))
+        self._set(program, "u_eye", tuple(float(v) for v in camera.position))
+        self._set(program, "u_perspective", not camera.parallel)
+        box_min = np.array(volume.bounds[0::2])
+        box_max = np.array(volume.bounds[1::2])
+        spacing = self._spacing()
+        view_dir = np.asarray(camera.direction, dtype=np.float64)
+        clip_min, clip_max = box_min, box_max
+        if defines["SKIP"]:
+            clip_min, clip_max = self._visible_box(box_min, box_max)
+        if clip_min is None:
+            vertices = np.zeros((0, 3), dtype=np.float32)
+            starts = np.zeros(1, dtype=np.int64)
+        else:
+            # Grow the box so that the planes before it own the entry segments (slice.frag.glsl).
+            margin = 2.5 * spacing / self._min_cosine(camera, width, height)
+            stack = slice_polygons(clip_min - margin, clip_max + margin, view_dir, spacing, anchor=box_min,
+                                   back_to_front=False)
+            vertices = triangle_fan(stack).positions
+            starts = np.concatenate([[0], np.cumsum((stack.counts - 2) * 3)])
+        fbo, term_fbo, colour, _ = self._target("slices", width, height)
+        composite = self._settings.blend_mode == BlendMode.COMPOSITE
+        fbo.use()
+        fbo.depth_mask = True  # a masked depth buffer is not cleared either
+        extreme = self._settings.blend_mode in (BlendMode.MAXIMUM, BlendMode.MINIMUM)
+        fbo.clear(-3.0e38 if extreme else 0.0, 0.0, 0.0, 0.0, depth=1.0)
+        fbo.depth_mask = False
+        fbo.use()
+        ctx.enable(moderngl.BLEND | moderngl.DEPTH_TEST)
+        ctx.disable(moderngl.CULL_FACE)
+        ctx.depth_func = "<"
+        if composite:
+            ctx.blend_equation = moderngl.FUNC_ADD
+            ctx.blend_func = moderngl.ONE_MINUS_DST_ALPHA, moderngl.ONE
+        elif self._settings.blend_mode == BlendMode.AVERAGE:
+            ctx.blend_equation = moderngl.FUNC_ADD
+            ctx.blend_func = moderngl.ONE, moderngl.ONE
+        else:
+            ctx.blend_equation = moderngl.MAX
+        queries = []
+        passes = 0
+        n_slices = len(starts) - 1
+        terminated = 0
+        if n_slices:
+            vbo = ctx.buffer(np.ascontiguousarray(vertices, dtype=np.float32).tobytes())
+            vao = ctx.vertex_array(program, [(vbo, "3f", "in_position")])
+            early = composite and opts.early_termination
+            batch = opts.termination_interval if early else n_slices
+            term = self._program("terminate", {}) if early else None
+            if term is not None:
+                colour.use(location=15)
+                term["u_accumulated"].value = 15
+                term["u_termination"].value = float(opts.termination_alpha)
+                term_vao = ctx.vertex_array(term, [])
+            for first in range(0, n_slices, batch):
+                last = min(first + batch, n_slices)
+                fbo.use()
+                query = ctx.query(samples=True)
+                with query:
+                    vao.render(moderngl.TRIANGLES, vertices=int(starts[last] - starts[first]), first=int(starts[first]))
+                queries.append(query)
+                passes += 1
+                if term is not None and last < n_slices:
+                    ctx.disable(moderngl.BLEND)
+                    term_fbo.depth_mask = True
+                    term_fbo.use()
+                    term_vao.render(moderngl.TRIANGLES, vertices=3)
+                    ctx.enable(moderngl.BLEND)
+                    terminated += 1
+            if term is not None:
+                term_vao.release()
+            vao.release()
+            vbo.release()
+        fragments = sum(q.samples for q in queries)
+        per_fragment = 2 if (defines["CLASSIFY"] == 1 or not composite) else 1
+        counters.update(fragments=fragments, samples=fragments * per_fragment, passes=passes,
+                        slices=n_slices, termination_passes=terminated)
+        ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
+        raw = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(height, width, 4)
+        return raw
+
+    @staticmethod
+    def _min_cosine(camera: Camera, width: int, height: int) -> float:
+        """The smallest cosine between a pixel ray and the view direction (at the corners)."""
+        if camera.parallel:
+            return 1.0
+        _, dirs = camera.pixel_rays(width, height)
+        corners = dirs[[0, 0, -1, -1], [0, -1, 0, -1]]
+        return float(max((corners @ np.asarray(camera.direction)).min(), 0.1))
+
+    def _visible_box(self, box_min: NDArray, box_max: NDArray) -> tuple[Any, Any]:
+        """The bounds of the bricks that are not empty (None, None when all are empty), so slices
+        are cut only where something can show."""
+        grid = self._bricks
+        assert grid is not None
+        assert self._mask_state is not None
+        visible = self._mask_state[1]
+        if not visible.any():
+            return None, None
+        lo, hi = grid.brick_bounds()
+        lo = lo[visible].min(axis=0)
+        hi = hi[visible].max(axis=0)
+        lo = np.maximum(lo, box_min)
+        hi = np.minimum(hi, box_max)
+        if not np.all(hi > lo):
+            return None, None
+        return lo, hi
+
+    def _project_to_rgba(self, raw: NDArray[np.float32]) -> NDArray[np.float32]:
+        """Maximum / minimum / average images: the normalised value per pixel through the TF."""
+        info = self._volume_info
+        tf = self._tf
+        assert info is not None and tf is not None
+        mode = self._settings.blend_mode
+        if mode == BlendMode.AVERAGE:
+            found = raw[..., 1] > 0
+            x = np.where(found, raw[..., 0] / np.where(found, raw[..., 1], 1.0), 0.0)
+        else:
+            found = raw[..., 1] > 0
+            x = raw[..., 0].astype(np.float64)
+            if mode == BlendMode.MINIMUM:
+                x = -x
+        rgb, alpha = tf.sample(np.where(found, info.to_data_value(x), np.nan))
+        out = np.zeros(raw.shape, dtype=np.float32)
+        out[..., :3] = rgb * alpha[..., None]
+        out[..., 3] = alpha
+        return out
+
+    # ------------------------------------------------------------------------------ release
+    def release(self) -> None:
+        """Free every GL object and the context."""
+        if self._ctx is not None:
+            with self._ctx:
+                for obj in reversed(self._objects):
+                    obj.release()
+        self._objects.clear()
+        self._programs.clear()
+        self._tables.clear()
+        self._targets.clear()
+        self._volume_tex = self._gradient_tex = None
+        if self._ctx is not None:
+            self._ctx.release()
+            self._ctx = None
+        super().release()

@@ -1,0 +1,211 @@
+// Shared by the slice (raster) and march (compute) paths: both visit the same sample points and
+// classify each segment between them with these functions, so the two paths agree.
+//
+// Defines (from the renderer): CLASSIFY 0 post-classified 1D TF, 1 pre-integrated 1D TF,
+// 2 post-classified 2D TF; SHADE 0/1; BLEND 0 composite, 1 maximum, 2 minimum, 3 average;
+// SKIP 0/1 (empty-space skipping by the brick mask); NONFINITE 0/1 (the volume holds NaN or Inf).
+#pragma once
+
+#define COMPOSITE (BLEND == 0)
+#define LUM_LIGHTING (CLASSIFY == 1 && SHADE == 1)
+#define NEEDS_GRADIENT (SHADE == 1 || CLASSIFY == 2)
+const float NO_DATA = -3.0e38;
+
+uniform sampler3D u_volume;          // the data in its own precision
+uniform vec2 u_value_map;            // texel t -> normalised value t * x + y (0 and 1: the data's range)
+uniform vec3 u_box_min;              // world bounds of the grid points
+uniform vec3 u_box_max;
+uniform vec3 u_world_to_tex_scale;   // texture coordinate = world * scale + offset
+uniform vec3 u_world_to_tex_offset;
+uniform vec3 u_view_dir;             // unit, from the eye into the scene
+uniform float u_plane_base;          // view_dir . anchor of the slice planes
+uniform float u_spacing;             // distance between slice planes (world)
+uniform uint u_jitter_seed;          // 0: no jitter
+uniform vec3 u_light;                // L: toward the headlight (-view direction)
+
+// ------------------------------------------------------------------------------ sampling
+// Values are normalised: every table covers [0, 1] = the data's finite range.
+float data_value(vec3 world) {
+    float t = texture(u_volume, world * u_world_to_tex_scale + u_world_to_tex_offset).r;
+    return t * u_value_map.x + u_value_map.y;
+}
+
+#if NONFINITE
+bool is_valid(float v) { return !(isnan(v) || isinf(v)); }
+#else
+bool is_valid(float v) { return true; }   // the volume has no NaN or Inf: no test per sample
+#endif
+
+// Texture coordinate of entry x in [0, 1] of an n-entry table whose entries sit at texel centres.
+float table_coord(float x, float n) { return (clamp(x, 0.0, 1.0) * (n - 1.0) + 0.5) / n; }
+
+// A per-pixel fraction in [0, 1) of the slice spacing, the same for a pixel in both paths.
+float jitter_fraction(uvec2 pixel) {
+    if (u_jitter_seed == 0u) return 0.0;
+    uint h = pixel.x * 1973u + pixel.y * 9277u + u_jitter_seed * 26699u;
+    h = (h ^ 61u) ^ (h >> 16);
+    h *= 9u;
+    h ^= h >> 4;
+    h *= 0x27d4eb2du;
+    h ^= h >> 15;
+    return float(h >> 8) / 16777216.0;
+}
+
+// Parameter interval of the ray inside the closed box (t0 > t1 when it misses). An axis the ray
+// runs parallel to constrains nothing when the ray lies within the slab (the reference's test).
+vec2 box_interval(vec3 origin, vec3 dir, vec3 lo, vec3 hi) {
+    float t_enter = -3.0e38;
+    float t_exit = 3.0e38;
+    for (int a = 0; a < 3; ++a) {
+        if (dir[a] != 0.0) {
+            float ta = (lo[a] - origin[a]) / dir[a];
+            float tb = (hi[a] - origin[a]) / dir[a];
+            t_enter = max(t_enter, min(ta, tb));
+            t_exit = min(t_exit, max(ta, tb));
+        } else if (origin[a] < lo[a] || origin[a] > hi[a]) {
+            return vec2(1.0, 0.0);
+        }
+    }
+    return vec2(t_enter, t_exit);
+}
+
+// 1 - exp(-x) without losing the relative precision for thin segments.
+float one_minus_exp(float x) {
+    return x < 1.0e-3 ? x * (1.0 - x * (0.5 - x / 6.0)) : 1.0 - exp(-x);
+}
+
+// --------------------------------------------------------------------------- gradients
+#if NEEDS_GRADIENT
+uniform sampler3D u_gradient;        // central differences (world units) / u_gradient_scale
+uniform float u_gradient_scale;
+vec3 gradient_at(vec3 world) {
+    return texture(u_gradient, world * u_world_to_tex_scale + u_world_to_tex_offset).xyz * u_gradient_scale;
+}
+#endif
+
+// ---------------------------------------------------------------------------- shading
+#if SHADE
+uniform float u_ambient;
+uniform float u_diffuse;
+uniform float u_specular;
+uniform float u_specular_power;
+uniform float u_gradient_threshold;  // |grad| at or below this: no shading (DESIGN.md)
+
+// (diffuse factor ka + kd |N.L|, specular ks max(N.H, 0)^p); (1, 0) where there is no gradient.
+vec2 light_factors(vec3 g, vec3 half_vector) {
+    float magnitude = length(g);
+    if (!(magnitude > u_gradient_threshold) || isinf(magnitude)) return vec2(1.0, 0.0);
+    vec3 normal = -g / magnitude;
+    float ndl = dot(normal, u_light);
+    if (ndl < 0.0) {  // two-sided lighting
+        normal = -normal;
+        ndl = -ndl;
+    }
+    float ndh = max(dot(normal, half_vector), 0.0);
+    float highlight = u_specular_power == 0.0 ? 1.0 : (ndh > 0.0 ? pow(ndh, u_specular_power) : 0.0);
+    return vec2(u_ambient + u_diffuse * ndl, u_specular * highlight);
+}
+
+vec3 shaded(vec3 colour, vec2 factors) { return clamp(colour * factors.x + factors.y, 0.0, 1.0); }
+#endif
+
+// ----------------------------------------------------------------------- classification
+#if CLASSIFY == 0
+uniform sampler2D u_tf;              // (n, 1): r, g, b, extinction tau per world unit
+uniform float u_tf_size;
+// Linear interpolation between two texels by hand: half the texel reads of a bilinear lookup.
+vec4 tf_lookup(float v) {
+    float x = clamp(v, 0.0, 1.0) * (u_tf_size - 1.0);
+    int i = min(int(x), int(u_tf_size) - 2);
+    return mix(texelFetch(u_tf, ivec2(i, 0), 0), texelFetch(u_tf, ivec2(i + 1, 0), 0), x - float(i));
+}
+#elif CLASSIFY == 1
+uniform sampler2D u_preint;          // [front, back]: premultiplied colour, optical depth (length u_spacing)
+uniform float u_preint_size;
+#if LUM_LIGHTING
+uniform sampler2D u_preint_back;     // [front, back]: diffuse back-weighted, specular back-weighted
+#endif
+vec2 preint_coord(float front, float back) {
+    return vec2(table_coord((back), u_preint_size), table_coord((front), u_preint_size));
+}
+#elif CLASSIFY == 2
+uniform sampler2D u_tf2d;            // (n_values, n_gradients): r, g, b, tau
+uniform vec2 u_tf2d_size;
+uniform float u_tf2d_gradient_max;
+vec4 tf2d_lookup(float v, float gradient_magnitude) {
+    return texture(u_tf2d, vec2(table_coord((v), u_tf2d_size.x),
+                                table_coord(gradient_magnitude / u_tf2d_gradient_max, u_tf2d_size.y)));
+}
+#endif
+
+#if CLASSIFY == 0 || CLASSIFY == 2
+#define PREINTEGRATED 0
+// Post-classification by the midpoint rule: premultiplied RGBA of a segment `len` world units long
+// whose middle is `p` with data value `v` (second order in the step, unlike a sample at the front).
+vec4 classify_sample(vec3 p, float v, float len, vec3 dir) {
+    if (!is_valid(v)) return vec4(0.0);
+#if CLASSIFY == 0
+    vec4 e = tf_lookup(v);
+#else
+    vec3 g2 = gradient_at(p);
+    vec4 e = tf2d_lookup(v, length(g2));
+#endif
+    float alpha = one_minus_exp(e.a * len);
+    vec3 colour = e.rgb;
+#if SHADE
+    vec3 half_vector = normalize(u_light - dir);
+#if CLASSIFY == 2
+    colour = shaded(colour, light_factors(g2, half_vector));
+#else
+    colour = shaded(colour, light_factors(gradient_at(p), half_vector));
+#endif
+#endif
+    return vec4(colour * alpha, alpha);
+}
+#else
+#define PREINTEGRATED 1
+// Pre-integrated RGBA of the segment [front, back] (`len` world units) along which the data runs
+// from vf to vb: the table for the plane spacing, rescaled to the real length (seed 003).
+vec4 classify_segment(vec3 front, vec3 back, float vf, float vb, float len, vec3 dir) {
+    if (!is_valid(vf) || !is_valid(vb)) return vec4(0.0);
+    vec2 tc = preint_coord(vf, vb);
+    vec4 entry = texture(u_preint, tc);
+    float depth = entry.a;
+    float ratio = len / u_spacing;
+    float alpha_table = one_minus_exp(depth);
+    float alpha = one_minus_exp(depth * ratio);
+    float scale = alpha_table > 1.0e-30 ? alpha / alpha_table : ratio;
+#if LUM_LIGHTING
+    vec3 half_vector = normalize(u_light - dir);
+    vec4 back_entry = texture(u_preint_back, tc);
+    vec2 lf = light_factors(gradient_at(front), half_vector);
+    vec2 lb = light_factors(gradient_at(back), half_vector);
+    float specular_back = back_entry.a;
+    float specular_front = max(alpha_table - specular_back, 0.0);
+    vec3 colour = entry.rgb * lf.x + back_entry.rgb * lb.x + vec3(specular_front * lf.y + specular_back * lb.y);
+    return vec4(min(colour * scale, vec3(alpha)), alpha);
+#else
+    return vec4(entry.rgb * scale, alpha);
+#endif
+}
+#endif
+
+// What a segment contributes to the non-composite blend modes: (value for max / min, weight sum).
+// Maximum and minimum use both ends; the average integrates the segment with the trapezoid rule.
+vec2 project_segment(float vf, float vb, float len) {
+    bool okf = is_valid(vf);
+    bool okb = is_valid(vb);
+#if BLEND == 3
+    if (!okf || !okb) return vec2(0.0, 0.0);
+    return vec2(0.5 * (vf + vb) * len, len);
+#else
+    if (!okf && !okb) return vec2(NO_DATA, 0.0);
+    float a = okf ? vf : vb;
+    float b = okb ? vb : vf;
+#if BLEND == 1
+    return vec2(max(a, b), 1.0);
+#else
+    return vec2(-min(a, b), 1.0);   // minimum as the maximum of -v, so both blend with MAX
+#endif
+#endif
+}

@@ -1,0 +1,129 @@
+"""What the slicer uploads, prepared in numpy: the volume in its own precision, its gradients and
+the transfer-function tables. No GL here, so all of it is tested without a context.
+
+Why the normalised value axis: the shaders work with x = (v - lo) / (hi - lo) over the data's
+finite value range [lo, hi], and every table covers exactly that range. In float32 a data value
+like 1e6 + 0.3 cannot be turned into a table coordinate without cancellation, and a float64 volume
+cannot be uploaded at all; both are normalised in float64 on the CPU instead (and so is integer
+data, see `volume_texture`). A per-volume affine map in the shader turns the texel into x. The TF is constant beyond its ends and trilinear values never leave [lo, hi], so
+tables over [lo, hi] are exact for every segment a renderer can meet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.model.preintegration import lighting_tables, preintegrate
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.volume import UniformVolume
+
+#: Entries of the post-classification TF texture: enough that a spike of 1/1000 of the range
+#: spans several texels.
+POST_TF_SIZE = 4096
+
+
+@dataclass(frozen=True, eq=False)
+class VolumeTexture:
+    """The volume as texel data: `data` (nz, ny, nx) in `dtype` (a moderngl dtype), and the map
+    x = texel * value_map[0] + value_map[1] from what the shader reads to the normalised value."""
+
+    data: NDArray
+    dtype: str
+    value_map: tuple[float, float]
+    lo: float
+    hi: float
+
+    def to_data_value(self, x: NDArray) -> NDArray[np.float64]:
+        """Normalised values back to data units (float64)."""
+        return self.lo + np.asarray(x, dtype=np.float64) * (self.hi - self.lo)
+
+
+def value_range(volume: UniformVolume) -> tuple[float, float]:
+    """The range the tables cover: the finite data range, widened when the volume is constant."""
+    lo, hi = (float(v) for v in volume.value_range)
+    if not hi > lo:
+        pad = max(abs(lo) * 1e-6, 0.5)
+        lo, hi = lo - pad, hi + pad
+    return lo, hi
+
+
+def volume_texture(volume: UniformVolume, native: bool = False) -> VolumeTexture:
+    """The volume normalised to [0, 1] in float64 and stored as float32 (NaN/Inf kept); with
+    `native`, 8-bit data keeps its bits in an 8-bit normalised texture instead.
+
+    Why float32 by default: Mesa llvmpipe filters 8-bit textures in 8-bit arithmetic, so every
+    trilinear value is rounded to a whole data step (measured: up to 1.1 steps off, 0.34 on
+    average, against 7e-5 for float32), which pre-integration, made to follow the data between
+    samples exactly, cannot afford; its 16-bit normalised 3D textures filter wrongly (values off by
+    tens of steps). GPUs filter 8-bit data to float with 8-bit weights, where `native` saves 3/4
+    of the memory.
+    """
+    lo, hi = value_range(volume)
+    span = hi - lo
+    values = volume.values
+    if native and values.dtype == np.uint8:
+        return VolumeTexture(values, "f1", (255.0 / span, -lo / span), lo, hi)
+    normalised = np.empty(values.shape, dtype=np.float32)
+    np.multiply(np.subtract(values, lo, dtype=np.float64), 1.0 / span, out=normalised, casting="same_kind")
+    return VolumeTexture(normalised, "f4", (1.0, 0.0), lo, hi)
+
+
+def gradient_texture(volume: UniformVolume) -> tuple[NDArray[np.float16], float]:
+    """Central differences in world units at the grid points, one-sided at the borders (the
+    reference's gradient), as half floats (nz, ny, nx, 3) divided by the returned scale."""
+    values = volume.values
+    span = float(volume.value_range[1] - volume.value_range[0]) or 1.0
+    scale = span / min(volume.spacing)  # the largest |d s / d axis| one cell can give
+    out = np.empty(values.shape + (3,), dtype=np.float16)
+    for axis, h in ((2, volume.spacing[0]), (1, volume.spacing[1]), (0, volume.spacing[2])):
+        component = np.gradient(values.astype(np.float32, copy=False), axis=axis) / np.float32(h * scale)
+        out[..., 2 - axis] = component
+    return out, scale
+
+
+def post_tf_table(tf: TransferFunction1D, lo: float, hi: float, n: int = POST_TF_SIZE) -> NDArray[np.float32]:
+    """(1, n, 4): colour and extinction tau per world unit at lo + (hi - lo) k / (n - 1)."""
+    values = np.linspace(lo, hi, n)
+    rgb, _ = tf.sample(values)
+    tau = tf.extinction(values)
+    return np.concatenate([rgb, tau[:, None]], axis=1).astype(np.float32)[None]
+
+
+def tf2d_table(tf, lo: float, hi: float, n_values: int = 512, n_gradients: int = 256) -> NDArray[np.float32]:
+    """(n_gradients, n_values, 4): colour and extinction tau of a 2D TF at data values
+    lo + (hi - lo) i / (n_values - 1) and gradient magnitudes gmax j / (n_gradients - 1)."""
+    values = np.linspace(lo, hi, n_values)[None, :]
+    gradients = np.linspace(0.0, tf.gradient_range[1], n_gradients)[:, None]
+    rgb, _ = tf.sample(values, gradients)
+    tau = tf.extinction(values, gradients)
+    return np.concatenate([rgb, tau[..., None]], axis=-1).astype(np.float32)
+
+
+def _optical_depth(alpha: NDArray) -> NDArray[np.float64]:
+    return -np.log1p(-np.minimum(alpha.astype(np.float64), 1.0 - 1e-7))
+
+
+def preintegration_table(
+    tf: TransferFunction1D, lo: float, hi: float, n: int, spacing: float
+) -> NDArray[np.float32]:
+    """(n, n, 4) [front, back]: premultiplied colour and the optical depth -ln(1 - alpha) of a
+    segment `spacing` long. The shader rescales both to the segment's real length (seed 003's
+    opacity and colour correction), exactly for the opacity."""
+    table = preintegrate(tf, n, step=spacing, value_range=(lo, hi))
+    out = np.array(table, dtype=np.float32)
+    out[..., 3] = _optical_depth(table[..., 3])
+    return out
+
+
+def lighting_textures(
+    tf: TransferFunction1D, lo: float, hi: float, n: int, spacing: float
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """Lum et al.'s front table (diffuse front-weighted, optical depth) and back table (diffuse
+    back-weighted, specular back-weighted), both (n, n, 4)."""
+    tables = lighting_tables(tf, n, step=spacing, value_range=(lo, hi))
+    front = np.array(tables.front, dtype=np.float32)
+    front[..., 3] = _optical_depth(tables.front[..., 3])
+    return front, np.array(tables.back, dtype=np.float32)
