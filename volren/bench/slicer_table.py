@@ -105,3 +105,28 @@ def markdown_row(row: dict) -> str:
         f"| {row['dataset']} | {row['tf']} | {row['renderer']} | {row['step']:g} | {row['ms']:.1f} | "
         f"{row['rmse']:.5f} | {row['max_abs']:.4f} | {samples_text} |"
     )
+
+
+RATIO_HEADER = (
+    "| dataset | TF | vtk step | vtk ms | vtk RMSE | fastest slicer at equal or lower RMSE | its ms | its RMSE | time ratio |\n"
+    "|---|---|---|---|---|---|---|---|---|"
+)
+
+
+def equal_error_rows(rows: list[dict]) -> list[str]:
+    """For every `vtk` row: the fastest `slicer` row of the same scene whose RMSE is at most
+    vtk's, and the ratio of their times (the issue's goal is a ratio of at most 0.5)."""
+    out = []
+    for peer in (r for r in rows if r["renderer"] == "vtk"):
+        scene = [r for r in rows if (r["dataset"], r["tf"]) == (peer["dataset"], peer["tf"])]
+        better = [r for r in scene if r["renderer"].startswith("slicer") and r["rmse"] <= peer["rmse"]]
+        head = f"| {peer['dataset']} | {peer['tf']} | {peer['step']:g} | {peer['ms']:.1f} | {peer['rmse']:.5f} |"
+        if not better:
+            out.append(head + " none | - | - | - |")
+            continue
+        best = min(better, key=lambda r: r["ms"])
+        out.append(
+            head + f" {best['renderer']}, step {best['step']:g} | {best['ms']:.1f} | {best['rmse']:.5f} | "
+            f"{best['ms'] / peer['ms']:.2f} |"
+        )
+    return out

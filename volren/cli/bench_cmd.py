@@ -147,7 +147,10 @@ def run_slicer(args: argparse.Namespace) -> int:
             tqdm.write(line)
             bar.update()
 
-        slicer_table.run(shared, datasets, styles, steps, paths, args.size, args.frames, report)
+        rows = slicer_table.run(shared, datasets, styles, steps, paths, args.size, args.frames, report)
+    ratios = [slicer_table.RATIO_HEADER, *slicer_table.equal_error_rows(rows)]
+    lines += ["", *ratios]
+    print("\n" + "\n".join(ratios))
     if args.out:
         try:
             Path(args.out).write_text("\n".join(lines) + "\n")

@@ -434,3 +434,23 @@ def test_2d_tf_skips_bricks_its_widgets_cannot_reach():
     assert visible[..., 3].all() and not visible[..., :2].any()
     # The bound is exact for one widget: the box's peak wherever the brick's range meets it.
     np.testing.assert_array_equal(grid.max_opacity(tf)[..., 3], 1.0)
+
+
+# ----------------------------------------------------------------------------- real data
+def test_real_data_against_reference(shared_data):
+    """A 64^3 block of the bonsai with its spiky scene TF: both classifications stay close to the
+    reference, pre-integration closer (measured: see the bounds)."""
+    from tests.conftest import load_scene_tf
+    from volren.io import load_volume
+
+    full = load_volume(shared_data / "uniform" / "bonsai.vti", scalars="ImageFile")
+    block = UniformVolume(np.ascontiguousarray(full.values[96:160, 96:160, 96:160]), spacing=full.spacing)
+    tf = load_scene_tf("bonsai-spiky")
+    camera = Camera.orbit(block.bounds, 30, 20, 1.0)
+    reference, _ = render("reference", block, tf, RenderSettings(), camera)
+    assert reference[..., 3].max() > 0.5
+    errors = {}
+    for pre in (False, True):
+        image, _ = render("slicer", block, tf, RenderSettings(step=0.5, preintegration=pre), camera)
+        errors[pre] = rmse(image, reference)
+    assert errors[True] < 0.5 * errors[False] and errors[True] < 0.01, errors

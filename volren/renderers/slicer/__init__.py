@@ -1,5 +1,4 @@
-"""The moderngl view-aligned slicer (Real-Time Volume Graphics, section 3.3): this package will hold
-a renderer that draws the volume as a stack of polygons perpendicular to the viewing direction,
-textured from a 3D texture and blended back to front, with the polygons computed on the CPU by
-`proxy_geometry`.
+"""The moderngl view-aligned slicer (Real-Time Volume Graphics, section 3.3): `renderer` (the
+`slicer` renderer and its two paths over the same sample planes), `proxy_geometry` (the slice
+polygons, numpy), `textures` (what goes to the GPU, numpy) and the GLSL in `shaders/`.
 """

@@ -64,7 +64,7 @@ class SlicerOptions:
     empty_space_skipping: bool = True
     early_termination: bool = True
     termination_alpha: float = 0.999
-    brick_size: int = 16
+    brick_size: int = 8
     jitter_seed: int = 1
     termination_interval: int = 16
     volume_format: str = "float"
@@ -116,7 +116,7 @@ class SlicerRenderer(RendererBase):
         "empty_space_skipping": "skip bricks whose values map to zero opacity (default true)",
         "early_termination": "stop a ray once its opacity reaches termination_alpha (default true)",
         "termination_alpha": "opacity at which early termination stops a ray (default 0.999)",
-        "brick_size": "cells per brick edge for empty-space skipping (default 16)",
+        "brick_size": "cells per brick edge for empty-space skipping (default 8)",
         "jitter_seed": "seed of the per-pixel jitter when jitter is on (default 1)",
         "termination_interval": "slices between early-termination passes in the slices path (default 16)",
         "volume_format": "float (default): the volume as normalised float32; native: 8-bit data as an 8-bit "
@@ -310,13 +310,13 @@ class SlicerRenderer(RendererBase):
     def _options(self) -> SlicerOptions:
         return SlicerOptions.parse(self._settings.options)
 
-    def _skip_reach(self, spacing: float, brick: int) -> int:
-        """Bricks a segment can reach beyond its own: segments are at most 2 spacings long (the
-        entry segment with jitter) and cross planes at most 60 degrees off the view axis."""
+    def _skip_reach(self, spacing: float, brick: int, min_cosine: float) -> int:
+        """Bricks a segment can reach beyond its own: a segment is at most one plane spacing
+        along the view axis, so spacing / cos(angle of the ray) long."""
         volume = self._uniform_volume()
-        return max(1, math.ceil(4.0 * spacing / (brick * min(volume.spacing))))
+        return max(1, math.ceil(spacing / min_cosine / (brick * min(volume.spacing))))
 
-    def _brick_mask(self, opts: SlicerOptions, spacing: float) -> dict[str, float]:
+    def _brick_mask(self, opts: SlicerOptions, spacing: float, min_cosine: float) -> dict[str, float]:
         """Classify the bricks for the current TF (dilated so that pre-integrated segments
         reaching into a neighbour are covered) and upload the mask when it changed."""
         volume = self._uniform_volume()
@@ -326,7 +326,7 @@ class SlicerRenderer(RendererBase):
         grid = self._bricks
         tf = self._tf
         assert tf is not None
-        reach = self._skip_reach(spacing, opts.brick_size)
+        reach = self._skip_reach(spacing, opts.brick_size, min_cosine)
         key = (tf.version, opts.brick_size, reach)
         if self._mask_state is None or self._mask_state[0] != key:
             self._mask_state = (key, grid.dilated(reach).visible(tf))
@@ -463,7 +463,7 @@ class SlicerRenderer(RendererBase):
         counters: dict[str, float] = {}
         before = dict(self.uploads)
         if defines["SKIP"]:
-            counters.update(self._brick_mask(opts, self._spacing()))
+            counters.update(self._brick_mask(opts, self._spacing(), self._min_cosine(camera, width, height)))
         world_to_clip = camera.projection_matrix(width / height) @ camera.view_matrix()
         if opts.path == "march":
             raw = self._march(defines, camera, opts, width, height, world_to_clip, counters)
@@ -595,12 +595,17 @@ class SlicerRenderer(RendererBase):
 
     @staticmethod
     def _min_cosine(camera: Camera, width: int, height: int) -> float:
-        """The smallest cosine between a pixel ray and the view direction (at the corners)."""
+        """A lower bound of the cosine between any pixel ray and the view direction: that of the
+        rays through the image's corners (the pixel rays lie between them)."""
         if camera.parallel:
             return 1.0
-        _, dirs = camera.pixel_rays(width, height)
-        corners = dirs[[0, 0, -1, -1], [0, -1, 0, -1]]
-        return float(max((corners @ np.asarray(camera.direction)).min(), 0.1))
+        inverse = np.linalg.inv(camera.projection_matrix(width / height) @ camera.view_matrix())
+        ndc = np.array([[x, y, z, 1.0] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        points = ndc @ inverse.T
+        points = (points[:, :3] / points[:, 3:]).reshape(4, 2, 3)
+        rays = points[:, 1] - points[:, 0]
+        rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+        return float(max((rays @ np.asarray(camera.direction)).min(), 1e-3))
 
     def _visible_box(self, box_min: NDArray, box_max: NDArray) -> tuple[Any, Any]:
         """The bounds of the bricks that are not empty (None, None when all are empty), so slices

@@ -50,62 +50,77 @@ void main() {
     float t_anchor = (u_plane_base - dot(u_view_dir, origin)) / cosv;
     float jitter = jitter_fraction(uvec2(pixel));
     float k = ceil((t0 - t_anchor) / dt - jitter);   // the first sample plane at or behind the entry
-    uint samples = 1u;
+    uint samples = 0u;
     uint skips = 0u;
-    float ta = t0;
-    float t_stop = t1;
-#if COMPOSITE && SKIP
-    // Segments whose front lies in an empty brick add nothing: start at the first sample plane
-    // in the first non-empty brick and stop after the last one. Keeping the test out of the
-    // sample loop matters on llvmpipe, which runs every branch of a divergent loop body.
-    vec2 occupied = occupied_span(origin, dir, t0, t1, skips);
-    t_stop = occupied.y;
-    if (occupied.x > t0) {
-        k = ceil((occupied.x - t_anchor) / dt - jitter);
-        ta = t_anchor + (k + jitter) * dt;
-        k += 1.0;
-    }
-#endif
     // Pre-integration and the projections read the segment ends (each read once and carried to the
     // next segment); post-classification reads the middle of each segment.
     bool ends = !(COMPOSITE) || PREINTEGRATED == 1;
+    float ta = t0;            // the front of the next segment; it ends on plane k (+ jitter)
     vec3 pa = origin + ta * dir;
-    float va = ends ? data_value(pa) : 0.0;
-    samples = ends ? 1u : 0u;
-    while (ta < t_stop) {
-        float tb = min(t_anchor + (k + jitter) * dt, t1);
-        k += 1.0;
-        if (!(tb > ta)) continue;
-        vec3 pb = origin + tb * dir;
-#if COMPOSITE && PREINTEGRATED == 0
-        vec3 pm = origin + (0.5 * (ta + tb)) * dir;
-        vec4 c = classify_sample(pm, data_value(pm), tb - ta, dir);
-        samples += 1u;
-        float vb = 0.0;
-#else
-        float vb = data_value(pb);
-        samples += 1u;
-#if COMPOSITE
-        vec4 c = classify_segment(pa, pb, va, vb, tb - ta, dir);
-#endif
-#endif
-#if COMPOSITE
-        result += (1.0 - result.a) * c;
-        if (result.a >= u_termination) {
-            atomicAdd(counters.terminated, 1u);
-            break;
+    float va = 0.0;
+    bool need_front = ends;   // va must be read at ta
+    bool opaque = false;
+    // Runs of non-empty bricks along the ray, found by a DDA over the brick grid; a segment whose
+    // front lies in an empty brick adds nothing, so the samples jump from one run to the next.
+    // The DDA stays out of the sample loop: llvmpipe runs every branch of a divergent loop body.
+    while (ta < t1 && !opaque) {
+        float run_end = t1;
+#if COMPOSITE && SKIP
+        float run_start = next_brick_run(origin, dir, ta, t1, false, skips);
+        if (!(run_start < t1)) break;
+        if (run_start > ta) {
+            k = ceil((run_start - t_anchor) / dt - jitter);
+            ta = t_anchor + (k + jitter) * dt;
+            k += 1.0;
+            if (!(ta < t1)) break;
+            pa = origin + ta * dir;
+            need_front = ends;
         }
+        run_end = next_brick_run(origin, dir, ta, t1, true, skips);
+#endif
+        if (need_front) {
+            va = data_value(pa);
+            samples += 1u;
+            need_front = false;
+        }
+        // At least one segment per run: the DDA and brick_of may disagree about a point on a brick
+        // face, and integrating a segment is always safe where skipping one might not be.
+        do {
+            float tb = min(t_anchor + (k + jitter) * dt, t1);
+            k += 1.0;
+            if (!(tb > ta)) continue;
+            vec3 pb = origin + tb * dir;
+#if COMPOSITE && PREINTEGRATED == 0
+            vec3 pm = origin + (0.5 * (ta + tb)) * dir;
+            vec4 c = classify_sample(pm, data_value(pm), tb - ta, dir);
+            samples += 1u;
+            float vb = 0.0;
 #else
-        vec2 p = project_segment(va, vb, tb - ta);
+            float vb = data_value(pb);
+            samples += 1u;
+#if COMPOSITE
+            vec4 c = classify_segment(pa, pb, va, vb, tb - ta, dir);
+#endif
+#endif
+#if COMPOSITE
+            result += (1.0 - result.a) * c;
+            if (result.a >= u_termination) {
+                atomicAdd(counters.terminated, 1u);
+                opaque = true;
+                break;
+            }
+#else
+            vec2 p = project_segment(va, vb, tb - ta);
 #if BLEND == 3
-        result += p;
+            result += p;
 #else
-        result = max(result, p);
+            result = max(result, p);
 #endif
 #endif
-        ta = tb;
-        pa = pb;
-        va = vb;
+            ta = tb;
+            pa = pb;
+            va = vb;
+        } while (ta < run_end);
     }
     atomicAdd(counters.samples, samples);
     atomicAdd(counters.brick_steps, skips);

@@ -15,9 +15,9 @@ ivec3 brick_of(vec3 world) {
 bool brick_empty(ivec3 b) { return texelFetch(u_brick_mask, b, 0).r >= 0.5; }
 
 // Walk the bricks along origin + t dir from t_from (3D DDA, Amanatides and Woo) and return the
-// t where the first non-empty brick begins, or t_to when there is none before it. `steps`
-// counts the bricks looked at.
-float first_occupied(vec3 origin, vec3 dir, float t_from, float t_to, inout uint steps) {
+// t where the first brick that is empty (`want_empty`) or not empty begins: t_from itself when the
+// brick there already is, t_to when none begins before it. `steps` counts the bricks looked at.
+float next_brick_run(vec3 origin, vec3 dir, float t_from, float t_to, bool want_empty, inout uint steps) {
     ivec3 b = brick_of(origin + t_from * dir);
     ivec3 stride = ivec3(sign(dir));
     vec3 lo = u_brick_origin + vec3(b) * u_brick_size;
@@ -33,10 +33,10 @@ float first_occupied(vec3 origin, vec3 dir, float t_from, float t_to, inout uint
     float t = t_from;
     for (int i = 0; i < 4096; ++i) {
         steps += 1u;
-        if (!brick_empty(b)) return t;
+        if (brick_empty(b) == want_empty) return t;
         float t_next = min(t_max.x, min(t_max.y, t_max.z));
         if (t_next >= t_to) return t_to;
-        t = t_next;
+        t = max(t_next, t_from);
         if (t_max.x <= t_max.y && t_max.x <= t_max.z) {
             b.x += stride.x;
             t_max.x += t_delta.x;
@@ -49,15 +49,5 @@ float first_occupied(vec3 origin, vec3 dir, float t_from, float t_to, inout uint
         }
         if (any(lessThan(b, ivec3(0))) || any(greaterThanEqual(b, u_brick_count))) return t_to;
     }
-    return t_from;  // not expected; skipping nothing is always safe
-}
-
-// The part [t_start, t_end] of [t0, t1] between the first and the last non-empty brick
-// (t_start >= t_end when the ray meets none).
-vec2 occupied_span(vec3 origin, vec3 dir, float t0, float t1, inout uint steps) {
-    float t_start = first_occupied(origin, dir, t0, t1, steps);
-    if (!(t_start < t1)) return vec2(t1, t1);
-    vec3 back = origin + t1 * dir;
-    float s = first_occupied(back, -dir, 0.0, t1 - t_start, steps);
-    return vec2(t_start, t1 - s);
+    return want_empty ? t_to : t_from;  // not expected; skipping nothing is always safe
 }
