@@ -284,6 +284,24 @@ def compute_cuts(ta, tb, P, G, m, tf_cuts, shading, thr):
 
 
 @njit(cache=True)
+def next_boundary(u0, length, cuts, ci, cend, p, piece, n):
+    """The end of the sub-interval that starts at u0: the next of the n equal pieces' ends
+    (p * piece) or the next cut, whichever comes first; returns (u1, ci, p) advanced past it.
+    u1 <= u0 means "no progress yet, call again" (a piece end at or before u0 was passed)."""
+    while ci < cend and cuts[ci] <= u0:
+        ci += 1
+    ucut = cuts[ci] if ci < cend else length
+    upiece = p * piece if p < n else length
+    if upiece <= u0:
+        return u0, ci, p + 1
+    if ucut < upiece:
+        return ucut, ci + 1, p
+    if ucut == upiece:
+        ci += 1
+    return upiece, ci, p + 1
+
+
+@njit(cache=True)
 def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz):
     unit = tf[5]
     shading = sp[0]
@@ -307,22 +325,9 @@ def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, 
         u0 = 0.0
         f0 = c[0]
         while u0 < length:
-            # next boundary: a piece end or a cut, whichever comes first
-            while ci < cend and cuts[ci] <= u0:
-                ci += 1
-            ucut = cuts[ci] if ci < cend else length
-            upiece = p * piece if p < n else length
-            if upiece <= u0:
-                p += 1
+            u1, ci, p = next_boundary(u0, length, cuts, ci, cend, p, piece, n)
+            if u1 <= u0:
                 continue
-            if ucut < upiece:
-                u1 = ucut
-                ci += 1
-            else:
-                u1 = upiece
-                p += 1
-                if ucut == upiece:
-                    ci += 1
             f1 = cubic(c, u1)
             # the TF is linear on this piece: take its opacity line from the piece's middle, so
             # that the ends (on a cut, up to rounding) get the one-sided limits even at steps

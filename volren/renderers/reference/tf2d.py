@@ -64,6 +64,7 @@ from volren.renderers.reference.ray_integral import (
     _interval_cuts,
     _normal_turn,
     cubic,
+    next_boundary,
     store_pixel,
 )
 from volren.renderers.reference.shading import half_vector, shade
@@ -436,22 +437,9 @@ def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, h
         p = 1
         u0 = 0.0
         while u0 < length:
-            # next boundary: a piece end or a cut, whichever comes first
-            while ci < cend and cuts[ci] <= u0:
-                ci += 1
-            ucut = cuts[ci] if ci < cend else length
-            upiece = p * piece if p < n else length
-            if upiece <= u0:
-                p += 1
+            u1, ci, p = next_boundary(u0, length, cuts, ci, cend, p, piece, n)
+            if u1 <= u0:
                 continue
-            if ucut < upiece:
-                u1 = ucut
-                ci += 1
-            else:
-                u1 = upiece
-                p += 1
-                if ucut == upiece:
-                    ci += 1
             umid = 0.5 * (u0 + u1)
             q = _subdivision(
                 tf, cubic(c, u0), cubic(c, u1), _grad_mag(gk, u0), _grad_mag(gk, umid), _grad_mag(gk, u1)
