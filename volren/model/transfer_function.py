@@ -10,9 +10,8 @@ identifies the TF contents uniquely across instances: caches of tables and textu
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
@@ -20,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from volren.errors import VolrenError
 from volren.model.file_version import check_format_version
+from volren.model.versioned import Versioned
 
 #: Opacities are clamped to this before taking the logarithm (DESIGN.md).
 MAX_OPACITY = 1.0 - 1e-6
@@ -27,8 +27,6 @@ MAX_OPACITY = 1.0 - 1e-6
 #: tables and integrators; no physical length is this small.
 MIN_UNIT_DISTANCE = 1e-30
 TF_FORMAT_VERSION = 1
-
-_versions = itertools.count(1)
 
 
 def _points(data: ArrayLike, width: int, what: str) -> NDArray[np.float64]:
@@ -48,7 +46,7 @@ def _points(data: ArrayLike, width: int, what: str) -> NDArray[np.float64]:
     return arr[order]
 
 
-class TransferFunction1D:
+class TransferFunction1D(Versioned):
     """Colour and opacity control points over the data value, with change notification."""
 
     #: The TF's dimension: renderers check it against their capabilities (`KindSupport.tf_dims`).
@@ -65,8 +63,7 @@ class TransferFunction1D:
         self._opacity = _points(opacity, 2, "opacity")
         self._unit = self._check_unit(opacity_unit_distance)
         self.extra: dict[str, Any] = dict(extra or {})
-        self._listeners: list[Callable[[TransferFunction1D], None]] = []
-        self.version = next(_versions)
+        super().__init__()
 
     # ----------------------------------------------------------------- construction helpers
     @classmethod
@@ -163,16 +160,6 @@ class TransferFunction1D:
 
     def copy(self) -> TransferFunction1D:
         return TransferFunction1D(self._color, self._opacity, self._unit, self.extra)
-
-    def on_change(self, callback: Callable[[TransferFunction1D], None]) -> Callable[[], None]:
-        """Call `callback(tf)` after every edit; returns a function that disconnects it."""
-        self._listeners.append(callback)
-        return lambda: self._listeners.remove(callback)
-
-    def _changed(self) -> None:
-        self.version = next(_versions)
-        for callback in list(self._listeners):
-            callback(self)
 
     # ---------------------------------------------------------------------------- sampling
     def sample(self, values: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

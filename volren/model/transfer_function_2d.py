@@ -36,7 +36,7 @@ Every edit bumps `version`, drawn from the same process-wide counter as Transfer
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, ClassVar
@@ -46,7 +46,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from volren.errors import VolrenError
 from volren.model.file_version import check_format_version
-from volren.model.transfer_function import MAX_OPACITY, TF_FORMAT_VERSION, TransferFunction1D, _versions
+from volren.model.transfer_function import MAX_OPACITY, TF_FORMAT_VERSION, TransferFunction1D
+from volren.model.versioned import Versioned
 
 WIDGET_TYPES = ("gaussian", "triangle", "box")
 
@@ -236,7 +237,7 @@ class TFWidget:
         return cls(kind, data["color"], data["opacity"], extra=extra, **geometry)
 
 
-class TransferFunction2D:
+class TransferFunction2D(Versioned):
     """Widgets over (value, gradient magnitude) on [lo, hi] x [0, gmax], with change notification."""
 
     #: The TF's dimension: renderers check it against their capabilities (`KindSupport.tf_dims`).
@@ -255,8 +256,7 @@ class TransferFunction2D:
         self._widgets = [self._check_widget(w, i) for i, w in enumerate(widgets)]
         self._unit = TransferFunction1D._check_unit(opacity_unit_distance)
         self.extra: dict[str, Any] = dict(extra or {})
-        self._listeners: list[Callable[[TransferFunction2D], None]] = []
-        self.version = next(_versions)
+        super().__init__()
 
     # --------------------------------------------------------------------------- checks
     @staticmethod
@@ -340,16 +340,6 @@ class TransferFunction2D:
         return TransferFunction2D(
             self._value_range, self._gradient_range, self._widgets, self._unit, self.extra
         )
-
-    def on_change(self, callback: Callable[[TransferFunction2D], None]) -> Callable[[], None]:
-        """Call `callback(tf)` after every edit; returns a function that disconnects it."""
-        self._listeners.append(callback)
-        return lambda: self._listeners.remove(callback)
-
-    def _changed(self) -> None:
-        self.version = next(_versions)
-        for callback in list(self._listeners):
-            callback(self)
 
     # ---------------------------------------------------------------------------- sampling
     def sample(
