@@ -27,6 +27,7 @@ BUILTIN_ENTRY_POINTS = {
     "vtk": "volren.renderers.vtk_mappers.renderer:VtkRenderer",
     "reference": "volren.renderers.reference.renderer:ReferenceRenderer",
     "slicer": "volren.renderers.slicer.renderer:SlicerRenderer",
+    "tetra": "volren.renderers.tetra.renderer:TetraRenderer",
 }
 
 

@@ -41,7 +41,7 @@ from volren.model.volume import TetVolume, UniformVolume
 from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, RendererBase
 from volren.renderers.reference.ray_integral import AVERAGE, COMPOSITE, MAXIMUM, MINIMUM
 from volren.renderers.reference.shading import shade_params
-from volren.renderers.reference.tets import bin_rows, prepare_tets, render_tets, tet_boxes
+from volren.renderers.reference.tets import bin_rows, prepare_tets, projected_boxes, ray_far, render_tets
 from volren.renderers.reference.tf2d import pack_tf2d, render_uniform_2d
 from volren.renderers.reference.tf_eval import pack_tf
 from volren.renderers.reference.uniform import render_uniform
@@ -68,13 +68,6 @@ _SUPPORT = KindSupport(
 )
 #: Uniform grids also take 2D TFs (composite only: `tf2d`).
 _UNIFORM_SUPPORT = replace(_SUPPORT, tf_dims=frozenset({1, 2}), blend_modes_2d=frozenset({BlendMode.COMPOSITE}))
-
-
-def _ray_far(camera: Camera, dirs: NDArray) -> NDArray:
-    """Distance along each ray from the near plane (where it starts) to the far plane."""
-    near, far = camera.clipping_range
-    cos = dirs @ np.asarray(camera.direction, dtype=np.float64)
-    return (far - near) / cos
 
 
 class ReferenceRenderer(RendererBase):
@@ -155,7 +148,7 @@ class ReferenceRenderer(RendererBase):
         origins, dirs = camera.pixel_rays(width, height)
         origins = np.ascontiguousarray(origins.reshape(-1, 3))
         dirs = np.ascontiguousarray(dirs.reshape(-1, 3))
-        tfar = np.ascontiguousarray(_ray_far(camera, dirs))
+        tfar = np.ascontiguousarray(ray_far(camera, dirs))
         n = width * height
         out = np.zeros((n, 4))
         stats = np.zeros((n, 5), np.int64)
@@ -181,7 +174,7 @@ class ReferenceRenderer(RendererBase):
 
         else:
             (normals, anchors, sigma, tvals, grads, ok, flat), _ = prepared
-            boxes = self._boxes(camera, width, height, vol, ok)
+            boxes = projected_boxes(camera, width, height, vol.points, vol.tets, ok)
             extra["candidates"] = 0.0
             extra["flat_or_nonfinite_tets"] = float(np.count_nonzero(~ok))
 
@@ -233,20 +226,3 @@ class ReferenceRenderer(RendererBase):
                 stacklevel=3,
             )
         return image, counters
-
-    @staticmethod
-    def _boxes(camera: Camera, width: int, height: int, vol: TetVolume, ok: NDArray) -> NDArray:
-        """Pixel boxes of the projected tetrahedra (see `tets.tet_boxes`)."""
-        pts = np.concatenate([vol.points, np.ones((len(vol.points), 1))], axis=1)
-        view = camera.view_matrix()
-        clip = pts @ (camera.projection_matrix(width / height) @ view).T
-        w = clip[:, 3]
-        safe = np.where(w > 0, w, 1.0)
-        px = (clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5
-        py = (1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5
-        depth = -(pts @ view[2])
-        near, far = camera.clipping_range
-        return tet_boxes(
-            np.ascontiguousarray(px), np.ascontiguousarray(py), np.ascontiguousarray(w),
-            np.ascontiguousarray(depth), vol.tets, ok, width, height, near, far,
-        )  # fmt: skip

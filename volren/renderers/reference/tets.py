@@ -133,6 +133,30 @@ def prepare_tets(points, tets, values):
     return normals, anchors, sigma, tvals, grads, ok, flat
 
 
+def ray_far(camera, dirs: np.ndarray) -> np.ndarray:
+    """Distance along each ray from the near plane (where it starts) to the far plane."""
+    near, far = camera.clipping_range
+    cos = dirs @ np.asarray(camera.direction, dtype=np.float64)
+    return (far - near) / cos
+
+
+def projected_boxes(camera, width: int, height: int, points: np.ndarray, tets: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Pixel boxes of the projected tetrahedra whose `ok` is set (see `tet_boxes`)."""
+    pts = np.concatenate([points, np.ones((len(points), 1))], axis=1)
+    view = camera.view_matrix()
+    clip = pts @ (camera.projection_matrix(width / height) @ view).T
+    w = clip[:, 3]
+    safe = np.where(w > 0, w, 1.0)
+    px = (clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5
+    py = (1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5
+    depth = -(pts @ view[2])
+    near, far = camera.clipping_range
+    return tet_boxes(
+        np.ascontiguousarray(px), np.ascontiguousarray(py), np.ascontiguousarray(w),
+        np.ascontiguousarray(depth), tets, ok, width, height, near, far,
+    )  # fmt: skip
+
+
 @njit(cache=True)
 def tet_boxes(px, py, pw, depth, tets, ok, width, height, near, far):
     """Pixel bounding box (x0, x1, y0, y1) of every tetrahedron's projection; x0 = -1: none.

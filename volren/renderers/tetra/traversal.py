@@ -1,0 +1,363 @@
+"""Cell-to-cell ray casting through a tetrahedral mesh (Weiler et al., the book's section 7.5), on
+the CPU with numba.
+
+Per pixel ray:
+1. Entries. The tetrahedra with a face on the mesh boundary are binned to the pixels their
+   projections cover (`reference.tets.tet_boxes` / `bin_rows`). Each candidate is clipped against
+   its four face planes (`reference.tets.clip_tet`); where the ray enters it through a boundary
+   face (or starts inside it, at the near plane), that is an entry into the mesh. Entries are
+   sorted by their ray parameter.
+2. Walk. From an entry the ray leaves each tetrahedron through the face whose plane it meets first
+   among those it heads out of (t = -a / b with b < 0), and enters the neighbour across that face.
+   The face planes come from `reference.tets.prepare_tets`: both tetrahedra of a face hold
+   bit-identical planes, so the exit parameter of one is the entry parameter of the other, with
+   no gap and no overlap. A ray through an edge or a vertex leaves the cells it only touches at
+   once (zero length) and walks around the edge or vertex to the cell it does enter.
+3. Leaving the mesh (a face with no neighbour, or one next to a flat or non-finite cell, which
+   count as holes) ends the walk; the next entry beyond that point starts the next one, so
+   non-convex meshes and holes are handled alike. A walk longer than `max_steps` cells stops and
+   is counted.
+4. Each cell segment is integrated from its front value, back value and length: with the 3D
+   pre-integration table (`integrate_segment`), or exactly by handing every ray's segments to the
+   reference integrator. Cells whose value range maps to zero opacity are stepped through without
+   integrating; a ray stops once its opacity reaches the termination threshold.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from volren.renderers.reference.ray_integral import integrate_ray
+
+COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
+#: Entries kept per ray (more are counted and ignored; meshes with this many boundary crossings
+#: along one ray are not seen in practice).
+MAX_ENTRIES = 512
+
+
+@njit(cache=True)
+def _bilinear(table, i0, j0, fi, fj, c):
+    return (
+        (1.0 - fi) * ((1.0 - fj) * table[i0, j0, c] + fj * table[i0, j0 + 1, c])
+        + fi * ((1.0 - fj) * table[i0 + 1, j0, c] + fj * table[i0 + 1, j0 + 1, c])
+    )
+
+
+@njit(cache=True)
+def integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_front, s_back, length):
+    """Premultiplied (r, g, b, alpha) of a segment from the 3D table: the optical depth is exact
+    in the length (per-length depth, bilinear in the two values), the colour per unit opacity is
+    interpolated linearly between the evenly spaced length layers (`model.preintegration.lengths`)."""
+    n = depth_per_length.shape[0]
+    x = min(max((s_front - lo) * scale, 0.0), n - 1.0)
+    y = min(max((s_back - lo) * scale, 0.0), n - 1.0)
+    i0 = min(int(x), n - 2)
+    j0 = min(int(y), n - 2)
+    fi = x - i0
+    fj = y - j0
+    depth = length * _bilinear(depth_per_length, i0, j0, fi, fj, 0)
+    alpha = -math.expm1(-depth)
+    layers = colour_ratio.shape[0]
+    u = min(max(layers * length / lmax - 1.0, 0.0), layers - 1.0)
+    k0 = min(int(u), layers - 1)
+    k1 = min(k0 + 1, layers - 1)
+    w = u - k0
+    r = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 0) + w * _bilinear(colour_ratio[k1], i0, j0, fi, fj, 0)
+    g = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 1) + w * _bilinear(colour_ratio[k1], i0, j0, fi, fj, 1)
+    b = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 2) + w * _bilinear(colour_ratio[k1], i0, j0, fi, fj, 2)
+    return r * alpha, g * alpha, b * alpha, alpha
+
+
+@njit(cache=True)
+def _plane(t, f, ox, oy, oz, dx, dy, dz, planes):
+    """(a, b): the ray is inside face f's half-space where a + b t >= 0."""
+    a = planes[t, f, 0] * ox + planes[t, f, 1] * oy + planes[t, f, 2] * oz + planes[t, f, 3]
+    b = planes[t, f, 0] * dx + planes[t, f, 1] * dy + planes[t, f, 2] * dz
+    return a, b
+
+
+def pack_planes(normals: np.ndarray, anchors: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """(m, 4, 4) inward unit plane equations (N, D) with N = sigma n / |n| and D = -N . anchor,
+    so that a = N . o + D is the signed distance. Both cells of a face get exactly opposite
+    equations (negation and |n| are exact under it), so they compute the same crossing
+    parameter; one array keeps a cell's planes together in memory, which the walk reads at
+    random. Flat cells (n = 0) get zero planes."""
+    length = np.linalg.norm(normals, axis=-1)
+    inward = normals * (sigma / np.where(length > 0, length, 1.0))[..., None]
+    offsets = -np.einsum("mfk,mfk->mf", inward, anchors)
+    return np.ascontiguousarray(np.concatenate([inward, offsets[..., None]], axis=-1))
+
+
+#: |b| (the cosine between the ray and a face plane's normal) at or below this: the ray runs
+#: parallel to the plane.
+PARALLEL = 1e-12
+
+
+@njit(cache=True)
+def _symbolic_inside(t, f, planes):
+    """Whether a ray lying in face f's plane counts as inside the cell: the ray moved by
+    (e, e^2, e^3) for an infinitesimal e lies inside iff the first non-zero component of the
+    inward normal is positive. Exactly one of the two cells of a face, and one cell around an
+    edge, owns such a ray."""
+    for k in range(3):
+        if planes[t, f, k] != 0.0:
+            return planes[t, f, k] > 0.0
+    return False
+
+
+@njit(cache=True)
+def _exit(t, ox, oy, oz, dx, dy, dz, planes, on_plane):
+    """(t_exit, face) of the ray in tetrahedron t: the first plane it heads out of. A ray lying in
+    a face plane that the symbolic perturbation puts outside this cell leaves through that face
+    at once (t_exit = -inf): the cell across it owns the ray."""
+    t_out = math.inf
+    face = -1
+    for f in range(4):
+        a, b = _plane(t, f, ox, oy, oz, dx, dy, dz, planes)
+        if b < -PARALLEL:
+            if -a / b < t_out:
+                t_out = -a / b
+                face = f
+        elif b <= PARALLEL and abs(a) <= on_plane and not _symbolic_inside(t, f, planes):
+            return -math.inf, f
+    return t_out, face
+
+
+@njit(cache=True)
+def _shade_factors(gx, gy, gz, sp, hx, hy, hz):
+    """(diffuse factor, specular term) for a cell's constant gradient; (1, 0) without one."""
+    mag = math.sqrt(gx * gx + gy * gy + gz * gz)
+    if not (mag > sp[5]) or not math.isfinite(mag):
+        return 1.0, 0.0
+    nx = -gx / mag
+    ny = -gy / mag
+    nz = -gz / mag
+    ndl = nx * sp[6] + ny * sp[7] + nz * sp[8]
+    if ndl < 0.0:
+        nx, ny, nz, ndl = -nx, -ny, -nz, -ndl
+    ndh = max(nx * hx + ny * hy + nz * hz, 0.0)
+    return sp[1] + sp[2] * ndl, sp[3] * ndh ** sp[4]
+
+
+@njit(cache=True)
+def _entries(q, ox, oy, oz, dx, dy, dz, tmax, offsets, cand, planes, tvals, grads, corner, boundary, on_plane, ts, ids,
+             svals):
+    """Entries of ray q into the mesh, sorted by t: (count, dropped). A candidate cell is an
+    entry where the ray enters it through a boundary face, or starts inside it."""
+    count = 0
+    dropped = 0
+    for c in range(offsets[q], offsets[q + 1]):
+        t = cand[c]
+        # The ray enters the mesh where it crosses a boundary face of this cell heading inwards,
+        # inside the face's triangle (closed, within on_plane), or it starts inside the cell (the
+        # near plane cuts the mesh). The walk starts there even when this cell only touches the
+        # ray at an edge or a vertex: it steps on to the cell that owns the ray at no length.
+        t0 = -1.0
+        inside_at_origin = True
+        for f in range(4):
+            a, b = _plane(t, f, ox, oy, oz, dx, dy, dz, planes)
+            if a < -on_plane:
+                inside_at_origin = False
+            if not boundary[t, f] or not (b > PARALLEL):
+                continue
+            t_hit = -a / b
+            if not (0.0 <= t_hit <= tmax) or (t0 >= 0.0 and t_hit >= t0):
+                continue
+            on_triangle = True
+            for g in range(4):
+                if g != f:
+                    ag, bg = _plane(t, g, ox, oy, oz, dx, dy, dz, planes)
+                    if ag + bg * t_hit < -on_plane:
+                        on_triangle = False
+            if on_triangle:
+                t0 = t_hit
+        if inside_at_origin:
+            t0 = 0.0
+        if t0 < 0.0:
+            continue
+        # the linear field at the entry point, from the cell's first vertex and its gradient
+        s0 = (tvals[t, 0] + grads[t, 0] * (ox + t0 * dx - corner[t, 0]) + grads[t, 1] * (oy + t0 * dy - corner[t, 1])
+              + grads[t, 2] * (oz + t0 * dz - corner[t, 2]))
+        if count == ts.shape[0]:
+            dropped += 1
+            continue
+        k = count  # insertion into the sorted list
+        while k > 0 and ts[k - 1] > t0:
+            ts[k] = ts[k - 1]
+            ids[k] = ids[k - 1]
+            svals[k] = svals[k - 1]
+            k -= 1
+        ts[k] = t0
+        ids[k] = t
+        svals[k] = s0
+        count += 1
+    return count, dropped
+
+
+@njit(cache=True)
+def _grow(ta, tb, P, G, m):
+    """The exact path's segment arrays with twice the room, the first m rows kept."""
+    grow = 2 * ta.shape[0]
+    ta2 = np.empty(grow)
+    tb2 = np.empty(grow)
+    P2 = np.zeros((grow, 4))
+    G2 = np.zeros((grow if G.shape[0] else 0, 3, 4))
+    for i in range(m):
+        ta2[i] = ta[i]
+        tb2[i] = tb[i]
+        for c in range(4):
+            P2[i, c] = P[i, c]
+        if G.shape[0]:
+            for c in range(3):
+                G2[i, c, 0] = G[i, c, 0]
+    return ta2, tb2, P2, G2
+
+
+@njit(parallel=True, cache=True)
+def cast_rays(
+    orig, dirs, tfar, offsets, cand, boundary, neighbors, planes, tvals, grads, corner, ok,
+    visible, depth_per_length, colour_ratio, lo, scale, lmax, sp, mode, termination, max_steps, on_plane,
+    exact, h0, tol, max_levels, tf, out, stats,
+):  # fmt: skip
+    """One block of rays: out (n, 4) premultiplied RGBA (for maximum / minimum / average: the
+    value in out[:, 0] and 1 in out[:, 1] where the ray met data); stats (n, 4) = cell steps,
+    cells integrated, walks cut at max_steps, entries dropped."""
+    n = orig.shape[0]
+    for q in prange(n):
+        for c in range(4):
+            out[q, c] = 0.0
+            stats[q, c] = 0
+        if offsets[q + 1] == offsets[q]:
+            continue
+        ox, oy, oz = orig[q, 0], orig[q, 1], orig[q, 2]
+        dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+        ts = np.empty(MAX_ENTRIES)
+        ids = np.empty(MAX_ENTRIES, np.int64)
+        svals = np.empty(MAX_ENTRIES)
+        count, dropped = _entries(q, ox, oy, oz, dx, dy, dz, tfar[q], offsets, cand, planes, tvals, grads, corner,
+                                  boundary, on_plane, ts, ids, svals)
+        stats[q, 3] = dropped
+        if count == 0:
+            continue
+        hx = sp[6] - dx
+        hy = sp[7] - dy
+        hz = sp[8] - dz
+        hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+        if hn > 0.0:
+            hx, hy, hz = hx / hn, hy / hn, hz / hn
+        cr = 0.0
+        cg = 0.0
+        cb = 0.0
+        trans = 1.0
+        best = 0.0
+        found = False
+        integral = 0.0
+        total = 0.0
+        # exact path: the segments, handed to the reference integrator at the end
+        cap = 64 if exact else 1
+        ta = np.empty(cap)
+        tb = np.empty(cap)
+        P = np.zeros((cap, 4))
+        G = np.zeros((cap if exact and sp[0] else 0, 3, 4))
+        m = 0
+        steps = 0
+        integrated = 0
+        cut = 0
+        t_done = -math.inf
+        done = False
+        for e in range(count):
+            if done:
+                break
+            if ts[e] < t_done:
+                continue
+            t = ids[e]
+            t_in = ts[e]
+            s_in = svals[e]
+            walked = 0
+            while True:
+                t_out, face = _exit(t, ox, oy, oz, dx, dy, dz, planes, on_plane)
+                if face < 0:
+                    break
+                if t_out < t_in:
+                    t_out = t_in
+                if t_out > tfar[q]:
+                    t_out = tfar[q]
+                # the field is linear in the cell: exact along the ray from the entry value
+                s_out = s_in + (grads[t, 0] * dx + grads[t, 1] * dy + grads[t, 2] * dz) * (t_out - t_in)
+                length = t_out - t_in
+                steps += 1
+                walked += 1
+                if length > 0.0:
+                    if mode != COMPOSITE:
+                        if mode == AVERAGE:
+                            integral += 0.5 * (s_in + s_out) * length
+                            total += length
+                        else:
+                            v = max(s_in, s_out) if mode == MAXIMUM else min(s_in, s_out)
+                            if not found or (mode == MAXIMUM and v > best) or (mode == MINIMUM and v < best):
+                                best = v
+                        found = True
+                    elif exact:
+                        if m == ta.shape[0]:
+                            ta, tb, P, G = _grow(ta, tb, P, G, m)
+                        ta[m] = t_in
+                        tb[m] = t_out
+                        P[m, 0] = s_in
+                        P[m, 1] = (s_out - s_in) / length
+                        if sp[0]:
+                            G[m, 0, 0] = grads[t, 0]
+                            G[m, 1, 0] = grads[t, 1]
+                            G[m, 2, 0] = grads[t, 2]
+                        m += 1
+                    elif visible[t]:
+                        r, g, b, a = integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_in, s_out,
+                                                       length)
+                        if sp[0]:
+                            diffuse, specular = _shade_factors(grads[t, 0], grads[t, 1], grads[t, 2], sp, hx, hy, hz)
+                            r = min(r * diffuse + specular * a, a)
+                            g = min(g * diffuse + specular * a, a)
+                            b = min(b * diffuse + specular * a, a)
+                        cr += trans * r
+                        cg += trans * g
+                        cb += trans * b
+                        trans *= 1.0 - a
+                        integrated += 1
+                        if 1.0 - trans >= termination:
+                            done = True
+                            break
+                if t_out >= tfar[q]:
+                    done = True
+                    break
+                nb = neighbors[t, face]
+                if nb < 0 or not ok[nb]:
+                    break
+                if walked >= max_steps:
+                    cut += 1
+                    break
+                t = nb
+                t_in = t_out
+                s_in = s_out
+            t_done = t_out
+        stats[q, 0] = steps
+        stats[q, 1] = integrated
+        stats[q, 2] = cut
+        if mode != COMPOSITE:
+            if found:
+                out[q, 0] = integral / total if mode == AVERAGE else best
+                out[q, 1] = 1.0
+        elif exact:
+            if m > 0:
+                result = integrate_ray(ta, tb, P, G, m, COMPOSITE, h0, tol, max_levels, tf, sp, dx, dy, dz)
+                out[q, 0] = result[0]
+                out[q, 1] = result[1]
+                out[q, 2] = result[2]
+                out[q, 3] = result[3]
+                stats[q, 1] = m
+        else:
+            out[q, 0] = cr
+            out[q, 1] = cg
+            out[q, 2] = cb
+            out[q, 3] = 1.0 - trans
