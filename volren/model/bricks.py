@@ -229,23 +229,10 @@ class BrickGrid:
     def max_opacity(self, tf: TransferFunction1D) -> NDArray[np.float64]:
         """The largest opacity `tf` takes on [vmin, vmax] of every brick (0 for empty bricks); for
         a 2D TF an upper bound over every gradient magnitude (`_max_opacity_2d`)."""
-        if getattr(tf, "dims", 1) == 2:
-            lo = np.where(self.empty, 0.0, self.vmin)
-            hi = np.where(self.empty, 0.0, self.vmax)
-            return np.where(self.empty, 0.0, _max_opacity_2d(tf, lo, hi))
-        points = tf.opacity_points
-        xs, alphas = points[:, 0], np.clip(points[:, 1], 0.0, 1.0)
-        lo = np.where(self.empty, 0.0, self.vmin).reshape(-1)
-        hi = np.where(self.empty, 0.0, self.vmax).reshape(-1)
-        best = np.maximum(np.interp(lo, xs, alphas), np.interp(hi, xs, alphas))
-        # Control points with lo <= x <= hi: indices [first, stop) of the sorted xs.
-        first = np.searchsorted(xs, lo, side="left")
-        stop = np.searchsorted(xs, hi, side="right")
-        inside = stop > first
-        if inside.any():
-            best[inside] = np.maximum(best[inside], _range_max(alphas, first[inside], stop[inside]))
-        best[self.empty.reshape(-1)] = 0.0
-        return best.reshape(self.shape)
+        lo = np.where(self.empty, 0.0, self.vmin)
+        hi = np.where(self.empty, 0.0, self.vmax)
+        bound = _max_opacity_2d if getattr(tf, "dims", 1) == 2 else max_opacity_between
+        return np.where(self.empty, 0.0, bound(tf, lo, hi))
 
     def visible(self, tf: TransferFunction1D, threshold: float = 0.0) -> NDArray[np.bool_]:
         """Per brick: True iff `tf`'s opacity exceeds `threshold` somewhere in [vmin, vmax].
@@ -326,6 +313,25 @@ def _shift_reduce(a: NDArray, ufunc: np.ufunc, axis: int) -> NDArray:
     out[tuple(trail)] = ufunc(out[tuple(trail)], a[tuple(lead)])
     out[tuple(lead)] = ufunc(out[tuple(lead)], a[tuple(trail)])
     return out
+
+
+def max_opacity_between(tf: TransferFunction1D, lo: ArrayLike, hi: ArrayLike) -> NDArray[np.float64]:
+    """The largest opacity a piecewise-linear TF takes on each interval [lo, hi] (lo <= hi): the
+    larger of its values at both ends and at the opacity control points inside (a sparse table
+    answers each interval in O(1)). Used for bricks and for tetrahedra alike."""
+    lo = np.asarray(lo, dtype=np.float64)
+    hi = np.asarray(hi, dtype=np.float64)
+    points = tf.opacity_points
+    xs, alphas = points[:, 0], np.clip(points[:, 1], 0.0, 1.0)
+    flat_lo, flat_hi = lo.reshape(-1), hi.reshape(-1)
+    best = np.maximum(np.interp(flat_lo, xs, alphas), np.interp(flat_hi, xs, alphas))
+    # Control points with lo <= x <= hi: indices [first, stop) of the sorted xs.
+    first = np.searchsorted(xs, flat_lo, side="left")
+    stop = np.searchsorted(xs, flat_hi, side="right")
+    inside = stop > first
+    if inside.any():
+        best[inside] = np.maximum(best[inside], _range_max(alphas, first[inside], stop[inside]))
+    return best.reshape(lo.shape)
 
 
 def _max_opacity_2d(tf, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.model.bricks import max_opacity_between
 from volren.model.camera import Camera
 from volren.model.preintegration import LengthAxis, preintegrate
 from volren.model.settings import BlendMode
@@ -225,14 +226,7 @@ def _morton_order(centres: NDArray[np.float64]) -> NDArray[np.int64]:
 
 
 def _visible_cells(tf, lo: NDArray, hi: NDArray) -> NDArray[np.bool_]:
-    """Cells whose value range [lo, hi] reaches a non-zero opacity (the TF is piecewise linear:
-    its maximum over an interval is at an end or at a control point inside)."""
-    points = tf.opacity_points
-    xs, alphas = points[:, 0], points[:, 1]
-    best = np.maximum(np.interp(lo, xs, alphas), np.interp(hi, xs, alphas))
-    first = np.searchsorted(xs, lo, side="left")
-    stop = np.searchsorted(xs, hi, side="right")
-    for k in range(len(xs)):
-        inside = (first <= k) & (k < stop)
-        best = np.where(inside, np.maximum(best, alphas[k]), best)
-    return np.nan_to_num(best) > 0.0
+    """Cells whose value range [lo, hi] reaches a non-zero opacity (NaN ranges: no)."""
+    bad = ~(np.isfinite(lo) & np.isfinite(hi))
+    best = max_opacity_between(tf, np.where(bad, 0.0, lo), np.where(bad, 0.0, hi))
+    return (best > 0.0) & ~bad
