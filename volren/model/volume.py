@@ -11,6 +11,7 @@ every renderer treats them as transparent.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import ClassVar, Literal, TypeAlias
 
 import numpy as np
@@ -221,9 +222,10 @@ class TetVolume:
         hi = self.points.max(axis=0)
         return (lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
 
-    @property
+    @cached_property
     def mean_edge_length(self) -> float:
-        """Mean length of the six edges of every tetrahedron: the unit of the `step` setting."""
+        """Mean length of the six edges of every tetrahedron: the unit of the `step` setting
+        (computed once: renderers ask for it every frame)."""
         p = self.points[self.tets]
         pairs = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
         lengths = [np.linalg.norm(p[:, a] - p[:, b], axis=1) for a, b in pairs]

@@ -32,7 +32,16 @@ from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, R
 from volren.renderers.reference.shading import shade_params
 from volren.renderers.reference.tets import bin_rows, prepare_tets, projected_boxes, ray_far
 from volren.renderers.reference.tf_eval import pack_tf
-from volren.renderers.tetra.traversal import AVERAGE, COMPOSITE, MAXIMUM, MINIMUM, cast_rays, pack_planes
+from volren.renderers.tetra.traversal import (
+    AVERAGE,
+    COMPOSITE,
+    MAXIMUM,
+    MINIMUM,
+    bin_triangles,
+    cast_rays,
+    merge_lists,
+    pack_planes,
+)
 
 _MODES = {BlendMode.COMPOSITE: COMPOSITE, BlendMode.MAXIMUM: MAXIMUM, BlendMode.MINIMUM: MINIMUM,
           BlendMode.AVERAGE: AVERAGE}
@@ -95,7 +104,11 @@ class TetraRenderer(RendererBase):
             boundary = ok[:, None] & ~across_ok
             self._mesh = mesh
             packed = pack_planes(planes[0], planes[1], planes[2])
-            self._planes = (tets, neighbors, planes, packed, boundary, ok & boundary.any(axis=1))
+            cell, face = np.nonzero(boundary)
+            others = np.array([[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]])
+            triangles = np.ascontiguousarray(np.take_along_axis(tets[cell], others[face], axis=1))
+            faces = (np.ascontiguousarray(cell, dtype=np.int64), triangles, packed[cell, face])
+            self._planes = (tets, neighbors, planes, packed, boundary, faces)
         assert self._planes is not None
         return self._mesh, self._planes
 
@@ -105,6 +118,32 @@ class TetraRenderer(RendererBase):
         size, far below any cell and far above rounding in the plane equations."""
         b = np.asarray(mesh.bounds, dtype=np.float64)
         return 1e-12 * float(np.linalg.norm(b[1::2] - b[0::2]) + np.abs(b).max())
+
+    def _entry_candidates(self, camera: Camera, width: int, height: int, mesh: PreparedMesh, tets: NDArray,
+                          faces: tuple, ok: NDArray) -> tuple:
+        """Where rays can enter the mesh: the boundary faces turned towards the eye (as triangles
+        to rasterize, with their cells), and the cells the near plane cuts (as pixel boxes), where
+        rays start inside the mesh."""
+        cell, triangles, plane = faces
+        if camera.parallel:
+            facing = plane[:, :3] @ np.asarray(camera.direction) >= -1e-12
+        else:
+            eye = np.asarray(camera.position, dtype=np.float64)
+            facing = plane[:, :3] @ eye + plane[:, 3] <= self._on_plane(mesh)
+        cell, triangles = cell[facing], np.ascontiguousarray(triangles[facing])
+        pts = np.concatenate([mesh.points, np.ones((len(mesh.points), 1))], axis=1)
+        view = camera.view_matrix()
+        clip = pts @ (camera.projection_matrix(width / height) @ view).T
+        w = clip[:, 3]
+        behind = ~(w > 0)
+        safe = np.where(behind, 1.0, w)
+        px = np.ascontiguousarray((clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5)
+        py = np.ascontiguousarray((1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5)
+        depth = -(pts @ view[2])
+        near = camera.clipping_range[0]
+        cut = ok & (depth[tets].min(axis=1) <= near) & (depth[tets].max(axis=1) >= near)
+        near_cells = projected_boxes(camera, width, height, mesh.points, tets, cut)
+        return (triangles, np.ascontiguousarray(cell)), px, py, behind, near_cells
 
     def _options(self) -> dict[str, Any]:
         o = dict(self._settings.options)
@@ -156,7 +195,7 @@ class TetraRenderer(RendererBase):
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         opts = self._options()
-        mesh, (tets, neighbors, planes, packed, boundary, boundary_cells) = self._prepare()
+        mesh, (tets, neighbors, planes, packed, boundary, faces) = self._prepare()
         normals, anchors, sigma, tvals, grads, ok, _ = planes
         corner = np.ascontiguousarray(mesh.points[tets[:, 0]])
         depth, ratio, lo, scale, lmax, visible = self._tables(mesh, opts["table_size"], opts["table_lengths"])
@@ -172,7 +211,7 @@ class TetraRenderer(RendererBase):
         origins = np.ascontiguousarray(origins.reshape(-1, 3))
         dirs = np.ascontiguousarray(dirs.reshape(-1, 3))
         tfar = np.ascontiguousarray(ray_far(camera, dirs))
-        boxes = projected_boxes(camera, width, height, mesh.points, tets, boundary_cells)
+        entry_faces, px, py, behind, near_cells = self._entry_candidates(camera, width, height, mesh, tets, faces, ok)
         n = width * height
         out = np.zeros((n, 4))
         stats = np.zeros((n, 4), np.int64)
@@ -183,7 +222,10 @@ class TetraRenderer(RendererBase):
             for y0 in range(0, height, rows):
                 y1 = min(height, y0 + rows)
                 a, b = y0 * width, y1 * width
-                offsets, cand = bin_rows(boxes, width, y0, y1)
+                offsets, cand = merge_lists(
+                    *bin_triangles(px, py, behind, entry_faces[0], entry_faces[1], width, height, y0, y1, 0.01),
+                    *bin_rows(near_cells, width, y0, y1),
+                )
                 cast_rays(
                     origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, boundary, neighbors, packed,
                     tvals, grads, corner, ok, visible, depth, ratio, lo, scale, lmax, sp, mode,

@@ -361,3 +361,82 @@ def cast_rays(
             out[q, 1] = cg
             out[q, 2] = cb
             out[q, 3] = 1.0 - trans
+
+
+@njit(cache=True)
+def _covers(px, py, tri, x, y, margin):
+    """Whether pixel centre (x, y) lies in the projected triangle or within `margin` pixels of
+    it (either winding)."""
+    ax, ay = px[tri[0]], py[tri[0]]
+    bx, by = px[tri[1]], py[tri[1]]
+    cx, cy = px[tri[2]], py[tri[2]]
+    area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    sign = 1.0 if area >= 0.0 else -1.0
+    for (ux, uy, vx, vy) in ((ax, ay, bx, by), (bx, by, cx, cy), (cx, cy, ax, ay)):
+        ex = vx - ux
+        ey = vy - uy
+        length = math.sqrt(ex * ex + ey * ey)
+        if sign * (ex * (y - uy) - ey * (x - ux)) < -margin * length:
+            return False
+    return True
+
+
+@njit(cache=True)
+def bin_triangles(px, py, behind, triangles, cells, width, height, row0, row1, margin):
+    """CSR lists (offsets per pixel of rows row0 .. row1 - 1, cell ids) of the projected
+    triangles covering each pixel centre (with `margin` pixels to spare); a triangle with a
+    vertex behind the eye is listed in every pixel."""
+    n = (row1 - row0) * width
+    counts = np.zeros(n + 1, np.int64)
+    k = triangles.shape[0]
+    for phase in range(2):
+        if phase == 1:
+            offsets = np.cumsum(counts)
+            fill = offsets[:-1].copy()
+            cand = np.empty(offsets[-1], np.int64)
+        for i in range(k):
+            tri = triangles[i]
+            whole = behind[tri[0]] or behind[tri[1]] or behind[tri[2]]
+            x0 = 0
+            x1 = width - 1
+            y0 = row0
+            y1 = row1 - 1
+            if not whole:
+                xmin = min(px[tri[0]], px[tri[1]], px[tri[2]]) - margin
+                xmax = max(px[tri[0]], px[tri[1]], px[tri[2]]) + margin
+                ymin = min(py[tri[0]], py[tri[1]], py[tri[2]]) - margin
+                ymax = max(py[tri[0]], py[tri[1]], py[tri[2]]) + margin
+                x0 = max(x0, int(math.ceil(xmin)))
+                x1 = min(x1, int(math.floor(xmax)))
+                y0 = max(y0, int(math.ceil(ymin)))
+                y1 = min(y1, int(math.floor(ymax)))
+            for y in range(y0, y1 + 1):
+                for x in range(x0, x1 + 1):
+                    if whole or _covers(px, py, tri, x, y, margin):
+                        p = (y - row0) * width + x
+                        if phase == 0:
+                            counts[p + 1] += 1
+                        else:
+                            cand[fill[p]] = cells[i]
+                            fill[p] += 1
+    return offsets, cand
+
+
+@njit(cache=True)
+def merge_lists(o1, c1, o2, c2):
+    """Two CSR lists over the same pixels as one."""
+    n = o1.shape[0] - 1
+    offsets = np.empty(n + 1, np.int64)
+    offsets[0] = 0
+    for p in range(n):
+        offsets[p + 1] = offsets[p] + (o1[p + 1] - o1[p]) + (o2[p + 1] - o2[p])
+    cand = np.empty(offsets[n], np.int64)
+    for p in range(n):
+        k = offsets[p]
+        for c in range(o1[p], o1[p + 1]):
+            cand[k] = c1[c]
+            k += 1
+        for c in range(o2[p], o2[p + 1]):
+            cand[k] = c2[c]
+            k += 1
+    return offsets, cand
