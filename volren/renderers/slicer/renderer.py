@@ -137,6 +137,7 @@ class SlicerRenderer(RendererBase):
         self._targets: dict[str, tuple[tuple, Any]] = {}
         self._mask_state: tuple[tuple, NDArray[np.bool_]] | None = None
         self._mask_tex: Any = None
+        self._counter_buffer: Any = None  # the march path's work counters (4 x uint32)
         #: How often each kind of data went to the GPU (or was rebuilt) since the renderer was made.
         self.uploads: dict[str, int] = {"volume": 0, "gradient": 0, "tables": 0, "brick_mask": 0}
 
@@ -489,12 +490,9 @@ class SlicerRenderer(RendererBase):
         self._set(program, "u_termination", float(termination))
         image = self._target("march", width, height)
         image.bind_to_image(0, read=False, write=True)
-        held = self._tables.get("counters")
-        if held is None:
-            buffer = self._track(self._context().buffer(reserve=16))
-            self._tables["counters"] = ((), buffer)
-        else:
-            buffer = held[1]
+        if self._counter_buffer is None:
+            self._counter_buffer = self._track(self._context().buffer(reserve=16))
+        buffer = self._counter_buffer
         buffer.write(np.zeros(4, dtype=np.uint32).tobytes())
         buffer.bind_to_storage_buffer(1)
         program.run(math.ceil(width / _LOCAL_SIZE), math.ceil(height / _LOCAL_SIZE), 1)
@@ -656,7 +654,7 @@ class SlicerRenderer(RendererBase):
         self._programs.clear()
         self._tables.clear()
         self._targets.clear()
-        self._volume_tex = self._gradient_tex = None
+        self._volume_tex = self._gradient_tex = self._counter_buffer = None
         if self._ctx is not None:
             self._ctx.release()
             self._ctx = None

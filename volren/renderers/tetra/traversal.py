@@ -2,16 +2,17 @@
 the CPU with numba.
 
 Per pixel ray:
-1. Entries. The tetrahedra with a face on the mesh boundary are binned to the pixels their
-   projections cover (`reference.tets.tet_boxes` / `bin_rows`). Each candidate is clipped against
-   its four face planes (`reference.tets.clip_tet`); where the ray enters it through a boundary
-   face (or starts inside it, at the near plane), that is an entry into the mesh. Entries are
-   sorted by their ray parameter.
+1. Entries. The boundary faces turned towards the eye are rasterized to the pixels they cover
+   (`bin_triangles`), and the cells the near plane cuts are binned by their pixel boxes
+   (`reference.tets.bin_rows`). Where a ray crosses a candidate cell's boundary face inside its
+   triangle, or starts inside the cell, it enters the mesh (`_entries`). Entries are sorted by
+   their ray parameter.
 2. Walk. From an entry the ray leaves each tetrahedron through the face whose plane it meets first
    among those it heads out of (t = -a / b with b < 0), and enters the neighbour across that face.
-   The face planes come from `reference.tets.prepare_tets`: both tetrahedra of a face hold
-   bit-identical planes, so the exit parameter of one is the entry parameter of the other, with
-   no gap and no overlap. A ray through an edge or a vertex leaves the cells it only touches at
+   The face planes come from `reference.tets.prepare_tets` (`pack_planes`): both tetrahedra of a
+   face hold exactly opposite planes, so the exit parameter of one is the entry parameter of the
+   other, with no gap and no overlap. A ray lying in a face plane belongs to one cell by a
+   symbolic perturbation; a ray through an edge or a vertex leaves the cells it only touches at
    once (zero length) and walks around the edge or vertex to the cell it does enter.
 3. Leaving the mesh (a face with no neighbour, or one next to a flat or non-finite cell, which
    count as holes) ends the walk; the next entry beyond that point starts the next one, so
