@@ -157,12 +157,10 @@ def test_the_qt_free_modules_do_not_import_qt():
     assert result.returncode == 0, result.stderr
 
 
-def test_loading_a_2d_tf_is_refused_in_one_line(tmp_path):
-    """The app has no 2D TF editor yet: a 2D TF file, a scene with one, or a 2D override is a
-    clear one-line error (shown by the window), never a crash."""
+def test_loading_a_2d_tf_gives_it_to_the_app(tmp_path):
+    """A 2D TF file, a scene with one, or a 2D override all load as the 2D TF they hold."""
     from volren import io
     from volren.app.loading import load_input
-    from volren.errors import VolrenError
     from volren.model import TFWidget, TransferFunction2D
     from volren.model.scene import Scene
     from volren.samples import sample_paths
@@ -171,13 +169,11 @@ def test_loading_a_2d_tf_is_refused_in_one_line(tmp_path):
     io.save_transfer_function(tf, tmp_path / "tf2d.json")
     volume_path, _ = sample_paths("marschner_lobb")
     io.save_scene(Scene(str(volume_path), tf, renderer="reference"), tmp_path / "scene.json")
-    for path, tf_path in (
-        (tmp_path / "tf2d.json", None),
-        (tmp_path / "scene.json", None),
-        (volume_path, tmp_path / "tf2d.json"),
+    for path, tf_path, has_volume in (
+        (tmp_path / "tf2d.json", None, False),
+        (tmp_path / "scene.json", None, True),
+        (volume_path, tmp_path / "tf2d.json", True),
     ):
-        with pytest.raises(VolrenError) as info:
-            load_input(path, tf_path)
-        message = str(info.value)
-        assert "2D transfer function" in message and "1D transfer functions only" in message, message
-        assert "\n" not in message and message.startswith(str(tf_path or path))
+        loaded = load_input(path, tf_path)
+        assert loaded.transfer_function == tf
+        assert (loaded.volume is not None) == has_volume

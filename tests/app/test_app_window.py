@@ -320,18 +320,25 @@ def test_opening_a_corrupt_file_with_the_real_readers(loaded_window, qtbot, erro
 
 
 @needs_io
-def test_opening_a_2d_tf_is_refused_and_keeps_the_view(loaded_window, qtbot, error_boxes, tmp_path):
+def test_opening_a_2d_tf_switches_to_a_renderer_that_draws_it(loaded_window, qtbot, error_boxes, tmp_path):
+    """vtk draws 1D TFs only: a 2D TF keeps the volume, disables vtk with the reason and moves
+    the view to a renderer that can draw it, without an error box."""
     from volren import io
     from volren.model import TFWidget, TransferFunction2D
 
     w = loaded_window
-    volume, tf = w.state.volume, w.state.transfer_function
-    tf2 = TransferFunction2D((0.0, 1.0), (0.0, 1.0), [TFWidget.box((0.2, 0.8), (0.0, 1.0), (1.0, 1.0, 1.0), 0.5)])
+    volume = w.state.volume
+    lo, hi = volume.value_range
+    tf2 = TransferFunction2D((lo, hi), (0.0, 1.0), [TFWidget.box((lo, hi), (0.0, 1.0), (1.0, 1.0, 1.0), 0.5)])
     io.save_transfer_function(tf2, tmp_path / "tf2d.json")
-    with qtbot.waitSignal(w.loadFinished, timeout=FRAME_TIMEOUT_MS) as blocker:
+    assert w.state.renderer == "vtk"
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
         w.open_input(tmp_path / "tf2d.json")
-    assert blocker.args == [False] and w.state.volume is volume and w.state.transfer_function is tf
-    assert len(error_boxes) == 1 and "2D transfer function" in error_boxes[0][1] and "\n" not in error_boxes[0][1]
+    assert w.state.volume is volume and w.state.transfer_function == tf2
+    assert w.state.renderer != "vtk" and blocker.args[0].renderer == w.state.renderer
+    vtk_option = next(o for o in w.renderer_options() if o.name == "vtk")
+    assert not vtk_option.enabled and "2D" in vtk_option.reason
+    assert error_boxes == []
 
 
 @needs_io

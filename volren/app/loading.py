@@ -20,7 +20,7 @@ from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.scene import OrbitView
 from volren.model.settings import RenderSettings
-from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
 
 DEFAULT_SAMPLE = "marschner_lobb"
@@ -33,7 +33,7 @@ class LoadedInput:
     """What one file (or the default sample) contributes; `volume is None` for a TF-only file."""
 
     volume: Volume | None
-    transfer_function: TransferFunction1D | None
+    transfer_function: TransferFunction | None
     camera: Camera | OrbitView | None = None
     settings: RenderSettings | None = None
     renderer: str | None = None
@@ -64,26 +64,14 @@ def _is_scene_json(path: Path) -> bool:
     return isinstance(data, dict) and ("volume" in data or "transfer_function" in data)
 
 
-def _only_1d(tf, source: PathArg):
-    """`tf` itself; a 2D TF is refused in one line (the app has no 2D TF editor yet)."""
-    if tf is not None and tf.dims != 1:
-        raise VolrenError(
-            f"{source}: holds a {tf.dims}D transfer function, and the app shows 1D transfer functions only "
-            "for now; render it with `volren render --renderer reference`"
-        )
-    return tf
-
-
 def load_input(
     path: PathArg | None = None,
     tf: PathArg | None = None,
     scalars: str | None = None,
 ) -> LoadedInput:
-    """Read `path` (default: the bundled sample) and optionally a TF file that overrides its TF.
-
-    2D transfer functions (in a TF file or a scene) are refused with a VolrenError for now."""
+    """Read `path` (default: the bundled sample) and optionally a TF file that overrides its TF."""
     io = _io()
-    override = _only_1d(io.load_transfer_function(tf), tf) if tf is not None else None
+    override = io.load_transfer_function(tf) if tf is not None else None
     if path is None:
         from volren.samples import sample_paths
 
@@ -98,13 +86,13 @@ def load_input(
                 raise VolrenError(f"{p}: the scene names no volume")
             return LoadedInput(
                 scene.volume,
-                override or _only_1d(scene.transfer_function, p),
+                override or scene.transfer_function,
                 scene.camera,
                 scene.settings,
                 scene.renderer,
                 source=p.name,
             )
-        return LoadedInput(None, _only_1d(io.load_transfer_function(p), p), source=p.name)
+        return LoadedInput(None, io.load_transfer_function(p), source=p.name)
     volume = io.load_volume(p, scalars=scalars)
     if override is None:
         from volren.api import default_transfer_function

@@ -70,6 +70,7 @@ class MainWindow(QMainWindow):
         self._last_good_renderer: str | None = None
         self._failure_key: tuple[Any, ...] | None = None
         self._closed = False
+        self._shown_tf_dims = 1
 
         self.viewport = Viewport(self.state, self)
         self.setCentralWidget(self.viewport)
@@ -197,7 +198,7 @@ class MainWindow(QMainWindow):
         volume = loaded.volume
         assert volume is not None and loaded.transfer_function is not None
         settings = loaded.settings or self.state.settings
-        options, notes = renderer_options(volume.kind, settings, self._registry)
+        options, notes = renderer_options(volume.kind, settings, self._registry, loaded.transfer_function.dims)
         wanted = requested_renderer or loaded.renderer or self.state.renderer
         chosen = pick_renderer(options, wanted)
         if chosen != wanted:
@@ -218,21 +219,43 @@ class MainWindow(QMainWindow):
     # ------------------------------------------------------------------ state
     def _on_state_change(self, change: Change) -> None:
         if change.what == "volume":
+            self._tf_dims_changed()
             self.setWindowTitle(f"volren - {self.state.source}" if self.state.source else "volren")
             self._refresh_renderers()
-        elif change.what == "settings":
+        elif change.what == "settings" or (change.what == "tf" and self._tf_dims_changed()):
             self._refresh_renderers()
+            self._keep_a_usable_renderer()
         elif change.what == "renderer":
             self.chooser.set_current(self.state.renderer)
 
+    def _tf_dims_changed(self) -> bool:
+        tf = self.state.transfer_function
+        dims = tf.dims if tf is not None else 1
+        changed, self._shown_tf_dims = dims != self._shown_tf_dims, dims
+        return changed
+
+    def _keep_a_usable_renderer(self) -> None:
+        """After a TF or settings change the current renderer may no longer apply (a 2D TF in
+        `vtk`): switch to one that can, and say why in the status bar."""
+        if self.state.volume is None:
+            return
+        options = self.renderer_options()
+        chosen = pick_renderer(options, self.state.renderer)
+        if chosen is not None and chosen != self.state.renderer:
+            reason = next((o.reason for o in options if o.name == self.state.renderer), None)
+            self.statusBar().showMessage(f"{_renderer_message(self.state.renderer, reason)}; using {chosen}", 15000)
+            self.state.set_renderer(chosen)
+
+    def _options(self) -> tuple[list[RendererOption], list[str]]:
+        volume, tf = self.state.volume, self.state.transfer_function
+        dims = tf.dims if tf is not None else 1
+        return renderer_options(volume.kind if volume else None, self.state.settings, self._registry, dims)
+
     def renderer_options(self) -> list[RendererOption]:
-        volume = self.state.volume
-        options, _ = renderer_options(volume.kind if volume else None, self.state.settings, self._registry)
-        return options
+        return self._options()[0]
 
     def _refresh_renderers(self) -> None:
-        volume = self.state.volume
-        options, notes = renderer_options(volume.kind if volume else None, self.state.settings, self._registry)
+        options, notes = self._options()
         self.chooser.set_options(options, self.state.renderer)
         if notes:
             self.statusBar().showMessage("; ".join(notes), 15000)

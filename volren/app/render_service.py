@@ -29,7 +29,7 @@ from PyQt5.QtCore import QObject, QThread, pyqtSignal, pyqtSlot
 from volren.io.image_io import to_png_pixels
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
-from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
 from volren.renderers.base import Renderer
 
@@ -41,7 +41,7 @@ class RenderRequest:
     serial: int
     renderer: str
     volume: Volume
-    tf: TransferFunction1D
+    tf: TransferFunction
     tf_key: tuple[int, int]
     settings: RenderSettings
     camera: Camera
@@ -253,7 +253,7 @@ class RenderService(QObject):
         self,
         renderer: str,
         volume: Volume,
-        tf: TransferFunction1D,
+        tf: TransferFunction,
         settings: RenderSettings,
         camera: Camera,
         width: int,

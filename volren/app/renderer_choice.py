@@ -16,7 +16,7 @@ from volren.renderers.registry import RendererRegistry
 from volren.renderers.registry import registry as default_registry
 
 #: Fast interactive renderers first; `reference` is exact but slow.
-PREFERENCE = ("vtk",)
+PREFERENCE = ("vtk", "slicer", "tetra")
 
 
 @dataclass(frozen=True)
@@ -35,8 +35,10 @@ def renderer_options(
     volume_kind: str | None,
     settings: RenderSettings | None = None,
     registry: RendererRegistry = default_registry,
+    tf_dims: int = 1,
 ) -> tuple[list[RendererOption], list[str]]:
-    """Every registered renderer with why it cannot draw `volume_kind` (None: it can).
+    """Every registered renderer with why it cannot draw `volume_kind` with a `tf_dims`-D TF and
+    `settings` (None: it can).
 
     Also returns the warnings the registry raised while importing renderers (a broken plugin), so
     the app can show them instead of letting them escape; the registry reports each one once.
@@ -52,7 +54,7 @@ def renderer_options(
                 except Exception as exc:  # noqa: BLE001 - any import failure disables the entry
                     reasons[name] = str(exc)
         else:
-            reasons = registry.compatible(volume_kind, 1, settings)
+            reasons = registry.compatible(volume_kind, tf_dims, settings)
     options = [RendererOption(name, reasons.get(name)) for name in registry.names()]
     return options, [str(w.message) for w in caught]
 

@@ -96,8 +96,10 @@ class FrameScheduler(QObject):
         if not full:
             width, height = preview_size(width, height, self.current_preview_scale())
         self._requested_any = True
+        volume = s.render_volume
+        assert volume is not None
         return self._service.submit(
-            s.renderer, s.volume, s.transfer_function, s.settings, s.camera, width, height, full, s.background
+            s.renderer, volume, s.transfer_function, s.settings, s.camera, width, height, full, s.background
         )
 
     def detach(self) -> None:

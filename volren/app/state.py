@@ -18,12 +18,13 @@ from dataclasses import dataclass
 from typing import Literal
 
 from volren.model.camera import Camera
+from volren.model.crop import Box, check_box, covers, crop_volume
 from volren.model.settings import RenderSettings
-from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
 
 #: The parts of the state a `Change` can name.
-What = Literal["volume", "tf", "camera", "settings", "renderer", "background", "interaction"]
+What = Literal["volume", "tf", "camera", "settings", "renderer", "background", "crop", "interaction"]
 
 #: The scene camera convention (DESIGN.md): azimuth 30, elevation 20, zoom 1 after the reset.
 DEFAULT_VIEW = (30.0, 20.0, 1.0)
@@ -52,11 +53,14 @@ def default_camera(volume: Volume, aspect: float = 1.0, parallel: bool = False) 
 
 
 class ViewState:
-    """Volume, transfer function, camera, settings, renderer name and background of one view."""
+    """Volume, transfer function (1D or 2D), camera, settings, renderer name, background and crop
+    box of one view."""
 
     def __init__(self, renderer: str = "vtk", settings: RenderSettings | None = None) -> None:
         self._volume: Volume | None = None
-        self._tf: TransferFunction1D | None = None
+        self._tf: TransferFunction | None = None
+        self._crop: Box | None = None
+        self._cropped: tuple[Volume, Box, Volume] | None = None
         self._camera: Camera | None = None
         self._settings = settings or RenderSettings()
         self._renderer = renderer
@@ -114,8 +118,25 @@ class ViewState:
         return self._volume
 
     @property
-    def transfer_function(self) -> TransferFunction1D | None:
+    def transfer_function(self) -> TransferFunction | None:
         return self._tf
+
+    @property
+    def crop(self) -> Box | None:
+        """The axis-aligned crop box in world units (xmin, xmax, ...), or None: no cropping."""
+        return self._crop
+
+    @property
+    def render_volume(self) -> Volume | None:
+        """What the renderers draw: the volume cut to the crop box (made once per box)."""
+        volume, box = self._volume, self._crop
+        if volume is None or box is None:
+            return volume
+        if self._cropped is not None and self._cropped[0] is volume and self._cropped[1] == box:
+            return self._cropped[2]
+        cropped = crop_volume(volume, box)
+        self._cropped = (volume, box, cropped)
+        return cropped
 
     @property
     def camera(self) -> Camera | None:
@@ -137,7 +158,7 @@ class ViewState:
     def load(
         self,
         volume: Volume,
-        tf: TransferFunction1D,
+        tf: TransferFunction,
         camera: Camera,
         settings: RenderSettings | None = None,
         source: str = "",
@@ -146,9 +167,12 @@ class ViewState:
         """Replace the whole scene at once (one "volume" change, so one new frame).
 
         The renderer changes in the same step, so no frame is requested from a renderer that
-        cannot draw the new volume, nor from the new renderer with the old volume.
+        cannot draw the new volume, nor from the new renderer with the old volume. The crop box
+        is cleared: it belongs to the old volume's bounds.
         """
         self._volume = volume
+        self._crop = None
+        self._cropped = None
         self._hook_tf(tf)
         self._camera = camera
         if settings is not None:
@@ -158,12 +182,12 @@ class ViewState:
         self.source = source
         self._emit("volume", interactive=False)
 
-    def set_transfer_function(self, tf: TransferFunction1D) -> None:
+    def set_transfer_function(self, tf: TransferFunction) -> None:
         """Use another TF object; in-place edits of the current one are announced as well."""
         self._hook_tf(tf)
         self._emit("tf")
 
-    def _hook_tf(self, tf: TransferFunction1D) -> None:
+    def _hook_tf(self, tf: TransferFunction) -> None:
         if self._tf_unhook is not None:
             self._tf_unhook()
         self._tf = tf
@@ -182,6 +206,21 @@ class ViewState:
             return
         self._renderer = name
         self._emit("renderer", interactive=False)
+
+    def set_crop(self, box: Box | None) -> None:
+        """Crop to `box` (world units), or None for the whole volume; a box covering the whole
+        volume is stored as None. A box that leaves nothing to draw raises a VolrenError."""
+        if box is not None:
+            box = check_box(box)
+            if self._volume is not None:
+                if covers(box, self._volume.bounds):
+                    box = None
+                else:  # cut now: errors surface here, not in the render thread
+                    self._cropped = (self._volume, box, crop_volume(self._volume, box))
+        if box == self._crop:
+            return
+        self._crop = box
+        self._emit("crop")
 
     def set_background(self, rgb: tuple[float, float, float]) -> None:
         self._background = (float(rgb[0]), float(rgb[1]), float(rgb[2]))

@@ -1,0 +1,100 @@
+"""Undo and redo of transfer-function edits, recorded from the `ViewState` itself.
+
+Editors do not push undo commands: every finished TF change (a click, a typed value, a file
+opened, or a whole drag between `begin_interaction` and `end_interaction`) is noticed here by
+comparing the TF's JSON form with the last one recorded. So each editor, present or future, gets
+undo for free, a drag is one undo step, and an edit that changes nothing records nothing.
+Undo puts a fresh TF object built from the JSON into the state (editors follow the state).
+A new volume starts a new history: the old TFs belong to the old data range.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from PyQt5.QtCore import QObject
+from PyQt5.QtWidgets import QUndoCommand, QUndoStack
+
+from volren.app.state import Change, ViewState
+from volren.model.transfer_function_2d import transfer_function_from_dict
+
+
+def _snapshot(state: ViewState) -> dict[str, Any] | None:
+    tf = state.transfer_function
+    return None if tf is None else tf.to_dict()
+
+
+class _TFChange(QUndoCommand):
+    def __init__(self, history: TFHistory, before: dict[str, Any], after: dict[str, Any], label: str) -> None:
+        super().__init__(label)
+        self._history = history
+        self._before = before
+        self._after = after
+        self._done = True  # pushed after the edit happened: the first redo() does nothing
+
+    def redo(self) -> None:
+        if self._done:
+            self._done = False
+            return
+        self._history._apply(self._after)
+
+    def undo(self) -> None:
+        self._history._apply(self._before)
+
+
+def _label(before: dict[str, Any] | None, after: dict[str, Any]) -> str:
+    if before is None or before.get("dims", 1) != after.get("dims", 1):
+        return "new transfer function"
+    changed = sorted(k for k in after if before.get(k) != after.get(k))
+    return "edit " + (", ".join(k.replace("_", " ") for k in changed) if changed else "transfer function")
+
+
+class TFHistory(QObject):
+    """A QUndoStack of TF states; `stack.createUndoAction(...)` gives the menu actions."""
+
+    def __init__(self, state: ViewState, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self.state = state
+        self.stack = QUndoStack(self)
+        self._recorded = _snapshot(state)
+        self._applying = False
+        self._unsubscribe = state.subscribe(self._on_change)
+
+    def _on_change(self, change: Change) -> None:
+        if change.what == "volume":
+            self.stack.clear()
+            self._recorded = _snapshot(self.state)
+        elif change.what in ("tf", "interaction") and not change.interactive and not self._applying:
+            self.record()
+
+    def record(self) -> None:
+        """Push the TF as it is now, if it differs from the last recorded one."""
+        now = _snapshot(self.state)
+        if now is None or _same(now, self._recorded):
+            return
+        before, self._recorded = self._recorded, now
+        if before is None:
+            return
+        self.stack.push(_TFChange(self, before, now, _label(before, now)))
+
+    def _apply(self, data: dict[str, Any]) -> None:
+        self._applying = True
+        try:
+            self.state.set_transfer_function(transfer_function_from_dict(data))
+        finally:
+            self._applying = False
+        self._recorded = data
+
+    def undo(self) -> None:
+        self.stack.undo()
+
+    def redo(self) -> None:
+        self.stack.redo()
+
+    def detach(self) -> None:
+        self._unsubscribe()
+
+
+def _same(a: dict[str, Any] | None, b: dict[str, Any] | None) -> bool:
+    return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)

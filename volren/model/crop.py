@@ -1,0 +1,94 @@
+"""Axis-aligned cropping: the part of a volume inside a box, as a volume every renderer can draw.
+
+Cropping makes a smaller volume rather than asking each renderer to clip: the result is exact for
+every renderer (plugins included), the renderers skip the cropped-away data for free, and the
+crop box means the same thing on uniform grids and on meshes. A uniform grid keeps the samples
+inside the box (at least two per axis, so it stays a grid; the box snaps outwards to whole
+samples); a mesh keeps the tetrahedra whose four corners are inside the box (ParaView's
+"extract cells by region" with "all points inside").
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from volren.errors import VolrenError
+from volren.model.volume import TetVolume, UniformVolume, Volume
+
+#: (xmin, xmax, ymin, ymax, zmin, zmax) in world units, VTK's order.
+Box = tuple[float, float, float, float, float, float]
+
+
+def check_box(box: Sequence[float]) -> Box:
+    """`box` as six finite floats with min <= max per axis, or a one-line VolrenError."""
+    try:
+        values = tuple(float(v) for v in box)
+    except (TypeError, ValueError):
+        raise VolrenError(f"a crop box is six numbers (xmin, xmax, ymin, ymax, zmin, zmax), got {box!r}") from None
+    if len(values) != 6 or not all(math.isfinite(v) for v in values):
+        raise VolrenError(f"a crop box is six finite numbers (xmin, xmax, ymin, ymax, zmin, zmax), got {box!r}")
+    for axis in range(3):
+        if values[2 * axis] > values[2 * axis + 1]:
+            raise VolrenError(f"crop box: {'xyz'[axis]}min {values[2 * axis]:g} is above {'xyz'[axis]}max "
+                              f"{values[2 * axis + 1]:g}")
+    return values  # type: ignore[return-value]
+
+
+def covers(box: Box, bounds: Sequence[float]) -> bool:
+    """True when the box contains the whole of `bounds` (cropping would change nothing)."""
+    return all(box[2 * a] <= bounds[2 * a] and box[2 * a + 1] >= bounds[2 * a + 1] for a in range(3))
+
+
+def _index_range(lo: float, hi: float, origin: float, spacing: float, n: int) -> tuple[int, int]:
+    """First and one-past-last sample index inside [lo, hi], widened to at least two samples."""
+    eps = 1e-9
+    first = max(0, math.floor((lo - origin) / spacing + eps))
+    last = min(n - 1, math.ceil((hi - origin) / spacing - eps))
+    if last - first < 1:  # keep a grid: two samples around the box
+        first = min(max(0, first), n - 2)
+        last = first + 1
+    return first, last + 1
+
+
+def crop_volume(volume: Volume, box: Sequence[float]) -> Volume:
+    """The part of `volume` inside `box`; the volume itself when the box covers it all."""
+    box = check_box(box)
+    if covers(box, volume.bounds):
+        return volume
+    if isinstance(volume, UniformVolume):
+        return _crop_uniform(volume, box)
+    return _crop_mesh(volume, box)
+
+
+def _crop_uniform(volume: UniformVolume, box: Box) -> UniformVolume:
+    nz, ny, nx = volume.values.shape
+    slices = []
+    origin = []
+    for axis, n in zip(range(3), (nx, ny, nz), strict=True):
+        first, stop = _index_range(box[2 * axis], box[2 * axis + 1], volume.origin[axis], volume.spacing[axis], n)
+        slices.append(slice(first, stop))
+        origin.append(volume.origin[axis] + first * volume.spacing[axis])
+    sx, sy, sz = slices
+    return UniformVolume(
+        volume.values[sz, sy, sx],
+        spacing=volume.spacing,
+        origin=tuple(origin),
+        name=volume.name,
+    )
+
+
+def _crop_mesh(volume: TetVolume, box: Box) -> TetVolume:
+    lo = np.array(box[0::2])
+    hi = np.array(box[1::2])
+    inside = np.all((volume.points >= lo) & (volume.points <= hi), axis=1)
+    keep = np.all(inside[volume.tets], axis=1)
+    if not keep.any():
+        raise VolrenError(f"{volume.name}: no tetrahedron lies wholly inside the crop box {box}")
+    tets = volume.tets[keep]
+    used = np.unique(tets)
+    remap = np.full(len(volume.points), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return TetVolume(volume.points[used], remap[tets], volume.values[used], name=volume.name)
