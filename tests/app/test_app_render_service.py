@@ -88,6 +88,41 @@ def test_newest_request_wins_and_the_renderer_stays_on_one_thread(qtbot, scene):
     assert kinds.count("volume") == 1 and kinds.count("tf") == 1, "unchanged inputs were sent again"
 
 
+def test_a_continuous_drag_still_shows_frames(qtbot, scene):
+    """Requests every 10 ms, frames of 60 ms: each frame finishes and is shown (a newer request
+    waiting must not abandon a short frame, or a drag would show nothing until it stops)."""
+    service = RenderService(factory=lambda name: SlowRenderer())
+    volume, tf, camera = scene
+    frames = []
+    service.frameReady.connect(frames.append)
+    try:
+        for i in range(60):
+            service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(i), 8, 8, full=False)
+            qtbot.wait(10)
+        shown_during_drag = len(frames)
+    finally:
+        service.shutdown()
+    assert shown_during_drag >= 4, f"only {shown_during_drag} frames shown during a 0.6 s drag"
+
+
+def test_a_long_frame_gives_way_to_a_newer_request(qtbot, scene, monkeypatch):
+    import volren.app.render_service as rs
+
+    monkeypatch.setattr(rs, "INTERRUPT_AFTER_S", 0.02)  # the 60 ms frame counts as long
+    service = RenderService(factory=lambda name: SlowRenderer())
+    volume, tf, camera = scene
+    frames = []
+    service.frameReady.connect(frames.append)
+    try:
+        first = service.submit("slow", volume, tf, RenderSettings(), camera, 8, 8)
+        qtbot.wait(35)  # the first frame is running, past the threshold
+        second = service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(5), 8, 8)
+        qtbot.waitUntil(lambda: any(f.serial == second for f in frames), timeout=5000)
+    finally:
+        service.shutdown()
+    assert [f.serial for f in frames] == [second], f"frame {first} was finished although superseded"
+
+
 def test_slow_frames_report_progress(qtbot, scene, monkeypatch):
     import volren.app.render_service as rs
 

@@ -67,6 +67,11 @@ class Frame:
 
 #: Frames slower than this report their progress, at most this often.
 PROGRESS_INTERVAL_S = 0.25
+#: A frame is abandoned for a newer request only after it ran this long. Interrupting every
+#: frame that a newer request overtakes would starve a continuous drag (requests at 60 Hz,
+#: frames at 20 Hz: nothing would ever be shown); a short frame is finished and shown, a slow
+#: one (the reference renderer) gives way.
+INTERRUPT_AFTER_S = 0.25
 
 
 class _Superseded(Exception):
@@ -168,9 +173,9 @@ class RenderWorker(QObject):
         last_report = [start]
 
         def progress(fraction: float) -> None:
-            if self._mailbox.waiting():
-                raise _Superseded()
             now = time.perf_counter()
+            if fraction < 1.0 and now - start > INTERRUPT_AFTER_S and self._mailbox.waiting():
+                raise _Superseded()
             if now - last_report[0] > PROGRESS_INTERVAL_S:  # only slow frames, and not too often
                 last_report[0] = now
                 self.progressed.emit(request.serial, request.renderer, float(fraction))

@@ -44,7 +44,7 @@ class _TFChange(QUndoCommand):
 
 
 def _label(before: dict[str, Any] | None, after: dict[str, Any]) -> str:
-    if before is None or before.get("dims", 1) != after.get("dims", 1):
+    if before is None or before.get("kind") != after.get("kind"):
         return "new transfer function"
     changed = sorted(k for k in after if before.get(k) != after.get(k))
     return "edit " + (", ".join(k.replace("_", " ") for k in changed) if changed else "transfer function")
