@@ -13,6 +13,8 @@ from typing import Any, ClassVar
 
 os.environ["QT_QPA_PLATFORM"] = "offscreen"
 os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="volren-xdg-"))
+# QSettings (recent files) must never touch the person's own configuration.
+os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="volren-config-")
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
@@ -27,8 +29,8 @@ from volren.renderers.base import Capabilities, KindSupport, RendererBase  # noq
 from volren.renderers.registry import registry  # noqa: E402
 from volren.samples import marschner_lobb, sample_transfer_functions  # noqa: E402
 
-#: Small windows keep every frame cheap.
-WINDOW_SIZE = (360, 300)
+#: Room for the docks (TF editors, settings) and a viewport of about 500 x 600 pixels.
+WINDOW_SIZE = (1300, 700)
 #: Generous: the first VTK frame creates an EGL context; later frames take tens of ms.
 FRAME_TIMEOUT_MS = 20000
 

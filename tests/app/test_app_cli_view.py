@@ -57,6 +57,27 @@ def test_view_screenshot_of_a_real_x_window(tmp_path):
     assert chromatic_fraction(out) > 0.02, "the screenshot shows no rendered volume"
 
 
+@pytest.mark.xvfb
+@needs_io
+def test_a_tf_edit_in_the_real_window_changes_the_frame_on_screen():
+    """A real X window: a click in the 1D editor adds an opaque point, and the pixels the window
+    system shows in the viewport change (grabbed from the screen, not from the widget)."""
+    import json
+
+    if shutil.which("xvfb-run") is None:
+        pytest.skip(f"xvfb-run is not on PATH (Debian packages: {XVFB_PACKAGES})")
+    env = dict(os.environ, QT_QPA_PLATFORM="xcb")
+    cmd = ["xvfb-run", "-a", "-s", "-screen 0 1400x900x24", sys.executable, "-m", "tests.app.real_window_edit"]
+    root = Path(__file__).resolve().parents[2]
+    result = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=240, cwd=root)
+    assert result.returncode == 0, f"exit {result.returncode}: {result.stderr[-2000:]}"
+    report = json.loads(result.stdout.strip().splitlines()[-1])
+    assert report["platform"] == "xcb"
+    assert report["points_added"] == 1
+    assert report["changed_fraction"] > 0.02, report
+    assert report["frame_matches_screen"], report
+
+
 def test_view_with_an_unknown_renderer_fails_in_one_line(tmp_path):
     env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
     result = view(["--renderer", "no_such_renderer", "--screenshot", str(tmp_path / "x.png")], env)

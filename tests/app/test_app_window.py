@@ -346,6 +346,6 @@ def test_run_with_screenshot_in_process(qapp, tmp_path):
     from volren.app.main import run
 
     out = tmp_path / "window.png"
-    assert run(renderer="vtk", screenshot=out, size=(400, 320)) == 0
+    assert run(renderer="vtk", screenshot=out, size=(1300, 720)) == 0
     image = QImage(str(out))
-    assert (image.width(), image.height()) == (400, 320)
+    assert (image.width(), image.height()) == (1300, 720)

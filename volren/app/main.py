@@ -25,7 +25,7 @@ from volren.app.loading import PathArg, one_line_error
 
 #: How long --screenshot waits for a full-quality frame (the reference renderer can be slow).
 SCREENSHOT_TIMEOUT_S = 120.0
-DEFAULT_WINDOW_SIZE = (1100, 760)
+DEFAULT_WINDOW_SIZE = (1400, 800)
 
 
 def _has_display() -> bool:

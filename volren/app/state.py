@@ -74,11 +74,14 @@ class ViewState:
     # ------------------------------------------------------------------ observation
     def subscribe(self, listener: Listener) -> Callable[[], None]:
         """Call `listener(change)` after every change; returns a function that unsubscribes."""
-        self._listeners.append(listener)
+        listeners = self._listeners
+        listeners.append(listener)
 
         def unsubscribe() -> None:
-            if listener in self._listeners:
-                self._listeners.remove(listener)
+            # Holds the list, not the state: widgets unsubscribe from Qt's `destroyed`, which can
+            # come after Python has torn the state down (at exit).
+            if listener in listeners:
+                listeners.remove(listener)
 
         return unsubscribe
 

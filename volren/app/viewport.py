@@ -6,11 +6,14 @@ Frames keep their aspect ratio (a frame made before a resize is letterboxed unti
 arrives) and preview frames are scaled up smoothly.
 
 Gestures follow VTK's trackball camera (see `interaction`): left-drag rotates, right-drag or the
-wheel dollies, middle-drag (or shift + left-drag) pans, 'r' resets the view. The viewport only
+wheel dollies, middle-drag (or shift + left-drag) pans, 'r' resets the view; ctrl + left-click
+emits `pointPicked` with the pixel under the mouse (for picking). The viewport only
 changes the `ViewState`; the frame scheduler decides what to render.
 """
 
 from __future__ import annotations
+
+import math
 
 from PyQt5.QtCore import QPoint, QRectF, QSize, Qt, pyqtSignal
 from PyQt5.QtGui import (
@@ -37,6 +40,9 @@ class Viewport(QWidget):
 
     resized = pyqtSignal()
     resetRequested = pyqtSignal()
+    #: Ctrl+left-click: the pixel (x, y) under the mouse in a full frame of `pixel_size()` (row 0
+    #: at the top), i.e. what `pick(volume, tf, state.camera, x, y, *pixel_size())` looks at.
+    pointPicked = pyqtSignal(int, int)
 
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -51,7 +57,10 @@ class Viewport(QWidget):
         self.setAttribute(Qt.WA_OpaquePaintEvent)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(64, 64)
-        self.setToolTip("Left-drag: rotate; right-drag or wheel: zoom; middle-drag: pan; R: reset view")
+        self.setToolTip(
+            "Left-drag: rotate; right-drag or wheel: zoom; middle-drag: pan; R: reset view; "
+            "Ctrl+click: place a 2D transfer-function widget at that point"
+        )
 
     # ------------------------------------------------------------------ frames
     @property
@@ -106,6 +115,10 @@ class Viewport(QWidget):
 
     # ------------------------------------------------------------------ gestures
     def mousePressEvent(self, event: QMouseEvent) -> None:
+        if event.button() == Qt.LeftButton and event.modifiers() & Qt.ControlModifier:
+            self._pick(event.pos())
+            event.accept()
+            return
         gesture = _GESTURES.get(event.button())
         if self._drag_button is not None or gesture is None or self._state.camera is None:
             return super().mousePressEvent(event)
@@ -151,6 +164,15 @@ class Viewport(QWidget):
             event.accept()
             return
         super().keyPressEvent(event)
+
+    def _pick(self, pos: QPoint) -> None:
+        """Emit pointPicked with the pixel under `pos` in `pixel_size()` coordinates (full frames)."""
+        ratio = self.devicePixelRatioF()
+        width, height = self.pixel_size()
+        x = math.floor((pos.x() + 0.5) * ratio)
+        y = math.floor((pos.y() + 0.5) * ratio)
+        if 0 <= x < width and 0 <= y < height:
+            self.pointPicked.emit(x, y)
 
     def _apply(self, gesture: str, dx: int, dy: int) -> None:
         cam, volume = self._state.camera, self._state.volume

@@ -1,0 +1,163 @@
+"""The dock widgets around the viewport, and the wiring between them and the window.
+
+Right: the transfer-function editors (1D and 2D, with undo and redo). Left: the rendering
+settings (lighting, sampling, blend mode, crop box, background) and, tabbed with them, the dataset
+facts. Every panel edits the window's `ViewState`; this module only places them, forwards their
+errors to the window's one-line reporter, tells the settings panels what the current renderer can
+do, and turns a Ctrl+click on the volume into a 2D TF widget at the picked value and gradient.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from PyQt5.QtCore import Qt
+from PyQt5.QtGui import QKeySequence
+from PyQt5.QtWidgets import QDockWidget, QScrollArea, QVBoxLayout, QWidget
+
+from volren.app.panels import (
+    BackgroundPanel,
+    BlendPanel,
+    CropPanel,
+    DatasetInfoPanel,
+    LightingPanel,
+    SamplingPanel,
+)
+from volren.app.state import Change
+from volren.app.tf_history import TFHistory
+from volren.app.tf_panel import TransferFunctionPanel
+from volren.renderers.base import KindSupport
+
+if TYPE_CHECKING:
+    from volren.app.main_window import MainWindow
+
+
+def _titled(title: str, panel: QWidget) -> QWidget:
+    from PyQt5.QtWidgets import QGroupBox
+
+    box = QGroupBox(title)
+    layout = QVBoxLayout(box)
+    layout.setContentsMargins(4, 4, 4, 4)
+    layout.addWidget(panel)
+    return box
+
+
+def _scrolled(widget: QWidget) -> QScrollArea:
+    """In a scroll area, so that longer text after a load (bounds, notes) never widens the dock
+    and squeezes the viewport under the person's mouse."""
+    scroll = QScrollArea()
+    scroll.setWidgetResizable(True)
+    scroll.setWidget(widget)
+    return scroll
+
+
+class Docks:
+    """Builds the docks of `window` and keeps them in step with its renderer."""
+
+    def __init__(self, window: MainWindow) -> None:
+        self.window = window
+        state = window.state
+        self.history = TFHistory(state, window)
+        self.tf_panel = TransferFunctionPanel(state, self.history, window)
+        self.lighting = LightingPanel(state)
+        self.sampling = SamplingPanel(state)
+        self.blend = BlendPanel(state)
+        self.crop = CropPanel(state)
+        self.background = BackgroundPanel(state)
+        self.dataset = DatasetInfoPanel(state)
+
+        self.tf_dock = self._dock("Transfer function", "tf-dock", self.tf_panel, Qt.RightDockWidgetArea)
+        settings = QWidget()
+        layout = QVBoxLayout(settings)
+        layout.setContentsMargins(2, 2, 2, 2)
+        for title, panel in (
+            ("Lighting", self.lighting),
+            ("Sampling", self.sampling),
+            ("Blend mode", self.blend),
+            ("Crop box", self.crop),
+            ("Background", self.background),
+        ):
+            layout.addWidget(_titled(title, panel))
+        layout.addStretch(1)
+        self.settings_dock = self._dock("Rendering", "settings-dock", _scrolled(settings), Qt.LeftDockWidgetArea)
+        self.dataset_dock = self._dock("Dataset", "dataset-dock", _scrolled(self.dataset), Qt.LeftDockWidgetArea)
+        window.tabifyDockWidget(self.settings_dock, self.dataset_dock)
+        self.settings_dock.raise_()
+
+        self.undo_action = self.history.stack.createUndoAction(window, "&Undo")
+        self.undo_action.setShortcut(QKeySequence.Undo)
+        self.redo_action = self.history.stack.createRedoAction(window, "&Redo")
+        self.redo_action.setShortcut(QKeySequence.Redo)
+        edit_menu = window.menuBar().addMenu("&Edit")
+        edit_menu.addAction(self.undo_action)
+        edit_menu.addAction(self.redo_action)
+        window.view_menu.addSeparator()
+        for dock in (self.tf_dock, self.settings_dock, self.dataset_dock):
+            window.view_menu.addAction(dock.toggleViewAction())
+
+        for source in (self.tf_panel, self.crop):
+            source.errorOccurred.connect(window.report_error)
+        window.viewport.pointPicked.connect(self.pick)
+        self._unsubscribe = state.subscribe(self._on_change)
+        self._update_capabilities()
+
+    def _dock(self, title: str, name: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
+        dock = QDockWidget(title, self.window)
+        dock.setObjectName(name)
+        dock.setWidget(widget)
+        self.window.addDockWidget(area, dock)
+        return dock
+
+    # ------------------------------------------------------------------ capabilities
+    def _on_change(self, change: Change) -> None:
+        if change.what in ("renderer", "volume", "tf"):
+            self._update_capabilities()
+
+    def current_support(self) -> KindSupport | None:
+        """What the current renderer can do with the loaded volume (None: unknown, allow all)."""
+        state = self.window.state
+        if state.volume is None:
+            return None
+        try:
+            caps = self.window.registry.capabilities(state.renderer)
+        except Exception:  # noqa: BLE001 - a broken plugin is reported by the chooser
+            return None
+        return caps.kinds.get(state.volume.kind)
+
+    def _update_capabilities(self) -> None:
+        support = self.current_support()
+        for panel in (self.lighting, self.sampling, self.blend):
+            panel.set_capabilities(support)
+
+    # ------------------------------------------------------------------ picking
+    def pick(self, x: int, y: int) -> None:
+        """Ctrl+click on the volume: a 2D TF widget at the value and gradient seen there."""
+        from volren.app.picking import pick
+
+        window, state = self.window, self.window.state
+        frame = window.viewport.frame
+        if state.volume is None or state.transfer_function is None or state.camera is None or frame is None:
+            return
+        if state.transfer_function.dims != 2:
+            window.statusBar().showMessage(
+                "Ctrl+click places a widget of a 2D transfer function: switch to the 2D tab first", 8000
+            )
+            return
+        width, height = window.viewport.pixel_size()
+        try:
+            hit = pick(state.render_volume, state.transfer_function, state.camera, x, y, width, height)
+        except Exception as exc:  # noqa: BLE001 - picking must never take the app down
+            window.report_error("Cannot pick", f"picking failed: {exc}")
+            return
+        if hit is None:
+            window.statusBar().showMessage("Nothing there to pick", 5000)
+            return
+        self.tf_panel.editor_2d.place_widget_at(hit.value, hit.gradient_magnitude)
+        window.statusBar().showMessage(
+            f"Widget placed at value {hit.value:.4g}, gradient magnitude {hit.gradient_magnitude:.4g}", 8000
+        )
+
+    def detach(self) -> None:
+        self._unsubscribe()
+        self.tf_panel.detach()
+        self.history.detach()

@@ -1,0 +1,84 @@
+"""The value histogram drawn behind the 1D transfer-function editor (pure numpy, no Qt).
+
+Counts cover the volume's finite values over its value range: every voxel of a uniform grid, the
+point values of a tetrahedral mesh. A histogram is computed once per volume object (and bin count)
+and cached weakly, so switching TFs or toggling log counts never rescans the data, and a volume
+that is closed frees its histogram with it.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.model.volume import Volume
+
+#: Enough bars for a ~300 px wide editor without aliasing; bars merge on narrower ones.
+DEFAULT_BINS = 256
+#: Values per chunk for the integer path: bounds bincount's int conversion to ~32 MiB at a time.
+_CHUNK = 1 << 22
+
+_cache: weakref.WeakKeyDictionary[Volume, dict[int, Histogram]] = weakref.WeakKeyDictionary()
+
+
+@dataclass(frozen=True, eq=False)
+class Histogram:
+    """Counts of values in equal-width bins: `edges` (bins + 1,), `counts` (bins,) int64."""
+
+    edges: NDArray[np.float64]
+    counts: NDArray[np.int64]
+
+    def heights(self, log: bool = False) -> NDArray[np.float64]:
+        """Bar heights in [0, 1], the fullest bin at 1.
+
+        `log` scales by log(1 + count), so bins with a handful of values (thin structures such as
+        vessels next to a large background peak) stay visible, and empty bins stay at 0.
+        """
+        counts = self.counts.astype(np.float64)
+        top = counts.max(initial=0.0)
+        if top <= 0:
+            return np.zeros_like(counts)
+        if log:
+            return np.log1p(counts) / np.log1p(top)
+        return counts / top
+
+
+def value_histogram(volume: Volume, bins: int = DEFAULT_BINS) -> Histogram:
+    """The histogram of `volume`'s finite values over `volume.value_range` (cached per volume)."""
+    if bins < 1:
+        raise ValueError(f"a histogram needs at least one bin, got {bins}")
+    per_volume = _cache.setdefault(volume, {})
+    found = per_volume.get(bins)
+    if found is None:
+        found = per_volume[bins] = compute_histogram(volume.values, bins, volume.value_range)
+    return found
+
+
+def compute_histogram(values: NDArray, bins: int, value_range: tuple[float, float]) -> Histogram:
+    """np.histogram's bins and counts for the finite `values`, faster for 8- and 16-bit integers."""
+    lo, hi = float(value_range[0]), float(value_range[1])
+    flat = np.asarray(values).reshape(-1)
+    if np.issubdtype(flat.dtype, np.integer) and flat.dtype.itemsize <= 2 and flat.size:
+        counts, edges = _integer_histogram(flat, bins, lo, hi)
+    else:
+        if np.issubdtype(flat.dtype, np.floating):
+            flat = flat[np.isfinite(flat)]
+        counts, edges = np.histogram(flat, bins, (lo, hi))
+    return Histogram(edges.astype(np.float64), counts.astype(np.int64))
+
+
+def _integer_histogram(flat: NDArray, bins: int, lo: float, hi: float) -> tuple[NDArray, NDArray]:
+    """Tally each distinct level (a bincount, ~3x faster than np.histogram on CT data), then bin
+    the levels weighted by their tallies: the same bin for every value as np.histogram gives."""
+    first, last = int(np.floor(lo)), int(np.ceil(hi))
+    tally = np.zeros(last - first + 1, np.int64)
+    for start in range(0, flat.size, _CHUNK):
+        chunk = flat[start : start + _CHUNK].astype(np.int32) - first
+        inside = chunk[(chunk >= 0) & (chunk < tally.size)]
+        tally += np.bincount(inside, minlength=tally.size)
+    levels = np.arange(first, last + 1, dtype=np.float64)
+    counts, edges = np.histogram(levels, bins, (lo, hi), weights=tally)
+    return np.rint(counts).astype(np.int64), edges

@@ -1,0 +1,260 @@
+"""The opacity canvas of the 1D TF editor: the data histogram behind the opacity curve.
+
+As in ParaView's colour map editor, the area under the curve is filled with the TF's colours, so
+one picture shows what each value looks like; the histogram behind says where the data is. Click
+on empty space adds a point there, drag moves a point (between its neighbours, opacity in [0, 1]),
+right-click or Delete removes one. The end points stay, like ParaView's: they bound the curve
+and the TF's value range.
+
+Edits go straight to the `ViewState`'s TF object; a click-and-drag is wrapped in
+begin/end_interaction, so it previews cheaply and is one undo step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PyQt5.QtCore import QPoint, QPointF, QRectF, QSize, Qt
+from PyQt5.QtGui import (
+    QColor,
+    QHideEvent,
+    QKeyEvent,
+    QMouseEvent,
+    QPainter,
+    QPainterPath,
+    QPaintEvent,
+    QPalette,
+    QPen,
+    QPolygonF,
+)
+from PyQt5.QtWidgets import QSizePolicy, QWidget
+
+from volren.app.color_bar import MARGIN, PICK_RADIUS, ValueAxis, color_strip, neighbours, tf_color
+from volren.app.histograms import Histogram
+from volren.app.state import ViewState
+from volren.model.transfer_function import TransferFunction1D
+
+#: Vertical room above opacity 1 and below 0 (px), for the point markers and the readout.
+TOP, BOTTOM = 8, 6
+#: Alpha of the colour fill under the curve: the histogram stays readable through it.
+FILL_OPACITY = 0.55
+
+
+class OpacityCurve(QWidget):
+    """The opacity points of the state's 1D TF over the value axis, with the histogram behind."""
+
+    def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._axis = ValueAxis(0.0, 1.0)
+        self._histogram: Histogram | None = None
+        self._log_counts = False
+        self._drag: int | None = None
+        #: Index of the selected opacity point (Delete removes it), or None.
+        self.selected: int | None = None
+        self.setFocusPolicy(Qt.StrongFocus)
+        self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
+        self.setMinimumSize(2 * MARGIN + 40, TOP + BOTTOM + 40)
+        self.setToolTip("Opacity: click to add a point, drag to move it, right-click or Delete to remove it")
+
+    def sizeHint(self) -> QSize:
+        return QSize(300, 150)
+
+    # ------------------------------------------------------------------ model access
+    def transfer_function(self) -> TransferFunction1D | None:
+        tf = self._state.transfer_function
+        return tf if isinstance(tf, TransferFunction1D) else None
+
+    @property
+    def axis(self) -> ValueAxis:
+        return self._axis
+
+    def set_axis(self, axis: ValueAxis) -> None:
+        self._axis = axis
+        self.update()
+
+    @property
+    def histogram(self) -> Histogram | None:
+        return self._histogram
+
+    def set_histogram(self, histogram: Histogram | None) -> None:
+        self._histogram = histogram
+        self.update()
+
+    @property
+    def log_counts(self) -> bool:
+        return self._log_counts
+
+    def set_log_counts(self, log: bool) -> None:
+        self._log_counts = bool(log)
+        self.update()
+
+    def model_changed(self) -> None:
+        """The TF changed or was replaced: forget a selection that no longer exists."""
+        tf = self.transfer_function()
+        if tf is None or (self.selected is not None and self.selected >= len(tf.opacity_points)):
+            self.selected = None
+        self.update()
+
+    # ------------------------------------------------------------------ geometry
+    def _plot_height(self) -> float:
+        return float(max(self.height() - TOP - BOTTOM, 1))
+
+    def value_at(self, x: float) -> float:
+        return self._axis.to_value(x, self.width())
+
+    def opacity_at(self, y: float) -> float:
+        """The opacity at widget y, clamped to [0, 1]."""
+        return float(min(max((self.height() - BOTTOM - y) / self._plot_height(), 0.0), 1.0))
+
+    def _y(self, opacity: float) -> float:
+        return self.height() - BOTTOM - opacity * self._plot_height()
+
+    def position_of(self, value: float, opacity: float) -> QPoint:
+        """Where (value, opacity) is drawn, in this widget's pixels (rounded)."""
+        return QPoint(round(self._axis.to_x(value, self.width())), round(self._y(opacity)))
+
+    def point_positions(self) -> list[QPoint]:
+        """Widget-pixel centres of the opacity points, in point order."""
+        tf = self.transfer_function()
+        return [] if tf is None else [self.position_of(x, a) for x, a in tf.opacity_points]
+
+    def _pick(self, pos: QPointF) -> int | None:
+        tf = self.transfer_function()
+        if tf is None:
+            return None
+        points = tf.opacity_points
+        dx = self._axis.to_x(points[:, 0], self.width()) - pos.x()
+        dy = np.array([self._y(a) for a in points[:, 1]]) - pos.y()
+        distance = np.hypot(dx, dy)
+        best = int(np.argmin(distance))
+        return best if distance[best] <= PICK_RADIUS else None
+
+    # ------------------------------------------------------------------ edits
+    def add_point(self, value: float, opacity: float) -> int:
+        """Add an opacity point (value clamped to the axis); returns its index."""
+        tf = self.transfer_function()
+        assert tf is not None
+        points = tf.opacity_points
+        value = self._axis.clamp(value)
+        index = int(np.searchsorted(points[:, 0], value, side="right"))
+        tf.set_opacity_points(np.insert(points, index, [value, min(max(opacity, 0.0), 1.0)], axis=0))
+        return index
+
+    def delete_selected(self) -> bool:
+        """Remove the selected point unless it is the first or the last; True if removed."""
+        tf = self.transfer_function()
+        if tf is None or self.selected is None:
+            return False
+        points = tf.opacity_points
+        if not 0 < self.selected < len(points) - 1:
+            return False
+        index, self.selected = self.selected, None
+        tf.set_opacity_points(np.delete(points, index, axis=0))
+        return True
+
+    def _move(self, index: int, pos: QPointF) -> None:
+        tf = self.transfer_function()
+        if tf is None or index >= len(tf.opacity_points):
+            return
+        points = tf.opacity_points
+        left, right = neighbours(points[:, 0], index)
+        moved = (self._axis.clamp(self.value_at(pos.x()), left, right), self.opacity_at(pos.y()))
+        if moved != tuple(points[index]):
+            points[index] = moved
+            tf.set_opacity_points(points)
+
+    # ------------------------------------------------------------------ mouse and keys
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        if self.transfer_function() is None:
+            return
+        pos = event.localPos()
+        hit = self._pick(pos)
+        if event.button() == Qt.RightButton:
+            if hit is not None:
+                self.selected = hit
+                self.delete_selected()
+            return
+        if event.button() != Qt.LeftButton:
+            return
+        self._state.begin_interaction()
+        self._drag = (
+            hit if hit is not None else self.add_point(self.value_at(pos.x()), self.opacity_at(pos.y()))
+        )
+        self.selected = self._drag
+        self.update()
+
+    def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        if self._drag is not None:
+            self._move(self._drag, event.localPos())
+
+    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
+        if event.button() == Qt.LeftButton:
+            self._end_drag()
+
+    def _end_drag(self) -> None:
+        if self._drag is not None:
+            self._drag = None
+            self._state.end_interaction()
+
+    def keyPressEvent(self, event: QKeyEvent) -> None:
+        if event.key() in (Qt.Key_Delete, Qt.Key_Backspace) and self.delete_selected():
+            return
+        super().keyPressEvent(event)
+
+    def hideEvent(self, event: QHideEvent) -> None:
+        self._end_drag()  # a drag cut short must not leave the state "interacting"
+        super().hideEvent(event)
+
+    # ------------------------------------------------------------------ painting
+    def paintEvent(self, event: QPaintEvent) -> None:
+        painter = QPainter(self)
+        palette = self.palette()
+        painter.fillRect(self.rect(), palette.color(QPalette.Base))
+        left, right = MARGIN, self.width() - MARGIN
+        plot = QRectF(left, TOP, right - left, self._plot_height())
+        painter.setPen(palette.color(QPalette.Mid))
+        painter.drawRect(plot)
+        self._paint_histogram(painter, palette)
+        tf = self.transfer_function()
+        if tf is None:
+            return
+        painter.setRenderHint(QPainter.Antialiasing)
+        curve = [QPointF(left, self._y(tf.opacity_points[0, 1]))]
+        curve += [QPointF(self._axis.to_x(x, self.width()), self._y(a)) for x, a in tf.opacity_points]
+        curve.append(QPointF(right, self._y(tf.opacity_points[-1, 1])))
+        under = QPainterPath()
+        under.addPolygon(QPolygonF([QPointF(left, plot.bottom()), *curve, QPointF(right, plot.bottom())]))
+        painter.save()
+        painter.setClipPath(under)
+        painter.setOpacity(FILL_OPACITY)
+        painter.drawImage(plot, color_strip(tf, self._axis, self.width()), QRectF(left, 0, plot.width(), 1))
+        painter.restore()
+        painter.setPen(QPen(palette.color(QPalette.Text), 1.5))
+        painter.drawPolyline(QPolygonF(curve))
+        self._paint_points(painter, tf, palette)
+
+    def _paint_histogram(self, painter: QPainter, palette: QPalette) -> None:
+        if self._histogram is None:
+            return
+        heights = self._histogram.heights(self._log_counts)
+        xs = self._axis.to_x(self._histogram.edges, self.width())
+        bar = QColor(palette.color(QPalette.Text))
+        bar.setAlphaF(0.22)
+        bottom = self.height() - BOTTOM
+        for x0, x1, h in zip(xs[:-1], xs[1:], heights):
+            if h > 0:
+                top = bottom - h * self._plot_height()
+                painter.fillRect(QRectF(x0, top, max(x1 - x0, 1.0), bottom - top), bar)
+
+    def _paint_points(self, painter: QPainter, tf: TransferFunction1D, palette: QPalette) -> None:
+        for index, (x, a) in enumerate(tf.opacity_points):
+            chosen = index == self.selected
+            painter.setPen(
+                QPen(palette.color(QPalette.Highlight if chosen else QPalette.Text), 2 if chosen else 1)
+            )
+            painter.setBrush(tf_color(tf, x))
+            radius = 5.5 if chosen else 4.0
+            painter.drawEllipse(QPointF(self._axis.to_x(x, self.width()), self._y(a)), radius, radius)
+            if chosen:
+                painter.setPen(palette.color(QPalette.Text))
+                painter.drawText(QPointF(MARGIN + 4, TOP + 12), f"value {x:.5g}   opacity {a:.3f}")

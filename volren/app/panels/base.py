@@ -1,0 +1,64 @@
+"""`StatePanel`: the base of the settings panels, a widget that mirrors part of a `ViewState`.
+
+A panel never keeps its own copy of what it edits. It writes through the state's setters and
+redraws its widgets from the state whenever the parts it `watches` change, wherever the change
+came from (this panel, a loaded scene, undo). Redrawing happens with the widgets' signals
+blocked, so showing a value never reads as an edit and never loops back into the state.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import ClassVar
+
+from PyQt5.QtCore import QObject
+from PyQt5.QtWidgets import QWidget
+
+from volren.app.state import Change, ViewState, What
+
+
+@contextmanager
+def signals_blocked(*objects: QObject) -> Iterator[None]:
+    """Set widget values without their change signals firing (the value came from the state)."""
+    previous = [o.blockSignals(True) for o in objects]
+    try:
+        yield
+    finally:
+        for o, was in zip(objects, previous, strict=True):
+            o.blockSignals(was)
+
+
+class StatePanel(QWidget):
+    """A widget that shows part of `state` and follows its changes; subclasses fill in `refresh`."""
+
+    #: The parts of the state this panel shows: a change of any of them calls `refresh`.
+    watches: ClassVar[frozenset[What]] = frozenset()
+
+    def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.state = state
+        unsubscribe = state.subscribe(self._on_change)
+        self._unsubscribe = unsubscribe
+        # A plain function, not a bound method: it must still run while the C++ object dies.
+        self.destroyed.connect(lambda *_: unsubscribe())
+
+    def _on_change(self, change: Change) -> None:
+        if change.what in self.watches:
+            self.refresh()
+
+    def refresh(self) -> None:
+        """Show what the state holds now, without emitting edits."""
+        raise NotImplementedError
+
+    def detach(self) -> None:
+        """Stop following the state (the window is closing, or the panel is replaced)."""
+        self._unsubscribe()
+
+
+def unsupported(state: ViewState, feature: str) -> str:
+    """The tooltip of a control the current renderer cannot honour, e.g. "The vtk renderer has no
+    pre-integration for tet volumes"."""
+    volume = state.volume
+    where = f" for {volume.kind} volumes" if volume is not None else ""
+    return f"The {state.renderer} renderer has no {feature}{where}"

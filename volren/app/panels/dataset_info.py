@@ -1,0 +1,121 @@
+"""The dataset panel: read-only facts about the loaded volume, and what loading changed.
+
+The notes a load leaves on the volume (cells dropped or split into tetrahedra, tetrahedra
+repaired, values converted, NaNs found; see `volren.io.dataset`) are listed one per line: they
+are why a rendering may not look like the file in another program, so they stay in view instead
+of vanishing with the status-bar message.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import QFormLayout, QLabel, QListWidget, QVBoxLayout, QWidget
+
+from volren.app.panels.base import StatePanel
+from volren.app.state import ViewState
+from volren.model.volume import UniformVolume, Volume
+
+NO_VOLUME = "No volume"
+
+
+def _num(value: float) -> str:
+    return f"{float(value):.6g}"
+
+
+def _triple(values: Sequence[float]) -> str:
+    return ", ".join(_num(v) for v in values)
+
+
+def _bounds(bounds: Sequence[float]) -> str:
+    return " × ".join(f"[{_num(bounds[2 * a])}, {_num(bounds[2 * a + 1])}]" for a in range(3))
+
+
+def _size(volume: Volume) -> str:
+    if isinstance(volume, UniformVolume):
+        return " × ".join(str(n) for n in volume.dimensions)
+    return f"{len(volume.tets):,} tetrahedra"
+
+
+def volume_facts(volume: Volume, shown: Volume | None = None) -> list[tuple[str, str]]:
+    """(label, text) rows describing `volume`; `shown` is what cropping leaves of it, if cropped."""
+    rows = [("Name", volume.name)]
+    if isinstance(volume, UniformVolume):
+        nx, ny, nz = volume.dimensions
+        rows += [
+            ("Kind", "uniform grid"),
+            ("Dimensions", _size(volume)),
+            ("Points", f"{nx * ny * nz:,}"),
+            ("Cells", f"{(nx - 1) * (ny - 1) * (nz - 1):,}"),
+            ("Spacing", _triple(volume.spacing)),
+            ("Origin", _triple(volume.origin)),
+        ]
+    else:
+        rows += [
+            ("Kind", "tetrahedral mesh"),
+            ("Points", f"{len(volume.points):,}"),
+            ("Cells", f"{len(volume.tets):,} tetrahedra"),
+            ("Mean edge length", _num(volume.mean_edge_length)),
+        ]
+    low, high = volume.value_range
+    rows += [
+        ("Bounds", _bounds(volume.bounds)),
+        ("Data type", str(volume.values.dtype)),
+        ("Value range", f"{_num(low)} to {_num(high)}"),
+        ("Non-finite values", f"{volume.nonfinite_count:,}"),
+    ]
+    if shown is not None and shown is not volume:
+        rows.append(("Cropped to", _size(shown)))
+    return rows
+
+
+class DatasetInfoPanel(StatePanel):
+    """A read-only form of `volume_facts` and the list of the volume's notes."""
+
+    watches = frozenset({"volume", "crop"})
+
+    def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
+        super().__init__(state, parent)
+        self.empty = QLabel(NO_VOLUME, self)
+        self.form = QFormLayout()
+        self.notes_label = QLabel("Notes", self)
+        self.notes_list = QListWidget(self)
+        self.notes_list.setToolTip("What loading changed or ignored (also reported as warnings)")
+        self.notes_list.setWordWrap(True)
+        layout = QVBoxLayout(self)
+        layout.addWidget(self.empty)
+        layout.addLayout(self.form)
+        layout.addWidget(self.notes_label)
+        layout.addWidget(self.notes_list)
+        self._values: dict[str, QLabel] = {}
+        self.refresh()
+
+    def facts(self) -> dict[str, str]:
+        """The facts as shown, label to text."""
+        return {label: widget.text() for label, widget in self._values.items()}
+
+    def notes(self) -> list[str]:
+        """The notes as shown."""
+        return [self.notes_list.item(i).text() for i in range(self.notes_list.count())]
+
+    def refresh(self) -> None:
+        volume = self.state.volume
+        while self.form.rowCount():
+            self.form.removeRow(0)
+        self._values = {}
+        self.notes_list.clear()
+        self.empty.setVisible(volume is None)
+        if volume is None:
+            self.notes_label.hide()
+            self.notes_list.hide()
+            return
+        for label, text in volume_facts(volume, self.state.render_volume):
+            value = QLabel(text, self)
+            value.setTextInteractionFlags(Qt.TextSelectableByMouse)
+            self.form.addRow(label, value)
+            self._values[label] = value
+        self.notes_list.addItems(list(volume.notes))
+        self.notes_label.setText(f"Notes ({len(volume.notes)})" if volume.notes else "Notes: none")
+        self.notes_label.show()
+        self.notes_list.setVisible(bool(volume.notes))

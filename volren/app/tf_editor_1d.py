@@ -1,0 +1,428 @@
+"""The 1D transfer-function editor panel (after ParaView's colour map editor and 3D Slicer's volume
+rendering module).
+
+The panel owns no TF: it shows and edits `state.transfer_function` in place, and re-reads it on
+every "tf" or "volume" change, because undo and opened files replace the object. Undo itself is
+`TFHistory`'s, which records from the state; here only gestures are grouped (a drag is one
+begin/end_interaction). A 2D TF is not edited here: the panel says so and offers to start a 1D
+one. Errors (a bad file) leave as `errorOccurred(title, one_line)` for the window to show.
+
+The value axis spans the TF's range and the data's, so both the histogram and every control
+point are in view; it stays put during a drag so the point under the mouse does not slide.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from PyQt5.QtCore import QPoint, pyqtSignal
+from PyQt5.QtGui import QIcon, QImage, QPixmap
+from PyQt5.QtWidgets import (
+    QAbstractSpinBox,
+    QCheckBox,
+    QComboBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QStackedWidget,
+    QStyle,
+    QToolButton,
+    QVBoxLayout,
+    QWidget,
+)
+
+from volren.app.color_bar import ColorBar, ValueAxis
+from volren.app.colormap_presets import PRESET_NAMES, apply_preset, unit_stops
+from volren.app.histograms import value_histogram
+from volren.app.opacity_curve import OpacityCurve
+from volren.app.state import Change, ViewState
+from volren.errors import VolrenError
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TransferFunction
+
+TF_FILTER = "Transfer functions: volren or ParaView preset JSON (*.json);;All files (*)"
+PRESET_PLACEHOLDER = "Colour map…"
+
+
+def _decimals(scale: float) -> int:
+    """Digits after the point that resolve about a thousandth of `scale` (a range or a length)."""
+    if not math.isfinite(scale) or scale <= 0:
+        return 3
+    return int(min(max(3 - math.floor(math.log10(scale)), 1), 12))
+
+
+def _preset_icon(name: str) -> QIcon:
+    x = np.linspace(0.0, 1.0, 48)
+    stops = unit_stops(name)
+    rgb = np.stack([np.interp(x, stops[:, 0], stops[:, c]) for c in (1, 2, 3)], axis=-1)
+    row = np.round(rgb * 255).astype(np.uint8)
+    pixels = np.ascontiguousarray(np.repeat(row[None], 12, axis=0))
+    image = QImage(pixels.data, 48, 12, 3 * 48, QImage.Format_RGB888).copy()
+    return QIcon(QPixmap.fromImage(image))
+
+
+class PresetBox(QComboBox):
+    """The colour-map chooser: a placeholder, then the preset names.
+
+    The swatches are drawn when the list first opens: building them imports matplotlib and VTK
+    (for "Cool to Warm"), which the app's start-up should not wait for.
+    """
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLengthWithIcon)
+        self.setMinimumContentsLength(10)
+        self.addItem(PRESET_PLACEHOLDER)
+        self.addItems(PRESET_NAMES)
+        self._have_icons = False
+
+    def showPopup(self) -> None:
+        if not self._have_icons:
+            self._have_icons = True
+            for index, name in enumerate(PRESET_NAMES, start=1):
+                self.setItemIcon(index, _preset_icon(name))
+        super().showPopup()
+
+
+def _one_line(exc: BaseException, path: Path) -> str:
+    """The first line of an error, naming the file (io errors already start with it)."""
+    text = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+    return text if str(path) in text else f"{path}: {text}"
+
+
+class TransferFunction1DEditor(QWidget):
+    """Histogram, opacity curve, colour bar, presets, value range and file buttons for a 1D TF."""
+
+    #: (title, one-line message) of a failure (a file that cannot be read or written).
+    errorOccurred = pyqtSignal(str, str)
+
+    def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._shown_tf: TransferFunction | None = None
+        self._last_folder = ""
+        self._build()
+        self._unsubscribe = state.subscribe(self._on_state_change)
+        unsubscribe = self._unsubscribe
+        self.destroyed.connect(lambda *_: unsubscribe())
+        self._set_volume()
+        self.refresh()
+
+    # ------------------------------------------------------------------ construction
+    def _build(self) -> None:
+        self.curve = OpacityCurve(self._state, self)
+        self.color_bar = ColorBar(self._state, self)
+
+        self.preset_box = PresetBox(self)
+        self.preset_box.setToolTip("Replace the colours with a colour map over the current value range")
+        self.preset_box.currentIndexChanged.connect(self._on_preset_chosen)
+        self.log_check = QCheckBox("Log counts", self)
+        self.log_check.setToolTip("Histogram heights as log(1 + count): rare values stay visible")
+        self.log_check.toggled.connect(self.curve.set_log_counts)
+
+        self.min_spin = self._spin_box("Lowest value of the transfer function (its points are rescaled)")
+        self.max_spin = self._spin_box("Highest value of the transfer function (its points are rescaled)")
+        self.min_spin.valueChanged.connect(self._on_min_changed)
+        self.max_spin.valueChanged.connect(self._on_max_changed)
+        self.reset_range_button = QToolButton(self)
+        self.reset_range_button.setText("Data range")
+        self.reset_range_button.setIcon(self.style().standardIcon(QStyle.SP_BrowserReload))
+        self.reset_range_button.setToolTip("Reset to the data range: rescale the transfer function onto it")
+        self.reset_range_button.clicked.connect(self.reset_to_data_range)
+        self.unit_spin = self._spin_box(
+            "Opacity unit distance: the thickness (world units) that the opacities above refer to"
+        )
+        self.unit_spin.setStepType(QAbstractSpinBox.AdaptiveDecimalStepType)
+        self.unit_spin.valueChanged.connect(self._on_unit_changed)
+
+        self.open_button = QPushButton("Open…", self)
+        self.open_button.setToolTip(
+            "Open a transfer function: volren JSON (1D or 2D) or a ParaView colour preset"
+        )
+        self.open_button.clicked.connect(self._open_clicked)
+        self.save_button = QPushButton("Save…", self)
+        self.save_button.setToolTip("Save the transfer function as volren JSON")
+        self.save_button.clicked.connect(self._save_clicked)
+
+        self.message_2d = QLabel(
+            "The transfer function is 2D (value and gradient magnitude); edit it in the 2D editor, "
+            "or replace it with a 1D one.",
+            self,
+        )
+        self.message_2d.setWordWrap(True)
+        self.use_1d_button = QPushButton("Use a 1D transfer function", self)
+        self.use_1d_button.clicked.connect(self.use_1d_transfer_function)
+
+        self.pages = QStackedWidget(self)
+        self.page_1d = QWidget(self.pages)
+        one = QVBoxLayout(self.page_1d)
+        one.setContentsMargins(0, 0, 0, 0)
+        one.setSpacing(2)
+        top = QHBoxLayout()
+        top.addWidget(self.preset_box, 1)
+        top.addWidget(self.log_check)
+        one.addLayout(top)
+        one.addWidget(self.curve, 1)
+        one.addWidget(self.color_bar)
+        value_range = QHBoxLayout()
+        value_range.addWidget(QLabel("Range", self.page_1d))
+        value_range.addWidget(self.min_spin, 1)
+        value_range.addWidget(QLabel("to", self.page_1d))
+        value_range.addWidget(self.max_spin, 1)
+        value_range.addWidget(self.reset_range_button)
+        one.addLayout(value_range)
+        unit = QHBoxLayout()
+        unit.addWidget(QLabel("Unit distance", self.page_1d))
+        unit.addWidget(self.unit_spin, 1)
+        one.addLayout(unit)
+        self.page_2d = QWidget(self.pages)
+        two = QVBoxLayout(self.page_2d)
+        two.addWidget(self.message_2d)
+        two.addWidget(self.use_1d_button)
+        two.addStretch(1)
+        self.pages.addWidget(self.page_1d)
+        self.pages.addWidget(self.page_2d)
+
+        files = QHBoxLayout()
+        files.addStretch(1)
+        files.addWidget(self.open_button)
+        files.addWidget(self.save_button)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(4, 4, 4, 4)
+        layout.addWidget(self.pages, 1)
+        layout.addLayout(files)
+
+    def _spin_box(self, tip: str) -> QDoubleSpinBox:
+        spin = QDoubleSpinBox(self)
+        spin.setMinimumWidth(60)  # the hint fits the widest allowed value; the panel must fit ~300 px
+        spin.setKeyboardTracking(False)  # apply on Enter, focus loss or a step, not per keystroke
+        spin.setToolTip(tip)
+        return spin
+
+    # ------------------------------------------------------------------ following the state
+    def _on_state_change(self, change: Change) -> None:
+        if change.what == "volume":
+            self._set_volume()
+            self.refresh()
+        elif change.what == "tf" or (change.what == "interaction" and not change.interactive):
+            self.refresh()
+
+    def _set_volume(self) -> None:
+        volume = self._state.volume
+        self.curve.set_histogram(None if volume is None else value_histogram(volume))
+
+    def transfer_function(self) -> TransferFunction1D | None:
+        """The state's TF when it is 1D (what this panel edits), else None."""
+        tf = self._state.transfer_function
+        return tf if isinstance(tf, TransferFunction1D) else None
+
+    def refresh(self) -> None:
+        """Show the state's TF as it is now (it may be another object than last time)."""
+        tf = self._state.transfer_function
+        volume = self._state.volume
+        replaced = tf is not self._shown_tf
+        self._shown_tf = tf
+        if replaced:
+            self.curve.selected = self.color_bar.selected = None
+        is_2d = tf is not None and tf.dims == 2
+        self.pages.setCurrentWidget(self.page_2d if is_2d else self.page_1d)
+        self.use_1d_button.setEnabled(volume is not None)
+        self.page_1d.setEnabled(isinstance(tf, TransferFunction1D))
+        self.save_button.setEnabled(tf is not None)
+        self.reset_range_button.setEnabled(
+            volume is not None and volume.value_range[1] > volume.value_range[0]
+        )
+        tf1 = self.transfer_function()
+        if tf1 is not None:
+            if replaced or not self._state.interacting:
+                ranges = [tf1.value_range] + ([volume.value_range] if volume is not None else [])
+                axis = ValueAxis.spanning(*ranges)
+                self.curve.set_axis(axis)
+                self.color_bar.set_axis(axis)
+            self._show_numbers(tf1)
+        self.curve.model_changed()
+        self.color_bar.model_changed()
+
+    def _show_numbers(self, tf: TransferFunction1D) -> None:
+        lo, hi = tf.value_range
+        span = hi - lo if hi > lo else max(abs(lo), 1.0)
+        bound = 1e3 * max(abs(lo), abs(hi), span)
+        decimals = _decimals(span)
+        for spin, value in ((self.min_spin, lo), (self.max_spin, hi)):
+            spin.blockSignals(True)
+            spin.setDecimals(decimals)
+            spin.setRange(-bound, bound)
+            spin.setSingleStep(span / 100)
+            spin.setValue(value)
+            spin.blockSignals(False)
+        unit = tf.opacity_unit_distance
+        decimals = _decimals(unit)
+        self.unit_spin.blockSignals(True)
+        self.unit_spin.setDecimals(decimals)
+        self.unit_spin.setRange(10.0**-decimals, 1e4 * max(unit, 1.0))
+        self.unit_spin.setValue(unit)
+        self.unit_spin.blockSignals(False)
+
+    # ------------------------------------------------------------------ public operations
+    def point_positions(self) -> list[QPoint]:
+        """Opacity point centres in `self.curve`'s pixels (for scripted gestures)."""
+        return self.curve.point_positions()
+
+    def stop_positions(self) -> list[QPoint]:
+        """Colour stop markers in `self.color_bar`'s pixels."""
+        return self.color_bar.stop_positions()
+
+    def apply_preset(self, name: str) -> None:
+        """Replace the colours with the named colour map over the TF's range; opacity stays."""
+        tf = self.transfer_function()
+        if tf is not None:
+            apply_preset(tf, name)
+
+    def set_value_range(self, lo: float, hi: float) -> bool:
+        """Rescale the TF's points onto [lo, hi]; refused (False) unless lo < hi."""
+        tf = self.transfer_function()
+        if tf is None or not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            self.refresh()  # put the boxes back
+            return False
+        if (lo, hi) != tf.value_range:
+            tf.rescale(lo, hi)
+        return True
+
+    def reset_to_data_range(self) -> None:
+        volume = self._state.volume
+        if volume is not None:
+            self.set_value_range(*volume.value_range)
+
+    def use_1d_transfer_function(self) -> None:
+        """Replace the TF (a 2D one) with the default 1D TF of the volume."""
+        volume = self._state.volume
+        if volume is None:
+            return
+        from volren.api import default_transfer_function
+
+        self._state.set_transfer_function(default_transfer_function(volume))
+
+    def open_file(self, path: str | Path) -> bool:
+        """Put the TF in `path` into the state; False (and errorOccurred) if it cannot be read.
+
+        volren JSON (1D or 2D) is used as it is. A ParaView preset is a colour map: its colours
+        are spread over the current TF's range (or the data's) and the opacity is kept, unless
+        the preset brings its own opacity ("Points"), which is spread the same way.
+        """
+        from volren.io.json_text import read_json
+        from volren.io.paraview_presets import is_preset_data
+        from volren.io.tf_io import tf_from_data
+
+        path = Path(path)
+        try:
+            data = read_json(path)
+            tf = self._from_preset(data, path) if is_preset_data(data) else tf_from_data(data, path)
+        except (VolrenError, OSError, ValueError, TypeError, KeyError) as exc:
+            self.errorOccurred.emit("Cannot open the transfer function", _one_line(exc, path))
+            return False
+        self._last_folder = str(path.parent)
+        self._state.set_transfer_function(tf)
+        return True
+
+    def _from_preset(self, data: Any, path: Path) -> TransferFunction1D:
+        from volren.io.paraview_presets import preset_to_tf, select_preset
+
+        preset = select_preset(data, None, path)
+        imported = preset_to_tf(preset, path)
+        current, volume = self.transfer_function(), self._state.volume
+        colors = imported.color_points
+        p0, p1 = colors[0, 0], colors[-1, 0]
+        if current is not None:
+            lo, hi = current.value_range
+        elif volume is not None:
+            lo, hi = volume.value_range
+        else:
+            lo, hi = p0, p1
+        scale = (hi - lo) / (p1 - p0) if p1 > p0 else 0.0
+
+        def spread(x: np.ndarray) -> np.ndarray:
+            return lo + (x - p0) * scale
+
+        colors[:, 0] = spread(colors[:, 0])
+        if current is not None and "Points" not in preset:
+            return TransferFunction1D(
+                colors, current.opacity_points, current.opacity_unit_distance, current.extra
+            )
+        opacity = imported.opacity_points
+        opacity[:, 0] = spread(opacity[:, 0])
+        if current is not None:
+            unit = current.opacity_unit_distance
+        else:
+            unit = volume.characteristic_length if volume is not None else 1.0
+        return TransferFunction1D(colors, opacity, unit, imported.extra)
+
+    def save_file(self, path: str | Path) -> bool:
+        """Write the state's TF as volren JSON (".json" added when there is no suffix)."""
+        from volren.io import save_transfer_function
+
+        tf = self._state.transfer_function
+        if tf is None:
+            return False
+        path = Path(path)
+        if not path.suffix:
+            path = path.with_suffix(".json")
+        try:
+            save_transfer_function(tf, path)
+        except (VolrenError, OSError) as exc:
+            self.errorOccurred.emit("Cannot save the transfer function", _one_line(exc, path))
+            return False
+        self._last_folder = str(path.parent)
+        return True
+
+    # ------------------------------------------------------------------ dialogs (tests replace these)
+    def get_open_path(self) -> str | None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open transfer function", self._last_folder, TF_FILTER)
+        return path or None
+
+    def get_save_path(self) -> str | None:
+        start = str(Path(self._last_folder or ".") / "transfer_function.json")
+        path, _ = QFileDialog.getSaveFileName(self, "Save transfer function", start, TF_FILTER)
+        return path or None
+
+    def detach(self) -> None:
+        """Stop following the state (the panel is being thrown away)."""
+        self._unsubscribe()
+
+    # ------------------------------------------------------------------ slots
+    def _on_preset_chosen(self, index: int) -> None:
+        if index <= 0:
+            return
+        self.apply_preset(self.preset_box.itemText(index))
+        self.preset_box.blockSignals(True)
+        self.preset_box.setCurrentIndex(0)  # a menu of actions: choosing the same map again works
+        self.preset_box.blockSignals(False)
+
+    def _on_min_changed(self, value: float) -> None:
+        tf = self.transfer_function()
+        if tf is not None:
+            self.set_value_range(value, tf.value_range[1])
+
+    def _on_max_changed(self, value: float) -> None:
+        tf = self.transfer_function()
+        if tf is not None:
+            self.set_value_range(tf.value_range[0], value)
+
+    def _on_unit_changed(self, value: float) -> None:
+        tf = self.transfer_function()
+        if tf is not None and value > 0 and value != tf.opacity_unit_distance:
+            tf.set_opacity_unit_distance(value)
+
+    def _open_clicked(self) -> None:
+        path = self.get_open_path()
+        if path:
+            self.open_file(path)
+
+    def _save_clicked(self) -> None:
+        path = self.get_save_path()
+        if path:
+            self.save_file(path)
