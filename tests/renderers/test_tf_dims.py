@@ -68,3 +68,15 @@ def test_registry_and_capabilities_report_2d_support():
     compatible = registry.compatible("uniform", 2)
     assert compatible["reference"] is None and "2D" in compatible["vtk"]
     assert "2D" in registry.compatible("tet", 2)["reference"]
+
+
+def test_no_renderer_claims_pre_integration_of_a_2d_tf():
+    """The slicer pre-integrates 1D TFs only and refuses 2D ones: its capabilities must say so,
+    so the app and the CLI never offer that combination (found by `volren bench stress`)."""
+    from volren.model.settings import RenderSettings
+
+    pre = RenderSettings(preintegration=True)
+    assert registry.compatible("uniform", 1, pre)["slicer"] is None
+    reasons = registry.compatible("uniform", 2, pre)
+    assert "pre-integration of 2D transfer functions" in reasons["slicer"]
+    assert registry.compatible("uniform", 2, RenderSettings())["slicer"] is None

@@ -48,6 +48,8 @@ def _scrolled(widget: QWidget) -> QScrollArea:
     scroll = QScrollArea()
     scroll.setWidgetResizable(True)
     scroll.setWidget(widget)
+    # Wide enough for the controls as built (no horizontal scrolling), plus a vertical scroll bar.
+    scroll.setMinimumWidth(widget.sizeHint().width() + scroll.verticalScrollBar().sizeHint().width() + 4)
     return scroll
 
 

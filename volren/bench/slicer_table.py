@@ -18,6 +18,7 @@ from pathlib import Path
 
 from volren.api import prepared_renderer
 from volren.bench.metrics import image_error
+from volren.bench.pareto import equal_error
 from volren.bench.reference_cache import reference_image
 from volren.bench.vtk_vs_reference import SCENES
 from volren.model.camera import Camera
@@ -119,14 +120,14 @@ def equal_error_rows(rows: list[dict]) -> list[str]:
     out = []
     for peer in (r for r in rows if r["renderer"] == "vtk"):
         scene = [r for r in rows if (r["dataset"], r["tf"]) == (peer["dataset"], peer["tf"])]
-        better = [r for r in scene if r["renderer"].startswith("slicer") and r["rmse"] <= peer["rmse"]]
+        (match,) = equal_error([peer], [r for r in scene if r["renderer"].startswith("slicer")])
         head = f"| {peer['dataset']} | {peer['tf']} | {peer['step']:g} | {peer['ms']:.1f} | {peer['rmse']:.5f} |"
-        if not better:
+        best = match.ours
+        if best is None:
             out.append(head + " none | - | - | - |")
             continue
-        best = min(better, key=lambda r: r["ms"])
         out.append(
             head + f" {best['renderer']}, step {best['step']:g} | {best['ms']:.1f} | {best['rmse']:.5f} | "
-            f"{best['ms'] / peer['ms']:.2f} |"
+            f"{match.ratio:.2f} |"
         )
     return out

@@ -44,6 +44,8 @@ class KindSupport:
     #: The blend modes available with a 2D TF (where 2 is in tf_dims): maximum / minimum /
     #: average project the value alone, which leaves no gradient to look a 2D TF up with.
     blend_modes_2d: frozenset[BlendMode] = frozenset({BlendMode.COMPOSITE})
+    #: Pre-integration of 2D TFs (a 4D table over value and gradient pairs: nobody has one yet).
+    preintegration_2d: bool = False
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,8 @@ class Capabilities:
         if settings is not None:
             if settings.preintegration and not support.preintegration:
                 return f"has no pre-integration for {volume_kind} volumes"
+            if settings.preintegration and tf_dim == 2 and not support.preintegration_2d:
+                return f"has no pre-integration of 2D transfer functions on {volume_kind} volumes"
             if settings.shade and not support.shading:
                 return f"has no shading for {volume_kind} volumes"
             if settings.blend_mode not in support.blend_modes:

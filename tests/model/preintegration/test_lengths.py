@@ -80,3 +80,15 @@ def test_correction_scales_opacity_exactly_and_colour_exactly_on_the_diagonal():
     np.testing.assert_array_equal(correct_for_length(np.zeros(4), 2.0), np.zeros(4))
     thin = correct_for_length(np.array([0.25, 0.5, 0.0, 0.0]), 2.0)  # emission without absorption
     np.testing.assert_allclose(thin, [0.5, 1.0, 0.0, 0.0])
+
+
+def test_a_zero_length_is_transparent_even_behind_an_opaque_entry():
+    """0 * ln(1 - 1) must not become NaN (found by `volren bench stress`)."""
+    out = correct_for_length(np.array([[0.5, 0.5, 0.5, 1.0], [0.2, 0.1, 0.0, 0.3]]), 0.0)
+    np.testing.assert_array_equal(np.abs(out), 0.0)
+    axis = LengthAxis(1.0, 4)
+    table = np.zeros((4, 2, 2, 4), np.float32)
+    table[..., 3] = 1.0
+    table[..., 0] = 1.0
+    assert np.all(np.abs(interpolate_in_length(table, axis, [0, 1], [1, 0], [0.0, 0.0])) == 0.0)
+    np.testing.assert_allclose(interpolate_in_length(table, axis, [0], [1], [0.5])[0], [1.0, 0.0, 0.0, 1.0])

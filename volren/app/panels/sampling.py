@@ -35,6 +35,7 @@ class SamplingPanel(StatePanel):
         self._support: KindSupport | None = None
         self.step = SettingControl(state, "step", 0.05, 4.0, 0.05, 3, STEP_TIP, slider=False, parent=self)
         self.step_length = QLabel(self)
+        self.step_length.setWordWrap(True)  # a long unit must not widen the dock after a load
         self.preintegration = QCheckBox("Pre-integration", self)
         self.preintegration.toggled.connect(lambda on: self._set_flag("preintegration", on))
         self.jitter = QCheckBox("Jitter", self)

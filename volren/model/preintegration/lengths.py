@@ -81,9 +81,15 @@ def interpolate_in_length(
     upper = table[k1, front, back].astype(np.float64)
     rho = (1 - w) * _colour_ratio(lower) + w * _colour_ratio(upper)
     ratio = length / axis.lengths[k0]
-    with np.errstate(divide="ignore"):
-        alpha = -np.expm1(ratio * np.log1p(-lower[..., 3]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        alpha = -np.expm1(_depth(ratio, lower[..., 3]))
     return np.concatenate([rho * alpha[..., None], alpha[..., None]], axis=-1)
+
+
+def _depth(ratio: NDArray, alpha: NDArray) -> NDArray:
+    """ratio * ln(1 - alpha), the scaled optical depth (negated); 0 for a zero length even where
+    alpha = 1 (0 * -inf would be NaN: a segment of no length is transparent)."""
+    return np.where(ratio > 0, ratio * np.log1p(-alpha), 0.0)
 
 
 def correct_for_length(rgba: ArrayLike, ratio: ArrayLike) -> NDArray[np.float64]:
@@ -94,6 +100,6 @@ def correct_for_length(rgba: ArrayLike, ratio: ArrayLike) -> NDArray[np.float64]
     ratio = np.asarray(ratio, dtype=np.float64)
     alpha = rgba[..., 3]
     with np.errstate(divide="ignore", invalid="ignore"):
-        corrected = -np.expm1(ratio * np.log1p(-alpha))
+        corrected = -np.expm1(_depth(ratio, alpha))
         scale = np.where(alpha > 0, corrected / np.where(alpha > 0, alpha, 1.0), ratio)
     return np.concatenate([rgba[..., :3] * scale[..., None], corrected[..., None]], axis=-1)

@@ -1,0 +1,49 @@
+"""`volren bench app` (the app's latency, on a bundled sample) and BENCHMARKS.md's assembly."""
+
+from __future__ import annotations
+
+import datetime
+import math
+import os
+import tempfile
+
+import pytest
+
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="volren-xdg-"))
+os.environ.setdefault("XDG_CONFIG_HOME", tempfile.mkdtemp(prefix="volren-config-"))
+
+
+def test_app_latency_measures_frames_on_a_sample(qapp):
+    pytest.importorskip("pytestqt")
+    from tests.app.conftest import vtk_unusable
+
+    if vtk_unusable():
+        pytest.skip(vtk_unusable())
+    from volren.bench import app_latency
+    from volren.samples import marschner_lobb, sample_transfer_functions
+
+    timing = app_latency.measure(
+        qapp, marschner_lobb(17), sample_transfer_functions()["marschner_lobb"].copy(), "vtk", "ml",
+        edits=2, gesture_s=0.5,
+    )
+    assert timing.edit_ms >= timing.edit_frame_ms > 0 and math.isfinite(timing.edit_ms)
+    assert timing.rotate_fps > 0 and timing.drag_fps > 0, "no frame was shown during a gesture"
+    assert timing.settle_ms > 0
+    w, h = timing.preview_size
+    assert 0 < w < app_latency.VIEWPORT[0] and 0 < h < app_latency.VIEWPORT[1]
+    assert app_latency.markdown_row(timing).count("|") == app_latency.HEADER.splitlines()[0].count("|")
+
+
+def test_benchmarks_md_collects_the_fragments_and_relinks_plots(tmp_path):
+    from volren.bench import report
+
+    out = tmp_path / "docs" / "bench"
+    out.mkdir(parents=True)
+    (out / "summary.md").write_text("ratio 0.3\n\n![engine](engine.png)\n")
+    (out / "stress.md").write_text("0 NaN\n")
+    text = report.compose(out, tmp_path, date=datetime.date(2026, 11, 22), command="volren bench all")
+    assert "Measured 2026-11-22" in text and "`volren bench all`" in text
+    assert "![engine](docs/bench/engine.png)" in text
+    assert text.index("## Run time against error") < text.index("## Numerical stress")
+    assert "Not in this run: skip.md, app.md." in text

@@ -1,0 +1,90 @@
+"""The scenes `volren bench run` measures: the shared datasets with their TFs, and the bundled samples.
+
+A shared dataset comes with one TF per style in ../shared/scenes (`<dataset>-<style>.json`) and the
+camera of shared/scenes/README.md (`vtk_vs_reference.SCENES`); a bundled sample (`volren.samples`)
+comes with its own TF, style `sample`, seen from azimuth 30 and elevation 20 like the others.
+Volumes load lazily, one dataset at a time, so a run holds one large mesh at most.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+from volren.bench.vtk_vs_reference import SCENES, STYLES
+from volren.errors import VolrenError
+from volren.model.camera import Camera
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.volume import Volume
+from volren.samples import SAMPLES, sample_paths
+
+#: What --quick measures: one small grid and one small mesh, both bundled.
+QUICK_DATASETS = ("marschner_lobb", "hollow_cylinder")
+SAMPLE_CAMERA = (30.0, 20.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """A volume file, how to read it, its TFs by style and the scene's camera."""
+
+    name: str
+    kind: str
+    path: Path
+    scalars: str | None
+    tf_paths: tuple[tuple[str, Path], ...]
+    azimuth: float
+    elevation: float
+    zoom: float
+
+    def load(self) -> Volume:
+        from volren.io import load_volume
+
+        return load_volume(self.path, scalars=self.scalars)
+
+    def transfer_functions(self) -> Iterator[tuple[str, TransferFunction1D]]:
+        for style, path in self.tf_paths:
+            yield style, TransferFunction1D.from_dict(json.loads(path.read_text()))
+
+    def camera(self, bounds, turn: float = 0.0) -> Camera:
+        """The scene's camera, turned by `turn` degrees of azimuth (the timed frames turn)."""
+        return Camera.orbit(bounds, self.azimuth + turn, self.elevation, self.zoom)
+
+
+def shared_datasets(shared: Path) -> dict[str, Dataset]:
+    """The datasets of shared/scenes/README.md whose file and at least one TF are present, their TFs
+    in the README's order (smooth, spiky, opaque, then any others by name)."""
+    out = {}
+    for name, (rel, scalars, az, el, zoom) in SCENES.items():
+        path = shared / "data" / rel
+        found = [(p.stem.removeprefix(f"{name}-"), p) for p in (shared / "scenes").glob(f"{name}-*.json")]
+        tfs = tuple(
+            sorted(found, key=lambda sp: (STYLES.index(sp[0]) if sp[0] in STYLES else len(STYLES), sp[0]))
+        )
+        if path.exists() and tfs:
+            kind = "tet" if rel.startswith("tets/") else "uniform"
+            out[name] = Dataset(name, kind, path, scalars, tfs, az, el, zoom)
+    return out
+
+
+def sample_datasets() -> dict[str, Dataset]:
+    out = {}
+    for name in SAMPLES:
+        volume_path, tf_path = sample_paths(name)
+        kind = "tet" if volume_path.suffix == ".vtu" else "uniform"
+        out[name] = Dataset(name, kind, volume_path, None, (("sample", tf_path),), *SAMPLE_CAMERA)
+    return out
+
+
+def select(names: Iterable[str] | None, shared: Path | None, quick: bool = False) -> list[Dataset]:
+    """The datasets asked for by name; by default every shared one and every sample (--quick: two samples)."""
+    available = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets()}
+    if names is None:
+        names = QUICK_DATASETS if quick else list(available)
+    names = list(names)
+    unknown = [n for n in names if n not in available]
+    if unknown:
+        where = "" if shared is not None else " (no shared folder found: give --shared)"
+        raise VolrenError(f"unknown datasets {unknown}; choose from {', '.join(available)}{where}")
+    return [available[n] for n in names]

@@ -1,0 +1,181 @@
+"""The quality settings `volren bench run` sweeps, per renderer and volume kind.
+
+A configuration is one point of a renderer's time/error curve. Each renderer sweeps the knob that
+trades time for error most directly (the step for `slicer` and VTK's stepped mappers, the table
+size for `tetra`, whose rays step cell to cell) and, at one middle setting, turns the other knobs
+one at a time (pre-integration, table size, jitter, skipping), so that the sweep stays linear in
+the number of knobs instead of their product. VTK's mappers are peers: each one is a curve.
+
+`curve` names the renderer as plotted and compared: `slicer`, `tetra` (ours) or `vtk-<mapper>`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from volren.errors import VolrenError
+from volren.model.settings import RenderSettings
+
+#: Every curve a sweep can hold, by volume kind, in plotting order.
+CURVES: dict[str, tuple[str, ...]] = {
+    "uniform": ("slicer", "vtk-smart", "vtk-gpu", "vtk-fixed_point"),
+    "tet": ("tetra", "vtk-raycast", "vtk-projected", "vtk-zsweep"),
+}
+#: Curves that time one cold frame only: VTK's ZSweep takes 30-80 s per 512x512 frame.
+ONE_FRAME_CURVES = frozenset({"vtk-zsweep"})
+
+FULL_STEPS = (2.0, 1.0, 0.5, 0.25)
+QUICK_STEPS = (2.0, 0.5)
+#: The step at which the other knobs are turned one at a time.
+MIDDLE_STEP = 0.5
+SLICER_TABLE = 512
+TETRA_TABLE = 256
+TETRA_LENGTHS = 32
+
+
+@dataclass(frozen=True)
+class Config:
+    """One renderer with one set of quality settings; None marks a knob the renderer lacks."""
+
+    curve: str
+    step: float | None = None
+    preintegration: bool | None = None
+    table_size: int | None = None
+    table_lengths: int | None = None
+    jitter: bool | None = None
+    skipping: bool | None = None
+
+    @property
+    def ours(self) -> bool:
+        return not self.curve.startswith("vtk-")
+
+    @property
+    def renderer(self) -> str:
+        """The registry name of the renderer that draws this configuration."""
+        return "vtk" if not self.ours else self.curve
+
+    @property
+    def one_frame(self) -> bool:
+        return self.curve in ONE_FRAME_CURVES
+
+    @property
+    def label(self) -> str:
+        """The settings as short text, e.g. 'step 0.5, pre 512, jitter, no skipping'."""
+        parts = []
+        if self.step is not None:
+            parts.append(f"step {self.step:g}")
+        if self.preintegration:
+            parts.append(f"pre {self.table_size}" if self.table_size else "pre")
+        elif self.preintegration is not None:
+            parts.append("post" if self.ours else "linear")
+        elif self.table_size is not None:
+            parts.append(f"table {self.table_size}x{self.table_lengths}")
+        if self.jitter:
+            parts.append("jitter")
+        if self.skipping is False:
+            parts.append("no skipping")
+        return ", ".join(parts) or "default"
+
+    def settings(self) -> RenderSettings:
+        """The RenderSettings that make the renderer draw this configuration."""
+        options: dict[str, object] = {}
+        if self.curve == "slicer":
+            options.update(
+                table_size=self.table_size or SLICER_TABLE,
+                empty_space_skipping=bool(self.skipping),
+                early_termination=bool(self.skipping),
+            )
+        elif self.curve == "tetra":
+            options.update(
+                table_size=self.table_size,
+                table_lengths=self.table_lengths,
+                termination_alpha=0.999 if self.skipping else 1.0,
+            )
+        else:
+            options["mapper"] = self.curve.removeprefix("vtk-")
+        return RenderSettings(
+            step=self.step if self.step is not None else RenderSettings().step,
+            preintegration=bool(self.preintegration),
+            jitter=bool(self.jitter),
+            options=options,
+        )
+
+
+def _slicer(steps: Iterable[float], tables: Iterable[int]) -> list[Config]:
+    out = [
+        Config("slicer", step, pre, SLICER_TABLE if pre else None, jitter=False, skipping=True)
+        for step in steps
+        for pre in (False, True)
+    ]
+    out += [Config("slicer", MIDDLE_STEP, True, n, jitter=False, skipping=True) for n in tables]
+    for pre in (False, True):
+        table = SLICER_TABLE if pre else None
+        out.append(Config("slicer", MIDDLE_STEP, pre, table, jitter=True, skipping=True))
+        out.append(Config("slicer", MIDDLE_STEP, pre, table, jitter=False, skipping=False))
+    return out
+
+
+def _vtk_uniform(steps: Iterable[float]) -> list[Config]:
+    steps = list(steps)
+    out = [Config("vtk-smart")]
+    out += [Config("vtk-gpu", step, jitter=False) for step in steps]
+    out.append(Config("vtk-gpu", MIDDLE_STEP, jitter=True))
+    out += [Config("vtk-fixed_point", step) for step in steps]
+    return out
+
+
+def _tetra(tables: Iterable[int], short_lengths: bool) -> list[Config]:
+    out = [Config("tetra", table_size=n, table_lengths=TETRA_LENGTHS, skipping=True) for n in tables]
+    if short_lengths:
+        out.append(Config("tetra", table_size=TETRA_TABLE, table_lengths=8, skipping=True))
+    out.append(Config("tetra", table_size=TETRA_TABLE, table_lengths=TETRA_LENGTHS, skipping=False))
+    return out
+
+
+def _vtk_tets() -> list[Config]:
+    return [
+        Config("vtk-raycast", preintegration=False),
+        Config("vtk-raycast", preintegration=True),
+        Config("vtk-projected"),
+        Config("vtk-zsweep", preintegration=False),
+    ]
+
+
+def configs(
+    kind: str, quick: bool = False, steps: Iterable[float] | None = None, curves: Iterable[str] | None = None
+) -> list[Config]:
+    """The sweep for a volume of this kind: the full one, or a few points per curve with `quick`;
+    `steps` replaces the step list, `curves` keeps only those curves."""
+    if kind not in CURVES:
+        raise VolrenError(f"no benchmark sweep for {kind} volumes")
+    steps = list(steps) if steps is not None else list(QUICK_STEPS if quick else FULL_STEPS)
+    if kind == "uniform":
+        out = _slicer(steps, (64,) if quick else (64, 2048)) + _vtk_uniform(steps)
+    else:
+        out = _tetra((32, TETRA_TABLE) if quick else (32, 64, 128, TETRA_TABLE, 512), not quick) + _vtk_tets()
+    if curves is not None:
+        wanted = set(curves)
+        out = [c for c in out if c.curve in wanted]
+    return _unique(out)
+
+
+def _unique(configs: list[Config]) -> list[Config]:
+    """The configurations in order, each once (a swept step may equal the middle step)."""
+    seen: set[Config] = set()
+    out = []
+    for c in configs:
+        if c not in seen:
+            seen.add(c)
+            out.append(c)
+    return out
+
+
+def check_curves(names: Iterable[str]) -> list[str]:
+    """The curve names, or an error listing the valid ones."""
+    names = list(names)
+    valid = [c for kind in CURVES.values() for c in kind]
+    unknown = [n for n in names if n not in valid]
+    if unknown or not names:
+        raise VolrenError(f"unknown renderers {unknown or names}; choose from {', '.join(valid)}")
+    return names
