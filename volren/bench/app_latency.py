@@ -40,6 +40,17 @@ class AppTiming:
     preview_size: tuple[int, int]  # the size of the preview frames seen while rotating
 
 
+def application():
+    """The QApplication (offscreen where there is no display: the numbers do not need a screen)."""
+    import os
+
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+    from PyQt5.QtWidgets import QApplication
+
+    return QApplication.instance() or QApplication(["volren"])
+
+
 def _wait(app, condition: Callable[[], bool], timeout_s: float) -> bool:
     end = time.perf_counter() + timeout_s
     while not condition():

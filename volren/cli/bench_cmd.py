@@ -28,6 +28,23 @@ def _int_list(minimum: int):
     return parse
 
 
+def _shared_path(text: str | None) -> Path:
+    """The --shared folder, or ../shared beside the repository."""
+    return Path(text) if text else Path(__file__).resolve().parents[2].parent / "shared"
+
+
+def _has_data(shared: Path) -> bool:
+    return (shared / "data").is_dir() and (shared / "scenes").is_dir()
+
+
+def _shared(text: str | None) -> Path:
+    """The shared folder with data/ and scenes/, or a one-line error."""
+    shared = _shared_path(text)
+    if not _has_data(shared):
+        raise VolrenError(f"{shared}: no data/ and scenes/ folders there (give --shared)")
+    return shared
+
+
 def add_parser(sub) -> None:
     bench = sub.add_parser("bench", help="benchmarks (print tables of times and errors)")
     kinds = bench.add_subparsers(dest="bench", metavar="BENCHMARK", required=True)
@@ -125,9 +142,7 @@ def run_slicer(args: argparse.Namespace) -> int:
     from volren.bench import slicer_table
     from volren.bench.vtk_vs_reference import SCENES
 
-    shared = Path(args.shared) if args.shared else Path(__file__).resolve().parents[2].parent / "shared"
-    if not (shared / "data").is_dir() or not (shared / "scenes").is_dir():
-        raise VolrenError(f"{shared}: no data/ and scenes/ folders there (give --shared)")
+    shared = _shared(args.shared)
     datasets = [d for d in args.datasets.split(",") if d]
     unknown = [d for d in datasets if d not in SCENES or SCENES[d][0].startswith("tets/")]
     if unknown:
@@ -196,7 +211,7 @@ def run_skip(args: argparse.Namespace) -> int:
     if not renderers or set(renderers) - set(skipping.RENDERERS):
         names = ", ".join(skipping.RENDERERS)
         raise VolrenError(f"--renderers must name some of {names}, got {args.renderers!r}")
-    shared = Path(args.shared) if args.shared else Path(__file__).resolve().parents[2].parent / "shared"
+    shared = _shared_path(args.shared)
     kinds, scenes = skipping.plan(shared, args.samples, args.datasets, args.styles, args.quick)
     base = RenderSettings(step=args.step, preintegration=args.preintegration)
     print(skipping.HEADER)
@@ -259,11 +274,9 @@ def run_run(args: argparse.Namespace) -> int:
         raise VolrenError("--size must be at least 8, --frames at least 1 and --turn finite and >= 0")
     steps = _float_list(args.steps, "--steps") if args.steps else None
     curves = sweep.check_curves(_names(args.renderers)) if args.renderers else None
-    shared = Path(args.shared) if args.shared else Path(__file__).resolve().parents[2].parent / "shared"
-    if not (shared / "data").is_dir() or not (shared / "scenes").is_dir():
-        if args.shared:
-            raise VolrenError(f"{shared}: no data/ and scenes/ folders there")
-        shared = None
+    shared = _shared(args.shared) if args.shared else _shared_path(None)
+    if not _has_data(shared):
+        shared = None  # the default folder is absent: bundled samples only
     chosen = datasets.select(_names(args.datasets), shared, args.quick)
     styles = _names(args.tfs)
 
@@ -394,16 +407,7 @@ def add_app_parsers(kinds) -> None:
     b.set_defaults(run=run_all)
 
 
-def _shared(text: str | None) -> Path:
-    shared = Path(text) if text else Path(__file__).resolve().parents[2].parent / "shared"
-    if not (shared / "data").is_dir() or not (shared / "scenes").is_dir():
-        raise VolrenError(f"{shared}: no data/ and scenes/ folders there (give --shared)")
-    return shared
-
-
 def run_app(args: argparse.Namespace) -> int:
-    import os
-
     from volren.bench import app_latency
     from volren.bench.vtk_vs_reference import SCENES
 
@@ -414,11 +418,7 @@ def run_app(args: argparse.Namespace) -> int:
         raise VolrenError(f"unknown datasets {unknown}; choose from {', '.join(SCENES)}")
     if args.edits < 1 or not (math.isfinite(args.seconds) and args.seconds > 0):
         raise VolrenError("--edits must be at least 1 and --seconds positive")
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
-    from PyQt5.QtWidgets import QApplication
-
-    app = QApplication.instance() or QApplication(["volren"])
+    app = app_latency.application()
     lines = [app_latency.HEADER]
     print(app_latency.HEADER, flush=True)
     for dataset in datasets:

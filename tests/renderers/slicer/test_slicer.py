@@ -417,7 +417,7 @@ def test_2d_tf_refuses_preintegration(scene):
     volume, _, camera = scene
     lo, hi = volume.value_range
     tf2 = value_only_2d([(lo, hi, (1, 1, 1), 0.5)], lo, hi, 1.0)
-    with pytest.raises(VolrenError, match="1D transfer function"):
+    with pytest.raises(VolrenError, match="no pre-integration of 2D transfer functions"):
         render("slicer", volume, tf2, RenderSettings(preintegration=True), camera)
 
 
