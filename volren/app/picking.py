@@ -70,15 +70,8 @@ class PickResult:
 
 def pixel_ray(camera: Camera, x: float, y: float, width: int, height: int) -> tuple[NDArray, NDArray]:
     """Origin (on the near plane) and unit direction of the ray through the centre of pixel (x, y),
-    exactly as `Camera.pixel_rays` computes them for the whole image."""
-    inv = np.linalg.inv(camera.projection_matrix(width / height) @ camera.view_matrix())
-    nx = (x + 0.5) / width * 2.0 - 1.0
-    ny = 1.0 - (y + 0.5) / height * 2.0
-    near = inv @ np.array([nx, ny, -1.0, 1.0])
-    far = inv @ np.array([nx, ny, 1.0, 1.0])
-    origin = near[:3] / near[3]
-    direction = far[:3] / far[3] - origin
-    return origin, direction / np.linalg.norm(direction)
+    the ray `Camera.pixel_rays` gives there (to rounding)."""
+    return camera.rays(width, height, x, y)
 
 
 # ----------------------------------------------------------------------------- uniform grids

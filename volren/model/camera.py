@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from volren.errors import VolrenError
 
@@ -144,10 +144,17 @@ class Camera:
 
         Origins lie on the near clipping plane, as in a GPU ray caster.
         """
+        xx, yy = np.meshgrid(np.arange(width), np.arange(height))
+        return self.rays(width, height, xx, yy)
+
+    def rays(
+        self, width: int, height: int, x: ArrayLike, y: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Origins and unit directions (..., 3) of the rays through the centres of pixels (x, y) of a
+        width x height image: `pixel_rays` at those pixels (to rounding; picking asks for one pixel)."""
         inv = np.linalg.inv(self.projection_matrix(width / height) @ self.view_matrix())
-        x = (np.arange(width) + 0.5) / width * 2.0 - 1.0
-        y = 1.0 - (np.arange(height) + 0.5) / height * 2.0
-        xx, yy = np.meshgrid(x, y)
+        xx = (np.asarray(x, dtype=np.float64) + 0.5) / width * 2.0 - 1.0
+        yy = 1.0 - (np.asarray(y, dtype=np.float64) + 0.5) / height * 2.0
         ones = np.ones_like(xx)
 
         def unproject(z: float) -> NDArray:
