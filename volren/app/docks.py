@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from PyQt5.QtCore import Qt
 from PyQt5.QtGui import QKeySequence
-from PyQt5.QtWidgets import QDockWidget, QScrollArea, QVBoxLayout, QWidget
+from PyQt5.QtWidgets import QDockWidget, QGroupBox, QScrollArea, QVBoxLayout, QWidget
 
 from volren.app.panels import (
     BackgroundPanel,
@@ -33,8 +33,6 @@ if TYPE_CHECKING:
 
 
 def _titled(title: str, panel: QWidget) -> QWidget:
-    from PyQt5.QtWidgets import QGroupBox
-
     box = QGroupBox(title)
     layout = QVBoxLayout(box)
     layout.setContentsMargins(4, 4, 4, 4)

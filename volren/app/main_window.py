@@ -88,7 +88,6 @@ class MainWindow(QMainWindow):
         """`settings` keeps the recent files (default: the app's QSettings; tests pass their own)."""
         super().__init__(parent)
         self.state = state or ViewState()
-        self._registry = registry
         self.registry = registry
         #: False in headless runs (--screenshot): errors are only emitted, never shown modally.
         self.show_error_dialogs = True
@@ -301,7 +300,7 @@ class MainWindow(QMainWindow):
         assert volume is not None and loaded.transfer_function is not None
         settings = loaded.settings or self.state.settings
         options, notes = renderer_options(
-            volume.kind, settings, self._registry, loaded.transfer_function.dims
+            volume.kind, settings, self.registry, loaded.transfer_function.dims
         )
         wanted = requested_renderer or loaded.renderer or self.state.renderer
         chosen = pick_renderer(options, wanted)
@@ -374,7 +373,7 @@ class MainWindow(QMainWindow):
     def _options(self) -> tuple[list[RendererOption], list[str]]:
         volume, tf = self.state.volume, self.state.transfer_function
         dims = tf.dims if tf is not None else 1
-        return renderer_options(volume.kind if volume else None, self.state.settings, self._registry, dims)
+        return renderer_options(volume.kind if volume else None, self.state.settings, self.registry, dims)
 
     def renderer_options(self) -> list[RendererOption]:
         return self._options()[0]
