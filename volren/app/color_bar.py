@@ -1,4 +1,4 @@
-"""The colour bar of the 1D TF editor, and the value axis it shares with the opacity curve.
+"""The colour bar of the 1D TF editor: the TF's colours along the value axis, with its stops.
 
 The bar shows the TF's colours along the value axis with a marker under each colour stop, as
 ParaView's colour map editor does: click adds a stop (in the colour already shown there, so the
@@ -12,16 +12,11 @@ the viewport previews it and the undo history records it as one step.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
-
 import numpy as np
 from PyQt5.QtCore import QPoint, QPointF, QRectF, QSize, Qt
 from PyQt5.QtGui import (
     QColor,
-    QHideEvent,
     QImage,
-    QKeyEvent,
     QMouseEvent,
     QPainter,
     QPaintEvent,
@@ -30,49 +25,9 @@ from PyQt5.QtGui import (
 )
 from PyQt5.QtWidgets import QColorDialog, QSizePolicy, QWidget
 
+from volren.app.point_canvas import MARGIN, PICK_RADIUS, PointCanvas, ValueAxis, axis_span, neighbours
 from volren.app.state import ViewState
 from volren.model.transfer_function import TransferFunction1D
-
-#: Horizontal room at both ends of the axis (px): a marker or point at the end stays whole.
-MARGIN = 8
-#: How close (px) a click must be to a stop or point to pick it rather than add a new one.
-PICK_RADIUS = 6
-
-
-@dataclass(frozen=True)
-class ValueAxis:
-    """Data values <-> widget x, shared by the opacity curve and the colour bar so they line up."""
-
-    lo: float
-    hi: float
-
-    @classmethod
-    def spanning(cls, *ranges: tuple[float, float]) -> ValueAxis:
-        """The union of `ranges`, widened when it is a single value (a constant volume or TF)."""
-        lo = min(r[0] for r in ranges)
-        hi = max(r[1] for r in ranges)
-        if not hi > lo:
-            pad = 0.5 * max(abs(lo), 1.0)
-            lo, hi = lo - pad, hi + pad
-        return cls(float(lo), float(hi))
-
-    def to_x(self, value: Any, width: int) -> Any:
-        """Widget x of `value` (a number or an array) in a widget `width` pixels wide."""
-        return MARGIN + (value - self.lo) / (self.hi - self.lo) * _span(width)
-
-    def to_value(self, x: Any, width: int) -> Any:
-        """The data value at widget x (a number or an array)."""
-        return self.lo + (x - MARGIN) / _span(width) * (self.hi - self.lo)
-
-    def clamp(self, value: float, lo: float | None = None, hi: float | None = None) -> float:
-        """`value` inside the axis and inside [lo, hi] where given (a point's neighbours)."""
-        low = self.lo if lo is None else max(lo, self.lo)
-        high = self.hi if hi is None else min(hi, self.hi)
-        return float(min(max(value, low), max(low, high)))
-
-
-def _span(width: int) -> float:
-    return float(max(width - 2 * MARGIN, 1))
 
 
 def color_strip(tf: TransferFunction1D, axis: ValueAxis, width: int) -> QImage:
@@ -89,28 +44,14 @@ def tf_color(tf: TransferFunction1D, value: float) -> QColor:
     return QColor.fromRgbF(*(float(c) for c in rgb[0]))
 
 
-def neighbours(xs: np.ndarray, index: int) -> tuple[float | None, float | None]:
-    """The x of the points left and right of `index` (None at the ends): a dragged point stays
-    between them, so dragging never reorders points."""
-    left = float(xs[index - 1]) if index > 0 else None
-    right = float(xs[index + 1]) if index + 1 < len(xs) else None
-    return left, right
-
-
-class ColorBar(QWidget):
+class ColorBar(PointCanvas):
     """The TF's colours with a marker per colour stop; edits the state's 1D TF."""
 
     STRIP_HEIGHT = 16
     MARKER_HEIGHT = 9
 
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
-        super().__init__(parent)
-        self._state = state
-        self._axis = ValueAxis(0.0, 1.0)
-        self._drag: int | None = None
-        #: Index of the selected colour stop (Delete removes it), or None.
-        self.selected: int | None = None
-        self.setFocusPolicy(Qt.StrongFocus)
+        super().__init__(state, parent)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Fixed)
         self.setFixedHeight(2 + self.STRIP_HEIGHT + self.MARKER_HEIGHT + 3)
         self.setMinimumWidth(2 * MARGIN + 40)
@@ -121,32 +62,16 @@ class ColorBar(QWidget):
     def sizeHint(self) -> QSize:
         return QSize(300, self.height())
 
-    # ------------------------------------------------------------------ model access
-    def transfer_function(self) -> TransferFunction1D | None:
-        tf = self._state.transfer_function
-        return tf if isinstance(tf, TransferFunction1D) else None
+    # ------------------------------------------------------------------ the points edited
+    def _points(self, tf: TransferFunction1D) -> np.ndarray:
+        return tf.color_points
 
-    @property
-    def axis(self) -> ValueAxis:
-        return self._axis
-
-    def set_axis(self, axis: ValueAxis) -> None:
-        self._axis = axis
-        self.update()
-
-    def model_changed(self) -> None:
-        """The TF changed or was replaced: forget a selection that no longer exists."""
-        tf = self.transfer_function()
-        if tf is None or (self.selected is not None and self.selected >= len(tf.color_points)):
-            self.selected = None
-        self.update()
+    def _set_points(self, tf: TransferFunction1D, points: np.ndarray) -> None:
+        tf.set_color_points(points)
 
     # ------------------------------------------------------------------ geometry
     def _strip_rect(self) -> QRectF:
-        return QRectF(MARGIN, 2, _span(self.width()), self.STRIP_HEIGHT)
-
-    def value_at(self, x: float) -> float:
-        return self._axis.to_value(x, self.width())
+        return QRectF(MARGIN, 2, axis_span(self.width()), self.STRIP_HEIGHT)
 
     def position_of(self, value: float) -> QPoint:
         """Where `value` is on the strip, in this widget's pixels."""
@@ -160,12 +85,12 @@ class ColorBar(QWidget):
         y = 2 + self.STRIP_HEIGHT + self.MARKER_HEIGHT // 2
         return [QPoint(round(self._axis.to_x(x, self.width())), y) for x in tf.color_points[:, 0]]
 
-    def _pick(self, x: float) -> int | None:
-        """The stop nearest to `x` within PICK_RADIUS (the whole height counts: a bar is thin)."""
+    def _pick(self, pos: QPointF) -> int | None:
+        """The stop nearest to `pos` within PICK_RADIUS in x (the whole height counts: a bar is thin)."""
         tf = self.transfer_function()
         if tf is None:
             return None
-        distance = np.abs(self._axis.to_x(tf.color_points[:, 0], self.width()) - x)
+        distance = np.abs(self._axis.to_x(tf.color_points[:, 0], self.width()) - pos.x())
         best = int(np.argmin(distance))
         return best if distance[best] <= PICK_RADIUS else None
 
@@ -194,65 +119,26 @@ class ColorBar(QWidget):
         points[index, 1:] = (color.redF(), color.greenF(), color.blueF())
         tf.set_color_points(points)
 
-    def delete_selected(self) -> bool:
-        """Remove the selected stop unless it is the first or the last; True if removed."""
-        tf = self.transfer_function()
-        if tf is None or self.selected is None:
-            return False
-        points = tf.color_points
-        if not 0 < self.selected < len(points) - 1:
-            return False
-        index, self.selected = self.selected, None
-        tf.set_color_points(np.delete(points, index, axis=0))
-        return True
+    def _add_at(self, pos: QPointF) -> int:
+        return self.add_stop(self.value_at(pos.x()))
 
-    def _move(self, index: int, x: float) -> None:
+    def _move(self, index: int, pos: QPointF) -> None:
         tf = self.transfer_function()
         if tf is None or index >= len(tf.color_points):
             return
         points = tf.color_points
         left, right = neighbours(points[:, 0], index)
-        value = self._axis.clamp(self.value_at(x), left, right)
+        value = self._axis.clamp(self.value_at(pos.x()), left, right)
         if value != points[index, 0]:
             points[index, 0] = value
             tf.set_color_points(points)
 
     # ------------------------------------------------------------------ mouse and keys
-    def mousePressEvent(self, event: QMouseEvent) -> None:
-        if self.transfer_function() is None:
-            return
-        x = event.localPos().x()
-        hit = self._pick(x)
-        if event.button() == Qt.RightButton:
-            if hit is not None:
-                self.selected = hit
-                self.delete_selected()
-            return
-        if event.button() != Qt.LeftButton:
-            return
-        self._state.begin_interaction()
-        self._drag = hit if hit is not None else self.add_stop(self.value_at(x))
-        self.selected = self._drag
-        self.update()
-
-    def mouseMoveEvent(self, event: QMouseEvent) -> None:
-        if self._drag is not None:
-            self._move(self._drag, event.localPos().x())
-
-    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
-        if event.button() == Qt.LeftButton:
-            self._end_drag()
-
-    def _end_drag(self) -> None:
-        if self._drag is not None:
-            self._drag = None
-            self._state.end_interaction()
-
     def mouseDoubleClickEvent(self, event: QMouseEvent) -> None:
         if event.button() != Qt.LeftButton or self.transfer_function() is None:
             return
         self._end_drag()
-        hit = self._pick(event.localPos().x())
+        hit = self._pick(event.localPos())
         if hit is None:
             return
         self.selected = hit
@@ -262,15 +148,6 @@ class ColorBar(QWidget):
         color = self.choose_color(QColor.fromRgbF(float(r), float(g), float(b)))
         if color is not None and self.transfer_function() is tf and hit < len(tf.color_points):
             self.set_stop_color(hit, color)
-
-    def keyPressEvent(self, event: QKeyEvent) -> None:
-        if event.key() in (Qt.Key_Delete, Qt.Key_Backspace) and self.delete_selected():
-            return
-        super().keyPressEvent(event)
-
-    def hideEvent(self, event: QHideEvent) -> None:
-        self._end_drag()  # a drag cut short must not leave the state "interacting"
-        super().hideEvent(event)
 
     # ------------------------------------------------------------------ painting
     def paintEvent(self, event: QPaintEvent) -> None:

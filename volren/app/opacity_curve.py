@@ -13,12 +13,9 @@ begin/end_interaction, so it previews cheaply and is one undo step.
 from __future__ import annotations
 
 import numpy as np
-from PyQt5.QtCore import QPoint, QPointF, QRectF, QSize, Qt
+from PyQt5.QtCore import QPoint, QPointF, QRectF, QSize
 from PyQt5.QtGui import (
     QColor,
-    QHideEvent,
-    QKeyEvent,
-    QMouseEvent,
     QPainter,
     QPainterPath,
     QPaintEvent,
@@ -28,8 +25,9 @@ from PyQt5.QtGui import (
 )
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
-from volren.app.color_bar import MARGIN, PICK_RADIUS, ValueAxis, color_strip, neighbours, tf_color
+from volren.app.color_bar import color_strip, tf_color
 from volren.app.histograms import Histogram
+from volren.app.point_canvas import MARGIN, PICK_RADIUS, PointCanvas, neighbours
 from volren.app.state import ViewState
 from volren.model.transfer_function import TransferFunction1D
 
@@ -39,19 +37,13 @@ TOP, BOTTOM = 8, 6
 FILL_OPACITY = 0.55
 
 
-class OpacityCurve(QWidget):
+class OpacityCurve(PointCanvas):
     """The opacity points of the state's 1D TF over the value axis, with the histogram behind."""
 
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
-        super().__init__(parent)
-        self._state = state
-        self._axis = ValueAxis(0.0, 1.0)
+        super().__init__(state, parent)
         self._histogram: Histogram | None = None
         self._log_counts = False
-        self._drag: int | None = None
-        #: Index of the selected opacity point (Delete removes it), or None.
-        self.selected: int | None = None
-        self.setFocusPolicy(Qt.StrongFocus)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(2 * MARGIN + 40, TOP + BOTTOM + 40)
         self.setToolTip("Opacity: click to add a point, drag to move it, right-click or Delete to remove it")
@@ -59,18 +51,12 @@ class OpacityCurve(QWidget):
     def sizeHint(self) -> QSize:
         return QSize(300, 150)
 
-    # ------------------------------------------------------------------ model access
-    def transfer_function(self) -> TransferFunction1D | None:
-        tf = self._state.transfer_function
-        return tf if isinstance(tf, TransferFunction1D) else None
+    # ------------------------------------------------------------------ the points edited
+    def _points(self, tf: TransferFunction1D) -> np.ndarray:
+        return tf.opacity_points
 
-    @property
-    def axis(self) -> ValueAxis:
-        return self._axis
-
-    def set_axis(self, axis: ValueAxis) -> None:
-        self._axis = axis
-        self.update()
+    def _set_points(self, tf: TransferFunction1D, points: np.ndarray) -> None:
+        tf.set_opacity_points(points)
 
     @property
     def histogram(self) -> Histogram | None:
@@ -88,19 +74,9 @@ class OpacityCurve(QWidget):
         self._log_counts = bool(log)
         self.update()
 
-    def model_changed(self) -> None:
-        """The TF changed or was replaced: forget a selection that no longer exists."""
-        tf = self.transfer_function()
-        if tf is None or (self.selected is not None and self.selected >= len(tf.opacity_points)):
-            self.selected = None
-        self.update()
-
     # ------------------------------------------------------------------ geometry
     def _plot_height(self) -> float:
         return float(max(self.height() - TOP - BOTTOM, 1))
-
-    def value_at(self, x: float) -> float:
-        return self._axis.to_value(x, self.width())
 
     def opacity_at(self, y: float) -> float:
         """The opacity at widget y, clamped to [0, 1]."""
@@ -140,17 +116,8 @@ class OpacityCurve(QWidget):
         tf.set_opacity_points(np.insert(points, index, [value, min(max(opacity, 0.0), 1.0)], axis=0))
         return index
 
-    def delete_selected(self) -> bool:
-        """Remove the selected point unless it is the first or the last; True if removed."""
-        tf = self.transfer_function()
-        if tf is None or self.selected is None:
-            return False
-        points = tf.opacity_points
-        if not 0 < self.selected < len(points) - 1:
-            return False
-        index, self.selected = self.selected, None
-        tf.set_opacity_points(np.delete(points, index, axis=0))
-        return True
+    def _add_at(self, pos: QPointF) -> int:
+        return self.add_point(self.value_at(pos.x()), self.opacity_at(pos.y()))
 
     def _move(self, index: int, pos: QPointF) -> None:
         tf = self.transfer_function()
@@ -164,47 +131,6 @@ class OpacityCurve(QWidget):
             tf.set_opacity_points(points)
 
     # ------------------------------------------------------------------ mouse and keys
-    def mousePressEvent(self, event: QMouseEvent) -> None:
-        if self.transfer_function() is None:
-            return
-        pos = event.localPos()
-        hit = self._pick(pos)
-        if event.button() == Qt.RightButton:
-            if hit is not None:
-                self.selected = hit
-                self.delete_selected()
-            return
-        if event.button() != Qt.LeftButton:
-            return
-        self._state.begin_interaction()
-        self._drag = (
-            hit if hit is not None else self.add_point(self.value_at(pos.x()), self.opacity_at(pos.y()))
-        )
-        self.selected = self._drag
-        self.update()
-
-    def mouseMoveEvent(self, event: QMouseEvent) -> None:
-        if self._drag is not None:
-            self._move(self._drag, event.localPos())
-
-    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
-        if event.button() == Qt.LeftButton:
-            self._end_drag()
-
-    def _end_drag(self) -> None:
-        if self._drag is not None:
-            self._drag = None
-            self._state.end_interaction()
-
-    def keyPressEvent(self, event: QKeyEvent) -> None:
-        if event.key() in (Qt.Key_Delete, Qt.Key_Backspace) and self.delete_selected():
-            return
-        super().keyPressEvent(event)
-
-    def hideEvent(self, event: QHideEvent) -> None:
-        self._end_drag()  # a drag cut short must not leave the state "interacting"
-        super().hideEvent(event)
-
     # ------------------------------------------------------------------ painting
     def paintEvent(self, event: QPaintEvent) -> None:
         painter = QPainter(self)

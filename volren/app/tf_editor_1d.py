@@ -36,10 +36,11 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from volren.app.color_bar import ColorBar, ValueAxis
+from volren.app.color_bar import ColorBar
 from volren.app.colormap_presets import PRESET_NAMES, apply_preset, unit_stops
 from volren.app.histograms import value_histogram
 from volren.app.opacity_curve import OpacityCurve
+from volren.app.point_canvas import ValueAxis
 from volren.app.state import Change, ViewState
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
