@@ -136,6 +136,25 @@ def test_face_matching_without_packed_keys(monkeypatch):
         assert np.array_equal(getattr(packed, name), getattr(columns, name))
 
 
+def test_repeated_points_with_equal_values_are_merged():
+    """A mesh whose cells use their own copies of shared points has the adjacency of the shared
+    mesh; copies whose values differ (a jump in the field) stay apart."""
+    points, tets = grid_mesh(seed=4)
+    values = points @ np.array([1.0, -2.0, 0.5])
+    shared = build_mesh(points, tets, values)
+    pick = np.random.default_rng(2).integers(0, 2, size=tets.shape) * len(points)
+    copies = build_mesh(np.concatenate([points, points]), tets + pick, np.concatenate([values, values]))
+    for name in ("tets", "neighbors", "neighbor_faces", "boundary_faces", "face_normals", "face_offsets"):
+        assert np.array_equal(getattr(copies, name), getattr(shared, name)), name
+    jump = build_mesh(np.concatenate([points, points]), tets + pick, np.concatenate([values, values + 1.0]))
+    assert jump.n_boundary > shared.n_boundary
+    check_adjacency(jump)
+    # -0.0 and 0.0 are the same coordinate
+    flipped = np.concatenate([points, np.where(points == 0.0, -0.0, points)])
+    assert np.array_equal(build_mesh(flipped, tets + pick, np.concatenate([values, values])).neighbors,
+                          shared.neighbors)
+
+
 def test_gradients_are_exact_for_a_linear_field():
     points, tets = grid_mesh(seed=2)
     a, b = np.array([0.7, -1.3, 2.1]), 0.4

@@ -10,6 +10,8 @@ Conventions (shared with the ray-casting kernels):
 - Face f of tet t is the face OPPOSITE vertex f, i.e. the vertices ``tets[t]`` without index f.
   `FACE_VERTICES[f]` lists the other three local indices in the order whose right-hand normal
   points out of a positively oriented tet.
+- Points repeated with the same value are one point (`merged_duplicates`): ``tets`` name the first
+  copy, so faces between cells written with their own copies match.
 - A tet is positively oriented when det[p1 - p0, p2 - p0, p3 - p0] > 0; inverted input cells get
   vertices 2 and 3 swapped.
 - A tet is *flat* when it repeats a vertex or ``|V| <= FLAT_REL_TOL * l**3`` (l its longest edge),
@@ -29,6 +31,7 @@ Conventions (shared with the ray-casting kernels):
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import tempfile
@@ -51,7 +54,7 @@ FACE_VERTICES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]], dtype=np.
 FLAT_REL_TOL = 1e-9
 
 #: Bumped whenever what `build_mesh` computes or what the cache file holds changes.
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 #: How many prepared meshes the process keeps (least recently used ones go first).
 MEMORY_CACHE_ENTRIES = 4
@@ -100,9 +103,9 @@ class PreparedMesh:
     def n_flat(self) -> int:
         return int(np.count_nonzero(self.flat))
 
-    @property
+    @functools.cached_property
     def bounds(self) -> tuple[float, float, float, float, float, float]:
-        """(xmin, xmax, ymin, ymax, zmin, zmax) of the points, VTK's order."""
+        """(xmin, xmax, ymin, ymax, zmin, zmax) of the points, VTK's order (kept: renderers ask per frame)."""
         lo = self.points.min(axis=0)
         hi = self.points.max(axis=0)
         return (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), float(lo[2]), float(hi[2]))
@@ -194,6 +197,21 @@ def _match_faces(lo: NDArray, mid: NDArray, hi: NDArray, n_points: int) -> tuple
     return first[~same_tet], second[~same_tet], int(np.count_nonzero(lengths > 2))
 
 
+def merged_duplicates(points: NDArray, values: NDArray) -> NDArray[np.int64]:
+    """For each point, the first point with the same coordinates and the same value (bit for bit).
+
+    Meshes written cell by cell (or stitched from blocks, like blunt fin) repeat points; faces
+    between such copies would not match, so rays would leave the mesh and re-enter at every one.
+    Copies with different values are kept apart: the field jumps there, and the walk carries the
+    value across matched faces."""
+    rows = np.empty((len(points), 4))
+    rows[:, :3] = points + 0.0  # -0.0 -> 0.0
+    rows[:, 3] = values + 0.0
+    _, first, inverse = np.unique(rows.view(np.dtype((np.void, 32))).ravel(), return_index=True,
+                                  return_inverse=True)
+    return first[inverse.ravel()]
+
+
 def build_mesh(points: NDArray, tets: NDArray, values: NDArray) -> PreparedMesh:
     """Prepare a mesh without any caching (`prepare_mesh` is the cached entry point)."""
     points = np.array(points, dtype=np.float64, order="C")
@@ -209,6 +227,7 @@ def build_mesh(points: NDArray, tets: NDArray, values: NDArray) -> PreparedMesh:
         raise VolrenError(f"the mesh is too large for 32-bit indices ({n} points, {m} tetrahedra)")
     if tets.min() < 0 or tets.max() >= n:
         raise VolrenError(f"tetrahedra refer to points outside 0..{n - 1}")
+    tets = merged_duplicates(points, values)[tets]
 
     # Orientation and flatness.
     p = points[tets]  # (m, 4, 3)
