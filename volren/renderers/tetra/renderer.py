@@ -30,8 +30,9 @@ from volren.model.tet_mesh import PreparedMesh, prepare_mesh
 from volren.model.volume import TetVolume
 from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, RendererBase
 from volren.renderers.reference.shading import shade_params
-from volren.renderers.reference.tets import bin_rows, prepare_tets, projected_boxes, ray_far
+from volren.renderers.reference.tets import bin_rows, prepare_tets, ray_far
 from volren.renderers.reference.tf_eval import pack_tf
+from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
 from volren.renderers.tetra.traversal import (
     AVERAGE,
     COMPOSITE,
@@ -57,8 +58,9 @@ class TetraRenderer(RendererBase):
     name: ClassVar[str] = "tetra"
     capabilities: ClassVar[Capabilities] = Capabilities(
         kinds={"tet": KindSupport(preintegration=True, shading=True, blend_modes=frozenset(BlendMode))},
-        backend="cpu",
-        summary="cell-to-cell ray casting through tetrahedra (numba) with 3D pre-integration tables",
+        backend="cpu/opengl",
+        summary="cell-to-cell ray casting through tetrahedra (numba, or compute shaders on a GPU) with 3D "
+        "pre-integration tables",
     )
     option_help: ClassVar[Mapping[str, str]] = {
         "integration": "table (default): 3D pre-integration table per segment; exact: every segment "
@@ -67,20 +69,32 @@ class TetraRenderer(RendererBase):
         "table_lengths": "segment-length layers of the 3D table (default 32)",
         "termination_alpha": "opacity at which a ray stops (default 0.999; 1 never stops early)",
         "max_steps": "most cells one walk may take before it is cut and counted (default 100000)",
+        "backend": "auto (default): the GL compute-shader walk on a hardware GPU, else numba on the CPU; "
+        "cpu; gl (OpenGL 4.3 compute shaders, also on Mesa llvmpipe; table integration only)",
     }
 
     def __init__(self) -> None:
         super().__init__()
         self._mesh: PreparedMesh | None = None
         self._planes: tuple | None = None
+        self._neighbor_faces: NDArray | None = None  # in the cells' Morton order, like _planes
         self._table_key: tuple | None = None
         self._table: tuple | None = None
+        self._gl: GLWalk | None = None
+        self._generation = 0  # which volume the GL walk's buffers hold
 
     def _volume_changed(self) -> None:
         self._mesh = None
         self._planes = None
         self._table_key = None
         self._table = None
+        self._generation += 1
+
+    def release(self) -> None:
+        if self._gl is not None:
+            self._gl.release()
+            self._gl = None
+        super().release()
 
     # ------------------------------------------------------------------------ preparation
     def _prepare(self) -> tuple[PreparedMesh, tuple]:
@@ -98,6 +112,7 @@ class TetraRenderer(RendererBase):
             tets = np.ascontiguousarray(mesh.tets[order], dtype=np.int64)
             old = mesh.neighbors[order]
             neighbors = np.ascontiguousarray(np.where(old >= 0, rank[np.maximum(old, 0)], -1), dtype=np.int64)
+            self._neighbor_faces = np.ascontiguousarray(mesh.neighbor_faces[order], dtype=np.int64)
             planes = prepare_tets(mesh.points, tets, mesh.values)
             ok = planes[5]
             # A face is on the boundary when no usable cell lies across it: flat and non-finite
@@ -141,10 +156,12 @@ class TetraRenderer(RendererBase):
         safe = np.where(behind, 1.0, w)
         px = np.ascontiguousarray((clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5)
         py = np.ascontiguousarray((1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5)
-        depth = -(pts @ view[2])
-        near = camera.clipping_range[0]
-        cut = ok & (depth[tets].min(axis=1) <= near) & (depth[tets].max(axis=1) >= near)
-        near_cells = projected_boxes(camera, width, height, mesh.points, tets, cut)
+        # pixel boxes by cell id (x0 = -1: none); no rows at all when the near plane cuts no cell
+        near_cells = np.zeros((0, 4), np.int64)
+        cut = near_plane_cells(camera, width, height, mesh.points, tets, ok, np.asarray(mesh.bounds))
+        if cut is not None:
+            near_cells = np.full((len(tets), 4), -1, np.int64)
+            near_cells[cut[0]] = cut[1]
         return (triangles, np.ascontiguousarray(cell)), px, py, behind, near_cells
 
     def _options(self) -> dict[str, Any]:
@@ -155,9 +172,14 @@ class TetraRenderer(RendererBase):
             "table_lengths": o.get("table_lengths", 32),
             "termination_alpha": o.get("termination_alpha", 0.999),
             "max_steps": o.get("max_steps", 100_000),
+            "backend": o.get("backend", "auto"),
         }
         if opts["integration"] not in ("table", "exact"):
             raise VolrenError(f"tetra option integration must be table or exact, got {opts['integration']!r}")
+        if opts["backend"] not in ("auto", "cpu", "gl"):
+            raise VolrenError(f"tetra option backend must be auto, cpu or gl, got {opts['backend']!r}")
+        if opts["backend"] == "gl" and opts["integration"] == "exact":
+            raise VolrenError("tetra option integration=exact runs on the cpu backend only (backend=cpu or auto)")
         for name, low in (("table_size", 2), ("table_lengths", 1), ("max_steps", 1)):
             v = opts[name]
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
@@ -193,22 +215,64 @@ class TetraRenderer(RendererBase):
         return self._table
 
     # ------------------------------------------------------------------------------ render
+    def _uses_gl(self, opts: dict[str, Any]) -> bool:
+        """The GL walk when asked for, or on `auto` with table integration and a hardware GPU
+        (on software rasterizers numba is faster: `docs/tetra-benchmark.md`)."""
+        if opts["backend"] == "auto":
+            return opts["integration"] == "table" and gpu_renderer() is not None
+        return opts["backend"] == "gl"
+
     def _render(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         opts = self._options()
         mesh, (tets, neighbors, planes, packed, boundary, faces) = self._prepare()
         tvals, grads, ok = planes[3], planes[4], planes[5]
-        corner = np.ascontiguousarray(mesh.points[tets[:, 0]])
         depth, ratio, lo, scale, lmax, visible = self._tables(mesh, opts["table_size"], opts["table_lengths"])
         settings = self._settings
         mode = _MODES[settings.blend_mode]
-        exact = opts["integration"] == "exact" and mode == COMPOSITE
         span = float(self._volume.value_range[1] - self._volume.value_range[0])  # type: ignore[union-attr]
         length = self._volume.characteristic_length  # type: ignore[union-attr]
         sp = shade_params(settings, camera, span, length)
-        tf = pack_tf(self._tf)  # type: ignore[arg-type]
+        if self._uses_gl(opts):
+            walk = self._gl_walk(mesh, tets, neighbors, packed, tvals, grads, ok, boundary)
+            walk.set_tables((self._generation, self._table_key), depth[..., 0], ratio, visible)
+            params = WalkParameters(mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]))
+            near = near_plane_cells(camera, width, height, mesh.points, tets, ok, np.asarray(mesh.bounds))
+            out, counters = walk.render(camera, width, height, params, near)  # float32: no copy to float64
+            counters.update(entries_dropped=0.0, cells_transparent=float(np.count_nonzero(~visible)))
+            if progress is not None:
+                progress(1.0)
+        else:
+            out, counters = self._render_cpu(camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors,
+                                             planes, packed, boundary, faces, visible, depth, ratio, lo, scale, lmax)
+        if mode == COMPOSITE:
+            rgba = np.clip(out, 0.0, 1.0, out=out)
+            np.minimum(rgba[:, :3], rgba[:, 3:4], out=rgba[:, :3])
+        else:
+            found = out[:, 1] > 0
+            rgb, alpha = self._tf.sample(np.where(found, out[:, 0], np.nan))  # type: ignore[union-attr]
+            rgba = np.concatenate([rgb * alpha[:, None], alpha[:, None]], axis=1)
+        return rgba.reshape(height, width, 4).astype(np.float32, copy=False), counters
 
+    def _gl_walk(self, mesh: PreparedMesh, tets: NDArray, neighbors: NDArray, packed: NDArray, tvals: NDArray,
+                 grads: NDArray, ok: NDArray, boundary: NDArray) -> GLWalk:
+        """The GL walk, holding this volume's mesh."""
+        if self._gl is None:
+            self._gl = GLWalk()
+        if self._gl.mesh_key != self._generation:
+            self._gl.set_mesh(self._generation, gl_mesh(mesh.points, tets, neighbors, self._neighbor_faces, packed,
+                                                        tvals, grads, ok, boundary))
+        return self._gl
+
+    def _render_cpu(self, camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors, planes, packed,
+                    boundary, faces, visible, depth, ratio, lo, scale, lmax) -> tuple[NDArray, dict[str, float]]:
+        """The numba walk over blocks of rows: (H * W, 4) float64 per pixel and the counters."""
+        tvals, grads, ok = planes[3], planes[4], planes[5]
+        corner = np.ascontiguousarray(mesh.points[tets[:, 0]])
+        exact = opts["integration"] == "exact" and mode == COMPOSITE
+        length = self._volume.characteristic_length  # type: ignore[union-attr]
+        tf = pack_tf(self._tf)  # type: ignore[arg-type]
         origins, dirs = camera.pixel_rays(width, height)
         origins = np.ascontiguousarray(origins.reshape(-1, 3))
         dirs = np.ascontiguousarray(dirs.reshape(-1, 3))
@@ -232,20 +296,12 @@ class TetraRenderer(RendererBase):
                     origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, boundary, neighbors, packed,
                     tvals, grads, corner, ok, visible, depth, ratio, lo, scale, lmax, sp, mode,
                     float(opts["termination_alpha"]), int(opts["max_steps"]), self._on_plane(mesh), exact,
-                    float(settings.step) * length, 1e-5, 10, tf, out[a:b], stats[a:b],
+                    float(self._settings.step) * length, 1e-5, 10, tf, out[a:b], stats[a:b],
                 )  # fmt: skip
                 if progress is not None:
                     progress(y1 / height)
         finally:
             numba.set_parallel_chunksize(old_chunk)
-        if mode == COMPOSITE:
-            rgba = np.clip(out, 0.0, 1.0)
-            rgba[:, :3] = np.minimum(rgba[:, :3], rgba[:, 3:4])
-        else:
-            found = out[:, 1] > 0
-            rgb, alpha = self._tf.sample(np.where(found, out[:, 0], np.nan))  # type: ignore[union-attr]
-            rgba = np.concatenate([rgb * alpha[:, None], alpha[:, None]], axis=1)
-        image = rgba.reshape(height, width, 4).astype(np.float32)
         counters = {
             "cell_steps": float(stats[:, 0].sum()),
             "cells_integrated": float(stats[:, 1].sum()),
@@ -254,7 +310,7 @@ class TetraRenderer(RendererBase):
             "entries_dropped": float(stats[:, 3].sum()),
             "cells_transparent": float(np.count_nonzero(~visible)),
         }
-        return image, counters
+        return out, counters
 
 
 def _morton_order(centres: NDArray[np.float64]) -> NDArray[np.int64]:
