@@ -53,6 +53,9 @@ TF2D_TABLE_SIZE = (512, 256)
 _BLEND_CODES = {BlendMode.COMPOSITE: 0, BlendMode.MAXIMUM: 1, BlendMode.MINIMUM: 2, BlendMode.AVERAGE: 3}
 _ALL_MODES = frozenset(BlendMode)
 _LOCAL_SIZE = 8
+#: Lanes of the march path's work counters (march.comp.glsl), 4 uint32 each.
+_STAT_LANES = 1024
+_COUNTER_BYTES = 16 * _STAT_LANES
 
 
 @dataclass(frozen=True)
@@ -491,15 +494,18 @@ class SlicerRenderer(RendererBase):
         image = self._target("march", width, height)
         image.bind_to_image(0, read=False, write=True)
         if self._counter_buffer is None:
-            self._counter_buffer = self._track(self._context().buffer(reserve=16))
+            self._counter_buffer = self._track(self._context().buffer(reserve=_COUNTER_BYTES))
         buffer = self._counter_buffer
-        buffer.write(np.zeros(4, dtype=np.uint32).tobytes())
+        buffer.write(bytes(_COUNTER_BYTES))
         buffer.bind_to_storage_buffer(1)
-        program.run(math.ceil(width / _LOCAL_SIZE), math.ceil(height / _LOCAL_SIZE), 1)
-        self._ctx.memory_barrier()
-        samples, brick_steps, terminated, hit = np.frombuffer(buffer.read(), dtype=np.uint32)
+        query = self._ctx.query(time=True)
+        with query:
+            program.run(math.ceil(width / _LOCAL_SIZE), math.ceil(height / _LOCAL_SIZE), 1)
+            self._ctx.memory_barrier()
+        lanes = np.frombuffer(buffer.read(), dtype=np.uint32).reshape(_STAT_LANES, 4).astype(np.int64)
+        samples, brick_steps, terminated, hit = lanes.sum(axis=0)
         counters.update(samples=int(samples), brick_steps=int(brick_steps), rays_terminated=int(terminated),
-                        rays_hit=int(hit), passes=1)
+                        rays_hit=int(hit), passes=1, gpu_ms=query.elapsed / 1e6)
         raw = np.frombuffer(image.read(), dtype=np.float32).reshape(height, width, 4)
         return raw
 

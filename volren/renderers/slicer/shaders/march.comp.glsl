@@ -6,12 +6,18 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2D u_image;
-layout(std430, binding = 1) buffer Counters {
-    uint samples;      // data values fetched
-    uint brick_steps;  // bricks looked at while skipping empty space
-    uint terminated;   // rays stopped by early termination
-    uint rays_hit;     // rays that met the box
-} counters;
+// Per lane: data values fetched, bricks looked at while skipping empty space, rays stopped by
+// early termination, rays that met the box. Invocations add to one of STAT_LANES lanes (the host
+// sums them): a million rays adding to the same four addresses queue on them.
+layout(std430, binding = 1) buffer Counters { uvec4 lanes[]; } counters;
+const uint STAT_LANES = 1024u;
+
+// A lane per invocation of a work group, and 16 groups of lanes: neighbouring invocations never
+// share an address.
+uint stat_lane() {
+    uint group = gl_WorkGroupID.x + gl_NumWorkGroups.x * gl_WorkGroupID.y;
+    return (gl_LocalInvocationIndex + 64u * group) % STAT_LANES;
+}
 
 uniform mat4 u_clip_to_world;
 
@@ -105,7 +111,6 @@ void main() {
 #if COMPOSITE
             result += (1.0 - result.a) * c;
             if (result.a >= u_termination) {
-                atomicAdd(counters.terminated, 1u);
                 opaque = true;
                 break;
             }
@@ -122,8 +127,10 @@ void main() {
             va = vb;
         } while (ta < run_end);
     }
-    atomicAdd(counters.samples, samples);
-    atomicAdd(counters.brick_steps, skips);
-    atomicAdd(counters.rays_hit, 1u);
+    uint lane = stat_lane();
+    atomicAdd(counters.lanes[lane].x, samples);
+    if (skips > 0u) atomicAdd(counters.lanes[lane].y, skips);
+    if (opaque) atomicAdd(counters.lanes[lane].z, 1u);
+    atomicAdd(counters.lanes[lane].w, 1u);
     imageStore(u_image, pixel, pixel_value(result));
 }
