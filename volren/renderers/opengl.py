@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ctypes
 import functools
+from typing import Any
 
 from volren.errors import VolrenError
 
@@ -41,3 +42,39 @@ def require_opengl() -> None:
     problem = opengl_problem()
     if problem:
         raise VolrenError(problem)
+
+
+class GLObjectOwner:
+    """Keeps the GL objects something made, so that releasing it can free them all (tests check
+    that it does). Subclasses set `self._objects = []` and free `self._objects` on release."""
+
+    _objects: list[Any]
+
+    def _track(self, obj: Any) -> Any:
+        self._objects.append(obj)
+        return obj
+
+    def _drop(self, obj: Any) -> None:
+        if obj is not None:
+            obj.release()
+            self._objects = [o for o in self._objects if o is not obj]
+
+    @property
+    def gl_objects(self) -> list[Any]:
+        """The GL objects held now."""
+        return list(self._objects)
+
+    def _release_gl_objects(self, ctx: Any) -> None:
+        """Free every tracked object, newest first, in `ctx` (None: the context is gone already)."""
+        if ctx is not None:
+            with ctx:
+                for obj in reversed(self._objects):
+                    obj.release()
+        self._objects.clear()
+
+
+def mat4_bytes(m: Any) -> bytes:
+    """A numpy (row-major) 4x4 matrix as GLSL's column-major float32 bytes."""
+    import numpy as np
+
+    return np.ascontiguousarray(np.asarray(m, dtype=np.float64).T, dtype=np.float32).tobytes()

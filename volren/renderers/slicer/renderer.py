@@ -39,7 +39,7 @@ from volren.model.settings import BlendMode
 from volren.model.volume import UniformVolume
 from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, RendererBase
 from volren.renderers.glsl import compile_program, load_shader
-from volren.renderers.opengl import require_opengl
+from volren.renderers.opengl import GLObjectOwner, mat4_bytes, require_opengl
 from volren.renderers.slicer import textures
 from volren.renderers.slicer.proxy_geometry import slice_polygons, triangle_fan
 
@@ -94,12 +94,7 @@ class SlicerOptions:
         return out
 
 
-def _mat4(m: NDArray) -> bytes:
-    """A numpy (row-major) 4x4 matrix as GLSL's column-major float32 bytes."""
-    return np.ascontiguousarray(np.asarray(m, dtype=np.float64).T, dtype=np.float32).tobytes()
-
-
-class SlicerRenderer(RendererBase):
+class SlicerRenderer(GLObjectOwner, RendererBase):
     """View-aligned slicing of uniform volumes on the GPU (or Mesa llvmpipe)."""
 
     name: ClassVar[str] = "slicer"
@@ -155,20 +150,6 @@ class SlicerRenderer(RendererBase):
             except Exception:
                 self._ctx = moderngl.create_standalone_context(backend="egl")
         return self._ctx
-
-    def _track(self, obj: Any) -> Any:
-        self._objects.append(obj)
-        return obj
-
-    def _drop(self, obj: Any) -> None:
-        if obj is not None:
-            obj.release()
-            self._objects = [o for o in self._objects if o is not obj]
-
-    @property
-    def gl_objects(self) -> list[Any]:
-        """The GL objects this renderer holds (tests check that `release` frees them all)."""
-        return list(self._objects)
 
     def _program(self, kind: str, defines: Mapping[str, int]) -> Any:
         key = (kind, tuple(sorted(defines.items())))
@@ -488,7 +469,7 @@ class SlicerRenderer(RendererBase):
     def _march(self, defines, camera, opts, width, height, world_to_clip, counters) -> NDArray[np.float32]:
         program = self._program("march", defines)
         self._bind(program, defines, camera, opts)
-        program["u_clip_to_world"].write(_mat4(np.linalg.inv(world_to_clip)))
+        program["u_clip_to_world"].write(mat4_bytes(np.linalg.inv(world_to_clip)))
         termination = opts.termination_alpha if opts.early_termination else 2.0
         self._set(program, "u_termination", float(termination))
         image = self._target("march", width, height)
@@ -516,7 +497,7 @@ class SlicerRenderer(RendererBase):
         volume = self._uniform_volume()
         program = self._program("slices", defines)
         self._bind(program, defines, camera, opts)
-        program["u_world_to_clip"].write(_mat4(world_to_clip))
+        program["u_world_to_clip"].write(mat4_bytes(world_to_clip))
         self._set(program, "u_eye", tuple(float(v) for v in camera.position))
         self._set(program, "u_perspective", not camera.parallel)
         box_min = np.array(volume.bounds[0::2])
@@ -652,11 +633,7 @@ class SlicerRenderer(RendererBase):
     # ------------------------------------------------------------------------------ release
     def release(self) -> None:
         """Free every GL object and the context."""
-        if self._ctx is not None:
-            with self._ctx:
-                for obj in reversed(self._objects):
-                    obj.release()
-        self._objects.clear()
+        self._release_gl_objects(self._ctx)
         self._programs.clear()
         self._tables.clear()
         self._targets.clear()

@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.renderers.glsl import compile_program, load_shader
-from volren.renderers.opengl import opengl_problem
+from volren.renderers.opengl import GLObjectOwner, mat4_bytes, opengl_problem
 from volren.renderers.reference.tets import projected_boxes
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
@@ -137,7 +137,7 @@ class WalkParameters:
     max_steps: int
 
 
-class GLWalk:
+class GLWalk(GLObjectOwner):
     """The GL objects of the walk; `render` draws one frame."""
 
     def __init__(self) -> None:
@@ -176,15 +176,6 @@ class GLWalk:
         with self.context() as ctx:
             return str(ctx.info["GL_RENDERER"])
 
-    def _track(self, obj: Any) -> Any:
-        self._objects.append(obj)
-        return obj
-
-    def _drop(self, obj: Any) -> None:
-        if obj is not None:
-            obj.release()
-            self._objects = [o for o in self._objects if o is not obj]
-
     def _buffer(self, data: NDArray) -> Any:
         # GL refuses empty buffers; a 16-byte one stands in for an empty array
         raw = data.tobytes() if data.nbytes else bytes(16)
@@ -202,10 +193,6 @@ class GLWalk:
                 program = compile_program(self.context(), compute=source)
             self._programs[key] = self._track(program)
         return self._programs[key]
-
-    @property
-    def gl_objects(self) -> list[Any]:
-        return list(self._objects)
 
     # --------------------------------------------------------------------------- uploads
     def set_mesh(self, key: Any, mesh: GLMesh) -> None:
@@ -322,7 +309,7 @@ class GLWalk:
         assert mesh is not None
         ctx = self._ctx
         program = self._program("entry_faces")
-        _set(program, "u_world_to_clip", _mat4(world_to_clip))
+        _set(program, "u_world_to_clip", mat4_bytes(world_to_clip))
         _set(program, "u_parallel", bool(camera.parallel))
         _set(program, "u_eye", tuple(float(v) for v in np.asarray(camera.position) - mesh.centre))
         _set(program, "u_view_dir", tuple(float(v) for v in camera.direction))
@@ -365,7 +352,7 @@ class GLWalk:
             buffers[name].bind_to_storage_buffer(binding)
         self._table.use(location=0)
         _set(program, "u_table", 0)
-        _set(program, "u_clip_to_world", _mat4(np.linalg.inv(world_to_clip)))
+        _set(program, "u_clip_to_world", mat4_bytes(np.linalg.inv(world_to_clip)))
         _set(program, "u_size", (width, height))
         _set(program, "u_slots", self._slots)
         _set(program, "u_lo", p.lo)
@@ -381,13 +368,10 @@ class GLWalk:
         program.run(math.ceil(width / LOCAL), math.ceil(height / LOCAL), 1)
 
     def release(self) -> None:
+        self._release_gl_objects(self._ctx)
         if self._ctx is not None:
-            with self._ctx:
-                for obj in reversed(self._objects):
-                    obj.release()
             self._ctx.release()
         self._ctx = None
-        self._objects.clear()
         self._programs.clear()
         self._mesh_buffers.clear()
         self._frame.clear()
@@ -438,11 +422,6 @@ def _set(program: Any, name: str, value: Any) -> None:
             program[name].write(value)
         else:
             program[name].value = value
-
-
-def _mat4(m: NDArray) -> bytes:
-    """A numpy (row-major) 4x4 matrix as GLSL's column-major float32 bytes."""
-    return np.ascontiguousarray(np.asarray(m, dtype=np.float64).T, dtype=np.float32).tobytes()
 
 
 def _translation(offset: NDArray) -> NDArray[np.float64]:

@@ -60,20 +60,13 @@ float entry_parameter(uint key, vec3 o, vec3 d, float t_max) {
     return t;
 }
 
-float bilinear_depth(ivec3 at, vec2 w) {
-    float d00 = texelFetch(u_table, at, 0).a;
-    float d01 = texelFetch(u_table, at + ivec3(1, 0, 0), 0).a;
-    float d10 = texelFetch(u_table, at + ivec3(0, 1, 0), 0).a;
-    float d11 = texelFetch(u_table, at + ivec3(1, 1, 0), 0).a;
-    return mix(mix(d00, d01, w.x), mix(d10, d11, w.x), w.y);
-}
-
-vec3 bilinear_colour(ivec3 at, vec2 w) {
-    vec3 c00 = texelFetch(u_table, at, 0).rgb;
-    vec3 c01 = texelFetch(u_table, at + ivec3(1, 0, 0), 0).rgb;
-    vec3 c10 = texelFetch(u_table, at + ivec3(0, 1, 0), 0).rgb;
-    vec3 c11 = texelFetch(u_table, at + ivec3(1, 1, 0), 0).rgb;
-    return mix(mix(c00, c01, w.x), mix(c10, c11, w.x), w.y);
+// The table, bilinear within the texel square at `at`: w.x the back value's fraction, w.y the front's.
+vec4 bilinear(ivec3 at, vec2 w) {
+    vec4 t00 = texelFetch(u_table, at, 0);
+    vec4 t01 = texelFetch(u_table, at + ivec3(1, 0, 0), 0);
+    vec4 t10 = texelFetch(u_table, at + ivec3(0, 1, 0), 0);
+    vec4 t11 = texelFetch(u_table, at + ivec3(1, 1, 0), 0);
+    return mix(mix(t00, t01, w.x), mix(t10, t11, w.x), w.y);
 }
 
 // A lane per invocation of a work group, and 16 groups of lanes: neighbouring invocations never
@@ -102,8 +95,9 @@ vec4 integrate_segment(float s_front, float s_back, float len) {
     float u = clamp(layers * len / u_lmax - 1.0, 0.0, layers - 1.0);
     int k0 = min(int(u), size.z - 1);
     int k1 = min(k0 + 1, size.z - 1);
-    float alpha = opacity_of_depth(len * bilinear_depth(ivec3(j0, i0, k0), w));
-    vec3 ratio = mix(bilinear_colour(ivec3(j0, i0, k0), w), bilinear_colour(ivec3(j0, i0, k1), w), u - float(k0));
+    vec4 near_layer = bilinear(ivec3(j0, i0, k0), w);
+    float alpha = opacity_of_depth(len * near_layer.a);
+    vec3 ratio = mix(near_layer.rgb, bilinear(ivec3(j0, i0, k1), w).rgb, u - float(k0));
     return vec4(ratio * alpha, alpha);
 }
 
