@@ -13,9 +13,8 @@ Techniques and their switches:
   jumped over: exact) and `early_termination` at `termination_alpha` (a ray stops with opacity >=
   alpha, so the rest could add at most 1 - alpha to any premultiplied channel).
 - tetra: early termination (off: `termination_alpha` = 1, which no ray reaches) and not integrating
-  cells whose value range maps to zero opacity. The renderer has no option for the latter, so the
-  benchmark switches it off in a subclass (`IntegrateEveryCell`); the walk steps through every cell
-  either way, so only `cells_integrated` drops. The skip is exact to the optical model, not to the
+  cells whose value range maps to zero opacity (off: `skip_transparent` = false); the walk steps
+  through every cell either way, so only `cells_integrated` drops. The skip is exact to the optical model, not to the
   image with those cells integrated: the 3D pre-integration table interpolates between its 256 value
   bins, so a segment in a cell just beside an opacity spike or ramp gets a little opacity from the
   table (measured at 512x512: 1e-4 max abs on the smooth TFs, up to 6.6e-3 on the spiky ones; on
@@ -54,7 +53,6 @@ from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import Volume
 from volren.renderers.base import Renderer
-from volren.renderers.tetra.renderer import TetraRenderer
 
 #: The termination opacity of slicer and tetra by default; early termination changes a pixel by at
 #: most 1 - ALPHA per channel.
@@ -62,15 +60,6 @@ ALPHA = 0.999
 #: Float32 rounding allowed on top of a bound (the slicer composites in float32 on the GPU).
 ROUNDING = 1e-5
 RENDERERS = ("slicer", "tetra", "vtk")
-
-
-class IntegrateEveryCell(TetraRenderer):
-    """`tetra` with its transparent-cell skip switched off: every cell a ray walks through is
-    integrated, even where the TF maps its whole value range to zero opacity."""
-
-    def _tables(self, mesh, n: int, layers: int) -> tuple:
-        *tables, visible = super()._tables(mesh, n, layers)
-        return (*tables, np.ones_like(visible))
 
 
 @dataclass(frozen=True)
@@ -83,7 +72,6 @@ class Variant:
     kind: str = "skip"  # skip: same image within `bound`; shading: a different image; reuse: same image
     shade: bool = False
     tf_edit: bool = False
-    every_cell: bool = False
     terminates: bool = True
 
 
@@ -105,11 +93,11 @@ VARIANTS: dict[str, tuple[Variant, ...]] = {
     ),
     "tetra": (
         Variant("all_on", "all on"),
-        Variant("no_transparent_skip", "transparent cells integrated", every_cell=True),
+        Variant("no_transparent_skip", "transparent cells integrated", {"skip_transparent": False}),
         Variant(
             "no_early_termination", "early termination off", {"termination_alpha": 1.0}, terminates=False
         ),
-        Variant("all_off", "all off", {"termination_alpha": 1.0}, every_cell=True, terminates=False),
+        Variant("all_off", "all off", {"termination_alpha": 1.0, "skip_transparent": False}, terminates=False),
         Variant("shading", "all on, shading on", kind="shading", shade=True),
         Variant("tf_edit", "all on, TF edited every frame", kind="reuse", tf_edit=True),
     ),
@@ -269,7 +257,7 @@ def _make(
 ) -> Renderer:
     from volren.renderers.registry import registry
 
-    renderer = IntegrateEveryCell() if variant.every_cell else registry.create(name)
+    renderer = registry.create(name)
     try:
         renderer.set_volume(volume)
         renderer.set_transfer_function(tf)

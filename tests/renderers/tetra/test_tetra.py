@@ -136,6 +136,13 @@ def test_early_termination_and_transparent_cells(grids):
     assert np.abs(images[1.0] - images[0.99]).max() <= 0.01 + 1e-6
     assert counters[0.99]["cells_integrated"] < counters[1.0]["cells_integrated"]
     assert counters[1.0]["cells_transparent"] > 0
+    # without the skip every cell walked through is integrated; the transparent ones add (almost)
+    # nothing: only the table's interpolation next to the opacity ramp
+    every, every_counters = render("tetra", kuhn, opaque, camera, options={"termination_alpha": 1.0,
+                                                                          "skip_transparent": False})
+    assert every_counters["cells_integrated"] == every_counters["cell_steps"] > counters[1.0]["cells_integrated"]
+    assert every_counters["cells_transparent"] == 0
+    assert np.abs(every - images[1.0]).max() < 0.01
 
 
 @pytest.mark.parametrize("mode", ["maximum", "minimum", "average"])
@@ -149,7 +156,8 @@ def test_projections_match_the_reference(grids, mode):
 def test_bad_options(grids):
     kuhn, _, _, tf, camera, _ = grids
     for options, message in (({"integration": "fast"}, "integration"), ({"table_size": 1}, "table_size"),
-                             ({"termination_alpha": 0}, "termination_alpha")):
+                             ({"termination_alpha": 0}, "termination_alpha"),
+                             ({"skip_transparent": "no"}, "skip_transparent")):
         with pytest.raises(VolrenError, match=message):
             render("tetra", kuhn, tf, camera, 8, options=options)
 

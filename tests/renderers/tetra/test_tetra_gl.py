@@ -122,6 +122,12 @@ def test_early_termination_and_transparent_cells(kuhn):
     assert np.abs(gl_all - gl_stop).max() <= 0.01 + 1e-6
     assert counters_stop["cells_integrated"] < counters_all["cells_integrated"]
     assert counters_all["cells_integrated"] < counters_all["cell_steps"]  # transparent cells skipped
+    gl_every, cpu_every, counters_every, _ = both(mesh, opaque, camera, options={"termination_alpha": 1.0,
+                                                                                 "skip_transparent": False})
+    # every step is integrated but the zero-length ones around edges
+    assert counters_all["cells_integrated"] < counters_every["cells_integrated"]
+    assert counters_every["cell_steps"] - counters_every["cells_integrated"] <= 0.001 * counters_every["cell_steps"]
+    assert np.abs(gl_every - cpu_every).max() < 2e-4
 
 
 def test_an_eye_inside_the_mesh(kuhn):

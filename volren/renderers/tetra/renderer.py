@@ -69,6 +69,8 @@ class TetraRenderer(RendererBase):
         "table_lengths": "segment-length layers of the 3D table (default 32)",
         "termination_alpha": "opacity at which a ray stops (default 0.999; 1 never stops early)",
         "max_steps": "most cells one walk may take before it is cut and counted (default 100000)",
+        "skip_transparent": "walk through cells whose value range the TF maps to zero opacity without "
+        "integrating them (default true; false integrates every cell, for comparison)",
         "backend": "auto (default): the GL compute-shader walk on a hardware GPU, else numba on the CPU; "
         "cpu; gl (OpenGL 4.3 compute shaders, also on Mesa llvmpipe; table integration only)",
     }
@@ -173,11 +175,14 @@ class TetraRenderer(RendererBase):
             "termination_alpha": o.get("termination_alpha", 0.999),
             "max_steps": o.get("max_steps", 100_000),
             "backend": o.get("backend", "auto"),
+            "skip_transparent": o.get("skip_transparent", True),
         }
         if opts["integration"] not in ("table", "exact"):
             raise VolrenError(f"tetra option integration must be table or exact, got {opts['integration']!r}")
         if opts["backend"] not in ("auto", "cpu", "gl"):
             raise VolrenError(f"tetra option backend must be auto, cpu or gl, got {opts['backend']!r}")
+        if not isinstance(opts["skip_transparent"], bool):
+            raise VolrenError(f"tetra option skip_transparent must be true or false, got {opts['skip_transparent']!r}")
         if opts["backend"] == "gl" and opts["integration"] == "exact":
             raise VolrenError("tetra option integration=exact runs on the cpu backend only (backend=cpu or auto)")
         for name, low in (("table_size", 2), ("table_lengths", 1), ("max_steps", 1)):
@@ -229,6 +234,9 @@ class TetraRenderer(RendererBase):
         mesh, (tets, neighbors, planes, packed, boundary, faces) = self._prepare()
         tvals, grads, ok = planes[3], planes[4], planes[5]
         depth, ratio, lo, scale, lmax, visible = self._tables(mesh, opts["table_size"], opts["table_lengths"])
+        if not opts["skip_transparent"]:
+            visible = np.ones_like(visible)
+        transparent = float(np.count_nonzero(~visible))  # cells the walk steps through unintegrated
         settings = self._settings
         mode = _MODES[settings.blend_mode]
         span = float(self._volume.value_range[1] - self._volume.value_range[0])  # type: ignore[union-attr]
@@ -236,16 +244,18 @@ class TetraRenderer(RendererBase):
         sp = shade_params(settings, camera, span, length)
         if self._uses_gl(opts):
             walk = self._gl_walk(mesh, tets, neighbors, packed, tvals, grads, ok, boundary)
-            walk.set_tables((self._generation, self._table_key), depth[..., 0], ratio, visible)
+            walk.set_tables((self._generation, self._table_key, opts["skip_transparent"]), depth[..., 0], ratio,
+                            visible)
             params = WalkParameters(mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]))
             near = near_plane_cells(camera, width, height, mesh.points, tets, ok, np.asarray(mesh.bounds))
             out, counters = walk.render(camera, width, height, params, near)  # float32: no copy to float64
-            counters.update(entries_dropped=0.0, cells_transparent=float(np.count_nonzero(~visible)))
+            counters.update(entries_dropped=0.0)
             if progress is not None:
                 progress(1.0)
         else:
             out, counters = self._render_cpu(camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors,
                                              planes, packed, boundary, faces, visible, depth, ratio, lo, scale, lmax)
+        counters["cells_transparent"] = transparent
         if mode == COMPOSITE:
             rgba = np.clip(out, 0.0, 1.0, out=out)
             np.minimum(rgba[:, :3], rgba[:, 3:4], out=rgba[:, :3])
@@ -308,7 +318,6 @@ class TetraRenderer(RendererBase):
             "rays_hit": float(np.count_nonzero(stats[:, 0])),
             "walks_cut": float(stats[:, 2].sum()),
             "entries_dropped": float(stats[:, 3].sum()),
-            "cells_transparent": float(np.count_nonzero(~visible)),
         }
         return out, counters
 
