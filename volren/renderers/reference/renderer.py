@@ -30,7 +30,6 @@ from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any, ClassVar
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -45,6 +44,7 @@ from volren.renderers.reference.tets import bin_rows, prepare_tets, projected_bo
 from volren.renderers.reference.tf2d import pack_tf2d, render_uniform_2d
 from volren.renderers.reference.tf_eval import pack_tf
 from volren.renderers.reference.uniform import render_uniform
+from volren.renderers.row_blocks import run_in_row_blocks
 
 DEFAULT_TOLERANCE = 1e-5
 DEFAULT_MAX_LEVELS = 10
@@ -186,17 +186,7 @@ class ReferenceRenderer(RendererBase):
                     tvals, grads, tf, spar, mode, h0, tol, max_levels, out[a:b], stats[a:b],
                 )  # fmt: skip
 
-        rows = max(1, math.ceil(height / BLOCKS))
-        old_chunk = numba.get_parallel_chunksize()
-        numba.set_parallel_chunksize(CHUNK_SIZE)
-        try:
-            for y0 in range(0, height, rows):
-                y1 = min(height, y0 + rows)
-                kernel(y0 * width, y1 * width)
-                if progress is not None:
-                    progress(y1 / height)
-        finally:
-            numba.set_parallel_chunksize(old_chunk)
+        run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, kernel, progress)
 
         # only rounding can take a channel out of [0, 1] or rgb above alpha: clamp that
         rgba = np.clip(out, 0.0, 1.0)

@@ -13,11 +13,9 @@ cut at max_steps, entries dropped (more boundary crossings along a ray than the 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -32,6 +30,7 @@ from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, R
 from volren.renderers.reference.shading import shade_params
 from volren.renderers.reference.tets import bin_rows, prepare_tets, ray_far
 from volren.renderers.reference.tf_eval import pack_tf
+from volren.renderers.row_blocks import run_in_row_blocks
 from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
 from volren.renderers.tetra.traversal import (
     AVERAGE,
@@ -222,7 +221,7 @@ class TetraRenderer(RendererBase):
     # ------------------------------------------------------------------------------ render
     def _uses_gl(self, opts: dict[str, Any]) -> bool:
         """The GL walk when asked for, or on `auto` with table integration and a hardware GPU
-        (on software rasterizers numba is faster: `docs/tetra-benchmark.md`)."""
+        (on Mesa llvmpipe neither is faster across scenes, and numba keeps float64: `docs/tetra-benchmark.md`)."""
         if opts["backend"] == "auto":
             return opts["integration"] == "table" and gpu_renderer() is not None
         return opts["backend"] == "gl"
@@ -291,27 +290,20 @@ class TetraRenderer(RendererBase):
         n = width * height
         out = np.zeros((n, 4))
         stats = np.zeros((n, 4), np.int64)
-        rows = max(1, math.ceil(height / BLOCKS))
-        old_chunk = numba.get_parallel_chunksize()
-        numba.set_parallel_chunksize(CHUNK_SIZE)
-        try:
-            for y0 in range(0, height, rows):
-                y1 = min(height, y0 + rows)
-                a, b = y0 * width, y1 * width
-                offsets, cand = merge_lists(
-                    *bin_triangles(px, py, behind, entry_faces[0], entry_faces[1], width, height, y0, y1, 0.01),
-                    *bin_rows(near_cells, width, y0, y1),
-                )
-                cast_rays(
-                    origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, boundary, neighbors, packed,
-                    tvals, grads, corner, ok, visible, depth, ratio, lo, scale, lmax, sp, mode,
-                    float(opts["termination_alpha"]), int(opts["max_steps"]), self._on_plane(mesh), exact,
-                    float(self._settings.step) * length, 1e-5, 10, tf, out[a:b], stats[a:b],
-                )  # fmt: skip
-                if progress is not None:
-                    progress(y1 / height)
-        finally:
-            numba.set_parallel_chunksize(old_chunk)
+        def kernel(a: int, b: int) -> None:
+            offsets, cand = merge_lists(
+                *bin_triangles(px, py, behind, entry_faces[0], entry_faces[1], width, height, a // width, b // width,
+                               0.01),
+                *bin_rows(near_cells, width, a // width, b // width),
+            )
+            cast_rays(
+                origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, boundary, neighbors, packed,
+                tvals, grads, corner, ok, visible, depth, ratio, lo, scale, lmax, sp, mode,
+                float(opts["termination_alpha"]), int(opts["max_steps"]), self._on_plane(mesh), exact,
+                float(self._settings.step) * length, 1e-5, 10, tf, out[a:b], stats[a:b],
+            )  # fmt: skip
+
+        run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, kernel, progress)
         counters = {
             "cell_steps": float(stats[:, 0].sum()),
             "cells_integrated": float(stats[:, 1].sum()),
