@@ -56,7 +56,9 @@ def test_each_technique_saves_work(rows):
     assert s["all_on"]["brick_steps"] > 0 and s["no_empty_space"]["brick_steps"] == 0
     t = {v: rows["tetra", v] for v in ("all_on", "no_transparent_skip", "no_early_termination", "all_off")}
     assert t["all_on"]["cells_integrated"] < t["no_transparent_skip"]["cells_integrated"]
-    assert t["all_on"]["cell_steps"] < t["no_early_termination"]["cell_steps"] == t["all_off"]["cell_steps"]
+    # rays jump over transparent runs instead of stepping through them
+    assert t["all_on"]["cell_steps"] < t["no_transparent_skip"]["cell_steps"]
+    assert t["all_on"]["cell_steps"] < t["no_early_termination"]["cell_steps"] < t["all_off"]["cell_steps"]
     assert t["all_off"]["cells_integrated"] >= max(
         t["no_transparent_skip"]["cells_integrated"], t["no_early_termination"]["cells_integrated"]
     )

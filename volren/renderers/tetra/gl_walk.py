@@ -6,8 +6,9 @@ Mesa's llvmpipe, so CI tests them against the CPU walk on a machine without a GP
 
 Per frame, three passes:
 1. `clear.comp.glsl` empties the per-pixel entry lists;
-2. the rasterizer draws the boundary faces turned towards the eye (`entry_faces.*.glsl`), and each
-   fragment appends its face to its pixel's list (a fixed number of slots per pixel); cells the near
+2. the rasterizer draws the boundary faces turned towards the eye, each grown by ENTRY_MARGIN
+   (`entry_faces.*.glsl`), and each fragment appends its face to its pixel's list (a fixed number
+   of slots per pixel); cells the near
    plane cuts join the lists of their pixel boxes (`bin_near.comp.glsl`). When a list overflows, the
    slots grow and the faces are drawn again. (Binning in a compute shader, one invocation per
    face, cost about 190 ms of a 264 ms frame at 1024x1024 on an H100: a large face is one
@@ -34,6 +35,7 @@ from volren.model.camera import Camera
 from volren.renderers.glsl import compile_program, load_shader
 from volren.renderers.opengl import GLObjectOwner, mat4_bytes, opengl_problem
 from volren.renderers.reference.tets import projected_boxes
+from volren.renderers.tetra.walked_cells import WalkedCells
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
 #: Pixels per side of a walk work group.
@@ -44,6 +46,10 @@ CLEAR_GROUP, NEAR_GROUP = 256, 64
 FACE_VERTEX = np.dtype([("position", "<f4", 3), ("plane", "<f4", 4), ("candidate", "<u4")])
 #: Work groups along x before a dispatch wraps into y (GL guarantees 65535).
 MAX_GROUPS_X = 65535
+#: Pixels by which each entry face grows before it is rasterized (entry_faces.geom.glsl): four
+#: times the 1/256 pixel the rasterizer snaps to, so that every face a pixel centre lies on or
+#: near is listed (the CPU walk's bin_triangles lists faces within 0.01 pixel).
+ENTRY_MARGIN = 1.0 / 64.0
 #: Entry candidates a pixel's list holds at first (more when a frame needs them).
 SLOTS = 4
 #: Lanes of the walk's work counters (lists.glsl): 16 header bytes, then 16 bytes per lane.
@@ -81,13 +87,11 @@ class GLMesh:
     planes: NDArray[np.float32]      # (m * 4, 4) inward unit normal and offset per face
     neighbours: NDArray[np.int32]    # (m, 4): 4 * next cell + its face; -1 where the ray leaves the mesh
     fields: NDArray[np.float32]      # (m * 2, 4): (gradient, value at corner 0), (corner 0, visible); see set_tables
-    face_vertices: NDArray           # (3 f,) FACE_VERTEX: the boundary faces as triangles
     tolerance: float                 # world units: 2e-6 of the mesh's size (float32 rounding)
-    radius: float                    # half the diagonal of the mesh's box
 
 
 def gl_mesh(points: NDArray, tets: NDArray, neighbours: NDArray, neighbour_faces: NDArray, packed: NDArray,
-            tvals: NDArray, grads: NDArray, ok: NDArray, boundary: NDArray) -> GLMesh:
+            tvals: NDArray, grads: NDArray, ok: NDArray) -> GLMesh:
     """`GLMesh` from the CPU walk's arrays (`TetraRenderer._prepare`)."""
     m = len(tets)
     if m >= MAX_CELLS:
@@ -104,24 +108,25 @@ def gl_mesh(points: NDArray, tets: NDArray, neighbours: NDArray, neighbour_faces
     fields[:, 0, :3] = grads
     fields[:, 0, 3] = tvals[:, 0]
     fields[:, 1, :3] = corner
-    cell, face = np.nonzero(boundary)
-    others = np.array([[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]])
-    triangles = np.take_along_axis(tets[cell], others[face], axis=1)
-    planes32 = np.ascontiguousarray(planes, dtype=np.float32)
-    vertices = np.empty((len(cell), 3), FACE_VERTEX)
-    vertices["position"] = points[triangles] - centre
-    vertices["plane"] = planes32[cell, face][:, None, :]
-    vertices["candidate"] = (cell * 8 + face)[:, None]
     size = float(np.linalg.norm(hi - lo))
     return GLMesh(
         centre=centre,
-        planes=planes32.reshape(-1, 4),
+        planes=np.ascontiguousarray(planes, dtype=np.float32).reshape(-1, 4),
         neighbours=np.ascontiguousarray(np.where(across_ok, 4 * neighbours + neighbour_faces, -1), dtype=np.int32),
         fields=np.ascontiguousarray(fields.reshape(-1, 4), dtype=np.float32),
-        face_vertices=vertices.ravel(),
         tolerance=2e-6 * max(size, 1e-30),
-        radius=size / 2.0,
     )
+
+
+def entry_face_vertices(mesh: GLMesh, points: NDArray, walked: WalkedCells) -> NDArray:
+    """(3 f,) FACE_VERTEX: the boundary faces of the walked cells as triangles for the rasterizer,
+    each vertex with its face's plane (as the walk reads it) and its candidate (cell * 8 + face)."""
+    cell, face = walked.face_cells, walked.face_index
+    vertices = np.empty((len(cell), 3), FACE_VERTEX)
+    vertices["position"] = points[walked.triangles] - mesh.centre
+    vertices["plane"] = mesh.planes.reshape(-1, 4, 4)[cell, face][:, None, :]
+    vertices["candidate"] = (cell * 8 + face)[:, None]
+    return vertices.ravel()
 
 
 @dataclass(frozen=True)
@@ -135,6 +140,7 @@ class WalkParameters:
     lmax: float
     termination: float
     max_steps: int
+    jump: bool = False         # walk only the visible cells (`walked_cells`): leave at a transparent one
 
 
 class GLWalk(GLObjectOwner):
@@ -146,6 +152,7 @@ class GLWalk(GLObjectOwner):
         self._programs: dict[tuple, Any] = {}
         self._mesh: GLMesh | None = None
         self._mesh_buffers: dict[str, Any] = {}
+        self._faces: tuple[Any, Any, int] | None = None  # (buffer, vertex array, vertices) of the entry faces
         self._keys: dict[str, Any] = {}
         self._table: Any = None
         self._frame: dict[str, Any] = {}
@@ -187,6 +194,7 @@ class GLWalk(GLObjectOwner):
         if key not in self._programs:
             if name == "entry_faces":
                 program = compile_program(self.context(), vertex=load_shader("entry_faces.vert.glsl", {}, [SHADER_DIR]),
+                                          geometry=load_shader("entry_faces.geom.glsl", {}, [SHADER_DIR]),
                                           fragment=load_shader("entry_faces.frag.glsl", {}, [SHADER_DIR]))
             else:
                 source = load_shader(f"{name}.comp.glsl", defines or {}, [SHADER_DIR])
@@ -199,16 +207,31 @@ class GLWalk(GLObjectOwner):
         """Upload the mesh unless `key` says it is the one already there."""
         if self._keys.get("mesh") == key:
             return
-        with self.context() as ctx:  # another renderer's context may be current on this thread
+        with self.context():  # another renderer's context may be current on this thread
             for buffer in self._mesh_buffers.values():
                 self._drop(buffer)
             self._mesh = mesh
-            self._mesh_buffers = {name: self._buffer(getattr(mesh, name))
-                                  for name in ("planes", "neighbours", "fields", "face_vertices")}
-            program = self._program("entry_faces")
-            self._mesh_buffers["faces_vao"] = self._track(ctx.vertex_array(
-                program, [(self._mesh_buffers["face_vertices"], "3f 4f 1u", "in_position", "in_plane", "in_candidate")]))
+            self._mesh_buffers = {name: self._buffer(getattr(mesh, name)) for name in ("planes", "neighbours", "fields")}
         self._keys["mesh"] = key
+        self._keys.pop("faces", None)
+        self._keys.pop("tables", None)
+
+    def set_entry_faces(self, key: Any, walked: WalkedCells, points: NDArray) -> None:
+        """Upload the faces where rays enter the walked cells unless `key` says they are there.
+        Call after `set_mesh`."""
+        if self._keys.get("faces") == key:
+            return
+        assert self._mesh is not None
+        vertices = entry_face_vertices(self._mesh, points, walked)
+        with self.context() as ctx:
+            if self._faces is not None:
+                for obj in self._faces[:2]:
+                    self._drop(obj)
+            buffer = self._buffer(vertices)
+            array = self._track(ctx.vertex_array(self._program("entry_faces"),
+                                                 [(buffer, "3f 4f 1u", "in_position", "in_plane", "in_candidate")]))
+            self._faces = (buffer, array, len(vertices))
+        self._keys["faces"] = key
 
     def set_tables(self, key: Any, depth: NDArray, ratio: NDArray, visible: NDArray) -> None:
         """Upload the 3D table and the visibility flags (into the fields) unless `key` says they are there.
@@ -316,6 +339,7 @@ class GLWalk(GLObjectOwner):
         _set(program, "u_tolerance", mesh.tolerance)
         _set(program, "u_size", (width, height))
         _set(program, "u_slots", self._slots)
+        _set(program, "u_margin", ENTRY_MARGIN)
         target = self._frame.get("target")
         if target is None or target.size != (width, height):
             # the new one first, bound, then the old one freed: moderngl rebinds the framebuffer that
@@ -329,8 +353,9 @@ class GLWalk(GLObjectOwner):
                 self._drop(obj)
         target.use()
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST | moderngl.CULL_FACE)
-        if len(mesh.face_vertices):
-            self._mesh_buffers["faces_vao"].render(moderngl.TRIANGLES)
+        assert self._faces is not None
+        if self._faces[2]:
+            self._faces[1].render(moderngl.TRIANGLES)
         if near_cells is not None:
             cells, boxes = near_cells
             near = self._program("bin_near")
@@ -346,7 +371,7 @@ class GLWalk(GLObjectOwner):
     def _walk(self, camera: Camera, width: int, height: int, world_to_clip: NDArray, p: WalkParameters) -> None:
         mesh = self._mesh
         assert mesh is not None
-        program = self._program("walk", {"BLEND": p.blend, "SHADE": int(bool(p.shade[0]))})
+        program = self._program("walk", {"BLEND": p.blend, "SHADE": int(bool(p.shade[0])), "JUMP": int(p.jump)})
         buffers = self._mesh_buffers
         for name, binding in (("planes", 0), ("neighbours", 1), ("fields", 2)):
             buffers[name].bind_to_storage_buffer(binding)
@@ -359,7 +384,6 @@ class GLWalk(GLObjectOwner):
         _set(program, "u_scale", p.scale)
         _set(program, "u_lmax", p.lmax)
         _set(program, "u_tolerance", mesh.tolerance)
-        _set(program, "u_edge_tolerance", max(mesh.tolerance, 0.25 * _pixel_size_at_far_side(camera, height, mesh)))
         _set(program, "u_termination", p.termination if p.termination < 1.0 else 2.0)
         _set(program, "u_max_steps", p.max_steps)
         _set(program, "u_phong", tuple(float(v) for v in p.shade[1:5]))
@@ -374,6 +398,7 @@ class GLWalk(GLObjectOwner):
         self._ctx = None
         self._programs.clear()
         self._mesh_buffers.clear()
+        self._faces = None
         self._frame.clear()
         self._keys.clear()
         self._table = self._mesh = None
@@ -398,14 +423,6 @@ def near_plane_cells(camera: Camera, width: int, height: int, points: NDArray, t
     if not len(cells):
         return None
     return cells.astype(np.uint32), boxes[cells].astype(np.int32)
-
-
-def _pixel_size_at_far_side(camera: Camera, height: int, mesh: GLMesh) -> float:
-    """World size of a pixel where the mesh is farthest from the eye (its bounding sphere's far side)."""
-    if camera.parallel:
-        return 2.0 * camera.parallel_scale / height
-    far = float(np.linalg.norm(np.asarray(camera.position) - mesh.centre)) + mesh.radius
-    return 2.0 * math.tan(math.radians(camera.view_angle) / 2.0) * far / height
 
 
 def _dispatch(program: Any, groups: int) -> None:

@@ -31,7 +31,13 @@ from volren.renderers.reference.shading import shade_params
 from volren.renderers.reference.tets import bin_rows, prepare_tets, ray_far
 from volren.renderers.reference.tf_eval import pack_tf
 from volren.renderers.row_blocks import run_in_row_blocks
-from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
+from volren.renderers.tetra.gl_walk import (
+    GLWalk,
+    WalkParameters,
+    gl_mesh,
+    gpu_renderer,
+    near_plane_cells,
+)
 from volren.renderers.tetra.traversal import (
     AVERAGE,
     COMPOSITE,
@@ -42,6 +48,7 @@ from volren.renderers.tetra.traversal import (
     merge_lists,
     pack_planes,
 )
+from volren.renderers.tetra.walked_cells import WalkedCells, walked_cells
 
 _MODES = {BlendMode.COMPOSITE: COMPOSITE, BlendMode.MAXIMUM: MAXIMUM, BlendMode.MINIMUM: MINIMUM,
           BlendMode.AVERAGE: AVERAGE}
@@ -81,6 +88,7 @@ class TetraRenderer(RendererBase):
         self._neighbor_faces: NDArray | None = None  # in the cells' Morton order, like _planes
         self._table_key: tuple | None = None
         self._table: tuple | None = None
+        self._visible_walk: tuple[Any, WalkedCells] | None = None  # (table key, the visible cells' walk set)
         self._gl: GLWalk | None = None
         self._generation = 0  # which volume the GL walk's buffers hold
 
@@ -89,6 +97,7 @@ class TetraRenderer(RendererBase):
         self._planes = None
         self._table_key = None
         self._table = None
+        self._visible_walk = None
         self._generation += 1
 
     def release(self) -> None:
@@ -99,8 +108,8 @@ class TetraRenderer(RendererBase):
 
     # ------------------------------------------------------------------------ preparation
     def _prepare(self) -> tuple[PreparedMesh, tuple]:
-        """The mesh and, in Morton order, (tets, neighbours, reference planes, packed planes,
-        boundary faces per cell, (cell, triangle, plane) of every boundary face)."""
+        """The mesh and, in Morton order, (tets, neighbours, reference planes, packed planes, the
+        usable cells as a `WalkedCells`)."""
         if self._mesh is None:
             volume = self._volume
             assert isinstance(volume, TetVolume)
@@ -115,20 +124,24 @@ class TetraRenderer(RendererBase):
             neighbors = np.ascontiguousarray(np.where(old >= 0, rank[np.maximum(old, 0)], -1), dtype=np.int64)
             self._neighbor_faces = np.ascontiguousarray(mesh.neighbor_faces[order], dtype=np.int64)
             planes = prepare_tets(mesh.points, tets, mesh.values)
-            ok = planes[5]
-            # A face is on the boundary when no usable cell lies across it: flat and non-finite
-            # cells are holes the rays step over to the next entry.
-            across_ok = np.where(neighbors >= 0, ok[np.maximum(neighbors, 0)], False)
-            boundary = ok[:, None] & ~across_ok
-            self._mesh = mesh
             packed = pack_planes(planes[0], planes[1], planes[2])
-            cell, face = np.nonzero(boundary)
-            others = np.array([[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]])
-            triangles = np.ascontiguousarray(np.take_along_axis(tets[cell], others[face], axis=1))
-            faces = (np.ascontiguousarray(cell, dtype=np.int64), triangles, packed[cell, face])
-            self._planes = (tets, neighbors, planes, packed, boundary, faces)
+            # flat and non-finite cells are holes the rays step over to the next entry
+            usable = walked_cells(planes[5], tets, neighbors, packed)
+            self._mesh = mesh
+            self._planes = (tets, neighbors, planes, packed, usable)
         assert self._planes is not None
         return self._mesh, self._planes
+
+    def _walked_cells(self, usable: WalkedCells, visible: NDArray[np.bool_] | None) -> WalkedCells:
+        """The cells rays walk through: the usable ones, or (`visible` given) only those the TF
+        makes visible, so that rays jump over transparent regions from exit to next entry instead
+        of stepping through them cell by cell. Cached per TF table."""
+        if visible is None:
+            return usable
+        if self._visible_walk is None or self._visible_walk[0] != self._table_key:
+            tets, neighbors, _, packed, _ = self._planes  # type: ignore[misc]
+            self._visible_walk = (self._table_key, walked_cells(usable.cells & visible, tets, neighbors, packed))
+        return self._visible_walk[1]
 
     @staticmethod
     def _on_plane(mesh: PreparedMesh) -> float:
@@ -138,11 +151,11 @@ class TetraRenderer(RendererBase):
         return 1e-12 * float(np.linalg.norm(b[1::2] - b[0::2]) + np.abs(b).max())
 
     def _entry_candidates(self, camera: Camera, width: int, height: int, mesh: PreparedMesh, tets: NDArray,
-                          faces: tuple, ok: NDArray) -> tuple:
+                          walked: WalkedCells) -> tuple:
         """Where rays can enter the mesh: the boundary faces turned towards the eye (as triangles
         to rasterize, with their cells), and the cells the near plane cuts (as pixel boxes), where
         rays start inside the mesh."""
-        cell, triangles, plane = faces
+        cell, triangles, plane = walked.face_cells, walked.triangles, walked.face_planes
         if camera.parallel:
             facing = plane[:, :3] @ np.asarray(camera.direction) >= -1e-12
         else:
@@ -159,7 +172,7 @@ class TetraRenderer(RendererBase):
         py = np.ascontiguousarray((1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5)
         # pixel boxes by cell id (x0 = -1: none); no rows at all when the near plane cuts no cell
         near_cells = np.zeros((0, 4), np.int64)
-        cut = near_plane_cells(camera, width, height, mesh.points, tets, ok, np.asarray(mesh.bounds))
+        cut = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
         if cut is not None:
             near_cells = np.full((len(tets), 4), -1, np.int64)
             near_cells[cut[0]] = cut[1]
@@ -230,8 +243,8 @@ class TetraRenderer(RendererBase):
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         opts = self._options()
-        mesh, (tets, neighbors, planes, packed, boundary, faces) = self._prepare()
-        tvals, grads, ok = planes[3], planes[4], planes[5]
+        mesh, (tets, neighbors, planes, packed, usable) = self._prepare()
+        tvals, grads = planes[3], planes[4]
         depth, ratio, lo, scale, lmax, visible = self._tables(mesh, opts["table_size"], opts["table_lengths"])
         if not opts["skip_transparent"]:
             visible = np.ones_like(visible)
@@ -241,19 +254,25 @@ class TetraRenderer(RendererBase):
         span = float(self._volume.value_range[1] - self._volume.value_range[0])  # type: ignore[union-attr]
         length = self._volume.characteristic_length  # type: ignore[union-attr]
         sp = shade_params(settings, camera, span, length)
+        # transparent cells only matter to projections and to the exact path's comparison
+        jump = opts["skip_transparent"] and mode == COMPOSITE and opts["integration"] == "table"
+        walked = self._walked_cells(usable, visible if jump else None)
         if self._uses_gl(opts):
-            walk = self._gl_walk(mesh, tets, neighbors, packed, tvals, grads, ok, boundary)
+            walk = self._gl_walk(mesh, tets, neighbors, packed, tvals, grads, usable)
             walk.set_tables((self._generation, self._table_key, opts["skip_transparent"]), depth[..., 0], ratio,
                             visible)
-            params = WalkParameters(mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]))
-            near = near_plane_cells(camera, width, height, mesh.points, tets, ok, np.asarray(mesh.bounds))
+            walk.set_entry_faces((self._generation, self._table_key if jump else None), walked, mesh.points)
+            params = WalkParameters(mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]),
+                                    jump)
+            near = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
             out, counters = walk.render(camera, width, height, params, near)  # float32: no copy to float64
             counters.update(entries_dropped=0.0)
             if progress is not None:
                 progress(1.0)
         else:
             out, counters = self._render_cpu(camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors,
-                                             planes, packed, boundary, faces, visible, depth, ratio, lo, scale, lmax)
+                                             planes, packed, usable.cells, walked, visible, depth, ratio, lo,
+                                             scale, lmax)
         counters["cells_transparent"] = transparent
         if mode == COMPOSITE:
             rgba = np.clip(out, 0.0, 1.0, out=out)
@@ -265,19 +284,19 @@ class TetraRenderer(RendererBase):
         return rgba.reshape(height, width, 4).astype(np.float32, copy=False), counters
 
     def _gl_walk(self, mesh: PreparedMesh, tets: NDArray, neighbors: NDArray, packed: NDArray, tvals: NDArray,
-                 grads: NDArray, ok: NDArray, boundary: NDArray) -> GLWalk:
+                 grads: NDArray, usable: WalkedCells) -> GLWalk:
         """The GL walk, holding this volume's mesh."""
         if self._gl is None:
             self._gl = GLWalk()
         if self._gl.mesh_key != self._generation:
             self._gl.set_mesh(self._generation, gl_mesh(mesh.points, tets, neighbors, self._neighbor_faces, packed,
-                                                        tvals, grads, ok, boundary))
+                                                        tvals, grads, usable.cells))
         return self._gl
 
     def _render_cpu(self, camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors, planes, packed,
-                    boundary, faces, visible, depth, ratio, lo, scale, lmax) -> tuple[NDArray, dict[str, float]]:
+                    usable, walked, visible, depth, ratio, lo, scale, lmax) -> tuple[NDArray, dict[str, float]]:
         """The numba walk over blocks of rows: (H * W, 4) float64 per pixel and the counters."""
-        tvals, grads, ok = planes[3], planes[4], planes[5]
+        tvals, grads = planes[3], planes[4]
         corner = np.ascontiguousarray(mesh.points[tets[:, 0]])
         exact = opts["integration"] == "exact" and mode == COMPOSITE
         length = self._volume.characteristic_length  # type: ignore[union-attr]
@@ -286,7 +305,7 @@ class TetraRenderer(RendererBase):
         origins = np.ascontiguousarray(origins.reshape(-1, 3))
         dirs = np.ascontiguousarray(dirs.reshape(-1, 3))
         tfar = np.ascontiguousarray(ray_far(camera, dirs))
-        entry_faces, px, py, behind, near_cells = self._entry_candidates(camera, width, height, mesh, tets, faces, ok)
+        entry_faces, px, py, behind, near_cells = self._entry_candidates(camera, width, height, mesh, tets, walked)
         n = width * height
         out = np.zeros((n, 4))
         stats = np.zeros((n, 4), np.int64)
@@ -297,8 +316,8 @@ class TetraRenderer(RendererBase):
                 *bin_rows(near_cells, width, a // width, b // width),
             )
             cast_rays(
-                origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, boundary, neighbors, packed,
-                tvals, grads, corner, ok, visible, depth, ratio, lo, scale, lmax, sp, mode,
+                origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, walked.boundary, neighbors, packed,
+                tvals, grads, corner, usable, walked.cells, visible, depth, ratio, lo, scale, lmax, sp, mode,
                 float(opts["termination_alpha"]), int(opts["max_steps"]), self._on_plane(mesh), exact,
                 float(self._settings.step) * length, 1e-5, 10, tf, out[a:b], stats[a:b],
             )  # fmt: skip

@@ -219,13 +219,18 @@ def _grow(ta, tb, P, G, m):
 
 @njit(parallel=True, cache=True)
 def cast_rays(
-    orig, dirs, tfar, offsets, cand, boundary, neighbors, planes, tvals, grads, corner, ok,
+    orig, dirs, tfar, offsets, cand, boundary, neighbors, planes, tvals, grads, corner, ok, walkable,
     visible, depth_per_length, colour_ratio, lo, scale, lmax, sp, mode, termination, max_steps, on_plane,
     exact, h0, tol, max_levels, tf, out, stats,
 ):  # fmt: skip
     """One block of rays: out (n, 4) premultiplied RGBA (for maximum / minimum / average: the
     value in out[:, 0] and 1 in out[:, 1] where the ray met data); stats (n, 4) = cell steps,
-    cells integrated, walks cut at max_steps, entries dropped."""
+    cells integrated, walks cut at max_steps, entries dropped.
+
+    ok: the usable cells; walkable: those a walk may run through at positive length (the entry
+    faces in `boundary` and `cand` are theirs). A walk steps into any usable cell, so that it goes
+    around an edge or a vertex at zero length as always, and ends where it would run through a
+    cell outside `walkable`."""
     n = orig.shape[0]
     for q in prange(n):
         for c in range(4):
@@ -286,6 +291,9 @@ def cast_rays(
                     t_out = t_in
                 if t_out > tfar[q]:
                     t_out = tfar[q]
+                if t_out > t_in and not walkable[t]:
+                    t_out = t_in  # the ray leaves the walked cells here
+                    break
                 # the field is linear in the cell: exact along the ray from the entry value
                 s_out = s_in + (grads[t, 0] * dx + grads[t, 1] * dy + grads[t, 2] * dz) * (t_out - t_in)
                 length = t_out - t_in

@@ -8,7 +8,10 @@
 // and not behind where the last walk ended, so a ray needs no sorted array of its own (registers
 // are what a GPU has least of) and each candidate is walked at most once.
 //
-// Defines: BLEND (0 composite, 1 maximum, 2 minimum, 3 average), SHADE (0/1).
+// Defines: BLEND (0 composite, 1 maximum, 2 minimum, 3 average), SHADE (0/1), JUMP (1: the entry
+// faces are those of the visible cells, and a walk ends where it would run through a transparent
+// cell, so the next entry skips the transparent run; it still steps around an edge or a vertex
+// through any cell at zero length).
 #define LIST_ACCESS readonly
 #define LISTS_READ_ONLY 1
 #include "mesh.glsl"
@@ -26,7 +29,6 @@ uniform float u_lo;          // table index = (value - u_lo) * u_scale
 uniform float u_scale;
 uniform float u_lmax;        // the length of the last layer
 uniform float u_tolerance;   // world units: closer than this to a plane counts as on it
-uniform float u_edge_tolerance; // world units: a quarter pixel where the mesh is farthest from the eye
 uniform float u_termination; // opacity at which a ray stops (> 1: never)
 uniform uint u_max_steps;    // most cells one walk may take
 uniform vec4 u_phong;        // ambient, diffuse, specular, specular power
@@ -37,11 +39,9 @@ const float FAR = 3.0e38;
 
 // The ray parameter where candidate `key` lets the ray into the mesh, or -1 where it does not: 0
 // where the ray starts inside the cell; else where it crosses the named boundary face heading
-// inwards, before t_max, inside the face's triangle or within u_edge_tolerance of it. The
-// rasterizer listed the face because it covers the pixel centre, give or take its sub-pixel
-// snapping (1/256 pixel): a pixel centre on an edge between two faces may go to the face the ray
-// just misses. Entering there is right to within that distance: the walk then steps around the
-// edge at zero length to the cell the ray is in.
+// inwards, before t_max, inside the face's triangle (within float32 rounding, u_tolerance). The
+// faces were rasterized grown by a margin (entry_faces.geom.glsl), so every face the ray crosses
+// is listed, also at an edge, and a list may hold faces the ray just misses.
 float entry_parameter(uint key, vec3 o, vec3 d, float t_max) {
     uint cell = key >> 3u;
     uint code = key & 7u;
@@ -56,7 +56,7 @@ float entry_parameter(uint key, vec3 o, vec3 d, float t_max) {
     float t = -ab[code].x / ab[code].y;
     if (!(t >= 0.0 && t <= t_max)) return -1.0;
     for (uint g = 0u; g < 4u; ++g)
-        if (g != code && ab[g].x + ab[g].y * t < -u_edge_tolerance) return -1.0;
+        if (g != code && ab[g].x + ab[g].y * t < -u_tolerance) return -1.0;
     return t;
 }
 
@@ -194,8 +194,15 @@ vec4 cast_ray(ivec2 pixel) {
                 break;
             }
             t_out = min(max(t_exit, t_in), t_max);
+            bool visible = fields[2u * c + 1u].w != 0.0;
+#if JUMP
+            // a transparent cell the ray runs through (not just around an edge): the walk ends
+            if (t_out > t_in && !visible) {
+                t_out = t_in;
+                break;
+            }
+#endif
             vec3 gradient = fields[2u * c].xyz;
-            bool visible = fields[2u * c + 1u].w != 0.0;  // the same cache line as the gradient
             float s_out = s_in + dot(gradient, d) * (t_out - t_in);
             float len = t_out - t_in;
             steps += 1u;
