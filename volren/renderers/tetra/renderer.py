@@ -4,8 +4,9 @@ Per volume: `model.tet_mesh.prepare_mesh` (face adjacency, cached by content has
 planes of `reference.tets.prepare_tets` (bit-identical on both sides of every face). Per TF
 version: the 3D pre-integration table over the mesh's value range and segment lengths up to its
 longest edge (`model.preintegration`), turned into optical depth per unit length and colour per
-unit opacity, and the cells whose value range maps to zero opacity. Per frame: the boundary cells
-binned to pixels, then the numba kernel over blocks of rows.
+unit opacity, the cells whose value range maps to zero opacity, and the boundary faces of the
+visible cells, which composite rays walk alone (`walked_cells`). Per frame: the entry faces binned
+to pixels, then the numba kernel over blocks of rows (or the GL walk, `gl_walk`).
 
 Counters: cell_steps (cells walked through, summed over rays), cells_integrated, rays_hit, walks
 cut at max_steps, entries dropped (more boundary crossings along a ray than the kernel keeps).
@@ -75,8 +76,9 @@ class TetraRenderer(RendererBase):
         "table_lengths": "segment-length layers of the 3D table (default 32)",
         "termination_alpha": "opacity at which a ray stops (default 0.999; 1 never stops early)",
         "max_steps": "most cells one walk may take before it is cut and counted (default 100000)",
-        "skip_transparent": "walk through cells whose value range the TF maps to zero opacity without "
-        "integrating them (default true; false integrates every cell, for comparison)",
+        "skip_transparent": "skip cells whose value range the TF maps to zero opacity: composite rays jump "
+        "from a transparent run to the next visible cell (default true; false walks and integrates every "
+        "cell, for comparison)",
         "backend": "auto (default): the GL compute-shader walk on a hardware GPU, else numba on the CPU; "
         "cpu; gl (OpenGL 4.3 compute shaders, also on Mesa llvmpipe; table integration only)",
     }
@@ -248,7 +250,7 @@ class TetraRenderer(RendererBase):
         depth, ratio, lo, scale, lmax, visible = self._tables(mesh, opts["table_size"], opts["table_lengths"])
         if not opts["skip_transparent"]:
             visible = np.ones_like(visible)
-        transparent = float(np.count_nonzero(~visible))  # cells the walk steps through unintegrated
+        transparent = float(np.count_nonzero(~visible))  # cells the walk skips or steps through unintegrated
         settings = self._settings
         mode = _MODES[settings.blend_mode]
         span = float(self._volume.value_range[1] - self._volume.value_range[0])  # type: ignore[union-attr]

@@ -20,8 +20,10 @@ Per pixel ray:
    is counted.
 4. Each cell segment is integrated from its front value, back value and length: with the 3D
    pre-integration table (`integrate_segment`), or exactly by handing every ray's segments to the
-   reference integrator. Cells whose value range maps to zero opacity are stepped through without
-   integrating; a ray stops once its opacity reaches the termination threshold.
+   reference integrator. For compositing, the walk may run only through the cells the TF makes
+   visible (`walked_cells`): the entry faces are then the visible cells' boundary faces, and a walk
+   ends where it would run through a transparent cell, so the next entry jumps over the transparent
+   run. A ray stops once its opacity reaches the termination threshold.
 """
 
 from __future__ import annotations
