@@ -32,13 +32,7 @@ from volren.renderers.reference.shading import shade_params
 from volren.renderers.reference.tets import bin_rows, prepare_tets, ray_far
 from volren.renderers.reference.tf_eval import pack_tf
 from volren.renderers.row_blocks import run_in_row_blocks
-from volren.renderers.tetra.gl_walk import (
-    GLWalk,
-    WalkParameters,
-    gl_mesh,
-    gpu_renderer,
-    near_plane_cells,
-)
+from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
 from volren.renderers.tetra.traversal import (
     AVERAGE,
     COMPOSITE,
