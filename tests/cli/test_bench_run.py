@@ -77,6 +77,14 @@ def test_work_counters_are_where_the_renderer_counts(rows):
             assert r["samples"] == r["cell_steps"] == "", r
 
 
+def test_tetra_refinement_walks_fewer_cells(rows):
+    """The sweep's adaptive refinement point casts rays on a 16-pixel grid first: fewer rays, so
+    fewer cell steps, than a ray per pixel with the same table."""
+    full, refined = find(rows, "tetra", "table 256x32"), find(rows, "tetra", "table 256x32, refine 16/0.1")
+    assert 0 < int(refined["cell_steps"]) < int(full["cell_steps"])
+    assert float(refined["rmse"]) < 0.05
+
+
 @pytest.mark.parametrize(
     "renderer, coarse, fine, factor",
     [

@@ -3,8 +3,8 @@
 A configuration is one point of a renderer's time/error curve. Each renderer sweeps the knob that
 trades time for error most directly (the step for `slicer` and VTK's stepped mappers, the table
 size for `tetra`, whose rays step cell to cell) and, at one middle setting, turns the other knobs
-one at a time (pre-integration, table size, jitter, skipping), so that the sweep stays linear in
-the number of knobs instead of their product. VTK's mappers are peers: each one is a curve.
+one at a time (pre-integration, table size, jitter, skipping, `tetra`'s adaptive image refinement),
+so that the sweep stays linear in the number of knobs instead of their product. VTK's mappers are peers: each one is a curve.
 
 `curve` names the renderer as plotted and compared: `slicer`, `tetra` (ours) or `vtk-<mapper>`.
 """
@@ -32,6 +32,10 @@ MIDDLE_STEP = 0.5
 SLICER_TABLE = 512
 TETRA_TABLE = 256
 TETRA_LENGTHS = 32
+#: `tetra`'s adaptive refinement settings swept (image stride, refine tolerance): from close to the
+#: image with a ray per pixel to coarse.
+TETRA_REFINEMENT = ((8, 0.02), (16, 0.05), (16, 0.1), (32, 0.2))
+QUICK_TETRA_REFINEMENT = ((16, 0.1),)
 
 
 @dataclass(frozen=True)
@@ -45,6 +49,8 @@ class Config:
     table_lengths: int | None = None
     jitter: bool | None = None
     skipping: bool | None = None
+    image_stride: int | None = None
+    refine_tolerance: float | None = None
 
     @property
     def ours(self) -> bool:
@@ -75,6 +81,8 @@ class Config:
             parts.append("jitter")
         if self.skipping is False:
             parts.append("no skipping")
+        if self.image_stride is not None:
+            parts.append(f"refine {self.image_stride}/{self.refine_tolerance:g}")
         return ", ".join(parts) or "default"
 
     def settings(self) -> RenderSettings:
@@ -92,6 +100,8 @@ class Config:
                 table_lengths=self.table_lengths,
                 termination_alpha=0.999 if self.skipping else 1.0,
             )
+            if self.image_stride is not None:
+                options.update(image_stride=self.image_stride, refine_tolerance=self.refine_tolerance)
         else:
             options["mapper"] = self.curve.removeprefix("vtk-")
         return RenderSettings(
@@ -125,11 +135,13 @@ def _vtk_uniform(steps: Iterable[float]) -> list[Config]:
     return out
 
 
-def _tetra(tables: Iterable[int], short_lengths: bool) -> list[Config]:
+def _tetra(tables: Iterable[int], short_lengths: bool, refinement: Iterable[tuple[int, float]]) -> list[Config]:
     out = [Config("tetra", table_size=n, table_lengths=TETRA_LENGTHS, skipping=True) for n in tables]
     if short_lengths:
         out.append(Config("tetra", table_size=TETRA_TABLE, table_lengths=8, skipping=True))
     out.append(Config("tetra", table_size=TETRA_TABLE, table_lengths=TETRA_LENGTHS, skipping=False))
+    out += [Config("tetra", table_size=TETRA_TABLE, table_lengths=TETRA_LENGTHS, skipping=True, image_stride=stride,
+                   refine_tolerance=tol) for stride, tol in refinement]
     return out
 
 
@@ -153,7 +165,8 @@ def configs(
     if kind == "uniform":
         out = _slicer(steps, (64,) if quick else (64, 2048)) + _vtk_uniform(steps)
     else:
-        out = _tetra((32, TETRA_TABLE) if quick else (32, 64, 128, TETRA_TABLE, 512), not quick) + _vtk_tets()
+        tables = (32, TETRA_TABLE) if quick else (32, 64, 128, TETRA_TABLE, 512)
+        out = _tetra(tables, not quick, QUICK_TETRA_REFINEMENT if quick else TETRA_REFINEMENT) + _vtk_tets()
     if curves is not None:
         wanted = set(curves)
         out = [c for c in out if c.curve in wanted]

@@ -28,10 +28,11 @@ from volren.model.settings import BlendMode
 from volren.model.tet_mesh import PreparedMesh, prepare_mesh
 from volren.model.volume import TetVolume
 from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, RendererBase
+from volren.renderers.image_refinement import check_stride, refine_image
 from volren.renderers.reference.shading import shade_params
 from volren.renderers.reference.tets import bin_rows, prepare_tets, ray_far
 from volren.renderers.reference.tf_eval import pack_tf
-from volren.renderers.row_blocks import run_in_row_blocks
+from volren.renderers.row_blocks import parallel_chunk_size, run_in_row_blocks
 from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
 from volren.renderers.tetra.traversal import (
     AVERAGE,
@@ -39,7 +40,9 @@ from volren.renderers.tetra.traversal import (
     MAXIMUM,
     MINIMUM,
     bin_triangles,
+    bin_triangles_at,
     cast_rays,
+    gather_lists,
     merge_lists,
     pack_planes,
 )
@@ -75,6 +78,12 @@ class TetraRenderer(RendererBase):
         "cell, for comparison)",
         "backend": "auto (default): the GL compute-shader walk on a hardware GPU, else numba on the CPU; "
         "cpu; gl (OpenGL 4.3 compute shaders, also on Mesa llvmpipe; table integration only)",
+        "image_stride": "1 (default): a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, "
+        "rays every `image_stride` pixels first, more only where neighbouring rays differ by more than "
+        "refine_tolerance, the rest interpolated (faster on smooth images; features thinner than the stride "
+        "between rays that agree are missed; cpu backend)",
+        "refine_tolerance": "with image_stride > 1: the largest difference in any premultiplied RGBA channel "
+        "between a block's corner rays that is interpolated instead of cast (default 0.02)",
     }
 
     def __init__(self) -> None:
@@ -82,6 +91,7 @@ class TetraRenderer(RendererBase):
         self._mesh: PreparedMesh | None = None
         self._planes: tuple | None = None
         self._neighbor_faces: NDArray | None = None  # in the cells' Morton order, like _planes
+        self._corner: NDArray | None = None
         self._table_key: tuple | None = None
         self._table: tuple | None = None
         self._visible_walk: tuple[Any, WalkedCells] | None = None  # (table key, the visible cells' walk set)
@@ -125,6 +135,7 @@ class TetraRenderer(RendererBase):
             usable = walked_cells(planes[5], tets, neighbors, packed)
             self._mesh = mesh
             self._planes = (tets, neighbors, planes, packed, usable)
+            self._corner = np.ascontiguousarray(mesh.points[tets[:, 0]])  # where each cell's linear field is anchored
         assert self._planes is not None
         return self._mesh, self._planes
 
@@ -184,6 +195,8 @@ class TetraRenderer(RendererBase):
             "max_steps": o.get("max_steps", 100_000),
             "backend": o.get("backend", "auto"),
             "skip_transparent": o.get("skip_transparent", True),
+            "image_stride": o.get("image_stride", 1),
+            "refine_tolerance": o.get("refine_tolerance", 0.02),
         }
         if opts["integration"] not in ("table", "exact"):
             raise VolrenError(f"tetra option integration must be table or exact, got {opts['integration']!r}")
@@ -193,6 +206,12 @@ class TetraRenderer(RendererBase):
             raise VolrenError(f"tetra option skip_transparent must be true or false, got {opts['skip_transparent']!r}")
         if opts["backend"] == "gl" and opts["integration"] == "exact":
             raise VolrenError("tetra option integration=exact runs on the cpu backend only (backend=cpu or auto)")
+        check_stride(opts["image_stride"], "tetra option image_stride")
+        if opts["backend"] == "gl" and opts["image_stride"] > 1:
+            raise VolrenError("tetra option image_stride > 1 runs on the cpu backend only (backend=cpu or auto)")
+        tol = opts["refine_tolerance"]
+        if isinstance(tol, bool) or not isinstance(tol, int | float) or not 0.0 <= tol <= 1.0:
+            raise VolrenError(f"tetra option refine_tolerance must lie in [0, 1], got {tol!r}")
         for name, low in (("table_size", 2), ("table_lengths", 1), ("max_steps", 1)):
             v = opts[name]
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
@@ -229,10 +248,11 @@ class TetraRenderer(RendererBase):
 
     # ------------------------------------------------------------------------------ render
     def _uses_gl(self, opts: dict[str, Any]) -> bool:
-        """The GL walk when asked for, or on `auto` with table integration and a hardware GPU
-        (on Mesa llvmpipe neither is faster across scenes, and numba keeps float64: `docs/tetra-benchmark.md`)."""
+        """The GL walk when asked for, or on `auto` with table integration, a ray per pixel and a
+        hardware GPU (on Mesa llvmpipe neither is faster across scenes, and numba keeps float64:
+        `docs/tetra-benchmark.md`)."""
         if opts["backend"] == "auto":
-            return opts["integration"] == "table" and gpu_renderer() is not None
+            return opts["integration"] == "table" and opts["image_stride"] == 1 and gpu_renderer() is not None
         return opts["backend"] == "gl"
 
     def _render(
@@ -262,22 +282,27 @@ class TetraRenderer(RendererBase):
                                     jump)
             near = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
             out, counters = walk.render(camera, width, height, params, near)  # float32: no copy to float64
-            counters.update(entries_dropped=0.0)
+            counters.update(entries_dropped=0.0, rays_cast=float(width * height))
+            rgba = self._pixels(out, mode)
             if progress is not None:
                 progress(1.0)
         else:
-            out, counters = self._render_cpu(camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors,
-                                             planes, packed, usable.cells, walked, visible, depth, ratio, lo,
-                                             scale, lmax)
+            rgba, counters = self._render_cpu(camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors,
+                                              planes, packed, usable.cells, walked, visible, depth, ratio, lo,
+                                              scale, lmax)
         counters["cells_transparent"] = transparent
+        return rgba.reshape(height, width, 4).astype(np.float32, copy=False), counters
+
+    def _pixels(self, out: NDArray, mode: int) -> NDArray:
+        """Premultiplied RGBA (n, 4) from the walk's output: composites clipped to valid colours,
+        projected values through the TF."""
         if mode == COMPOSITE:
             rgba = np.clip(out, 0.0, 1.0, out=out)
             np.minimum(rgba[:, :3], rgba[:, 3:4], out=rgba[:, :3])
-        else:
-            found = out[:, 1] > 0
-            rgb, alpha = self._tf.sample(np.where(found, out[:, 0], np.nan))  # type: ignore[union-attr]
-            rgba = np.concatenate([rgb * alpha[:, None], alpha[:, None]], axis=1)
-        return rgba.reshape(height, width, 4).astype(np.float32, copy=False), counters
+            return rgba
+        found = out[:, 1] > 0
+        rgb, alpha = self._tf.sample(np.where(found, out[:, 0], np.nan))  # type: ignore[union-attr]
+        return np.concatenate([rgb * alpha[:, None], alpha[:, None]], axis=1)
 
     def _gl_walk(self, mesh: PreparedMesh, tets: NDArray, neighbors: NDArray, packed: NDArray, tvals: NDArray,
                  grads: NDArray, usable: WalkedCells) -> GLWalk:
@@ -291,42 +316,65 @@ class TetraRenderer(RendererBase):
 
     def _render_cpu(self, camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors, planes, packed,
                     usable, walked, visible, depth, ratio, lo, scale, lmax) -> tuple[NDArray, dict[str, float]]:
-        """The numba walk over blocks of rows: (H * W, 4) float64 per pixel and the counters."""
+        """The numba walk: (H * W, 4) premultiplied RGBA and the counters. A ray per pixel over
+        blocks of rows, or with image_stride > 1 adaptive refinement (`image_refinement`)."""
         tvals, grads = planes[3], planes[4]
-        corner = np.ascontiguousarray(mesh.points[tets[:, 0]])
+        corner = self._corner
         exact = opts["integration"] == "exact" and mode == COMPOSITE
         length = self._volume.characteristic_length  # type: ignore[union-attr]
         tf = pack_tf(self._tf)  # type: ignore[arg-type]
-        origins, dirs = camera.pixel_rays(width, height)
-        origins = np.ascontiguousarray(origins.reshape(-1, 3))
-        dirs = np.ascontiguousarray(dirs.reshape(-1, 3))
-        tfar = np.ascontiguousarray(ray_far(camera, dirs))
-        entry_faces, px, py, behind, near_cells = self._entry_candidates(camera, width, height, mesh, tets, walked)
-        n = width * height
-        out = np.zeros((n, 4))
-        stats = np.zeros((n, 4), np.int64)
-        def kernel(a: int, b: int) -> None:
-            offsets, cand = merge_lists(
-                *bin_triangles(px, py, behind, entry_faces[0], entry_faces[1], width, height, a // width, b // width,
-                               0.01),
-                *bin_rows(near_cells, width, a // width, b // width),
-            )
-            cast_rays(
-                origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, walked.boundary, neighbors, packed,
-                tvals, grads, corner, usable, walked.cells, visible, depth, ratio, lo, scale, lmax, sp, mode,
-                float(opts["termination_alpha"]), int(opts["max_steps"]), self._on_plane(mesh), exact,
-                float(self._settings.step) * length, 1e-5, 10, tf, out[a:b], stats[a:b],
-            )  # fmt: skip
+        (triangles, cells), px, py, behind, near_cells = self._entry_candidates(camera, width, height, mesh, tets,
+                                                                               walked)
+        totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
 
-        run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, kernel, progress)
+        def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray) -> NDArray:
+            out = np.zeros((len(origins), 4))
+            stats = np.zeros((len(origins), 4), np.int64)
+            cast_rays(
+                np.ascontiguousarray(origins), np.ascontiguousarray(dirs), np.ascontiguousarray(ray_far(camera, dirs)),
+                offsets, cand, walked.boundary, neighbors, packed, tvals, grads, corner, usable, walked.cells, visible,
+                depth, ratio, lo, scale, lmax, sp, mode, float(opts["termination_alpha"]), int(opts["max_steps"]),
+                self._on_plane(mesh), exact, float(self._settings.step) * length, 1e-5, 10, tf, out, stats,
+            )  # fmt: skip
+            totals[:4] += stats.sum(axis=0)
+            totals[4] += np.count_nonzero(stats[:, 0])
+            return out
+
+        stride = opts["image_stride"]
+        if stride == 1:
+            origins, dirs = (a.reshape(-1, 3) for a in camera.pixel_rays(width, height))
+            out = np.empty((width * height, 4))
+
+            def rows(a: int, b: int) -> None:
+                offsets, cand = merge_lists(
+                    *bin_triangles(px, py, behind, triangles, cells, width, height, a // width, b // width, 0.01),
+                    *bin_rows(near_cells, width, a // width, b // width),
+                )
+                out[a:b] = walk(origins[a:b], dirs[a:b], offsets, cand)
+
+            run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, rows, progress)
+            rgba, rays = self._pixels(out, mode), width * height
+        else:
+            near_lists = bin_rows(near_cells, width, 0, height) if len(near_cells) else None
+
+            def cast(pixels: NDArray[np.int64]) -> NDArray:
+                origins, dirs = camera.rays(width, height, pixels % width, pixels // width)
+                offsets, cand = bin_triangles_at(px, py, behind, triangles, cells, width, pixels, 0.01)
+                if near_lists is not None:
+                    offsets, cand = merge_lists(offsets, cand, *gather_lists(*near_lists, pixels))
+                return self._pixels(walk(origins, dirs, offsets, cand), mode)
+
+            with parallel_chunk_size(CHUNK_SIZE):
+                rgba, rays = refine_image(cast, width, height, stride, float(opts["refine_tolerance"]), progress)
         counters = {
-            "cell_steps": float(stats[:, 0].sum()),
-            "cells_integrated": float(stats[:, 1].sum()),
-            "rays_hit": float(np.count_nonzero(stats[:, 0])),
-            "walks_cut": float(stats[:, 2].sum()),
-            "entries_dropped": float(stats[:, 3].sum()),
+            "cell_steps": float(totals[0]),
+            "cells_integrated": float(totals[1]),
+            "rays_hit": float(totals[4]),
+            "rays_cast": float(rays),
+            "walks_cut": float(totals[2]),
+            "entries_dropped": float(totals[3]),
         }
-        return out, counters
+        return rgba, counters
 
 
 def _morton_order(centres: NDArray[np.float64]) -> NDArray[np.int64]:

@@ -434,6 +434,67 @@ def bin_triangles(px, py, behind, triangles, cells, width, height, row0, row1, m
 
 
 @njit(cache=True)
+def bin_triangles_at(px, py, behind, triangles, cells, width, pixels, margin):
+    """`bin_triangles` for some pixels only (`pixels`: row-major indices, ascending): CSR lists
+    in their order. Each triangle visits only the listed pixels of its bounding box, found per
+    row by bisection, so a sparse set costs little more than its own size."""
+    n = pixels.shape[0]
+    height = (pixels[n - 1] // width + 1) if n else 0
+    row_start = np.searchsorted(pixels, np.arange(height + 1) * width)
+    counts = np.zeros(n + 1, np.int64)
+    k = triangles.shape[0]
+    for phase in range(2):
+        if phase == 1:
+            offsets = np.cumsum(counts)
+            fill = offsets[:-1].copy()
+            cand = np.empty(offsets[-1], np.int64)
+        for i in range(k):
+            tri = triangles[i]
+            whole = behind[tri[0]] or behind[tri[1]] or behind[tri[2]]
+            x0 = 0
+            x1 = width - 1
+            y0 = 0
+            y1 = height - 1
+            if not whole:
+                x0 = max(x0, int(math.ceil(min(px[tri[0]], px[tri[1]], px[tri[2]]) - margin)))
+                x1 = min(x1, int(math.floor(max(px[tri[0]], px[tri[1]], px[tri[2]]) + margin)))
+                y0 = max(y0, int(math.ceil(min(py[tri[0]], py[tri[1]], py[tri[2]]) - margin)))
+                y1 = min(y1, int(math.floor(max(py[tri[0]], py[tri[1]], py[tri[2]]) + margin)))
+            for y in range(y0, y1 + 1):
+                j = row_start[y]
+                end = row_start[y + 1]
+                if j == end or x0 > x1:
+                    continue
+                j = np.searchsorted(pixels[j:end], y * width + x0) + j
+                while j < end and pixels[j] <= y * width + x1:
+                    x = pixels[j] - y * width
+                    if whole or _covers(px, py, tri, x, y, margin):
+                        if phase == 0:
+                            counts[j + 1] += 1
+                        else:
+                            cand[fill[j]] = cells[i]
+                            fill[j] += 1
+                    j += 1
+    return offsets, cand
+
+
+@njit(cache=True)
+def gather_lists(offsets, cand, pixels):
+    """The CSR lists of some pixels (indices into `offsets`' pixels), in their order."""
+    n = pixels.shape[0]
+    out_offsets = np.zeros(n + 1, np.int64)
+    for i in range(n):
+        out_offsets[i + 1] = out_offsets[i] + offsets[pixels[i] + 1] - offsets[pixels[i]]
+    out = np.empty(out_offsets[n], np.int64)
+    for i in range(n):
+        k = out_offsets[i]
+        for c in range(offsets[pixels[i]], offsets[pixels[i] + 1]):
+            out[k] = cand[c]
+            k += 1
+    return out_offsets, out
+
+
+@njit(cache=True)
 def merge_lists(o1, c1, o2, c2):
     """Two CSR lists over the same pixels as one."""
     n = o1.shape[0] - 1
