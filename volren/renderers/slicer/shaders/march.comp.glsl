@@ -3,6 +3,7 @@
 // path rasterizes, front to back, so it can stop early and jump over empty bricks.
 #include "common.glsl"
 #include "skipping.glsl"
+#include "pixel_ray.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(rgba32f, binding = 0) uniform writeonly image2D u_image;
@@ -30,12 +31,9 @@ void main() {
     ivec2 size = imageSize(u_image);
     if (pixel.x >= size.x || pixel.y >= size.y) return;
     vec2 ndc = (vec2(pixel) + 0.5) / vec2(size) * 2.0 - 1.0;
-    vec4 near4 = u_clip_to_world * vec4(ndc, -1.0, 1.0);
-    vec4 far4 = u_clip_to_world * vec4(ndc, 1.0, 1.0);
-    vec3 origin = near4.xyz / near4.w;
-    vec3 dir = far4.xyz / far4.w - origin;
-    float t_far = length(dir);
-    dir /= t_far;
+    vec3 origin, dir;
+    float t_far;
+    pixel_ray(u_clip_to_world, ndc, origin, dir, t_far);
     vec2 span = box_interval(origin, dir, u_box_min, u_box_max);
     float t0 = max(span.x, 0.0);
     float t1 = min(span.y, t_far);

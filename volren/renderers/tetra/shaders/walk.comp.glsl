@@ -16,6 +16,7 @@
 #define LISTS_READ_ONLY 1
 #include "mesh.glsl"
 #include "lists.glsl"
+#include "pixel_ray.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, binding = 11) writeonly buffer Result { vec4 result[]; };  // row 0 at the top
@@ -122,12 +123,9 @@ vec4 cast_ray(ivec2 pixel) {
     list *= u_slots;
     vec2 ndc = vec2((float(pixel.x) + 0.5) / float(u_size.x) * 2.0 - 1.0,
                     1.0 - (float(pixel.y) + 0.5) / float(u_size.y) * 2.0);
-    vec4 near4 = u_clip_to_world * vec4(ndc, -1.0, 1.0);
-    vec4 far4 = u_clip_to_world * vec4(ndc, 1.0, 1.0);
-    vec3 o = near4.xyz / near4.w;
-    vec3 d = far4.xyz / far4.w - o;
-    float t_max = length(d);
-    d /= t_max;
+    vec3 o, d;
+    float t_max;
+    pixel_ray(u_clip_to_world, ndc, o, d, t_max);
     vec3 h = u_light - d;
     h = dot(h, h) > 0.0 ? normalize(h) : h;
 
