@@ -3,8 +3,10 @@ rays on a coarse grid of pixels, and cast more only in the blocks whose corner c
 
 A ray caster pays per pixel. Where the image is smooth (empty background, soft interiors) the
 colours between four rays `stride` pixels apart are well predicted by bilinear interpolation; where
-the corners differ by more than `tolerance` (any premultiplied RGBA channel), the block is split in
-four and its edge midpoints and centre are cast, down to single pixels. The error is then bounded
+the corners differ by more than `tolerance` (any premultiplied RGBA channel), or some corner rays
+see nothing (alpha 0) and others do, the block is split in four and its edge midpoints and centre
+are cast, down to single pixels: silhouettes are followed to the pixel however faint, so no
+interpolated haze spreads into the background. The error is then bounded
 by how much a block's colours can vary between corners that agree, which is small for smooth images
 and large only for features thinner than the stride that no corner ray touches: those are missed.
 With stride 1 every pixel is cast and the image is exact.
@@ -26,10 +28,10 @@ from volren.renderers.base import ProgressCallback
 CastRays = Callable[[NDArray[np.int64]], NDArray[np.floating]]
 
 
-def check_stride(stride: object, name: str = "image_stride") -> int:
+def check_stride(stride: object, name: str = "option image_stride") -> int:
     """The stride as an int: a power of two from 1 to 64, else an error naming the option."""
     if isinstance(stride, bool) or not isinstance(stride, int) or stride < 1 or stride > 64 or stride & (stride - 1):
-        raise VolrenError(f"option {name} must be 1, 2, 4, 8, 16, 32 or 64, got {stride!r}")
+        raise VolrenError(f"{name} must be 1, 2, 4, 8, 16, 32 or 64, got {stride!r}")
     return stride
 
 
@@ -38,8 +40,9 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
     """The (height * width, 4) image and the number of rays cast.
 
     The blocks of each level are `stride` pixels wide (the last row and column of blocks are cut at
-    the image's edge); a block whose four corners differ by at most `tolerance` is filled by
-    bilinear interpolation between them, the others are split until the blocks are one pixel wide.
+    the image's edge); a block whose four corners differ by at most `tolerance` and agree on
+    whether they see anything is filled by bilinear interpolation between them, the others are
+    split until the blocks are one pixel wide.
     Cast pixels are never overwritten by interpolation."""
     image = np.zeros((height * width, 4))
     done = np.zeros(height * width, dtype=bool)
@@ -65,7 +68,10 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
         xb, yb = np.minimum(x0 + size, width - 1), np.minimum(y0 + size, height - 1)
         corners = np.stack([image[ya * width + xa], image[ya * width + xb], image[yb * width + xa],
                             image[yb * width + xb]], axis=1)
-        split = (corners.max(axis=1) - corners.min(axis=1)).max(axis=1) > tolerance
+        covered = corners[:, :, 3] > 0.0
+        # a silhouette (some corner rays see nothing) is always followed down to pixels
+        split = ((corners.max(axis=1) - corners.min(axis=1)).max(axis=1) > tolerance) | (
+            covered.any(axis=1) & ~covered.all(axis=1))
         keep = ~split
         _fill(image, done, width, xa[keep], ya[keep], xb[keep], yb[keep])
         half = size // 2
