@@ -80,8 +80,8 @@ class TetraRenderer(RendererBase):
         "cpu; gl (OpenGL 4.3 compute shaders, also on Mesa llvmpipe; table integration only)",
         "image_stride": "1 (default): a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, "
         "rays every `image_stride` pixels first, more only where neighbouring rays differ by more than "
-        "refine_tolerance, the rest interpolated (faster on smooth images; features thinner than the stride "
-        "between rays that agree are missed; cpu backend)",
+        "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features thinner "
+        "than the stride between rays that agree are missed; cpu backend)",
         "refine_tolerance": "with image_stride > 1: the largest difference in any premultiplied RGBA channel "
         "between a block's corner rays that is interpolated instead of cast (default 0.02)",
     }
