@@ -4,7 +4,8 @@ A configuration is one point of a renderer's time/error curve. Each renderer swe
 trades time for error most directly (the step for `slicer` and VTK's stepped mappers, the table
 size for `tetra`, whose rays step cell to cell) and, at one middle setting, turns the other knobs
 one at a time (pre-integration, table size, jitter, skipping, `tetra`'s adaptive image refinement),
-so that the sweep stays linear in the number of knobs instead of their product. VTK's mappers are peers: each one is a curve.
+so that the sweep stays linear in the number of knobs instead of their product. VTK's mappers are
+peers: each one is a curve.
 
 `curve` names the renderer as plotted and compared: `slicer`, `tetra` (ours) or `vtk-<mapper>`.
 """

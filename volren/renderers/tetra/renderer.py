@@ -6,10 +6,12 @@ version: the 3D pre-integration table over the mesh's value range and segment le
 longest edge (`model.preintegration`), turned into optical depth per unit length and colour per
 unit opacity, the cells whose value range maps to zero opacity, and the boundary faces of the
 visible cells, which composite rays walk alone (`walked_cells`). Per frame: the entry faces binned
-to pixels, then the numba kernel over blocks of rows (or the GL walk, `gl_walk`).
+to pixels, then the numba kernel over blocks of rows, or over the pixels adaptive refinement asks
+for (`image_refinement`), or the GL walk (`gl_walk`).
 
-Counters: cell_steps (cells walked through, summed over rays), cells_integrated, rays_hit, walks
-cut at max_steps, entries dropped (more boundary crossings along a ray than the kernel keeps).
+Counters: cell_steps (cells walked through, summed over rays), cells_integrated, rays_hit,
+rays_cast, walks cut at max_steps, entries dropped (more boundary crossings along a ray than the
+kernel keeps).
 """
 
 from __future__ import annotations
@@ -249,8 +251,8 @@ class TetraRenderer(RendererBase):
     # ------------------------------------------------------------------------------ render
     def _uses_gl(self, opts: dict[str, Any]) -> bool:
         """The GL walk when asked for, or on `auto` with table integration, a ray per pixel and a
-        hardware GPU (on Mesa llvmpipe neither is faster across scenes, and numba keeps float64:
-        `docs/tetra-benchmark.md`)."""
+        hardware GPU (on Mesa llvmpipe numba keeps float64, progress per block of rows and adaptive
+        refinement: `docs/tetra-benchmark.md`)."""
         if opts["backend"] == "auto":
             return opts["integration"] == "table" and opts["image_stride"] == 1 and gpu_renderer() is not None
         return opts["backend"] == "gl"
@@ -327,8 +329,8 @@ class TetraRenderer(RendererBase):
                                                                                walked)
         totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
 
-        def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray) -> NDArray:
-            out = np.zeros((len(origins), 4))
+        def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray, out: NDArray) -> NDArray:
+            """The rays' walk output into `out` (n, 4); the counters summed into `totals`."""
             stats = np.zeros((len(origins), 4), np.int64)
             cast_rays(
                 np.ascontiguousarray(origins), np.ascontiguousarray(dirs), np.ascontiguousarray(ray_far(camera, dirs)),
@@ -350,7 +352,7 @@ class TetraRenderer(RendererBase):
                     *bin_triangles(px, py, behind, triangles, cells, width, height, a // width, b // width, 0.01),
                     *bin_rows(near_cells, width, a // width, b // width),
                 )
-                out[a:b] = walk(origins[a:b], dirs[a:b], offsets, cand)
+                walk(origins[a:b], dirs[a:b], offsets, cand, out[a:b])
 
             run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, rows, progress)
             rgba, rays = self._pixels(out, mode), width * height
@@ -362,7 +364,7 @@ class TetraRenderer(RendererBase):
                 offsets, cand = bin_triangles_at(px, py, behind, triangles, cells, width, pixels, 0.01)
                 if near_lists is not None:
                     offsets, cand = merge_lists(offsets, cand, *gather_lists(*near_lists, pixels))
-                return self._pixels(walk(origins, dirs, offsets, cand), mode)
+                return self._pixels(walk(origins, dirs, offsets, cand, np.empty((len(pixels), 4))), mode)
 
             with parallel_chunk_size(CHUNK_SIZE):
                 rgba, rays = refine_image(cast, width, height, stride, float(opts["refine_tolerance"]), progress)
