@@ -393,6 +393,24 @@ def _covers(px, py, tri, x, y, margin):
 
 
 @njit(cache=True)
+def _pixel_box(px, py, behind, tri, width, row0, row1, margin):
+    """(whole, x0, x1, y0, y1): the pixels of rows row0 .. row1 - 1 whose centres the projected
+    triangle's bounding box (grown by `margin`) holds; whole: a vertex lies behind the eye, so the
+    box is every pixel of those rows."""
+    whole = behind[tri[0]] or behind[tri[1]] or behind[tri[2]]
+    x0 = 0
+    x1 = width - 1
+    y0 = row0
+    y1 = row1 - 1
+    if not whole:
+        x0 = max(x0, int(math.ceil(min(px[tri[0]], px[tri[1]], px[tri[2]]) - margin)))
+        x1 = min(x1, int(math.floor(max(px[tri[0]], px[tri[1]], px[tri[2]]) + margin)))
+        y0 = max(y0, int(math.ceil(min(py[tri[0]], py[tri[1]], py[tri[2]]) - margin)))
+        y1 = min(y1, int(math.floor(max(py[tri[0]], py[tri[1]], py[tri[2]]) + margin)))
+    return whole, x0, x1, y0, y1
+
+
+@njit(cache=True)
 def bin_triangles(px, py, behind, triangles, cells, width, height, row0, row1, margin):
     """CSR lists (offsets per pixel of rows row0 .. row1 - 1, cell ids) of the projected
     triangles covering each pixel centre (with `margin` pixels to spare); a triangle with a
@@ -407,20 +425,7 @@ def bin_triangles(px, py, behind, triangles, cells, width, height, row0, row1, m
             cand = np.empty(offsets[-1], np.int64)
         for i in range(k):
             tri = triangles[i]
-            whole = behind[tri[0]] or behind[tri[1]] or behind[tri[2]]
-            x0 = 0
-            x1 = width - 1
-            y0 = row0
-            y1 = row1 - 1
-            if not whole:
-                xmin = min(px[tri[0]], px[tri[1]], px[tri[2]]) - margin
-                xmax = max(px[tri[0]], px[tri[1]], px[tri[2]]) + margin
-                ymin = min(py[tri[0]], py[tri[1]], py[tri[2]]) - margin
-                ymax = max(py[tri[0]], py[tri[1]], py[tri[2]]) + margin
-                x0 = max(x0, int(math.ceil(xmin)))
-                x1 = min(x1, int(math.floor(xmax)))
-                y0 = max(y0, int(math.ceil(ymin)))
-                y1 = min(y1, int(math.floor(ymax)))
+            whole, x0, x1, y0, y1 = _pixel_box(px, py, behind, tri, width, row0, row1, margin)
             for y in range(y0, y1 + 1):
                 for x in range(x0, x1 + 1):
                     if whole or _covers(px, py, tri, x, y, margin):
@@ -450,16 +455,7 @@ def bin_triangles_at(px, py, behind, triangles, cells, width, pixels, margin):
             cand = np.empty(offsets[-1], np.int64)
         for i in range(k):
             tri = triangles[i]
-            whole = behind[tri[0]] or behind[tri[1]] or behind[tri[2]]
-            x0 = 0
-            x1 = width - 1
-            y0 = 0
-            y1 = height - 1
-            if not whole:
-                x0 = max(x0, int(math.ceil(min(px[tri[0]], px[tri[1]], px[tri[2]]) - margin)))
-                x1 = min(x1, int(math.floor(max(px[tri[0]], px[tri[1]], px[tri[2]]) + margin)))
-                y0 = max(y0, int(math.ceil(min(py[tri[0]], py[tri[1]], py[tri[2]]) - margin)))
-                y1 = min(y1, int(math.floor(max(py[tri[0]], py[tri[1]], py[tri[2]]) + margin)))
+            whole, x0, x1, y0, y1 = _pixel_box(px, py, behind, tri, width, 0, height, margin)
             for y in range(y0, y1 + 1):
                 j = row_start[y]
                 end = row_start[y + 1]
