@@ -50,8 +50,9 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
 
     def sample(xs: NDArray[np.int64], ys: NDArray[np.int64]) -> None:
         nonlocal cast_count
-        index = np.unique(np.minimum(ys, height - 1) * width + np.minimum(xs, width - 1))
-        index = index[~done[index]]
+        wanted = np.zeros(height * width, dtype=bool)
+        wanted[np.minimum(ys, height - 1) * width + np.minimum(xs, width - 1)] = True
+        index = np.flatnonzero(wanted & ~done)
         if index.size:
             image[index] = cast(index)
             done[index] = True
@@ -66,12 +67,7 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
     for level in range(levels):
         xa, ya = np.minimum(x0, width - 1), np.minimum(y0, height - 1)
         xb, yb = np.minimum(x0 + size, width - 1), np.minimum(y0 + size, height - 1)
-        corners = np.stack([image[ya * width + xa], image[ya * width + xb], image[yb * width + xa],
-                            image[yb * width + xb]], axis=1)
-        covered = corners[:, :, 3] > 0.0
-        # a silhouette (some corner rays see nothing) is always followed down to pixels
-        split = ((corners.max(axis=1) - corners.min(axis=1)).max(axis=1) > tolerance) | (
-            covered.any(axis=1) & ~covered.all(axis=1))
+        split = _split(image, width, xa, ya, xb, yb, tolerance)
         keep = ~split
         _fill(image, done, width, xa[keep], ya[keep], xb[keep], yb[keep])
         half = size // 2
@@ -85,6 +81,25 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
     if not levels and progress is not None:
         progress(1.0)
     return image, cast_count
+
+
+@njit(cache=True)
+def _split(image, width, xa, ya, xb, yb, tolerance):
+    """Which blocks split: their corners differ by more than `tolerance` in some channel, or some
+    corner rays see nothing (alpha 0) and others do (a silhouette is followed down to pixels)."""
+    split = np.zeros(xa.shape[0], dtype=np.bool_)
+    for k in range(xa.shape[0]):
+        a, b = ya[k] * width + xa[k], ya[k] * width + xb[k]
+        c, d = yb[k] * width + xa[k], yb[k] * width + xb[k]
+        for ch in range(4):
+            lo = min(image[a, ch], image[b, ch], image[c, ch], image[d, ch])
+            hi = max(image[a, ch], image[b, ch], image[c, ch], image[d, ch])
+            if hi - lo > tolerance:
+                split[k] = True
+        covered = (image[a, 3] > 0.0) + (image[b, 3] > 0.0) + (image[c, 3] > 0.0) + (image[d, 3] > 0.0)
+        if 0 < covered < 4:
+            split[k] = True
+    return split
 
 
 @njit(cache=True)

@@ -48,7 +48,7 @@ FACE_VERTEX = np.dtype([("position", "<f4", 3), ("plane", "<f4", 4), ("candidate
 MAX_GROUPS_X = 65535
 #: Pixels by which each entry face grows before it is rasterized (entry_faces.geom.glsl): four
 #: times the 1/256 pixel the rasterizer snaps to, so that every face a pixel centre lies on or
-#: near is listed (the CPU walk's bin_triangles lists faces within 0.01 pixel).
+#: near is listed (the CPU walk lists faces within `entry_bins.MARGIN`, 0.01 pixel).
 ENTRY_MARGIN = 1.0 / 64.0
 #: Entry candidates a pixel's list holds at first (more when a frame needs them).
 SLOTS = 4

@@ -35,17 +35,22 @@ from volren.renderers.reference.shading import shade_params
 from volren.renderers.reference.tets import bin_rows, prepare_tets, ray_far
 from volren.renderers.reference.tf_eval import pack_tf
 from volren.renderers.row_blocks import parallel_chunk_size, run_in_row_blocks
+from volren.renderers.tetra.entry_bins import (
+    EntryFaces,
+    bin_tiles,
+    bin_triangles,
+    bin_triangles_at,
+    gather_lists,
+    merge_lists,
+    project_faces,
+)
 from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
 from volren.renderers.tetra.traversal import (
     AVERAGE,
     COMPOSITE,
     MAXIMUM,
     MINIMUM,
-    bin_triangles,
-    bin_triangles_at,
     cast_rays,
-    gather_lists,
-    merge_lists,
     pack_planes,
 )
 from volren.renderers.tetra.walked_cells import WalkedCells, walked_cells
@@ -160,32 +165,31 @@ class TetraRenderer(RendererBase):
         return 1e-12 * float(np.linalg.norm(b[1::2] - b[0::2]) + np.abs(b).max())
 
     def _entry_candidates(self, camera: Camera, width: int, height: int, mesh: PreparedMesh, tets: NDArray,
-                          walked: WalkedCells) -> tuple:
-        """Where rays can enter the mesh: the boundary faces turned towards the eye (as triangles
-        to rasterize, with their cells), and the cells the near plane cuts (as pixel boxes), where
-        rays start inside the mesh."""
+                          walked: WalkedCells) -> tuple[EntryFaces, NDArray[np.int64]]:
+        """Where rays can enter the mesh: the boundary faces turned towards the eye, projected to
+        pixels (`entry_bins`), and the cells the near plane cuts (pixel boxes by cell id, x0 = -1:
+        none; no rows when it cuts none), where rays start inside the mesh."""
         cell, triangles, plane = walked.face_cells, walked.triangles, walked.face_planes
         if camera.parallel:
             facing = plane[:, :3] @ np.asarray(camera.direction) >= -1e-12
         else:
             eye = np.asarray(camera.position, dtype=np.float64)
             facing = plane[:, :3] @ eye + plane[:, 3] <= self._on_plane(mesh)
-        cell, triangles = cell[facing], np.ascontiguousarray(triangles[facing])
         pts = np.concatenate([mesh.points, np.ones((len(mesh.points), 1))], axis=1)
         view = camera.view_matrix()
         clip = pts @ (camera.projection_matrix(width / height) @ view).T
         w = clip[:, 3]
         behind = ~(w > 0)
         safe = np.where(behind, 1.0, w)
-        px = np.ascontiguousarray((clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5)
-        py = np.ascontiguousarray((1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5)
-        # pixel boxes by cell id (x0 = -1: none); no rows at all when the near plane cuts no cell
+        px = (clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5
+        py = (1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5
+        faces = project_faces(px, py, behind, triangles[facing], cell[facing], width, height)
         near_cells = np.zeros((0, 4), np.int64)
         cut = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
         if cut is not None:
             near_cells = np.full((len(tets), 4), -1, np.int64)
             near_cells[cut[0]] = cut[1]
-        return (triangles, np.ascontiguousarray(cell)), px, py, behind, near_cells
+        return faces, near_cells
 
     def _options(self) -> dict[str, Any]:
         o = dict(self._settings.options)
@@ -325,8 +329,7 @@ class TetraRenderer(RendererBase):
         exact = opts["integration"] == "exact" and mode == COMPOSITE
         length = self._volume.characteristic_length  # type: ignore[union-attr]
         tf = pack_tf(self._tf)  # type: ignore[arg-type]
-        (triangles, cells), px, py, behind, near_cells = self._entry_candidates(camera, width, height, mesh, tets,
-                                                                               walked)
+        faces, near_cells = self._entry_candidates(camera, width, height, mesh, tets, walked)
         totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
 
         def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray, out: NDArray) -> NDArray:
@@ -349,7 +352,7 @@ class TetraRenderer(RendererBase):
 
             def rows(a: int, b: int) -> None:
                 offsets, cand = merge_lists(
-                    *bin_triangles(px, py, behind, triangles, cells, width, height, a // width, b // width, 0.01),
+                    *bin_triangles(faces, a // width, b // width),
                     *bin_rows(near_cells, width, a // width, b // width),
                 )
                 walk(origins[a:b], dirs[a:b], offsets, cand, out[a:b])
@@ -358,10 +361,11 @@ class TetraRenderer(RendererBase):
             rgba, rays = self._pixels(out, mode), width * height
         else:
             near_lists = bin_rows(near_cells, width, 0, height) if len(near_cells) else None
+            tiles = bin_tiles(faces)
 
             def cast(pixels: NDArray[np.int64]) -> NDArray:
                 origins, dirs = camera.rays(width, height, pixels % width, pixels // width)
-                offsets, cand = bin_triangles_at(px, py, behind, triangles, cells, width, pixels, 0.01)
+                offsets, cand = bin_triangles_at(faces, tiles, pixels)
                 if near_lists is not None:
                     offsets, cand = merge_lists(offsets, cand, *gather_lists(*near_lists, pixels))
                 return self._pixels(walk(origins, dirs, offsets, cand, np.empty((len(pixels), 4))), mode)
