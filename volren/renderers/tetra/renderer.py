@@ -42,6 +42,7 @@ from volren.renderers.tetra.entry_bins import (
     bin_triangles_at,
     gather_lists,
     merge_lists,
+    pixel_coordinates,
     project_faces,
 )
 from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
@@ -175,14 +176,8 @@ class TetraRenderer(RendererBase):
         else:
             eye = np.asarray(camera.position, dtype=np.float64)
             facing = plane[:, :3] @ eye + plane[:, 3] <= self._on_plane(mesh)
-        pts = np.concatenate([mesh.points, np.ones((len(mesh.points), 1))], axis=1)
-        view = camera.view_matrix()
-        clip = pts @ (camera.projection_matrix(width / height) @ view).T
-        w = clip[:, 3]
-        behind = ~(w > 0)
-        safe = np.where(behind, 1.0, w)
-        px = (clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5
-        py = (1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5
+        clip_matrix = camera.projection_matrix(width / height) @ camera.view_matrix()
+        px, py, behind = pixel_coordinates(mesh.points, clip_matrix, width, height)
         faces = project_faces(px, py, behind, triangles[facing], cell[facing], width, height)
         near_cells = np.zeros((0, 4), np.int64)
         cut = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
