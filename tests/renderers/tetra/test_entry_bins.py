@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from volren.model.camera import Camera
+from volren.renderers.reference.tets import pixel_coordinates
 from volren.renderers.tetra.entry_bins import (
     MARGIN,
     bin_tiles,
     bin_triangles,
     bin_triangles_at,
-    pixel_coordinates,
     project_faces,
 )
 
@@ -118,14 +118,13 @@ def test_pixel_coordinates_follow_the_camera() -> None:
     """The focal point projects to the image centre; points along a pixel's ray project to that
     pixel's centre; a point behind the eye is flagged."""
     camera = Camera(position=(1.0, 2.0, 9.0), focal_point=(0.5, 0.0, 0.0), view_up=(0.0, 1.0, 0.2))
-    matrix = camera.projection_matrix(WIDTH / HEIGHT) @ camera.view_matrix()
     origins, dirs = camera.rays(WIDTH, HEIGHT, np.array([3, 30]), np.array([5, 20]))
     points = np.concatenate([[camera.focal_point], origins + 2.0 * dirs, origins + 7.5 * dirs,
                              [2.0 * np.array(camera.position) - camera.focal_point]])
-    px, py, behind = pixel_coordinates(points, matrix, WIDTH, HEIGHT)
+    px, py, w = pixel_coordinates(camera, WIDTH, HEIGHT, points)
     assert np.allclose([px[0], py[0]], [(WIDTH - 1) / 2, (HEIGHT - 1) / 2], atol=1e-9)
     assert np.allclose(px[1:5], [3, 30, 3, 30], atol=1e-9) and np.allclose(py[1:5], [5, 20, 5, 20], atol=1e-9)
-    assert list(behind) == [False] * 5 + [True]
+    assert list(w > 0) == [True] * 5 + [False]
 
 
 def test_special_faces() -> None:

@@ -140,21 +140,36 @@ def ray_far(camera, dirs: np.ndarray) -> np.ndarray:
     return (far - near) / cos
 
 
+def pixel_coordinates(camera, width: int, height: int, points: np.ndarray) -> tuple[np.ndarray, np.ndarray,
+                                                                                     np.ndarray]:
+    """(px, py, w): points (n, 3) at pixel coordinates (pixel centres at integers, row 0 at the top)
+    and their clip w (<= 0: on or behind the eye's plane, where px, py are the points divided by 1)."""
+    matrix = camera.projection_matrix(width / height) @ camera.view_matrix()
+    n = len(points)
+    px, py, w = np.empty(n), np.empty(n), np.empty(n)
+    _pixel_coordinates(np.ascontiguousarray(points, dtype=np.float64), matrix, int(width), int(height), px, py, w)
+    return px, py, w
+
+
+@njit(cache=True)
+def _pixel_coordinates(points, m, width, height, px, py, pw):
+    for i in range(points.shape[0]):
+        x, y, z = points[i, 0], points[i, 1], points[i, 2]
+        w = m[3, 0] * x + m[3, 1] * y + m[3, 2] * z + m[3, 3]
+        pw[i] = w
+        if not (w > 0.0):
+            w = 1.0
+        px[i] = ((m[0, 0] * x + m[0, 1] * y + m[0, 2] * z + m[0, 3]) / w + 1.0) * 0.5 * width - 0.5
+        py[i] = (1.0 - (m[1, 0] * x + m[1, 1] * y + m[1, 2] * z + m[1, 3]) / w) * 0.5 * height - 0.5
+
+
 def projected_boxes(camera, width: int, height: int, points: np.ndarray, tets: np.ndarray, ok: np.ndarray) -> np.ndarray:
     """Pixel boxes of the projected tetrahedra whose `ok` is set (see `tet_boxes`)."""
-    pts = np.concatenate([points, np.ones((len(points), 1))], axis=1)
+    px, py, w = pixel_coordinates(camera, width, height, points)
     view = camera.view_matrix()
-    clip = pts @ (camera.projection_matrix(width / height) @ view).T
-    w = clip[:, 3]
-    safe = np.where(w > 0, w, 1.0)
-    px = (clip[:, 0] / safe + 1.0) * 0.5 * width - 0.5
-    py = (1.0 - clip[:, 1] / safe) * 0.5 * height - 0.5
-    depth = -(pts @ view[2])
+    depth = -(np.asarray(points, dtype=np.float64) @ view[2, :3] + view[2, 3])
     near, far = camera.clipping_range
-    return tet_boxes(
-        np.ascontiguousarray(px), np.ascontiguousarray(py), np.ascontiguousarray(w),
-        np.ascontiguousarray(depth), tets, ok, width, height, near, far,
-    )  # fmt: skip
+    return tet_boxes(px, py, w, np.ascontiguousarray(depth), tets, ok, width, height, near, far)
 
 
 @njit(cache=True)

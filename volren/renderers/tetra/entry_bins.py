@@ -42,29 +42,6 @@ class EntryFaces:
     margin: float
 
 
-def pixel_coordinates(points: NDArray, clip_matrix: NDArray, width: int, height: int) -> tuple[NDArray, NDArray,
-                                                                                                 NDArray]:
-    """(px, py, behind): points (n, 3) at pixel coordinates (pixel centres at integers, row 0 at the
-    top) under the world-to-clip matrix; behind: on or behind the eye's plane (w <= 0)."""
-    n = len(points)
-    px, py, behind = np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_)
-    _pixel_coordinates(np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(clip_matrix,
-                       dtype=np.float64), int(width), int(height), px, py, behind)
-    return px, py, behind
-
-
-@njit(cache=True)
-def _pixel_coordinates(points, m, width, height, px, py, behind):
-    for i in range(points.shape[0]):
-        x, y, z = points[i, 0], points[i, 1], points[i, 2]
-        w = m[3, 0] * x + m[3, 1] * y + m[3, 2] * z + m[3, 3]
-        behind[i] = not (w > 0.0)
-        if behind[i]:
-            w = 1.0
-        px[i] = ((m[0, 0] * x + m[0, 1] * y + m[0, 2] * z + m[0, 3]) / w + 1.0) * 0.5 * width - 0.5
-        py[i] = (1.0 - (m[1, 0] * x + m[1, 1] * y + m[1, 2] * z + m[1, 3]) / w) * 0.5 * height - 0.5
-
-
 def project_faces(px: NDArray, py: NDArray, behind: NDArray, triangles: NDArray, cells: NDArray, width: int,
                   height: int, margin: float = MARGIN) -> EntryFaces:
     """The entry faces `triangles` (k, 3 vertex ids) with their vertices at pixel coordinates

@@ -32,7 +32,7 @@ from volren.model.volume import TetVolume
 from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, RendererBase
 from volren.renderers.image_refinement import check_stride, refine_image
 from volren.renderers.reference.shading import shade_params
-from volren.renderers.reference.tets import bin_rows, prepare_tets, ray_far
+from volren.renderers.reference.tets import bin_rows, pixel_coordinates, prepare_tets, ray_far
 from volren.renderers.reference.tf_eval import pack_tf
 from volren.renderers.row_blocks import parallel_chunk_size, run_in_row_blocks
 from volren.renderers.tetra.entry_bins import (
@@ -42,7 +42,6 @@ from volren.renderers.tetra.entry_bins import (
     bin_triangles_at,
     gather_lists,
     merge_lists,
-    pixel_coordinates,
     project_faces,
 )
 from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
@@ -176,9 +175,8 @@ class TetraRenderer(RendererBase):
         else:
             eye = np.asarray(camera.position, dtype=np.float64)
             facing = plane[:, :3] @ eye + plane[:, 3] <= self._on_plane(mesh)
-        clip_matrix = camera.projection_matrix(width / height) @ camera.view_matrix()
-        px, py, behind = pixel_coordinates(mesh.points, clip_matrix, width, height)
-        faces = project_faces(px, py, behind, triangles[facing], cell[facing], width, height)
+        px, py, w = pixel_coordinates(camera, width, height, mesh.points)
+        faces = project_faces(px, py, ~(w > 0), triangles[facing], cell[facing], width, height)
         near_cells = np.zeros((0, 4), np.int64)
         cut = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
         if cut is not None:
