@@ -83,6 +83,35 @@ def test_pixel_rays_go_through_pixel_centres():
     assert origins[0, 0, 1] > origins[1, 0, 1]  # row 0 is the top
 
 
+@pytest.mark.parametrize("parallel", [False, True])
+def test_rays_start_on_the_near_plane_through_their_pixel(parallel):
+    """The forward matrices map each ray's origin to its pixel centre at NDC depth -1 and a point
+    further along it to the same pixel; perspective rays leave the eye."""
+    camera = Camera.orbit((0, 10, -3, 20, 0, 5), 30, 20, 1.2, parallel=parallel, aspect=1.5)
+    width, height = 60, 40
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(-2, width + 2, (5, 7)), rng.uniform(-2, height + 2, (5, 7))
+    origins, directions = camera.rays(width, height, x, y)
+    assert origins.shape == directions.shape == (5, 7, 3)
+    np.testing.assert_allclose(np.linalg.norm(directions, axis=-1), 1.0, rtol=0, atol=1e-12)
+    matrix = camera.projection_matrix(width / height) @ camera.view_matrix()
+    for points, depth in ((origins, -1.0), (origins + 3.0 * directions, None)):
+        clip = np.concatenate([points, np.ones((5, 7, 1))], axis=-1) @ matrix.T
+        ndc = clip[..., :3] / clip[..., 3:]
+        np.testing.assert_allclose((ndc[..., 0] + 1) / 2 * width - 0.5, x, rtol=0, atol=1e-9)
+        np.testing.assert_allclose((1 - ndc[..., 1]) / 2 * height - 0.5, y, rtol=0, atol=1e-9)
+        if depth is not None:
+            np.testing.assert_allclose(ndc[..., 2], depth, rtol=0, atol=1e-9)
+    if not parallel:
+        toward = origins - np.asarray(camera.position)
+        np.testing.assert_allclose(directions, toward / np.linalg.norm(toward, axis=-1, keepdims=True), atol=1e-12)
+    one_origin, one_direction = camera.rays(width, height, x[2, 3], y[2, 3])  # a scalar pixel, as picking asks
+    assert one_origin.shape == (3,)
+    np.testing.assert_allclose(one_direction, directions[2, 3], rtol=0, atol=1e-15)
+    row_origins, _ = camera.rays(width, height, x[0], 17.0)  # broadcast: one row
+    np.testing.assert_allclose(row_origins, camera.rays(width, height, x[0], np.full(7, 17.0))[0], rtol=0, atol=0)
+
+
 def test_operations_are_rigid_and_invertible():
     camera = Camera.orbit((0, 10, 0, 20, 0, 5), 30, 20, 1.2)
     back = camera.azimuth(40).azimuth(-40)
