@@ -19,7 +19,6 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from volren.errors import VolrenError
@@ -153,18 +152,22 @@ class Camera:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Origins and unit directions (..., 3) of the rays through the centres of pixels (x, y) of a
         width x height image: `pixel_rays` at those pixels (to rounding; picking asks for one pixel).
-
-        One numba pass over the pixels: numpy's stacked temporaries cost 30-60 ms at 512x512, a
-        quarter of a tetra frame."""
+        x and y broadcast. Renderers that need many rays per frame use `renderers.camera_rays`."""
         inv = np.linalg.inv(self.projection_matrix(width / height) @ self.view_matrix())
-        xs, ys = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
-        origins = np.empty(xs.shape + (3,))
-        directions = np.empty(xs.shape + (3,))
-        _unproject_pixels(
-            np.ascontiguousarray(inv), np.ascontiguousarray(xs).reshape(-1), np.ascontiguousarray(ys).reshape(-1),
-            float(width), float(height), origins.reshape(-1, 3), directions.reshape(-1, 3),
-        )  # fmt: skip
-        return origins, directions
+        xx, yy = np.broadcast_arrays(
+            (np.asarray(x, dtype=np.float64) + 0.5) / width * 2.0 - 1.0,
+            1.0 - (np.asarray(y, dtype=np.float64) + 0.5) / height * 2.0,
+        )
+        ones = np.ones_like(xx)
+
+        def unproject(z: float) -> NDArray:
+            clip = np.stack([xx, yy, z * ones, ones], axis=-1) @ inv.T
+            return clip[..., :3] / clip[..., 3:4]
+
+        near, far = unproject(-1.0), unproject(1.0)
+        directions = far - near
+        directions /= np.linalg.norm(directions, axis=-1, keepdims=True)
+        return near, directions
 
     # ------------------------------------------------------------------------ operations
     def reset(self, bounds: Sequence[float], aspect: float = 1.0) -> Camera:
@@ -319,27 +322,3 @@ class Camera:
             return cls(**kwargs)
         except (TypeError, ValueError) as exc:
             raise VolrenError(f"bad camera: {exc}") from None
-
-
-@njit(cache=True)
-def _unproject_pixels(inv, xs, ys, width, height, origins, directions):  # pragma: no cover - numba
-    """Each pixel centre unprojected onto the near (z = -1) and far (z = 1) planes through `inv`,
-    the inverse of projection @ view: origins on the near plane, unit directions toward the far."""
-    sx, sy = 2.0 / width, 2.0 / height
-    for i in range(xs.shape[0]):
-        cx = (xs[i] + 0.5) * sx - 1.0
-        cy = 1.0 - (ys[i] + 0.5) * sy
-        w = inv[3, 0] * cx + inv[3, 1] * cy + inv[3, 3]
-        near_w = 1.0 / (w - inv[3, 2])
-        far_w = 1.0 / (w + inv[3, 2])
-        norm = 0.0
-        for k in range(3):
-            base = inv[k, 0] * cx + inv[k, 1] * cy + inv[k, 3]
-            near = (base - inv[k, 2]) * near_w
-            d = (base + inv[k, 2]) * far_w - near
-            origins[i, k] = near
-            directions[i, k] = d
-            norm += d * d
-        norm = 1.0 / np.sqrt(norm)
-        for k in range(3):
-            directions[i, k] *= norm

@@ -30,6 +30,7 @@ from volren.model.settings import BlendMode
 from volren.model.tet_mesh import PreparedMesh, prepare_mesh
 from volren.model.volume import TetVolume
 from volren.renderers.base import Capabilities, KindSupport, ProgressCallback, RendererBase
+from volren.renderers.camera_rays import image_rays, pixel_rays
 from volren.renderers.image_refinement import check_stride, refine_image
 from volren.renderers.reference.shading import shade_params
 from volren.renderers.reference.tets import bin_rows, pixel_coordinates, prepare_tets, ray_far
@@ -340,7 +341,7 @@ class TetraRenderer(RendererBase):
 
         stride = opts["image_stride"]
         if stride == 1:
-            origins, dirs = (a.reshape(-1, 3) for a in camera.pixel_rays(width, height))
+            origins, dirs = image_rays(camera, width, height)
             out = np.empty((width * height, 4))
 
             def rows(a: int, b: int) -> None:
@@ -357,7 +358,7 @@ class TetraRenderer(RendererBase):
             tiles = bin_tiles(faces)
 
             def cast(pixels: NDArray[np.int64]) -> NDArray:
-                origins, dirs = camera.rays(width, height, pixels % width, pixels // width)
+                origins, dirs = pixel_rays(camera, width, height, pixels % width, pixels // width)
                 offsets, cand = bin_triangles_at(faces, tiles, pixels)
                 if near_lists is not None:
                     offsets, cand = merge_lists(offsets, cand, *gather_lists(*near_lists, pixels))
