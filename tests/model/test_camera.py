@@ -107,7 +107,7 @@ def test_rays_start_on_the_near_plane_through_their_pixel(parallel):
         np.testing.assert_allclose(directions, toward / np.linalg.norm(toward, axis=-1, keepdims=True), atol=1e-12)
     one_origin, one_direction = camera.rays(width, height, x[2, 3], y[2, 3])  # a scalar pixel, as picking asks
     assert one_origin.shape == (3,)
-    np.testing.assert_allclose(one_direction, directions[2, 3], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(one_direction, directions[2, 3], rtol=0, atol=1e-12)
     row_origins, _ = camera.rays(width, height, x[0], 17.0)  # broadcast: one row
     np.testing.assert_allclose(row_origins, camera.rays(width, height, x[0], np.full(7, 17.0))[0], rtol=0, atol=0)
 
