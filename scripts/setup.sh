@@ -2,8 +2,8 @@
 # Set up volren on a Debian/Ubuntu machine; safe to run again (it only does what is missing).
 #   1. system libraries for OpenGL through EGL (Mesa llvmpipe without a GPU), Qt and, for the
 #      tests, a virtual X server;
-#   2. a virtual environment in .venv with volren installed in editable mode (re-installed when
-#      pyproject.toml changes).
+#   2. a virtual environment in .venv with volren and the renderer plugins under plugins/ installed
+#      in editable mode (re-installed when a pyproject.toml changes).
 # Usage: scripts/setup.sh [--tests]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -52,7 +52,7 @@ if [ ! -x .venv/bin/python ]; then
   "$python" -m venv .venv
 fi
 stamp=.venv/.volren-installed
-hash=$(sha256sum pyproject.toml | cut -d' ' -f1)
+hash=$(cat pyproject.toml plugins/*/pyproject.toml | sha256sum | cut -d' ' -f1)
 installed=$(cat "$stamp" 2>/dev/null || true)   # "<pyproject hash> <extras>"
 extras=$([ "$with_tests" = 1 ] && echo test || echo none)
 if [ "${installed%% *}" != "$hash" ] || { [ "$extras" = test ] && [ "${installed#* }" != test ]; }; then
@@ -63,5 +63,9 @@ if [ "${installed%% *}" != "$hash" ] || { [ "$extras" = test ] && [ "${installed
   else
     .venv/bin/python -m pip install -q -e .
   fi
+  for plugin in plugins/*/; do
+    echo "setup: installing the renderer plugin $plugin"
+    .venv/bin/python -m pip install -q --no-deps -e "$plugin"
+  done
   echo "$hash $extras" > "$stamp"
 fi

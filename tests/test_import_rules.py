@@ -54,6 +54,10 @@ def offending(subpackage: str, forbidden: tuple[str, ...], allowed: dict[str, tu
         ("renderers", ("PyQt5", "pyvistaqt", "pyvista", "volren.io", "volren.app", "volren.cli")),
         ("io", ("PyQt5", "pyvistaqt", "moderngl", "volren.renderers", "volren.app", "volren.cli")),
         ("cli", ("PyQt5", "pyvistaqt", "volren.app")),
+        # the kit judges renderers through the public contract only: no renderer's internals
+        ("testing", HEAVY + ("vtkmodules", "volren.io", "volren.app", "volren.cli", "volren.bench",
+                             "volren.renderers.reference", "volren.renderers.slicer", "volren.renderers.tetra",
+                             "volren.renderers.vtk_mappers")),  # fmt: skip
     ],
 )
 def test_static_import_rules(subpackage, forbidden):

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from os import PathLike
 from typing import Any
 
@@ -21,7 +22,7 @@ from volren.model.transfer_function_2d import (
     transfer_function_from_dict,
 )
 from volren.model.volume import TetVolume, UniformVolume, Volume
-from volren.renderers.base import ProgressCallback, Renderer
+from volren.renderers.base import ProgressCallback, Renderer, render_frame
 
 
 def default_transfer_function(volume: Volume) -> TransferFunction1D:
@@ -79,11 +80,12 @@ def parse_size(size: Any) -> tuple[int, int]:
     return int(values[0]), int(values[1])
 
 
+@contextmanager
 def prepared_renderer(
     name: str, volume: Volume, tf: TransferFunction, settings: RenderSettings | None = None
-) -> Renderer:
-    """A new renderer `name` holding the volume, TF and settings; use it as a context manager
-    (or call release()) so its GPU/VTK resources are freed."""
+) -> Iterator[Renderer]:
+    """``with prepared_renderer(...) as r``: a new renderer `name` holding the volume, TF and
+    settings, released at the end of the block (the Protocol asks for no context-manager methods)."""
     from volren.renderers.registry import registry
 
     renderer = registry.create(name)
@@ -91,10 +93,9 @@ def prepared_renderer(
         renderer.set_volume(volume)
         renderer.set_transfer_function(tf)
         renderer.set_settings(settings or RenderSettings())
-    except BaseException:
+        yield renderer
+    finally:
         renderer.release()
-        raise
-    return renderer
 
 
 def render(
@@ -128,4 +129,5 @@ def render(
     render_settings = RenderSettings().with_(**settings)
     cam = camera or Camera.orbit(vol.bounds, azimuth, elevation, zoom, parallel, width / height)
     with prepared_renderer(renderer, vol, transfer, render_settings) as r:
-        return r.render(cam, width, height, progress)
+        image, _ = render_frame(r, cam, width, height, progress, label=renderer)
+        return image

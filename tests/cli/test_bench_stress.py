@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from volren.bench import stress, stress_cases
-from volren.bench.metrics import image_error
 from volren.cli.main import main
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
@@ -22,6 +21,7 @@ from volren.model.tet_repair import repair_tets, signed_volumes
 from volren.renderers.base import Capabilities, KindSupport
 from volren.renderers.reference.renderer import ReferenceRenderer
 from volren.renderers.registry import BUILTIN_ENTRY_POINTS, RendererRegistry, registry
+from volren.testing.metrics import image_error
 
 NAN_PIXELS = 7
 

@@ -31,7 +31,7 @@ from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
-from volren.renderers.base import Renderer
+from volren.renderers.base import Renderer, render_frame
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,16 +180,12 @@ class RenderWorker(QObject):
                 last_report[0] = now
                 self.progressed.emit(request.serial, request.renderer, float(fraction))
 
-        image = renderer.render(request.camera, request.width, request.height, progress)
-        elapsed = (time.perf_counter() - start) * 1000.0
-        stats = getattr(renderer, "last_frame", None)
-        ms = float(getattr(stats, "ms", elapsed) or elapsed)
-        image = np.asarray(image)
-        if image.shape != (request.height, request.width, 4):
-            raise RuntimeError(f"renderer returned shape {image.shape}, expected {(request.height, request.width, 4)}")
+        image, stats = render_frame(
+            renderer, request.camera, request.width, request.height, progress, label=request.renderer
+        )
         rgb = to_png_pixels(image, request.background)
         return Frame(
-            request.serial, request.renderer, request.width, request.height, ms, request.full, rgb, request.camera
+            request.serial, request.renderer, request.width, request.height, stats.ms, request.full, rgb, request.camera
         )
 
     def _release(self) -> None:

@@ -28,11 +28,11 @@ import numpy as np
 
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset, shared_datasets
-from volren.bench.metrics import image_error
 from volren.bench.reference_cache import reference_image, reference_settings, scene_key
 from volren.bench.run_bench import turn_offsets
 from volren.model.settings import RenderSettings
 from volren.model.volume import TetVolume, UniformVolume, Volume
+from volren.testing.metrics import image_error
 
 #: The error is measured at this size (the reference images the CPU run already has).
 ERROR_SIZE = 512

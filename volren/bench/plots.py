@@ -21,6 +21,20 @@ RMSE_FLOOR = 1e-6
 _ORDER = [c for kind in CURVES.values() for c in kind]
 _COLORS = dict(zip(_ORDER, ["C0", "C2", "C1", "C3", "C0", "C1", "C4", "C5"], strict=True))
 _MARKERS = dict(zip(_ORDER, ["o", "^", "s", "D", "o", "s", "v", "P"], strict=True))
+#: Colours and markers of other renderers (plugins), in the order they first appear.
+_OTHER_STYLES = [("C6", "X"), ("C7", "*"), ("C8", "h"), ("C9", "<"), ("C5", ">")]
+
+
+def _order(curve: str) -> tuple[int, str]:
+    return (_ORDER.index(curve), "") if curve in _ORDER else (len(_ORDER), curve)
+
+
+def _style(curve: str, others: list[str]) -> tuple[str, str]:
+    if curve in _COLORS:
+        return _COLORS[curve], _MARKERS[curve]
+    if curve not in others:
+        others.append(curve)
+    return _OTHER_STYLES[others.index(curve) % len(_OTHER_STYLES)]
 
 
 def plot_dataset(rows: list[Row], dataset: str, path: Path) -> Path:
@@ -29,10 +43,11 @@ def plot_dataset(rows: list[Row], dataset: str, path: Path) -> Path:
     figure = Figure(figsize=(4.6 * len(scenes) + 1.6, 4.2), layout="constrained")
     axes = figure.subplots(1, len(scenes), squeeze=False)[0]
     legend: dict[str, object] = {}  # one legend for all panels, outside them: it never hides a point
+    others: list[str] = []
     for ax, (tf, scene) in zip(axes, scenes.items(), strict=True):
-        curves = group(sorted(scene, key=lambda r: _ORDER.index(r["renderer"])), lambda r: r["renderer"])
+        curves = group(sorted(scene, key=lambda r: _order(str(r["renderer"]))), lambda r: r["renderer"])
         for curve, points in curves.items():
-            color, marker = _COLORS[curve], _MARKERS[curve]
+            color, marker = _style(str(curve), others)
             style = "--" if str(curve).startswith("vtk-") else "-"
             ax.scatter(
                 [p["ms"] for p in points],
@@ -61,7 +76,7 @@ def plot_dataset(rows: list[Row], dataset: str, path: Path) -> Path:
         ax.set_ylabel("RMSE against reference")
         ax.set_title(f"{dataset}, {tf}")
         ax.grid(True, which="both", alpha=0.25)
-    names = [c for c in _ORDER if c in legend]
+    names = sorted(legend, key=_order)
     figure.legend(
         [legend[c] for c in names],
         names,

@@ -25,14 +25,14 @@ from numpy.typing import NDArray
 
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset
-from volren.bench.metrics import image_error
 from volren.bench.reference_cache import reference_image
 from volren.bench.sweep import Config
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import Volume
-from volren.renderers.base import Renderer
+from volren.renderers.base import Renderer, render_frame
+from volren.testing.metrics import image_error
 
 COLUMNS = (
     "dataset", "kind", "tf", "renderer", "settings", "step", "preintegration", "table_size", "table_lengths",
@@ -61,10 +61,10 @@ def time_turning(
     for offset in turn_offsets(frames, turn):
         camera = camera_at(offset)
         start = time.perf_counter()
-        frame = renderer.render(camera, size, size)
+        frame, stats = render_frame(renderer, camera, size, size)
         times.append((time.perf_counter() - start) * 1000.0)
         if offset == 0.0:
-            image, counters = frame, dict(renderer.last_frame.counters)
+            image, counters = frame, dict(stats.counters)
     return statistics.median(times), image, counters
 
 

@@ -47,13 +47,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.bench.metrics import image_error
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import Volume
 from volren.renderers.base import Renderer
+from volren.testing.metrics import image_error
 
 #: The termination opacity of slicer and tetra by default; early termination changes a pixel by at
 #: most 1 - ALPHA per channel.

@@ -17,13 +17,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from volren.api import prepared_renderer
-from volren.bench.metrics import image_error
 from volren.bench.pareto import equal_error
 from volren.bench.reference_cache import reference_image
 from volren.bench.vtk_vs_reference import SCENES
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
+from volren.testing.metrics import image_error
 
 
 @dataclass(frozen=True)

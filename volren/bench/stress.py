@@ -26,7 +26,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.bench.metrics import image_error
 from volren.bench.stress_cases import (
     BELOW_ALPHA,
     PREMULTIPLIED,
@@ -40,6 +39,7 @@ from volren.bench.stress_cases import (
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
 from volren.renderers.registry import RendererRegistry
+from volren.testing.metrics import image_error
 
 #: How far a premultiplied colour channel may exceed its alpha (float32 and 8-bit rounding).
 COLOR_EPS = 1e-4

@@ -8,15 +8,19 @@ so that the sweep stays linear in the number of knobs instead of their product. 
 peers: each one is a curve.
 
 `curve` names the renderer as plotted and compared: `slicer`, `tetra` (ours) or `vtk-<mapper>`.
+Any other registered renderer (a plugin) is swept along the quality axis it declares in its
+capabilities (`Capabilities.quality`, fast to accurate; its defaults when it declares none), as the
+curve of its own name.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
+from volren.renderers.base import QualityLevel
 
 #: Every curve a sweep can hold, by volume kind, in plotting order.
 CURVES: dict[str, tuple[str, ...]] = {
@@ -52,6 +56,9 @@ class Config:
     skipping: bool | None = None
     image_stride: int | None = None
     refine_tolerance: float | None = None
+    #: A level of a registered renderer's own quality axis (plugins); it replaces the knobs above.
+    quality_label: str | None = None
+    quality: QualityLevel | None = field(default=None, compare=False)
 
     @property
     def ours(self) -> bool:
@@ -69,6 +76,8 @@ class Config:
     @property
     def label(self) -> str:
         """The settings as short text, e.g. 'step 0.5, pre 512, jitter, no skipping'."""
+        if self.quality_label is not None:
+            return self.quality_label
         parts = []
         if self.step is not None:
             parts.append(f"step {self.step:g}")
@@ -88,6 +97,8 @@ class Config:
 
     def settings(self) -> RenderSettings:
         """The RenderSettings that make the renderer draw this configuration."""
+        if self.quality is not None:
+            return self.quality.apply()
         options: dict[str, object] = {}
         if self.curve == "slicer":
             options.update(
@@ -162,7 +173,8 @@ def configs(
     `steps` replaces the step list, `curves` keeps only those curves."""
     if kind not in CURVES:
         raise VolrenError(f"no benchmark sweep for {kind} volumes")
-    steps = list(steps) if steps is not None else list(QUICK_STEPS if quick else FULL_STEPS)
+    given_steps = list(steps) if steps is not None else None
+    steps = given_steps or list(QUICK_STEPS if quick else FULL_STEPS)
     if kind == "uniform":
         out = _slicer(steps, (64,) if quick else (64, 2048)) + _vtk_uniform(steps)
     else:
@@ -171,7 +183,27 @@ def configs(
     if curves is not None:
         wanted = set(curves)
         out = [c for c in out if c.curve in wanted]
+        out += [c for name in curves if name not in BUILTIN_CURVES for c in quality_axis(name, kind, given_steps)]
     return _unique(out)
+
+
+BUILTIN_CURVES = frozenset(c for kind in CURVES.values() for c in kind)
+
+
+def quality_axis(name: str, kind: str, steps: Iterable[float] | None = None) -> list[Config]:
+    """A registered renderer's declared quality axis on volumes of `kind` (none if it does not draw
+    them); `steps`, when given, replaces the axis by those steps at the renderer's defaults."""
+    from volren.renderers.registry import registry
+
+    capabilities = registry.capabilities(name)
+    if kind not in capabilities.kinds:
+        return []
+    if steps is not None:
+        levels = tuple(QualityLevel(f"step {s:g}", step=s) for s in steps)
+    else:
+        levels = capabilities.quality or (QualityLevel("default"),)
+    return [Config(name, step=level.step, preintegration=level.preintegration, quality_label=level.label,
+                   quality=level) for level in levels]  # fmt: skip
 
 
 def _unique(configs: list[Config]) -> list[Config]:
@@ -186,10 +218,16 @@ def _unique(configs: list[Config]) -> list[Config]:
 
 
 def check_curves(names: Iterable[str]) -> list[str]:
-    """The curve names, or an error listing the valid ones."""
+    """The curve names (built-in curves, or any registered renderer), or an error listing the valid ones."""
+    from volren.renderers.registry import registry
+
     names = list(names)
     valid = [c for kind in CURVES.values() for c in kind]
-    unknown = [n for n in names if n not in valid]
+    registered = [n for n in registry.names() if n not in valid]
+    unknown = [n for n in names if n not in valid and n not in registered]
     if unknown or not names:
-        raise VolrenError(f"unknown renderers {unknown or names}; choose from {', '.join(valid)}")
+        raise VolrenError(
+            f"unknown renderers {unknown or names}; choose from {', '.join(valid)} or a registered renderer "
+            f"({', '.join(registered)})"
+        )
     return names

@@ -14,10 +14,10 @@ import time
 from pathlib import Path
 
 from volren.api import prepared_renderer
-from volren.bench.metrics import image_error
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
+from volren.testing.metrics import image_error
 
 #: dataset -> (file under shared/data, scalars, azimuth, elevation, zoom), from shared/scenes/README.md
 SCENES = {

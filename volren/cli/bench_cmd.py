@@ -249,7 +249,8 @@ def add_run_parser(kinds) -> None:
     r.add_argument("--shared", help="the folder with data/ and scenes/ (default: ../shared beside the repo)")
     r.add_argument("--datasets", help="comma-separated (default: every shared dataset and bundled sample)")
     r.add_argument("--tfs", help="TF styles to keep, e.g. smooth,spiky (default: all)")
-    r.add_argument("--renderers", help="curves to run, e.g. slicer,vtk-gpu,tetra,vtk-raycast (default: all)")
+    r.add_argument("--renderers", help="curves to run, e.g. slicer,vtk-gpu,tetra,vtk-raycast, or any registered "
+                   "renderer (a plugin: swept along its declared quality axis) (default: the built-in curves)")
     r.add_argument("--steps", help="the swept sample steps (default 2,1,0.5,0.25; --quick 2,0.5)")
     r.add_argument("--size", type=int, help="image side in pixels (default 512; --quick 128)")
     r.add_argument("--frames", type=int, help="timed frames per setting, median taken (default 5; --quick 3)")

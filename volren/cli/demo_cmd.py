@@ -27,6 +27,7 @@ def run(args: argparse.Namespace) -> int:
     from volren.api import parse_size, prepared_renderer
     from volren.cli.progress import progress_bar
     from volren.model.camera import Camera
+    from volren.renderers.base import render_frame
     from volren.renderers.registry import registry
     from volren.samples import SAMPLES, sample_paths
 
@@ -54,10 +55,9 @@ def run(args: argparse.Namespace) -> int:
             try:
                 with prepared_renderer(name, volume, tf) as renderer:
                     with progress_bar(f"{sample} {name}") as progress:
-                        renderer.render(camera.azimuth(-10.0), width, height, progress)
-                    first_ms = renderer.last_frame.ms
-                    image = renderer.render(camera, width, height)
-                    ms = renderer.last_frame.ms
+                        _, first = render_frame(renderer, camera.azimuth(-10.0), width, height, progress, name)
+                    image, stats = render_frame(renderer, camera, width, height, label=name)
+                first_ms, ms = first.ms, stats.ms
             except VolrenError as exc:
                 print(f"{sample:16s} {name:10s} FAILED: {exc}")
                 failures += 1

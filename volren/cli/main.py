@@ -13,10 +13,10 @@ import warnings
 from collections.abc import Sequence
 
 from volren import __version__
-from volren.cli import bench_cmd, demo_cmd, render_cmd, renderers_cmd, view_cmd
+from volren.cli import bench_cmd, check_cmd, demo_cmd, render_cmd, renderers_cmd, view_cmd
 from volren.errors import VolrenError
 
-COMMANDS = (renderers_cmd, render_cmd, view_cmd, demo_cmd, bench_cmd)
+COMMANDS = (renderers_cmd, render_cmd, view_cmd, demo_cmd, bench_cmd, check_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -132,6 +132,7 @@ def run(args: argparse.Namespace) -> int:
     from volren import io
     from volren.api import prepared_renderer
     from volren.cli.progress import progress_bar
+    from volren.renderers.base import render_frame
 
     if not args.output and not args.save_array:
         raise VolrenError("give -o OUT.png (and/or --save-array OUT.npy)")
@@ -143,8 +144,7 @@ def run(args: argparse.Namespace) -> int:
     camera = scene.resolved_camera()
     with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
         with progress_bar(f"{scene.renderer} {width}x{height}") as progress:
-            image = renderer.render(camera, width, height, progress)
-        stats = renderer.last_frame
+            image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
     if args.output:
         io.save_image(image, args.output, transparent=args.transparent)
     if args.save_array:

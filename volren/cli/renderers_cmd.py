@@ -24,7 +24,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"{name:12s} [{caps.backend}] {caps.describe()}")
         if caps.summary:
             print(f"{'':12s} {caps.summary}")
-        options = getattr(registry.get(name), "option_help", {})
-        for key, text in options.items():
+        for kind, support in sorted(caps.kinds.items()):
+            acc = support.accuracy
+            print(f"{'':12s} accuracy on {kind}: RMSE <= {acc.rmse:g}, features within {acc.position_px:g} px")
+        if caps.quality:
+            print(f"{'':12s} quality axis: {' | '.join(level.label for level in caps.quality)}")
+        for key, text in registry.get(name).option_help.items():
             print(f"{'':12s} option {key}: {text}")
     return 0

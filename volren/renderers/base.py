@@ -1,16 +1,23 @@
 """The renderer contract: what every renderer (built-in or plugin) provides.
 
+The whole contract, in prose, is `docs/renderer-contract.md` in the repository: the optical
+model, units, camera, output, capabilities, options, progress and cancellation, threads,
+`release()` and counters. `volren check-renderer NAME` (the kit in `volren.testing`) checks it.
+
 A renderer holds a volume, a transfer function and settings, and turns a camera into an image:
 ``render(camera, width, height)`` returns a float32 (H, W, 4) array of premultiplied linear RGBA
-composited over black, row 0 at the top (DESIGN.md). Renderers never see files or PyVista
-objects, only `volren.model` objects.
+composited over black, row 0 at the top. Renderers never see files or PyVista objects, only
+`volren.model` objects.
 
 Third parties implement `Renderer` (most simply by subclassing `RendererBase`) and register the
-class under the entry-point group ``volren.renderers``.
+class under the entry-point group ``volren.renderers``. Callers go through `render_frame`, which
+checks what a renderer returns, so a renderer that follows the Protocol without subclassing
+`RendererBase` works everywhere.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
@@ -34,8 +41,50 @@ MAX_IMAGE_SIDE = 16384
 
 
 @dataclass(frozen=True)
+class Accuracy:
+    """How close a renderer's images come to the exact ones at its default quality, as it claims.
+
+    The conformance kit holds the renderer to these numbers and never widens them: `rmse` bounds
+    DESIGN.md's error metric (RMSE over pixels and the four RGBA channels) against the kit's closed
+    forms; `position_px` bounds how far, in pixels, a small feature may land from where the camera
+    contract puts it.
+    """
+
+    rmse: float = 0.01
+    position_px: float = 0.25
+
+    def __post_init__(self) -> None:
+        for name in ("rmse", "position_px"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+                raise VolrenError(f"accuracy {name} must be a finite number >= 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class QualityLevel:
+    """One setting on a renderer's quality axis: what it changes from the caller's settings."""
+
+    label: str
+    step: float | None = None
+    preintegration: bool | None = None
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    def apply(self, settings: RenderSettings | None = None) -> RenderSettings:
+        """`settings` (default: the defaults) with this level's changes."""
+        settings = settings or RenderSettings()
+        changes: dict[str, Any] = {}
+        if self.step is not None:
+            changes["step"] = self.step
+        if self.preintegration is not None:
+            changes["preintegration"] = self.preintegration
+        if self.options:
+            changes["options"] = {**settings.options, **self.options}
+        return settings.with_(**changes)
+
+
+@dataclass(frozen=True)
 class KindSupport:
-    """What a renderer can do with one kind of volume."""
+    """What a renderer can do with one kind of volume, and how accurately at default quality."""
 
     tf_dims: frozenset[int] = frozenset({1})
     preintegration: bool = False
@@ -46,6 +95,8 @@ class KindSupport:
     blend_modes_2d: frozenset[BlendMode] = frozenset({BlendMode.COMPOSITE})
     #: Pre-integration of 2D TFs (a 4D table over value and gradient pairs: nobody has one yet).
     preintegration_2d: bool = False
+    #: What the renderer promises on this kind at default settings (checked by the kit).
+    accuracy: Accuracy = field(default_factory=Accuracy)
 
 
 @dataclass(frozen=True)
@@ -55,6 +106,8 @@ class Capabilities:
     kinds: Mapping[VolumeKind, KindSupport]
     backend: str = "cpu"
     summary: str = ""
+    #: The quality axis, fast to accurate, that `volren bench run` sweeps (empty: defaults only).
+    quality: tuple[QualityLevel, ...] = ()
 
     @property
     def volume_kinds(self) -> frozenset[str]:
@@ -119,10 +172,16 @@ class FrameStats:
 
 @runtime_checkable
 class Renderer(Protocol):
-    """The structural contract a renderer class satisfies."""
+    """The structural contract a renderer class satisfies (docs/renderer-contract.md).
+
+    Everything callers use is here: `volren render`, the app and the bench need nothing else.
+    `last_frame` is None until the first frame and then describes the latest one.
+    """
 
     name: ClassVar[str]
     capabilities: ClassVar[Capabilities]
+    option_help: ClassVar[Mapping[str, str]]
+    last_frame: FrameStats | None
 
     def set_volume(self, volume: Volume) -> None: ...
 
@@ -263,3 +322,27 @@ class RendererBase(ABC):
 
     def __exit__(self, *exc) -> None:
         self.release()
+
+
+def render_frame(
+    renderer: Renderer,
+    camera: Camera,
+    width: int,
+    height: int,
+    progress: ProgressCallback | None = None,
+    label: str | None = None,
+) -> tuple[NDArray[np.float32], FrameStats]:
+    """One frame through the Protocol, checked: the image (float32 (H, W, 4)) and its FrameStats.
+
+    Why: callers may hold any renderer that follows the Protocol, so what comes back is checked
+    here once instead of trusted; a renderer that breaks the contract is a one-line VolrenError.
+    """
+    name = label or getattr(renderer, "name", "") or type(renderer).__name__
+    image = renderer.render(camera, width, height, progress)
+    if not isinstance(image, np.ndarray) or image.shape != (height, width, 4) or image.dtype != np.float32:
+        got = f"{image.dtype} {image.shape}" if isinstance(image, np.ndarray) else type(image).__name__
+        raise VolrenError(f"renderer {name} returned {got}, expected float32 {(height, width, 4)}")
+    stats = getattr(renderer, "last_frame", None)
+    if not isinstance(stats, FrameStats) or (stats.width, stats.height) != (width, height):
+        raise VolrenError(f"renderer {name} did not describe its frame in last_frame (a FrameStats of {width}x{height})")
+    return image, stats

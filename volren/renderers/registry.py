@@ -10,7 +10,7 @@ VolrenWarning) and stays listed under `failures`; the other renderers stay usabl
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from importlib import import_module, metadata
 from typing import Any
@@ -56,17 +56,31 @@ def _distribution_installed(name: str) -> bool:
     return True
 
 
+#: The methods of the Renderer Protocol.
+RENDERER_METHODS = ("set_volume", "set_transfer_function", "set_settings", "render", "release")
+
+
 def check_renderer_class(cls: Any, name: str) -> None:
-    """Raise VolrenError unless `cls` satisfies the Renderer contract."""
-    missing = [
-        m
-        for m in ("set_volume", "set_transfer_function", "set_settings", "render", "release")
-        if not callable(getattr(cls, m, None))
-    ]
+    """Raise VolrenError unless `cls` has what the Renderer Protocol says at class level (the
+    instance attribute `last_frame` is checked by `check_renderer_instance`)."""
+    if not isinstance(cls, type):
+        raise VolrenError(f"renderer {name!r} is {cls!r}, not a class")
+    missing = [m for m in RENDERER_METHODS if not callable(getattr(cls, m, None))]
     if missing:
         raise VolrenError(f"renderer {name!r} ({cls!r}) lacks {', '.join(missing)}")
+    if not isinstance(getattr(cls, "name", None), str):
+        raise VolrenError(f"renderer {name!r} has no `name` string")
     if not isinstance(getattr(cls, "capabilities", None), Capabilities):
         raise VolrenError(f"renderer {name!r} has no `capabilities` Capabilities record")
+    help_ = getattr(cls, "option_help", None)
+    if not isinstance(help_, Mapping) or not all(isinstance(k, str) and isinstance(v, str) for k, v in help_.items()):
+        raise VolrenError(f"renderer {name!r} has no `option_help` mapping of option names to help text")
+
+
+def check_renderer_instance(renderer: Any, name: str) -> None:
+    """Raise VolrenError unless a new renderer has the Protocol's `last_frame` (None before a frame)."""
+    if not hasattr(renderer, "last_frame"):
+        raise VolrenError(f"renderer {name!r} has no `last_frame` attribute (set it to None in __init__)")
 
 
 class RendererRegistry:
@@ -164,8 +178,14 @@ class RendererRegistry:
         return self.get(name).capabilities
 
     def create(self, name: str, **kwargs: Any) -> Renderer:
-        """A new renderer instance."""
-        return self.get(name)(**kwargs)
+        """A new renderer instance, checked against the Protocol."""
+        renderer = self.get(name)(**kwargs)
+        try:
+            check_renderer_instance(renderer, name)
+        except VolrenError:
+            renderer.release()
+            raise
+        return renderer
 
     def compatible(self, volume_kind: str, tf_dim: int = 1, settings=None) -> dict[str, str | None]:
         """For each available renderer: None if it can draw such a scene, else the reason."""

@@ -1,0 +1,23 @@
+"""The conformance kit on every registered renderer (built-ins and installed plugins), quick."""
+
+from __future__ import annotations
+
+import pytest
+
+from volren.renderers.registry import registry
+from volren.testing import CHECKS, run_check
+from volren.testing.runner import renderer_factory
+
+NAMES = registry.names()
+
+
+@pytest.mark.parametrize("check", CHECKS, ids=[c.name for c in CHECKS])
+@pytest.mark.parametrize("name", NAMES)
+def test_registered_renderer_conforms(name, check):
+    result = run_check(check, renderer_factory(name), quick=True)
+    print("\n".join(result.lines()))
+    assert result.passed, "\n".join(result.failures())
+
+
+def test_the_example_plugin_is_registered():
+    assert "example" in NAMES, "scripts/setup.sh installs plugins/volren-example"

@@ -1,0 +1,510 @@
+"""The conformance checks: what `volren check-renderer` holds a renderer to.
+
+Each check takes a `CheckContext` (a factory of fresh renderers, quick or full) and returns
+`Measurement`s: a measured number beside its bound. Image bounds are the renderer's own declared
+`Accuracy` for that volume kind at default settings, never widened here; contract rules that
+admit no error (an empty TF draws nothing, cancelling lets the exception through) have bound 0.
+
+Every image any check renders is also held to the output rules (float32 (H, W, 4), finite, in
+[0, 1], rgb <= alpha), so a violation anywhere fails the check that saw it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.errors import VolrenError
+from volren.model.camera import Camera
+from volren.model.settings import BlendMode, RenderSettings
+from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TFWidget, TransferFunction, TransferFunction2D
+from volren.model.volume import Volume
+from volren.renderers.base import Accuracy, Capabilities, Renderer, render_frame
+from volren.testing import oracles
+from volren.testing.metrics import image_error
+from volren.testing.scenes import axis_camera, column_camera, lattice_volume
+
+#: The volume kinds the kit has scenes for.
+KINDS = ("uniform", "tet")
+#: How far a premultiplied channel may exceed alpha, or leave [0, 1]: float32 rounding.
+OUTPUT_EPS = 1e-6
+
+RendererFactory = Callable[[], Renderer]
+
+
+class ContractError(Exception):
+    """A renderer broke a rule of the contract; the message is one line."""
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One measured number of one check beside its bound (`at_least`: the value must reach it)."""
+
+    check: str
+    case: str
+    quantity: str
+    value: float
+    bound: float
+    at_least: bool = False
+
+    @property
+    def passed(self) -> bool:
+        if math.isnan(self.value):
+            return False
+        return self.value >= self.bound if self.at_least else self.value <= self.bound
+
+    def line(self) -> str:
+        relation = ">=" if self.at_least else "<="
+        verdict = "PASS" if self.passed else "FAIL"
+        return f"{verdict} {self.check} [{self.case}] {self.quantity} {self.value:.3g} (bound {relation} {self.bound:.3g})"
+
+
+def _check_output(image: Any, width: int, height: int) -> str | None:
+    """Why `image` breaks the output rules, or None."""
+    if not isinstance(image, np.ndarray) or image.dtype != np.float32 or image.shape != (height, width, 4):
+        got = f"{image.dtype} {image.shape}" if isinstance(image, np.ndarray) else type(image).__name__
+        return f"returned {got}, expected float32 {(height, width, 4)}"
+    if not np.all(np.isfinite(image)):
+        return f"{np.count_nonzero(~np.isfinite(image))} non-finite values"
+    if image.min() < -OUTPUT_EPS or image.max() > 1 + OUTPUT_EPS:
+        return f"values outside [0, 1] (min {image.min():.3g}, max {image.max():.3g})"
+    excess = float((image[..., :3] - image[..., 3:4]).max())
+    if excess > OUTPUT_EPS:
+        return f"colour exceeds alpha by {excess:.3g}: not premultiplied"
+    return None
+
+
+@dataclass
+class CheckContext:
+    """What a check works with: fresh renderers, and the sizes for a quick or full run."""
+
+    factory: RendererFactory
+    quick: bool = False
+    _renderers: list[Renderer] = field(default_factory=list)
+    _inputs: dict[int, tuple[Any, Any, Any]] = field(default_factory=dict)
+
+    def renderer(self) -> Renderer:
+        """A new renderer, released when the check ends (`close`)."""
+        renderer = self.factory()
+        self._renderers.append(renderer)
+        return renderer
+
+    @property
+    def capabilities(self) -> Capabilities:
+        return type(self._probe()).capabilities
+
+    def _probe(self) -> Renderer:
+        return self._renderers[0] if self._renderers else self.renderer()
+
+    def kinds(self) -> list[str]:
+        return [k for k in KINDS if k in self.capabilities.kinds]
+
+    def accuracy(self, kind: str) -> Accuracy:
+        return self.capabilities.kinds[kind].accuracy  # type: ignore[index]
+
+    def size(self, full: int) -> int:
+        """Image sizes are the same in quick runs (an RMSE with silhouettes depends on the size)."""
+        return full
+
+    def feed(self, renderer: Renderer, volume: Volume, tf: TransferFunction, settings: RenderSettings) -> None:
+        """Give the renderer what changed since its last frame (as the app does)."""
+        last = self._inputs.get(id(renderer), (None, None, None))
+        if last[2] != settings:
+            renderer.set_settings(settings)
+        if last[0] is not volume:
+            renderer.set_volume(volume)
+        if last[1] is not tf:
+            renderer.set_transfer_function(tf)
+        self._inputs[id(renderer)] = (volume, tf, settings)
+
+    def draw(
+        self,
+        renderer: Renderer,
+        volume: Volume,
+        tf: TransferFunction,
+        camera: Camera,
+        width: int,
+        height: int,
+        settings: RenderSettings | None = None,
+        progress: Callable[[float], None] | None = None,
+    ) -> NDArray[np.float64]:
+        """One frame, held to the output rules; float64 for the comparisons."""
+        self.feed(renderer, volume, tf, settings or RenderSettings())
+        image, _ = render_frame(renderer, camera, width, height, progress)
+        problem = _check_output(image, width, height)
+        if problem:
+            raise ContractError(f"{volume.kind} {width}x{height}: {problem}")
+        return image.astype(np.float64)
+
+    def close(self) -> None:
+        for renderer in self._renderers:
+            try:
+                renderer.release()
+            except Exception:  # noqa: BLE001 - the release check reports release failures
+                pass
+        self._renderers.clear()
+
+
+def _rmse(image: NDArray, expected: NDArray) -> float:
+    return image_error(image, expected).rmse
+
+
+def _box(kind: str, value: float = 1.0) -> Volume:
+    return lattice_volume(kind, value, (5, 4, 4), (0.7, 1.1, 0.9), (-1.0, 0.5, 2.0))
+
+
+# ---------------------------------------------------------------------------------- checks
+def check_output(ctx: CheckContext) -> list[Measurement]:
+    """Random volumes, a non-square image, every claimed blend mode: the output rules hold."""
+    out = []
+    rng = np.random.default_rng(7)
+    for kind in ctx.kinds():
+        volume = lattice_volume(kind, lambda x, y, z: rng.random(x.shape) * 8.0 - 2.0, (6, 5, 4), (0.8, 1.0, 1.3))
+        tf = TransferFunction1D([[-2, 0.1, 0.2, 1.0], [6, 1.0, 0.5, 0.0]], [[-1, 0.0], [6, 0.9]], 0.5)
+        renderer = ctx.renderer()
+        w, h = ctx.size(37), ctx.size(23)
+        modes = sorted(ctx.capabilities.kinds[kind].blend_modes)  # type: ignore[index]
+        for mode in modes:
+            ctx.draw(renderer, volume, tf, Camera.orbit(volume.bounds, 35, 25, aspect=w / h), w, h,
+                     RenderSettings(blend_mode=mode))  # fmt: skip
+        out.append(Measurement("output", f"{kind}, {len(modes)} blend modes", "rule violations", 0, 0))
+    return out
+
+
+def check_empty(ctx: CheckContext) -> list[Measurement]:
+    """A TF with zero opacity everywhere draws exactly nothing."""
+    out = []
+    for kind in ctx.kinds():
+        volume = lattice_volume(kind, lambda x, y, z: x + y, (5, 4, 4), (1.0, 0.8, 1.2))
+        tf = TransferFunction1D([[0, 1, 1, 1]], [[0, 0.0], [10, 0.0]], 1.0)
+        n = ctx.size(32)
+        image = ctx.draw(ctx.renderer(), volume, tf, Camera.orbit(volume.bounds, 20, 30), n, n)
+        out.append(Measurement("empty", kind, "max abs", float(np.abs(image).max()), 0.0))
+    return out
+
+
+def check_box(ctx: CheckContext) -> list[Measurement]:
+    """A homogeneous box against 1 - (1 - a)^(L / d_u), perspective and parallel."""
+    out = []
+    tf = TransferFunction1D.constant(0.35, (0.9, 0.4, 0.2), opacity_unit_distance=0.8)
+    for kind in ctx.kinds():
+        volume = _box(kind)
+        renderer = ctx.renderer()
+        for parallel in (False, True):
+            w, h = ctx.size(48), ctx.size(40)
+            camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.3, parallel=parallel, aspect=w / h)
+            image = ctx.draw(renderer, volume, tf, camera, w, h)
+            expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, volume.bounds),
+                                                 (0.9, 0.4, 0.2), 0.35, 0.8)  # fmt: skip
+            case = f"{kind}, {'parallel' if parallel else 'perspective'}"
+            out.append(Measurement("box", case, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
+    return out
+
+
+RAMP_COLOUR = [(0.3, 0.1), (1.4, 0.9), (2.0, 0.3)]
+
+
+def check_ramp(ctx: CheckContext) -> list[Measurement]:
+    """s = x viewed along x: constant opacity, colour linear with a kink, against the closed-form
+    emission integral (both directions)."""
+    out = []
+    tf = TransferFunction1D([[x, c, 1 - c, 0.5] for x, c in RAMP_COLOUR], [[0, 0.3]], opacity_unit_distance=0.6)
+    tau = -math.log(1 - 0.3) / 0.6
+    for kind in ctx.kinds():
+        volume = lattice_volume(kind, lambda x, y, z: x, (6, 4, 3), (0.5, 1.2, 0.9))
+        b = volume.bounds
+        renderer = ctx.renderer()
+        n = ctx.size(16)
+        for sign in (-1.0, 1.0):
+            camera = axis_camera(b, 0, sign, 0.35 * min(b[3] - b[2], b[5] - b[4]))
+            image = ctx.draw(renderer, volume, tf, camera, n, n)
+            entry, exit_ = (b[0], b[1]) if sign < 0 else (b[1], b[0])
+            red, alpha = oracles.linear_colour_emission(RAMP_COLOUR, tau, entry, exit_)
+            green, _ = oracles.linear_colour_emission([(x, 1 - c) for x, c in RAMP_COLOUR], tau, entry, exit_)
+            expected = np.broadcast_to([red, green, 0.5 * alpha, alpha], image.shape)
+            case = f"{kind}, from {'-' if sign < 0 else '+'}x"
+            out.append(Measurement("ramp", case, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
+    return out
+
+
+def check_projection(ctx: CheckContext) -> list[Measurement]:
+    """Maximum, minimum and average along z in a parallel view against the lattice's columns."""
+    out = []
+    rng = np.random.default_rng(11)
+    dims, spacing = (9, 7, 5), (0.5, 0.5, 1.3)
+    values = rng.random(dims[::-1])
+    tf = TransferFunction1D([[0, 0.1, 0.9, 0.3], [1, 0.8, 0.2, 0.6]], [[0.1, 0.0], [0.9, 1.0]])
+    for kind in ctx.kinds():
+        modes = [m for m in (BlendMode.MAXIMUM, BlendMode.MINIMUM, BlendMode.AVERAGE)
+                 if m in ctx.capabilities.kinds[kind].blend_modes]  # type: ignore[index]  # fmt: skip
+        if not modes:
+            continue
+        volume = lattice_volume(kind, lambda x, y, z: values.reshape(-1), dims, spacing)
+        camera = column_camera(dims, spacing, (0.0, 0.0, 0.0), volume.bounds[5])
+        renderer = ctx.renderer()
+        for mode in modes:
+            image = ctx.draw(renderer, volume, tf, camera, dims[0], dims[1], RenderSettings(blend_mode=mode))
+            expected = oracles.projection_rgba(tf, oracles.column_projection(values, str(mode))[::-1])
+            # the outermost columns lie on the volume's boundary, where a ray may or may not hit
+            err = _rmse(image[1:-1, 1:-1], expected[1:-1, 1:-1])
+            out.append(Measurement("projection", f"{kind}, {mode}", "RMSE", err, ctx.accuracy(kind).rmse))
+    return out
+
+
+def check_nan(ctx: CheckContext) -> list[Measurement]:
+    """NaN points make every cell they touch transparent: a box whose far half is NaN draws as the
+    box of its finite cells."""
+    out = []
+    tf = TransferFunction1D.constant(0.4, (0.3, 0.6, 0.9), opacity_unit_distance=0.7)
+    dims, spacing, origin = (8, 4, 4), (0.5, 0.9, 0.8), (0.0, 0.0, 0.0)
+    finite_until = 3  # points with i <= 3 are finite: cells 0..2 along x are whole
+    for kind in ctx.kinds():
+        volume = lattice_volume(kind, lambda x, y, z: np.where(x <= finite_until * spacing[0] + 1e-9, 1.0, np.nan),
+                                dims, spacing, origin)  # fmt: skip
+        b = list(volume.bounds)
+        b[1] = finite_until * spacing[0]
+        w, h = ctx.size(40), ctx.size(32)
+        camera = Camera.orbit(volume.bounds, 40, 25, zoom=1.2, aspect=w / h)
+        image = ctx.draw(ctx.renderer(), volume, tf, camera, w, h)
+        expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, b), (0.3, 0.6, 0.9), 0.4, 0.7)
+        out.append(Measurement("nan", kind, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
+    return out
+
+
+def check_point(ctx: CheckContext) -> list[Measurement]:
+    """One bright point off centre lands where the camera contract projects it (the alpha-weighted
+    centroid of its blob, which is point-symmetric): catches flipped rows, swapped axes, a wrong
+    field of view or aspect, and half-pixel shifts."""
+    out = []
+    dims, spacing, origin = (12, 10, 8), (1.0, 1.2, 0.9), (-3.0, 1.0, 0.5)
+    bright = (8, 3, 5)
+    point = tuple(o + s * i for o, s, i in zip(origin, spacing, bright, strict=True))
+
+    def spot(x, y, z):
+        return np.where(np.isclose(x, point[0]) & np.isclose(y, point[1]) & np.isclose(z, point[2]), 1.0, 0.0)
+
+    tf = TransferFunction1D([[0, 1, 1, 1]], [[0, 0.0], [1, 0.9]], opacity_unit_distance=0.5)
+    for kind in ctx.kinds():
+        volume = lattice_volume(kind, spot, dims, spacing, origin)
+        renderer = ctx.renderer()
+        cases = [("perspective", Camera.orbit(volume.bounds, 25, 15, zoom=1.6, aspect=1.4), 1.4),
+                 ("parallel", axis_camera(volume.bounds, 2, 1.0, 4.5), 1.25)]  # fmt: skip
+        for name, camera, aspect in cases:
+            h = ctx.size(60)
+            w = int(round(h * aspect))
+            image = ctx.draw(renderer, volume, tf, camera, w, h)
+            cx, cy = oracles.weighted_centroid(image[..., 3])
+            px, py = oracles.pixel_of(camera, w, h, point)
+            offset = math.hypot(cx - px, cy - py)
+            out.append(Measurement("point", f"{kind}, {name} {w}x{h}", "offset px", offset,
+                                   ctx.accuracy(kind).position_px))  # fmt: skip
+    return out
+
+
+def check_step(ctx: CheckContext) -> list[Measurement]:
+    """A homogeneous slab filling the view at several steps: the opacity is corrected for the step,
+    so every step gives the closed form."""
+    out = []
+    tf = TransferFunction1D.constant(0.3, (0.2, 0.8, 0.5), opacity_unit_distance=1.0)
+    steps = (1.0, 0.25) if ctx.quick else (1.0, 0.5, 0.25)
+    for kind in ctx.kinds():
+        volume = lattice_volume(kind, 1.0, (5, 5, 6), (1.0, 1.0, 1.0))  # 5 units thick along z
+        b = volume.bounds
+        # off the centre line, so that no ray runs inside a face of the tetrahedralized lattice
+        camera = axis_camera(b, 2, 1.0, 0.3 * (b[3] - b[2]), shift=(0.137, 0.071, 0.0))
+        n = ctx.size(16)
+        renderer = ctx.renderer()
+        expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, n, n, b), (0.2, 0.8, 0.5), 0.3, 1.0)
+        for step in steps:
+            image = ctx.draw(renderer, volume, tf, camera, n, n, RenderSettings(step=step))
+            out.append(Measurement("step", f"{kind}, step {step:g}", "RMSE", _rmse(image, expected),
+                                   ctx.accuracy(kind).rmse))  # fmt: skip
+    return out
+
+
+def check_shading(ctx: CheckContext) -> list[Measurement]:
+    """Shading on changes the image of a field with a gradient by more than the renderer's own
+    error; with shading off the lighting parameters change nothing."""
+    out = []
+    tf = TransferFunction1D.constant(0.3, (1.0, 0.6, 0.3), opacity_unit_distance=1.2)
+    lit = RenderSettings(shade=True, ambient=0.0, diffuse=0.5, specular=0.0)  # about half as bright
+    for kind in ctx.kinds():
+        volume = lattice_volume(kind, lambda x, y, z: x, (5, 4, 3), (0.8, 1.1, 0.9))
+        camera = Camera.orbit(volume.bounds, 70, -25, zoom=1.2)
+        n = ctx.size(24)
+        renderer = ctx.renderer()
+        plain = ctx.draw(renderer, volume, tf, camera, n, n)
+        other_lights = ctx.draw(renderer, volume, tf, camera, n, n,
+                                RenderSettings(ambient=0.9, diffuse=0.1, specular=1.0, specular_power=50.0))  # fmt: skip
+        out.append(Measurement("shading", f"{kind}, off", "max abs change with the lights", float(
+            np.abs(other_lights - plain).max()), 0.0))  # fmt: skip
+        if not ctx.capabilities.kinds[kind].shading:  # type: ignore[index]
+            continue
+        shaded = ctx.draw(renderer, volume, tf, camera, n, n, lit)
+        out.append(Measurement("shading", f"{kind}, on", "RMSE change from unshaded", _rmse(shaded, plain),
+                               ctx.accuracy(kind).rmse, at_least=True))  # fmt: skip
+    return out
+
+
+class _Cancel(Exception):
+    """Raised by the kit's progress callback to cancel a frame."""
+
+
+def _kit_scene(kind: str) -> tuple[Volume, TransferFunction1D, Camera]:
+    volume = lattice_volume(kind, lambda x, y, z: np.sin(x) + np.cos(1.3 * y) + 0.5 * z, (8, 7, 6), (0.9, 0.8, 1.0))
+    tf = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.8]], 0.6)
+    return volume, tf, Camera.orbit(volume.bounds, 15, 35)
+
+
+def check_progress(ctx: CheckContext) -> list[Measurement]:
+    """The progress callback is called with fractions that never decrease, all in [0, 1]."""
+    out = []
+    for kind in ctx.kinds():
+        volume, tf, camera = _kit_scene(kind)
+        calls: list[float] = []
+        n = ctx.size(48)
+        ctx.draw(ctx.renderer(), volume, tf, camera, n, n, progress=calls.append)
+        bad = sum(1 for f in calls if not 0.0 <= f <= 1.0) + sum(1 for a, b in itertools.pairwise(calls) if b < a)
+        out.append(Measurement("progress", f"{kind}, {len(calls)} calls", "out of order or range",
+                               bad + (0 if calls else 1), 0))  # fmt: skip
+    return out
+
+
+def check_cancel(ctx: CheckContext) -> list[Measurement]:
+    """An exception raised from the progress callback comes out of `render`, and the next frame
+    equals one that was never interrupted."""
+    out = []
+    for kind in ctx.kinds():
+        volume, tf, camera = _kit_scene(kind)
+        n = ctx.size(48)
+        renderer = ctx.renderer()
+        before = ctx.draw(renderer, volume, tf, camera, n, n)
+        raised = None
+
+        def cancel(fraction: float) -> None:
+            raise _Cancel()
+
+        try:
+            ctx.draw(renderer, volume, tf, camera.azimuth(10), n, n, progress=cancel)
+        except _Cancel:
+            raised = True
+        except Exception as exc:  # noqa: BLE001 - any other outcome is the renderer's fault
+            raise ContractError(f"{kind}: cancelling raised {type(exc).__name__}: {exc} instead of the callback's exception") from None
+        out.append(Measurement("cancel", kind, "cancel exceptions swallowed", 0 if raised else 1, 0))
+        after = ctx.draw(renderer, volume, tf, camera, n, n)
+        out.append(Measurement("cancel", f"{kind}, next frame", "max abs change", float(np.abs(after - before).max()), 0.0))
+    return out
+
+
+def check_release(ctx: CheckContext) -> list[Measurement]:
+    """release() may be called twice; any use after it is a one-line VolrenError."""
+    kind = ctx.kinds()[0]
+    volume, tf, camera = _kit_scene(kind)
+    renderer = ctx.renderer()
+    ctx.draw(renderer, volume, tf, camera, 8, 8)
+    renderer.release()
+    renderer.release()
+    bad = 0
+    for name, use in (("render", lambda: renderer.render(camera, 8, 8)),
+                      ("set_volume", lambda: renderer.set_volume(volume)),
+                      ("set_transfer_function", lambda: renderer.set_transfer_function(tf)),
+                      ("set_settings", lambda: renderer.set_settings(RenderSettings()))):  # fmt: skip
+        try:
+            use()
+        except VolrenError as exc:
+            bad += "\n" in str(exc)
+            continue
+        except Exception as exc:  # noqa: BLE001
+            raise ContractError(f"{name} after release raised {type(exc).__name__}, not VolrenError") from None
+        raise ContractError(f"{name} after release did not raise")
+    return [Measurement("release", kind, "uses after release not refused in one line", bad, 0)]
+
+
+def _tf_2d() -> TransferFunction2D:
+    return TransferFunction2D((-2.0, 4.0), (0.0, 3.0), [TFWidget.gaussian((1.0, 1.0), (1.0, 1.0), (1, 0.5, 0), 0.6)])
+
+
+def _combinations(kind_support: Any) -> Iterator[tuple[int, RenderSettings, bool]]:
+    """Every (TF dims, settings) the contract knows, and whether `kind_support` claims it."""
+    for dims, pre, shade, mode in itertools.product((1, 2), (False, True), (False, True), list(BlendMode)):
+        settings = RenderSettings(preintegration=pre, shade=shade, blend_mode=mode)
+        claimed = dims in kind_support.tf_dims and (not pre or kind_support.preintegration) \
+            and (not pre or dims == 1 or kind_support.preintegration_2d) \
+            and (not shade or kind_support.shading) and mode in kind_support.blend_modes \
+            and (dims == 1 or mode in kind_support.blend_modes_2d)  # fmt: skip
+        yield dims, settings, claimed
+
+
+def check_capabilities(ctx: CheckContext) -> list[Measurement]:
+    """Every combination claimed renders; every one not claimed, and every volume kind not claimed,
+    is refused with a one-line VolrenError before any work (no progress call)."""
+    out = []
+    caps = ctx.capabilities
+    for kind in KINDS:
+        volume, tf1, camera = _kit_scene(kind)
+        if kind not in caps.kinds:
+            try:
+                ctx.renderer().set_volume(volume)
+            except VolrenError:
+                out.append(Measurement("capabilities", f"{kind} not claimed", "accepted", 0, 0))
+                continue
+            raise ContractError(f"set_volume accepted a {kind} volume that the capabilities do not claim")
+        tf2 = _tf_2d()
+        renderer, refusing = ctx.renderer(), ctx.renderer()
+        claimed = refused = 0
+        for dims, settings, is_claimed in _combinations(caps.kinds[kind]):  # type: ignore[index]
+            what = f"{kind} {dims}D TF, pre-integration {settings.preintegration}, shade {settings.shade}, {settings.blend_mode}"
+            tf = tf1 if dims == 1 else tf2
+            if ctx.quick and is_claimed and claimed >= 6:
+                continue
+            if is_claimed:
+                claimed += 1
+                try:
+                    ctx.draw(renderer, volume, tf, camera, 12, 12, settings)
+                except ContractError:
+                    raise
+                except Exception as exc:  # noqa: BLE001
+                    raise ContractError(f"claimed {what} failed: {type(exc).__name__}: {exc}") from None
+                continue
+            refused += 1
+            calls: list[float] = []
+            try:
+                ctx.draw(refusing, volume, tf, camera, 12, 12, settings, progress=calls.append)
+            except VolrenError as exc:
+                if calls:
+                    raise ContractError(f"{what} is not claimed but was refused only after work began") from None
+                if "\n" in str(exc):
+                    raise ContractError(f"{what}: the refusal is not one line") from None
+                continue
+            except Exception as exc:  # noqa: BLE001
+                raise ContractError(f"{what} is not claimed and raised {type(exc).__name__}, not VolrenError") from None
+            raise ContractError(f"{what} is not claimed but rendered")
+        out.append(Measurement("capabilities", f"{kind}, {claimed} claimed rendered, {refused} refused",
+                               "violations", 0, 0))  # fmt: skip
+    return out
+
+
+@dataclass(frozen=True)
+class Check:
+    """A named check and what it verifies (its function's docstring)."""
+
+    name: str
+    run: Callable[[CheckContext], list[Measurement]]
+
+    @property
+    def description(self) -> str:
+        return " ".join((self.run.__doc__ or "").split())
+
+
+CHECKS: Sequence[Check] = tuple(
+    Check(fn.__name__.removeprefix("check_"), fn)
+    for fn in (check_output, check_empty, check_box, check_ramp, check_projection, check_nan, check_point,
+               check_step, check_shading, check_progress, check_cancel, check_release, check_capabilities)
+)  # fmt: skip

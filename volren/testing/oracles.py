@@ -1,0 +1,113 @@
+"""Closed forms of the optical model that need no reference run (numpy, float64).
+
+Each function computes, from the formulas of the renderer contract alone, what an exact renderer
+draws for one of the kit's scenes: path lengths through a box, the emission of a linear ramp, the
+projection of one point. None of them calls a renderer.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.model.camera import Camera
+from volren.model.transfer_function import TransferFunction1D
+
+#: The contract's opacity clamp: a(s) is used as min(a(s), MAX_OPACITY).
+MAX_OPACITY = 1.0 - 1e-6
+
+
+def box_path_lengths(camera: Camera, width: int, height: int, bounds: Sequence[float]) -> NDArray[np.float64]:
+    """Length (H, W) of each pixel-centre ray inside the box, between the near and far planes."""
+    origins, directions = camera.pixel_rays(width, height)
+    lo = np.asarray(bounds[0::2], dtype=np.float64)
+    hi = np.asarray(bounds[1::2], dtype=np.float64)
+    inside = (origins >= lo) & (origins <= hi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (lo - origins) / directions
+        t2 = (hi - origins) / directions
+    parallel_to_slab = directions == 0
+    t_min = np.where(parallel_to_slab, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2))
+    t_max = np.where(parallel_to_slab, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2))
+    near, far = camera.clipping_range
+    t_far = (far - near) / (directions @ camera.direction)
+    start = np.maximum(t_min.max(axis=-1), 0.0)
+    end = np.minimum(t_max.min(axis=-1), t_far)
+    return np.maximum(end - start, 0.0)
+
+
+def homogeneous_image(
+    lengths: NDArray, rgb: Sequence[float], opacity: float, unit_distance: float
+) -> NDArray[np.float64]:
+    """Premultiplied RGBA of a constant medium: alpha = 1 - (1 - a)^(L / d_u), colour = c alpha."""
+    a = min(float(opacity), MAX_OPACITY)
+    alpha = 1.0 - (1.0 - a) ** (np.asarray(lengths, dtype=np.float64) / unit_distance)
+    return np.concatenate([alpha[..., None] * np.asarray(rgb, dtype=np.float64), alpha[..., None]], axis=-1)
+
+
+def linear_colour_emission(
+    colour_points: Sequence[tuple[float, float]], extinction: float, entry: float, exit_: float
+) -> tuple[float, float]:
+    """(premultiplied colour, alpha) of one channel along a ray on which s runs linearly from
+    `entry` to `exit_` at unit speed, with constant extinction and the colour piecewise linear
+    through `colour_points` ((s, c), constant beyond the ends).
+
+    Per linear piece of length L starting at colour c0 with slope g per unit length:
+    C = T (c0 (1 - e) + g ((1 - e) / tau - L e)), e = exp(-tau L), T the transmittance before it."""
+    xs = np.asarray([p[0] for p in colour_points], dtype=np.float64)
+    cs = np.asarray([p[1] for p in colour_points], dtype=np.float64)
+    lo, hi = min(entry, exit_), max(entry, exit_)
+    knots = np.unique(np.clip(np.concatenate([xs, [entry, exit_]]), lo, hi))
+    if exit_ < entry:
+        knots = knots[::-1]
+    colour, transmittance = 0.0, 1.0
+    for a, b in zip(knots[:-1], knots[1:], strict=True):
+        length = abs(b - a)
+        c0 = float(np.interp(a, xs, cs))
+        slope = (float(np.interp(b, xs, cs)) - c0) / length
+        e = math.exp(-extinction * length)
+        colour += transmittance * (c0 * (1 - e) + slope * ((1 - e) / extinction - length * e))
+        transmittance *= e
+    return colour, 1.0 - transmittance
+
+
+def projection_rgba(tf: TransferFunction1D, values: NDArray) -> NDArray[np.float64]:
+    """What maximum / minimum / average projection draws for the projected values: (c(v) a(v), a(v)),
+    the TF's opacity without length correction."""
+    rgb, alpha = tf.sample(values)
+    return np.concatenate([rgb * alpha[..., None], alpha[..., None]], axis=-1)
+
+
+def column_projection(values_zyx: NDArray, mode: str) -> NDArray[np.float64]:
+    """Maximum, minimum or average along z of a trilinear (or Kuhn-linear) field sampled on a
+    lattice, along the lattice's z columns: there the field is piecewise linear between the
+    samples, so the extremes are samples and the mean is the trapezoid rule. Result (ny, nx)."""
+    v = np.asarray(values_zyx, dtype=np.float64)
+    if mode == "maximum":
+        return v.max(axis=0)
+    if mode == "minimum":
+        return v.min(axis=0)
+    if mode == "average":
+        return (v.sum(axis=0) - 0.5 * (v[0] + v[-1])) / (v.shape[0] - 1)
+    raise ValueError(f"no column projection for {mode}")
+
+
+def pixel_of(camera: Camera, width: int, height: int, point: Sequence[float]) -> tuple[float, float]:
+    """Where the camera contract puts a world point: (column, row) in pixels, in the frame where
+    pixel (i, j) has its centre at (i, j) and row 0 is the top."""
+    clip = camera.projection_matrix(width / height) @ camera.view_matrix() @ np.append(np.asarray(point, float), 1.0)
+    ndc = clip[:3] / clip[3]
+    return (ndc[0] + 1.0) / 2.0 * width - 0.5, (1.0 - ndc[1]) / 2.0 * height - 0.5
+
+
+def weighted_centroid(weights: NDArray) -> tuple[float, float]:
+    """(column, row) centroid of a non-negative (H, W) image, in the same pixel frame as `pixel_of`."""
+    w = np.asarray(weights, dtype=np.float64)
+    total = w.sum()
+    if not total > 0:
+        return math.nan, math.nan
+    rows, cols = np.indices(w.shape)
+    return float((w * cols).sum() / total), float((w * rows).sum() / total)
