@@ -72,9 +72,9 @@ _SUPPORT = KindSupport(
     preintegration=False,
     shading=True,
     blend_modes=frozenset(BlendMode),
-    # the per-ray tolerance bounds the max abs error; the kit measures RMSE up to 2e-8 and the
-    # point 0.06 px off (the blob's own asymmetry in perspective)
-    accuracy=Accuracy(rmse=DEFAULT_TOLERANCE, position_px=0.1),
+    # the per-ray tolerance bounds the max abs error; the kit measures RMSE up to 2e-8 (float32
+    # rounding) and the point 0.09 px off (the blob's own asymmetry in perspective)
+    accuracy=Accuracy(rmse=DEFAULT_TOLERANCE, position_px=0.15),
 )
 #: Uniform grids also take 2D TFs (composite only: `tf2d`).
 _UNIFORM_SUPPORT = replace(_SUPPORT, tf_dims=frozenset({1, 2}), blend_modes_2d=frozenset({BlendMode.COMPOSITE}))
