@@ -1,7 +1,8 @@
 """The reference renderer against independent closed forms (numpy), and its invariants.
 
 The oracles here never call the renderer's own integration code: slab lengths, optical depths and
-emission integrals are computed in numpy from the formulas of DESIGN.md's optical model.
+emission integrals are computed in numpy from the formulas of DESIGN.md's optical model (the slab
+lengths and the linear-colour emission are the conformance kit's, `volren.testing.oracles`).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import pytest
 from volren.errors import VolrenError, VolrenWarning
 from volren.model import BlendMode, Camera, RenderSettings, TetVolume, TransferFunction1D, UniformVolume
 from volren.renderers.reference import ReferenceRenderer
+from volren.testing.oracles import box_path_lengths, linear_colour_emission
 
 SHARED = Path(__file__).resolve().parents[3] / "shared"
 MAXA = 1.0 - 1e-6
@@ -31,23 +33,6 @@ def render(volume, tf, camera, width, height=None, **settings):
     img = r.render(camera, width, height or width)
     assert img.dtype == np.float32 and img.shape == ((height or width), width, 4)
     return r.last_rgba64, r
-
-
-def slab_lengths(camera, width, height, bounds):
-    """Path length of every pixel ray inside the box, from the near plane on (numpy slab test)."""
-    o, d = camera.pixel_rays(width, height)
-    lo = np.asarray(bounds[0::2], float)
-    hi = np.asarray(bounds[1::2], float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1 = (lo - o) / d
-        t2 = (hi - o) / d
-    tmin = np.where(d == 0, np.where((o >= lo) & (o <= hi), -np.inf, np.inf), np.minimum(t1, t2))
-    tmax = np.where(d == 0, np.where((o >= lo) & (o <= hi), np.inf, -np.inf), np.maximum(t1, t2))
-    near, far = camera.clipping_range
-    t_far = (far - near) / (d @ camera.direction)
-    t0 = np.maximum(tmin.max(axis=-1), 0.0)
-    t1 = np.minimum(tmax.min(axis=-1), t_far)
-    return np.maximum(t1 - t0, 0.0)
 
 
 def grid(values_fn, dims, spacing, origin=(0.0, 0.0, 0.0)):
@@ -109,26 +94,6 @@ def grid_camera(n_x, n_y, s, z_top):
                   parallel_scale=n_y * s / 2, clipping_range=(1.0, 100.0))  # fmt: skip
 
 
-def emission_linear_colour(c_pts, tau, x_entry, x_exit):
-    """C and alpha of a ray along x from x_entry to x_exit through s = x, with constant extinction
-    tau and the colour piecewise linear through c_pts ((x, c) sorted, constant beyond)."""
-    xs = np.asarray([p[0] for p in c_pts], float)
-    cs = np.asarray([p[1] for p in c_pts], float)
-    sign = 1.0 if x_exit >= x_entry else -1.0
-    knots = np.unique(np.clip(np.concatenate([xs, [x_entry, x_exit]]), min(x_entry, x_exit), max(x_entry, x_exit)))
-    knots = knots if sign > 0 else knots[::-1]
-    total = 0.0
-    T = 1.0
-    for a, b in zip(knots[:-1], knots[1:]):
-        L = abs(b - a)
-        ca = np.interp(a, xs, cs)
-        g = (np.interp(b, xs, cs) - ca) / L  # colour slope per unit length along the ray
-        e = math.exp(-tau * L)
-        total += T * (ca * (1 - e) + g * ((1 - e) / tau - L * e))
-        T *= e
-    return total, 1 - T
-
-
 def optical_depth_linear_opacity(a_pts, x0, x1):
     """Integral of -ln(1 - a(s)) over s in [x0, x1], a piecewise linear through a_pts (< 1)."""
     xs = np.asarray([p[0] for p in a_pts], float)
@@ -157,7 +122,7 @@ def test_homogeneous_box_matches_slab_lengths(parallel):
     tf = TransferFunction1D.constant(a, c, opacity_unit_distance=d)
     cam = Camera.orbit(vol.bounds, 30, 20, zoom=1.3, parallel=parallel)
     rgba, r = render(vol, tf, cam, 24, 20)
-    L = slab_lengths(cam, 24, 20, vol.bounds)
+    L = box_path_lengths(cam, 24, 20, vol.bounds)
     alpha = 1 - (1 - a) ** (L / d)
     assert (L == 0).any() and (L > 0).any()
     np.testing.assert_allclose(rgba[..., 3], alpha, atol=1e-9, rtol=0)
@@ -171,7 +136,7 @@ def test_homogeneous_box_camera_inside():
     tf = TransferFunction1D.constant(0.2, (1.0, 1.0, 1.0), opacity_unit_distance=1.5)
     cam = Camera(position=(2.0, 1.0, 4.0), focal_point=(2.0, 1.0, 0.0), clipping_range=(0.1, 50.0)).azimuth(20)
     rgba, _ = render(vol, tf, cam, 16)
-    L = slab_lengths(cam, 16, 16, vol.bounds)
+    L = box_path_lengths(cam, 16, 16, vol.bounds)
     np.testing.assert_allclose(rgba[..., 3], 1 - 0.8 ** (L / 1.5), atol=1e-9, rtol=0)
 
 
@@ -187,7 +152,7 @@ def test_homogeneous_tet_box_no_double_counting(inside):
     else:
         cam = Camera.orbit(vol.bounds, 37, 23, zoom=1.2)
     rgba, _ = render(vol, tf, cam, 20)
-    L = slab_lengths(cam, 20, 20, vol.bounds)
+    L = box_path_lengths(cam, 20, 20, vol.bounds)
     np.testing.assert_allclose(rgba[..., 3], 1 - 0.6 ** (L / 0.7), atol=1e-9, rtol=0)
 
 
@@ -215,8 +180,8 @@ def test_ramp_constant_opacity_linear_colour_with_kink(from_minus):
     tau = -math.log(1 - 0.3) / 0.6
     rgba, _ = render(vol, tf, x_camera(vol, from_minus), 6)
     entry, exit_ = (0.0, x1) if from_minus else (x1, 0.0)
-    red, alpha = emission_linear_colour(c_pts, tau, entry, exit_)
-    green, _ = emission_linear_colour([(x, 1 - c) for x, c in c_pts], tau, entry, exit_)
+    red, alpha = linear_colour_emission(c_pts, tau, entry, exit_)
+    green, _ = linear_colour_emission([(x, 1 - c) for x, c in c_pts], tau, entry, exit_)
     np.testing.assert_allclose(rgba[..., 3], alpha, atol=1e-9, rtol=0)
     np.testing.assert_allclose(rgba[..., 0], red, atol=1e-9, rtol=0)
     np.testing.assert_allclose(rgba[..., 1], green, atol=1e-9, rtol=0)
@@ -258,7 +223,7 @@ def test_empty_and_opaque_limits():
     rgba, _ = render(vol, tf, cam, 4)
     L = vol.bounds[1]
     np.testing.assert_allclose(rgba[..., 3], 1 - 1e-6 ** (L / d), atol=1e-9, rtol=0)
-    red, _ = emission_linear_colour(c_pts, -math.log(1e-6) / d, 0.0, L)
+    red, _ = linear_colour_emission(c_pts, -math.log(1e-6) / d, 0.0, L)
     np.testing.assert_allclose(rgba[..., 0], red, atol=1e-9, rtol=0)
     np.testing.assert_allclose(rgba[..., 0], 0.2, atol=1e-3)  # the first sample's colour
 
@@ -444,7 +409,7 @@ def test_shading_of_a_constant_gradient_field(kind):
     tf = TransferFunction1D.constant(0.3, c, opacity_unit_distance=1.2)
     cam = Camera.orbit(vol.bounds, 70, -25, zoom=1.2)
     rgba, _ = render(vol, tf, cam, 16, **SHADE)
-    L = slab_lengths(cam, 16, 16, vol.bounds)
+    L = box_path_lengths(cam, 16, 16, vol.bounds)
     alpha = 1 - 0.7 ** (L / 1.2)
     shaded = expected_shading(cam, 16, c, (-1.0, 0.0, 0.0))  # N = -grad s / |grad s|
     np.testing.assert_allclose(rgba[..., 3], alpha, atol=1e-9, rtol=0)

@@ -18,7 +18,6 @@ from tests.renderers.test_reference import (
     grid,
     optical_depth_linear_opacity,
     render,
-    slab_lengths,
 )
 from volren.bench.reference_cache import reference_image, scene_key
 from volren.errors import VolrenError
@@ -33,6 +32,7 @@ from volren.model import (
 )
 from volren.renderers.reference import ReferenceRenderer
 from volren.renderers.reference.tf2d import eval_tf2d, pack_tf2d
+from volren.testing.oracles import box_path_lengths
 
 RED, BLUE, WHITE = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (1.0, 1.0, 1.0)
 
@@ -166,7 +166,7 @@ def test_constant_block_uses_each_widget_at_zero_gradient(widget, opacity):
     tf = TransferFunction2D((0.0, 10.0), (0.0, 2.0), [widget], d)
     cam = Camera.orbit(vol.bounds, 30, 20, zoom=1.3)
     img, r = render(vol, tf, cam, 24, 20)
-    L = slab_lengths(cam, 24, 20, vol.bounds)
+    L = box_path_lengths(cam, 24, 20, vol.bounds)
     alpha = 1 - (1 - opacity) ** (L / d)
     np.testing.assert_allclose(img[..., 3], alpha, atol=1e-9, rtol=0)
     np.testing.assert_allclose(img[..., 0], alpha, atol=1e-9, rtol=0)

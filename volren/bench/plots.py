@@ -14,11 +14,11 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, NullFormatter
 
 from volren.bench.pareto import Row, group, pareto_front
-from volren.bench.sweep import CURVES
+from volren.bench.sweep import BUILTIN_CURVES
 
 #: RMSE below this is drawn at it: a log axis has no zero (an exact match is possible on a sample).
 RMSE_FLOOR = 1e-6
-_ORDER = [c for kind in CURVES.values() for c in kind]
+_ORDER = list(BUILTIN_CURVES)
 _COLORS = dict(zip(_ORDER, ["C0", "C2", "C1", "C3", "C0", "C1", "C4", "C5"], strict=True))
 _MARKERS = dict(zip(_ORDER, ["o", "^", "s", "D", "o", "s", "v", "P"], strict=True))
 #: Colours and markers of other renderers (plugins), in the order they first appear.

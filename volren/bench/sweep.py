@@ -27,6 +27,8 @@ CURVES: dict[str, tuple[str, ...]] = {
     "uniform": ("slicer", "vtk-smart", "vtk-gpu", "vtk-fixed_point"),
     "tet": ("tetra", "vtk-raycast", "vtk-projected", "vtk-zsweep"),
 }
+#: Every built-in curve, in plotting order; any other name is a registered renderer's own axis.
+BUILTIN_CURVES: tuple[str, ...] = tuple(c for kind in CURVES.values() for c in kind)
 #: Curves that time one cold frame only: VTK's ZSweep takes 30-80 s per 512x512 frame.
 ONE_FRAME_CURVES = frozenset({"vtk-zsweep"})
 
@@ -187,9 +189,6 @@ def configs(
     return _unique(out)
 
 
-BUILTIN_CURVES = frozenset(c for kind in CURVES.values() for c in kind)
-
-
 def quality_axis(name: str, kind: str, steps: Iterable[float] | None = None) -> list[Config]:
     """A registered renderer's declared quality axis on volumes of `kind` (none if it does not draw
     them); `steps`, when given, replaces the axis by those steps at the renderer's defaults."""
@@ -222,12 +221,11 @@ def check_curves(names: Iterable[str]) -> list[str]:
     from volren.renderers.registry import registry
 
     names = list(names)
-    valid = [c for kind in CURVES.values() for c in kind]
-    registered = [n for n in registry.names() if n not in valid]
-    unknown = [n for n in names if n not in valid and n not in registered]
+    registered = [n for n in registry.names() if n not in BUILTIN_CURVES]
+    unknown = [n for n in names if n not in BUILTIN_CURVES and n not in registered]
     if unknown or not names:
         raise VolrenError(
-            f"unknown renderers {unknown or names}; choose from {', '.join(valid)} or a registered renderer "
+            f"unknown renderers {unknown or names}; choose from {', '.join(BUILTIN_CURVES)} or a registered renderer "
             f"({', '.join(registered)})"
         )
     return names

@@ -22,20 +22,18 @@ def _positive(text: str) -> float:
 def add_parser(sub) -> None:
     p = sub.add_parser("check-renderer", help="run the conformance kit on a registered renderer")
     p.add_argument("name", help="registered renderer name (see `volren renderers`)")
-    p.add_argument("--quick", action="store_true", help="smaller images and fewer cases")
+    p.add_argument("--quick", action="store_true", help="fewer cases (fewer steps and capability combinations)")
     p.add_argument("--check", action="append", metavar="CHECK", help="run only this check (repeatable)")
     p.add_argument("--time-limit", type=_positive, default=None, metavar="S", help="seconds per check (default 300)")
     p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from volren.testing.runner import DEFAULT_TIME_LIMIT, renderer_factory, run_check, select_checks
+    from volren.testing.runner import DEFAULT_TIME_LIMIT, run_checks, select_checks
 
-    factory = renderer_factory(args.name)
     checks = select_checks(args.check)
     failed = 0
-    for check in checks:
-        result = run_check(check, factory, args.quick, args.time_limit or DEFAULT_TIME_LIMIT)
+    for result in run_checks(args.name, args.quick, args.check, args.time_limit or DEFAULT_TIME_LIMIT):
         for line in result.lines():
             print(line, flush=True)
         failed += not result.passed

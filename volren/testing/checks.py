@@ -66,11 +66,9 @@ class Measurement:
         return f"{verdict} {self.check} [{self.case}] {self.quantity} {self.value:.3g} (bound {relation} {self.bound:.3g})"
 
 
-def _check_output(image: Any, width: int, height: int) -> str | None:
-    """Why `image` breaks the output rules, or None."""
-    if not isinstance(image, np.ndarray) or image.dtype != np.float32 or image.shape != (height, width, 4):
-        got = f"{image.dtype} {image.shape}" if isinstance(image, np.ndarray) else type(image).__name__
-        return f"returned {got}, expected float32 {(height, width, 4)}"
+def _check_values(image: NDArray[np.float32]) -> str | None:
+    """Why the values of an image (its shape and dtype checked by `render_frame`) break the output
+    rules, or None."""
     if not np.all(np.isfinite(image)):
         return f"{np.count_nonzero(~np.isfinite(image))} non-finite values"
     if image.min() < -OUTPUT_EPS or image.max() > 1 + OUTPUT_EPS:
@@ -83,7 +81,8 @@ def _check_output(image: Any, width: int, height: int) -> str | None:
 
 @dataclass
 class CheckContext:
-    """What a check works with: fresh renderers, and the sizes for a quick or full run."""
+    """What a check works with: fresh renderers, and whether the run is quick (fewer cases; the image
+    sizes stay, since an RMSE with silhouettes depends on the size)."""
 
     factory: RendererFactory
     quick: bool = False
@@ -108,10 +107,6 @@ class CheckContext:
 
     def accuracy(self, kind: str) -> Accuracy:
         return self.capabilities.kinds[kind].accuracy  # type: ignore[index]
-
-    def size(self, full: int) -> int:
-        """Image sizes are the same in quick runs (an RMSE with silhouettes depends on the size)."""
-        return full
 
     def feed(self, renderer: Renderer, volume: Volume, tf: TransferFunction, settings: RenderSettings) -> None:
         """Give the renderer what changed since its last frame (as the app does)."""
@@ -138,7 +133,7 @@ class CheckContext:
         """One frame, held to the output rules; float64 for the comparisons."""
         self.feed(renderer, volume, tf, settings or RenderSettings())
         image, _ = render_frame(renderer, camera, width, height, progress)
-        problem = _check_output(image, width, height)
+        problem = _check_values(image)
         if problem:
             raise ContractError(f"{volume.kind} {width}x{height}: {problem}")
         return image.astype(np.float64)
@@ -169,7 +164,7 @@ def check_output(ctx: CheckContext) -> list[Measurement]:
         volume = lattice_volume(kind, lambda x, y, z: rng.random(x.shape) * 8.0 - 2.0, (6, 5, 4), (0.8, 1.0, 1.3))
         tf = TransferFunction1D([[-2, 0.1, 0.2, 1.0], [6, 1.0, 0.5, 0.0]], [[-1, 0.0], [6, 0.9]], 0.5)
         renderer = ctx.renderer()
-        w, h = ctx.size(37), ctx.size(23)
+        w, h = 37, 23
         modes = sorted(ctx.capabilities.kinds[kind].blend_modes)  # type: ignore[index]
         for mode in modes:
             ctx.draw(renderer, volume, tf, Camera.orbit(volume.bounds, 35, 25, aspect=w / h), w, h,
@@ -184,7 +179,7 @@ def check_empty(ctx: CheckContext) -> list[Measurement]:
     for kind in ctx.kinds():
         volume = lattice_volume(kind, lambda x, y, z: x + y, (5, 4, 4), (1.0, 0.8, 1.2))
         tf = TransferFunction1D([[0, 1, 1, 1]], [[0, 0.0], [10, 0.0]], 1.0)
-        n = ctx.size(32)
+        n = 32
         image = ctx.draw(ctx.renderer(), volume, tf, Camera.orbit(volume.bounds, 20, 30), n, n)
         out.append(Measurement("empty", kind, "max abs", float(np.abs(image).max()), 0.0))
     return out
@@ -198,7 +193,7 @@ def check_box(ctx: CheckContext) -> list[Measurement]:
         volume = _box(kind)
         renderer = ctx.renderer()
         for parallel in (False, True):
-            w, h = ctx.size(48), ctx.size(40)
+            w, h = 48, 40
             camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.3, parallel=parallel, aspect=w / h)
             image = ctx.draw(renderer, volume, tf, camera, w, h)
             expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, volume.bounds),
@@ -221,7 +216,7 @@ def check_ramp(ctx: CheckContext) -> list[Measurement]:
         volume = lattice_volume(kind, lambda x, y, z: x, (6, 4, 3), (0.5, 1.2, 0.9))
         b = volume.bounds
         renderer = ctx.renderer()
-        n = ctx.size(16)
+        n = 16
         for sign in (-1.0, 1.0):
             camera = axis_camera(b, 0, sign, 0.35 * min(b[3] - b[2], b[5] - b[4]))
             image = ctx.draw(renderer, volume, tf, camera, n, n)
@@ -270,7 +265,7 @@ def check_nan(ctx: CheckContext) -> list[Measurement]:
                                 dims, spacing, origin)  # fmt: skip
         b = list(volume.bounds)
         b[1] = finite_until * spacing[0]
-        w, h = ctx.size(40), ctx.size(32)
+        w, h = 40, 32
         camera = Camera.orbit(volume.bounds, 40, 25, zoom=1.2, aspect=w / h)
         image = ctx.draw(ctx.renderer(), volume, tf, camera, w, h)
         expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, b), (0.3, 0.6, 0.9), 0.4, 0.7)
@@ -297,7 +292,7 @@ def check_point(ctx: CheckContext) -> list[Measurement]:
         cases = [("perspective", Camera.orbit(volume.bounds, 25, 15, zoom=1.6, aspect=1.4), 1.4),
                  ("parallel", axis_camera(volume.bounds, 2, 1.0, 4.5), 1.25)]  # fmt: skip
         for name, camera, aspect in cases:
-            h = ctx.size(60)
+            h = 60
             w = int(round(h * aspect))
             image = ctx.draw(renderer, volume, tf, camera, w, h)
             cx, cy = oracles.weighted_centroid(image[..., 3])
@@ -319,7 +314,7 @@ def check_step(ctx: CheckContext) -> list[Measurement]:
         b = volume.bounds
         # off the centre line, so that no ray runs inside a face of the tetrahedralized lattice
         camera = axis_camera(b, 2, 1.0, 0.3 * (b[3] - b[2]), shift=(0.137, 0.071, 0.0))
-        n = ctx.size(16)
+        n = 16
         renderer = ctx.renderer()
         expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, n, n, b), (0.2, 0.8, 0.5), 0.3, 1.0)
         for step in steps:
@@ -338,7 +333,7 @@ def check_shading(ctx: CheckContext) -> list[Measurement]:
     for kind in ctx.kinds():
         volume = lattice_volume(kind, lambda x, y, z: x, (5, 4, 3), (0.8, 1.1, 0.9))
         camera = Camera.orbit(volume.bounds, 70, -25, zoom=1.2)
-        n = ctx.size(24)
+        n = 24
         renderer = ctx.renderer()
         plain = ctx.draw(renderer, volume, tf, camera, n, n)
         other_lights = ctx.draw(renderer, volume, tf, camera, n, n,
@@ -369,7 +364,7 @@ def check_progress(ctx: CheckContext) -> list[Measurement]:
     for kind in ctx.kinds():
         volume, tf, camera = _kit_scene(kind)
         calls: list[float] = []
-        n = ctx.size(48)
+        n = 48
         ctx.draw(ctx.renderer(), volume, tf, camera, n, n, progress=calls.append)
         bad = sum(1 for f in calls if not 0.0 <= f <= 1.0) + sum(1 for a, b in itertools.pairwise(calls) if b < a)
         out.append(Measurement("progress", f"{kind}, {len(calls)} calls", "out of order or range",
@@ -383,7 +378,7 @@ def check_cancel(ctx: CheckContext) -> list[Measurement]:
     out = []
     for kind in ctx.kinds():
         volume, tf, camera = _kit_scene(kind)
-        n = ctx.size(48)
+        n = 48
         renderer = ctx.renderer()
         before = ctx.draw(renderer, volume, tf, camera, n, n)
         raised = None
