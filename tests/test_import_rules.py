@@ -47,10 +47,49 @@ def offending(subpackage: str, forbidden: tuple[str, ...], allowed: dict[str, tu
     ]
 
 
+RENDERER_PACKAGES = sorted(p.parent.name for p in (PACKAGE / "renderers").glob("*/__init__.py"))
+#: Who may import a renderer's package (its public names, never its modules) from outside it: the
+#: benchmarks take the reference's one-segment integral as the truth of pre-integration tables.
+PUBLIC_RENDERER_USERS = {"reference": ("bench/",)}
+
+
+def test_a_renderer_is_imported_only_by_itself():
+    """Renderers share code through `volren.kernels` and the model, never through each other's
+    modules, so the reference that judges them shares no integrator with them. The registry
+    names renderers by entry-point strings, not imports; tests may import anything."""
+    assert len(RENDERER_PACKAGES) >= 4
+    found = []
+    for path in PACKAGE.rglob("*.py"):
+        rel = path.relative_to(PACKAGE).as_posix()
+        for name in imported_modules(path):
+            for renderer in RENDERER_PACKAGES:
+                package = f"volren.renderers.{renderer}"
+                if name != package and not name.startswith(package + "."):
+                    continue
+                if rel.startswith(f"renderers/{renderer}/"):
+                    continue
+                public = name == package and rel.startswith(PUBLIC_RENDERER_USERS.get(renderer, ()))
+                if not public:
+                    found.append(f"{rel} imports {name}")
+    assert found == []
+
+
+def test_kernels_need_only_the_model_and_the_contract():
+    allowed = ("numpy", "numba", "math", "collections", "contextlib", "__future__", "volren.model",
+               "volren.errors", "volren.renderers.base")
+    found = [
+        f"{path.relative_to(PACKAGE)} imports {name}"
+        for path, names in imports_of("kernels").items()
+        for name in names
+        if not any(name == a or name.startswith(a + ".") for a in allowed)
+    ]
+    assert found == []
+
+
 @pytest.mark.parametrize(
     "subpackage, forbidden",
     [
-        ("model", HEAVY + ("volren.io", "volren.renderers", "volren.app", "volren.cli")),
+        ("model", HEAVY + ("volren.io", "volren.renderers", "volren.app", "volren.cli", "volren.kernels")),
         ("renderers", ("PyQt5", "pyvistaqt", "pyvista", "volren.io", "volren.app", "volren.cli")),
         ("io", ("PyQt5", "pyvistaqt", "moderngl", "volren.renderers", "volren.app", "volren.cli")),
         ("cli", ("PyQt5", "pyvistaqt", "volren.app")),

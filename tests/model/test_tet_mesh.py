@@ -63,16 +63,42 @@ def check_adjacency(mesh: PreparedMesh) -> None:
     assert np.array_equal(mesh.boundary_faces, np.argwhere(~inner))
 
 
+def outward_normals(mesh: PreparedMesh) -> np.ndarray:
+    """Unit outward normals (m, 4, 3) from the kernels' planes (sigma n points inward)."""
+    p = mesh.planes
+    n = -p.sigma[..., None] * p.normals
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return n / np.linalg.norm(n, axis=2, keepdims=True)
+
+
 def check_planes(mesh: PreparedMesh) -> None:
-    """Unit normals, the face's vertices on its plane and the opposite vertex behind it."""
+    """Each face's vertices on its plane, the opposite vertex on the inner side (sigma n.(x - p_a)
+    > 0), the anchor the face's vertex with the lowest id, and usable = neither flat nor
+    non-finite."""
+    planes = mesh.planes
+    assert np.array_equal(planes.usable, ~(mesh.flat | mesh.nonfinite))
     good = ~mesh.flat
     p = mesh.points[mesh.tets[good]]  # (g, 4, 3)
-    n, d = mesh.face_normals[good], mesh.face_offsets[good]
-    assert np.allclose(np.linalg.norm(n, axis=2), 1.0, atol=1e-12)
+    n, a, sigma = planes.normals[good], planes.anchors[good], planes.sigma[good]
+    scale = np.linalg.norm(n, axis=2) * mesh.max_edge_length
     for f in range(4):
-        on_face = np.einsum("tij,tj->ti", p[:, FACE_VERTICES[f]], n[:, f])
-        assert np.allclose(on_face, d[:, f, None], atol=1e-9)
-        assert np.all(np.einsum("ij,ij->i", p[:, f], n[:, f]) < d[:, f])
+        ids = mesh.tets[good][:, FACE_VERTICES[f]]
+        assert np.array_equal(a[:, f], mesh.points[ids.min(axis=1)])
+        on_face = np.einsum("tij,tj->ti", p[:, FACE_VERTICES[f]] - a[:, f, None], n[:, f])
+        assert np.all(np.abs(on_face) <= 1e-12 * scale[:, f, None])
+        assert np.all(sigma[:, f] * np.einsum("ij,ij->i", p[:, f] - a[:, f], n[:, f]) > 0)
+    assert np.array_equal(planes.values, mesh.values[mesh.tets])
+
+
+def check_planes_shared(mesh: PreparedMesh) -> None:
+    """The two cells of an interior face hold bit-identical planes with opposite sigma."""
+    inner = mesh.neighbors >= 0
+    across = (mesh.neighbors[inner], mesh.neighbor_faces[inner])
+    planes = mesh.planes
+    assert np.array_equal(planes.normals[inner], planes.normals[across])
+    assert np.array_equal(planes.anchors[inner], planes.anchors[across])
+    good = ~(mesh.flat[np.nonzero(inner)[0]] | mesh.flat[across[0]])
+    assert np.array_equal(planes.sigma[inner][good], -planes.sigma[across][good])
 
 
 def check_boundary_outward(mesh: PreparedMesh) -> None:
@@ -81,7 +107,7 @@ def check_boundary_outward(mesh: PreparedMesh) -> None:
     assert np.array_equal(mesh.boundary_triangles, mesh.tets[t[:, None], FACE_VERTICES[f]])
     a, b, c = (mesh.points[mesh.boundary_triangles[:, k]] for k in range(3))
     cross = np.cross(b - a, c - a)
-    assert np.all(np.einsum("ij,ij->i", cross, mesh.face_normals[t, f]) > 0)
+    assert np.all(np.einsum("ij,ij->i", cross, outward_normals(mesh)[t, f]) > 0)
     enclosed = np.einsum("ij,ij->i", (a + b + c) / 3, cross).sum() / 6  # divergence theorem
     assert enclosed == pytest.approx(signed_volumes(mesh.points, mesh.tets).sum(), rel=1e-12)
 
@@ -103,7 +129,7 @@ def test_cube_split(tets, longest):
 
     # Two boundary triangles per cube face, with the axis normal pointing away from the centre.
     t, f = mesh.boundary_faces.T
-    normals = mesh.face_normals[t, f]
+    normals = outward_normals(mesh)[t, f]
     centroids = mesh.points[mesh.boundary_triangles].mean(axis=1)
     assert np.all(np.einsum("ij,ij->i", normals, centroids - 0.5) > 0)
     axis = np.argmax(np.abs(normals), axis=1)
@@ -119,10 +145,7 @@ def test_interior_planes_are_exactly_opposite():
     check_planes(mesh)
     check_boundary_outward(mesh)
     assert mesh.n_boundary == 2 * 2 * (4 * 3 + 3 * 5 + 4 * 5)
-    inner = mesh.neighbors >= 0
-    across = (mesh.neighbors[inner], mesh.neighbor_faces[inner])
-    assert np.array_equal(mesh.face_normals[inner], -mesh.face_normals[across])
-    assert np.array_equal(mesh.face_offsets[inner], -mesh.face_offsets[across])
+    check_planes_shared(mesh)
 
 
 def test_face_matching_without_packed_keys(monkeypatch):
@@ -144,8 +167,10 @@ def test_repeated_points_with_equal_values_are_merged():
     shared = build_mesh(points, tets, values)
     pick = np.random.default_rng(2).integers(0, 2, size=tets.shape) * len(points)
     copies = build_mesh(np.concatenate([points, points]), tets + pick, np.concatenate([values, values]))
-    for name in ("tets", "neighbors", "neighbor_faces", "boundary_faces", "face_normals", "face_offsets"):
+    for name in ("tets", "neighbors", "neighbor_faces", "boundary_faces"):
         assert np.array_equal(getattr(copies, name), getattr(shared, name)), name
+    for name in ("normals", "anchors", "sigma", "values", "usable"):
+        assert np.array_equal(getattr(copies.planes, name), getattr(shared.planes, name)), name
     jump = build_mesh(np.concatenate([points, points]), tets + pick, np.concatenate([values, values + 1.0]))
     assert jump.n_boundary > shared.n_boundary
     check_adjacency(jump)
@@ -181,7 +206,7 @@ def test_an_inverted_tet_is_reoriented():
     check_planes(mesh)
     check_boundary_outward(mesh)
     assert mesh.n_boundary == 6
-    assert np.allclose(mesh.face_normals[0, 0], np.ones(3) / np.sqrt(3))  # face 1-2-3, away from 0
+    assert np.allclose(outward_normals(mesh)[0, 0], np.ones(3) / np.sqrt(3))  # face 1-2-3, away from 0
 
 
 def test_flat_tets_are_marked_not_dropped():
@@ -202,7 +227,7 @@ def test_flat_tets_are_marked_not_dropped():
         mesh = build_mesh(points, tets, values)
     assert mesh.flat.tolist() == [False, True, True, True] and mesh.n_flat == 3
     assert np.all(mesh.gradients[1:] == 0) and np.all(np.isfinite(mesh.gradients))
-    assert np.all(mesh.face_normals[1:] == 0) and np.all(mesh.face_offsets[1:] == 0)
+    assert mesh.planes.usable.tolist() == [True, False, False, False]
     check_adjacency(mesh)
     check_planes(mesh)
     # Face 0-1-2 is shared by all four cells: non-manifold, so boundary everywhere.
@@ -241,7 +266,9 @@ def test_result_is_read_only_float64_and_int32():
     for name in tet_mesh._ARRAY_FIELDS:
         array = getattr(mesh, name)
         assert not array.flags.writeable, name
-    assert mesh.points.dtype == mesh.values.dtype == mesh.face_normals.dtype == np.float64
+    assert mesh.points.dtype == mesh.values.dtype == mesh.planes.normals.dtype == np.float64
+    for name in ("normals", "anchors", "sigma", "values", "gradients", "usable"):
+        assert not getattr(mesh.planes, name).flags.writeable, name
     assert mesh.boundary_faces.dtype == mesh.boundary_triangles.dtype == np.int32
 
 
@@ -361,10 +388,7 @@ def test_spx(shared_data):
     check_adjacency(mesh)
     check_planes(mesh)
     check_boundary_outward(mesh)
-    inner = mesh.neighbors >= 0
-    across = (mesh.neighbors[inner], mesh.neighbor_faces[inner])
-    assert np.abs(mesh.face_normals[inner] + mesh.face_normals[across]).max() <= 1e-9
-    assert np.abs(mesh.face_offsets[inner] + mesh.face_offsets[across]).max() <= 1e-9
+    check_planes_shared(mesh)
     # The boundary surface is closed: every boundary edge is used once in each direction.
     tri = mesh.boundary_triangles
     edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])

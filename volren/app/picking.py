@@ -5,14 +5,14 @@ of a point the person clicks in the rendered image, so the pick must find the po
 actually shows there under the current TF, with the renderers' own reconstruction.
 
 The ray is the renderers' ray through the centre of pixel (x, y) (row 0 at the top), starting on
-the near plane and ending on the far plane (`Camera.pixel_rays`, the reference's `ray_far`). It is
+the near plane and ending on the far plane (`Camera.pixel_rays`, `kernels.tet_projection.ray_far`). It is
 sampled every `STEP_FRACTION` characteristic lengths (mean voxel spacing or mean tet edge):
 
 - uniform grids: the trilinear interpolant of the values, and the gradient the renderers shade
   with (central differences at the grid points in world units, one-sided at the borders,
   interpolated trilinearly like the values); a cell with a non-finite corner is no data;
-- tetrahedral meshes: the reference renderer's exact ray-tetrahedron clipping (`tets.clip_tet`
-  on the candidates of `tets.projected_boxes`), linear values and the constant gradient in each
+- tetrahedral meshes: the renderers' exact ray-tetrahedron clipping (`kernels.tet_clipping`
+  on the candidates of `kernels.tet_projection.projected_boxes`), linear values and the constant gradient in each
   tet; gaps of a non-convex mesh are no data.
 
 Each piece of the ray gets the TF's extinction at its midpoint (1D or 2D TF, DESIGN.md's optical
@@ -32,7 +32,6 @@ passes only through gaps and non-finite cells).
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass
 from typing import Literal
 
@@ -40,11 +39,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.kernels.box_clipping import clip_box
+from volren.kernels.tet_clipping import clip_tet
+from volren.kernels.tet_projection import projected_boxes, ray_far
 from volren.model.camera import Camera
+from volren.model.tet_mesh import prepare_mesh
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import TetVolume, UniformVolume, Volume
-from volren.renderers.reference.tets import clip_tet, prepare_tets, projected_boxes, ray_far
-from volren.renderers.reference.uniform import clip_box
 
 #: Sample spacing along the ray, in characteristic lengths (mean voxel spacing, mean tet edge).
 STEP_FRACTION = 0.25
@@ -137,9 +138,6 @@ def _uniform_samples(
 
 
 # ------------------------------------------------------------------------ tetrahedral meshes
-_prepared: weakref.WeakKeyDictionary[TetVolume, tuple] = weakref.WeakKeyDictionary()
-
-
 def _tet_intervals(
     volume: TetVolume,
     camera: Camera,
@@ -152,12 +150,10 @@ def _tet_intervals(
     t_far: float,
 ) -> NDArray:
     """(entry, exit, value at entry, slope along the ray, |grad s|) of the tets the ray crosses, by entry."""
-    if volume not in _prepared:
-        _prepared[volume] = prepare_tets(
-            volume.points, volume.tets, np.ascontiguousarray(volume.values, np.float64)
-        )
-    normals, anchors, sigma, tvals, grads, ok, _ = _prepared[volume]
-    boxes = projected_boxes(camera, width, height, volume.points, volume.tets, ok)
+    mesh = prepare_mesh(volume)  # cached by content, shared with the renderers
+    p = mesh.planes
+    normals, anchors, sigma, tvals, grads = p.normals, p.anchors, p.sigma, p.values, p.gradients
+    boxes = projected_boxes(camera, width, height, mesh.points, mesh.tets, p.usable)
     candidates = np.flatnonzero(
         (boxes[:, 0] <= x) & (x <= boxes[:, 1]) & (boxes[:, 2] <= y) & (y <= boxes[:, 3])
     )

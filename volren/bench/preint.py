@@ -6,7 +6,7 @@ integration), Engel's approximate integral-function table, the 3D table for 64 l
 lighting tables (front and back weighted), all
 with n_t = n (no oversampling, as in seed 000's Table 1), each
 the median of several runs, and each one's max error over random entries against the continuous
-integral (`preint_oracle`, float64, adaptive). A second table gives that error for the exact table
+integral (`volren.renderers.reference.segment_rgba`, float64, adaptive). A second table gives that error for the exact table
 as a function of n and n_t (oversampling). Also the time of a repeated (cached) request.
 """
 
@@ -22,7 +22,6 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.bench.preint_oracle import continuous_entries
 from volren.model.preintegration import (
     LengthAxis,
     TableCache,
@@ -33,6 +32,7 @@ from volren.model.preintegration import (
 )
 from volren.model.preintegration.tables import MAX_TABLE_BYTES
 from volren.model.transfer_function import TransferFunction1D
+from volren.renderers.reference import segment_rgba
 
 T = TypeVar("T")
 
@@ -99,7 +99,7 @@ def measure_size(
     row = SizeRow(n)
     idx = sample_entries(n, entries, rng)
     values = values_of(idx, n, lo, hi)
-    truth = continuous_entries(tf, values[:, 0], values[:, 1], step)
+    truth = segment_rgba(tf, values[:, 0], values[:, 1], step)
 
     row.exact_s, exact = median_seconds(lambda: preintegrate(tf, n, step, oversampling=1, cache=None), repeats)
     row.errors["exact"] = max_error(exact, idx, truth)
@@ -121,7 +121,7 @@ def measure_size(
         )
         pick = rng.integers(0, lengths, size=len(idx))
         truth3d = np.stack(
-            [continuous_entries(tf, values[k : k + 1, 0], values[k : k + 1, 1], layers[pick[k]])[0] for k in range(len(idx))]
+            [segment_rgba(tf, values[k : k + 1, 0], values[k : k + 1, 1], layers[pick[k]])[0] for k in range(len(idx))]
         )
         got = table3d[pick, idx[:, 0], idx[:, 1]].astype(np.float64)
         row.errors["3d"] = float(np.abs(got - truth3d).max())
@@ -166,7 +166,7 @@ def oversampling_errors(
     for n in sizes:
         idx = sample_entries(n, entries, rng)
         values = values_of(idx, n, lo, hi)
-        truth = continuous_entries(tf, values[:, 0], values[:, 1], step)
+        truth = segment_rgba(tf, values[:, 0], values[:, 1], step)
         for m in factors:
             out[(n, m)] = max_error(preintegrate(tf, n, step, oversampling=m, cache=None), idx, truth)
     return out

@@ -460,14 +460,14 @@ def _lighting_arrays(tables: LightingTables) -> tuple[tuple[NDArray, str], ...]:
 
 def _oracle_error(tf: TransferFunction1D, table: NDArray, n: int, length: float, seed: int) -> float:
     """Max abs RGBA difference of 16 random entries of a table over the TF's range from the
-    continuous integral (`preint_oracle`)."""
-    from volren.bench.preint_oracle import continuous_entries
+    continuous integral (`volren.renderers.reference.segment_rgba`)."""
+    from volren.renderers.reference import segment_rgba
 
     rng = np.random.default_rng(seed)
     idx = rng.integers(0, n, size=(16, 2))
     lo, hi = tf.value_range
     values = lo + (hi - lo) * idx / (n - 1)
-    truth = continuous_entries(tf, values[:, 0], values[:, 1], length)
+    truth = segment_rgba(tf, values[:, 0], values[:, 1], length)
     return float(np.abs(np.asarray(table, np.float64)[idx[:, 0], idx[:, 1]] - truth).max())
 
 

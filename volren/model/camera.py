@@ -152,7 +152,7 @@ class Camera:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Origins and unit directions (..., 3) of the rays through the centres of pixels (x, y) of a
         width x height image: `pixel_rays` at those pixels (to rounding; picking asks for one pixel).
-        x and y broadcast. Renderers that need many rays per frame use `renderers.camera_rays`."""
+        x and y broadcast. Renderers that need many rays per frame use `volren.kernels.camera_rays`."""
         inv = np.linalg.inv(self.projection_matrix(width / height) @ self.view_matrix())
         xx, yy = np.broadcast_arrays(
             (np.asarray(x, dtype=np.float64) + 0.5) / width * 2.0 - 1.0,

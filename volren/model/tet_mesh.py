@@ -14,16 +14,20 @@ Conventions (shared with the ray-casting kernels):
   copy, so faces between cells written with their own copies match.
 - A tet is positively oriented when det[p1 - p0, p2 - p0, p3 - p0] > 0; inverted input cells get
   vertices 2 and 3 swapped.
-- A tet is *flat* when it repeats a vertex or ``|V| <= FLAT_REL_TOL * l**3`` (l its longest edge),
-  the test `volren.model.tet_repair` drops cells with on loading. Flat tets are kept (the
-  adjacency runs through them) but have zero face normals, zero offsets and a zero gradient.
+- A tet is *flat* when it repeats a vertex or ``|V| <= FLAT_REL_TOL * l**3`` (l its longest
+  edge): `volren.model.tet_repair.flat_cells`, the project's one flatness rule. Loading drops such
+  cells (`repair_tets`) and renderers treat them as holes. Flat tets are kept here (the adjacency runs through them) with a
+  zero gradient.
 - ``neighbors[t, f]`` is the tet across face f and ``neighbor_faces[t, f]`` that face's index in
   the neighbour, so ``neighbors[neighbors[t, f], neighbor_faces[t, f]] == t``; both are -1 on the
   boundary. A face shared by more than two tets (non-manifold input) is boundary for all of them
   and counted in `n_nonmanifold_faces`; a face a degenerate tet shares with itself is boundary too.
-- The plane of face f is ``dot(face_normals[t, f], x) == face_offsets[t, f]``, the normal outward
-  and of unit length. Both sides of an interior face are computed from the same sorted vertex
-  triple, so their planes are exactly (bit for bit) opposite: no cracks between cells.
+- `PreparedMesh.planes` (`FacePlanes`) holds the plane of face f as a point p_a and a normal
+  n = (p_b - p_a) x (p_c - p_a), where a < b < c are the face's global vertex ids, with sigma = +-1
+  so that sigma n.(x - p_a) >= 0 inside. Both sides of an interior face compute n and p_a from the
+  same sorted triple, so their planes are bit for bit the same with opposite sigma: rays clipped
+  against them are partitioned exactly, with no cracks between cells. Flat and non-finite cells
+  are not `usable`: renderers treat them as holes.
 - ``gradients[t]`` is the gradient of the linear interpolant of `values` in tet t (Eq. 7.2:
   ``s(x) = values[tets[t, 0]] + gradients[t] . (x - points[tets[t, 0]])``); NaN when one of its
   vertex values is not finite (``nonfinite[t]``), which takes precedence over flatness.
@@ -44,17 +48,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.model.tet_repair import flat_cells
 from volren.model.volume import TetVolume
 
 #: Local vertex indices of face f (opposite vertex f), ordered so that the right-hand normal points
 #: out of a positively oriented tet.
 FACE_VERTICES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]], dtype=np.int64)
 
-#: Relative volume below which a tet is flat (the same test `tet_repair.repair_tets` applies).
-FLAT_REL_TOL = 1e-9
-
 #: Bumped whenever what `build_mesh` computes or what the cache file holds changes.
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 
 #: How many prepared meshes the process keeps (least recently used ones go first).
 MEMORY_CACHE_ENTRIES = 4
@@ -75,8 +77,6 @@ class PreparedMesh:
     tets: NDArray[np.int32]  # (m, 4), positively oriented (flat ones as given)
     neighbors: NDArray[np.int32]  # (m, 4), -1 on the boundary
     neighbor_faces: NDArray[np.int8]  # (m, 4), -1 on the boundary
-    face_normals: NDArray[np.float64]  # (m, 4, 3), outward unit normals, zero for flat tets
-    face_offsets: NDArray[np.float64]  # (m, 4), plane dot(n, x) = offset
     gradients: NDArray[np.float64]  # (m, 3)
     flat: NDArray[np.bool_]  # (m,)
     nonfinite: NDArray[np.bool_]  # (m,), some vertex value is NaN or Inf
@@ -110,6 +110,12 @@ class PreparedMesh:
         hi = self.points.max(axis=0)
         return (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]), float(lo[2]), float(hi[2]))
 
+    @functools.cached_property
+    def planes(self) -> FacePlanes:
+        """The face planes the ray-casting kernels clip against (computed once per mesh, not stored
+        on disk: they follow from the points and tets in O(m))."""
+        return face_planes(self.points, self.tets, self.values, self.gradients, ~(self.flat | self.nonfinite))
+
     @property
     def nbytes(self) -> int:
         return sum(a.nbytes for a in self._arrays().values())
@@ -130,8 +136,6 @@ _ARRAY_FIELDS = (
     "tets",
     "neighbors",
     "neighbor_faces",
-    "face_normals",
-    "face_offsets",
     "gradients",
     "flat",
     "nonfinite",
@@ -144,8 +148,6 @@ _STORED_DTYPES = {
     "tets": np.int32,
     "neighbors": np.int32,
     "neighbor_faces": np.int8,
-    "face_normals": np.float64,
-    "face_offsets": np.float64,
     "gradients": np.float64,
     "flat": np.bool_,
     "nonfinite": np.bool_,
@@ -240,7 +242,7 @@ def build_mesh(points: NDArray, tets: NDArray, values: NDArray) -> PreparedMesh:
         d = p[:, a] - p[:, b]
         np.maximum(longest_sq, np.einsum("ij,ij->i", d, d), out=longest_sq)
         repeated |= tets[:, a] == tets[:, b]
-    flat = repeated | (np.abs(det) <= 6.0 * FLAT_REL_TOL * longest_sq**1.5)
+    flat = flat_cells(det, np.sqrt(longest_sq), repeated)
     inverted = det < 0
     if inverted.any():
         tets[inverted, 2], tets[inverted, 3] = tets[inverted, 3], tets[inverted, 2]
@@ -264,22 +266,6 @@ def build_mesh(points: NDArray, tets: NDArray, values: NDArray) -> PreparedMesh:
     faces = tets[:, FACE_VERTICES].reshape(-1, 3)  # (4m, 3), row 4t + f
     lo, mid, hi = _sort3(faces[:, 0], faces[:, 1], faces[:, 2])
 
-    # Plane of each face from its sorted triple (identical on both sides of a shared face), then
-    # turned outward: the sorted order is outward when it is an even permutation of `faces`.
-    q0, q1, q2 = points[lo], points[mid], points[hi]
-    normals = np.cross(q1 - q0, q2 - q0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        normals /= np.sqrt(np.einsum("ij,ij->i", normals, normals))[:, None]
-    inversions = (
-        (faces[:, 0] > faces[:, 1]).astype(np.int8)
-        + (faces[:, 0] > faces[:, 2])
-        + (faces[:, 1] > faces[:, 2])
-    )
-    normals[inversions % 2 == 1] *= -1.0
-    flat_faces = np.repeat(flat, 4)
-    normals[flat_faces] = 0.0
-    offsets = np.einsum("ij,ij->i", normals, q0)
-
     # Adjacency.
     first, second, n_nonmanifold = _match_faces(lo, mid, hi, n)
     neighbors = np.full(4 * m, -1, dtype=np.int32)
@@ -297,8 +283,6 @@ def build_mesh(points: NDArray, tets: NDArray, values: NDArray) -> PreparedMesh:
             tets=tets.astype(np.int32),
             neighbors=neighbors.reshape(m, 4),
             neighbor_faces=neighbor_faces.reshape(m, 4),
-            face_normals=normals.reshape(m, 4, 3),
-            face_offsets=offsets.reshape(m, 4),
             gradients=gradients,
             flat=flat,
             nonfinite=nonfinite,
@@ -309,6 +293,40 @@ def build_mesh(points: NDArray, tets: NDArray, values: NDArray) -> PreparedMesh:
             max_edge_length=float(np.sqrt(longest_sq.max())),
         )
     )
+
+
+@dataclass(frozen=True, eq=False)
+class FacePlanes:
+    """Per cell and face f (opposite vertex f): sigma n.(x - p_a) >= 0 inside (module docstring)."""
+
+    normals: NDArray[np.float64]  # (m, 4, 3) n, not normalised (zero length for flat faces)
+    anchors: NDArray[np.float64]  # (m, 4, 3) p_a, the face's vertex with the lowest global id
+    sigma: NDArray[np.float64]  # (m, 4) +1 or -1
+    values: NDArray[np.float64]  # (m, 4) the value at vertex f
+    gradients: NDArray[np.float64]  # (m, 3) the constant gradient of the linear field
+    usable: NDArray[np.bool_]  # (m,) neither flat nor with a non-finite vertex value
+
+
+def face_planes(points: NDArray, tets: NDArray, values: NDArray, gradients: NDArray,
+                usable: NDArray[np.bool_]) -> FacePlanes:
+    """`FacePlanes` of the cells `tets` (m, 4) of a mesh."""
+    faces = tets[:, FACE_VERTICES]  # (m, 4, 3)
+    lo, mid, hi = _sort3(faces[..., 0], faces[..., 1], faces[..., 2])
+    anchors = points[lo]
+    normals = np.cross(points[mid] - anchors, points[hi] - anchors)
+    opposite = points[tets] - anchors  # vertex f minus the anchor of face f
+    sigma = np.where(np.einsum("tfc,tfc->tf", normals, opposite) > 0.0, 1.0, -1.0)
+    planes = FacePlanes(
+        normals=normals,
+        anchors=anchors,
+        sigma=sigma,
+        values=values[tets],
+        gradients=np.ascontiguousarray(gradients),
+        usable=np.ascontiguousarray(usable),
+    )
+    for name in ("normals", "anchors", "sigma", "values", "gradients", "usable"):
+        getattr(planes, name).flags.writeable = False
+    return planes
 
 
 def _freeze(mesh: PreparedMesh) -> PreparedMesh:
@@ -367,8 +385,6 @@ def _read_cached(path: Path, key: str, volume: TetVolume) -> PreparedMesh | None
         "tets": (m, 4),
         "neighbors": (m, 4),
         "neighbor_faces": (m, 4),
-        "face_normals": (m, 4, 3),
-        "face_offsets": (m, 4),
         "gradients": (m, 3),
         "flat": (m,),
         "nonfinite": (m,),

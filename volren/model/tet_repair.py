@@ -22,6 +22,17 @@ def signed_volumes(points: NDArray, tets: NDArray) -> NDArray[np.float64]:
     return np.einsum("ij,ij->i", a, np.cross(b, c)) / 6.0
 
 
+#: A tetrahedron is flat when it repeats a vertex or |V| <= FLAT_REL_TOL * l**3 (l its longest
+#: edge): the one flatness rule, applied on loading (`repair_tets`) and by `tet_mesh.build_mesh`.
+FLAT_REL_TOL = 1e-9
+
+
+def flat_cells(six_volumes: NDArray, longest_edges: NDArray, repeated: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """The flat tetrahedra, from 6 * signed volume, the longest edge and whether a vertex repeats;
+    relative to the edge length, so the decision does not depend on units."""
+    return repeated | (np.abs(six_volumes) <= 6.0 * FLAT_REL_TOL * longest_edges**3)
+
+
 @dataclass(frozen=True)
 class RepairResult:
     tets: NDArray[np.int64]
@@ -29,12 +40,8 @@ class RepairResult:
     reoriented: int
 
 
-def repair_tets(points: NDArray, tets: NDArray, rel_tol: float = 1e-9) -> RepairResult:
-    """Drop zero-volume tetrahedra and reorient inverted ones (swap vertices 2 and 3).
-
-    A tetrahedron counts as zero-volume when ``|V| <= rel_tol * l**3`` with l its longest edge,
-    or when it repeats a vertex; the relative test keeps the decision independent of units.
-    """
+def repair_tets(points: NDArray, tets: NDArray) -> RepairResult:
+    """Drop flat tetrahedra (`flat_cells`) and reorient inverted ones (swap vertices 2 and 3)."""
     tets = np.asarray(tets, dtype=np.int64)
     if len(tets) == 0:
         return RepairResult(tets.reshape(0, 4), 0, 0)
@@ -45,7 +52,7 @@ def repair_tets(points: NDArray, tets: NDArray, rel_tol: float = 1e-9) -> Repair
     repeated = np.zeros(len(tets), dtype=bool)
     for a, b in pairs:
         repeated |= tets[:, a] == tets[:, b]
-    flat = repeated | (np.abs(volumes) <= rel_tol * longest**3)
+    flat = flat_cells(6.0 * volumes, longest, repeated)
     inverted = (~flat) & (volumes < 0)
     fixed = tets.copy()
     fixed[inverted, 2], fixed[inverted, 3] = tets[inverted, 3], tets[inverted, 2]

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from tests.model.preintegration.tfs import on_nodes, smooth, spiky
-from volren.bench.preint_oracle import continuous_entries
 from volren.model.preintegration import preintegrate, preintegrate_approximate, preintegrate_brute_force
 from volren.model.transfer_function import TransferFunction1D
+from volren.renderers.reference import segment_rgba
 
 
 def composite(front: np.ndarray, back: np.ndarray) -> np.ndarray:
@@ -51,7 +51,7 @@ def test_error_against_the_continuous_integral_falls_as_n_t_squared(step):
     pairs = np.random.default_rng(3).integers(0, coarse, (60, 2))
     pairs[:6, 1] = pairs[:6, 0]
     values = pairs / (coarse - 1)
-    truth = continuous_entries(tf, values[:, 0], values[:, 1], step)
+    truth = segment_rgba(tf, values[:, 0], values[:, 1], step)
 
     def error(refine: int, oversampling: int) -> float:
         n = (coarse - 1) * refine + 1
@@ -120,7 +120,7 @@ def test_splitting_a_segment_and_compositing_the_halves_equals_the_whole():
     joined = composite(half[i, mid], half[mid, j])
     assert np.abs(joined - whole[i, j]).max() <= 1e-6
     pick = np.random.default_rng(0).choice(len(i), 40, replace=False)
-    truth = continuous_entries(tf, i[pick] / (n - 1), j[pick] / (n - 1), 3.0)
+    truth = segment_rgba(tf, i[pick] / (n - 1), j[pick] / (n - 1), 3.0)
     assert np.abs(joined[pick] - truth).max() <= 1e-4
 
 

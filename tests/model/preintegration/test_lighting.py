@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from tests.model.preintegration.tfs import smooth, spiky
-from volren.bench.preint_oracle import continuous_entries
 from volren.model.preintegration import lighting_tables, preintegrate, preintegrate_brute_force
 from volren.model.transfer_function import TransferFunction1D
+from volren.renderers.reference import segment_rgba
 
 
 def emission_centre(x: np.ndarray) -> np.ndarray:
@@ -71,8 +71,8 @@ def test_weighted_tables_against_the_continuous_integral():
             np.column_stack([xs, rgb * ramp[:, None]]), np.column_stack([xs, alpha]), tf.opacity_unit_distance
         )
         white = TransferFunction1D(np.column_stack([xs, ramp, ramp, ramp]), np.column_stack([xs, alpha]))
-        want_diffuse = continuous_entries(ramped, [si], [sj], step)[0, :3]
-        want_specular = continuous_entries(white, [si], [sj], step)[0, 0]
+        want_diffuse = segment_rgba(ramped, [si], [sj], step)[0, :3]
+        want_specular = segment_rgba(white, [si], [sj], step)[0, 0]
         np.testing.assert_allclose(lit.diffuse_back[i, j], want_diffuse, atol=2e-5)
         assert lit.specular_back[i, j] == pytest.approx(want_specular, abs=2e-5)
 

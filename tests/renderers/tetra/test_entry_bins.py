@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from volren.kernels.tet_projection import pixel_coordinates
 from volren.model.camera import Camera
-from volren.renderers.reference.tets import pixel_coordinates
 from volren.renderers.tetra.entry_bins import (
     MARGIN,
     bin_tiles,

@@ -171,7 +171,7 @@ def test_spx_against_the_cpu_walk_and_the_reference(shared_data):
     assert gl_counters["walks_cut"] == 0
     assert rmse(gl, cpu) < 2e-4
     assert rmse(gl, reference) < 3e-3
-    # no holes or streaks: the same pixels as the CPU walk, whose exact path covers the reference's
+    # no holes or streaks: the same pixels as the CPU walk, whose segments are the reference's
     # (test_tetra); the table's blur of the spikes shows 4 faint pixels (alpha 0.01-0.08) on both
     assert np.array_equal(gl[..., 3] > 0.01, cpu[..., 3] > 0.01)
 
@@ -225,8 +225,8 @@ def test_options(kuhn):
     mesh, tf, camera = kuhn
     with pytest.raises(VolrenError, match="backend"):
         render("tetra", mesh, tf, camera, 8, options={"backend": "cuda"})
-    with pytest.raises(VolrenError, match="exact"):
-        render("tetra", mesh, tf, camera, 8, options={"backend": "gl", "integration": "exact"})
+    with pytest.raises(VolrenError, match="cpu backend only"):
+        render("tetra", mesh, tf, camera, 8, options={"backend": "gl", "image_stride": 4})
 
 
 def test_auto_uses_the_cpu_on_a_software_rasterizer(kuhn):

@@ -29,7 +29,7 @@ Composite (emission-absorption, premultiplied RGBA over black, front to back):
    alpha = 1 - exp(-tau_mean l),  C += T alpha c(s(u_e))  (c shaded when shading is on),
    T *= exp(-tau_mean l); the ray's alpha is 1 - T.
    - tau_mean is the exact mean of tau = -ln(1 - min(a, 1 - 1e-6)) / d_u over the piece's value
-     span (`tf_eval.mean_extinction`; the clamped opacity is linear there): exact for linear s
+     span (`volren.kernels.tf_eval.mean_extinction`; the clamped opacity is linear there): exact for linear s
      (tetrahedra), second order for cubic s, and without the first-order error that the
      logarithmic spike of tau near opacity 1 gives tau(s(midpoint)).
    - u_e = l (1/x - 1/(e^x - 1)), x = tau_mean l, is where a homogeneous piece emits on average
@@ -58,15 +58,15 @@ import math
 import numpy as np
 from numba import njit
 
-from volren.model.preintegration.segment_math import emission_centre
-from volren.renderers.reference.shading import half_vector, shade
-from volren.renderers.reference.tf_eval import (
+from volren.kernels.shading import half_vector, shade
+from volren.kernels.tf_eval import (
     color,
     interval_width,
     mean_extinction,
     opacity,
     opacity_line,
 )
+from volren.model.preintegration.segment_math import emission_centre
 
 COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
 

@@ -34,8 +34,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError, VolrenWarning
+from volren.kernels.row_blocks import run_in_row_blocks
+from volren.kernels.shading import shade_params
+from volren.kernels.tet_projection import bin_rows, projected_boxes, ray_far
+from volren.kernels.tf_eval import pack_tf
 from volren.model.camera import Camera
 from volren.model.settings import BlendMode
+from volren.model.tet_mesh import prepare_mesh
 from volren.model.volume import TetVolume, UniformVolume
 from volren.renderers.base import (
     Accuracy,
@@ -46,12 +51,9 @@ from volren.renderers.base import (
     RendererBase,
 )
 from volren.renderers.reference.ray_integral import AVERAGE, COMPOSITE, MAXIMUM, MINIMUM
-from volren.renderers.reference.shading import shade_params
-from volren.renderers.reference.tets import bin_rows, prepare_tets, projected_boxes, ray_far, render_tets
+from volren.renderers.reference.tets import render_tets
 from volren.renderers.reference.tf2d import pack_tf2d, render_uniform_2d
-from volren.renderers.reference.tf_eval import pack_tf
 from volren.renderers.reference.uniform import render_uniform
-from volren.renderers.row_blocks import run_in_row_blocks
 
 DEFAULT_TOLERANCE = 1e-5
 DEFAULT_MAX_LEVELS = 10
@@ -139,9 +141,7 @@ class ReferenceRenderer(RendererBase):
                 )
             else:
                 assert isinstance(vol, TetVolume)
-                values = np.ascontiguousarray(vol.values, dtype=np.float64)
-                faces = prepare_tets(vol.points, vol.tets, values)
-                self._prepared = (faces, vol.characteristic_length)
+                self._prepared = (prepare_mesh(vol), vol.characteristic_length)
         return self._prepared
 
     # ------------------------------------------------------------------------ render
@@ -188,10 +188,12 @@ class ReferenceRenderer(RendererBase):
                 )  # fmt: skip
 
         else:
-            (normals, anchors, sigma, tvals, grads, ok, flat), _ = prepared
-            boxes = projected_boxes(camera, width, height, vol.points, vol.tets, ok)
+            mesh, _ = prepared
+            p = mesh.planes
+            normals, anchors, sigma, tvals, grads = p.normals, p.anchors, p.sigma, p.values, p.gradients
+            boxes = projected_boxes(camera, width, height, mesh.points, mesh.tets, p.usable)
             extra["candidates"] = 0.0
-            extra["flat_or_nonfinite_tets"] = float(np.count_nonzero(~ok))
+            extra["flat_or_nonfinite_tets"] = float(np.count_nonzero(~p.usable))
 
             def kernel(a: int, b: int) -> None:
                 offsets, cand = bin_rows(boxes, width, a // width, b // width)

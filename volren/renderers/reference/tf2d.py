@@ -52,6 +52,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from volren.kernels.box_clipping import clip_box
+from volren.kernels.shading import half_vector, shade
 from volren.model.preintegration.segment_math import emission_centre
 from volren.model.transfer_function import MAX_OPACITY
 from volren.model.transfer_function_2d import TransferFunction2D
@@ -67,8 +69,7 @@ from volren.renderers.reference.ray_integral import (
     next_boundary,
     store_pixel,
 )
-from volren.renderers.reference.shading import half_vector, shade
-from volren.renderers.reference.uniform import build_intervals, clip_box
+from volren.renderers.reference.uniform import build_intervals
 
 GAUSSIAN, TRIANGLE, BOX = 0, 1, 2
 _TYPES = {"gaussian": GAUSSIAN, "triangle": TRIANGLE, "box": BOX}

@@ -31,10 +31,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.kernels.tet_projection import projected_boxes
 from volren.model.camera import Camera
 from volren.renderers.glsl import compile_program, load_shader
 from volren.renderers.opengl import GLObjectOwner, mat4_bytes, opengl_problem
-from volren.renderers.reference.tets import projected_boxes
 from volren.renderers.tetra.walked_cells import WalkedCells
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
@@ -134,7 +134,7 @@ class WalkParameters:
     """What a frame needs besides the camera (see `walk.comp.glsl`'s uniforms)."""
 
     blend: int                 # traversal.COMPOSITE ... AVERAGE
-    shade: tuple               # reference.shading.shade_params
+    shade: tuple               # volren.kernels.shading.shade_params
     lo: float                  # table index = (value - lo) * scale
     scale: float
     lmax: float

@@ -1,13 +1,13 @@
 """The `tetra` renderer: cell-to-cell ray casting through tetrahedral meshes (see `traversal`).
 
-Per volume: `model.tet_mesh.prepare_mesh` (face adjacency, cached by content hash) and the face
-planes of `reference.tets.prepare_tets` (bit-identical on both sides of every face). Per TF
+Per volume: `model.tet_mesh.prepare_mesh` (face adjacency and the face planes, bit-identical on
+both sides of every face; cached by content hash). Per TF
 version: the 3D pre-integration table over the mesh's value range and segment lengths up to its
 longest edge (`model.preintegration`), turned into optical depth per unit length and colour per
 unit opacity, the cells whose value range maps to zero opacity, and the boundary faces of the
 visible cells, which composite rays walk alone (`walked_cells`). Per frame: the entry faces binned
 to pixels, then the numba kernel over blocks of rows, or over the pixels adaptive refinement asks
-for (`image_refinement`), or the GL walk (`gl_walk`).
+for (`volren.kernels.image_refinement`), or the GL walk (`gl_walk`).
 
 Counters: cell_steps (cells walked through, summed over rays), cells_integrated, rays_hit,
 rays_cast, walks cut at max_steps, entries dropped (more boundary crossings along a ray than the
@@ -24,6 +24,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.kernels.camera_rays import image_rays, pixel_rays
+from volren.kernels.image_refinement import check_stride, refine_image
+from volren.kernels.row_blocks import parallel_chunk_size, run_in_row_blocks
+from volren.kernels.shading import shade_params
+from volren.kernels.tet_projection import bin_rows, pixel_coordinates, ray_far
 from volren.model.bricks import max_opacity_between
 from volren.model.camera import Camera
 from volren.model.preintegration import LengthAxis, preintegrate
@@ -38,12 +43,6 @@ from volren.renderers.base import (
     QualityLevel,
     RendererBase,
 )
-from volren.renderers.camera_rays import image_rays, pixel_rays
-from volren.renderers.image_refinement import check_stride, refine_image
-from volren.renderers.reference.shading import shade_params
-from volren.renderers.reference.tets import bin_rows, pixel_coordinates, prepare_tets, ray_far
-from volren.renderers.reference.tf_eval import pack_tf
-from volren.renderers.row_blocks import parallel_chunk_size, run_in_row_blocks
 from volren.renderers.tetra.entry_bins import (
     EntryFaces,
     bin_tiles,
@@ -98,8 +97,6 @@ class TetraRenderer(RendererBase):
         ),
     )
     option_help: ClassVar[Mapping[str, str]] = {
-        "integration": "table (default): 3D pre-integration table per segment; exact: every segment "
-        "integrated by the reference quadrature (slow, for comparison)",
         "table_size": "value entries per axis of the 3D table (default 256)",
         "table_lengths": "segment-length layers of the 3D table (default 32)",
         "termination_alpha": "opacity at which a ray stops (default 0.999; 1 never stops early)",
@@ -108,7 +105,7 @@ class TetraRenderer(RendererBase):
         "from a transparent run to the next visible cell (default true; false walks and integrates every "
         "cell, for comparison)",
         "backend": "auto (default): the GL compute-shader walk on a hardware GPU, else numba on the CPU; "
-        "cpu; gl (OpenGL 4.3 compute shaders, also on Mesa llvmpipe; table integration only)",
+        "cpu; gl (OpenGL 4.3 compute shaders, also on Mesa llvmpipe)",
         "image_stride": "1 (default): a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, "
         "rays every `image_stride` pixels first, more only where neighbouring rays differ by more than "
         "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features thinner "
@@ -160,7 +157,9 @@ class TetraRenderer(RendererBase):
             old = mesh.neighbors[order]
             neighbors = np.ascontiguousarray(np.where(old >= 0, rank[np.maximum(old, 0)], -1), dtype=np.int64)
             self._neighbor_faces = np.ascontiguousarray(mesh.neighbor_faces[order], dtype=np.int64)
-            planes = prepare_tets(mesh.points, tets, mesh.values)
+            p = mesh.planes
+            planes = tuple(np.ascontiguousarray(a[order]) for a in (p.normals, p.anchors, p.sigma, p.values,
+                                                                      p.gradients, p.usable))
             packed = pack_planes(planes[0], planes[1], planes[2])
             # flat and non-finite cells are holes the rays step over to the next entry
             usable = walked_cells(planes[5], tets, neighbors, packed)
@@ -211,7 +210,6 @@ class TetraRenderer(RendererBase):
     def _options(self) -> dict[str, Any]:
         o = dict(self._settings.options)
         opts = {
-            "integration": o.get("integration", "table"),
             "table_size": o.get("table_size", 256),
             "table_lengths": o.get("table_lengths", 32),
             "termination_alpha": o.get("termination_alpha", 0.999),
@@ -221,14 +219,10 @@ class TetraRenderer(RendererBase):
             "image_stride": o.get("image_stride", 1),
             "refine_tolerance": o.get("refine_tolerance", 0.02),
         }
-        if opts["integration"] not in ("table", "exact"):
-            raise VolrenError(f"tetra option integration must be table or exact, got {opts['integration']!r}")
         if opts["backend"] not in ("auto", "cpu", "gl"):
             raise VolrenError(f"tetra option backend must be auto, cpu or gl, got {opts['backend']!r}")
         if not isinstance(opts["skip_transparent"], bool):
             raise VolrenError(f"tetra option skip_transparent must be true or false, got {opts['skip_transparent']!r}")
-        if opts["backend"] == "gl" and opts["integration"] == "exact":
-            raise VolrenError("tetra option integration=exact runs on the cpu backend only (backend=cpu or auto)")
         check_stride(opts["image_stride"], "tetra option image_stride")
         if opts["backend"] == "gl" and opts["image_stride"] > 1:
             raise VolrenError("tetra option image_stride > 1 runs on the cpu backend only (backend=cpu or auto)")
@@ -273,11 +267,11 @@ class TetraRenderer(RendererBase):
 
     # ------------------------------------------------------------------------------ render
     def _uses_gl(self, opts: dict[str, Any]) -> bool:
-        """The GL walk when asked for, or on `auto` with table integration, a ray per pixel and a
+        """The GL walk when asked for, or on `auto` with a ray per pixel and a
         hardware GPU (on Mesa llvmpipe numba keeps float64, progress per block of rows and adaptive
         refinement: `docs/tetra-benchmark.md`)."""
         if opts["backend"] == "auto":
-            return opts["integration"] == "table" and opts["image_stride"] == 1 and gpu_renderer() is not None
+            return opts["image_stride"] == 1 and gpu_renderer() is not None
         return opts["backend"] == "gl"
 
     def _render(
@@ -295,8 +289,8 @@ class TetraRenderer(RendererBase):
         span = float(self._volume.value_range[1] - self._volume.value_range[0])  # type: ignore[union-attr]
         length = self._volume.characteristic_length  # type: ignore[union-attr]
         sp = shade_params(settings, camera, span, length)
-        # transparent cells only matter to projections and to the exact path's comparison
-        jump = opts["skip_transparent"] and mode == COMPOSITE and opts["integration"] == "table"
+        # transparent cells only matter to projections
+        jump = opts["skip_transparent"] and mode == COMPOSITE
         walked = self._walked_cells(usable, visible if jump else None)
         if self._uses_gl(opts):
             walk = self._gl_walk(mesh, tets, neighbors, packed, tvals, grads, usable)
@@ -345,9 +339,6 @@ class TetraRenderer(RendererBase):
         blocks of rows, or with image_stride > 1 adaptive refinement (`image_refinement`)."""
         tvals, grads = planes[3], planes[4]
         corner = self._corner
-        exact = opts["integration"] == "exact" and mode == COMPOSITE
-        length = self._volume.characteristic_length  # type: ignore[union-attr]
-        tf = pack_tf(self._tf)  # type: ignore[arg-type]
         faces, near_cells = self._entry_candidates(camera, width, height, mesh, tets, walked)
         totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
 
@@ -358,7 +349,7 @@ class TetraRenderer(RendererBase):
                 np.ascontiguousarray(origins), np.ascontiguousarray(dirs), np.ascontiguousarray(ray_far(camera, dirs)),
                 offsets, cand, walked.boundary, neighbors, packed, tvals, grads, corner, usable, walked.cells, visible,
                 depth, ratio, lo, scale, lmax, sp, mode, float(opts["termination_alpha"]), int(opts["max_steps"]),
-                self._on_plane(mesh), exact, float(self._settings.step) * length, 1e-5, 10, tf, out, stats,
+                self._on_plane(mesh), out, stats,
             )  # fmt: skip
             totals[:4] += stats.sum(axis=0)
             totals[4] += np.count_nonzero(stats[:, 0])

@@ -4,26 +4,26 @@ the CPU with numba.
 Per pixel ray:
 1. Entries. The boundary faces turned towards the eye are rasterized to the pixels they cover
    (`entry_bins`), and the cells the near plane cuts are binned by their pixel boxes
-   (`reference.tets.bin_rows`). Where a ray crosses a candidate cell's boundary face inside its
+   (`volren.kernels.tet_projection.bin_rows`). Where a ray crosses a candidate cell's boundary face inside its
    triangle, or starts inside the cell, it enters the mesh (`_entries`). Entries are sorted by
    their ray parameter.
 2. Walk. From an entry the ray leaves each tetrahedron through the face whose plane it meets first
    among those it heads out of (t = -a / b with b < 0), and enters the neighbour across that face.
-   The face planes come from `reference.tets.prepare_tets` (`pack_planes`): both tetrahedra of a
-   face hold exactly opposite planes, so the exit parameter of one is the entry parameter of the
-   other, with no gap and no overlap. A ray lying in a face plane belongs to one cell by a
-   symbolic perturbation; a ray through an edge or a vertex leaves the cells it only touches at
-   once (zero length) and walks around the edge or vertex to the cell it does enter.
+   The face planes come from the mesh preparation (`PreparedMesh.planes`, packed by
+   `pack_planes`): both tetrahedra of a face hold exactly opposite planes, so the exit parameter
+   of one is the entry parameter of the other, with no gap and no overlap. A ray lying in a face
+   plane belongs to one cell by a symbolic perturbation; a ray through an edge or a vertex leaves
+   the cells it only touches at once (zero length) and walks around the edge or vertex to the cell
+   it does enter.
 3. Leaving the mesh (a face with no neighbour, or one next to a flat or non-finite cell, which
    count as holes) ends the walk; the next entry beyond that point starts the next one, so
    non-convex meshes and holes are handled alike. A walk longer than `max_steps` cells stops and
    is counted.
-4. Each cell segment is integrated from its front value, back value and length: with the 3D
-   pre-integration table (`integrate_segment`), or exactly by handing every ray's segments to the
-   reference integrator. For compositing, the walk may run only through the cells the TF makes
-   visible (`walked_cells`): the entry faces are then the visible cells' boundary faces, and a walk
-   ends where it would run through a transparent cell, so the next entry jumps over the transparent
-   run. A ray stops once its opacity reaches the termination threshold.
+4. Each cell segment is integrated from its front value, back value and length with the 3D
+   pre-integration table (`integrate_segment`). For compositing, the walk may run only through the
+   cells the TF makes visible (`walked_cells`): the entry faces are then the visible cells'
+   boundary faces, and a walk ends where it would run through a transparent cell, so the next entry
+   jumps over the transparent run. A ray stops once its opacity reaches the termination threshold.
 """
 
 from __future__ import annotations
@@ -32,8 +32,6 @@ import math
 
 import numpy as np
 from numba import njit, prange
-
-from volren.renderers.reference.ray_integral import integrate_ray
 
 COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
 #: Entries kept per ray (more are counted and ignored; meshes with this many boundary crossings
@@ -200,30 +198,11 @@ def _entries(q, ox, oy, oz, dx, dy, dz, tmax, offsets, cand, planes, tvals, grad
     return count, dropped
 
 
-@njit(cache=True)
-def _grow(ta, tb, P, G, m):
-    """The exact path's segment arrays with twice the room, the first m rows kept."""
-    grow = 2 * ta.shape[0]
-    ta2 = np.empty(grow)
-    tb2 = np.empty(grow)
-    P2 = np.zeros((grow, 4))
-    G2 = np.zeros((grow if G.shape[0] else 0, 3, 4))
-    for i in range(m):
-        ta2[i] = ta[i]
-        tb2[i] = tb[i]
-        for c in range(4):
-            P2[i, c] = P[i, c]
-        if G.shape[0]:
-            for c in range(3):
-                G2[i, c, 0] = G[i, c, 0]
-    return ta2, tb2, P2, G2
-
-
 @njit(parallel=True, cache=True)
 def cast_rays(
     orig, dirs, tfar, offsets, cand, boundary, neighbors, planes, tvals, grads, corner, ok, walkable,
     visible, depth_per_length, colour_ratio, lo, scale, lmax, sp, mode, termination, max_steps, on_plane,
-    exact, h0, tol, max_levels, tf, out, stats,
+    out, stats,
 ):  # fmt: skip
     """One block of rays: out (n, 4) premultiplied RGBA (for maximum / minimum / average: the
     value in out[:, 0] and 1 in out[:, 1] where the ray met data); stats (n, 4) = cell steps,
@@ -264,13 +243,6 @@ def cast_rays(
         found = False
         integral = 0.0
         total = 0.0
-        # exact path: the segments, handed to the reference integrator at the end
-        cap = 64 if exact else 1
-        ta = np.empty(cap)
-        tb = np.empty(cap)
-        P = np.zeros((cap, 4))
-        G = np.zeros((cap if exact and sp[0] else 0, 3, 4))
-        m = 0
         steps = 0
         integrated = 0
         cut = 0
@@ -311,18 +283,6 @@ def cast_rays(
                             if not found or (mode == MAXIMUM and v > best) or (mode == MINIMUM and v < best):
                                 best = v
                         found = True
-                    elif exact:
-                        if m == ta.shape[0]:
-                            ta, tb, P, G = _grow(ta, tb, P, G, m)
-                        ta[m] = t_in
-                        tb[m] = t_out
-                        P[m, 0] = s_in
-                        P[m, 1] = (s_out - s_in) / length
-                        if sp[0]:
-                            G[m, 0, 0] = grads[t, 0]
-                            G[m, 1, 0] = grads[t, 1]
-                            G[m, 2, 0] = grads[t, 2]
-                        m += 1
                     elif visible[t]:
                         r, g, b, a = integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_in, s_out,
                                                        length)
@@ -359,14 +319,6 @@ def cast_rays(
             if found:
                 out[q, 0] = integral / total if mode == AVERAGE else best
                 out[q, 1] = 1.0
-        elif exact:
-            if m > 0:
-                result = integrate_ray(ta, tb, P, G, m, COMPOSITE, h0, tol, max_levels, tf, sp, dx, dy, dz)
-                out[q, 0] = result[0]
-                out[q, 1] = result[1]
-                out[q, 2] = result[2]
-                out[q, 3] = result[3]
-                stats[q, 1] = m
         else:
             out[q, 0] = cr
             out[q, 1] = cg

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from volren.errors import VolrenError
-from volren.renderers.image_refinement import check_stride, refine_image
+from volren.kernels.image_refinement import check_stride, refine_image
 
 
 class Caster:

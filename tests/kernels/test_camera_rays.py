@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from volren.kernels.camera_rays import image_rays, pixel_rays
 from volren.model.camera import Camera
-from volren.renderers.camera_rays import image_rays, pixel_rays
 
 
 @pytest.mark.parametrize("parallel", [False, True])

@@ -1,0 +1,19 @@
+"""CPU kernels (numpy and numba) that renderers and the app share, and nothing renderer-specific.
+
+Why: the reference renderer defines the truth, so the renderers it judges must not borrow its
+internals; what several of them need lives here, neutral, and is tested on its own:
+
+- `camera_rays`: the rays through many pixel centres in one numba pass;
+- `row_blocks`: a frame rendered in blocks of rows, with progress after each;
+- `image_refinement`: image-space adaptive refinement (rays on a coarse grid, more where needed);
+- `tf_eval`: exact evaluation of a 1D transfer function inside kernels (`pack_tf`);
+- `shading`: the Blinn-Phong headlight of DESIGN.md's optical model;
+- `tet_projection`: tetrahedra projected to pixel boxes and binned per pixel;
+- `tet_clipping`: a ray clipped against one tetrahedron's face planes, exact at shared faces;
+- `box_clipping`: a ray clipped to a box (slab test).
+
+The tetrahedra's face planes themselves are part of the one mesh preparation,
+`volren.model.tet_mesh.prepare_mesh` (`PreparedMesh.planes`). Each renderer keeps its own
+integrator. Kernels import only `volren.model`, `volren.errors` and the contract in
+`volren.renderers.base` (tested in tests/test_import_rules.py).
+"""
