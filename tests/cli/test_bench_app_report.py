@@ -1,8 +1,7 @@
-"""`volren bench app` (the app's latency, on a bundled sample) and BENCHMARKS.md's assembly."""
+"""`volren bench app`: the app's latency, on a bundled sample."""
 
 from __future__ import annotations
 
-import datetime
 import math
 import os
 import tempfile
@@ -33,17 +32,3 @@ def test_app_latency_measures_frames_on_a_sample(qapp):
     w, h = timing.preview_size
     assert 0 < w < app_latency.VIEWPORT[0] and 0 < h < app_latency.VIEWPORT[1]
     assert app_latency.markdown_row(timing).count("|") == app_latency.HEADER.splitlines()[0].count("|")
-
-
-def test_benchmarks_md_collects_the_fragments_and_relinks_plots(tmp_path):
-    from volren.bench import report
-
-    out = tmp_path / "docs" / "bench"
-    out.mkdir(parents=True)
-    (out / "summary.md").write_text("ratio 0.3\n\n![engine](engine.png)\n")
-    (out / "stress.md").write_text("0 NaN\n")
-    text = report.compose(out, tmp_path, date=datetime.date(2026, 11, 22), command="volren bench all")
-    assert "Measured 2026-11-22" in text and "`volren bench all`" in text
-    assert "![engine](docs/bench/engine.png)" in text
-    assert text.index("## Run time against error") < text.index("## Numerical stress")
-    assert "Not in this run: skip.md, app.md, gpu.md." in text

@@ -19,7 +19,6 @@ from tests.renderers.test_reference import (
     optical_depth_linear_opacity,
     render,
 )
-from volren.bench.reference_cache import reference_image, scene_key
 from volren.errors import VolrenError
 from volren.model import (
     Camera,
@@ -33,6 +32,7 @@ from volren.model import (
 from volren.renderers.reference import ReferenceRenderer
 from volren.renderers.reference.tf2d import eval_tf2d, pack_tf2d
 from volren.testing.oracles import box_path_lengths
+from volren.testing.reference_images import reference_image, scene_key
 
 RED, BLUE, WHITE = (1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (1.0, 1.0, 1.0)
 

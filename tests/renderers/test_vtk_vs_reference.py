@@ -20,11 +20,11 @@ import numpy as np
 import pytest
 
 from tests.conftest import load_scene_tf
-from volren.bench.reference_cache import reference_image
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.renderers.registry import registry
 from volren.testing.metrics import image_error
+from volren.testing.reference_images import reference_image
 
 pytestmark = [pytest.mark.vtk, pytest.mark.slow, pytest.mark.usefixtures("opengl")]
 

@@ -204,7 +204,7 @@ def markdown_row(t: AppTiming) -> str:
 def scene_inputs(shared: Path, dataset: str, style: str):
     """The volume and TF of a shared scene (../shared/scenes/<dataset>-<style>.json)."""
     from volren import io
-    from volren.bench.vtk_vs_reference import SCENES
+    from volren.bench.datasets import SCENES
 
     path, scalars = SCENES[dataset][0], SCENES[dataset][1]
     volume = io.load_volume(shared / "data" / path, scalars=scalars)

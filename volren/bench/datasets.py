@@ -1,7 +1,7 @@
 """The scenes `volren bench run` measures: the shared datasets with their TFs, and the bundled samples.
 
-A shared dataset comes with one TF per style in ../shared/scenes (`<dataset>-<style>.json`) and the
-camera of shared/scenes/README.md (`vtk_vs_reference.SCENES`); a bundled sample (`volren.samples`)
+A shared dataset comes with one TF per style in the shared folder's scenes/ (`<dataset>-<style>.json`) and the
+camera of shared/scenes/README.md (`SCENES`); a bundled sample (`volren.samples`)
 comes with its own TF, style `sample`, seen from azimuth 30 and elevation 20 like the others.
 Volumes load lazily, one dataset at a time, so a run holds one large mesh at most.
 """
@@ -9,16 +9,47 @@ Volumes load lazily, one dataset at a time, so a run holds one large mesh at mos
 from __future__ import annotations
 
 import json
+import os
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from volren.bench.vtk_vs_reference import SCENES, STYLES
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import Volume
 from volren.samples import SAMPLES, sample_paths
+
+#: dataset -> (file under shared/data, scalars, azimuth, elevation, zoom), from shared/scenes/README.md
+SCENES = {
+    "ironProt": ("uniform/ironProt.vtk", "scalars", 30, 20, 1.0),
+    "bonsai": ("uniform/bonsai.vti", "ImageFile", 30, 20, 1.0),
+    "engine": ("uniform/engine.vti", "ImageFile", 30, 20, 1.0),
+    "aneurism": ("uniform/aneurism.vti", "ImageFile", 30, 20, 1.0),
+    "spx": ("tets/spx.vtk", "scalars", 30, 20, 1.0),
+    "bluntfin": ("tets/bluntfin_tets.vtu", "Density", 30, 20, 1.4),
+    "oxygen": ("tets/oxygen_post_tets.vtu", "VelocityMagnitude", 30, 45, 1.3),
+}
+STYLES = ("smooth", "spiky", "opaque")
+
+#: Where the shared datasets are when no --shared is given.
+SHARED_ENV = "VOLREN_SHARED"
+
+
+def shared_folder(flag: str | os.PathLike | None, required: bool = True) -> Path | None:
+    """The folder with data/ and scenes/: the --shared flag, else $VOLREN_SHARED. Without either
+    (or when it lacks those folders) a one-line error, or None when not `required`."""
+    text = flag if flag is not None else os.environ.get(SHARED_ENV)
+    if not text:
+        if required:
+            raise VolrenError(f"no shared data folder given (--shared DIR or ${SHARED_ENV})")
+        return None
+    shared = Path(text).expanduser()
+    if not ((shared / "data").is_dir() and (shared / "scenes").is_dir()):
+        if required or flag is not None:
+            raise VolrenError(f"{shared}: no data/ and scenes/ folders there (--shared DIR or ${SHARED_ENV})")
+        return None
+    return shared
 
 #: What --quick measures: one small grid and one small mesh, both bundled.
 QUICK_DATASETS = ("marschner_lobb", "hollow_cylinder")

@@ -5,7 +5,7 @@ Timing: one warm-up frame at the scene's view (shader compilation, uploads, tabl
 (-2, 0, +2, ... for three frames), so no renderer can reuse the last frame's per-view work; the
 time is their median. Error: DESIGN.md's RMSE and max abs of the timed frame at the scene's own
 view (offset 0 is always among the turns) against `reference` at that view, from the on-disk
-reference cache (`reference_cache`), so each scene needs one reference image per size, ever.
+reference cache (`volren.testing.reference_images`), so each scene needs one reference image per size, ever.
 Curves in `sweep.ONE_FRAME_CURVES` (VTK's ZSweep) time one frame at the scene's view, with no
 warm-up: at 30-80 s a frame, a warm-up and a median would cost minutes per scene.
 
@@ -25,7 +25,6 @@ from numpy.typing import NDArray
 
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset
-from volren.bench.reference_cache import reference_image
 from volren.bench.sweep import Config
 from volren.errors import VolrenError
 from volren.model.camera import Camera
@@ -33,6 +32,7 @@ from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import Volume
 from volren.renderers.base import Renderer, render_frame
 from volren.testing.metrics import image_error
+from volren.testing.reference_images import reference_image
 
 COLUMNS = (
     "dataset", "kind", "tf", "renderer", "settings", "step", "preintegration", "table_size", "table_lengths",

@@ -165,7 +165,7 @@ class Scene:
 
 def scene_kind(dataset: str, samples: bool = False) -> str:
     """The volume kind of a shared dataset (or bundled sample) before it is loaded."""
-    from volren.bench.vtk_vs_reference import SCENES
+    from volren.bench.datasets import SCENES
     from volren.samples import SAMPLES
 
     if samples:
@@ -175,7 +175,7 @@ def scene_kind(dataset: str, samples: bool = False) -> str:
 
 def shared_scenes(shared: Path, datasets: Iterable[str], styles: Sequence[str]) -> Iterator[Scene]:
     """The scenes of ../shared/scenes, each dataset loaded once, when its turn comes."""
-    from volren.bench.vtk_vs_reference import SCENES
+    from volren.bench.datasets import SCENES
     from volren.io import load_volume
 
     for dataset in datasets:
@@ -212,7 +212,7 @@ def plan(
     quick: bool,
 ) -> tuple[list[str], Iterator[Scene]]:
     """(volume kind of every scene, the scenes, loaded lazily) for the command line's choices."""
-    from volren.bench.vtk_vs_reference import SCENES, STYLES
+    from volren.bench.datasets import SCENES, STYLES
     from volren.samples import SAMPLES
 
     if samples:

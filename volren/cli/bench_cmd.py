@@ -1,7 +1,9 @@
-"""`volren bench ...`: benchmarks that print numbers (medians of several runs), never pass/fail.
+"""`volren bench run|skip|stress|app`: benchmarks that print numbers (medians of several runs).
 
-`volren bench preint` measures the pre-integration tables (`volren.bench.preint`); `volren bench
-slicer` times `slicer` and `vtk` against `reference` on the shared scenes (`volren.bench.slicer_table`).
+`run` sweeps every renderer's quality settings (time against error), `skip` switches each skipping
+technique on and off, `stress` feeds extreme input, `app` times the desktop app. The shared
+datasets are found with --shared or $VOLREN_SHARED. The experiments behind the docs (pre-integration
+tables, slicer settings, GPU runs, BENCHMARKS.md) are scripts in the repository's benchmarks/.
 """
 
 from __future__ import annotations
@@ -10,120 +12,17 @@ import argparse
 import math
 from pathlib import Path
 
+from volren.bench.datasets import shared_folder
 from volren.errors import VolrenError
-
-
-def _int_list(minimum: int):
-    """argparse type: comma-separated whole numbers >= minimum."""
-
-    def parse(text: str) -> list[int]:
-        try:
-            values = [int(v) for v in text.split(",") if v.strip()]
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected comma-separated whole numbers, got {text!r}") from None
-        if not values or min(values) < minimum:
-            raise argparse.ArgumentTypeError(f"expected whole numbers >= {minimum}, got {text!r}")
-        return values
-
-    return parse
-
-
-def _shared_path(text: str | None) -> Path:
-    """The --shared folder, or ../shared beside the repository."""
-    return Path(text) if text else Path(__file__).resolve().parents[2].parent / "shared"
-
-
-def _has_data(shared: Path) -> bool:
-    return (shared / "data").is_dir() and (shared / "scenes").is_dir()
-
-
-def _shared(text: str | None) -> Path:
-    """The shared folder with data/ and scenes/, or a one-line error."""
-    shared = _shared_path(text)
-    if not _has_data(shared):
-        raise VolrenError(f"{shared}: no data/ and scenes/ folders there (give --shared)")
-    return shared
 
 
 def add_parser(sub) -> None:
     bench = sub.add_parser("bench", help="benchmarks (print tables of times and errors)")
     kinds = bench.add_subparsers(dest="bench", metavar="BENCHMARK", required=True)
-    p = kinds.add_parser("preint", help="pre-integration tables: seconds and max error per table size")
-    p.add_argument("--tf", help="transfer-function JSON (default: ../shared/scenes/engine-spiky.json if present)")
-    p.add_argument("--sizes", type=_int_list(2), default=None, help="table sizes n (default 32,64,...,4096)")
-    p.add_argument("--step", type=float, default=0.5, help="segment length in world units (default 0.5)")
-    p.add_argument("--lengths", type=int, default=64, help="lengths of the 3D table (default 64)")
-    p.add_argument("--entries", type=int, default=500, help="random entries checked per size (default 500)")
-    p.add_argument("--repeats", type=int, default=5, help="timed runs per table, median reported (default 5)")
-    p.add_argument("--brute-limit", type=float, default=60.0, help="skip brute force predicted above this many s")
-    p.add_argument("--oversampling", type=_int_list(1), default=None, help="n_t factors for the error table (1,2,4,8)")
-    p.add_argument("--error-sizes", type=_int_list(2), default=None, help="sizes for the error table (64,256,1024)")
-    p.add_argument("--out", help="also write the tables to this Markdown file")
-    p.set_defaults(run=run_preint)
-    s = kinds.add_parser("slicer", help="slicer and vtk: ms per frame and RMSE against reference per step")
-    s.add_argument("--shared", help="the shared folder with data/ and scenes/ (default: ../shared beside the repo)")
-    s.add_argument("--datasets", default="bonsai,engine", help="comma-separated (default bonsai,engine)")
-    s.add_argument("--styles", default="smooth,spiky,opaque", help="TF styles (default smooth,spiky,opaque)")
-    s.add_argument("--steps", default="1,0.5,0.25", help="sample steps (default 1,0.5,0.25)")
-    s.add_argument("--paths", default="march", help="slicer paths: march, slices or both (default march)")
-    s.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
-    s.add_argument("--frames", type=int, default=5, help="timed frames per setting, median reported (default 5)")
-    s.add_argument("--out", help="also write the table to this Markdown file")
-    s.set_defaults(run=run_slicer)
     add_skip_parser(kinds)
     add_run_parser(kinds)
     add_stress_parser(kinds)
     add_app_parsers(kinds)
-
-
-def run_preint(args: argparse.Namespace) -> int:
-    import numba
-    from tqdm import tqdm
-
-    from volren import io
-    from volren.bench import preint
-
-    for name in ("step", "lengths", "entries", "repeats"):
-        value = getattr(args, name)
-        if not (value > 0 and math.isfinite(value)):
-            raise VolrenError(f"--{name} must be positive and finite, got {value}")
-    tf_path = Path(args.tf) if args.tf else preint.default_tf_path()
-    tf = io.load_transfer_function(tf_path)
-    sizes = args.sizes or list(preint.DEFAULT_SIZES)
-    rows = []
-    with tqdm(total=len(sizes), desc="table sizes", leave=False) as bar:
-        for row in preint.size_rows(
-            tf, sizes, args.step, args.lengths, args.entries, args.repeats, args.brute_limit
-        ):
-            rows.append(row)
-            bar.set_postfix_str(f"n={row.n}")
-            bar.update()
-    errors = preint.oversampling_errors(
-        tf,
-        args.error_sizes or list(preint.DEFAULT_ERROR_SIZES),
-        args.oversampling or list(preint.DEFAULT_OVERSAMPLING),
-        args.step,
-        args.entries,
-    )
-    lo, hi = tf.value_range
-    text = "\n\n".join(
-        [
-            f"Pre-integration tables for {tf_path.name} over [{lo:g}, {hi:g}], segment length {args.step:g}, "
-            f"{numba.get_num_threads()} threads; times are medians of {args.repeats} runs after a warm-up "
-            f"(brute force: one run); errors are max abs over {args.entries} random entries (RGBA) against "
-            "the continuous integral.",
-            preint.format_size_table(rows, args.lengths),
-            "Max error of the exact table against the continuous integral by table size n and TF bins n_t - 1:",
-            preint.format_oversampling_table(errors),
-        ]
-    )
-    print(text)
-    if args.out:
-        try:
-            Path(args.out).write_text(text + "\n")
-        except OSError as exc:
-            raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
-    return 0
 
 
 def _float_list(text: str, what: str) -> list[float]:
@@ -136,53 +35,11 @@ def _float_list(text: str, what: str) -> list[float]:
     return values
 
 
-def run_slicer(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
-    from volren.bench import slicer_table
-    from volren.bench.vtk_vs_reference import SCENES
-
-    shared = _shared(args.shared)
-    datasets = [d for d in args.datasets.split(",") if d]
-    unknown = [d for d in datasets if d not in SCENES or SCENES[d][0].startswith("tets/")]
-    if unknown:
-        grids = ", ".join(n for n, s in SCENES.items() if not s[0].startswith("tets/"))
-        raise VolrenError(f"unknown or non-uniform datasets {unknown}; choose from {grids}")
-    steps = _float_list(args.steps, "--steps")
-    paths = [p for p in args.paths.split(",") if p]
-    if not paths or any(p not in ("march", "slices") for p in paths):
-        raise VolrenError(f"--paths must name march and/or slices, got {args.paths!r}")
-    if args.size < 8 or args.frames < 1:
-        raise VolrenError("--size must be at least 8 and --frames at least 1")
-    styles = [s for s in args.styles.split(",") if s]
-    total = len(datasets) * len(styles) * len(slicer_table.configs(steps, paths))
-    lines = [slicer_table.HEADER]
-    print(slicer_table.HEADER)
-    with tqdm(total=total, desc="settings", leave=False) as bar:
-
-        def report(row: dict) -> None:
-            line = slicer_table.markdown_row(row)
-            lines.append(line)
-            tqdm.write(line)
-            bar.update()
-
-        rows = slicer_table.run(shared, datasets, styles, steps, paths, args.size, args.frames, report)
-    ratios = [slicer_table.RATIO_HEADER, *slicer_table.equal_error_rows(rows)]
-    lines += ["", *ratios]
-    print("\n" + "\n".join(ratios))
-    if args.out:
-        try:
-            Path(args.out).write_text("\n".join(lines) + "\n")
-        except OSError as exc:
-            raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
-    return 0
-
-
 def add_skip_parser(kinds) -> None:
-    """`bench skip` (issue 7): each skipping technique on and off per renderer (volren.bench.skipping)."""
+    """`bench skip`: each skipping technique on and off per renderer (volren.bench.skipping)."""
     k = kinds.add_parser("skip", help="skipping techniques on and off: ms, work counters, image change")
-    k.add_argument("--shared", help="the folder with data/ and scenes/ (default: ../shared beside the repo)")
-    k.add_argument("--samples", action="store_true", help="the bundled samples instead of ../shared")
+    k.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
+    k.add_argument("--samples", action="store_true", help="the bundled samples instead of the shared datasets")
     k.add_argument("--datasets", help="comma-separated (default: every shared dataset, or every sample)")
     k.add_argument("--styles", help="TF styles (default smooth,spiky,opaque)")
     k.add_argument("--renderers", default="slicer,tetra,vtk", help="comma-separated (default: all three)")
@@ -211,7 +68,7 @@ def run_skip(args: argparse.Namespace) -> int:
     if not renderers or set(renderers) - set(skipping.RENDERERS):
         names = ", ".join(skipping.RENDERERS)
         raise VolrenError(f"--renderers must name some of {names}, got {args.renderers!r}")
-    shared = _shared_path(args.shared)
+    shared = None if args.samples else shared_folder(args.shared)
     kinds, scenes = skipping.plan(shared, args.samples, args.datasets, args.styles, args.quick)
     base = RenderSettings(step=args.step, preintegration=args.preintegration)
     print(skipping.HEADER)
@@ -240,13 +97,13 @@ def run_skip(args: argparse.Namespace) -> int:
     return 0
 
 
-# --------------------------------------------------------------------------- bench run (issue 7)
+# --------------------------------------------------------------------------------------- bench run
 def add_run_parser(kinds) -> None:
     r = kinds.add_parser("run", help="every renderer and quality setting: ms against error, CSV, plots")
     r.add_argument("--quick", action="store_true",
                    help="128x128, two bundled samples, 3 frames, a few settings per renderer (for CI)")
     r.add_argument("--out", default="bench-run", help="folder for runs.csv, <dataset>.png, summary.md")
-    r.add_argument("--shared", help="the folder with data/ and scenes/ (default: ../shared beside the repo)")
+    r.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     r.add_argument("--datasets", help="comma-separated (default: every shared dataset and bundled sample)")
     r.add_argument("--tfs", help="TF styles to keep, e.g. smooth,spiky (default: all)")
     r.add_argument("--renderers", help="curves to run, e.g. slicer,vtk-gpu,tetra,vtk-raycast, or any registered "
@@ -275,9 +132,7 @@ def run_run(args: argparse.Namespace) -> int:
         raise VolrenError("--size must be at least 8, --frames at least 1 and --turn finite and >= 0")
     steps = _float_list(args.steps, "--steps") if args.steps else None
     curves = sweep.check_curves(_names(args.renderers)) if args.renderers else None
-    shared = _shared(args.shared) if args.shared else _shared_path(None)
-    if not _has_data(shared):
-        shared = None  # the default folder is absent: bundled samples only
+    shared = shared_folder(args.shared, required=False)  # none: the bundled samples only
     chosen = datasets.select(_names(args.datasets), shared, args.quick)
     styles = _names(args.tfs)
 
@@ -321,7 +176,7 @@ def run_run(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------ bench stress (issue 7)
+# ------------------------------------------------------------------------------------ bench stress
 def add_stress_parser(kinds) -> None:
     """`bench stress`: NaN/Inf/out-of-range pixels and error against reference on extreme input."""
     t = kinds.add_parser("stress", help="numerical stability: NaN/Inf/out-of-range counts on extreme input")
@@ -389,9 +244,9 @@ def run_stress(args: argparse.Namespace) -> int:
 
 
 def add_app_parsers(kinds) -> None:
-    """`bench app` (the desktop app's latency and frame rate) and `bench all` (BENCHMARKS.md)."""
+    """`bench app`: the desktop app's latency and frame rate."""
     a = kinds.add_parser("app", help="desktop app: TF edit -> new frame latency, frames per second rotating")
-    a.add_argument("--shared", help="the folder with data/ and scenes/ (default: ../shared beside the repo)")
+    a.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     a.add_argument("--datasets", default="ironProt,bonsai", help="comma-separated (default ironProt,bonsai)")
     a.add_argument("--renderers", default="slicer,vtk", help="comma-separated (default slicer,vtk)")
     a.add_argument("--style", default="smooth", help="TF style of the scenes (default smooth)")
@@ -399,20 +254,13 @@ def add_app_parsers(kinds) -> None:
     a.add_argument("--seconds", type=float, default=3.0, help="length of each drag gesture (default 3 s)")
     a.add_argument("--out", help="folder to write app.md into")
     a.set_defaults(run=run_app)
-    b = kinds.add_parser("all", help="run, skip, stress and app into one folder, then write BENCHMARKS.md")
-    b.add_argument("--out", default="docs/bench", help="folder for every result (default docs/bench)")
-    b.add_argument("--markdown", default="BENCHMARKS.md", help="the summary file (default BENCHMARKS.md)")
-    b.add_argument("--shared", help="the folder with data/ and scenes/ (default: ../shared beside the repo)")
-    b.add_argument("--run-args", default="", help="extra arguments for `bench run`, e.g. '--steps 1,0.5'")
-    b.add_argument("--only", default="run,skip,stress,app", help="which benchmarks to run (default: all four)")
-    b.set_defaults(run=run_all)
 
 
 def run_app(args: argparse.Namespace) -> int:
     from volren.bench import app_latency
-    from volren.bench.vtk_vs_reference import SCENES
+    from volren.bench.datasets import SCENES
 
-    shared = _shared(args.shared)
+    shared = shared_folder(args.shared)
     datasets = [d for d in args.datasets.split(",") if d]
     unknown = [d for d in datasets if d not in SCENES]
     if unknown:
@@ -441,37 +289,3 @@ def run_app(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_all(args: argparse.Namespace) -> int:
-    """Every benchmark into one folder, then BENCHMARKS.md from their fragments (volren.bench.report)."""
-    import shlex
-    import time
-
-    from volren.bench import report
-    from volren.cli.main import main
-
-    out = Path(args.out)
-    shared = ["--shared", args.shared] if args.shared else []
-    commands = {
-        "run": ["bench", "run", "--out", str(out), *shared, *shlex.split(args.run_args)],
-        "skip": ["bench", "skip", "--out", str(out), *shared],
-        "stress": ["bench", "stress", "--out", str(out)],
-        "app": ["bench", "app", "--out", str(out), *shared],
-    }
-    chosen = [c for c in args.only.split(",") if c]
-    unknown = set(chosen) - set(commands)
-    if unknown:
-        raise VolrenError(f"--only names unknown benchmarks {sorted(unknown)}; choose from {', '.join(commands)}")
-    status = 0
-    for name in chosen:
-        start = time.perf_counter()
-        code = main(commands[name])
-        print(f"bench {name}: exit {code} after {time.perf_counter() - start:.0f} s", flush=True)
-        status = status or code
-    markdown = Path(args.markdown)
-    command = "volren bench all --out " + str(out) + (f" --run-args {shlex.quote(args.run_args)}" if args.run_args else "")
-    try:
-        markdown.write_text(report.compose(out, markdown.resolve().parent, command=command))
-    except OSError as exc:
-        raise VolrenError(f"{markdown}: cannot write: {exc.strerror or exc}") from None
-    print(f"wrote {markdown}")
-    return status

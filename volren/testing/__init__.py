@@ -7,7 +7,9 @@ From the command line: ``volren check-renderer NAME [--quick]``. From a plugin's
     test_conformance = conformance_test(MyRenderer, quick=True)   # one test per check
 
 The checks compare against closed forms (`oracles`) on small scenes (`scenes`), so they need no
-reference run; `metrics.image_error` is DESIGN.md's error metric.
+reference run; `metrics.image_error` is DESIGN.md's error metric. Where an exact oracle does
+not exist, `reference_images` gives the `reference` renderer's image of a scene (through the
+public API), cached on disk by a hash of everything that determines it.
 """
 
 from volren.testing.checks import CHECKS, Check, CheckContext, ContractError, Measurement

@@ -1,6 +1,6 @@
 """The pre-integration table cache: hits return the very same read-only object, every input the
 table depends on is part of the key, memory stays within its byte budget (LRU), and concurrent
-requests compute a table once. No timings here: speed is measured by `volren bench preint`."""
+requests compute a table once. No timings here: speed is measured by `python -m benchmarks.preint`."""
 
 from __future__ import annotations
 

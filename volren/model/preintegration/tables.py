@@ -13,7 +13,7 @@ bins that carry the TF's exact mean extinction and emission; an entry composites
 value span covers, each as a homogeneous slab of the entry's length divided among them. The
 optical depth (hence the opacity) is exact for any n; the colour treats each bin as homogeneous,
 an error that falls as n_t^-2 and grows with the optical depth of one bin (measured by
-`volren bench preint` and tests/model/preintegration/test_accuracy.py). It depends on n_t, not
+`python -m benchmarks.preint` and tests/model/preintegration/test_accuracy.py). It depends on n_t, not
 on n, so `oversampling` (by default enough for n_t >= AUTO_MIN_ENTRIES) makes a small table exact at
 its entries to the same degree as a large one. The diagonal is the homogeneous segment's closed
 form: alpha = 1 - exp(-tau(s) L), colour = c(s) alpha.

@@ -1,4 +1,4 @@
-"""`volren bench preint`: time and accuracy of the pre-integration tables (seed 000's Table 1).
+"""`python -m benchmarks.preint`: time and accuracy of the pre-integration tables (seed 000's Table 1).
 
 For each table size n: seconds for the brute-force O(n^3) table (only where the previous size
 predicts it finishes within the limit), the exact O(n^2) table (incremental subrange
@@ -12,7 +12,10 @@ as a function of n and n_t (oversampling). Also the time of a repeated (cached) 
 
 from __future__ import annotations
 
+import argparse
+import math
 import statistics
+import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
@@ -22,6 +25,9 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from benchmarks._cli import int_list, run
+from volren.bench.datasets import shared_folder
+from volren.errors import VolrenError
 from volren.model.preintegration import (
     LengthAxis,
     TableCache,
@@ -33,6 +39,7 @@ from volren.model.preintegration import (
 from volren.model.preintegration.tables import MAX_TABLE_BYTES
 from volren.model.transfer_function import TransferFunction1D
 from volren.renderers.reference import segment_rgba
+from volren.samples import sample_paths
 
 T = TypeVar("T")
 
@@ -209,11 +216,77 @@ def format_oversampling_table(errors: dict[tuple[int, int], float]) -> str:
 
 
 def default_tf_path() -> Path:
-    """The engine's spiky TF from ../shared/scenes when present (two opacity spikes narrower than
-    the bins of small tables), else the bundled Marschner-Lobb sample's TF."""
-    shared = Path(__file__).resolve().parents[2].parent / "shared" / "scenes" / "engine-spiky.json"
-    if shared.is_file():
-        return shared
-    from volren.samples import sample_paths
-
+    """The engine's spiky TF from the shared scenes when $VOLREN_SHARED names them (two opacity
+    spikes narrower than the bins of small tables), else the bundled Marschner-Lobb sample's TF."""
+    shared = shared_folder(None, required=False)
+    if shared is not None and (shared / "scenes" / "engine-spiky.json").is_file():
+        return shared / "scenes" / "engine-spiky.json"
     return sample_paths("marschner_lobb")[1]
+
+
+def run_tables(args: argparse.Namespace) -> int:
+    import numba
+    from tqdm import tqdm
+
+    from volren import io
+
+    for name in ("step", "lengths", "entries", "repeats"):
+        value = getattr(args, name)
+        if not (value > 0 and math.isfinite(value)):
+            raise VolrenError(f"--{name} must be positive and finite, got {value}")
+    tf_path = Path(args.tf) if args.tf else default_tf_path()
+    tf = io.load_transfer_function(tf_path)
+    sizes = args.sizes or list(DEFAULT_SIZES)
+    rows = []
+    with tqdm(total=len(sizes), desc="table sizes", leave=False) as bar:
+        for row in size_rows(
+            tf, sizes, args.step, args.lengths, args.entries, args.repeats, args.brute_limit
+        ):
+            rows.append(row)
+            bar.set_postfix_str(f"n={row.n}")
+            bar.update()
+    errors = oversampling_errors(
+        tf,
+        args.error_sizes or list(DEFAULT_ERROR_SIZES),
+        args.oversampling or list(DEFAULT_OVERSAMPLING),
+        args.step,
+        args.entries,
+    )
+    lo, hi = tf.value_range
+    text = "\n\n".join(
+        [
+            f"Pre-integration tables for {tf_path.name} over [{lo:g}, {hi:g}], segment length {args.step:g}, "
+            f"{numba.get_num_threads()} threads; times are medians of {args.repeats} runs after a warm-up "
+            f"(brute force: one run); errors are max abs over {args.entries} random entries (RGBA) against "
+            "the continuous integral.",
+            format_size_table(rows, args.lengths),
+            "Max error of the exact table against the continuous integral by table size n and TF bins n_t - 1:",
+            format_oversampling_table(errors),
+        ]
+    )
+    print(text)
+    if args.out:
+        try:
+            Path(args.out).write_text(text + "\n")
+        except OSError as exc:
+            raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m benchmarks.preint", description="pre-integration tables: seconds and max error per table size")
+    p.add_argument("--tf", help="transfer-function JSON (default: engine-spiky.json of $VOLREN_SHARED, else the Marschner-Lobb sample TF)")
+    p.add_argument("--sizes", type=int_list(2), default=None, help="table sizes n (default 32,64,...,4096)")
+    p.add_argument("--step", type=float, default=0.5, help="segment length in world units (default 0.5)")
+    p.add_argument("--lengths", type=int, default=64, help="lengths of the 3D table (default 64)")
+    p.add_argument("--entries", type=int, default=500, help="random entries checked per size (default 500)")
+    p.add_argument("--repeats", type=int, default=5, help="timed runs per table, median reported (default 5)")
+    p.add_argument("--brute-limit", type=float, default=60.0, help="skip brute force predicted above this many s")
+    p.add_argument("--oversampling", type=int_list(1), default=None, help="n_t factors for the error table (1,2,4,8)")
+    p.add_argument("--error-sizes", type=int_list(2), default=None, help="sizes for the error table (64,256,1024)")
+    p.add_argument("--out", help="also write the tables to this Markdown file")
+    return run(run_tables, p, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,6 +1,6 @@
-"""Measure the `vtk` renderer against `reference` on the shared scenes (python -m volren.bench.vtk_vs_reference).
+"""Measure the `vtk` renderer against `reference` on the shared scenes (python -m benchmarks.vtk_vs_reference).
 
-For each dataset and TF style in ../shared/scenes: the RMSE / max / PSNR of `vtk` against
+For each dataset and TF style in the shared scenes folder (--shared or $VOLREN_SHARED): the RMSE / max / PSNR of `vtk` against
 `reference`, the median time per frame of `vtk` (after a warm-up frame) and the time of the one
 reference frame (rendered anew, not from the cache). Prints a Markdown table.
 """
@@ -11,25 +11,13 @@ import argparse
 import json
 import statistics
 import time
-from pathlib import Path
 
 from volren.api import prepared_renderer
+from volren.bench.datasets import SCENES, STYLES, shared_folder
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.testing.metrics import image_error
-
-#: dataset -> (file under shared/data, scalars, azimuth, elevation, zoom), from shared/scenes/README.md
-SCENES = {
-    "ironProt": ("uniform/ironProt.vtk", "scalars", 30, 20, 1.0),
-    "bonsai": ("uniform/bonsai.vti", "ImageFile", 30, 20, 1.0),
-    "engine": ("uniform/engine.vti", "ImageFile", 30, 20, 1.0),
-    "aneurism": ("uniform/aneurism.vti", "ImageFile", 30, 20, 1.0),
-    "spx": ("tets/spx.vtk", "scalars", 30, 20, 1.0),
-    "bluntfin": ("tets/bluntfin_tets.vtu", "Density", 30, 20, 1.4),
-    "oxygen": ("tets/oxygen_post_tets.vtu", "VelocityMagnitude", 30, 45, 1.3),
-}
-STYLES = ("smooth", "spiky", "opaque")
 
 
 def time_frames(renderer, camera, width, height, frames: int) -> tuple[float, object]:
@@ -46,14 +34,14 @@ def main(argv: list[str] | None = None) -> None:
     from volren.io import load_volume
 
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--shared", default=str(Path(__file__).resolve().parents[2].parent / "shared"))
+    parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     parser.add_argument("--size", type=int, default=512)
     parser.add_argument("--datasets", default=",".join(SCENES))
     parser.add_argument("--styles", default=",".join(STYLES))
     parser.add_argument("--frames", type=int, default=5)
     parser.add_argument("--step", type=float, default=0.5)
     args = parser.parse_args(argv)
-    shared = Path(args.shared)
+    shared = shared_folder(args.shared)
     size = args.size
     print("| dataset | TF | vtk ms/frame | reference ms | RMSE | max abs | PSNR dB |")
     print("|---|---|---|---|---|---|---|")

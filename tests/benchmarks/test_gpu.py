@@ -1,4 +1,4 @@
-"""`python -m volren.bench.gpu`: the scenes travel as arrays and come back as a table (run here on
+"""`python -m benchmarks.gpu`: the scenes travel as arrays and come back as a table (run here on
 llvmpipe, at a small size)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from volren.bench import gpu
+from benchmarks import gpu
 from volren.renderers.opengl import opengl_problem
 
 pytestmark = pytest.mark.skipif(opengl_problem() is not None, reason="no OpenGL (EGL) context here")

@@ -1,4 +1,4 @@
-"""`volren bench gpu`: our OpenGL renderers on a machine with a real GPU.
+"""`python -m benchmarks.gpu`: our OpenGL renderers on a machine with a real GPU.
 
 `bench run` measures everything on the machine at hand; on a GPU machine the question is narrower:
 how fast are `slicer` and `tetra`'s GL walk there, at what error. The scenes, cameras, turning
@@ -28,11 +28,11 @@ import numpy as np
 
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset, shared_datasets
-from volren.bench.reference_cache import reference_image, reference_settings, scene_key
 from volren.bench.run_bench import turn_offsets
 from volren.model.settings import RenderSettings
 from volren.model.volume import TetVolume, UniformVolume, Volume
 from volren.testing.metrics import image_error
+from volren.testing.reference_images import reference_image, reference_settings, scene_key
 
 #: The error is measured at this size (the reference images the CPU run already has).
 ERROR_SIZE = 512
@@ -181,7 +181,7 @@ def markdown(rows: list[dict], device: str, frames: int = FRAMES) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m volren.bench.gpu", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.gpu", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
     e = sub.add_parser("export", help="write the shared datasets, TFs and reference images as arrays")
     e.add_argument("--shared", type=Path, required=True)

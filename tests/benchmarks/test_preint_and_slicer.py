@@ -1,5 +1,6 @@
-"""`volren bench preint` in process: the Markdown tables it prints (and writes with --out) hold
-numeric timings and small errors, and bad arguments exit with argparse's 2 or a one-line error."""
+"""`python -m benchmarks.preint` and `benchmarks.slicer_table` in process: the Markdown tables they
+print (and write with --out) hold numeric timings and small errors, and bad arguments exit with
+argparse's 2 or a one-line error."""
 
 from __future__ import annotations
 
@@ -8,8 +9,16 @@ import re
 
 import pytest
 
-from volren.cli.main import main
+from benchmarks import preint, slicer_table
 from volren.samples import sample_paths
+
+PREINT_ERROR = "python -m benchmarks.preint: error: "
+
+
+def main(argv: list[str]) -> int:
+    """The scripts' mains, called like `volren bench NAME ...` used to be."""
+    assert argv[0] == "bench"
+    return {"preint": preint.main, "slicer": slicer_table.main}[argv[1]](argv[2:])
 
 
 @pytest.fixture(scope="module")
@@ -128,12 +137,12 @@ def test_bad_list_arguments_are_usage_errors(capsys, sample_tf, option, value):
     ],
 )
 def test_bad_values_give_one_line_and_exit_1(tmp_path, capsys, sample_tf, args, fragments):
-    """Mistakes a user can make are one `volren: error:` line naming the problem, never a traceback."""
+    """Mistakes a user can make are one `...: error:` line naming the problem, never a traceback."""
     argv = small_run(sample_tf) + [a.format(tmp=tmp_path) for a in args]
     assert main(argv) == 1
     captured = capsys.readouterr()
     err = captured.err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("volren: error: "), captured.err
+    assert len(err) == 1 and err[0].startswith(PREINT_ERROR), captured.err
     assert all(f in err[0] for f in fragments), err[0]
     assert captured.out == ""
 
@@ -145,7 +154,7 @@ def test_unwritable_out_file_is_an_error_after_printing(tmp_path, capsys, sample
     captured = capsys.readouterr()
     assert rows(captured.out, "8") and not target.exists()
     last = captured.err.rstrip().split("\n")[-1].split("\r")[-1]  # after the cleared progress bar
-    assert last.startswith("volren: error: ") and str(target) in last and "cannot write" in last
+    assert last.startswith(PREINT_ERROR) and str(target) in last and "cannot write" in last
 
 
 @pytest.mark.usefixtures("opengl")

@@ -24,7 +24,7 @@ from volren.model.volume import TetVolume, UniformVolume, Volume
 from volren.renderers.base import ProgressCallback
 
 #: Bump when the reference renderer's results change, so stale images are not reused.
-REFERENCE_VERSION = 1
+REFERENCE_VERSION = 2
 
 
 def cache_folder() -> Path:

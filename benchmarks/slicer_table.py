@@ -9,21 +9,26 @@ rendered once into it). Rows come back as dicts; `markdown` formats them.
 
 from __future__ import annotations
 
+import argparse
 import json
 import statistics
+import sys
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+from benchmarks._cli import float_list
+from benchmarks._cli import run as run_command
 from volren.api import prepared_renderer
+from volren.bench.datasets import SCENES, shared_folder
 from volren.bench.pareto import equal_error
-from volren.bench.reference_cache import reference_image
-from volren.bench.vtk_vs_reference import SCENES
+from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.testing.metrics import image_error
+from volren.testing.reference_images import reference_image
 
 
 @dataclass(frozen=True)
@@ -131,3 +136,59 @@ def equal_error_rows(rows: list[dict]) -> list[str]:
             f"{match.ratio:.2f} |"
         )
     return out
+
+
+def run_table(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    shared = shared_folder(args.shared)
+    datasets = [d for d in args.datasets.split(",") if d]
+    unknown = [d for d in datasets if d not in SCENES or SCENES[d][0].startswith("tets/")]
+    if unknown:
+        grids = ", ".join(n for n, s in SCENES.items() if not s[0].startswith("tets/"))
+        raise VolrenError(f"unknown or non-uniform datasets {unknown}; choose from {grids}")
+    steps = float_list(args.steps, "--steps")
+    paths = [p for p in args.paths.split(",") if p]
+    if not paths or any(p not in ("march", "slices") for p in paths):
+        raise VolrenError(f"--paths must name march and/or slices, got {args.paths!r}")
+    if args.size < 8 or args.frames < 1:
+        raise VolrenError("--size must be at least 8 and --frames at least 1")
+    styles = [s for s in args.styles.split(",") if s]
+    total = len(datasets) * len(styles) * len(configs(steps, paths))
+    lines = [HEADER]
+    print(HEADER)
+    with tqdm(total=total, desc="settings", leave=False) as bar:
+
+        def report(row: dict) -> None:
+            line = markdown_row(row)
+            lines.append(line)
+            tqdm.write(line)
+            bar.update()
+
+        rows = run(shared, datasets, styles, steps, paths, args.size, args.frames, report)
+    ratios = [RATIO_HEADER, *equal_error_rows(rows)]
+    lines += ["", *ratios]
+    print("\n" + "\n".join(ratios))
+    if args.out:
+        try:
+            Path(args.out).write_text("\n".join(lines) + "\n")
+        except OSError as exc:
+            raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    s = argparse.ArgumentParser(prog="python -m benchmarks.slicer_table", description="slicer and vtk: ms per frame and RMSE against reference per step")
+    s.add_argument("--shared", help="the shared folder with data/ and scenes/ (default: $VOLREN_SHARED)")
+    s.add_argument("--datasets", default="bonsai,engine", help="comma-separated (default bonsai,engine)")
+    s.add_argument("--styles", default="smooth,spiky,opaque", help="TF styles (default smooth,spiky,opaque)")
+    s.add_argument("--steps", default="1,0.5,0.25", help="sample steps (default 1,0.5,0.25)")
+    s.add_argument("--paths", default="march", help="slicer paths: march, slices or both (default march)")
+    s.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
+    s.add_argument("--frames", type=int, default=5, help="timed frames per setting, median reported (default 5)")
+    s.add_argument("--out", help="also write the table to this Markdown file")
+    return run_command(run_table, s, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
