@@ -1,10 +1,10 @@
-"""`python -m benchmarks.preint`: time and accuracy of the pre-integration tables (seed 000's Table 1).
+"""`python -m benchmarks.preint`: time and accuracy of the pre-integration tables (Lum, Wilson and Ma 2004's Table 1).
 
 For each table size n: seconds for the brute-force O(n^3) table (only where the previous size
 predicts it finishes within the limit), the exact O(n^2) table (incremental subrange
 integration), Engel's approximate integral-function table, the 3D table for 64 lengths and the
 lighting tables (front and back weighted), all
-with n_t = n (no oversampling, as in seed 000's Table 1), each
+with n_t = n (no oversampling, as in Lum, Wilson and Ma 2004's Table 1), each
 the median of several runs, and each one's max error over random entries against the continuous
 integral (`volren.renderers.reference.segment_rgba`, float64, adaptive). A second table gives that error for the exact table
 as a function of n and n_t (oversampling). Also the time of a repeated (cached) request.

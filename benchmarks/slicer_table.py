@@ -1,4 +1,4 @@
-"""Time per frame and error against `reference` for `slicer` and `vtk` in one run (issue 4's table).
+"""Time per frame and error against `reference` for `slicer` and `vtk` in one run.
 
 For each dataset and TF style in ../shared/scenes: `slicer` post-classified and pre-integrated
 (each path asked for) and `vtk` at each step; ms per frame is the median of several frames after

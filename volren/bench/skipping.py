@@ -1,4 +1,4 @@
-"""What each skipping technique saves and what it changes in the image (issue 7, `volren bench skip`).
+"""What each skipping technique saves and what it changes in the image (`volren bench skip`).
 
 For every scene (a volume, a TF, the scene's camera) and renderer, the same frames are drawn with
 every skipping technique on, with each one off alone and with all off. A row gives the median ms

@@ -1,4 +1,4 @@
-"""`volren bench stress`: the numerical stability suite (issue 7).
+"""`volren bench stress`: the numerical stability suite.
 
 Why: a renderer that is accurate on friendly data can still return NaN, Inf or colours brighter
 than their opacity on the corners of its input (see `stress_cases`). This suite renders every

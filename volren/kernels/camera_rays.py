@@ -1,9 +1,9 @@
 """Camera rays for many pixels at once, in one numba pass.
 
-`Camera.rays` defines the rays (the model stays numpy), but its stacked numpy temporaries cost
-35-60 ms for 512x512 pixels on this 2-core machine, a quarter of a tetra frame with a ray per
-pixel. Renderers that build rays every frame (and every refinement level) call `pixel_rays` here:
-the same unprojection of each pixel centre onto the near and far planes, 4-8 ms for 512x512.
+`Camera.rays` defines the rays (the model stays numpy), but its stacked numpy temporaries cost a
+large share of a CPU ray-casting frame. Renderers that build rays every frame (and every
+refinement level) call `pixel_rays` here: the same unprojection of each pixel centre onto the near
+and far planes, several times faster (timings: docs/tetra-benchmark.md, "Camera rays").
 """
 
 from __future__ import annotations

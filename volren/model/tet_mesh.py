@@ -1,4 +1,4 @@
-"""A tetrahedral mesh prepared for cell-to-cell ray casting (Weiler et al.; book section 7.5.2).
+"""A tetrahedral mesh prepared for cell-to-cell ray casting (Weiler et al.; Real-Time Volume Graphics, section 7.5.2).
 
 `prepare_mesh(volume)` turns a `TetVolume` into a `PreparedMesh`: positively oriented cells, face
 adjacency, outward face planes, per-cell gradients and the boundary faces where rays enter. It is

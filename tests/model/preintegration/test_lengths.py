@@ -1,4 +1,4 @@
-"""3D tables along the length axis: how renderers interpolate in length, and seed 003's
+"""3D tables along the length axis: how renderers interpolate in length, and Schulze et al. 2003's
 opacity and colour correction of a 2D table used at another length."""
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ def test_segments_longer_than_the_axis_keep_exact_opacity():
 
 
 def test_correction_scales_opacity_exactly_and_colour_exactly_on_the_diagonal():
-    """Seed 003: alpha' = 1 - (1 - alpha)^(d'/d) is exact for every entry; C alpha'/alpha is exact
+    """Schulze et al. 2003: alpha' = 1 - (1 - alpha)^(d'/d) is exact for every entry; C alpha'/alpha is exact
     for homogeneous segments (the diagonal) and approximate elsewhere."""
     tf = spiky()
     n = 64

@@ -1,4 +1,4 @@
-"""Engel, Kraus and Ertl's approximate table from integral functions (book section 4.5), O(n^2).
+"""Engel, Kraus and Ertl's approximate table from integral functions (Real-Time Volume Graphics, section 4.5), O(n^2).
 
 The opacity uses the integral function of the extinction and is exact (the optical depth of a
 segment is the step times the mean extinction over its value span). The colour C = step * mean(q)

@@ -1,4 +1,4 @@
-"""The length axis of 3D tables, and the opacity and colour correction of seed 003 section 2.2.
+"""The length axis of 3D tables, and the opacity and colour correction of Schulze et al. 2003, section 2.2.
 
 Why this interpolation: the optical depth of an entry is exactly proportional to its length (L
 times the mean extinction over the value span), so the opacity needs no interpolation at all:
@@ -21,7 +21,7 @@ How a renderer looks up a segment of length L (`interpolate_in_length` does it i
    only ever scaled up, where the result is 1 anyway.
 Segments longer than L_max use the last layer, scaled (exact opacity, colour ratio of L_max).
 
-`correct_for_length` is seed 003's correction for a 2D table used at another segment length
+`correct_for_length` is Schulze et al. 2003's correction for a 2D table used at another segment length
 (slices crossed obliquely under perspective): opacity exact, colour C alpha' / alpha.
 """
 
@@ -93,7 +93,7 @@ def _depth(ratio: NDArray, alpha: NDArray) -> NDArray:
 
 
 def correct_for_length(rgba: ArrayLike, ratio: ArrayLike) -> NDArray[np.float64]:
-    """Seed 003's opacity and colour correction of premultiplied RGBA computed for a length d,
+    """Schulze et al. 2003's opacity and colour correction of premultiplied RGBA computed for a length d,
     used at d' = ratio d: alpha' = 1 - (1 - alpha)^ratio, C' = C alpha' / alpha (C ratio where
     alpha = 0, the thin limit)."""
     rgba = np.asarray(rgba, dtype=np.float64)

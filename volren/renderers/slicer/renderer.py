@@ -8,7 +8,7 @@ Why two paths over the same planes (option `path`):
   bricks, which blending cannot do cheaply.
 Both classify the segment between two consecutive planes with `shaders/common.glsl`: post-
 classified 1D TF (opacity corrected for the segment's length), pre-integrated 1D TF (a table for
-the plane spacing, corrected per segment for the real length along the ray, seed 003) with
+the plane spacing, corrected per segment for the real length along the ray, Schulze et al. 2003) with
 interpolated pre-integrated lighting (Lum et al.) when shading, or a post-classified 2D TF. The
 segment from where a ray enters the box to its first plane and the one from its last plane to the
 exit are integrated too (in the slice path the polygons are cut from a slightly grown box, so the

@@ -119,7 +119,7 @@ def preintegration_table(
     tf: TransferFunction1D, lo: float, hi: float, n: int, spacing: float
 ) -> NDArray[np.float32]:
     """(n, n, 4) [front, back]: premultiplied colour and the optical depth -ln(1 - alpha) of a
-    segment `spacing` long. The shader rescales both to the segment's real length (seed 003's
+    segment `spacing` long. The shader rescales both to the segment's real length (Schulze et al. 2003's
     opacity and colour correction), exactly for the opacity."""
     table = preintegrate(tf, n, step=spacing, value_range=(lo, hi))
     out = np.array(table, dtype=np.float32)

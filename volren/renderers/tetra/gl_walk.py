@@ -11,8 +11,8 @@ Per frame, three passes:
    of slots per pixel); cells the near
    plane cuts join the lists of their pixel boxes (`bin_near.comp.glsl`). When a list overflows, the
    slots grow and the faces are drawn again. (Binning in a compute shader, one invocation per
-   face, cost about 190 ms of a 264 ms frame at 1024x1024 on an H100: a large face is one
-   invocation's long loop. The rasterizer spreads every face over the whole GPU: 0.4-1 ms.)
+   face, took most of the frame: a large face is one invocation's long loop. The rasterizer
+   spreads every face over the whole GPU; timings in docs/tetra-benchmark.md.)
 3. `walk.comp.glsl` casts one ray per pixel and writes premultiplied RGBA (or the projected value).
 
 The mesh goes to the GPU once per volume, the visibility flags and the 3D table once per TF

@@ -149,7 +149,7 @@ class TetraRenderer(RendererBase):
             assert isinstance(volume, TetVolume)
             mesh = prepare_mesh(volume)
             # Cells in Morton order of their centroids: rays walk through neighbouring cells, and
-            # neighbours then lie close in memory (measured: 880 -> 847 ms on blunt fin spiky).
+            # neighbours then lie close in memory (docs/tetra-benchmark.md, "Cell order").
             order = _morton_order(mesh.points[mesh.tets].mean(axis=1))
             rank = np.empty_like(order)
             rank[order] = np.arange(len(order))

@@ -1,4 +1,4 @@
-"""Cell-to-cell ray casting through a tetrahedral mesh (Weiler et al., the book's section 7.5), on
+"""Cell-to-cell ray casting through a tetrahedral mesh (Weiler et al.; Real-Time Volume Graphics, section 7.5), on
 the CPU with numba.
 
 Per pixel ray:

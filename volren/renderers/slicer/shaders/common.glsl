@@ -165,7 +165,7 @@ vec4 classify_sample(vec3 p, float v, float len, vec3 dir) {
 #else
 #define PREINTEGRATED 1
 // Pre-integrated RGBA of the segment [front, back] (`len` world units) along which the data runs
-// from vf to vb: the table for the plane spacing, rescaled to the real length (seed 003).
+// from vf to vb: the table for the plane spacing, rescaled to the real length (Schulze et al. 2003).
 vec4 classify_segment(vec3 front, vec3 back, float vf, float vb, float len, vec3 dir) {
     if (!is_valid(vf) || !is_valid(vb)) return vec4(0.0);
     vec2 tc = preint_coord(vf, vb);
