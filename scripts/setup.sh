@@ -3,8 +3,12 @@
 #   1. system libraries for OpenGL through EGL (Mesa llvmpipe without a GPU), Qt and, for the
 #      tests, a virtual X server;
 #   2. a virtual environment in .venv with volren and the renderer plugins under plugins/ installed
-#      in editable mode (re-installed when a pyproject.toml changes).
+#      in editable mode: `.[app]` for the main job, `.[test,app,bench]` with --tests, at the
+#      versions CI tests (`-c constraints.txt`); re-installed when a pyproject.toml or
+#      constraints.txt changes.
 # Usage: scripts/setup.sh [--tests]
+#   VOLREN_LATEST=1 scripts/setup.sh ...  ignores constraints.txt and upgrades every dependency to
+#                                         its newest release (to test against them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -52,17 +56,22 @@ if [ ! -x .venv/bin/python ]; then
   "$python" -m venv .venv
 fi
 stamp=.venv/.volren-installed
-hash=$(cat pyproject.toml plugins/*/pyproject.toml | sha256sum | cut -d' ' -f1)
-installed=$(cat "$stamp" 2>/dev/null || true)   # "<pyproject hash> <extras>"
-extras=$([ "$with_tests" = 1 ] && echo test || echo none)
-if [ "${installed%% *}" != "$hash" ] || { [ "$extras" = test ] && [ "${installed#* }" != test ]; }; then
-  echo "setup: installing volren and its dependencies into .venv"
+if [ "${VOLREN_LATEST:-0}" = 1 ]; then
+  pins=(--upgrade --upgrade-strategy eager)
+  mode=latest
+else
+  pins=(-c constraints.txt)
+  mode=pinned
+fi
+# "<hash of the pyproject files, constraints.txt and the mode> <extras>"
+hash=$( { cat pyproject.toml plugins/*/pyproject.toml constraints.txt; echo "$mode"; } | sha256sum | cut -d' ' -f1)
+installed=$(cat "$stamp" 2>/dev/null || true)
+extras=$([ "$with_tests" = 1 ] && echo test,app,bench || echo app)
+# the test install includes the app: the main job needs nothing more after it
+if [ "${installed%% *}" != "$hash" ] || { [ "$extras" != app ] && [ "${installed#* }" != "$extras" ]; }; then
+  echo "setup: installing volren[$extras] and its dependencies into .venv ($mode versions)"
   .venv/bin/python -m pip install -q --upgrade pip
-  if [ "$extras" = test ]; then
-    .venv/bin/python -m pip install -q -e ".[test]"
-  else
-    .venv/bin/python -m pip install -q -e .
-  fi
+  .venv/bin/python -m pip install -q "${pins[@]}" -e ".[$extras]"
   for plugin in plugins/*/; do
     echo "setup: installing the renderer plugin $plugin"
     .venv/bin/python -m pip install -q --no-deps -e "$plugin"

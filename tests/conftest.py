@@ -1,4 +1,6 @@
-"""Shared fixtures: where the shared datasets are, and skipping what this machine cannot run."""
+"""Shared fixtures: where the shared datasets are (skipping, with an allowed reason, when they are
+not) and failing early, with what to install, when OpenGL cannot work here. Which skips are
+allowed and the per-session caches: tests/session_policy.py."""
 
 from __future__ import annotations
 
@@ -6,6 +8,8 @@ import json
 from pathlib import Path
 
 import pytest
+
+from tests.session_policy import SHARED_MISSING
 
 REPO = Path(__file__).resolve().parent.parent
 SHARED = REPO.parent / "shared"
@@ -17,14 +21,14 @@ SHARED_SCENES = SHARED / "scenes"
 def shared_data() -> Path:
     """../shared/data, or skip: the real datasets are not part of the repository."""
     if not SHARED_DATA.is_dir():
-        pytest.skip(f"shared datasets not found at {SHARED_DATA}")
+        pytest.skip(f"{SHARED_MISSING}: no datasets at {SHARED_DATA}")
     return SHARED_DATA
 
 
 @pytest.fixture(scope="session")
 def shared_scenes() -> Path:
     if not SHARED_SCENES.is_dir():
-        pytest.skip(f"shared scenes not found at {SHARED_SCENES}")
+        pytest.skip(f"{SHARED_MISSING}: no scenes at {SHARED_SCENES}")
     return SHARED_SCENES
 
 
@@ -34,15 +38,16 @@ def load_scene_tf(name: str):
 
     path = SHARED_SCENES / f"{name}.json"
     if not path.exists():
-        pytest.skip(f"scene {path} not found")
+        pytest.skip(f"{SHARED_MISSING}: scene {path} not found")
     return TransferFunction1D.from_dict(json.loads(path.read_text()))
 
 
 @pytest.fixture(scope="session")
 def opengl() -> None:
-    """Skip when no EGL context can be made here (the reason names the packages to install)."""
+    """Fail when no EGL context can be made here (the message names the packages to install):
+    CI has Mesa (scripts/setup.sh installs it), so a test that needs GL must not quietly skip."""
     from volren.renderers.opengl import opengl_problem
 
     problem = opengl_problem()
     if problem:
-        pytest.skip(problem)
+        pytest.fail(problem, pytrace=False)

@@ -10,12 +10,22 @@ from __future__ import annotations
 
 from typing import Any
 
-__version__ = "0.1.0"
-
 __all__ = ["VolrenError", "__version__", "render"]
 
 
+def _version() -> str:
+    """The installed distribution's version: pyproject.toml's, the only copy in the repository."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("volren")
+    except PackageNotFoundError:  # a source tree on sys.path that was never installed
+        return "0+unknown"
+
+
 def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        return _version()
     if name == "render":
         from volren.api import render
 

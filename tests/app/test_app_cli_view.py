@@ -14,14 +14,6 @@ import pytest
 pytestmark = pytest.mark.qt
 
 
-def _io_available() -> bool:
-    from volren import io
-
-    return all(hasattr(io, f) for f in ("load_volume", "load_transfer_function", "load_scene"))
-
-
-needs_io = pytest.mark.skipif(not _io_available(), reason="volren.io (load_volume & co.) is not available yet")
-
 XVFB_PACKAGES = (
     "xvfb xauth libxkbcommon-x11-0 libxcb-icccm4 libxcb-image0 libxcb-keysyms1 libxcb-render-util0 "
     "libxcb-shape0 libxcb-xinerama0 libdbus-1-3 libfontconfig1 libglib2.0-0"
@@ -42,10 +34,9 @@ def chromatic_fraction(path: Path) -> float:
 
 
 @pytest.mark.xvfb
-@needs_io
 def test_view_screenshot_of_a_real_x_window(tmp_path):
     if shutil.which("xvfb-run") is None:
-        pytest.skip(f"xvfb-run is not on PATH (Debian packages: {XVFB_PACKAGES})")
+        pytest.fail(f"xvfb-run is not on PATH (scripts/setup.sh --tests installs {XVFB_PACKAGES})", pytrace=False)
     out = tmp_path / "view.png"
     env = dict(os.environ, QT_QPA_PLATFORM="xcb")
     result = view(["--screenshot", str(out)], env, prefix=["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24"])
@@ -58,14 +49,13 @@ def test_view_screenshot_of_a_real_x_window(tmp_path):
 
 
 @pytest.mark.xvfb
-@needs_io
 def test_a_tf_edit_in_the_real_window_changes_the_frame_on_screen():
     """A real X window: a click in the 1D editor adds an opaque point, and the pixels the window
     system shows in the viewport change (grabbed from the screen, not from the widget)."""
     import json
 
     if shutil.which("xvfb-run") is None:
-        pytest.skip(f"xvfb-run is not on PATH (Debian packages: {XVFB_PACKAGES})")
+        pytest.fail(f"xvfb-run is not on PATH (scripts/setup.sh --tests installs {XVFB_PACKAGES})", pytrace=False)
     env = dict(os.environ, QT_QPA_PLATFORM="xcb")
     cmd = ["xvfb-run", "-a", "-s", "-screen 0 1400x900x24", sys.executable, "-m", "tests.app.real_window_edit"]
     root = Path(__file__).resolve().parents[2]
@@ -86,7 +76,6 @@ def test_view_with_an_unknown_renderer_fails_in_one_line(tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
-@needs_io
 def test_view_screenshot_of_a_missing_file_fails_in_one_line(tmp_path):
     env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
     result = view([str(tmp_path / "missing.vti"), "--screenshot", str(tmp_path / "x.png")], env)

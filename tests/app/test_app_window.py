@@ -21,14 +21,6 @@ pytestmark = [pytest.mark.qt, pytest.mark.vtk]
 FRAME_TIMEOUT_MS = 20000
 
 
-def _io_available() -> bool:
-    from volren import io
-
-    return all(hasattr(io, f) for f in ("load_volume", "load_transfer_function", "load_scene"))
-
-
-needs_io = pytest.mark.skipif(not _io_available(), reason="volren.io (load_volume & co.) is not available yet")
-
 
 def frame_pixels(window) -> np.ndarray:
     frame = window.viewport.frame
@@ -272,7 +264,6 @@ def test_in_place_tf_edit_renders_again(loaded_window, qtbot):
     assert not_background(w) == 0
 
 
-@needs_io
 def test_opens_the_bundled_sample_by_default(window, qtbot, error_boxes):
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         window.open_input()
@@ -281,7 +272,6 @@ def test_opens_the_bundled_sample_by_default(window, qtbot, error_boxes):
     assert error_boxes == []
 
 
-@needs_io
 def test_opening_a_scene_then_a_tf_file(window, qtbot, tmp_path, error_boxes):
     from volren import io
     from volren.model.scene import OrbitView, Scene
@@ -307,7 +297,6 @@ def test_opening_a_scene_then_a_tf_file(window, qtbot, tmp_path, error_boxes):
     assert error_boxes == []
 
 
-@needs_io
 def test_opening_a_corrupt_file_with_the_real_readers(loaded_window, qtbot, error_boxes, tmp_path):
     w = loaded_window
     volume = w.state.volume
@@ -319,7 +308,6 @@ def test_opening_a_corrupt_file_with_the_real_readers(loaded_window, qtbot, erro
     assert len(error_boxes) == 1 and "corrupt.vti" in error_boxes[0][1] and "\n" not in error_boxes[0][1]
 
 
-@needs_io
 def test_opening_a_2d_tf_switches_to_a_renderer_that_draws_it(loaded_window, qtbot, error_boxes, tmp_path):
     """vtk draws 1D TFs only: a 2D TF keeps the volume, disables vtk with the reason and moves
     the view to a renderer that can draw it, without an error box."""
@@ -341,7 +329,6 @@ def test_opening_a_2d_tf_switches_to_a_renderer_that_draws_it(loaded_window, qtb
     assert error_boxes == []
 
 
-@needs_io
 def test_run_with_screenshot_in_process(qapp, tmp_path):
     from volren.app.main import run
 

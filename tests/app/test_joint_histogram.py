@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import gc
-import time
 
 import numpy as np
 import pytest
@@ -187,15 +186,12 @@ def test_tet_mesh_leaves_out_nonfinite_tets():
     assert hist.counts[2].sum() == pytest.approx(hist.counts.sum())
 
 
-# --------------------------------------------------------------------------------- speed
-def test_a_256_cubed_volume_takes_well_under_two_seconds():
+# --------------------------------------------------------------------------------- size
+def test_a_256_cubed_volume_is_counted_in_full():
+    """2^24 points are within MAX_SAMPLES: every one is counted, none subsampled away. How fast
+    that is (the app's target: well under 2 s) is measured by `volren bench app`, not asserted."""
     rng = np.random.default_rng(0)
     values = rng.integers(0, 256, size=(256, 256, 256), dtype=np.uint8)
-    jh.joint_histogram(UniformVolume(values[:8, :8, :8]))  # compile / load the kernels first
-    volume = UniformVolume(values)
-    start = time.perf_counter()
-    hist = jh.joint_histogram(volume)
-    elapsed = time.perf_counter() - start
-    assert hist.stride == 1  # 2^24 points: done in full
+    hist = jh.joint_histogram(UniformVolume(values))
+    assert hist.stride == 1
     assert hist.counts.sum() + hist.above == values.size
-    assert elapsed < 2.0, f"{elapsed:.2f} s"

@@ -10,9 +10,8 @@ import numpy as np
 import pytest
 
 from benchmarks import gpu
-from volren.renderers.opengl import opengl_problem
 
-pytestmark = pytest.mark.skipif(opengl_problem() is not None, reason="no OpenGL (EGL) context here")
+pytestmark = pytest.mark.usefixtures("opengl")  # fails, naming the packages, where EGL cannot work
 
 
 def test_export_then_run(shared_data, tmp_path, monkeypatch):

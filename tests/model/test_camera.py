@@ -29,7 +29,8 @@ VIEWS = [
 
 def vtk_matrices(bounds, azimuth, elevation, zoom, parallel, aspect):
     """vtkCamera after vtkRenderer.ResetCamera, Azimuth, Elevation, Zoom, ResetCameraClippingRange."""
-    vtk_core = pytest.importorskip("vtkmodules.vtkRenderingCore")
+    from vtkmodules import vtkRenderingCore as vtk_core
+
     renderer = vtk_core.vtkRenderer()
     renderer.SetNearClippingPlaneTolerance(0.001)  # what VTK picks for a 24-bit depth buffer
     camera = renderer.GetActiveCamera()

@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
+from tests.session_policy import SHARED_MISSING
 from volren.model import tet_mesh
 from volren.model.tet_mesh import FACE_VERTICES, PreparedMesh, build_mesh, prepare_mesh
 from volren.model.volume import TetVolume
@@ -379,7 +380,7 @@ def test_spx(shared_data):
 
     path = shared_data / "tets" / "spx.vtk"
     if not path.exists():
-        pytest.skip(f"{path} not found")
+        pytest.skip(f"{SHARED_MISSING}: {path} not found")
     volume = load_volume(path, scalars="scalars")
     mesh = prepare_mesh(volume)
     assert (mesh.n_points, mesh.n_tets) == (2896, 12936)

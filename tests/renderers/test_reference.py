@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.session_policy import SHARED_MISSING
 from volren.errors import VolrenError, VolrenWarning
 from volren.model import BlendMode, Camera, RenderSettings, TetVolume, TransferFunction1D, UniformVolume
 from volren.renderers.reference import ReferenceRenderer
@@ -477,8 +478,8 @@ def test_counters_progress_and_options():
 def test_iron_protein_scene():
     path = SHARED / "data" / "uniform" / "ironProt.vtk"
     if not path.exists():
-        pytest.skip(f"shared data not found at {path}")
-    pv = pytest.importorskip("pyvista")
+        pytest.skip(f"{SHARED_MISSING}: {path} not found")
+    import pyvista as pv
     grid_ = pv.read(path)
     grid_.set_active_scalars("scalars")
     vol = UniformVolume(np.asarray(grid_.active_scalars).reshape(tuple(grid_.dimensions)[::-1]),

@@ -4,17 +4,16 @@ Log-log axes (both quantities span decades); every setting of a renderer is a fa
 its Pareto front a line through bold markers, so the reader sees at once which renderer gives the
 least error for a time budget. Our renderers are drawn solid, VTK's mappers dashed. Figures are
 made with matplotlib's object API (no pyplot state), which renders with Agg and needs no display.
+matplotlib is the `bench` extra and loads only when a plot is drawn (`require_matplotlib`).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter, NullFormatter
-
 from volren.bench.pareto import Row, group, pareto_front
 from volren.bench.sweep import BUILTIN_CURVES
+from volren.extras import require
 
 #: RMSE below this is drawn at it: a log axis has no zero (an exact match is possible on a sample).
 RMSE_FLOOR = 1e-6
@@ -23,6 +22,11 @@ _COLORS = dict(zip(_ORDER, ["C0", "C2", "C1", "C3", "C0", "C1", "C4", "C5"], str
 _MARKERS = dict(zip(_ORDER, ["o", "^", "s", "D", "o", "s", "v", "P"], strict=True))
 #: Colours and markers of other renderers (plugins), in the order they first appear.
 _OTHER_STYLES = [("C6", "X"), ("C7", "*"), ("C8", "h"), ("C9", "<"), ("C5", ">")]
+
+
+def require_matplotlib() -> None:
+    """A one-line VolrenError naming the `bench` extra when matplotlib is missing."""
+    require("bench", "volren bench run (its plots)")
 
 
 def _order(curve: str) -> tuple[int, str]:
@@ -39,6 +43,10 @@ def _style(curve: str, others: list[str]) -> tuple[str, str]:
 
 def plot_dataset(rows: list[Row], dataset: str, path: Path) -> Path:
     """Write `path` (PNG): a panel per TF of `dataset`'s rows, ms against RMSE per renderer."""
+    require_matplotlib()
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import FuncFormatter, NullFormatter
+
     scenes = group((r for r in rows if r["dataset"] == dataset), lambda r: r["tf"])
     figure = Figure(figsize=(4.6 * len(scenes) + 1.6, 4.2), layout="constrained")
     axes = figure.subplots(1, len(scenes), squeeze=False)[0]

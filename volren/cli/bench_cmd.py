@@ -126,6 +126,7 @@ def run_run(args: argparse.Namespace) -> int:
 
     from volren.bench import datasets, plots, run_bench, summary, sweep
 
+    plots.require_matplotlib()  # before the sweep, not after it: the plots come last
     size = args.size or (128 if args.quick else 512)
     frames = args.frames or (3 if args.quick else 5)
     if size < 8 or frames < 1 or not (math.isfinite(args.turn) and args.turn >= 0):
@@ -252,11 +253,16 @@ def add_app_parsers(kinds) -> None:
     a.add_argument("--style", default="smooth", help="TF style of the scenes (default smooth)")
     a.add_argument("--edits", type=int, default=7, help="timed TF edits, median reported (default 7)")
     a.add_argument("--seconds", type=float, default=3.0, help="length of each drag gesture (default 3 s)")
+    a.add_argument("--histogram-size", type=int, default=256,
+                   help="time the 2D TF editor's joint histogram of an N^3 volume (default 256; 0: not)")
     a.add_argument("--out", help="folder to write app.md into")
     a.set_defaults(run=run_app)
 
 
 def run_app(args: argparse.Namespace) -> int:
+    from volren.extras import require
+
+    require("app", "volren bench app")  # before anything is loaded
     from volren.bench import app_latency
     from volren.bench.datasets import SCENES
 
@@ -279,6 +285,10 @@ def run_app(args: argparse.Namespace) -> int:
     note = app_latency.NOTE.format(
         w=app_latency.VIEWPORT[0], h=app_latency.VIEWPORT[1], style=args.style, platform=app.platformName()
     )
+    if args.histogram_size > 0:
+        seconds = app_latency.joint_histogram_seconds(args.histogram_size)
+        lines += ["", app_latency.histogram_line(args.histogram_size, seconds)]
+        print("\n" + lines[-1], flush=True)
     if args.out:
         out = Path(args.out)
         try:

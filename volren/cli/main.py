@@ -12,7 +12,7 @@ import sys
 import warnings
 from collections.abc import Sequence
 
-from volren import __version__
+import volren
 from volren.cli import bench_cmd, check_cmd, demo_cmd, render_cmd, renderers_cmd, view_cmd
 from volren.errors import VolrenError
 
@@ -23,7 +23,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="volren", description="Volume rendering of uniform grids and tetrahedral meshes."
     )
-    parser.add_argument("--version", action="version", version=f"volren {__version__}")
+    parser.add_argument("--version", action="version", version=f"volren {volren.__version__}")
     parser.add_argument("--traceback", action="store_true", help="show the full traceback on errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for command in COMMANDS:

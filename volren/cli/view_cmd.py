@@ -1,9 +1,11 @@
-"""`volren view [INPUT]`: the desktop app (imports Qt only when run)."""
+"""`volren view [INPUT]`: the desktop app (imports Qt only when run; Qt is the `app` extra)."""
 
 from __future__ import annotations
 
 import argparse
 import importlib
+
+from volren.extras import require
 
 
 def add_parser(sub) -> None:
@@ -21,6 +23,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    require("app", "volren view")
     app_main = importlib.import_module("volren.app.main")
     return app_main.run(
         args.input,

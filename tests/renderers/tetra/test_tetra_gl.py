@@ -17,10 +17,9 @@ from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import TetVolume
-from volren.renderers.opengl import opengl_problem
 from volren.renderers.tetra import gl_walk
 
-pytestmark = pytest.mark.skipif(opengl_problem() is not None, reason="no OpenGL (EGL) context here")
+pytestmark = pytest.mark.usefixtures("opengl")  # fails, naming the packages, where EGL cannot work
 
 GL = {"backend": "gl"}
 CPU = {"backend": "cpu"}
