@@ -84,11 +84,11 @@ def test_reasons_on_the_list():
 
 
 def test_caches_are_this_sessions_own():
-    from volren.bench import reference_cache
+    from volren.testing import reference_images
     from volren.model import tet_mesh
 
     home_cache = Path.home() / ".cache"
-    for folder in (tet_mesh.cache_dir(), reference_cache.cache_folder(), Path(os.environ["XDG_CACHE_HOME"])):
+    for folder in (tet_mesh.cache_dir(), reference_images.cache_folder(), Path(os.environ["XDG_CACHE_HOME"])):
         assert SESSION_CACHE in folder.parents, folder
         assert home_cache not in folder.parents, folder
     assert SESSION_CACHE.is_dir()
