@@ -34,7 +34,7 @@ ALLOWED_SKIP_PREFIXES = (SHARED_MISSING, NO_GPU)
 #: The cache variables set for the session: volren's own, then the XDG default the rest follow.
 CACHE_VARIABLES = {
     "VOLREN_MESH_CACHE": "meshes",  # volren.model.tet_mesh.cache_dir
-    "VOLREN_REFERENCE_CACHE": "reference",  # volren.bench.reference_cache.cache_folder
+    "VOLREN_REFERENCE_CACHE": "reference",  # volren.testing.reference_images.cache_folder
     "XDG_CACHE_HOME": "xdg",  # volren.samples' generated copies; matplotlib, fontconfig, Mesa, pip
 }
 
