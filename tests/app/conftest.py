@@ -22,7 +22,7 @@ import pytest  # noqa: E402
 import pytestqt  # noqa: E402, F401
 from PyQt5 import QtWidgets  # noqa: E402, F401
 
-from volren.app.loading import LoadedInput  # noqa: E402
+from volren.app.core.loading import LoadedInput  # noqa: E402
 from volren.errors import VolrenError  # noqa: E402
 from volren.model.volume import UniformVolume  # noqa: E402
 from volren.renderers.base import Capabilities, KindSupport, RendererBase  # noqa: E402
@@ -83,7 +83,7 @@ def error_boxes(monkeypatch) -> list[tuple[str, str]]:
 @pytest.fixture
 def make_window(qtbot, error_boxes) -> Iterator[Callable[..., Any]]:
     """Build shown MainWindows (closed and shut down after the test)."""
-    from volren.app.main_window import MainWindow
+    from volren.app.window.main_window import MainWindow
 
     reason = vtk_unusable()
     if reason:  # CI can render with VTK (Mesa through EGL): a window test must not quietly skip

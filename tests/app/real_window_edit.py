@@ -27,8 +27,8 @@ def screen_pixels(widget) -> np.ndarray:
 
 def main() -> int:
     app = QApplication(sys.argv[:1])
-    from volren.app.loading import load_input
-    from volren.app.main_window import MainWindow
+    from volren.app.core.loading import load_input
+    from volren.app.window.main_window import MainWindow
 
     window = MainWindow()
     window.show_error_dialogs = False

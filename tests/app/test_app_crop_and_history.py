@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from volren.app.state import Change, ViewState, default_camera
-from volren.app.tf_history import TFHistory
+from volren.app.core.state import Change, ViewState, default_camera
+from volren.app.tf_editor.history import TFHistory
 from volren.errors import VolrenError
 from volren.model import TFWidget, TransferFunction2D
 from volren.samples import marschner_lobb, sample_transfer_functions

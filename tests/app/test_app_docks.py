@@ -57,7 +57,7 @@ def test_ctrl_click_on_the_volume_places_a_2d_widget(loaded_window, qtbot):
     editor = w.docks.tf_panel.editor_2d
     frame_after(qtbot, w, editor.use_2d_button.click)
     assert w.state.transfer_function.dims == 2 and w.docks.tf_panel.tabs.currentWidget() is editor
-    from volren.app.picking import pick
+    from volren.app.core.picking import pick
 
     tf = w.state.transfer_function
     widgets = len(tf.widgets)

@@ -15,9 +15,9 @@ import pytest
 from PyQt5.QtCore import QSettings, Qt
 from PyQt5.QtGui import QKeySequence
 
-from volren.app import dialogs
-from volren.app.loading import LoadCancelled, LoadedInput, load_input, view_scene
-from volren.app.recent_files import RecentFiles, RecentFilesMenu
+from volren.app.core.loading import LoadCancelled, LoadedInput, load_input, view_scene
+from volren.app.files import screenshot_dialog as dialogs
+from volren.app.files.recent_files import RecentFiles, RecentFilesMenu
 from volren.errors import VolrenError
 from volren.io.image_io import to_png_pixels
 from volren.model import TFWidget, TransferFunction2D
@@ -387,7 +387,7 @@ def test_scene_extras_are_checked_and_optional(tmp_path):
 def test_screenshot_at_a_chosen_size_matches_a_direct_render(
     make_window, ini, fakes, qtbot, tmp_path, error_boxes
 ):
-    from volren.app.render_service import _registry_factory
+    from volren.app.rendering.render_service import _registry_factory
 
     threads = []
 

@@ -9,10 +9,10 @@ import sys
 import numpy as np
 import pytest
 
-from volren.app import interaction
-from volren.app.imaging import adaptive_preview_scale, preview_size
-from volren.app.renderer_choice import RendererOption, pick_renderer, renderer_options
-from volren.app.state import Change, ViewState, default_camera
+from volren.app.core import interaction
+from volren.app.core.frame_sizes import adaptive_preview_scale, preview_size
+from volren.app.core.renderer_choice import RendererOption, pick_renderer, renderer_options
+from volren.app.core.state import Change, ViewState, default_camera
 from volren.io.image_io import to_png_pixels
 from volren.model.camera import Camera
 from volren.samples import marschner_lobb, sample_transfer_functions
@@ -148,8 +148,8 @@ def test_renderer_options_lists_every_registered_renderer():
 def test_the_qt_free_modules_do_not_import_qt():
     code = (
         "import sys\n"
-        "import volren.app, volren.app.state, volren.app.interaction, volren.app.imaging\n"
-        "import volren.app.loading, volren.app.renderer_choice\n"
+        "import volren.app, volren.app.core.state, volren.app.core.interaction, volren.app.core.frame_sizes\n"
+        "import volren.app.core.loading, volren.app.core.renderer_choice\n"
         "bad = [m for m in sys.modules if m.startswith(('PyQt5', 'qtpy', 'pyvistaqt'))]\n"
         "assert not bad, bad\n"
     )
@@ -160,7 +160,7 @@ def test_the_qt_free_modules_do_not_import_qt():
 def test_loading_a_2d_tf_gives_it_to_the_app(tmp_path):
     """A 2D TF file, a scene with one, or a 2D override all load as the 2D TF they hold."""
     from volren import io
-    from volren.app.loading import load_input
+    from volren.app.core.loading import load_input
     from volren.model import TFWidget, TransferFunction2D
     from volren.model.scene import Scene
     from volren.samples import sample_paths

@@ -11,7 +11,7 @@ from volren.samples import marschner_lobb, sample_transfer_functions
 
 @pytest.mark.qt
 def test_the_app_renders_it(qtbot):
-    from volren.app.render_service import RenderService
+    from volren.app.rendering.render_service import RenderService
     from volren.model.settings import RenderSettings
 
     service = RenderService(factory=lambda name: PlainRenderer())

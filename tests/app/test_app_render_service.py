@@ -9,7 +9,7 @@ from typing import ClassVar
 import numpy as np
 import pytest
 
-from volren.app.render_service import RenderService
+from volren.app.rendering.render_service import RenderService
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
@@ -106,7 +106,7 @@ def test_a_continuous_drag_still_shows_frames(qtbot, scene):
 
 
 def test_a_long_frame_gives_way_to_a_newer_request(qtbot, scene, monkeypatch):
-    import volren.app.render_service as rs
+    import volren.app.rendering.render_service as rs
 
     monkeypatch.setattr(rs, "INTERRUPT_AFTER_S", 0.02)  # the 60 ms frame counts as long
     service = RenderService(factory=lambda name: SlowRenderer())
@@ -124,7 +124,7 @@ def test_a_long_frame_gives_way_to_a_newer_request(qtbot, scene, monkeypatch):
 
 
 def test_slow_frames_report_progress(qtbot, scene, monkeypatch):
-    import volren.app.render_service as rs
+    import volren.app.rendering.render_service as rs
 
     monkeypatch.setattr(rs, "PROGRESS_INTERVAL_S", 0.0)
     service = RenderService(factory=lambda name: SlowRenderer())

@@ -8,9 +8,9 @@ from PyQt5.QtCore import QMimeData, QPoint, QPointF, Qt, QUrl
 from PyQt5.QtGui import QDragEnterEvent, QDropEvent, QImage, QWheelEvent
 from PyQt5.QtWidgets import QApplication
 
-from volren.app.imaging import preview_size
-from volren.app.loading import LoadedInput
-from volren.app.state import default_camera
+from volren.app.core.frame_sizes import preview_size
+from volren.app.core.loading import LoadedInput
+from volren.app.core.state import default_camera
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
 from volren.samples import sample_transfer_functions

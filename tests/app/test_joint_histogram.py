@@ -7,7 +7,7 @@ import gc
 import numpy as np
 import pytest
 
-from volren.app import joint_histogram as jh
+from volren.app.core import joint_histogram as jh
 from volren.model.tet_mesh import prepare_mesh
 from volren.model.volume import TetVolume, UniformVolume
 

@@ -14,6 +14,7 @@ from PyQt5.QtCore import QPoint, QPointF, Qt
 from PyQt5.QtGui import QColor, QWheelEvent
 from PyQt5.QtWidgets import QApplication, QStyle, QStyleOptionSpinBox
 
+from volren.app.core.state import Change, ViewState, default_camera
 from volren.app.panels import (
     BackgroundPanel,
     BlendPanel,
@@ -24,7 +25,6 @@ from volren.app.panels import (
 )
 from volren.app.panels.controls import GestureSpinBox
 from volren.app.panels.crop import decimals_for
-from volren.app.state import Change, ViewState, default_camera
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.tet_repair import repair_tets
 from volren.model.transfer_function_2d import TransferFunction2D

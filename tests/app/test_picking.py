@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from volren.app.picking import OPACITY_THRESHOLD, STEP_FRACTION, pick, pixel_ray, sample_grid
+from volren.app.core.picking import OPACITY_THRESHOLD, STEP_FRACTION, pick, pixel_ray, sample_grid
 from volren.model.camera import Camera
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
@@ -188,8 +188,8 @@ def test_tet_mesh_gaps_are_no_data(camera):
 # ---------------------------------------------------------------------------- the viewport
 @pytest.fixture
 def viewport(qtbot, sphere, camera):
-    from volren.app.state import ViewState
-    from volren.app.viewport import Viewport
+    from volren.app.core.state import ViewState
+    from volren.app.rendering.viewport import Viewport
 
     state = ViewState()
     state.load(sphere, below(RADIUS), camera.reset(sphere.bounds, 1.5))

@@ -17,13 +17,13 @@ from PyQt5.QtGui import QColor, QMouseEvent
 from PyQt5.QtWidgets import QApplication, QWidget
 
 from volren.api import default_transfer_function
-from volren.app.colormap_presets import PRESET_NAMES, apply_preset, preset_color_points, unit_stops
-from volren.app.histograms import value_histogram
-from volren.app.opacity_curve import BOTTOM, TOP
-from volren.app.point_canvas import MARGIN
-from volren.app.state import Change, ViewState, default_camera
-from volren.app.tf_editor_1d import PRESET_PLACEHOLDER, TransferFunction1DEditor
-from volren.app.tf_history import TFHistory
+from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset, preset_color_points, unit_stops
+from volren.app.core.state import Change, ViewState, default_camera
+from volren.app.core.value_histogram import value_histogram
+from volren.app.tf_editor.history import TFHistory
+from volren.app.tf_editor.one_d.editor import PRESET_PLACEHOLDER, TransferFunction1DEditor
+from volren.app.tf_editor.one_d.opacity_curve import BOTTOM, TOP
+from volren.app.tf_editor.one_d.point_canvas import MARGIN
 from volren.errors import VolrenError
 from volren.io import load_transfer_function
 from volren.model.transfer_function import TransferFunction1D

@@ -8,11 +8,11 @@ import pytest
 from PyQt5.QtCore import QPoint, Qt
 from PyQt5.QtGui import QColor
 
-from volren.app import tf_widget_geometry as geometry
-from volren.app.joint_histogram import joint_histogram, suggested_gradient_max
-from volren.app.state import Change, ViewState, default_camera
-from volren.app.tf_editor_2d import DEFAULT_OPACITY, TransferFunction2DEditor
-from volren.app.tf_history import TFHistory
+from volren.app.core import tf_widget_geometry as geometry
+from volren.app.core.joint_histogram import joint_histogram, suggested_gradient_max
+from volren.app.core.state import Change, ViewState, default_camera
+from volren.app.tf_editor.history import TFHistory
+from volren.app.tf_editor.two_d.editor import DEFAULT_OPACITY, TransferFunction2DEditor
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
 from volren.model.volume import UniformVolume

@@ -21,7 +21,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from volren.app.loading import PathArg, one_line_error
+from volren.app.core.loading import PathArg, one_line_error
 
 #: How long --screenshot waits for a full-quality frame (the reference renderer can be slow).
 SCREENSHOT_TIMEOUT_S = 120.0
@@ -130,7 +130,7 @@ def run(
 def _run_app(input, tf, scalars, renderer, screenshot, size, timeout_s: float, traceback: bool) -> int:
     from PyQt5.QtWidgets import QApplication
 
-    from volren.app.main_window import MainWindow
+    from volren.app.window.main_window import MainWindow
 
     app = QApplication.instance() or QApplication([sys.argv[0] if sys.argv else "volren"])
     app.setApplicationName("volren")

@@ -116,8 +116,8 @@ def measure(
     timeout_s: float = 120.0,
 ) -> AppTiming:
     """Open `volume` with `tf` and `renderer` in a fresh window at VIEWPORT and time it."""
-    from volren.app.loading import LoadedInput
-    from volren.app.main_window import MainWindow
+    from volren.app.core.loading import LoadedInput
+    from volren.app.window.main_window import MainWindow
 
     window = MainWindow()
     window.show_error_dialogs = False

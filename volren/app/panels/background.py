@@ -9,8 +9,8 @@ from __future__ import annotations
 from PyQt5.QtGui import QColor, QIcon, QPixmap
 from PyQt5.QtWidgets import QColorDialog, QFormLayout, QPushButton, QWidget
 
+from volren.app.core.state import ViewState
 from volren.app.panels.base import StatePanel
-from volren.app.state import ViewState
 
 
 def _qcolor(rgb: tuple[float, float, float]) -> QColor:

@@ -15,7 +15,7 @@ from typing import ClassVar
 from PyQt5.QtCore import QObject
 from PyQt5.QtWidgets import QWidget
 
-from volren.app.state import Change, ViewState, What
+from volren.app.core.state import Change, ViewState, What
 
 
 @contextmanager

@@ -11,8 +11,8 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtGui import QStandardItemModel
 from PyQt5.QtWidgets import QComboBox, QFormLayout, QWidget
 
+from volren.app.core.state import ViewState
 from volren.app.panels.base import StatePanel, signals_blocked, unsupported
-from volren.app.state import ViewState
 from volren.model.settings import BlendMode
 from volren.renderers.base import KindSupport
 

@@ -16,8 +16,8 @@ from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtGui import QMouseEvent, QWheelEvent
 from PyQt5.QtWidgets import QDoubleSpinBox, QHBoxLayout, QSlider, QWidget
 
+from volren.app.core.state import ViewState
 from volren.app.panels.base import signals_blocked
-from volren.app.state import ViewState
 
 
 class Gesture:

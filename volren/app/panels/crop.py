@@ -18,9 +18,9 @@ from functools import partial
 from PyQt5.QtCore import pyqtSignal
 from PyQt5.QtWidgets import QCheckBox, QGridLayout, QLabel, QPushButton, QVBoxLayout, QWidget
 
+from volren.app.core.state import ViewState
 from volren.app.panels.base import StatePanel, signals_blocked
 from volren.app.panels.controls import Gesture, GestureSpinBox
-from volren.app.state import ViewState
 from volren.errors import VolrenError
 from volren.model.crop import Box
 from volren.model.volume import Volume

@@ -13,8 +13,8 @@ from collections.abc import Sequence
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QFormLayout, QLabel, QListWidget, QVBoxLayout, QWidget
 
+from volren.app.core.state import ViewState
 from volren.app.panels.base import StatePanel
-from volren.app.state import ViewState
 from volren.model.volume import UniformVolume, Volume
 
 NO_VOLUME = "No volume"

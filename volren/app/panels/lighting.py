@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from PyQt5.QtWidgets import QCheckBox, QFormLayout, QWidget
 
+from volren.app.core.state import ViewState
 from volren.app.panels.base import StatePanel, signals_blocked, unsupported
 from volren.app.panels.controls import SettingControl
-from volren.app.state import ViewState
 from volren.renderers.base import KindSupport
 
 SHADE_TIP = "Blinn-Phong shading with a headlight; normals from the gradient of the data"

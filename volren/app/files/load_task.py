@@ -22,7 +22,7 @@ from typing import Any
 
 from PyQt5.QtCore import QObject, QRunnable, QThreadPool, pyqtSignal, pyqtSlot
 
-from volren.app.loading import LoadCancelled, LoadedInput, PathArg, load_input, one_line_error
+from volren.app.core.loading import LoadCancelled, LoadedInput, PathArg, load_input, one_line_error
 
 #: load(path, tf, scalars) or load(path, tf, scalars, progress=...) -> LoadedInput.
 LoadFunction = Callable[..., LoadedInput]

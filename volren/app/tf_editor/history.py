@@ -16,7 +16,7 @@ from typing import Any
 from PyQt5.QtCore import QObject
 from PyQt5.QtWidgets import QUndoCommand, QUndoStack
 
-from volren.app.state import Change, ViewState
+from volren.app.core.state import Change, ViewState
 from volren.model.transfer_function_2d import transfer_function_from_dict
 
 

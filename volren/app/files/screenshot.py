@@ -21,9 +21,9 @@ import numpy as np
 from numpy.typing import NDArray
 from PyQt5.QtCore import QObject, QRunnable, QThreadPool, pyqtSignal, pyqtSlot
 
-from volren.app.loading import PathArg, one_line_error
-from volren.app.render_service import RendererFactory, _registry_factory
-from volren.app.state import ViewState
+from volren.app.core.loading import PathArg, one_line_error
+from volren.app.core.state import ViewState
+from volren.app.rendering.render_service import RendererFactory, _registry_factory
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings

@@ -17,7 +17,7 @@ from pathlib import Path
 from PyQt5.QtCore import QObject, QSettings, pyqtSignal
 from PyQt5.QtWidgets import QAction, QMenu, QWidget
 
-from volren.app.loading import PathArg
+from volren.app.core.loading import PathArg
 
 ORGANISATION = "volren"
 APPLICATION = "volren"

@@ -22,9 +22,9 @@ from PyQt5.QtCore import QPoint, QPointF, QRectF, QSize, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QImage, QKeyEvent, QMouseEvent, QPainter, QPaintEvent, QPen, QPolygonF
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
-from volren.app import tf_widget_geometry as geometry
-from volren.app.joint_histogram import JointHistogram
-from volren.app.state import ViewState
+from volren.app.core import tf_widget_geometry as geometry
+from volren.app.core.joint_histogram import JointHistogram
+from volren.app.core.state import ViewState
 from volren.errors import VolrenError
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
 

@@ -18,7 +18,7 @@ from PyQt5.QtCore import QPointF, Qt
 from PyQt5.QtGui import QHideEvent, QKeyEvent, QMouseEvent
 from PyQt5.QtWidgets import QWidget
 
-from volren.app.state import ViewState
+from volren.app.core.state import ViewState
 from volren.model.transfer_function import TransferFunction1D
 
 #: Horizontal room at both ends of the axis (px): a marker or point at the end stays whole.

@@ -33,10 +33,10 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from volren.app import tf_widget_geometry as geometry
-from volren.app.joint_histogram import joint_histogram, suggested_gradient_max
-from volren.app.state import Change, ViewState
-from volren.app.tf_widget_canvas import TFWidgetCanvas
+from volren.app.core import tf_widget_geometry as geometry
+from volren.app.core.joint_histogram import joint_histogram, suggested_gradient_max
+from volren.app.core.state import Change, ViewState
+from volren.app.tf_editor.two_d.widget_canvas import TFWidgetCanvas
 from volren.errors import VolrenError
 from volren.model.transfer_function_2d import TransferFunction2D
 

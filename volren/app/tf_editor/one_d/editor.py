@@ -36,12 +36,12 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from volren.app.color_bar import ColorBar
-from volren.app.colormap_presets import PRESET_NAMES, apply_preset, unit_stops
-from volren.app.histograms import value_histogram
-from volren.app.opacity_curve import OpacityCurve
-from volren.app.point_canvas import ValueAxis
-from volren.app.state import Change, ViewState
+from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset, unit_stops
+from volren.app.core.state import Change, ViewState
+from volren.app.core.value_histogram import value_histogram
+from volren.app.tf_editor.one_d.color_bar import ColorBar
+from volren.app.tf_editor.one_d.opacity_curve import OpacityCurve
+from volren.app.tf_editor.one_d.point_canvas import ValueAxis
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction

@@ -33,18 +33,24 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from volren.app import dialogs
-from volren.app.docks import Docks
-from volren.app.load_task import Loader, LoadFunction
-from volren.app.loading import LoadedInput, PathArg, load_input, one_line_error, view_scene
-from volren.app.recent_files import RecentFiles, RecentFilesMenu
-from volren.app.render_service import Frame, RendererFactory, RenderRequest, RenderService, _registry_factory
-from volren.app.renderer_box import RendererChooser
-from volren.app.renderer_choice import RendererOption, pick_renderer, renderer_options
-from volren.app.scheduling import FrameScheduler
-from volren.app.screenshot import ScreenshotJob, Screenshotter, check_writable
-from volren.app.state import Change, ViewState, default_camera
-from volren.app.viewport import Viewport
+from volren.app.core.loading import LoadedInput, PathArg, load_input, one_line_error, view_scene
+from volren.app.core.renderer_choice import RendererOption, pick_renderer, renderer_options
+from volren.app.core.state import Change, ViewState, default_camera
+from volren.app.files import screenshot_dialog as dialogs
+from volren.app.files.load_task import Loader, LoadFunction
+from volren.app.files.recent_files import RecentFiles, RecentFilesMenu
+from volren.app.files.screenshot import ScreenshotJob, Screenshotter, check_writable
+from volren.app.rendering.render_service import (
+    Frame,
+    RendererFactory,
+    RenderRequest,
+    RenderService,
+    _registry_factory,
+)
+from volren.app.rendering.renderer_chooser import RendererChooser
+from volren.app.rendering.scheduling import FrameScheduler
+from volren.app.rendering.viewport import Viewport
+from volren.app.window.docks import Docks
 from volren.errors import VolrenError
 from volren.renderers.registry import RendererRegistry
 from volren.renderers.registry import registry as default_registry

@@ -10,7 +10,7 @@ from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtGui import QStandardItemModel
 from PyQt5.QtWidgets import QComboBox, QWidget
 
-from volren.app.renderer_choice import RendererOption
+from volren.app.core.renderer_choice import RendererOption
 
 
 class RendererChooser(QComboBox):

@@ -28,9 +28,9 @@ from PyQt5.QtGui import (
 )
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
-from volren.app import interaction
-from volren.app.render_service import Frame
-from volren.app.state import ViewState
+from volren.app.core import interaction
+from volren.app.core.state import ViewState
+from volren.app.rendering.render_service import Frame
 
 _GESTURES = {Qt.LeftButton: "rotate", Qt.RightButton: "dolly", Qt.MiddleButton: "pan"}
 

@@ -16,9 +16,9 @@ from collections.abc import Callable
 
 from PyQt5.QtCore import QObject, QTimer
 
-from volren.app.imaging import adaptive_preview_scale, preview_size
-from volren.app.render_service import Frame, RenderService
-from volren.app.state import Change, ViewState
+from volren.app.core.frame_sizes import adaptive_preview_scale, preview_size
+from volren.app.core.state import Change, ViewState
+from volren.app.rendering.render_service import Frame, RenderService
 
 #: Input quiet for this long means the gesture stopped: render at full quality.
 SETTLE_MS = 150

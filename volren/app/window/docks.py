@@ -15,6 +15,7 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QDockWidget, QGroupBox, QScrollArea, QVBoxLayout, QWidget
 
+from volren.app.core.state import Change
 from volren.app.panels import (
     BackgroundPanel,
     BlendPanel,
@@ -23,13 +24,12 @@ from volren.app.panels import (
     LightingPanel,
     SamplingPanel,
 )
-from volren.app.state import Change
-from volren.app.tf_history import TFHistory
-from volren.app.tf_panel import TransferFunctionPanel
+from volren.app.tf_editor.history import TFHistory
+from volren.app.tf_editor.panel import TransferFunctionPanel
 from volren.renderers.base import KindSupport
 
 if TYPE_CHECKING:
-    from volren.app.main_window import MainWindow
+    from volren.app.window.main_window import MainWindow
 
 
 def _titled(title: str, panel: QWidget) -> QWidget:
@@ -132,7 +132,7 @@ class Docks:
     # ------------------------------------------------------------------ picking
     def pick(self, x: int, y: int) -> None:
         """Ctrl+click on the volume: a 2D TF widget at the value and gradient seen there."""
-        from volren.app.picking import pick
+        from volren.app.core.picking import pick
 
         window, state = self.window, self.window.state
         frame = window.viewport.frame

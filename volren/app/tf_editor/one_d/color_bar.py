@@ -25,8 +25,15 @@ from PyQt5.QtGui import (
 )
 from PyQt5.QtWidgets import QColorDialog, QSizePolicy, QWidget
 
-from volren.app.point_canvas import MARGIN, PICK_RADIUS, PointCanvas, ValueAxis, axis_span, neighbours
-from volren.app.state import ViewState
+from volren.app.core.state import ViewState
+from volren.app.tf_editor.one_d.point_canvas import (
+    MARGIN,
+    PICK_RADIUS,
+    PointCanvas,
+    ValueAxis,
+    axis_span,
+    neighbours,
+)
 from volren.model.transfer_function import TransferFunction1D
 
 

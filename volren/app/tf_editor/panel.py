@@ -11,10 +11,10 @@ from __future__ import annotations
 from PyQt5.QtCore import pyqtSignal
 from PyQt5.QtWidgets import QHBoxLayout, QTabWidget, QToolButton, QVBoxLayout, QWidget
 
-from volren.app.state import Change, ViewState
-from volren.app.tf_editor_1d import TransferFunction1DEditor
-from volren.app.tf_editor_2d import TransferFunction2DEditor
-from volren.app.tf_history import TFHistory
+from volren.app.core.state import Change, ViewState
+from volren.app.tf_editor.history import TFHistory
+from volren.app.tf_editor.one_d.editor import TransferFunction1DEditor
+from volren.app.tf_editor.two_d.editor import TransferFunction2DEditor
 
 
 class TransferFunctionPanel(QWidget):
