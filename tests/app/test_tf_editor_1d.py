@@ -8,7 +8,9 @@ the QMouseEvents themselves (`drag`); presses and releases go through qtbot.
 
 from __future__ import annotations
 
+import importlib.util
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,7 +19,12 @@ from PyQt5.QtGui import QColor, QMouseEvent
 from PyQt5.QtWidgets import QApplication, QWidget
 
 from volren.api import default_transfer_function
-from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset, preset_color_points, unit_stops
+from volren.app.core.colormap_presets import (
+    PRESET_NAMES,
+    apply_preset,
+    preset_color_points,
+    unit_stops,
+)
 from volren.app.core.state import Change, ViewState, default_camera
 from volren.app.core.value_histogram import value_histogram
 from volren.app.tf_editor.history import TFHistory
@@ -301,7 +308,7 @@ def test_preset_changes_colours_over_the_range_and_keeps_opacity(editor, state, 
 
 
 def test_presets_follow_their_sources():
-    from matplotlib import colormaps
+    colormaps = pytest.importorskip("matplotlib").colormaps
 
     x = np.arange(256) / 255
     for name, tolerance in (("viridis", 0.04), ("cividis", 0.04), ("jet", 1e-9), ("bone", 1e-9)):
@@ -320,6 +327,21 @@ def test_presets_follow_their_sources():
         assert stops[0, 0] == 0.0 and stops[-1, 0] == 1.0 and np.all(np.diff(stops[:, 0]) > 0), name
     with pytest.raises(VolrenError, match="no colour map named 'nope'"):
         apply_preset(TransferFunction1D.ramp(0, 1), "nope")
+
+
+def test_the_preset_data_is_what_the_generator_writes(tmp_path):
+    """colormap_presets.json is generated (scripts/make_colormap_presets.py): regenerating it from
+    matplotlib and ParaView's nodes gives the same stops, so the data and its sources agree."""
+    pytest.importorskip("matplotlib")
+    script = Path(__file__).resolve().parents[2] / "scripts" / "make_colormap_presets.py"
+    spec = importlib.util.spec_from_file_location("make_colormap_presets", script)
+    generator = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generator)
+    generator.main([str(tmp_path / "presets.json")])
+    fresh = json.loads((tmp_path / "presets.json").read_text())["presets"]
+    assert tuple(fresh) == PRESET_NAMES
+    for name in PRESET_NAMES:  # to rounding: other matplotlib or VTK builds may differ in the last digits
+        np.testing.assert_allclose(unit_stops(name), fresh[name], atol=1e-6, err_msg=name)
 
 
 def test_range_boxes_rescale_the_tf(editor, state):

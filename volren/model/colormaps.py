@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-#: matplotlib's viridis at five evenly spaced stops (perceptually uniform, colour-blind safe).
+#: Viridis (van der Walt and Smith's perceptually uniform, colour-blind safe map) at five evenly spaced stops.
 VIRIDIS = (
     (0.0, 0.267, 0.005, 0.329),
     (0.25, 0.230, 0.322, 0.546),

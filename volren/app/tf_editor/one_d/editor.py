@@ -70,8 +70,7 @@ def _preset_icon(name: str) -> QIcon:
 class PresetBox(QComboBox):
     """The colour-map chooser: a placeholder, then the preset names.
 
-    The swatches are drawn when the list first opens: building them imports matplotlib and VTK
-    (for "Cool to Warm"), which the app's start-up should not wait for.
+    The swatches are drawn when the list first opens, not while the app starts.
     """
 
     def __init__(self, parent: QWidget | None = None) -> None:
