@@ -1,7 +1,8 @@
 """DESIGN.md's import rules: app, cli -> renderers, io -> model; model pure numpy (numba only in
 model.preintegration, whose kernels the pre-integration issue asks for in numpy/numba); no Qt in
-renderers or the CLI; io and renderers independent. Checked statically (every import statement)
-and at run time (what `import volren` and the CLI actually load)."""
+renderers, the CLI or the app's core (volren.app.core); no matplotlib in the app; io and renderers
+independent. Checked statically (every import statement) and at run time (what `import volren`,
+the app's core and the CLI actually load)."""
 
 from __future__ import annotations
 
@@ -93,6 +94,11 @@ def test_kernels_need_only_the_model_and_the_contract():
         ("renderers", ("PyQt5", "pyvistaqt", "pyvista", "volren.io", "volren.app", "volren.cli")),
         ("io", ("PyQt5", "pyvistaqt", "moderngl", "volren.renderers", "volren.app", "volren.cli")),
         ("cli", ("PyQt5", "pyvistaqt", "volren.app")),
+        # the app's core is its Qt-free logic: no Qt, and none of the app's Qt parts
+        ("app/core", ("PyQt5", "pyvistaqt", "matplotlib", "volren.cli", "volren.app.files", "volren.app.main",
+                      "volren.app.panels", "volren.app.rendering", "volren.app.tf_editor", "volren.app.window")),
+        # matplotlib is the `bench` extra: the app's colour maps are data (app/core/colormap_presets.json)
+        ("app", ("matplotlib",)),
         # the kit judges renderers through the public contract only: no renderer's internals
         ("testing", HEAVY + ("vtkmodules", "volren.io", "volren.app", "volren.cli", "volren.bench",
                              "volren.renderers.reference", "volren.renderers.slicer", "volren.renderers.tetra",
@@ -124,6 +130,19 @@ def test_importing_volren_and_the_model_is_light():
 
 def test_preintegration_loads_numba_and_nothing_heavier():
     assert loaded_after("import volren.model.preintegration") == ["numba"]
+
+
+def test_the_app_core_loads_no_qt():
+    """Importing every core module (and so everything they import) loads neither Qt nor
+    matplotlib; nor does `import volren.app`."""
+    core = sorted(f"volren.app.core.{p.stem}" for p in (PACKAGE / "app" / "core").glob("*.py"))
+    assert "volren.app.core.state" in core
+    loaded = loaded_after(f"import volren.app, {', '.join(core)}")
+    assert "PyQt5" not in loaded and "pyvistaqt" not in loaded and "matplotlib" not in loaded
+
+
+def test_importing_the_app_package_loads_no_qt():
+    assert loaded_after("import volren.app") == []
 
 
 def test_the_cli_runs_without_qt():

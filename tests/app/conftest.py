@@ -112,7 +112,7 @@ def window(make_window):
 def loaded_window(window, sample, qtbot):
     """A window showing the sample with the vtk renderer, first full frame already on screen."""
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        window.apply_loaded(sample, "vtk")
+        window.files.apply_loaded(sample, "vtk")
     return window
 
 

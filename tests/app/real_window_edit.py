@@ -48,7 +48,7 @@ def main() -> int:
             app.processEvents()
             time.sleep(0.01)
 
-    window.apply_loaded(load_input(None), "vtk")
+    window.files.apply_loaded(load_input(None), "vtk")
     wait_full(1)
     before = screen_pixels(window.viewport)
     curve = window.docks.tf_panel.editor_1d.curve

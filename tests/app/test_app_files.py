@@ -16,7 +16,7 @@ from PyQt5.QtCore import QSettings, Qt
 from PyQt5.QtGui import QKeySequence
 
 from volren.app.core.loading import LoadCancelled, LoadedInput, load_input, view_scene
-from volren.app.files import screenshot_dialog as dialogs
+from volren.app.files import screenshot_dialog
 from volren.app.files.recent_files import RecentFiles, RecentFilesMenu
 from volren.errors import VolrenError
 from volren.io.image_io import to_png_pixels
@@ -100,7 +100,7 @@ def png_pixels(path: Path) -> np.ndarray:
 
 def show(window, qtbot, loaded: LoadedInput, renderer: str = "fake") -> None:
     with qtbot.waitSignal(window.fullFrameShown, timeout=TIMEOUT_MS):
-        window.apply_loaded(loaded, renderer)
+        window.files.apply_loaded(loaded, renderer)
 
 
 # ---------------------------------------------------------------------------- recent files
@@ -166,22 +166,22 @@ def test_opened_files_go_to_the_recent_menu_and_open_from_it(
         p.write_text("x")
     for p in (first, second):
         with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
-            w.open_input(p, renderer="fake")
-    with qtbot.waitSignal(w.loadFinished, timeout=TIMEOUT_MS) as failed:
-        w.open_input(bad)
+            w.files.open_input(p, renderer="fake")
+    with qtbot.waitSignal(w.files.loadFinished, timeout=TIMEOUT_MS) as failed:
+        w.files.open_input(bad)
     assert failed.args == [False] and len(error_boxes) == 1
-    assert w.recent.paths() == [str(second), str(first)]  # a file that failed is not listed
-    assert QSettings(w.recent._settings.fileName(), QSettings.IniFormat).value("recent/files") == [
+    assert w.files.recent.paths() == [str(second), str(first)]  # a file that failed is not listed
+    assert QSettings(w.files.recent._settings.fileName(), QSettings.IniFormat).value("recent/files") == [
         str(second),
         str(first),
     ]
-    entries = w.recent_menu.entries()
+    entries = w.files.recent_menu.entries()
     assert [e.data() for e in entries] == [str(second), str(first)]
-    assert w.recent_menu.menuAction() in w.menuBar().actions()[0].menu().actions()
+    assert w.files.recent_menu.menuAction() in w.menuBar().actions()[0].menu().actions()
     with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
         entries[1].trigger()
     assert w.state.source == "first.vti"
-    assert w.recent.paths() == [str(first), str(second)]
+    assert w.files.recent.paths() == [str(first), str(second)]
 
 
 # ---------------------------------------------------------------------------- cancel and supersede
@@ -191,21 +191,21 @@ def test_cancel_drops_a_slow_load_and_keeps_the_view(files_window, fakes, qtbot,
     show(w, qtbot, good_volume())
     volume, frame = w.state.volume, w.viewport.frame
     finished = []
-    w.loadFinished.connect(finished.append)
-    assert not w.cancel_action.isEnabled()
-    w.open_input(tmp_path / "slow.vti")
+    w.files.loadFinished.connect(finished.append)
+    assert not w.files.cancel_action.isEnabled()
+    w.files.open_input(tmp_path / "slow.vti")
     qtbot.waitUntil(load.started.is_set, timeout=TIMEOUT_MS)
-    assert w.busy_bar.isVisible() and w.cancel_button.isVisible() and w.cancel_action.isEnabled()
-    assert w.cancel_action.shortcut() == QKeySequence(Qt.Key_Escape)
-    qtbot.mouseClick(w.cancel_button, Qt.LeftButton)
+    assert w.files.busy_bar.isVisible() and w.files.cancel_button.isVisible() and w.files.cancel_action.isEnabled()
+    assert w.files.cancel_action.shortcut() == QKeySequence(Qt.Key_Escape)
+    qtbot.mouseClick(w.files.cancel_button, Qt.LeftButton)
     assert finished == [False]
-    assert not w.busy_bar.isVisible() and not w.cancel_button.isVisible() and not w.cancel_action.isEnabled()
+    assert not w.files.busy_bar.isVisible() and not w.files.cancel_button.isVisible() and not w.files.cancel_action.isEnabled()
     load.release.set()
-    assert load.finished.wait(10) and w.loader.wait(5000)
+    assert load.finished.wait(10) and w.files.loader.wait(5000)
     qtbot.wait(100)  # the abandoned result arrives now, and must be dropped
     assert w.state.volume is volume and w.viewport.frame is frame and w.state.source == "ml9"
     assert finished == [False] and error_boxes == []
-    assert w.recent.paths() == []
+    assert w.files.recent.paths() == []
 
 
 def test_escape_cancels_the_load(files_window, fakes, qtbot, tmp_path):
@@ -213,12 +213,12 @@ def test_escape_cancels_the_load(files_window, fakes, qtbot, tmp_path):
     w = files_window(load=load)
     w.activateWindow()
     qtbot.waitActive(w)
-    w.open_input(tmp_path / "slow.vti")
+    w.files.open_input(tmp_path / "slow.vti")
     qtbot.waitUntil(load.started.is_set, timeout=TIMEOUT_MS)
-    with qtbot.waitSignal(w.loader.cancelled, timeout=TIMEOUT_MS):
+    with qtbot.waitSignal(w.files.loader.cancelled, timeout=TIMEOUT_MS):
         qtbot.keyClick(w.viewport, Qt.Key_Escape)
     load.release.set()
-    assert load.finished.wait(10) and w.loader.wait(5000)
+    assert load.finished.wait(10) and w.files.loader.wait(5000)
     qtbot.wait(100)
     assert w.state.volume is None and "No volume" in w.viewport.placeholder
 
@@ -227,15 +227,15 @@ def test_a_new_open_supersedes_a_running_load(files_window, fakes, qtbot, tmp_pa
     load = ScriptedLoad()
     w = files_window(load=load)
     finished = []
-    w.loadFinished.connect(finished.append)
-    w.open_input(tmp_path / "slow.vti", renderer="fake")
+    w.files.loadFinished.connect(finished.append)
+    w.files.open_input(tmp_path / "slow.vti", renderer="fake")
     qtbot.waitUntil(load.started.is_set, timeout=TIMEOUT_MS)
     with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
-        w.open_input(tmp_path / "fast.vti", renderer="fake")
+        w.files.open_input(tmp_path / "fast.vti", renderer="fake")
     assert w.state.source == "fast.vti" and w.state.volume.dimensions == (11, 11, 11)
-    assert not w.busy_bar.isVisible()
+    assert not w.files.busy_bar.isVisible()
     load.release.set()
-    assert load.finished.wait(10) and w.loader.wait(5000)
+    assert load.finished.wait(10) and w.files.loader.wait(5000)
     qtbot.wait(100)
     assert w.state.source == "fast.vti" and finished == [True] and error_boxes == []
 
@@ -250,12 +250,12 @@ def test_stages_show_in_the_status_bar(files_window, fakes, qtbot, tmp_path):
         return good_volume()
 
     w = files_window(load=staged)
-    w.open_input(tmp_path / "big.vtu", renderer="fake")
-    qtbot.waitUntil(lambda: w.stage_label.text() == "Preparing mesh…", timeout=TIMEOUT_MS)
-    assert w.stage_label.isVisible() and w.busy_bar.maximum() == 100 and w.busy_bar.value() == 25
+    w.files.open_input(tmp_path / "big.vtu", renderer="fake")
+    qtbot.waitUntil(lambda: w.files.stage_label.text() == "Preparing mesh…", timeout=TIMEOUT_MS)
+    assert w.files.stage_label.isVisible() and w.files.busy_bar.maximum() == 100 and w.files.busy_bar.value() == 25
     with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
         release.set()
-    assert not w.stage_label.isVisible() and w.state.source == "ml9"
+    assert not w.files.stage_label.isVisible() and w.state.source == "ml9"
 
 
 def test_loading_a_mesh_prepares_it_and_cancelling_skips_that(monkeypatch, tmp_path):
@@ -287,9 +287,9 @@ def test_loading_a_mesh_prepares_it_and_cancelling_skips_that(monkeypatch, tmp_p
 def test_scene_save_then_open_round_trip(files_window, fakes, qtbot, tmp_path, error_boxes):
     w = files_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
-        w.open_input(renderer="fake_2d")  # the bundled sample, read from its file
+        w.files.open_input(renderer="fake_2d")  # the bundled sample, read from its file
     sample_file, _ = sample_paths("marschner_lobb")
-    assert w.volume_path == str(Path(sample_file).absolute())
+    assert w.scenes.volume_path == str(Path(sample_file).absolute())
     volume = w.state.volume
     lo, hi = volume.value_range
     tf = TransferFunction2D((lo, hi), (0.0, 2.0), [TFWidget.box((lo, hi), (0.1, 1.0), (0.2, 0.9, 0.4), 0.6)])
@@ -305,12 +305,12 @@ def test_scene_save_then_open_round_trip(files_window, fakes, qtbot, tmp_path, e
     assert w.state.renderer == "fake_2d"
     scene_path = tmp_path / "saved" / "view.json"
     scene_path.parent.mkdir()
-    assert w.save_scene(scene_path)
-    assert w.recent.paths()[0] == str(scene_path)
+    assert w.scenes.save(scene_path)
+    assert w.files.recent.paths()[0] == str(scene_path)
 
     other = files_window()
     with qtbot.waitSignal(other.fullFrameShown, timeout=TIMEOUT_MS):
-        other.open_input(scene_path)
+        other.files.open_input(scene_path)
     s = other.state
     assert s.transfer_function == tf and s.transfer_function.dims == 2
     assert s.settings == settings and s.renderer == "fake_2d" and s.source == "view.json"
@@ -319,17 +319,17 @@ def test_scene_save_then_open_round_trip(files_window, fakes, qtbot, tmp_path, e
     assert (s.camera.view_angle, s.camera.parallel) == (camera.view_angle, camera.parallel)
     assert s.background == (0.3, 0.2, 0.1) and s.crop == crop
     np.testing.assert_array_equal(s.volume.values, volume.values)
-    assert other.volume_path == str(Path(sample_file).absolute())
+    assert other.scenes.volume_path == str(Path(sample_file).absolute())
     assert error_boxes == []
 
 
 def test_a_volume_from_no_file_is_written_beside_the_scene(files_window, fakes, qtbot, tmp_path, error_boxes):
     w = files_window()
     show(w, qtbot, good_volume(13))
-    assert w.volume_path is None
-    assert w.save_scene(tmp_path / "memory.json")
+    assert w.scenes.volume_path is None
+    assert w.scenes.save(tmp_path / "memory.json")
     written = tmp_path / "memory.volume.vti"
-    assert written.is_file() and w.volume_path == str(written)
+    assert written.is_file() and w.scenes.volume_path == str(written)
     reread = load_input(tmp_path / "memory.json")
     assert reread.volume_path == str(written) and reread.renderer == "fake"
     np.testing.assert_allclose(reread.volume.values, w.state.volume.values)
@@ -339,12 +339,12 @@ def test_a_volume_from_no_file_is_written_beside_the_scene(files_window, fakes, 
 
 def test_saving_a_scene_reports_failures(files_window, fakes, qtbot, tmp_path, error_boxes):
     w = files_window()
-    assert not w.save_scene(tmp_path / "empty.json")
+    assert not w.scenes.save(tmp_path / "empty.json")
     assert "open a volume first" in error_boxes[-1][1]
     show(w, qtbot, good_volume())
-    assert not w.save_scene(tmp_path / "no" / "such" / "folder" / "x.json")
+    assert not w.scenes.save(tmp_path / "no" / "such" / "folder" / "x.json")
     assert len(error_boxes) == 2 and "x.json" in error_boxes[-1][1] and "\n" not in error_boxes[-1][1]
-    assert w.recent.paths() == []
+    assert w.files.recent.paths() == []
 
 
 def test_save_scene_menu_action_adds_the_suffix(files_window, fakes, qtbot, tmp_path, monkeypatch):
@@ -359,9 +359,9 @@ def test_save_scene_menu_action_adds_the_suffix(files_window, fakes, qtbot, tmp_
         return str(tmp_path / "chosen"), filter
 
     monkeypatch.setattr(QFileDialog, "getSaveFileName", choose)
-    assert w.save_scene_action in w.menuBar().actions()[0].menu().actions()
-    assert w.save_scene_action.shortcut() == QKeySequence("Ctrl+S")
-    w.save_scene_action.trigger()
+    assert w.scenes.save_action in w.menuBar().actions()[0].menu().actions()
+    assert w.scenes.save_action.shortcut() == QKeySequence("Ctrl+S")
+    w.scenes.save_action.trigger()
     assert offered == ["scene.json"] and (tmp_path / "chosen.json").is_file()
     assert load_input(tmp_path / "chosen.json").renderer == "fake"
 
@@ -402,8 +402,8 @@ def test_screenshot_at_a_chosen_size_matches_a_direct_render(
     render_thread = threads[0]
     path = tmp_path / "shot.png"
     assert (123, 77) != w.viewport.pixel_size()
-    with qtbot.waitSignal(w.screenshotSaved, timeout=TIMEOUT_MS) as saved:
-        assert w.render_screenshot(path, 123, 77)
+    with qtbot.waitSignal(w.screenshots.saved, timeout=TIMEOUT_MS) as saved:
+        assert w.screenshots.render(path, 123, 77)
     assert saved.args == [str(path)]
     assert len(threads) == 2 and threads[1] not in (threading.main_thread(), render_thread)  # its own thread
     assert [c["size"] for c in fakes["fake"].calls].count((123, 77)) == 1
@@ -419,15 +419,15 @@ def test_screenshot_at_a_chosen_size_matches_a_direct_render(
 
 def test_screenshot_errors_are_reported(files_window, fakes, qtbot, tmp_path, error_boxes):
     w = files_window()
-    assert not w.render_screenshot(tmp_path / "x.png", 10, 10)
+    assert not w.screenshots.render(tmp_path / "x.png", 10, 10)
     assert "open a volume first" in error_boxes[-1][1]
     show(w, qtbot, good_volume())
-    assert not w.render_screenshot(tmp_path / "missing" / "dir" / "x.png", 32, 32)
+    assert not w.screenshots.render(tmp_path / "missing" / "dir" / "x.png", 32, 32)
     assert len(error_boxes) == 2 and "x.png" in error_boxes[-1][1] and "\n" not in error_boxes[-1][1]
     taken = tmp_path / "taken.png"
     taken.mkdir()  # the folder is writable, the file itself cannot be written: fails after rendering
     with qtbot.waitSignal(w.errorReported, timeout=TIMEOUT_MS) as reported:
-        assert w.render_screenshot(taken, 32, 32)
+        assert w.screenshots.render(taken, 32, 32)
     assert reported.args[0] == "Cannot save the screenshot" and "taken.png" in reported.args[1]
     assert len(error_boxes) == 3
 
@@ -439,25 +439,25 @@ def test_screenshot_menu_action_uses_the_dialog_choice(files_window, fakes, qtbo
 
     def ask(parent, path, size):
         asked.append(size)
-        return dialogs.ScreenshotChoice(str(tmp_path / "menu.png"), 64, 40)
+        return screenshot_dialog.ScreenshotChoice(str(tmp_path / "menu.png"), 64, 40)
 
-    monkeypatch.setattr(dialogs, "ask_screenshot", ask)
-    assert w.screenshot_action in w.menuBar().actions()[0].menu().actions()
-    with qtbot.waitSignal(w.screenshotSaved, timeout=TIMEOUT_MS):
-        w.screenshot_action.trigger()
+    monkeypatch.setattr(screenshot_dialog, "ask_screenshot", ask)
+    assert w.screenshots.action in w.menuBar().actions()[0].menu().actions()
+    with qtbot.waitSignal(w.screenshots.saved, timeout=TIMEOUT_MS):
+        w.screenshots.action.trigger()
     assert asked == [w.viewport.pixel_size()]
     assert png_pixels(tmp_path / "menu.png").shape == (40, 64, 3)
 
     monkeypatch.setattr(
-        dialogs, "ask_screenshot", lambda *a: dialogs.ScreenshotChoice(str(tmp_path / "w.png"), 1, 1, True)
+        screenshot_dialog, "ask_screenshot", lambda *a: screenshot_dialog.ScreenshotChoice(str(tmp_path / "w.png"), 1, 1, True)
     )
-    with qtbot.waitSignal(w.screenshotSaved, timeout=TIMEOUT_MS):
-        w.screenshot_action.trigger()
+    with qtbot.waitSignal(w.screenshots.saved, timeout=TIMEOUT_MS):
+        w.screenshots.action.trigger()
     assert png_pixels(tmp_path / "w.png").shape == (w.height(), w.width(), 3)
 
 
 def test_screenshot_dialog_size_aspect_and_whole_window(qtbot, tmp_path):
-    dialog = dialogs.ScreenshotDialog(None, str(tmp_path / "shot"), (400, 200))
+    dialog = screenshot_dialog.ScreenshotDialog(None, str(tmp_path / "shot"), (400, 200))
     qtbot.addWidget(dialog)
     assert (dialog.width_box.value(), dialog.height_box.value()) == (400, 200)
     dialog.width_box.setValue(1000)
@@ -465,7 +465,7 @@ def test_screenshot_dialog_size_aspect_and_whole_window(qtbot, tmp_path):
     dialog.keep_aspect.setChecked(False)
     dialog.height_box.setValue(300)
     assert dialog.width_box.value() == 1000
-    assert dialog.choice() == dialogs.ScreenshotChoice(str(tmp_path / "shot.png"), 1000, 300, False)
+    assert dialog.choice() == screenshot_dialog.ScreenshotChoice(str(tmp_path / "shot.png"), 1000, 300, False)
     dialog.whole_window.setChecked(True)
     assert not dialog.width_box.isEnabled() and dialog.choice().whole_window
     dialog.path_edit.setText("")
@@ -481,8 +481,8 @@ def test_vtk_screenshot_renders_beside_the_viewport_renderer(
     show(w, qtbot, sample, "vtk")
     width, height = w.viewport.pixel_size()
     path = tmp_path / "vtk.png"
-    with qtbot.waitSignal(w.screenshotSaved, timeout=TIMEOUT_MS):
-        w.render_screenshot(path, width, height)
+    with qtbot.waitSignal(w.screenshots.saved, timeout=TIMEOUT_MS):
+        w.screenshots.render(path, width, height)
     pixels = png_pixels(path)
     shown = w.viewport.frame.rgb
     assert np.abs(pixels.astype(int) - shown).max() <= 2, "the screenshot differs from the frame on screen"

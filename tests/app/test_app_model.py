@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -143,18 +141,6 @@ def test_renderer_options_lists_every_registered_renderer():
     options, _warnings = renderer_options("uniform")
     assert [o.name for o in options] == registry.names()
     assert next(o for o in options if o.name == "vtk").enabled
-
-
-def test_the_qt_free_modules_do_not_import_qt():
-    code = (
-        "import sys\n"
-        "import volren.app, volren.app.core.state, volren.app.core.interaction, volren.app.core.frame_sizes\n"
-        "import volren.app.core.loading, volren.app.core.renderer_choice\n"
-        "bad = [m for m in sys.modules if m.startswith(('PyQt5', 'qtpy', 'pyvistaqt'))]\n"
-        "assert not bad, bad\n"
-    )
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
-    assert result.returncode == 0, result.stderr
 
 
 def test_loading_a_2d_tf_gives_it_to_the_app(tmp_path):

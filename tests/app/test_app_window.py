@@ -40,9 +40,9 @@ def test_window_opens_on_sample_and_shows_first_full_frame(loaded_window, error_
     assert frame.full and frame.renderer == "vtk"
     assert (frame.width, frame.height) == w.viewport.pixel_size()
     assert not_background(w) > 0.05 * frame.width * frame.height, "the volume is not visible"
-    assert "vtk" in w.frame_label.text() and f"{frame.width} x {frame.height}" in w.frame_label.text()
-    assert "ms" in w.frame_label.text()
-    assert w.chooser.currentText() == "vtk"
+    assert "vtk" in w.renderers.frame_label.text() and f"{frame.width} x {frame.height}" in w.renderers.frame_label.text()
+    assert "ms" in w.renderers.frame_label.text()
+    assert w.renderers.chooser.currentText() == "vtk"
     assert "marschner_lobb" in w.windowTitle()
     assert error_boxes == []
 
@@ -141,24 +141,24 @@ def test_resize_renders_at_the_new_size(loaded_window, qtbot):
 
 def test_switching_renderer_keeps_camera_and_tf(loaded_window, fake_renderers, qtbot, error_boxes):
     w = loaded_window
-    w._refresh_renderers()  # the fakes were registered after the window was made
+    w.renderers.refresh()  # the fakes were registered after the window was made
     camera, tf = w.state.camera, w.state.transfer_function
-    index = w.chooser.findText("fake")
-    assert index >= 0 and w.chooser.is_enabled("fake")
+    index = w.renderers.chooser.findText("fake")
+    assert index >= 0 and w.renderers.chooser.is_enabled("fake")
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
-        w.chooser.setCurrentIndex(index)
-        w.chooser.activated.emit(index)
+        w.renderers.chooser.setCurrentIndex(index)
+        w.renderers.chooser.activated.emit(index)
     assert blocker.args[0].renderer == "fake" and w.state.renderer == "fake"
     assert w.state.camera is camera and w.state.transfer_function is tf
     seen = fake_renderers["fake"].calls[-1]
     assert seen["camera"] == camera and seen["tf"] == tf
     assert seen["size"] == w.viewport.pixel_size()
-    assert "fake" in w.frame_label.text()
+    assert "fake" in w.renderers.frame_label.text()
 
-    vtk_index = w.chooser.findText("vtk")
+    vtk_index = w.renderers.chooser.findText("vtk")
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
-        w.chooser.setCurrentIndex(vtk_index)
-        w.chooser.activated.emit(vtk_index)
+        w.renderers.chooser.setCurrentIndex(vtk_index)
+        w.renderers.chooser.activated.emit(vtk_index)
     assert blocker.args[0].renderer == "vtk" and blocker.args[0].camera == camera
     assert error_boxes == []
 
@@ -166,35 +166,35 @@ def test_switching_renderer_keeps_camera_and_tf(loaded_window, fake_renderers, q
 def test_renderer_that_cannot_draw_the_volume_is_disabled_with_tooltip(make_window, fake_renderers, sample, qtbot):
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.apply_loaded(sample, "vtk")
-    assert "fake_tet_only" in w.chooser.names()
-    assert not w.chooser.is_enabled("fake_tet_only")
-    assert "does not render uniform volumes" in w.chooser.tooltip("fake_tet_only")
-    assert w.chooser.is_enabled("vtk") and w.chooser.is_enabled("fake")
+        w.files.apply_loaded(sample, "vtk")
+    assert "fake_tet_only" in w.renderers.chooser.names()
+    assert not w.renderers.chooser.is_enabled("fake_tet_only")
+    assert "does not render uniform volumes" in w.renderers.chooser.tooltip("fake_tet_only")
+    assert w.renderers.chooser.is_enabled("vtk") and w.renderers.chooser.is_enabled("fake")
     # picking the disabled entry anyway (e.g. by keyboard) changes nothing
-    w.chooser.activated.emit(w.chooser.findText("fake_tet_only"))
+    w.renderers.chooser.activated.emit(w.renderers.chooser.findText("fake_tet_only"))
     assert w.state.renderer == "vtk"
 
 
 def test_renderer_that_raises_reports_and_falls_back(loaded_window, fake_renderers, qtbot, error_boxes):
     w = loaded_window
-    w._refresh_renderers()
+    w.renderers.refresh()
     camera = w.state.camera
-    index = w.chooser.findText("fake_broken")
+    index = w.renderers.chooser.findText("fake_broken")
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
-        w.chooser.setCurrentIndex(index)
-        w.chooser.activated.emit(index)
+        w.renderers.chooser.setCurrentIndex(index)
+        w.renderers.chooser.activated.emit(index)
     assert len(error_boxes) == 1
     title, text = error_boxes[0]
     assert "\n" not in text and "shader did not compile" in text and "vtk" in text
-    assert w.state.renderer == "vtk" and w.chooser.currentText() == "vtk"
+    assert w.state.renderer == "vtk" and w.renderers.chooser.currentText() == "vtk"
     assert blocker.args[0].renderer == "vtk" and w.state.camera is camera
 
 
 def test_requested_renderer_that_cannot_draw_is_an_error(make_window, fake_renderers, sample, qtbot, error_boxes):
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
-        w.apply_loaded(sample, "fake_tet_only")
+        w.files.apply_loaded(sample, "fake_tet_only")
     assert blocker.args[0].renderer == "vtk"
     assert len(error_boxes) == 1 and "fake_tet_only does not render uniform volumes" in error_boxes[0][1]
 
@@ -211,14 +211,14 @@ def fake_load(path, tf, scalars):
 def test_opening_a_bad_file_keeps_the_volume_and_reports_one_line(make_window, sample, qtbot, error_boxes, tmp_path):
     w = make_window(load=fake_load)
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.apply_loaded(sample, "vtk")
+        w.files.apply_loaded(sample, "vtk")
     volume, frame = w.state.volume, w.viewport.frame
-    with qtbot.waitSignal(w.loadFinished, timeout=FRAME_TIMEOUT_MS) as blocker:
-        w.open_input(tmp_path / "bad.vti")
+    with qtbot.waitSignal(w.files.loadFinished, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.files.open_input(tmp_path / "bad.vti")
     assert blocker.args == [False]
     assert w.state.volume is volume and w.viewport.frame is frame
     assert len(error_boxes) == 1 and "bad.vti" in error_boxes[0][1] and "\n" not in error_boxes[0][1]
-    assert not w.busy_bar.isVisible()
+    assert not w.files.busy_bar.isVisible()
 
 
 def test_dropping_a_file_opens_it_off_the_gui_thread(make_window, sample, qtbot, tmp_path, error_boxes):
@@ -232,7 +232,7 @@ def test_dropping_a_file_opens_it_off_the_gui_thread(make_window, sample, qtbot,
     drop = QDropEvent(QPointF(20, 20), Qt.CopyAction, mime, Qt.LeftButton, Qt.NoModifier)
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         QApplication.sendEvent(w, drop)  # Qt delivers a drop only after an accepted drag-enter
-        assert w.busy_bar.isVisibleTo(w)  # the busy indicator shows while the loader runs
+        assert w.files.busy_bar.isVisibleTo(w)  # the busy indicator shows while the loader runs
     assert w.state.volume.dimensions == (17, 17, 17) and w.state.source == "good.vti"
     assert error_boxes == []
 
@@ -240,18 +240,18 @@ def test_dropping_a_file_opens_it_off_the_gui_thread(make_window, sample, qtbot,
 def test_save_screenshot_writes_a_png_of_the_viewport_size(loaded_window, tmp_path):
     w = loaded_window
     path = tmp_path / "shot.png"
-    assert w.save_screenshot(path)
+    assert w.screenshots.save(path)
     image = QImage(str(path))
     assert not image.isNull()
     assert (image.width(), image.height()) == w.viewport.pixel_size()
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     whole = tmp_path / "window.png"
-    assert w.save_screenshot(whole, whole_window=True)
+    assert w.screenshots.save(whole, whole_window=True)
     assert (QImage(str(whole)).width(), QImage(str(whole)).height()) == (w.width(), w.height())
 
 
 def test_save_screenshot_to_a_bad_place_reports(loaded_window, tmp_path, error_boxes):
-    assert not loaded_window.save_screenshot(tmp_path / "missing" / "dir" / "x.png")
+    assert not loaded_window.screenshots.save(tmp_path / "missing" / "dir" / "x.png")
     assert len(error_boxes) == 1 and "x.png" in error_boxes[0][1]
 
 
@@ -266,7 +266,7 @@ def test_in_place_tf_edit_renders_again(loaded_window, qtbot):
 
 def test_opens_the_bundled_sample_by_default(window, qtbot, error_boxes):
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        window.open_input()
+        window.files.open_input()
     assert window.state.source == "sample marschner_lobb" and window.state.volume.dimensions == (41, 41, 41)
     assert not_background(window) > 0
     assert error_boxes == []
@@ -282,7 +282,7 @@ def test_opening_a_scene_then_a_tf_file(window, qtbot, tmp_path, error_boxes):
     view = OrbitView(azimuth=90.0, elevation=10.0, zoom=1.5)
     io.save_scene(Scene(str(volume_path), io.load_transfer_function(tf_path), view, renderer="vtk"), scene_path)
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        window.open_input(scene_path)
+        window.files.open_input(scene_path)
     volume = window.state.volume
     assert window.state.camera == view.camera(volume.bounds, window.viewport.aspect())
     assert window.state.source == "scene.json"
@@ -290,7 +290,7 @@ def test_opening_a_scene_then_a_tf_file(window, qtbot, tmp_path, error_boxes):
     tf = TransferFunction1D.ramp(0.0, 1.0, 0.5, (1.0, 0.0, 0.0), 0.05)
     io.save_transfer_function(tf, tmp_path / "red.json")
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        window.open_input(tmp_path / "red.json")
+        window.files.open_input(tmp_path / "red.json")
     assert window.state.volume is volume and window.state.transfer_function == tf
     red = frame_pixels(window)[..., 0].astype(int) - frame_pixels(window)[..., 1]
     assert np.count_nonzero(red > 60) > 100, "the red TF is not what is shown"
@@ -302,8 +302,8 @@ def test_opening_a_corrupt_file_with_the_real_readers(loaded_window, qtbot, erro
     volume = w.state.volume
     bad = tmp_path / "corrupt.vti"
     bad.write_bytes(b"this is not a VTK file\x00\x01")
-    with qtbot.waitSignal(w.loadFinished, timeout=FRAME_TIMEOUT_MS) as blocker:
-        w.open_input(bad)
+    with qtbot.waitSignal(w.files.loadFinished, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.files.open_input(bad)
     assert blocker.args == [False] and w.state.volume is volume
     assert len(error_boxes) == 1 and "corrupt.vti" in error_boxes[0][1] and "\n" not in error_boxes[0][1]
 
@@ -321,10 +321,10 @@ def test_opening_a_2d_tf_switches_to_a_renderer_that_draws_it(loaded_window, qtb
     io.save_transfer_function(tf2, tmp_path / "tf2d.json")
     assert w.state.renderer == "vtk"
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
-        w.open_input(tmp_path / "tf2d.json")
+        w.files.open_input(tmp_path / "tf2d.json")
     assert w.state.volume is volume and w.state.transfer_function == tf2
     assert w.state.renderer != "vtk" and blocker.args[0].renderer == w.state.renderer
-    vtk_option = next(o for o in w.renderer_options() if o.name == "vtk")
+    vtk_option = next(o for o in w.renderers.options() if o.name == "vtk")
     assert not vtk_option.enabled and "2D" in vtk_option.reason
     assert error_boxes == []
 

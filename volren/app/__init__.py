@@ -1,20 +1,50 @@
-"""The PyQt5 desktop app (`volren view`).
+"""The PyQt5 desktop app (`volren view`), grouped by concept.
 
-The modules are split so that everything which is not Qt-specific can be used and tested
-without widgets, and so that later panels (the transfer-function editors) can plug into the same
-state object the viewport observes:
+Everything that is not Qt-specific sits in `core`, usable and tested without widgets; the widgets
+around it all observe and edit one `core.state.ViewState`. Importing this package does not import
+Qt, nor does importing anything in `core` (tests/test_import_rules.py); the other subpackages do.
 
-- `state`: `ViewState`, the observable model of what is shown (volume, TF, camera, settings,
-  renderer); no Qt.
-- `interaction`: mouse gestures -> camera operations (VTK's trackball-camera style); no Qt.
-- `imaging`: premultiplied float RGBA -> 8-bit RGB over a background colour; no Qt.
-- `loading`: files -> a `LoadedInput` (volume, TF, camera, settings); no Qt.
-- `renderer_choice`: which renderers can draw the loaded volume, and fallbacks; no Qt.
-- `render_service`: the render worker thread that owns the renderer, newest request only.
-- `scheduling`: turns state changes into reduced-size and full-quality frame requests.
-- `load_task`: runs `loading` off the GUI thread.
-- `viewport`, `renderer_box`, `dialogs`, `main_window`: the widgets.
-- `main`: `run()`, what `volren view` calls.
-
-Importing this package does not import Qt; the submodules that need it do.
+- `main`: `run()`, what `volren view` calls (window, input, event loop or --screenshot); Qt inside.
+- `core/` (Qt-free):
+  - `state`: `ViewState`, the observable model of what is shown (volume, TF, camera, settings,
+    renderer, background, crop).
+  - `interaction`: mouse gestures -> camera operations (VTK's trackball-camera style).
+  - `frame_sizes`: how big preview frames are (a quarter of the pixels, fewer for slow renderers).
+  - `loading`: files -> a `LoadedInput` (volume, TF, camera, settings) and back to a `Scene`.
+  - `renderer_choice`: which renderers can draw the loaded volume, and fallbacks.
+  - `picking`: the point a pixel shows, with its value and gradient magnitude.
+  - `value_histogram`: the value histogram behind the 1D TF editor.
+  - `joint_histogram`: the value x gradient-magnitude histogram behind the 2D TF editor.
+  - `colormap_presets`: the 1D editor's colour maps, read from `colormap_presets.json`.
+  - `tf_widget_geometry`: outlines, handles, moves and resizes of the 2D editor's widgets.
+- `rendering/` (Qt):
+  - `render_service`: the render worker thread that owns the renderer, newest request only.
+  - `scheduling`: state changes -> reduced-size and full-quality frame requests.
+  - `viewport`: the widget that shows frames and turns mouse input into camera changes.
+  - `renderer_chooser`: the renderer combo box, with why a renderer is disabled.
+- `files/` (Qt):
+  - `load_task`: runs `core.loading` off the GUI thread, cancellable.
+  - `screenshot`: renders a screenshot at a chosen size off the GUI thread and writes the PNG.
+  - `recent_files`: File > Open Recent, kept in QSettings.
+  - `screenshot_dialog`: the Save Screenshot dialog.
+- `tf_editor/` (Qt):
+  - `panel`: the TF dock, the 1D and 2D editors in tabs.
+  - `history`: undo and redo of TF edits, recorded from the state.
+  - `one_d/editor`: the 1D editor panel (presets, range, files) around the two canvases below.
+  - `one_d/point_canvas`: the base of the two canvases below: control points on a value axis.
+  - `one_d/opacity_curve`: the opacity curve over the value histogram.
+  - `one_d/color_bar`: the colour bar with its colour stops.
+  - `two_d/editor`: the 2D editor panel (add and delete widgets, colour, opacity, gradient axis).
+  - `two_d/widget_canvas`: the widgets drawn and dragged over the joint histogram.
+- `panels/` (Qt): the settings panels (lighting, sampling, blend mode, crop box, background,
+  dataset facts) and their shared base and controls.
+- `window/` (Qt):
+  - `main_window`: `MainWindow`, which builds the parts below and wires them to the state,
+    viewport, render thread, menus, toolbar and status bar.
+  - `file_actions`: File > Open, Open DICOM folder, Open Recent, loading in the background.
+  - `scene_actions`: File > Save Scene.
+  - `screenshot_actions`: File > Save Screenshot.
+  - `renderer_control`: the renderer in use: chooser, fallbacks, the frame label.
+  - `file_drops`: files dropped on the window open like File > Open.
+  - `docks`: places the TF editors and settings panels, and Ctrl+click picking.
 """

@@ -149,7 +149,7 @@ def _run_app(input, tf, scalars, renderer, screenshot, size, timeout_s: float, t
 
     with _guarded(on_problem, traceback), _quit_on_sigint(lambda: on_problem("interrupted")):
         window.show()
-        window.open_input(input, tf, scalars, renderer)
+        window.files.open_input(input, tf, scalars, renderer)
         try:
             code = int(app.exec_())
         finally:
@@ -191,7 +191,7 @@ def _screenshot(window, input, tf, scalars, renderer, path: Path, timeout_s: flo
     timer.start(int(timeout_s * 1000))
     with _guarded(lambda message: finish(3, ""), traceback), _quit_on_sigint(lambda: finish(130, "interrupted")):
         window.show()
-        window.open_input(input, tf, scalars, renderer)
+        window.files.open_input(input, tf, scalars, renderer)
         if not outcome:
             loop.exec_()
     timer.stop()

@@ -127,7 +127,7 @@ def measure(
     window.show()
     probe = _Probe(window)
     try:
-        _full_frame_after(app, window, probe, lambda: window.apply_loaded(LoadedInput(volume, tf), renderer), timeout_s)
+        _full_frame_after(app, window, probe, lambda: window.files.apply_loaded(LoadedInput(volume, tf), renderer), timeout_s)
         if errors or window.state.renderer != renderer:
             raise RuntimeError(f"{renderer} could not show {dataset}: {'; '.join(errors) or window.state.renderer}")
         state = window.state

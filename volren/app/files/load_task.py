@@ -1,7 +1,7 @@
 """Loading files off the GUI thread: newest request wins, and a load can be abandoned.
 
 Readers can take seconds on real datasets (DICOM series, large meshes), and the window must keep
-painting and answering meanwhile. `Loader.start` runs `loading.load_input` on a thread pool and
+painting and answering meanwhile. `Loader.start` runs `core.loading.load_input` on a thread pool and
 reports back through queued signals: the stage it is in (`stageChanged`), then `loaded` or
 `failed`. A result that is no longer the newest request (the person opened something else, or
 cancelled) is dropped, so the window keeps what it showed.

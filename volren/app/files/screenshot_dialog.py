@@ -1,6 +1,7 @@
-"""Message boxes and small dialogs, in one place so tests (and headless runs) can replace them.
+"""The Save Screenshot dialog: where to, at what size, or the whole window as shown.
 
-Every error the app shows is a one-line reason (VolrenError's contract), never a traceback.
+`ask_screenshot` is looked up on this module at call time, so tests (and headless runs) can
+replace the modal dialog.
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ from PyQt5.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QLineEdit,
-    QMessageBox,
     QPushButton,
     QSpinBox,
     QWidget,
@@ -26,11 +26,6 @@ from PyQt5.QtWidgets import (
 from volren.renderers.base import MAX_IMAGE_SIDE
 
 PNG_FILTER = "PNG images (*.png)"
-
-
-def show_error(parent: QWidget | None, title: str, message: str) -> None:
-    """A modal error box; looked up at call time so `QMessageBox.critical` can be patched."""
-    QMessageBox.critical(parent, title, message)
 
 
 @dataclass(frozen=True)

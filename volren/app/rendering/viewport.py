@@ -5,7 +5,7 @@ QImage; no renderer needs a window of its own, and switching renderers never reb
 Frames keep their aspect ratio (a frame made before a resize is letterboxed until its successor
 arrives) and preview frames are scaled up smoothly.
 
-Gestures follow VTK's trackball camera (see `interaction`): left-drag rotates, right-drag or the
+Gestures follow VTK's trackball camera (see `core.interaction`): left-drag rotates, right-drag or the
 wheel dollies, middle-drag (or shift + left-drag) pans, 'r' resets the view; ctrl + left-click
 emits `pointPicked` with the pixel under the mouse (for picking). The viewport only
 changes the `ViewState`; the frame scheduler decides what to render.

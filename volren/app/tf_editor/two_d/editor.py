@@ -8,10 +8,10 @@ that object in place (the state announces each edit, `TFHistory` makes it undoab
 state gets another TF object (undo, a file opened, a new volume) it simply shows the new one. It
 never keeps a copy of the TF, so there is nothing to get out of step, and syncing its controls
 never writes back (their signals are blocked meanwhile). With a 1D TF it offers to start a 2D one
-over the volume's value range and robust gradient range (`joint_histogram`), holding one
+over the volume's value range and robust gradient range (`core.joint_histogram`), holding one
 boundary-emphasis triangle.
 
-Dual-domain picking: the main window passes `picking.pick`'s (value, gradient magnitude) to
+Dual-domain picking: the main window passes `core.picking.pick`'s (value, gradient magnitude) to
 `place_widget_at`, which adds a small Gaussian there and selects it.
 """
 

@@ -6,7 +6,7 @@ runs left to right over the TF's value range, gradient magnitude bottom to top o
 
 Gestures: a click selects the topmost widget under the mouse (or clears the selection); a drag
 inside a widget moves it, a drag on a handle of the selected widget resizes it
-(`tf_widget_geometry` says what each handle does); Delete or Backspace removes the selected
+(`core.tf_widget_geometry` says what each handle does); Delete or Backspace removes the selected
 widget. A drag is wrapped in `state.begin_interaction()` / `end_interaction()` (begun at the
 first movement, so a plain click is no interaction), which makes it cheap previews while it lasts
 and one undo step. Every drag position is computed from the widget as it was at the press, so
@@ -168,7 +168,7 @@ class TFWidgetCanvas(QWidget):
         return (MIN_SIZE_FRACTION * (hi - lo), MIN_SIZE_FRACTION * gmax)
 
     def widget_pixel(self, index: int) -> QPoint:
-        """The pixel a move grabs widget `index` at (its `tf_widget_geometry.center`)."""
+        """The pixel a move grabs widget `index` at (its `core.tf_widget_geometry.center`)."""
         assert self._tf is not None
         return self.to_pixel(*geometry.center(self._tf.widgets[index])).toPoint()
 

@@ -1,0 +1,211 @@
+"""Opening files: File > Open, Open DICOM folder, Open Recent, and showing what was loaded.
+
+A load runs in the background (`files.load_task.Loader`) with its stage in the status bar, and can
+be cancelled (the Cancel button or Esc) or superseded by the next open. A file that fails to load
+leaves what was shown. A transfer-function file is applied to the volume already shown; a volume
+or a scene replaces the scene, with a renderer that can draw it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from PyQt5.QtCore import QObject, Qt, pyqtSignal
+from PyQt5.QtGui import QKeySequence
+from PyQt5.QtWidgets import QAction, QFileDialog, QLabel, QMainWindow, QProgressBar, QToolButton, QWidget
+
+from volren.app.core.loading import LoadedInput, PathArg
+from volren.app.core.state import ViewState, default_camera
+from volren.app.files.load_task import Loader, LoadFunction
+from volren.app.files.recent_files import RecentFiles, RecentFilesMenu
+from volren.app.rendering.viewport import Viewport
+from volren.app.window.renderer_control import RendererControl
+from volren.app.window.scene_actions import SceneActions
+from volren.errors import VolrenError
+
+OPEN_FILTER = (
+    "Volumes and scenes (*.vti *.vtk *.vtu *.vtr *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw *.json);;"
+    "All files (*)"
+)
+
+
+class FileActions(QObject):
+    """The open actions, the recent-files menu, the load's status-bar widgets and `open_input`."""
+
+    #: A load finished: True when something new is shown (False: failed or cancelled).
+    loadFinished = pyqtSignal(bool)
+
+    def __init__(
+        self,
+        window: QMainWindow,
+        state: ViewState,
+        viewport: Viewport,
+        renderers: RendererControl,
+        scenes: SceneActions,
+        recent: RecentFiles,
+        load: LoadFunction,
+        report_error: Callable[[str, str], None],
+    ) -> None:
+        super().__init__(window)
+        self._window = window
+        self._state = state
+        self._viewport = viewport
+        self._renderers = renderers
+        self._scenes = scenes
+        self._report_error = report_error
+        self.recent = recent
+        self.loader = Loader(window, load)
+        self.loader.loaded.connect(self._on_loaded)
+        self.loader.failed.connect(self._on_load_failed)
+        self.loader.busyChanged.connect(self._on_busy)
+        self.loader.stageChanged.connect(self._on_load_stage)
+        self.loader.cancelled.connect(self._on_load_cancelled)
+        self._build_actions()
+        self._build_status_widgets()
+
+    def _build_actions(self) -> None:
+        window = self._window
+        self.open_action = QAction("&Open…", window, shortcut=QKeySequence.Open, triggered=self._open_dialog)
+        self.open_action.setToolTip("Open a volume, a scene or a transfer function (or drop a file on the window)")
+        self.open_folder_action = QAction("Open &DICOM folder…", window, triggered=self._open_folder_dialog)
+        self.recent_menu = RecentFilesMenu(self.recent, window)
+        self.recent_menu.fileChosen.connect(self.open_input)
+        self.cancel_action = QAction("Cancel", window, shortcut=QKeySequence(Qt.Key_Escape), triggered=self.cancel)
+        self.cancel_action.setToolTip("Stop loading and keep what is shown  [Esc]")
+        self.cancel_action.setEnabled(False)
+
+    def _build_status_widgets(self) -> None:
+        window = self._window
+        self.stage_label = QLabel("", window)  # "Reading bonsai.vti…", "Preparing mesh…"
+        self.busy_bar = QProgressBar(window)
+        self.busy_bar.setRange(0, 0)  # busy indicator until a stage reports how far it is
+        self.busy_bar.setMaximumWidth(120)
+        self.busy_bar.setTextVisible(False)
+        self.cancel_button = QToolButton(window)
+        self.cancel_button.setDefaultAction(self.cancel_action)
+        for widget in self.status_widgets:
+            widget.hide()
+
+    @property
+    def status_widgets(self) -> tuple[QWidget, ...]:
+        """What the status bar shows while a load runs, left to right."""
+        return (self.stage_label, self.busy_bar, self.cancel_button)
+
+    # ------------------------------------------------------------------ opening
+    def open_input(
+        self,
+        path: PathArg | None = None,
+        tf: PathArg | None = None,
+        scalars: str | None = None,
+        renderer: str | None = None,
+    ) -> None:
+        """Load `path` (default: the bundled sample) in the background, then show it; a load still
+        running is abandoned (its result never shows).
+
+        `renderer` is an explicit request (the command line): if it cannot draw the volume that is
+        an error; a scene's renderer that cannot is replaced quietly.
+        """
+        label = Path(path).name if path is not None else "sample"
+        self._window.statusBar().showMessage(f"Opening {label}…")
+        if self._state.volume is None:
+            self._viewport.placeholder = f"Opening {label}…"
+            self._viewport.update()
+        self.loader.start(path, tf, scalars, context={"path": path, "renderer": renderer})
+
+    def cancel(self) -> bool:
+        """Abandon the running load (Esc, the status bar's Cancel): what is shown stays."""
+        return self.loader.cancel()
+
+    def apply_loaded(self, loaded: LoadedInput, requested_renderer: str | None = None) -> None:
+        """Show a loaded volume (with its TF, camera, settings), choosing a renderer that can draw it."""
+        state, volume = self._state, loaded.volume
+        assert volume is not None and loaded.transfer_function is not None
+        settings = loaded.settings or state.settings
+        wanted = requested_renderer or loaded.renderer or state.renderer
+        renderer, notes = self._renderers.choose_for(
+            volume, settings, loaded.transfer_function.dims, wanted, requested_renderer
+        )
+        aspect = self._viewport.aspect()
+        camera = loaded.resolve_camera(aspect) or default_camera(volume, aspect)
+        self._scenes.remember_volume_file(loaded.volume_path, loaded.scalars)
+        state.load(volume, loaded.transfer_function, camera, settings, loaded.source, renderer=renderer)
+        self._apply_view_extras(loaded)
+        if notes:
+            self._window.statusBar().showMessage("; ".join(notes), 15000)
+
+    def _apply_view_extras(self, loaded: LoadedInput) -> None:
+        """A scene's crop box and background (state.load just cleared the crop of the old volume)."""
+        if loaded.background is not None:
+            self._state.set_background(loaded.background)
+        if loaded.crop is not None:
+            try:
+                self._state.set_crop(loaded.crop)
+            except VolrenError as exc:
+                self._report_error("Cannot crop", f"{loaded.source}: {exc}")
+
+    # ------------------------------------------------------------------ the loader's answers
+    def _on_busy(self, busy: bool) -> None:
+        self.busy_bar.setRange(0, 0)
+        self.stage_label.setText("")
+        for widget in self.status_widgets:
+            widget.setVisible(busy)
+        self.cancel_action.setEnabled(busy)
+
+    def _on_load_stage(self, text: str, fraction: float | None) -> None:
+        self.stage_label.setText(text)
+        if fraction is None:
+            self.busy_bar.setRange(0, 0)
+        else:
+            self.busy_bar.setRange(0, 100)
+            self.busy_bar.setValue(round(100 * min(max(fraction, 0.0), 1.0)))
+
+    def _on_load_cancelled(self, _context: dict[str, Any]) -> None:
+        self._show_no_volume_placeholder()
+        self._window.statusBar().showMessage("Loading cancelled", 5000)
+        self.loadFinished.emit(False)
+
+    def _show_no_volume_placeholder(self) -> None:
+        if self._state.volume is None:
+            self._viewport.placeholder = "No volume (File > Open, or drop a file here)"
+            self._viewport.update()
+
+    def _on_loaded(self, loaded: LoadedInput, context: dict[str, Any]) -> None:
+        self._window.statusBar().clearMessage()
+        opened = context.get("path") if context else None
+        if loaded.volume is None:
+            if self._state.volume is None or loaded.transfer_function is None:
+                self._report_error(
+                    "Cannot apply the transfer function",
+                    f"{loaded.source}: a transfer function needs a volume; open a volume first",
+                )
+                self.loadFinished.emit(False)
+                return
+            self._state.set_transfer_function(loaded.transfer_function)
+            self._window.statusBar().showMessage(f"Transfer function from {loaded.source}", 5000)
+        else:
+            self.apply_loaded(loaded, context.get("renderer") if context else None)
+        if opened is not None:
+            self.recent.add(opened)
+        self.loadFinished.emit(True)
+
+    def _on_load_failed(self, message: str, context: dict[str, Any]) -> None:
+        self._show_no_volume_placeholder()
+        self._report_error("Cannot open", message)
+        self.loadFinished.emit(False)
+
+    # ------------------------------------------------------------------ dialogs
+    def _open_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self._window, "Open volume, scene or transfer function", "", OPEN_FILTER)
+        if path:
+            self.open_input(path)
+
+    def _open_folder_dialog(self) -> None:
+        path = QFileDialog.getExistingDirectory(self._window, "Open DICOM folder")
+        if path:
+            self.open_input(path)
+
+    def shutdown(self, timeout_ms: int = 5000) -> None:
+        """Stop the running load at its next stage and wait for it."""
+        self.loader.shutdown(timeout_ms)

@@ -1,0 +1,164 @@
+"""The renderer in use: what the chooser offers, switching when the current one cannot draw, and
+the status-bar label that says what it drew.
+
+Why one place: the renderer has to stay usable through every change that can rule it out (a new
+volume, a 2D TF in `vtk`, a setting, a render that fails), and each case says why in the same
+words. A renderer that raises is reported in one line and the previous working renderer takes
+over again; the same failure of the same scene is said once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from PyQt5.QtWidgets import QLabel, QStatusBar, QWidget
+
+from volren.app.core.renderer_choice import RendererOption, pick_renderer, renderer_options
+from volren.app.core.state import Change, ViewState
+from volren.app.rendering.render_service import Frame, RenderRequest
+from volren.app.rendering.renderer_chooser import RendererChooser
+from volren.app.rendering.viewport import Viewport
+from volren.model.settings import RenderSettings
+from volren.model.volume import Volume
+from volren.renderers.registry import RendererRegistry
+
+
+def renderer_message(name: str, reason: str | None) -> str:
+    """Why `name` cannot draw, as one phrase starting with "renderer"."""
+    reason = reason or "is not registered"
+    return reason if reason.startswith("renderer") else f"renderer {name} {reason}"
+
+
+class RendererControl:
+    """Owns the chooser and the frame label; keeps `state.renderer` one that can draw."""
+
+    def __init__(
+        self,
+        state: ViewState,
+        registry: RendererRegistry,
+        viewport: Viewport,
+        status_bar: QStatusBar,
+        report_error: Callable[[str, str], None],
+        parent: QWidget,
+    ) -> None:
+        self._state = state
+        self._registry = registry
+        self._viewport = viewport
+        self._status_bar = status_bar
+        self._report_error = report_error
+        self._last_good_renderer: str | None = None
+        self._failure_key: tuple[Any, ...] | None = None
+        self._shown_tf_dims = 1
+        self.chooser = RendererChooser(parent)
+        self.chooser.rendererChosen.connect(state.set_renderer)
+        #: "vtk  |  800 x 600  |  12.3 ms", or how far a slow frame is.
+        self.frame_label = QLabel("", parent)
+
+    # ------------------------------------------------------------------ options
+    def options(self) -> list[RendererOption]:
+        """Every registered renderer, with why it cannot draw what is shown (None: it can)."""
+        return self._options()[0]
+
+    def _options(self) -> tuple[list[RendererOption], list[str]]:
+        volume, tf = self._state.volume, self._state.transfer_function
+        dims = tf.dims if tf is not None else 1
+        return renderer_options(volume.kind if volume else None, self._state.settings, self._registry, dims)
+
+    def refresh(self) -> None:
+        """List the renderers again (after a change, or plugins registered later)."""
+        options, notes = self._options()
+        self.chooser.set_options(options, self._state.renderer)
+        if notes:
+            self._status_bar.showMessage("; ".join(notes), 15000)
+
+    def choose_for(
+        self, volume: Volume, settings: RenderSettings, tf_dims: int, wanted: str, requested: str | None
+    ) -> tuple[str, list[str]]:
+        """The renderer for a volume about to be shown, and notes for the status bar.
+
+        `requested` is an explicit request (the command line): if it cannot draw the volume that
+        is an error; another `wanted` one (a scene's) that cannot is replaced quietly. A new scene
+        also clears the memory of the last failure, so it is reported again.
+        """
+        options, notes = renderer_options(volume.kind, settings, self._registry, tf_dims)
+        chosen = pick_renderer(options, wanted)
+        if chosen != wanted:
+            reason = next((o.reason for o in options if o.name == wanted), None)
+            text = renderer_message(wanted, reason)
+            text += f"; using {chosen}" if chosen else f"; no renderer can draw {volume.kind} volumes"
+            if requested is not None or chosen is None:
+                self._report_error("Renderer unavailable", text)
+            else:
+                notes.append(text)
+        self._failure_key = None
+        return chosen or wanted, notes
+
+    # ------------------------------------------------------------------ state
+    def on_state_change(self, change: Change) -> None:
+        if change.what == "volume":
+            self._tf_dims_changed()
+            self.refresh()
+        elif change.what == "settings" or (change.what == "tf" and self._tf_dims_changed()):
+            self.refresh()
+            self._keep_a_usable_renderer()
+        elif change.what == "renderer":
+            self.chooser.set_current(self._state.renderer)
+
+    def _tf_dims_changed(self) -> bool:
+        tf = self._state.transfer_function
+        dims = tf.dims if tf is not None else 1
+        changed, self._shown_tf_dims = dims != self._shown_tf_dims, dims
+        return changed
+
+    def _keep_a_usable_renderer(self) -> None:
+        """After a TF or settings change the current renderer may no longer apply (a 2D TF in
+        `vtk`): switch to one that can, and say why in the status bar."""
+        state = self._state
+        if state.volume is None:
+            return
+        options = self.options()
+        chosen = pick_renderer(options, state.renderer)
+        if chosen is not None and chosen != state.renderer:
+            reason = next((o.reason for o in options if o.name == state.renderer), None)
+            self._status_bar.showMessage(f"{renderer_message(state.renderer, reason)}; using {chosen}", 15000)
+            state.set_renderer(chosen)
+
+    # ------------------------------------------------------------------ frames
+    def frame_shown(self, frame: Frame) -> None:
+        """The renderer drew: it is the one to fall back to, and its numbers go in the label."""
+        self._last_good_renderer = frame.renderer
+        self._failure_key = None
+        quality = "" if frame.full else ", preview"
+        self.frame_label.setText(
+            f"{frame.renderer}  |  {frame.width} x {frame.height}{quality}  |  {frame.ms:.1f} ms"
+        )
+
+    def frame_progressed(self, _serial: int, renderer: str, fraction: float) -> None:
+        """Slow renderers (reference) report how far the newest frame is."""
+        self.frame_label.setText(f"{renderer}  |  rendering {100 * fraction:.0f}%")
+
+    def render_failed(self, request: RenderRequest, message: str) -> None:
+        """Back to the last renderer that drew, if it can; report once per renderer and scene."""
+        name = request.renderer
+        if name != self._state.renderer:
+            return  # the person switched away already
+        text = message if message.startswith(f"renderer {name}") else f"renderer {name} failed: {message}"
+        fallback = self._last_good_renderer
+        usable = {o.name for o in self.options() if o.enabled}
+        if fallback == name or fallback not in usable:
+            fallback = None
+        if fallback is not None:
+            text += f"; switched back to {fallback}"
+            self._state.set_renderer(fallback)  # re-renders behind the message box
+        else:
+            self.frame_label.setText(f"{name}  |  render failed")
+            if self._viewport.frame is None:
+                self._viewport.placeholder = "Rendering failed"
+                self._viewport.update()
+        key = (name, id(request.volume), request.settings)
+        if fallback is None and key == self._failure_key:
+            self._status_bar.showMessage(text, 15000)  # already said once for this scene
+            return
+        self._failure_key = key
+        self._report_error("Rendering failed", text)

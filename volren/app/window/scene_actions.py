@@ -1,0 +1,106 @@
+"""File > Save Scene: what is shown, written as a scene JSON that File > Open reads back.
+
+A scene refers to its volume by path, so this part remembers which file (and scalars) the shown
+volume came from (`remember_volume_file`, told by the opening part). A volume made in memory has
+no file: it is written beside the scene first, as `<scene>.volume.vti` (or .vtu).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from PyQt5.QtGui import QKeySequence
+from PyQt5.QtWidgets import QAction, QFileDialog, QMainWindow
+
+from volren.app.core.loading import PathArg, one_line_error, view_scene
+from volren.app.core.state import ViewState
+from volren.app.files.recent_files import RecentFiles
+from volren.app.files.screenshot import check_writable
+from volren.app.rendering.viewport import Viewport
+from volren.errors import VolrenError
+
+SCENE_FILTER = "Scenes (*.json);;All files (*)"
+
+
+class SceneActions:
+    """The Save Scene action, its dialog, and `save(path)`."""
+
+    def __init__(
+        self,
+        window: QMainWindow,
+        state: ViewState,
+        viewport: Viewport,
+        recent: RecentFiles,
+        report_error: Callable[[str, str], None],
+    ) -> None:
+        self._window = window
+        self._state = state
+        self._viewport = viewport
+        self._recent = recent
+        self._report_error = report_error
+        self._volume_path: str | None = None
+        self._volume_scalars: str | None = None
+        self.save_action = QAction(
+            "Save &Scene…", window, shortcut=QKeySequence("Ctrl+S"), triggered=self._save_dialog
+        )
+        self.save_action.setToolTip("Save the volume's path, the transfer function, camera and settings")
+
+    @property
+    def volume_path(self) -> str | None:
+        """The file (or DICOM folder) the shown volume was read from; None for one made in memory."""
+        return self._volume_path
+
+    def remember_volume_file(self, path: str | None, scalars: str | None) -> None:
+        """The shown volume came from `path` (None: made in memory), with these scalars."""
+        self._volume_path, self._volume_scalars = path, scalars
+
+    def save(self, path: PathArg) -> bool:
+        """Write what is shown as a scene JSON that Open reads back; reports and returns False on
+        failure."""
+        s = self._state
+        if s.volume is None or s.transfer_function is None or s.camera is None:
+            self._report_error("Cannot save the scene", "nothing to save: open a volume first")
+            return False
+        from volren import io
+
+        try:
+            check_writable(path)  # before a volume is written beside it
+            volume_path = self._volume_path or self._write_volume_beside(Path(path))
+            scene = view_scene(
+                volume_path,
+                s.transfer_function,
+                s.camera,
+                s.settings,
+                s.renderer,
+                self._viewport.pixel_size(),
+                scalars=self._volume_scalars,
+                crop=s.crop,
+                background=s.background,
+            )
+            io.save_scene(scene, path)
+        except (VolrenError, OSError) as exc:
+            self._report_error("Cannot save the scene", one_line_error(exc, path))
+            return False
+        self._recent.add(path)
+        self._window.statusBar().showMessage(f"Saved scene {path}", 5000)
+        return True
+
+    def _write_volume_beside(self, scene_path: Path) -> str:
+        from volren import io
+
+        volume = self._state.volume
+        assert volume is not None
+        target = scene_path.with_name(f"{scene_path.stem}.volume.{'vti' if volume.kind == 'uniform' else 'vtu'}")
+        io.save_volume(volume, target)
+        self._volume_path, self._volume_scalars = str(target.absolute()), None
+        return self._volume_path
+
+    def _save_dialog(self) -> None:
+        if self._state.volume is None:
+            self._report_error("Cannot save the scene", "nothing to save: open a volume first")
+            return
+        start = str(Path(self._volume_path).with_suffix(".json")) if self._volume_path else "scene.json"
+        path, _ = QFileDialog.getSaveFileName(self._window, "Save scene", start, SCENE_FILTER)
+        if path:
+            self.save(path if Path(path).suffix else path + ".json")
