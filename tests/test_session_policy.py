@@ -84,8 +84,8 @@ def test_reasons_on_the_list():
 
 
 def test_caches_are_this_sessions_own():
-    from volren.testing import reference_images
     from volren.model import tet_mesh
+    from volren.testing import reference_images
 
     home_cache = Path.home() / ".cache"
     for folder in (tet_mesh.cache_dir(), reference_images.cache_folder(), Path(os.environ["XDG_CACHE_HOME"])):

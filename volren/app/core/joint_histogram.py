@@ -1,7 +1,7 @@
 """The joint histogram of data value and gradient magnitude: the 2D TF editor's background.
 
 Why: in a (value, |grad s|) scatter plot homogeneous materials show up as blobs at the bottom and
-the boundaries between them as arches joining pairs of blobs (book section 10.3-10.4), so the
+the boundaries between them as arches joining pairs of blobs (Real-Time Volume Graphics, section 10.3-10.4), so the
 editor draws it behind the widgets, on exactly the TF's axes (value range x [0, gmax]).
 
 Gradients are the renderers' own (reference `shading`, the slicer's gradient texture):
@@ -25,7 +25,7 @@ uniform: value bin i covers [lo + i w, lo + (i + 1) w), gradient bin j likewise 
 top edges are closed. `log_density` is log(1 + count) scaled to [0, 1].
 
 The default gradient axis (`GradientStats.robust_max`) is the 99.5th percentile of the non-zero
-gradient magnitudes (the book's "largest significant gradient magnitude"; zeros are left out so
+gradient magnitudes (Real-Time Volume Graphics' "largest significant gradient magnitude"; zeros are left out so
 that mostly empty volumes such as bonsai do not push it down), estimated from at most
 `STATS_SAMPLES` strided samples. Results are cached per volume object (weakly: a volume that is
 dropped takes its entries with it).

@@ -1,6 +1,6 @@
 """Picking: which point of the volume a pixel shows, with its value and gradient magnitude.
 
-Why: dual-domain interaction (book section 10.6) places a 2D TF widget at the (value, |grad s|)
+Why: dual-domain interaction (Real-Time Volume Graphics, section 10.6) places a 2D TF widget at the (value, |grad s|)
 of a point the person clicks in the rendered image, so the pick must find the point the image
 actually shows there under the current TF, with the renderers' own reconstruction.
 

@@ -177,7 +177,7 @@ def placed_gaussian(
     opacity: float,
 ) -> TFWidget:
     """A small Gaussian at a probed (value, gradient magnitude): 1/40 of the value axis and 1/20 of
-    the gradient axis wide (a constant default width; the book's section 10.6)."""
+    the gradient axis wide (a constant default width; Real-Time Volume Graphics, section 10.6)."""
     lo, hi = value_range
     return TFWidget.gaussian(
         (value, max(gradient, 0.0)), ((hi - lo) / 40.0, gradient_max / 20.0), color, opacity

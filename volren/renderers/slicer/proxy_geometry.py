@@ -5,7 +5,7 @@ bounding box with planes perpendicular to the viewing direction, textured from a
 blended in depth order. This module computes those polygons with numpy only, for all planes at
 once: the 12 box edges are intersected with every plane (Eq. 3.7), duplicates at corners are
 merged, and each plane's points are sorted by angle around their centroid, which gives the same
-convex polygon as the book's face-flag path algorithm.
+convex polygon as the face-flag path algorithm of Real-Time Volume Graphics, section 3.5.2.
 
 Planes sit on a lattice anchored in the world, ``view_dir . (x - anchor) = k * spacing`` for
 integers k, not on the box's nearest corner: when the camera turns a little the planes turn about

@@ -1,7 +1,7 @@
 """The `slicer` renderer: view-aligned sample planes through a 3D texture, with moderngl.
 
 Why two paths over the same planes (option `path`):
-- `slices` is the book's slicer (section 3.3): polygons where the planes cut the volume's box,
+- `slices` is the slicer of Real-Time Volume Graphics (section 3.3): polygons where the planes cut the volume's box,
   computed on the CPU (`proxy_geometry`), rasterized front to back and blended "under".
 - `march` walks the same planes per pixel in a compute shader. It visits exactly the same sample
   points, so it gives the same image, but a ray can stop when it is opaque and jump over empty

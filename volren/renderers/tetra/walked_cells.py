@@ -5,7 +5,7 @@ the ray leaves, and the next entry along the ray (a boundary face turned towards
 cell the near plane cuts) starts the next walk. The set is the usable cells (flat and non-finite
 ones are holes), or, for compositing with a TF, only the usable cells the TF gives some opacity:
 cells of zero opacity add nothing, so a ray that would step through a run of them jumps over it
-from the run's first face to the next visible cell (the book's chapter 8, empty-space skipping,
+from the run's first face to the next visible cell (Real-Time Volume Graphics, chapter 8, empty-space skipping,
 with the mesh's own faces as the skipping structure).
 """
 
