@@ -1,13 +1,16 @@
-"""What the benchmark scripts' command lines share: list arguments and one-line errors."""
+"""What the benchmark scripts' command lines share: list arguments and one-line errors
+(`float_list` is `volren bench`'s own)."""
 
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from collections.abc import Callable
 
+from volren.cli.bench_cmd import float_list
 from volren.errors import VolrenError
+
+__all__ = ["float_list", "int_list", "run"]
 
 
 def int_list(minimum: int) -> Callable[[str], list[int]]:
@@ -23,17 +26,6 @@ def int_list(minimum: int) -> Callable[[str], list[int]]:
         return values
 
     return parse
-
-
-def float_list(text: str, what: str) -> list[float]:
-    """Comma-separated positive finite numbers, or a one-line error naming `what`."""
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise VolrenError(f"{what} must be comma-separated numbers, got {text!r}") from None
-    if not values or not all(v > 0 and math.isfinite(v) for v in values):
-        raise VolrenError(f"{what} must be positive finite numbers, got {text!r}")
-    return values
 
 
 def run(command: Callable[[argparse.Namespace], int], parser: argparse.ArgumentParser,

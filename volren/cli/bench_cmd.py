@@ -25,7 +25,8 @@ def add_parser(sub) -> None:
     add_app_parsers(kinds)
 
 
-def _float_list(text: str, what: str) -> list[float]:
+def float_list(text: str, what: str) -> list[float]:
+    """Comma-separated positive finite numbers, or a one-line error naming `what`."""
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
@@ -131,7 +132,7 @@ def run_run(args: argparse.Namespace) -> int:
     frames = args.frames or (3 if args.quick else 5)
     if size < 8 or frames < 1 or not (math.isfinite(args.turn) and args.turn >= 0):
         raise VolrenError("--size must be at least 8, --frames at least 1 and --turn finite and >= 0")
-    steps = _float_list(args.steps, "--steps") if args.steps else None
+    steps = float_list(args.steps, "--steps") if args.steps else None
     curves = sweep.check_curves(_names(args.renderers)) if args.renderers else None
     shared = shared_folder(args.shared, required=False)  # none: the bundled samples only
     chosen = datasets.select(_names(args.datasets), shared, args.quick)
