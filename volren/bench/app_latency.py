@@ -193,7 +193,7 @@ def measure(
 def joint_histogram_seconds(n: int = HISTOGRAM_SIZE, repeats: int = 3) -> float:
     """Seconds (best of `repeats`, kernels compiled first) for the joint histogram of a random n^3
     uint8 volume, every point counted (raises if it was subsampled: then it measures less work)."""
-    from volren.app import joint_histogram as jh
+    from volren.app.core import joint_histogram as jh
     from volren.model.volume import UniformVolume
 
     values = np.random.default_rng(0).integers(0, 256, size=(n, n, n), dtype=np.uint8)
