@@ -39,6 +39,7 @@ def add_parser(sub) -> None:
     )
     p.add_argument("--save-array", metavar="OUT.npy", help="also save float32 (H, W, 4) RGBA, row 0 on top")
     p.add_argument("--transparent", action="store_true", help="PNG with alpha instead of over black")
+    p.add_argument("--force", action="store_true", help="write -o / --save-array even over an input file")
     raw = p.add_argument_group("headerless raw input")
     raw.add_argument("--raw-shape", help="NX,NY,NZ")
     raw.add_argument("--raw-dtype", default="uint8", help="numpy dtype, e.g. uint8, int16, float32")
@@ -128,6 +129,13 @@ def build_scene(args: argparse.Namespace) -> Scene:
     return scene
 
 
+def _check_outputs(outputs, inputs, force: bool) -> None:
+    """Outputs never name the same file; without --force, none is an input either."""
+    from volren.io.safe_write import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs(outputs, [] if force else inputs, hint=" (or add --force)")
+
+
 def run(args: argparse.Namespace) -> int:
     from volren import io
     from volren.api import prepared_renderer
@@ -139,7 +147,11 @@ def run(args: argparse.Namespace) -> int:
     for target in (args.output, args.save_array):
         if target and not Path(target).parent.exists():
             raise VolrenError(f"{target}: the folder {Path(target).parent} does not exist")
+    outputs = (("-o", args.output), ("--save-array", args.save_array))
+    inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
+    _check_outputs(outputs, inputs, args.force)  # before the (maybe long) load
     scene = build_scene(args)
+    _check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
     width, height = scene.size
     camera = scene.resolved_camera()
     with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:

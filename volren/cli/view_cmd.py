@@ -23,6 +23,9 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from volren.io.safe_write import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([("--screenshot", args.screenshot)], [("input", args.input), ("--tf file", args.tf)])
     require("app", "volren view")
     app_main = importlib.import_module("volren.app.main")
     return app_main.run(

@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 from PIL import Image
 
 from volren.errors import VolrenError, file_error
+from volren.io.safe_write import write_atomically
 
 
 def _rgba(rgba: ArrayLike, path: Path) -> NDArray[np.float32]:
@@ -61,8 +62,8 @@ def save_image(
     """Write a premultiplied float RGBA image as PNG: opaque over `background`, or with alpha."""
     path = Path(path)
     pixels = to_png_pixels(rgba, background, transparent, path)
-    try:
-        Image.fromarray(pixels).save(path, format="PNG")  # RGB or RGBA from the last axis
+    try:  # RGB or RGBA from the last axis; the old file stays until the new one is complete
+        write_atomically(path, lambda tmp: Image.fromarray(pixels).save(tmp, format="PNG"))
     except (OSError, ValueError) as exc:
         raise file_error(path, f"cannot write the PNG: {exc}") from None
 
@@ -73,8 +74,11 @@ def save_array(rgba: ArrayLike, path: str | Path) -> None:
     image = np.asarray(rgba)
     if image.ndim != 3 or image.shape[2] != 4:
         raise VolrenError(f"{path}: an image must be an (H, W, 4) RGBA array, got shape {image.shape}")
-    try:
-        with open(path, "wb") as f:
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as f:
             np.save(f, image.astype(np.float32, copy=False))
+
+    try:
+        write_atomically(path, write)
     except OSError as exc:
         raise file_error(path, f"cannot write: {exc.strerror}") from None

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from volren.errors import file_error
+from volren.io.safe_write import write_atomically
 
 _TRAILING_COMMA = re.compile(r'("(?:[^"\\]|\\.)*")|,(\s*[\]}])', re.S)
 
@@ -48,6 +49,6 @@ def write_json(data: Any, path: Path) -> None:
     except (TypeError, ValueError) as exc:
         raise file_error(path, f"cannot be written as JSON: {exc}") from None
     try:
-        path.write_text(text, encoding="utf-8")
+        write_atomically(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     except OSError as exc:
         raise file_error(path, f"cannot write: {exc.strerror}") from None

@@ -7,6 +7,7 @@ from typing import Any
 
 from volren.errors import VolrenError, file_error
 from volren.io import _pv, reader_messages
+from volren.io.safe_write import write_atomically
 from volren.model.volume import TetVolume, UniformVolume, Volume
 
 SCALARS_NAME = "values"
@@ -24,10 +25,14 @@ def to_pyvista(volume: Volume) -> Any:
 def save_volume(volume: Volume, path: str | Path) -> None:
     """Write `volume`; the format follows the suffix (.vti/.vtk for grids, .vtu/.vtk for meshes)."""
     path = Path(path)
-    try:
-        log = _pv.save(to_pyvista(volume), path)
+    dataset = to_pyvista(volume)
+
+    def write(tmp: Path) -> None:
+        problem = reader_messages.problem(_pv.save(dataset, tmp), path)
+        if problem:
+            raise file_error(path, f"cannot write: {problem}")
+
+    try:  # the old file stays until the new one is complete
+        write_atomically(path, write)
     except (ValueError, OSError, TypeError) as exc:
         raise file_error(path, f"cannot write: {' '.join(str(exc).split())}") from None
-    problem = reader_messages.problem(log, path)
-    if problem:
-        raise file_error(path, f"cannot write: {problem}")
