@@ -121,11 +121,22 @@ def test_subprocess_render_and_console_script(tmp_path, ml_sample):
         assert version.stdout.startswith("volren ")
 
 
-def test_usage_errors_exit_2(capsys):
+@pytest.mark.parametrize(
+    "argv, names",
+    [
+        (["render", "--blend", "xray"], ["volren render: error:", "--blend", "xray"]),
+        (["render", "--zoom", "big"], ["volren render: error:", "--zoom", "big"]),
+        (["render", "--no-such-flag"], ["volren: error:", "unrecognized arguments: --no-such-flag"]),
+        (["nosuch"], ["volren: error:", "nosuch"]),
+        (["bench", "run", "--size"], ["volren bench run: error:", "--size"]),
+    ],
+)
+def test_usage_errors_are_one_line_naming_the_flag_and_exit_2(capsys, argv, names):
     with pytest.raises(SystemExit) as exc:
-        main(["render", "--blend", "xray"])
+        main(argv)
     assert exc.value.code == 2
-    capsys.readouterr()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and all(n in err[0] for n in names) and "--help" in err[0], err
 
 
 def test_demo_renders_every_sample_with_each_renderer(tmp_path, capsys):

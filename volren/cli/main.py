@@ -1,8 +1,8 @@
 """Entry point of the `volren` command: parses arguments, runs a subcommand, reports errors.
 
 Errors people can cause print as one line ``volren: error: ...`` with exit status 1; usage
-errors exit with 2 (argparse); anything unexpected prints one line and exits with 3 unless
-``--traceback`` asks for the full story.
+errors print one line naming the flag (no usage block) and exit with 2; anything unexpected prints
+one line and exits with 3 unless ``--traceback`` asks for the full story.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import argparse
 import sys
 import warnings
 from collections.abc import Sequence
+from typing import NoReturn
 
 import volren
 from volren.cli import bench_cmd, check_cmd, demo_cmd, render_cmd, renderers_cmd, view_cmd
@@ -19,8 +20,17 @@ from volren.errors import VolrenError
 COMMANDS = (renderers_cmd, render_cmd, view_cmd, demo_cmd, bench_cmd, check_cmd)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse, with a usage error as one line that names the flag and where help is (the
+    subcommands' parsers are made of the same class)."""
+
+    def error(self, message: str) -> NoReturn:
+        text = " ".join(message.split())
+        self.exit(2, f"{self.prog}: error: {text} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="volren", description="Volume rendering of uniform grids and tetrahedral meshes."
     )
     parser.add_argument("--version", action="version", version=f"volren {volren.__version__}")
