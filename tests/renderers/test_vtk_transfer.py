@@ -90,3 +90,23 @@ def test_nonfinite_values_become_a_transparent_sentinel():
         assert opacity.GetValue(sentinel) == 0.0 and opacity.GetValue(0.9) == 0.0
         assert opacity.GetValue(1.0) == pytest.approx(expected)
         assert opacity.GetValue(2.0) == pytest.approx(expected)
+
+
+def test_large_tfs_reach_vtk_node_for_node():
+    """The nodes go to VTK as whole arrays (VTK re-sorts after every single AddPoint, which made
+    20,000 points take seconds): every node arrives, in order, steps kept."""
+    n = 50_000
+    xs = np.linspace(0.0, 1.0, n)
+    xs[100] = xs[101]  # a step
+    alphas = (np.arange(n) % 2) * 0.5
+    tf = TransferFunction1D(color=np.stack([xs, alphas, 1 - alphas, alphas], axis=1),
+                            opacity=np.stack([xs, alphas], axis=1))
+    color, opacity = uniform_functions(tf, 0.0)
+    assert color.GetSize() == n and opacity.GetSize() == n
+    node = [0.0] * 6
+    for i in (0, 100, 101, 4321, n - 1):
+        color.GetNodeValue(i, node)
+        assert node[:4] == [xs[i], alphas[i], 1 - alphas[i], alphas[i]]
+        value = [0.0] * 4
+        opacity.GetNodeValue(i, value)
+        assert value[:2] == [xs[i], alphas[i]]

@@ -11,15 +11,32 @@ import re
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from volren.errors import file_error
 from volren.io.safe_write import write_atomically
 
+#: Deepest nesting of arrays and objects read (TFs and scenes need 5; deeper is not one of ours,
+#: and Python's parser would run out of stack on it).
+MAX_DEPTH = 64
+#: Largest JSON file read (a TF or scene is kilobytes; a TF at its point limit a few MB).
+MAX_BYTES = 64 * 2**20
+
+_STRING = re.compile(r'"(?:[^"\\]|\\.)*"', re.S)
 _TRAILING_COMMA = re.compile(r'("(?:[^"\\]|\\.)*")|,(\s*[\]}])', re.S)
 
 
 def strip_trailing_commas(text: str) -> str:
     """Drop commas directly before ']' or '}' outside strings."""
     return _TRAILING_COMMA.sub(lambda m: m.group(1) or m.group(2), text)
+
+
+def nesting_depth(text: str) -> int:
+    """How deep arrays and objects nest in JSON text (strings skipped), in one linear pass."""
+    brackets = _STRING.sub("", text).encode("utf-8", "replace")
+    codes = np.frombuffer(brackets, np.uint8)
+    steps = np.isin(codes, (ord("["), ord("{"))).astype(np.int64) - np.isin(codes, (ord("]"), ord("}")))
+    return int(np.cumsum(steps).max(initial=0))
 
 
 def read_json(path: Path, lenient: bool = True) -> Any:
@@ -29,6 +46,12 @@ def read_json(path: Path, lenient: bool = True) -> Any:
     if path.is_dir():
         raise file_error(path, "is a folder, not a JSON file")
     try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise file_error(path, f"cannot read: {exc.strerror}") from None
+    if size > MAX_BYTES:
+        raise file_error(path, f"{size / 2**20:.0f} MiB is too large for a volren JSON file (at most {MAX_BYTES >> 20} MiB)")
+    try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:
         raise file_error(path, f"not a text (UTF-8) file: {exc.reason} at byte {exc.start}") from None
@@ -36,6 +59,9 @@ def read_json(path: Path, lenient: bool = True) -> Any:
         raise file_error(path, f"cannot read: {exc.strerror}") from None
     if not text.strip():
         raise file_error(path, "empty file")
+    depth = nesting_depth(text)
+    if depth > MAX_DEPTH:
+        raise file_error(path, f"arrays and objects nest {depth} deep; volren reads at most {MAX_DEPTH}")
     try:
         return json.loads(strip_trailing_commas(text) if lenient else text)
     except json.JSONDecodeError as exc:

@@ -52,6 +52,8 @@ class RenderSettings:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "blend_mode", BlendMode.parse(self.blend_mode))
+        if not isinstance(self.options, Mapping) or not all(isinstance(k, str) for k in self.options):
+            raise VolrenError(f"render setting options must map names to values, got {self.options!r:.80}")
         object.__setattr__(self, "options", dict(self.options))
         for name in ("step", "ambient", "diffuse", "specular", "specular_power"):
             value = getattr(self, name)

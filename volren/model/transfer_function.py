@@ -27,6 +27,10 @@ MAX_OPACITY = 1.0 - 1e-6
 #: tables and integrators; no physical length is this small.
 MIN_UNIT_DISTANCE = 1e-30
 TF_FORMAT_VERSION = 1
+#: Most colour or opacity control points a TF may have: far above any TF drawn by hand or read
+#: from a preset (ParaView's have hundreds), and where every renderer still takes it in under a
+#: second; above it a TF is refused rather than made slow.
+MAX_POINTS = 100_000
 
 
 def _points(data: ArrayLike, width: int, what: str) -> NDArray[np.float64]:
@@ -38,6 +42,8 @@ def _points(data: ArrayLike, width: int, what: str) -> NDArray[np.float64]:
         arr = arr.reshape(-1, width)
     if arr.ndim != 2 or arr.shape[1] != width or len(arr) == 0:
         raise VolrenError(f"{what} points must be a non-empty list of {width}-tuples, got shape {arr.shape}")
+    if len(arr) > MAX_POINTS:
+        raise VolrenError(f"{what} has {len(arr)} points; a transfer function has at most {MAX_POINTS}")
     if not np.all(np.isfinite(arr)):
         raise VolrenError(f"{what} points contain NaN or Inf")
     if np.any(arr[:, 1:] < 0) or np.any(arr[:, 1:] > 1):

@@ -61,6 +61,10 @@ GEOMETRY_KEYS: Mapping[str, tuple[str, ...]] = MappingProxyType(
 )
 _ALL_GEOMETRY = ("center", "width", "value", "half_width", "gradient_max", "value_range", "gradient_range")
 _WIDGET_KEYS = {"type", "color", "opacity", *_ALL_GEOMETRY}
+#: Most widgets a 2D TF may have: renderers evaluate every widget at every sample (or texel), so
+#: the cost grows with their number; hand-made 2D TFs have a handful.
+MAX_WIDGETS = 1024
+
 _KNOWN_KEYS = {"version", "kind", "value_range", "gradient_range", "widgets", "opacity_unit_distance"}
 
 
@@ -253,7 +257,7 @@ class TransferFunction2D(Versioned):
     ) -> None:
         self._value_range = self._check_value_range(value_range)
         self._gradient_range = self._check_gradient_range(gradient_range)
-        self._widgets = [self._check_widget(w, i) for i, w in enumerate(widgets)]
+        self._widgets = self._check_widgets(widgets)
         self._unit = TransferFunction1D._check_unit(opacity_unit_distance)
         self.extra: dict[str, Any] = dict(extra or {})
         super().__init__()
@@ -304,6 +308,8 @@ class TransferFunction2D(Versioned):
     # ------------------------------------------------------------------------------ edits
     def add_widget(self, widget: TFWidget) -> int:
         """Append a widget; returns its index."""
+        if len(self._widgets) >= MAX_WIDGETS:
+            raise VolrenError(f"a 2D transfer function has at most {MAX_WIDGETS} widgets")
         self._widgets.append(self._check_widget(widget, len(self._widgets)))
         self._changed()
         return len(self._widgets) - 1
@@ -320,8 +326,15 @@ class TransferFunction2D(Versioned):
         return removed
 
     def set_widgets(self, widgets: Iterable[TFWidget]) -> None:
-        self._widgets = [self._check_widget(w, i) for i, w in enumerate(widgets)]
+        self._widgets = self._check_widgets(widgets)
         self._changed()
+
+    @classmethod
+    def _check_widgets(cls, widgets: Iterable[TFWidget]) -> list[TFWidget]:
+        checked = [cls._check_widget(w, i) for i, w in enumerate(widgets)]
+        if len(checked) > MAX_WIDGETS:
+            raise VolrenError(f"a 2D transfer function has at most {MAX_WIDGETS} widgets, got {len(checked)}")
+        return checked
 
     def set_value_range(self, lo: float, hi: float) -> None:
         self._value_range = self._check_value_range((lo, hi))
@@ -418,6 +431,8 @@ class TransferFunction2D(Versioned):
         raw = data["widgets"]
         if not isinstance(raw, list):
             raise VolrenError(f"2D transfer function: 'widgets' must be a list, got {type(raw).__name__}")
+        if len(raw) > MAX_WIDGETS:
+            raise VolrenError(f"2D transfer function: {len(raw)} widgets; at most {MAX_WIDGETS}")
         widgets = []
         for i, item in enumerate(raw):
             try:

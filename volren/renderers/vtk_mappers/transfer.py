@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.model.transfer_function import MAX_OPACITY, TransferFunction1D
-from volren.renderers.vtk_mappers._vtk import vtkColorTransferFunction, vtkPiecewiseFunction
+from volren.renderers.vtk_mappers._vtk import numpy_to_vtk, vtkColorTransferFunction, vtkPiecewiseFunction
 
 #: Largest error of -ln(1 - a) between the nodes handed to the unstructured mappers.
 MAX_EXTINCTION_ERROR = 0.002
@@ -63,13 +63,21 @@ def _transparent_below(xs: NDArray, alphas: NDArray, tf: TransferFunction1D, dat
     return xs, alphas
 
 
-def _functions() -> tuple[vtkColorTransferFunction, vtkPiecewiseFunction]:
-    """Empty VTK functions that keep two nodes at one x: a step in the TF stays a step."""
+def _functions(color_x: NDArray, rgb: NDArray, opacity_x: NDArray,
+               opacity_y: NDArray) -> tuple[vtkColorTransferFunction, vtkPiecewiseFunction]:
+    """VTK functions with these nodes, keeping two nodes at one x (a step in the TF stays a step).
+
+    The nodes go in as whole arrays: VTK sorts its nodes after every AddPoint / AddRGBPoint, which
+    made a TF with 20,000 points take 6 s to hand over; these bulk calls sort once."""
     color = vtkColorTransferFunction()
     color.SetColorSpaceToRGB()
     color.AllowDuplicateScalarsOn()
+    x = np.ascontiguousarray(color_x, dtype=np.float64)
+    color.AddRGBPoints(numpy_to_vtk(x, deep=1), numpy_to_vtk(np.ascontiguousarray(rgb, dtype=np.float64), deep=1))
     opacity = vtkPiecewiseFunction()
     opacity.AllowDuplicateScalarsOn()
+    pairs = np.ascontiguousarray(np.stack([opacity_x, opacity_y], axis=1), dtype=np.float64).ravel()
+    opacity.FillFromDataPointer(len(opacity_x), pairs)
     return color, opacity
 
 
@@ -77,15 +85,10 @@ def uniform_functions(
     tf: TransferFunction1D, data_lo: float, sentinel: float | None = None
 ) -> tuple[vtkColorTransferFunction, vtkPiecewiseFunction]:
     """Colour and opacity functions for VTK's uniform-grid mappers (our convention as is)."""
-    color, opacity = _functions()
-    for x, r, g, b in tf.color_points:
-        color.AddRGBPoint(x, r, g, b)
     xs, alphas = tf.opacity_points[:, 0], tf.opacity_points[:, 1]
     if sentinel is not None:
         xs, alphas = _transparent_below(xs, alphas, tf, data_lo, sentinel)
-    for x, a in zip(xs, alphas):
-        opacity.AddPoint(x, a)
-    return color, opacity
+    return _functions(tf.color_points[:, 0], tf.color_points[:, 1:4], xs, alphas)
 
 
 def _opacity_steps(a0: float, a1: float) -> NDArray[np.float64]:
@@ -146,8 +149,4 @@ def unstructured_functions(
         rgb = np.stack([np.interp(xs2, xs, rgb[:, c]) for c in range(3)], axis=1)
         xs = xs2
     extinction = -np.log1p(-np.minimum(alphas, MAX_OPACITY))
-    color, opacity = _functions()
-    for x, (r, g, b), y in zip(xs, rgb, extinction):
-        color.AddRGBPoint(x, r, g, b)
-        opacity.AddPoint(x, y)
-    return color, opacity
+    return _functions(xs, rgb, xs, extinction)
