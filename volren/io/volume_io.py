@@ -18,6 +18,7 @@ from volren.errors import VolrenError, file_error
 from volren.io import _pv, reader_messages
 from volren.io.dataset import grid_from_view, tets_from_view, volume_from_grid
 from volren.io.formats import SUPPORTED, find_format
+from volren.io.formats.geometry import signed_as_declared
 from volren.io.formats.raw import load_raw
 from volren.io.limits import check_layout
 from volren.model.volume import TetVolume, UniformVolume
@@ -95,7 +96,7 @@ def load_volume(
     source = str(path)
     if view.kind == "image":
         grid = fmt.adjust(grid_from_view(view, scalars, source, name), result, inspection)
-        return volume_from_grid(grid, name)
+        return volume_from_grid(signed_as_declared(grid, inspection.facts.get("declared_spacing")), name)
     if inspection.reader in ("vtu", "legacy-unstructured"):
         return tets_from_view(view, scalars, source, name)
     raise VolrenError(

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from volren.errors import file_error
 from volren.io.formats.base import FileFormat, Inspection, quote, read_head
+from volren.io.formats.geometry import check_declared, parse_numbers
 from volren.io.limits import DataLayout, product
 
 _TYPE_SIZES = {
@@ -60,6 +61,10 @@ def inspect(path: Path) -> Inspection:
         )
     if min(dims) <= 0:
         raise file_error(path, f"malformed MetaImage header: DimSize {dims} must be positive")
+    spacing = parse_numbers(path, "ElementSpacing", fields.get("elementspacing") or fields.get("elementsize"))
+    origin_key = next((k for k in ("offset", "origin", "position") if k in fields), "offset")
+    origin = parse_numbers(path, origin_key.capitalize(), fields.get(origin_key))
+    facts = check_declared(path, spacing, origin, "ElementSpacing", origin_key.capitalize())
     element = fields.get("elementtype", "").upper()
     if element not in _TYPE_SIZES:
         raise file_error(path, f"unsupported MetaImage ElementType {fields.get('elementtype')!r}")
@@ -70,12 +75,12 @@ def inspect(path: Path) -> Inspection:
     binary = fields.get("binarydata", "true").lower() == "true"
     data_name = fields.get("elementdatafile", "")
     if compressed or not binary or header_size < 0 or data_name.upper() == "LIST" or "%" in data_name:
-        return Inspection("metaimage", path, layout)  # sizes on disk unknown: VTK reports these
+        return Inspection("metaimage", path, layout, facts)  # sizes on disk unknown: VTK reports these
     if data_name.upper() == "LOCAL":
         data_file, offset = path, header_end + header_size
     else:
         data_file, offset = path.parent / data_name, header_size
-    return Inspection("metaimage", path, DataLayout(dims, type_name, nbytes, data_file, offset, nbytes))
+    return Inspection("metaimage", path, DataLayout(dims, type_name, nbytes, data_file, offset, nbytes), facts)
 
 
 METAIMAGE = FileFormat("MetaImage", (".mhd", ".mha"), inspect)

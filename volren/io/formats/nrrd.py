@@ -24,6 +24,7 @@ import numpy as np
 from volren.errors import file_error
 from volren.io._pv import DatasetView, ReadResult
 from volren.io.formats.base import FileFormat, Grid, Inspection, quote, read_head
+from volren.io.formats.geometry import check_declared, parse_numbers
 from volren.io.limits import DataLayout, product
 
 _TYPES = {
@@ -100,7 +101,10 @@ def _geometry(fields: dict[str, str], dims: tuple[int, ...]) -> dict:
     vtk_splits_first = len(dims) > 3 or (bool(dims) and dims[0] <= 9)
     return {
         "direction": direction,
-        "spacing": tuple(float(s) if s > 0 else 1.0 for s in spacing[:3]),
+        # three spatial axes: as declared (checked in `inspect`; negative mirrors the axis); else
+        # the first three, NaN for non-spatial ones (vector components) made 1
+        "spacing": tuple(float(s) for s in spacing[:3]) if len(dims) == 3 and first_is_spatial
+        else tuple(float(s) if s > 0 else 1.0 for s in spacing[:3]),
         "sizes": dims,
         "unsplit": first_is_spatial and vtk_splits_first and len(spacing) == 3,
     }
@@ -127,6 +131,12 @@ def inspect(path: Path) -> Inspection:
         raise file_error(
             path, f"malformed NRRD space directions {quote(fields['spacedirections'])}"
         ) from None
+    if len(dims) == 3 and len(facts["spacing"]) == 3 and "spacings" in fields and "spacedirections" not in fields:
+        declared_spacing = facts["spacing"]
+    else:
+        declared_spacing = None
+    origin = parse_numbers(path, "space origin", fields.get("spaceorigin"))
+    check_declared(path, declared_spacing, origin, "spacings", "space origin")
     encoding = fields["encoding"].lower()
     if encoding in _RAW and fields.get("space", "").lower() in _LEFT_HANDED:
         # VTK flips its rows: our y, or our z when it took our x for vector components

@@ -19,6 +19,7 @@ import numpy as np
 from volren.errors import file_error
 from volren.io._pv import DatasetView, ReadResult
 from volren.io.formats.base import FileFormat, Inspection, quote
+from volren.io.formats.geometry import check_declared, parse_numbers
 from volren.io.limits import DataLayout, check_memory, product
 
 _TYPE_SIZES = {
@@ -98,22 +99,30 @@ def inspect(path: Path) -> Inspection:
                 "(uniform grids) and UNSTRUCTURED_GRID (cells) from .vtk files",
             )
         binary = mode == "BINARY"
+        facts: dict = {"ascii": not binary}
         if dataset == "STRUCTURED_POINTS":
-            layout = _structured_points(path, lines, binary)
+            layout = _structured_points(path, lines, binary, facts)
         else:
             layout = _unstructured_grid(path, lines, binary)
-    return Inspection(_DATASETS[dataset], path, layout, {"ascii": not binary})  # type: ignore[arg-type]
+    return Inspection(_DATASETS[dataset], path, layout, facts)  # type: ignore[arg-type]
 
 
-def _structured_points(path: Path, lines: _Lines, binary: bool) -> DataLayout:
+def _structured_points(path: Path, lines: _Lines, binary: bool, facts: dict) -> DataLayout:
+    """The data layout; the declared geometry, checked, goes into `facts`."""
     dims: tuple[int, ...] | None = None
+    spacing = origin = None
     while True:
         words = lines.next("POINT_DATA or CELL_DATA section (or it holds no scalars)")
         key = words[0].upper()
         if key == "DIMENSIONS":
             dims = tuple(_int(path, words, i, "DIMENSIONS") for i in (1, 2, 3))
+        elif key in ("SPACING", "ASPECT_RATIO"):
+            spacing = parse_numbers(path, key, " ".join(words[1:]))
+        elif key == "ORIGIN":
+            origin = parse_numbers(path, key, " ".join(words[1:]))
         elif key in ("POINT_DATA", "CELL_DATA"):
             break
+    facts.update(check_declared(path, spacing, origin, "SPACING", "ORIGIN"))
     if dims is None:
         raise file_error(path, "the STRUCTURED_POINTS header has no DIMENSIONS line")
     n = _int(path, words, 1, key)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from volren.errors import file_error
 from volren.io.formats.base import FileFormat, Inspection, read_head
+from volren.io.formats.geometry import check_declared, parse_numbers
 from volren.io.limits import DataLayout, product
 
 _TYPE_SIZES = {
@@ -73,7 +74,9 @@ def inspect_vti(path: Path) -> Inspection:
         raise file_error(path, f"the grid is empty (WholeExtent {extent!r})")
     per_point = _bytes_per_item(head)
     layout = DataLayout(dims, f"grid of {per_point}-byte points", product(dims) * per_point)
-    return Inspection("vti", path, layout)
+    spacing = parse_numbers(path, "Spacing", _attr(tag.group(0), "Spacing")) if tag else None
+    origin = parse_numbers(path, "Origin", _attr(tag.group(0), "Origin")) if tag else None
+    return Inspection("vti", path, layout, check_declared(path, spacing, origin, "Spacing", "Origin"))
 
 
 def inspect_vtu(path: Path) -> Inspection:
