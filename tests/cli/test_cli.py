@@ -145,3 +145,26 @@ def test_demo_renders_every_sample_with_each_renderer(tmp_path, capsys):
     assert len(lines) == 3 and all("ms per frame" in line for line in lines)
     assert sorted(p.name for p in tmp_path.glob("*.png")) == [
         "hollow_cylinder_vtk.png", "marschner_lobb_vtk.png", "phantom_ct_vtk.png"]
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--raw-spacing", "2,2,2"], "--raw-spacing describes headerless raw data only (it needs --raw-shape)"),
+        (["--raw-dtype", "int16"], "--raw-dtype describes headerless raw data only"),
+        (["--raw-byte-order", "big"], "--raw-byte-order describes headerless raw data only"),
+    ],
+)
+def test_raw_flags_on_a_file_with_a_header_are_refused_not_ignored(tmp_path, capsys, ml_sample, extra, message):
+    assert main(["render", str(ml_sample[0]), "-o", str(tmp_path / "x.png"), *extra]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and str(ml_sample[0]) in err[0], err
+
+
+def test_headerless_raw_without_a_shape_names_the_flags(tmp_path, capsys):
+    raw = tmp_path / "d.raw"
+    raw.write_bytes(bytes(64))
+    assert main(["render", str(raw), "-o", str(tmp_path / "x.png")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--raw-shape NX,NY,NZ" in err[0] and "--raw-dtype" in err[0] and "shape=" not in err[0]
+    assert main(["render", str(raw), "--raw-shape", "4,4,4", "-o", str(tmp_path / "x.png"), "--size", "8"]) == 0

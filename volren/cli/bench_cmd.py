@@ -73,7 +73,7 @@ def run_skip(args: argparse.Namespace) -> int:
     kinds, scenes = skipping.plan(shared, args.samples, args.datasets, args.styles, args.quick)
     base = RenderSettings(step=args.step, preintegration=args.preintegration)
     print(skipping.HEADER)
-    with tqdm(total=skipping.row_count(kinds, renderers, base), desc="configurations", leave=False) as bar:
+    with tqdm(total=skipping.row_count(kinds, renderers, base), desc="configurations", leave=False, disable=None) as bar:
 
         def report(row: dict) -> None:
             tqdm.write(skipping.markdown_row(row))
@@ -149,7 +149,7 @@ def run_run(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise VolrenError(f"{out}: cannot write: {exc.strerror or exc}") from None
     start, rows, skipped = time.perf_counter(), [], []
-    with stream, tqdm(total=total, desc="bench run", unit="run", leave=False) as bar:
+    with stream, tqdm(total=total, desc="bench run", unit="run", leave=False, disable=None) as bar:
 
         class BarProgress(run_bench.Progress):
             def status(self, text: str) -> None:
@@ -217,7 +217,7 @@ def run_stress(args: argparse.Namespace) -> int:
     for note in work.notes:
         print(f"note: {note}", file=sys.stderr)
     print(stress.ROW_HEADER)
-    with tqdm(total=len(work), desc="stress", unit="run", leave=False) as bar:
+    with tqdm(total=len(work), desc="stress", unit="run", leave=False, disable=None) as bar:
 
         def report(row: stress.Row) -> None:
             tqdm.write(stress.markdown_row(row))

@@ -1,9 +1,11 @@
-"""A tqdm progress bar for long renders (shown only once a frame takes more than a second)."""
+"""A tqdm progress bar for long renders: shown only once a frame takes more than a second, and only
+on a terminal (a log file or a pipe gets no carriage-return noise)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from typing import TextIO
 
 from tqdm import tqdm
 
@@ -11,8 +13,10 @@ from volren.renderers.base import ProgressCallback
 
 
 @contextmanager
-def progress_bar(description: str) -> Iterator[ProgressCallback]:
-    bar = tqdm(total=1000, desc=description, delay=1.0, leave=False, unit="‰", bar_format="{l_bar}{bar}| {elapsed}<{remaining}")
+def progress_bar(description: str, file: TextIO | None = None, delay: float = 1.0) -> Iterator[ProgressCallback]:
+    """A progress callback drawing a bar on `file` (stderr) when it is a terminal."""
+    bar = tqdm(total=1000, desc=description, delay=delay, leave=False, unit="‰", file=file, disable=None,
+               bar_format="{l_bar}{bar}| {elapsed}<{remaining}")
 
     def update(fraction: float) -> None:
         target = int(round(min(max(fraction, 0.0), 1.0) * 1000))

@@ -41,10 +41,10 @@ def add_parser(sub) -> None:
     p.add_argument("--transparent", action="store_true", help="PNG with alpha instead of over black")
     p.add_argument("--force", action="store_true", help="write -o / --save-array even over an input file")
     raw = p.add_argument_group("headerless raw input")
-    raw.add_argument("--raw-shape", help="NX,NY,NZ")
-    raw.add_argument("--raw-dtype", default="uint8", help="numpy dtype, e.g. uint8, int16, float32")
-    raw.add_argument("--raw-byte-order", choices=["little", "big"], default="little")
-    raw.add_argument("--raw-spacing", default="1,1,1", help="SX,SY,SZ")
+    raw.add_argument("--raw-shape", help="NX,NY,NZ (needed for headerless raw data, and only for it)")
+    raw.add_argument("--raw-dtype", help="numpy dtype, e.g. uint8, int16, float32 (default uint8)")
+    raw.add_argument("--raw-byte-order", choices=["little", "big"], help="default little")
+    raw.add_argument("--raw-spacing", help="SX,SY,SZ (default 1,1,1)")
     p.set_defaults(run=run)
 
 
@@ -72,6 +72,28 @@ def parse_options(items: list[str]) -> dict[str, Any]:
     return options
 
 
+_RAW_DETAILS = ("--raw-dtype", "--raw-byte-order", "--raw-spacing")
+
+
+def _check_raw_flags(args: argparse.Namespace) -> None:
+    """The raw flags describe headerless data: needed there (by their own names) and refused
+    elsewhere, so that none is silently ignored."""
+    from volren.io.formats import find_format
+
+    given = [flag for flag in _RAW_DETAILS if getattr(args, flag[2:].replace("-", "_")) is not None]
+    if args.raw_shape or args.input is None:
+        if given and args.input is None:
+            raise VolrenError(f"{given[0]} describes a headerless raw INPUT; this render has none")
+        return
+    path = Path(args.input)
+    if path.is_file() and find_format(path) is None:
+        raise VolrenError(f"{path}: headerless raw data: give --raw-shape NX,NY,NZ (and --raw-dtype if it is "
+                          "not uint8, --raw-spacing, --raw-byte-order)")
+    if given:
+        raise VolrenError(f"{path}: {given[0]} describes headerless raw data only (it needs --raw-shape); "
+                          f"this file's header says how it is laid out")
+
+
 def _load_input(args: argparse.Namespace):
     from volren import io
 
@@ -79,9 +101,9 @@ def _load_input(args: argparse.Namespace):
     if args.raw_shape:
         kwargs.update(
             shape=_triple(args.raw_shape, "--raw-shape", int),
-            dtype=args.raw_dtype,
-            byte_order=args.raw_byte_order,
-            spacing=_triple(args.raw_spacing, "--raw-spacing"),
+            dtype=args.raw_dtype or "uint8",
+            byte_order=args.raw_byte_order or "little",
+            spacing=_triple(args.raw_spacing or "1,1,1", "--raw-spacing"),
         )
     return io.load_volume(args.input, **kwargs)
 
@@ -91,6 +113,7 @@ def build_scene(args: argparse.Namespace) -> Scene:
     from volren import io
     from volren.api import as_transfer_function, parse_size
 
+    _check_raw_flags(args)
     if args.scene:
         scene = io.load_scene(args.scene, load_volume=args.input is None)
         if args.input is not None:
