@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from tests.io.dicom_series import write_series
+from volren.testing.dicom_series import write_series
 from volren.errors import VolrenError
 from volren.io import load_volume
 

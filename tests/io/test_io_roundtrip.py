@@ -11,7 +11,7 @@ import pytest
 import pyvista as pv
 import vtk
 
-from tests.io.dicom_series import write_series
+from volren.testing.dicom_series import write_series
 from volren.errors import VolrenError, VolrenWarning
 from volren.io import from_pyvista, load_volume
 from volren.model.volume import TetVolume, UniformVolume

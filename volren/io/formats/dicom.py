@@ -1,6 +1,6 @@
 """DICOM series: a folder of slice files (or one of its files, meaning the folder).
 
-Quirks of vtkDICOMImageReader (VTK 9.7), measured on series written by tests/io/dicom_series.py:
+Quirks of vtkDICOMImageReader (VTK 9.7), measured on series written by volren/testing/dicom_series.py:
 - it flips the rows (DICOM's first row comes out last) and orders slices by *decreasing*
   position along the slice normal, while its ImagePositionPatient is that of the lowest slice and
   its output origin is (0, 0, 0). Undoing both flips puts the values back in patient order,

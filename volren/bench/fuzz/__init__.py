@@ -1,0 +1,31 @@
+"""The fuzz suite: a deterministic corpus of malformed inputs run through `volren render`.
+
+`corpus()` generates the cases (volume files of every format, meshes, TF and scene JSON,
+command-line flags); `runner.run_cases` runs each in a child process with a time limit and
+classifies the outcome (render, clean error, crash, hang, traceback, several lines, unnamed
+culprit, bad pixels, nondeterministic image, bad header accepted in silence); `report` writes the
+summary. `volren bench fuzz` runs it all; CI runs `quick_corpus()`.
+"""
+
+from __future__ import annotations
+
+from volren.bench.fuzz.cases import Case
+from volren.bench.fuzz.json_cases import flag_cases, scene_cases, tf_cases
+from volren.bench.fuzz.volume_cases import volume_cases
+
+
+def corpus(seed: int = 0) -> list[Case]:
+    """Every case, in a fixed order; `seed` drives the byte-level randomness."""
+    return [*volume_cases(seed), *tf_cases(), *scene_cases(), *flag_cases()]
+
+
+def quick_corpus(seed: int = 0, every: int = 12) -> list[Case]:
+    """Every `every`-th case plus every valid seed and every case that once crashed or hung."""
+    cases = corpus(seed)
+    return [c for i, c in enumerate(cases) if i % every == 0 or c.expect == "render" or c.name in REGRESSIONS]
+
+
+#: Cases that once crashed, hung or rendered uninitialized memory: always in the quick subset.
+REGRESSIONS: frozenset[str] = frozenset()
+
+__all__ = ["Case", "corpus", "quick_corpus"]

@@ -1,0 +1,306 @@
+"""Run fuzz cases as child processes with a time limit, and classify what came back.
+
+Two ways to start a child: `fork` (default) forks this process after importing volren, VTK and
+PyVista once, so a case costs its own work (about 0.1 s, not the 1 s of a fresh interpreter);
+`exec` runs `python -m volren.cli.main` afresh, exactly as a user would. Either way the child is
+its own process: a crash, an abort or a hang is seen from outside.
+
+A rendered case runs twice with glibc's malloc perturbation set to two different bytes
+(`mallopt(M_PERTURB)` in a forked child, `MALLOC_PERTURB_` in a fresh one): memory a reader
+allocated and never filled then holds different bytes in the two runs, so an image drawn from
+uninitialized memory differs between them instead of passing by luck.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import re
+import resource
+import select
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from volren.bench.fuzz.cases import Case
+
+#: Outcome classes, worst first; a case's class is the worst of its runs.
+FAILURES = (
+    "crash",
+    "hang",
+    "traceback",
+    "internal-error",
+    "several-lines",
+    "unnamed",
+    "bad-pixels",
+    "nondeterministic",
+    "silent-accept",
+    "reader-crash-isolated",
+)
+OUTCOMES = (*FAILURES, "error", "render", "render-warned")
+
+_PERTURB = (0x5A, 0xC3)
+_OURS = re.compile(r"^volren( [a-z-]+)?: (error|warning|interrupted)")
+_M_PERTURB = -6  # glibc's mallopt parameter number
+_HEAP_WORDS = ("double free", "corrupted", "malloc():", "free():", "munmap_chunk", "terminate called", "Segmentation fault", "Aborted")  # fmt: skip
+
+
+@dataclass
+class Run:
+    """What one child did: exit status (negative: killed by that signal), output, time."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+    seconds: float
+    timed_out: bool = False
+    image: np.ndarray | None = None
+
+
+@dataclass
+class Result:
+    case: Case
+    outcome: str
+    detail: str
+    runs: list[Run] = field(default_factory=list)
+
+    @property
+    def first_line(self) -> str:
+        lines = (self.runs[0].stderr.strip() or self.runs[0].stdout.strip()).splitlines() if self.runs else []
+        return lines[0][:300] if lines else ""
+
+
+# ---------------------------------------------------------------------------------- children
+
+
+def _child_main(case: Case, folder: Path, perturb: int, memory_limit: int) -> None:  # pragma: no cover - child
+    """In the forked child: redirect output, set the malloc perturbation and limits, run volren."""
+    code = 3
+    try:
+        os.setpgid(0, 0)
+        os.chdir(folder)
+        for fd, name in ((1, "stdout.txt"), (2, "stderr.txt")):
+            target = os.open(name, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
+            os.dup2(target, fd)
+            os.close(target)
+        os.dup2(os.open(os.devnull, os.O_RDONLY), 0)
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+        if memory_limit:
+            resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
+        ctypes.CDLL(None).mallopt(_M_PERTURB, perturb)
+        from volren.cli.main import main
+
+        try:
+            code = int(main(list(case.argv)) or 0)
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+        except BaseException:
+            import traceback
+
+            traceback.print_exc()
+            code = 1
+    finally:
+        try:
+            sys.stdout.flush()
+            sys.stderr.flush()
+        finally:
+            os._exit(code)
+
+
+class _Child:
+    """A started child: its pid, a descriptor that becomes readable when it ends, its deadline."""
+
+    def __init__(self, pid: int, fd: int, deadline: float, proc: subprocess.Popen | None = None) -> None:
+        self.pid, self.fd, self.deadline, self.proc = pid, fd, deadline, proc
+        self.start = time.perf_counter()
+
+
+def _start(case: Case, folder: Path, perturb: int, mode: str, timeout: float, memory_limit: int) -> _Child:
+    deadline = time.perf_counter() + timeout
+    if mode == "fork":
+        sys.stdout.flush()
+        sys.stderr.flush()
+        pid = os.fork()
+        if pid == 0:  # pragma: no cover - child
+            _child_main(case, folder, perturb, memory_limit)
+        return _Child(pid, os.pidfd_open(pid), deadline)
+    env = {**os.environ, "MALLOC_PERTURB_": str(perturb)}
+    with open(folder / "stdout.txt", "wb") as out, open(folder / "stderr.txt", "wb") as err:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "volren.cli.main", *case.argv],
+            cwd=folder, stdout=out, stderr=err, stdin=subprocess.DEVNULL, env=env, start_new_session=True,
+        )  # fmt: skip
+    return _Child(proc.pid, os.pidfd_open(proc.pid), deadline, proc)
+
+
+def _finish(child: _Child, folder: Path, kill: bool) -> Run:
+    if kill:
+        try:
+            os.killpg(child.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    _, status = os.waitpid(child.pid, 0)
+    os.close(child.fd)
+    code = os.waitstatus_to_exitcode(status)
+    seconds = time.perf_counter() - child.start
+    read = lambda name: (folder / name).read_bytes().decode("utf-8", "replace")  # noqa: E731
+    image = None
+    if code == 0 and (folder / "out.npy").is_file():
+        try:
+            image = np.load(folder / "out.npy", allow_pickle=False)
+        except (ValueError, OSError):
+            image = None
+    return Run(code, read("stdout.txt"), read("stderr.txt"), seconds, kill, image)
+
+
+# ---------------------------------------------------------------------------------- classifying
+
+
+def _bad_pixels(image: np.ndarray | None) -> str:
+    if image is None:
+        return "no image"
+    if image.ndim != 3 or image.shape[2] != 4 or image.dtype != np.float32:
+        return f"image of shape {image.shape} {image.dtype}"
+    if not np.isfinite(image).all():
+        return "non-finite pixels"
+    if image.min() < 0 or image.max() > 1:
+        return f"pixels outside [0, 1] ({image.min():g}..{image.max():g})"
+    if (image[..., :3] > image[..., 3:] + 1e-5).any():
+        return "colour above alpha (not premultiplied)"
+    return ""
+
+
+def classify_run(case: Case, run: Run) -> tuple[str, str]:
+    """The outcome of one run, and a detail for the report."""
+    text = run.stdout + run.stderr
+    if run.timed_out:
+        return "hang", f"no answer in {run.seconds:.0f} s"
+    if run.returncode < 0:
+        return "crash", f"signal {signal.Signals(-run.returncode).name}"
+    if any(w in text for w in _HEAP_WORDS):
+        return "crash", next(w for w in _HEAP_WORDS if w in text)
+    if "Traceback (most recent call last)" in text:
+        return "traceback", text.strip().splitlines()[-1][:200]
+    if run.returncode == 3 or "internal error" in run.stderr:
+        return "internal-error", run.stderr.strip()[:200]
+    lines = [line for line in run.stderr.splitlines() if line.strip()]
+    stray = [line for line in lines if not _OURS.match(line)]
+    errors = [line for line in lines if _OURS.match(line) and ": error:" in line]
+    out_lines = [line for line in run.stdout.splitlines() if line.strip()]
+    if stray or len(errors) > 1 or len(out_lines) > 1:
+        return "several-lines", (stray or errors[1:] or out_lines)[0][:200]
+    if len(set(lines)) != len(lines):
+        return "several-lines", "a warning printed more than once"
+    if run.returncode != 0:
+        if not errors:
+            return "several-lines", f"exit {run.returncode} without an error line"
+        message = errors[0]
+        if "crashed" in message and "reader" in message:
+            return "reader-crash-isolated", message[:200]
+        if not any(name in message for name in case.culprits()):
+            return "unnamed", message[:200]
+        return "error", message[:200]
+    problem = _bad_pixels(run.image)
+    if problem:
+        return "bad-pixels", problem
+    warned = any(": warning:" in line for line in lines)
+    if case.expect == "error" and not warned:
+        return "silent-accept", "rendered without a word"
+    return ("render-warned" if warned else "render"), (lines[0][:200] if warned else "")
+
+
+def classify(case: Case, runs: list[Run]) -> Result:
+    outcomes = [classify_run(case, run) for run in runs]
+    if len(runs) == 2 and all(o[0].startswith("render") for o in outcomes):
+        a, b = runs[0].image, runs[1].image
+        if a is not None and b is not None and (a.shape != b.shape or not np.array_equal(a, b)):
+            diff = float(np.abs(a - b).max()) if a.shape == b.shape else float("inf")
+            return Result(case, "nondeterministic", f"two runs differ by up to {diff:.3g}", runs)
+    outcome, detail = min(outcomes, key=lambda o: OUTCOMES.index(o[0]))
+    return Result(case, outcome, detail, runs)
+
+
+# ---------------------------------------------------------------------------------- the loop
+
+
+def preload() -> None:
+    """Import what every case needs once, before forking (VTK, PyVista, the readers, the CLI)."""
+    import pyvista  # noqa: F401
+    import vtkmodules.all  # noqa: F401
+
+    import volren.api  # noqa: F401
+    import volren.cli.main  # noqa: F401
+    import volren.io  # noqa: F401
+
+
+def run_cases(
+    cases: Iterable[Case],
+    work: Path,
+    jobs: int = 2,
+    timeout: float = 30.0,
+    mode: str = "fork",
+    memory_limit: int = 0,
+    on_result: Callable[[Result], None] | None = None,
+) -> list[Result]:
+    """Run every case (twice when it renders), `jobs` children at a time; results in case order."""
+    if mode == "fork":
+        preload()
+    pending: Iterator[tuple[int, Case]] = iter(enumerate(cases))
+    runs: dict[int, list[Run]] = {}
+    results: dict[int, Result] = {}
+    second: list[tuple[int, Case]] = []
+    running: dict[int, tuple[int, Case, _Child, Path]] = {}
+    exhausted = False
+
+    def folder_for(index: int, case: Case, attempt: int) -> Path:
+        folder = work / f"{index:05d}-{attempt}"
+        shutil.rmtree(folder, ignore_errors=True)
+        case.lay_out(folder)
+        return folder
+
+    while True:
+        while len(running) < jobs and (second or not exhausted):
+            if second:
+                index, case = second.pop()
+                attempt = 1
+            else:
+                nxt = next(pending, None)
+                if nxt is None:
+                    exhausted = True
+                    continue
+                index, case = nxt
+                attempt = 0
+            folder = folder_for(index, case, attempt)
+            child = _start(case, folder, _PERTURB[attempt], mode, timeout, memory_limit)
+            running[child.fd] = (index, case, child, folder)
+        if not running:
+            break
+        now = time.perf_counter()
+        wait = max(0.0, min(c.deadline for _, _, c, _ in running.values()) - now)
+        ready, _, _ = select.select(list(running), [], [], wait)
+        now = time.perf_counter()
+        for fd in list(running):
+            index, case, child, folder = running[fd]
+            late = now >= child.deadline
+            if fd not in ready and not late:
+                continue
+            del running[fd]
+            run = _finish(child, folder, kill=late and fd not in ready)
+            runs.setdefault(index, []).append(run)
+            first = classify_run(case, run)[0]
+            if len(runs[index]) == 1 and first.startswith("render"):
+                second.append((index, case))
+                continue
+            results[index] = classify(case, runs[index])
+            shutil.rmtree(work / f"{index:05d}-0", ignore_errors=True)
+            shutil.rmtree(work / f"{index:05d}-1", ignore_errors=True)
+            if on_result:
+                on_result(results[index])
+    return [results[i] for i in sorted(results)]
