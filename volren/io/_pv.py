@@ -250,6 +250,47 @@ class TetCells:
     tets: NDArray[np.int64]
     tetrahedralized: dict[int, int]  # VTK cell type -> number of such cells split into tets
     dropped: dict[int, int]  # VTK cell type -> number of cells dropped (not 3D)
+    broken: dict[str, int] = field(default_factory=dict)  # why -> number of cells dropped as broken
+
+
+#: Points per cell of the fixed-size VTK cell types (the others list their own count).
+_CELL_SIZES = {1: 1, 3: 2, 5: 3, 8: 4, 9: 4, 10: 4, 11: 8, 12: 8, 13: 6, 14: 5, 15: 10, 16: 12, 21: 3, 22: 6,
+               23: 8, 24: 10, 25: 20, 26: 15, 27: 13, 28: 9, 29: 27}  # fmt: skip
+
+
+def _cell_offsets(grid: Any) -> NDArray[np.int64]:
+    # pyvista renamed `offset` to `cell_offsets` in 0.47
+    return np.asarray(grid.cell_offsets if hasattr(type(grid), "cell_offsets") else grid.offset, np.int64)
+
+
+def broken_cells(grid: Any) -> tuple[NDArray[np.bool_], dict[str, int]]:
+    """Cells no VTK filter may touch: an unknown cell type, a point index outside the points
+    (VTK reads past its arrays, or -1 as the last point), or a fixed-size type with another count.
+    Returns the mask of broken cells and their counts by reason."""
+    types = np.asarray(grid.celltypes).astype(np.int64)
+    offsets = _cell_offsets(grid)
+    conn = np.asarray(grid.cell_connectivity, dtype=np.int64)
+    sizes = np.diff(offsets)
+    if len(sizes) != len(types) or (offsets.size and (offsets[-1] != conn.size or (sizes < 0).any())):
+        return np.ones(len(types), bool), {"in a cell list that disagrees with its types and offsets": len(types)}
+    known = np.isin(types, [int(c) for c in pv.CellType])
+    lookup = np.full(256, -1, np.int64)
+    for t, n in _CELL_SIZES.items():
+        lookup[t] = n
+    expected = np.where((types >= 0) & (types < 256), lookup[np.clip(types, 0, 255)], -1)
+    wrong_size = (expected >= 0) & (sizes != expected)
+    outside = (conn < 0) | (conn >= int(grid.n_points))
+    cell_of = np.repeat(np.arange(len(sizes)), np.maximum(sizes, 0))
+    bad_index = np.zeros(len(sizes), bool)
+    if outside.any() and cell_of.size == conn.size:
+        bad_index[cell_of[outside]] = True
+    reasons = {
+        "of an unknown cell type": ~known,
+        "with a point index outside the points": known & bad_index,
+        "with the wrong number of points for their type": known & ~bad_index & wrong_size,
+    }
+    counts = {why: int(mask.sum()) for why, mask in reasons.items() if mask.any()}
+    return ~known | bad_index | wrong_size, counts
 
 
 def cell_type_dimension(cell_type: int) -> int:
@@ -267,6 +308,15 @@ def tetrahedralize(v: DatasetView) -> TetCells:
     types = np.asarray(grid.celltypes)
     if types.size == 0:
         return TetCells(points, np.zeros((0, 4), np.int64), {}, {})
+    broken, why = broken_cells(grid)
+    if broken.any():
+        with vtk_messages():
+            grid = grid.extract_cells(np.flatnonzero(~broken))
+        if grid.n_cells == 0:
+            return TetCells(points, np.zeros((0, 4), np.int64), {}, {}, why)
+        cells = tetrahedralize(view(grid))
+        ids = np.asarray(grid.point_data["vtkOriginalPointIds"], dtype=np.int64)
+        return TetCells(points, ids[cells.tets], cells.tetrahedralized, cells.dropped, why)
     unique, counts = np.unique(types, return_counts=True)
     dims = {int(t): cell_type_dimension(int(t)) for t in unique}
     dropped = {int(t): int(c) for t, c in zip(unique, counts) if dims[int(t)] != 3}
@@ -284,10 +334,7 @@ def tetrahedralize(v: DatasetView) -> TetCells:
         tetra = solid.triangulate() if converted else solid
     tet_types = np.asarray(tetra.celltypes)
     conn = np.asarray(tetra.cell_connectivity, dtype=np.int64)
-    # pyvista renamed `offset` to `cell_offsets` in 0.47
-    offsets = np.asarray(
-        tetra.cell_offsets if hasattr(type(tetra), "cell_offsets") else tetra.offset, np.int64
-    )
+    offsets = _cell_offsets(tetra)
     sizes = np.diff(offsets)
     is_tet = (tet_types == VTK_TETRA) & (sizes == 4)
     starts = offsets[:-1][is_tet]

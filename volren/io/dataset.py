@@ -163,12 +163,16 @@ def tets_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name
         raise VolrenError(f"{source}: the grid is empty ({view.n_points} points, {view.n_cells} cells)")
     view, values, notes = point_values(view, scalars, source, name)
     cells = _pv.tetrahedralize(view)
+    broken = ", ".join(f"{n:,} {why}" for why, n in cells.broken.items())
     if len(cells.tets) == 0:
-        raise VolrenError(f"{source}: no 3D cells to render (the grid holds {_counts(cells.dropped)})")
+        held = broken or _counts(cells.dropped)
+        raise VolrenError(f"{source}: no 3D cells to render (the grid holds {held})")
     repaired = repair_tets(cells.points, cells.tets)
     if len(repaired.tets) == 0:
         raise VolrenError(f"{source}: all {len(cells.tets):,} tetrahedra have zero volume")
     done = []
+    if broken:
+        done.append(f"dropped broken cells: {broken}")
     if cells.tetrahedralized:
         done.append(f"tetrahedralized {_counts(cells.tetrahedralized)}")
     if cells.dropped:

@@ -20,6 +20,7 @@ from volren.io.dataset import grid_from_view, tets_from_view, volume_from_grid
 from volren.io.formats import SUPPORTED, find_format
 from volren.io.formats.geometry import signed_as_declared
 from volren.io.formats.raw import load_raw
+from volren.io.isolation import run_isolated
 from volren.io.limits import check_layout
 from volren.model.volume import TetVolume, UniformVolume
 
@@ -59,7 +60,29 @@ def load_volume(
     headerless raw data: any file when `shape` = (nx, ny, nz) is given, with `dtype`,
     `byte_order` ('little', 'big'), `spacing`, `origin` and `header_bytes` describing it.
     `scalars` names the array to render; None takes the active (else first) point array.
+
+    Files with a header are read in a child process (`volren.io.isolation`): a reader that
+    crashes on a corrupt file is a one-line error here, not the end of this process.
     """
+    kwargs = {"shape": shape, "dtype": dtype, "byte_order": byte_order, "spacing": spacing,
+              "origin": origin, "header_bytes": header_bytes}  # fmt: skip
+    if shape is not None:  # headerless raw: numpy reads it, nothing native to isolate
+        return read_volume(path, scalars, **kwargs)
+    return run_isolated(path, read_volume, path, scalars, **kwargs)
+
+
+def read_volume(
+    path: str | Path,
+    scalars: str | None = None,
+    *,
+    shape: Sequence[int] | None = None,
+    dtype: DTypeLike | None = None,
+    byte_order: str = "little",
+    spacing: Sequence[float] = (1.0, 1.0, 1.0),
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
+    header_bytes: int = 0,
+) -> UniformVolume | TetVolume:
+    """`load_volume` in this process (the child's side of it)."""
     path = Path(path)
     _existing(path)
     name = path.name

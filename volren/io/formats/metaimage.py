@@ -61,6 +61,10 @@ def inspect(path: Path) -> Inspection:
         )
     if min(dims) <= 0:
         raise file_error(path, f"malformed MetaImage header: DimSize {dims} must be positive")
+    if not 2 <= ndims <= 3:
+        raise file_error(path, f"NDims = {ndims}: volren reads 2D and 3D MetaImage files")
+    if not 1 <= channels <= 64:
+        raise file_error(path, f"ElementNumberOfChannels = {channels} must be between 1 and 64")
     spacing = parse_numbers(path, "ElementSpacing", fields.get("elementspacing") or fields.get("elementsize"))
     origin_key = next((k for k in ("offset", "origin", "position") if k in fields), "offset")
     origin = parse_numbers(path, origin_key.capitalize(), fields.get(origin_key))
@@ -74,13 +78,47 @@ def inspect(path: Path) -> Inspection:
     compressed = fields.get("compresseddata", "false").lower() == "true"
     binary = fields.get("binarydata", "true").lower() == "true"
     data_name = fields.get("elementdatafile", "")
-    if compressed or not binary or header_size < 0 or data_name.upper() == "LIST" or "%" in data_name:
+    if data_name.upper().startswith("LIST") or "%" in data_name:
+        raise file_error(
+            path, f"ElementDataFile = {data_name}: volren does not read MetaImage slice lists or patterns"
+        )
+    if compressed:
+        _check_compressed(path, fields, header_end if data_name.upper() == "LOCAL" else 0,
+                          path if data_name.upper() == "LOCAL" else path.parent / data_name, nbytes)  # fmt: skip
+    if compressed or not binary or header_size < 0:
         return Inspection("metaimage", path, layout, facts)  # sizes on disk unknown: VTK reports these
     if data_name.upper() == "LOCAL":
         data_file, offset = path, header_end + header_size
     else:
         data_file, offset = path.parent / data_name, header_size
     return Inspection("metaimage", path, DataLayout(dims, type_name, nbytes, data_file, offset, nbytes), facts)
+
+
+#: zlib's deflate expands at most 1032 times; more declared data than that cannot be in the file.
+_MAX_DEFLATE_RATIO = 1032
+
+
+def _check_compressed(path: Path, fields: dict[str, str], offset: int, data_file: Path, nbytes: int) -> None:
+    """What MetaIO trusts in compressed data: CompressedDataSize, and that the bytes are zlib."""
+    if not data_file.is_file():
+        raise file_error(path, f"the data file {data_file.name!r} named in the header is missing")
+    available = data_file.stat().st_size - offset
+    declared = fields.get("compresseddatasize")
+    if declared is not None:
+        if not declared.isdigit() or not 0 < int(declared) <= available:
+            raise file_error(
+                path, f"CompressedDataSize = {declared!r} but {max(available, 0):,} bytes of data follow"
+            )
+        available = int(declared)
+    if nbytes > _MAX_DEFLATE_RATIO * max(available, 0):
+        raise file_error(
+            path, f"truncated or wrong DimSize: {available:,} compressed bytes cannot hold {nbytes:,} bytes"
+        )
+    with open(data_file, "rb") as f:
+        f.seek(offset)
+        magic = f.read(2)
+    if len(magic) < 2 or magic[0] & 0x0F != 8 or (magic[0] << 8 | magic[1]) % 31:
+        raise file_error(path, "CompressedData = True but the data is not zlib-compressed")
 
 
 METAIMAGE = FileFormat("MetaImage", (".mhd", ".mha"), inspect)

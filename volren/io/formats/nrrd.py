@@ -40,6 +40,12 @@ _TYPE_SIZES = {name: size for size, names in _TYPES.items() for name in names}
 _RAW = ("raw",)
 _HEADER_LIMIT = 1 << 20
 _SPATIAL_KINDS = ("domain", "space", "time", "none", "???")
+_KINDS = frozenset(
+    """domain space time list point vector covariant-vector normal stub scalar complex 2-vector 3-color
+    rgb-color hsv-color xyz-color 4-color rgba-color 3-vector 3-gradient 3-normal 4-vector quaternion
+    2d-symmetric-matrix 2d-masked-symmetric-matrix 2d-matrix 2d-masked-matrix 3d-symmetric-matrix
+    3d-masked-symmetric-matrix 3d-matrix 3d-masked-matrix none ???""".split()
+)
 _LEFT_HANDED = ("left-anterior-superior", "las", "3d-left-handed")
 
 
@@ -67,26 +73,42 @@ def _header(path: Path) -> tuple[dict[str, str], int]:
         if ":=" in line:
             continue  # key/value pairs: free-form metadata
         key, sep, value = line.partition(": ")
-        if not sep:
+        if not sep or not line.isprintable():
             raise file_error(
                 path, f"not a valid NRRD header: line {number + 1} {quote(line)} is not 'field: value'"
             )
-        fields[key.strip().lower().replace(" ", "")] = value.strip()
+        field = key.strip().lower().replace(" ", "")
+        if field in fields:  # the format allows each field once; VTK's reader crashes on some twice
+            raise file_error(path, f"not a valid NRRD header: the field {key.strip()!r} appears twice")
+        fields[field] = value.strip()
     return fields, -1  # no blank line: a detached header that ends at end of file
 
 
-def _directions(text: str) -> np.ndarray | None:
-    """The 'space directions' vectors, one per row; None unless there are three 3-vectors."""
-    vectors = re.findall(r"\(([^)]*)\)", text)
-    if len(vectors) != 3:
+def _directions(text: str, n_axes: int) -> np.ndarray | None:
+    """The 'space directions' of the spatial axes, one per row (None when absent, or when they
+    are not three 3-vectors: a 2D image or a space of other dimension); ValueError when
+    malformed: a word that is neither a vector nor 'none', a count that is not the dimension,
+    a non-finite entry, a zero vector, or three vectors that span no volume."""
+    if not text:
         return None
-    rows = np.array([[float(v) for v in vec.split(",")] for vec in vectors], dtype=np.float64)
-    return rows if rows.shape == (3, 3) else None
+    words = re.findall(r"\([^)]*\)|[^\s()]+", text)
+    if len(words) != n_axes or any(w != "none" and not w.startswith("(") for w in words):
+        raise ValueError(text)
+    vectors = [[float(v) for v in w.strip("()").split(",")] for w in words if w != "none"]
+    if len(vectors) != 3 or any(len(v) != 3 for v in vectors):
+        return None
+    rows = np.array(vectors, dtype=np.float64)
+    lengths = np.linalg.norm(rows, axis=1)
+    if not np.isfinite(rows).all() or (lengths == 0).any():
+        raise ValueError(text)
+    if abs(np.linalg.det(rows / lengths[:, None])) < 1e-6:
+        raise ValueError(text)
+    return rows
 
 
 def _geometry(fields: dict[str, str], dims: tuple[int, ...]) -> dict:
     """What the later steps need: spacing and direction per axis, and VTK's misreadings to undo."""
-    directions = _directions(fields.get("spacedirections", ""))
+    directions = _directions(fields.get("spacedirections", ""), len(dims))
     if directions is not None:
         spacing = np.linalg.norm(directions, axis=1)
         direction = (directions / np.where(spacing == 0, 1, spacing)[:, None]).T  # columns = axes
@@ -121,6 +143,14 @@ def inspect(path: Path) -> Inspection:
         raise file_error(path, f"malformed NRRD sizes {fields['sizes']!r}") from None
     if not dims or min(dims) <= 0:
         raise file_error(path, f"malformed NRRD sizes {fields['sizes']!r}")
+    dimension = fields["dimension"]
+    if not dimension.isdigit() or int(dimension) != len(dims) or not 1 <= len(dims) <= 16:
+        raise file_error(
+            path, f"NRRD dimension {dimension!r} does not match its {len(dims)} sizes {fields['sizes']!r}"
+        )
+    kinds = fields.get("kinds", "").lower().split()
+    if "kinds" in fields and (len(kinds) != len(dims) or not set(kinds) <= _KINDS):
+        raise file_error(path, f"malformed NRRD kinds {quote(fields['kinds'])}: one known kind per axis")
     type_name = fields["type"].lower()
     if type_name not in _TYPE_SIZES:
         raise file_error(path, f"unsupported NRRD type {fields['type']!r}")
@@ -129,7 +159,9 @@ def inspect(path: Path) -> Inspection:
         facts = _geometry(fields, dims)
     except ValueError:
         raise file_error(
-            path, f"malformed NRRD space directions {quote(fields['spacedirections'])}"
+            path,
+            f"malformed NRRD space directions {quote(fields['spacedirections'])}: one finite, non-zero "
+            "vector (or 'none') per axis, spanning a volume",
         ) from None
     if len(dims) == 3 and len(facts["spacing"]) == 3 and "spacings" in fields and "spacedirections" not in fields:
         declared_spacing = facts["spacing"]

@@ -44,10 +44,46 @@ def _check_xml(path: Path, expected: str) -> str:
         raise file_error(
             path, f"holds VTK XML data of type {kind!r}, not {expected} as .{_SUFFIX[expected]} files do"
         )
+    _check_attributes(path, head.split("<AppendedData")[0])
     return head
 
 
 _SUFFIX = {"ImageData": "vti", "UnstructuredGrid": "vtu"}
+
+
+_HEADER_TYPES = ("UInt32", "UInt64")
+_COMPRESSORS = ("vtkZLibDataCompressor", "vtkLZ4DataCompressor", "vtkLZMADataCompressor")
+_FORMATS = ("ascii", "binary", "appended")
+_MAX_COMPONENTS = 1 << 16
+
+
+def _check_attributes(path: Path, head: str) -> None:
+    """The attributes VTK's XML readers trust: a wrong one crashes them (a String or negative-
+    component point array, a header type other than UInt32/UInt64, a negative count)."""
+    tag = re.search(r"<VTKFile\b[^>]*>", head)
+    root = tag.group(0) if tag else ""
+    for name, allowed in (("header_type", _HEADER_TYPES), ("compressor", _COMPRESSORS),
+                          ("byte_order", ("LittleEndian", "BigEndian"))):  # fmt: skip
+        value = _attr(root, name)
+        if value is not None and value not in allowed:
+            raise file_error(path, f"<VTKFile {name}={value!r}> is not one of {', '.join(allowed)}")
+    field_data = [(m.start(), m.end()) for m in re.finditer(r"<FieldData\b.*?(</FieldData>|$)", head, re.S)]
+    for m in re.finditer(r"<DataArray\b[^>]*>", head):
+        tag = m.group(0)
+        name = _attr(tag, "Name") or "(unnamed)"
+        kind = _attr(tag, "type")
+        in_field_data = any(a <= m.start() < b for a, b in field_data)
+        if kind not in _TYPE_SIZES or (kind == "String" and not in_field_data):
+            raise file_error(path, f"data array {name!r} has type {kind!r}; volren reads numeric arrays")
+        components = _attr(tag, "NumberOfComponents")
+        if components is not None and not (components.isdigit() and 0 < int(components) <= _MAX_COMPONENTS):
+            raise file_error(path, f"data array {name!r} has NumberOfComponents={components!r}")
+        layout = _attr(tag, "format")
+        if layout is not None and layout not in _FORMATS:
+            raise file_error(path, f"data array {name!r} has format={layout!r}; expected {', '.join(_FORMATS)}")
+        offset = _attr(tag, "offset")
+        if offset is not None and not offset.isdigit():
+            raise file_error(path, f"data array {name!r} has offset={offset!r}")
 
 
 def _bytes_per_item(head: str) -> int:
@@ -72,6 +108,15 @@ def inspect_vti(path: Path) -> Inspection:
     dims = (e[1] - e[0] + 1, e[3] - e[2] + 1, e[5] - e[4] + 1)
     if min(dims) <= 0:
         raise file_error(path, f"the grid is empty (WholeExtent {extent!r})")
+    for piece in re.findall(r"<Piece\b[^>]*>", head):
+        text = _attr(piece, "Extent")
+        try:
+            p = [int(v) for v in (text or "").split()]
+        except ValueError:
+            p = []
+        inside = len(p) == 6 and all(e[2 * a] <= p[2 * a] <= p[2 * a + 1] <= e[2 * a + 1] for a in range(3))
+        if not inside:
+            raise file_error(path, f"a <Piece> Extent {text!r} is not inside the WholeExtent {extent!r}")
     per_point = _bytes_per_item(head)
     layout = DataLayout(dims, f"grid of {per_point}-byte points", product(dims) * per_point)
     spacing = parse_numbers(path, "Spacing", _attr(tag.group(0), "Spacing")) if tag else None
@@ -83,11 +128,13 @@ def inspect_vtu(path: Path) -> Inspection:
     head = _check_xml(path, "UnstructuredGrid")
     n_points = n_cells = 0
     for tag in re.findall(r"<Piece\b[^>]*>", head):
-        try:
-            n_points += int(_attr(tag, "NumberOfPoints") or 0)
-            n_cells += int(_attr(tag, "NumberOfCells") or 0)
-        except ValueError:
-            raise file_error(path, f"a <Piece> element has non-integer sizes: {tag[:120]}") from None
+        points, cells = _attr(tag, "NumberOfPoints") or "0", _attr(tag, "NumberOfCells") or "0"
+        if not (points.isdigit() and cells.isdigit()):
+            raise file_error(
+                path, f"a <Piece> has NumberOfPoints={points!r} NumberOfCells={cells!r}: not counts"
+            )
+        n_points += int(points)
+        n_cells += int(cells)
     # points as float64 xyz plus their arrays; cells as connectivity, offsets and types
     memory = n_points * (24 + _bytes_per_item(head)) + n_cells * (8 * 8 + 1)
     label = f"{n_points:,} points and {n_cells:,} cells"
