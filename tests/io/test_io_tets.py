@@ -127,3 +127,14 @@ def test_grids_without_3d_cells_or_points():
     empty = pv.UnstructuredGrid()
     with pytest.raises(VolrenError, match=r"^empty: the grid is empty \(0 points, 0 cells\)$"):
         from_pyvista(empty, name="empty")
+
+
+def test_duplicated_tets_are_merged_and_reported():
+    grid = merged(single(TET, pv.CellType.TETRA))
+    doubled = pv.UnstructuredGrid(
+        np.array([4, 0, 1, 2, 3, 4, 3, 2, 1, 0]), np.full(2, pv.CellType.TETRA, np.uint8), grid.points
+    )
+    doubled.point_data["s"] = grid.point_data["s"]
+    with pytest.warns(VolrenWarning, match="^d: 1 duplicated tetrahedron merged$"):
+        volume = from_pyvista(doubled, name="d")
+    assert len(volume.tets) == 1 and volume.merged_tet_count == 1

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from volren.errors import VolrenError
-from volren.model.tet_repair import repair_tets, signed_volumes
+from volren.model import tet_repair
+from volren.model.tet_repair import repair_tets, repeated_tets, signed_volumes
 from volren.model.volume import TetVolume, UniformVolume
 
 
@@ -106,3 +107,39 @@ def test_repair_is_scale_invariant():
     tiny = UNIT_TET * 1e-6
     result = repair_tets(tiny, np.array([[0, 1, 2, 3]]))
     assert result.dropped_degenerate == 0
+
+
+def two_tets_sharing_a_face():
+    """Two cells over the unit tet's face 1-2-3, with point 0 written twice (same value)."""
+    points = np.vstack([UNIT_TET, [[1, 1, 1]], UNIT_TET[:1]])
+    values = np.array([0.0, 1.0, 2.0, 3.0, 4.0, 0.0])
+    return points, np.array([[0, 1, 2, 3], [1, 2, 3, 4]]), values
+
+
+def test_repeated_tets_match_in_any_order_after_merging_points():
+    points, tets, values = two_tets_sharing_a_face()
+    again = np.array([[3, 2, 1, 0], [5, 1, 2, 3], [4, 3, 2, 1], [0, 1, 2, 4]])  # last one is new
+    repeated = repeated_tets(points, np.vstack([tets, again]), values)
+    assert repeated.tolist() == [False, False, True, True, True, False]
+
+
+def test_repeated_tets_need_the_same_value_at_a_repeated_point():
+    points, tets, values = two_tets_sharing_a_face()
+    values[5] = 9.0  # point 5 sits where point 0 does, with another value: a different field
+    assert not repeated_tets(points, np.vstack([tets, [[5, 1, 2, 3]]]), values).any()
+
+
+def test_a_hash_collision_never_merges_different_tets(monkeypatch):
+    monkeypatch.setattr(tet_repair, "_mixed", lambda ids: np.zeros(len(ids), np.uint64))
+    points, tets, values = two_tets_sharing_a_face()
+    assert repeated_tets(points, np.vstack([tets, tets[:1]]), values).tolist() == [False, False, True]
+
+
+def test_a_tet_volume_keeps_one_copy_of_each_tet_with_a_note():
+    points, tets, values = two_tets_sharing_a_face()
+    volume = TetVolume(points, np.vstack([tets, tets[:, ::-1], tets]), values, name="twice.vtu")
+    np.testing.assert_array_equal(volume.tets, tets)
+    assert volume.merged_tet_count == 4
+    assert volume.notes == ("twice.vtu: 4 duplicated tetrahedra merged",)
+    single = TetVolume(points, tets, values)
+    assert single.merged_tet_count == 0 and not single.notes

@@ -9,8 +9,12 @@ from hypothesis import strategies as st
 
 from volren.model.transfer_function import MAX_OPACITY, TransferFunction1D
 from volren.renderers.vtk_mappers.transfer import (
+    MASK_COLUMNS,
+    MASK_ROWS,
     MAX_EXTINCTION_ERROR,
     extinction_nodes,
+    masked_function,
+    masked_table,
     replace_nonfinite,
     uniform_functions,
     unstructured_functions,
@@ -90,6 +94,21 @@ def test_nonfinite_values_become_a_transparent_sentinel():
         assert opacity.GetValue(sentinel) == 0.0 and opacity.GetValue(0.9) == 0.0
         assert opacity.GetValue(1.0) == pytest.approx(expected)
         assert opacity.GetValue(2.0) == pytest.approx(expected)
+
+
+def test_the_masked_table_is_the_tf_per_sample_where_all_corners_are_finite():
+    """Top row (finite interpolates to 1): the TF at the texel centres of the scalar range, its
+    opacity that of one sample step; every other row transparent."""
+    table = masked_table(TF, (-20.0, 120.0), sample_distance=0.5)
+    assert table.shape == (MASK_ROWS, MASK_COLUMNS, 4) and table.dtype == np.float32
+    assert not table[:-1].any()
+    xs = -20.0 + (np.arange(MASK_COLUMNS) + 0.5) / MASK_COLUMNS * 140.0
+    rgb, alpha = TF.sample(xs)
+    np.testing.assert_allclose(table[-1, :, :3], rgb, atol=1e-6)
+    np.testing.assert_allclose(table[-1, :, 3], 1.0 - (1.0 - np.minimum(alpha, MAX_OPACITY)) ** 0.25, atol=1e-6)
+    image = masked_function(TF, (-20.0, 120.0), 0.5)
+    assert image.GetDimensions() == (MASK_COLUMNS, MASK_ROWS, 1)
+    assert image.GetPointData().GetScalars().GetNumberOfComponents() == 4
 
 
 def test_large_tfs_reach_vtk_node_for_node():

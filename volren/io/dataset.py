@@ -18,7 +18,7 @@ from volren.errors import VolrenError, VolrenWarning
 from volren.io import _pv
 from volren.io.formats.base import Grid, is_identity
 from volren.model.tet_repair import repair_tets
-from volren.model.volume import TetVolume, UniformVolume, Volume
+from volren.model.volume import TetVolume, UniformVolume, Volume, merged_tets_note
 
 _CELL_NAMES = {
     11: ("voxel", "voxels"), 12: ("hexahedron", "hexahedra"), 13: ("wedge", "wedges"),
@@ -152,6 +152,8 @@ def _report(volume: Volume, notes: list[str]) -> None:
     warn(notes)
     if volume.nonfinite_count:
         warn([f"{volume.name}: {volume.nonfinite_count:,} values are NaN or Inf; they render transparent"])
+    if isinstance(volume, TetVolume) and volume.merged_tet_count:
+        warn([merged_tets_note(volume.name, volume.merged_tet_count)])
 
 
 # ---------------------------------------------------------------------------- tetrahedral meshes

@@ -10,8 +10,9 @@ Conventions (shared with the ray-casting kernels):
 - Face f of tet t is the face OPPOSITE vertex f, i.e. the vertices ``tets[t]`` without index f.
   `FACE_VERTICES[f]` lists the other three local indices in the order whose right-hand normal
   points out of a positively oriented tet.
-- Points repeated with the same value are one point (`merged_duplicates`): ``tets`` name the first
-  copy, so faces between cells written with their own copies match.
+- Points repeated with the same value are one point (`tet_repair.merged_duplicates`): ``tets``
+  name the first copy, so faces between cells written with their own copies match. (Repeated
+  cells never get here: `TetVolume` keeps one copy of each.)
 - A tet is positively oriented when det[p1 - p0, p2 - p0, p3 - p0] > 0; inverted input cells get
   vertices 2 and 3 swapped.
 - A tet is *flat* when it repeats a vertex or ``|V| <= FLAT_REL_TOL * l**3`` (l its longest
@@ -48,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
-from volren.model.tet_repair import flat_cells
+from volren.model.tet_repair import flat_cells, merged_duplicates
 from volren.model.volume import TetVolume
 
 #: Local vertex indices of face f (opposite vertex f), ordered so that the right-hand normal points
@@ -197,21 +198,6 @@ def _match_faces(lo: NDArray, mid: NDArray, hi: NDArray, n_points: int) -> tuple
     first, second = order[pair_starts], order[pair_starts + 1]
     same_tet = first // 4 == second // 4  # a degenerate tet repeating one of its own faces
     return first[~same_tet], second[~same_tet], int(np.count_nonzero(lengths > 2))
-
-
-def merged_duplicates(points: NDArray, values: NDArray) -> NDArray[np.int64]:
-    """For each point, the first point with the same coordinates and the same value (bit for bit).
-
-    Meshes written cell by cell (or stitched from blocks, like blunt fin) repeat points; faces
-    between such copies would not match, so rays would leave the mesh and re-enter at every one.
-    Copies with different values are kept apart: the field jumps there, and the walk carries the
-    value across matched faces."""
-    rows = np.empty((len(points), 4))
-    rows[:, :3] = points + 0.0  # -0.0 -> 0.0
-    rows[:, 3] = values + 0.0
-    _, first, inverse = np.unique(rows.view(np.dtype((np.void, 32))).ravel(), return_index=True,
-                                  return_inverse=True)
-    return first[inverse.ravel()]
 
 
 def build_mesh(points: NDArray, tets: NDArray, values: NDArray) -> PreparedMesh:

@@ -6,6 +6,10 @@ bounds are given in (x, y, z) order. Sample ``[k, j, i]`` sits at ``origin + (i,
 
 Non-finite values (NaN, +-Inf) are kept as they are, counted, and left out of the value range;
 every renderer treats them as transparent.
+
+A tetrahedron given more than once (the same points in any order, after merging repeated points)
+is kept once, with a note: renderers disagreed on doubled cells (one drew them twice, another
+not at all), and a cell is one piece of the domain however often a file lists it.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.model.tet_repair import repeated_tets
 
 VolumeKind: TypeAlias = Literal["uniform", "tet"]
 
@@ -63,6 +68,11 @@ def finite_range(values: NDArray) -> tuple[tuple[float, float], int]:
         return (0.0, 0.0), n_bad
     good = values[finite] if n_bad else values
     return (float(good.min()), float(good.max())), n_bad
+
+
+def merged_tets_note(name: str, count: int) -> str:
+    """The note (and load warning) for `count` repeated tetrahedra kept once."""
+    return f"{name}: {count:,} duplicated tetrahedr{'on' if count == 1 else 'a'} merged"
 
 
 def _as_triple(value, what: str) -> tuple[float, float, float]:
@@ -170,6 +180,7 @@ class TetVolume:
     notes: tuple[str, ...] = ()
     value_range: tuple[float, float] = field(init=False)
     nonfinite_count: int = field(init=False)
+    merged_tet_count: int = field(init=False)  # repeated tetrahedra dropped (module docstring)
 
     kind: ClassVar[VolumeKind] = "tet"
 
@@ -205,6 +216,11 @@ class TetVolume:
         notes = tuple(self.notes) + conversion
         if n_bad:
             notes += (f"{self.name}: {n_bad} non-finite point values (NaN/Inf), rendered transparent",)
+        repeated = repeated_tets(points, tets, values)
+        n_repeated = int(np.count_nonzero(repeated))
+        if n_repeated:
+            tets = np.ascontiguousarray(tets[~repeated])
+            notes += (merged_tets_note(self.name, n_repeated),)
         for name, value in (
             ("points", points),
             ("tets", tets),
@@ -212,6 +228,7 @@ class TetVolume:
             ("notes", notes),
             ("value_range", value_range),
             ("nonfinite_count", n_bad),
+            ("merged_tet_count", n_repeated),
         ):
             object.__setattr__(self, name, value)
 

@@ -14,11 +14,15 @@ still gives the genuine vtkSmartVolumeMapper, at VTK's own step.
 
 The framebuffer is 8 bits per channel: every output value is a multiple of 1/255.
 
-Two mapper quirks are corrected here (both measured on a tetrahedralized box against the closed
-form): vtkUnstructuredGridVolumeRayCastMapper casts its rays through pixel corners, so its window
-centre is moved by half a pixel to put them through pixel centres like every other renderer
-(RMSE 0.015 -> 0.005); vtkOpenGLProjectedTetrahedraMapper draws its first frame wrong, so a new
-one renders a warm-up frame first.
+Three mapper quirks are corrected here (measured on tetrahedralized boxes against the closed
+form or `reference`): vtkUnstructuredGridVolumeRayCastMapper casts its rays through pixel corners,
+so its window centre is moved by half a pixel to put them through pixel centres like every other
+renderer (RMSE 0.015 -> 0.005); the same mapper loses rays that run inside a face plane (looking
+along an axis of a lattice mesh, the pixels on the image diagonal lie in the cubes' diagonal
+faces and came out up to 0.95 wrong: 19 pixels of 64x64), so its rays are moved a further
+thousandth of a pixel, by different amounts along x and y (RAY_NUDGE_PX), off every such plane;
+vtkOpenGLProjectedTetrahedraMapper draws its first frame wrong, so a new one renders a warm-up
+frame first.
 """
 
 from __future__ import annotations
@@ -43,9 +47,17 @@ from volren.renderers.base import (
 )
 from volren.renderers.opengl import require_opengl
 from volren.renderers.vtk_mappers import _vtk
-from volren.renderers.vtk_mappers.convert import image_data, unstructured_grid
-from volren.renderers.vtk_mappers.transfer import replace_nonfinite, uniform_functions, unstructured_functions
+from volren.renderers.vtk_mappers.convert import FINITE_NAME, image_data, unstructured_grid
+from volren.renderers.vtk_mappers.transfer import (
+    masked_function,
+    replace_nonfinite,
+    uniform_functions,
+    unstructured_functions,
+)
 from volren.vtk_messages import vtk_messages
+
+#: The ray caster's rays are moved this far (pixels, x and y) off planes through pixel centres.
+RAY_NUDGE_PX = (1e-3, 0.618e-3)
 
 #: VTK's average-intensity blend draws every pixel opaque (alpha 1), not the contract's
 #: (c(v) a(v), a(v)) of the mean value v, so `average` is not offered.
@@ -209,12 +221,13 @@ class VtkRenderer(RendererBase):
         if self._dataset is not None:
             return
         volume = self._volume
-        values, self._sentinel = replace_nonfinite(volume.values, volume.value_range)
         if isinstance(volume, UniformVolume):
+            values, self._sentinel = replace_nonfinite(volume.values, volume.value_range)
             self._dataset = image_data(volume, values)
         else:
             assert isinstance(volume, TetVolume)
-            self._dataset = unstructured_grid(volume, values)
+            self._sentinel = None  # cells with a non-finite corner are left out
+            self._dataset = unstructured_grid(volume)
 
     def _resolve_auto(self) -> str:
         """vtkSmartVolumeMapper's choice: GPU ray casting if this context supports it."""
@@ -252,16 +265,39 @@ class VtkRenderer(RendererBase):
                 self._mapper.SetUseJittering(int(settings.jitter))
         getattr(self._mapper, _BLEND_SETTERS[settings.blend_mode])()
 
+    def _masks_nonfinite(self) -> bool:
+        """Whether this frame hides grid cells with a non-finite corner through the 2D TF over
+        (value, finite) (see `transfer`): only VTK's GPU ray caster has 2D TFs, and only the
+        composite blend reads them."""
+        return (
+            self._sentinel is not None
+            and self._mapper_key[0] == "gpu"
+            and self._settings.blend_mode is BlendMode.COMPOSITE
+        )
+
     def _ensure_property(self) -> None:
         tf, settings, prop = self._tf, self._settings, self._property
-        key = (tf.version, self._sentinel)  # the conversion depends on the volume kind, reset with it
+        masked = self._masks_nonfinite()
+        h = settings.step * self._volume.characteristic_length
+        # The conversion depends on the volume kind, reset with it; the masked table on the step.
+        key = (tf.version, self._sentinel, h if masked else None)
         if key != self._tf_key:
             build = unstructured_functions if self._volume.kind == "tet" else uniform_functions
-            color, opacity = build(tf, self._volume.value_range[0], self._sentinel)
+            lo, hi = self._volume.value_range
+            color, opacity = build(tf, lo, self._sentinel)
             prop.SetColor(color)
             prop.SetScalarOpacity(opacity)
             prop.SetScalarOpacityUnitDistance(tf.opacity_unit_distance)
+            if masked:
+                prop.SetTransferFunction2D(masked_function(tf, (self._sentinel, hi), h))
             self._tf_key = key
+        if masked:
+            prop.SetTransferFunctionModeTo2D()
+            self._mapper.SetTransfer2DYAxisArray(FINITE_NAME)
+        else:
+            prop.SetTransferFunctionModeTo1D()
+            if self._mapper_key[0] == "gpu":
+                self._mapper.SetTransfer2DYAxisArray(None)
         prop.SetShade(int(settings.shade))
         prop.SetAmbient(settings.ambient)
         prop.SetDiffuse(settings.diffuse)
@@ -279,7 +315,10 @@ class VtkRenderer(RendererBase):
         cam.SetClippingRange(*camera.clipping_range)
         if self._mapper_key is not None and self._mapper_key[0] == "raycast":
             width, height = self._window.GetSize()
-            cam.SetWindowCenter(1.0 / width, 1.0 / height)  # rays through pixel centres
+            # Half a pixel (2 / size in window units) puts the rays through pixel centres; the
+            # nudge keeps them out of face planes (module docstring).
+            dx, dy = RAY_NUDGE_PX
+            cam.SetWindowCenter((1.0 + 2.0 * dx) / width, (1.0 + 2.0 * dy) / height)
         else:
             cam.SetWindowCenter(0.0, 0.0)
 

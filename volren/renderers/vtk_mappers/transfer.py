@@ -17,10 +17,20 @@ The unstructured mappers (ray cast, projected tetrahedra, ZSweep) differ twice (
 - they read the opacity function only at colour nodes, so every node carries both a colour and
   an opacity.
 
-Non-finite data values are replaced by a sentinel one data-range below the finite minimum, and
-every value below the finite minimum is made transparent; interpolation next to a NaN sample then
-mostly lands in that transparent band, approximating the reference's rule (a sample interpolated
-from a NaN is transparent).
+Non-finite values (the contract: a cell with a non-finite corner is transparent, the rest is drawn
+as usual). Tetrahedra with such a corner are left out of the mesh VTK gets (`convert`), which is
+the rule exactly. On grids a cell cannot be left out, and trilinear interpolation between any
+stand-in value and its finite neighbours gives values the TF draws: a sentinel one data range
+below the finite minimum, made transparent there, still let half of many such cells through
+(10 % scattered NaN points: 1.66x the reference's opacity). So on the GPU ray caster (composite)
+the grid also carries a point array `finite` (1 at finite points, 0 elsewhere) that VTK
+interpolates like the scalars and uses as the second axis of a 2D TF (`masked_table`): the TF
+itself in the top row, where `finite` interpolates to 1 (all eight corners finite), and nothing
+below it. Only a sliver of each such cell, where the non-finite corner's weight is under about
+1.5 / MASK_ROWS, keeps some opacity. VTK applies no opacity correction to a 2D TF, so the table
+holds the per-sample opacity 1 - (1 - a)^(h / d) for the mapper's sample distance h. Mappers
+without 2D TFs (fixed point, smart, the projection blend modes) keep the sentinel alone, and
+with it the approximation.
 """
 
 from __future__ import annotations
@@ -29,11 +39,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.model.transfer_function import MAX_OPACITY, TransferFunction1D
-from volren.renderers.vtk_mappers._vtk import numpy_to_vtk, vtkColorTransferFunction, vtkPiecewiseFunction
+from volren.renderers.vtk_mappers._vtk import (
+    numpy_to_vtk,
+    vtkColorTransferFunction,
+    vtkImageData,
+    vtkPiecewiseFunction,
+)
 
 #: Largest error of -ln(1 - a) between the nodes handed to the unstructured mappers.
 MAX_EXTINCTION_ERROR = 0.002
 MAX_SUBDIVISIONS = 256
+
+#: Size of the 2D TF that hides grid cells with a non-finite corner: columns over the scalar range
+#: (sentinel to maximum, so half of them cover the data), rows over `finite` from 0 to 1; 16 MiB.
+#: Measured on 10 % scattered NaN points, opacity against the reference: 1.09 with 64 rows, 1.03
+#: with 256, 1.007 with 1024.
+MASK_COLUMNS = 2048
+MASK_ROWS = 512
 
 
 def replace_nonfinite(values: NDArray, data_range: tuple[float, float]) -> tuple[NDArray, float | None]:
@@ -150,3 +172,26 @@ def unstructured_functions(
         xs = xs2
     extinction = -np.log1p(-np.minimum(alphas, MAX_OPACITY))
     return _functions(xs, rgb, xs, extinction)
+
+
+def masked_table(tf: TransferFunction1D, scalar_range: tuple[float, float], sample_distance: float) -> NDArray:
+    """(MASK_ROWS, MASK_COLUMNS, 4) float32 RGBA of the 2D TF over (value, finite): our TF sampled at
+    the texel centres of the scalar range in the top row, with the opacity of one sample step
+    `sample_distance` long; zero in every other row (module docstring)."""
+    lo, hi = scalar_range
+    xs = lo + (np.arange(MASK_COLUMNS) + 0.5) / MASK_COLUMNS * (hi - lo)
+    rgb, alpha = tf.sample(xs)
+    exponent = sample_distance / tf.opacity_unit_distance
+    table = np.zeros((MASK_ROWS, MASK_COLUMNS, 4), dtype=np.float32)
+    table[-1, :, :3] = rgb
+    table[-1, :, 3] = 1.0 - (1.0 - np.minimum(alpha, MAX_OPACITY)) ** exponent
+    return table
+
+
+def masked_function(tf: TransferFunction1D, scalar_range: tuple[float, float], sample_distance: float) -> vtkImageData:
+    """`masked_table` as the vtkImageData that vtkVolumeProperty.SetTransferFunction2D takes."""
+    table = masked_table(tf, scalar_range, sample_distance)
+    image = vtkImageData()
+    image.SetDimensions(MASK_COLUMNS, MASK_ROWS, 1)
+    image.GetPointData().SetScalars(numpy_to_vtk(table.reshape(-1, 4), deep=1))
+    return image
