@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
-from volren.model.colormaps import VIRIDIS, color_stops
+from volren.model.colormaps import VIRIDIS, color_stops, lerp
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import (
@@ -29,9 +29,9 @@ def default_transfer_function(volume: Volume) -> TransferFunction1D:
     """What a volume looks like before anyone edits its TF: viridis colours over the value range,
     opacity ramping from 0 at the bottom tenth to 0.3 at the top, per voxel (or tet edge) thickness."""
     lo, hi = volume.value_range
-    span = hi - lo if hi > lo else 1.0
-    color = color_stops(VIRIDIS, lo, lo + span)
-    opacity = [[lo, 0.0], [lo + 0.1 * span, 0.0], [hi, 0.3]]
+    top = hi if hi > lo else lo + 1.0
+    color = color_stops(VIRIDIS, lo, top)
+    opacity = [[lo, 0.0], [lerp(lo, top, 0.1), 0.0], [hi, 0.3]]
     return TransferFunction1D(color, opacity, volume.characteristic_length)
 
 
