@@ -19,14 +19,29 @@ from typing import Any, TextIO
 
 from volren.errors import VolrenWarning
 
-#: VTK appends whole object dumps (a vtkInformation's every key) to some messages; the first
-#: characters say what went wrong.
-VTK_MESSAGE_CHARS = 300
+#: Longest message of another library printed whole: VTK appends object dumps (a vtkInformation's
+#: every key) to some, and the first characters say what went wrong.
+LIBRARY_MESSAGE_CHARS = 300
 
 
 def fold(text: object) -> str:
     """`text` on one line: runs of whitespace, newlines included, become one space."""
     return " ".join(str(text).split())
+
+
+def shorten(text: str, limit: int = LIBRARY_MESSAGE_CHARS) -> str:
+    """`text` folded, and cut after `limit` characters (marked with ' ...')."""
+    line = fold(text)
+    return line if len(line) <= limit else line[:limit] + " ..."
+
+
+def _package(path: str) -> str:
+    """The installed package a source file belongs to ('pyvista' for .../site-packages/pyvista/x.py)."""
+    parts = Path(path).parts
+    for anchor in ("site-packages", "dist-packages"):
+        if anchor in parts[:-1]:
+            return parts[parts.index(anchor) + 1]
+    return Path(path).stem
 
 
 class LinePrinter:
@@ -52,11 +67,13 @@ class LinePrinter:
         if issubclass(category, VolrenWarning):
             self.warn(message)
         else:
-            self.warn(message, f"{category.__name__} at {'/'.join(Path(filename).parts[-2:])}:{lineno}")
+            where = "/".join(Path(filename).parts[-2:])
+            self.warn(shorten(str(message)), f"{category.__name__} at {where}:{lineno}")
 
 
 class _LoggingHandler(logging.Handler):
-    """A logging handler that hands WARNING and worse records to a LinePrinter."""
+    """A logging handler that hands WARNING and worse records to a LinePrinter, named by their
+    logger or, for the root logger, by the package that logged (pyvista logs VTK's errors there)."""
 
     def __init__(self, printer: LinePrinter) -> None:
         super().__init__(logging.WARNING)
@@ -64,7 +81,8 @@ class _LoggingHandler(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         try:
-            self._printer.warn(f"{record.name}: {record.getMessage()}")
+            source = record.name if record.name != "root" else _package(record.pathname)
+            self._printer.warn(f"{source}: {shorten(record.getMessage())}")
         except Exception:  # a log call must never break the command
             self.handleError(record)
 
@@ -98,8 +116,7 @@ def _vtk_output_to(printer: LinePrinter) -> Iterator[None]:
     @calldata_type(VTK_STRING)
     def on_text(_obj: Any, _event: str, output: str) -> None:
         for message in parse_output_window(output or ""):
-            text = message.text
-            printer.warn(f"VTK: {text[:VTK_MESSAGE_CHARS]}{' ...' if len(text) > VTK_MESSAGE_CHARS else ''}")
+            printer.warn(f"VTK: {shorten(message.text)}")
 
     window = vtkOutputWindow.GetInstance()
     mode = window.GetDisplayMode()
