@@ -9,6 +9,8 @@
 # Usage: scripts/setup.sh [--tests]
 #   VOLREN_LATEST=1 scripts/setup.sh ...  ignores constraints.txt and upgrades every dependency to
 #                                         its newest release (to test against them).
+#   VOLREN_APT_LOCK_TIMEOUT=S ...         seconds to wait for another apt or dpkg to finish
+#                                         before installing system packages (default 600).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -28,6 +30,31 @@ if [ "$with_tests" = 1 ]; then
   packages+=(xvfb xauth)
 fi
 
+# Seconds to wait, in all, for the dpkg and apt locks another package manager holds (on a fresh
+# machine's first boot, often unattended-upgrades or cloud-init) instead of failing at once.
+apt_lock_left=${VOLREN_APT_LOCK_TIMEOUT:-600}
+
+# Wait while another apt, dpkg or unattended-upgrades process runs, within the time left, saying so
+# in one line (on stderr: apt's own output goes to /dev/null). apt's DPkg::Lock::Timeout (apt >=
+# 1.9.11) covers the dpkg lock of `install`, but not on every apt release the lists lock of `update`.
+wait_for_apt() {
+  command -v pgrep >/dev/null 2>&1 || return 0
+  local pids said=0
+  while [ "$apt_lock_left" -gt 0 ] && pids=$(pgrep -d, -x 'apt|apt-get|aptitude|dpkg|unattended-upgr' 2>/dev/null); do
+    [ "$said" = 1 ] || echo "setup: waiting up to ${apt_lock_left}s for another package manager (pid $pids) to release the apt/dpkg lock" >&2
+    said=1
+    sleep 1
+    apt_lock_left=$((apt_lock_left - 1))
+  done
+}
+
+# apt-get as root (through sudo where needed), non-interactive, waiting for the locks within the
+# time left (then apt says who holds them); the environment goes through `env`, which sudo keeps.
+apt_get() {
+  wait_for_apt
+  $sudo env DEBIAN_FRONTEND=noninteractive apt-get -o "DPkg::Lock::Timeout=$apt_lock_left" "$@"
+}
+
 missing=()
 if command -v dpkg-query >/dev/null 2>&1; then
   for p in "${packages[@]}"; do
@@ -39,8 +66,8 @@ if [ "${#missing[@]}" -gt 0 ]; then
   sudo=""
   [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1 && sudo="sudo"
   if command -v apt-get >/dev/null 2>&1; then
-    $sudo apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+    apt_get update -qq
+    apt_get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
   else
     echo "setup: no apt-get here; please install the equivalents of: ${missing[*]}" >&2
   fi

@@ -57,3 +57,12 @@ def test_bad_arguments_are_clear_errors(kwargs, message):
     volume = UniformVolume(np.zeros((2, 2, 2), np.uint8))
     with pytest.raises(VolrenError, match=message):
         volren.render(volume, **kwargs)
+
+
+def test_default_transfer_function_of_values_near_the_float64_limits_is_finite():
+    """hi - lo overflows to inf there; the control points must stay finite (they were refused)."""
+    volume = UniformVolume(np.linspace(-1.0, 1.0, 8).reshape(2, 2, 2) * 1.7e308)
+    tf = default_transfer_function(volume)
+    assert tf.value_range == (-1.7e308, 1.7e308)
+    assert np.isfinite(tf.color_points).all() and np.isfinite(tf.opacity_points).all()
+    assert tf.sample([1.7e308])[1][0] == pytest.approx(0.3)

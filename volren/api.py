@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from os import PathLike
@@ -11,10 +12,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.errors import VolrenError
+from volren.errors import VolrenError, VolrenWarning
 from volren.model.camera import Camera
-from volren.model.colormaps import VIRIDIS, color_stops
-from volren.model.settings import RenderSettings
+from volren.model.colormaps import VIRIDIS, color_stops, lerp
+from volren.model.settings import RenderSettings, check_step
+from volren.model.tf_coverage import coverage_problem
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import (
     TransferFunction,
@@ -29,9 +31,9 @@ def default_transfer_function(volume: Volume) -> TransferFunction1D:
     """What a volume looks like before anyone edits its TF: viridis colours over the value range,
     opacity ramping from 0 at the bottom tenth to 0.3 at the top, per voxel (or tet edge) thickness."""
     lo, hi = volume.value_range
-    span = hi - lo if hi > lo else 1.0
-    color = color_stops(VIRIDIS, lo, lo + span)
-    opacity = [[lo, 0.0], [lo + 0.1 * span, 0.0], [hi, 0.3]]
+    top = hi if hi > lo else lo + 1.0
+    color = color_stops(VIRIDIS, lo, top)
+    opacity = [[lo, 0.0], [lerp(lo, top, 0.1), 0.0], [hi, 0.3]]
     return TransferFunction1D(color, opacity, volume.characteristic_length)
 
 
@@ -80,19 +82,40 @@ def parse_size(size: Any) -> tuple[int, int]:
     return int(values[0]), int(values[1])
 
 
+def check_scene(
+    volume: Volume,
+    tf: TransferFunction,
+    settings: RenderSettings,
+    tf_name: str | None = None,
+    step_name: str = "render setting step",
+) -> None:
+    """What `volren render` and `volren.render` check before drawing, so that bad input is an error
+    or a warning instead of a black image and success: a step too small to honour (an error naming
+    it as `step_name`), and a TF that shows nothing of the data (a VolrenWarning naming `tf_name`,
+    the TF file, where there is one)."""
+    check_step(settings.step, volume.bounds, volume.characteristic_length, step_name)
+    problem = coverage_problem(tf, volume.value_range)
+    if problem:
+        warnings.warn(f"{tf_name or 'transfer function'}: {problem}", VolrenWarning, stacklevel=2)
+
+
 @contextmanager
 def prepared_renderer(
     name: str, volume: Volume, tf: TransferFunction, settings: RenderSettings | None = None
 ) -> Iterator[Renderer]:
     """``with prepared_renderer(...) as r``: a new renderer `name` holding the volume, TF and
-    settings, released at the end of the block (the Protocol asks for no context-manager methods)."""
+    settings, released at the end of the block (the Protocol asks for no context-manager methods).
+    A step too small for any renderer to honour is refused here, where the bench and the reference
+    images pass as well as `render`."""
     from volren.renderers.registry import registry
 
+    settings = settings or RenderSettings()
+    check_step(settings.step, volume.bounds, volume.characteristic_length)
     renderer = registry.create(name)
     try:
         renderer.set_volume(volume)
         renderer.set_transfer_function(tf)
-        renderer.set_settings(settings or RenderSettings())
+        renderer.set_settings(settings)
         yield renderer
     finally:
         renderer.release()
@@ -127,6 +150,7 @@ def render(
         if not math.isfinite(value):
             raise VolrenError(f"{name} must be finite, got {value}")
     render_settings = RenderSettings().with_(**settings)
+    check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
     cam = camera or Camera.orbit(vol.bounds, azimuth, elevation, zoom, parallel, width / height)
     with prepared_renderer(renderer, vol, transfer, render_settings) as r:
         image, _ = render_frame(r, cam, width, height, progress, label=renderer)

@@ -39,7 +39,7 @@ class MessageLog:
         return [m for m in self.messages if m.kind == "error"]
 
 
-def _parse_output_window(text: str) -> list[VtkMessage]:
+def parse_output_window(text: str) -> list[VtkMessage]:
     """Split vtkStringOutputWindow's text into messages, dropping source paths and addresses."""
     out = []
     for block in text.split("\n\n"):
@@ -104,7 +104,7 @@ def vtk_messages() -> Iterator[MessageLog]:
         text = window.GetOutput()
         if isinstance(text, bytes):  # VTK hands back bytes when a message is not valid UTF-8
             text = text.decode("utf-8", "replace")
-        log.messages.extend(_parse_output_window(text or ""))
+        log.messages.extend(parse_output_window(text or ""))
         for chunk in stderr_text:
             lines = [" ".join(line.split()) for line in chunk.splitlines() if line.strip()]
             if lines:

@@ -80,10 +80,8 @@ def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
     [
         (["render", "{missing}", "-o", "{out}"], "missing.vti"),
         (["render", "{volume}", "-o", "{out}", "--renderer", "nope"], "unknown renderer 'nope'"),
-        (["render", "{volume}", "-o", "{out}", "--size", "0"], "image size"),
         (["render", "{volume}", "-o", "{out}", "--tf", "{missing}"], "missing.vti"),
         (["render", "{volume}", "-o", "{out}", "--option", "mapper=warp"], "unknown vtk mapper"),
-        (["render", "{volume}", "-o", "{out}", "--step", "-1"], "step"),
         (["render", "{volume}", "-o", "{tmp}/no/such/dir/x.png"], "does not exist"),
         (["render", "{volume}"], "-o OUT.png"),
         (["render", "-o", "{out}"], "INPUT"),

@@ -2,19 +2,20 @@
 
 Errors people can cause print as one line ``volren: error: ...`` with exit status 1; usage
 errors print one line naming the flag (no usage block) and exit with 2; anything unexpected prints
-one line and exits with 3 unless ``--traceback`` asks for the full story.
+one line and exits with 3 unless ``--traceback`` asks for the full story. Warnings, log records and
+stray VTK output print as one line each, once (`volren.cli.messages`).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
 import volren
 from volren.cli import bench_cmd, check_cmd, demo_cmd, render_cmd, renderers_cmd, view_cmd
+from volren.cli.messages import one_line_messages
 from volren.errors import VolrenError
 
 COMMANDS = (renderers_cmd, render_cmd, view_cmd, demo_cmd, bench_cmd, check_cmd)
@@ -41,17 +42,12 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _one_line_warnings(message, category, filename, lineno, file=None, line=None) -> None:
-    print(f"volren: warning: {message}", file=sys.stderr)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    previous = warnings.showwarning
-    warnings.showwarning = _one_line_warnings
     try:
-        return int(args.run(args) or 0)
+        with one_line_messages():
+            return int(args.run(args) or 0)
     except VolrenError as exc:
         if args.traceback:
             raise
@@ -69,8 +65,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 3
-    finally:
-        warnings.showwarning = previous
 
 
 def entry_point() -> None:

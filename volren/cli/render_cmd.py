@@ -8,13 +8,49 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from volren.errors import VolrenError
+from volren.model.camera import check_zoom
 from volren.model.scene import OrbitView, Scene
-from volren.model.settings import BlendMode
+from volren.model.settings import MAX_SAMPLES_PER_RAY, BlendMode
+
+
+def finite_float(text: str) -> float:
+    """An argparse type: a finite number (NaN or Inf is a usage error naming the flag, where the
+    camera would otherwise fail later with a message that names no flag)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """An argparse type: a finite number above 0 (for --zoom and --step)."""
+    value = finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a number above 0, got {text!r}")
+    return value
+
+
+def image_size(text: str) -> tuple[int, int]:
+    """An argparse type: W or WxH, each side in 1..MAX_IMAGE_SIDE."""
+    from volren.api import parse_size
+    from volren.renderers.base import MAX_IMAGE_SIDE
+
+    try:
+        width, height = parse_size(text)
+    except VolrenError:
+        raise argparse.ArgumentTypeError(f"expected W or WxH in pixels (e.g. 512 or 640x480), got {text!r}") from None
+    if max(width, height) > MAX_IMAGE_SIDE:
+        raise argparse.ArgumentTypeError(f"each side may be at most {MAX_IMAGE_SIDE} pixels, got {text!r}")
+    return width, height
 
 
 def add_parser(sub) -> None:
@@ -25,12 +61,16 @@ def add_parser(sub) -> None:
     p.add_argument("--renderer", help="renderer name (see `volren renderers`; default vtk)")
     p.add_argument("--tf", help="transfer function JSON (DESIGN.md format or a ParaView preset)")
     p.add_argument("--scalars", help="name of the point array to render")
-    p.add_argument("--size", help="image size W or WxH (default 512)")
-    p.add_argument("--azimuth", type=float, help="degrees, after the camera reset")
-    p.add_argument("--elevation", type=float, help="degrees, after the azimuth")
-    p.add_argument("--zoom", type=float, help="zoom factor, after the elevation")
+    p.add_argument("--size", type=image_size, help="image size W or WxH (default 512)")
+    p.add_argument("--azimuth", type=finite_float, help="degrees, after the camera reset")
+    p.add_argument("--elevation", type=finite_float, help="degrees, after the azimuth")
+    p.add_argument("--zoom", type=positive_float, help="zoom factor, after the elevation")
     p.add_argument("--parallel", action="store_true", default=None, help="parallel projection")
-    p.add_argument("--step", type=float, help="sample distance in mean voxel spacings / tet edges")
+    p.add_argument(
+        "--step",
+        type=positive_float,
+        help=f"sample distance in mean voxel spacings / tet edges (at most {MAX_SAMPLES_PER_RAY:,} per ray)",
+    )
     p.add_argument("--preintegration", action=argparse.BooleanOptionalAction, help="pre-integrated TF")
     p.add_argument("--shade", action=argparse.BooleanOptionalAction, help="Blinn-Phong shading")
     p.add_argument("--blend", choices=[m.value for m in BlendMode], help="blend mode (default composite)")
@@ -111,7 +151,7 @@ def _load_input(args: argparse.Namespace):
 def build_scene(args: argparse.Namespace) -> Scene:
     """The scene to render: from --scene and/or INPUT, with explicit flags applied on top."""
     from volren import io
-    from volren.api import as_transfer_function, parse_size
+    from volren.api import as_transfer_function
 
     _check_raw_flags(args)
     if args.scene:
@@ -120,15 +160,16 @@ def build_scene(args: argparse.Namespace) -> Scene:
             scene = replace(scene, volume=_load_input(args), volume_path=args.input)
     elif args.input is not None:
         volume = _load_input(args)
-        scene = Scene(args.input, as_transfer_function(None, volume), volume=volume, scalars=args.scalars)
+        tf = io.load_transfer_function(args.tf) if args.tf else as_transfer_function(None, volume)
+        scene = Scene(args.input, tf, volume=volume, scalars=args.scalars)
     else:
         raise VolrenError("give an INPUT volume or --scene SCENE.json")
-    if args.tf:
+    if args.tf and args.scene:
         scene = replace(scene, transfer_function=io.load_transfer_function(args.tf))
     if args.renderer:
         scene = replace(scene, renderer=args.renderer)
     if args.size:
-        scene = replace(scene, size=parse_size(args.size))
+        scene = replace(scene, size=args.size)
     orbit_flags = {
         "azimuth": args.azimuth,
         "elevation": args.elevation,
@@ -137,6 +178,8 @@ def build_scene(args: argparse.Namespace) -> Scene:
     }
     if any(v is not None for v in orbit_flags.values()):
         base = scene.camera if isinstance(scene.camera, OrbitView) else OrbitView()
+        if args.zoom is not None:
+            check_zoom(args.zoom, bool(args.parallel or base.parallel), name="--zoom")
         scene = replace(scene, camera=replace(base, **{k: v for k, v in orbit_flags.items() if v is not None}))
     changes: dict[str, Any] = {
         "step": args.step,
@@ -159,6 +202,18 @@ def _check_outputs(outputs, inputs, force: bool) -> None:
     refuse_overwriting_inputs(outputs, [] if force else inputs, hint=" (or add --force)")
 
 
+def _check_scene(args: argparse.Namespace, scene: Scene) -> None:
+    """`volren.api.check_scene`, naming what the user gave: the flag or the scene file."""
+    from volren.api import check_scene
+
+    from_scene = args.scene and args.step is None
+    step_name = f"{args.scene}: settings.step (or --step)" if from_scene else "--step"
+    tf_name = args.tf or args.scene or "the default transfer function"
+    if scene.volume is None:
+        raise VolrenError(f"{args.scene}: the scene names no volume; give INPUT")
+    check_scene(scene.volume, scene.transfer_function, scene.settings, tf_name, step_name)
+
+
 def run(args: argparse.Namespace) -> int:
     from volren import io
     from volren.api import prepared_renderer
@@ -175,6 +230,7 @@ def run(args: argparse.Namespace) -> int:
     _check_outputs(outputs, inputs, args.force)  # before the (maybe long) load
     scene = build_scene(args)
     _check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
+    _check_scene(args, scene)
     width, height = scene.size
     camera = scene.resolved_camera()
     with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:

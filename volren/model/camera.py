@@ -29,6 +29,27 @@ Vec3 = tuple[float, float, float]
 CLIPPING_RANGE_EXPANSION = 0.5
 #: vtkRenderer's NearClippingPlaneTolerance for a depth buffer of more than 16 bits.
 NEAR_CLIPPING_PLANE_TOLERANCE = 0.001
+#: Zoom factors (one call of `Camera.zoom`, or a scene's zoom) beyond these are typos, not views:
+#: the data shrinks a million times below its fitted size or a voxel fills the image a million
+#: times over, and VTK's float32 projection loses the data altogether (blank images at 1e300).
+MIN_ZOOM = 1e-6
+MAX_ZOOM = 1e6
+
+
+def check_zoom(zoom: float, parallel: bool, view_angle: float = 30.0, name: str = "camera zoom") -> None:
+    """Refuse a zoom that draws nothing sensible: outside [MIN_ZOOM, MAX_ZOOM], or (in perspective)
+    one that would widen `view_angle` to 180 degrees or more. `name` is what the caller calls it."""
+    try:
+        value = float(zoom)
+    except (TypeError, ValueError):
+        value = math.nan
+    if not MIN_ZOOM <= value <= MAX_ZOOM:  # False for NaN
+        raise VolrenError(f"{name} must lie in [{MIN_ZOOM:g}, {MAX_ZOOM:g}], got {zoom!r}")
+    if not parallel and view_angle / value >= 180.0:
+        raise VolrenError(
+            f"{name} {value:g} would widen the {view_angle:g} degree view angle to {view_angle / value:.4g}; "
+            f"a perspective view needs a zoom above {view_angle / 180.0:.4g} (or a parallel projection)"
+        )
 
 
 def _vec(value: Sequence[float], what: str) -> Vec3:
@@ -251,8 +272,7 @@ class Camera:
 
     def zoom(self, factor: float) -> Camera:
         """Narrow the view angle (or parallel scale) by `factor` (> 1 enlarges the image)."""
-        if not (factor > 0 and math.isfinite(factor)):
-            raise VolrenError(f"zoom factor must be positive, got {factor}")
+        check_zoom(factor, self.parallel, self.view_angle, "zoom factor")
         if self.parallel:
             return replace(self, parallel_scale=self.parallel_scale / factor)
         return replace(self, view_angle=self.view_angle / factor)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 #: Viridis (van der Walt and Smith's perceptually uniform, colour-blind safe map) at five evenly spaced stops.
 VIRIDIS = (
     (0.0, 0.267, 0.005, 0.329),
@@ -12,6 +14,15 @@ VIRIDIS = (
 )
 
 
+def lerp(lo: float, hi: float, x: float) -> float:
+    """lo + x (hi - lo), finite even where hi - lo overflows (data near the float64 limits, whose
+    default TF would otherwise get infinite control points)."""
+    span = hi - lo
+    if math.isfinite(span):
+        return lo + x * span
+    return lo * (1.0 - x) + hi * x
+
+
 def color_stops(stops, lo: float, hi: float) -> list[list[float]]:
     """The stops with x mapped from [0, 1] onto [lo, hi]: TransferFunction1D colour points."""
-    return [[lo + x * (hi - lo), r, g, b] for x, r, g, b in stops]
+    return [[lerp(lo, hi, x), r, g, b] for x, r, g, b in stops]

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from volren.errors import VolrenError
-from volren.model.camera import Camera
+from volren.model.camera import Camera, check_zoom
 from volren.model.file_version import check_format_version
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction, transfer_function_from_dict
@@ -35,10 +35,9 @@ class OrbitView:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
                 raise VolrenError(f"camera {name} must be a finite number, got {value!r}")
-        if self.zoom <= 0:
-            raise VolrenError(f"camera zoom must be positive, got {self.zoom!r}")
         if not isinstance(self.parallel, bool):
             raise VolrenError(f"camera parallel must be true or false, got {self.parallel!r}")
+        check_zoom(self.zoom, self.parallel)
 
     def camera(self, bounds: Sequence[float], aspect: float = 1.0) -> Camera:
         return Camera.orbit(bounds, self.azimuth, self.elevation, self.zoom, self.parallel, aspect)

@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields, replace
 from enum import StrEnum
 from typing import Any
 
 from volren.errors import VolrenError
+
+#: Most samples a ray may take across a volume's diagonal at the chosen `step`. The renderers that
+#: march (vtk, slicer, reference, plugins) silently draw a black image or run for hours far beyond
+#: it (VTK and the slicer go blank near 700,000 samples); 100,000 is about a 512^3 grid at step
+#: 0.009, the slicer's cap on slices, and still honoured by every renderer.
+MAX_SAMPLES_PER_RAY = 100_000
 
 
 class BlendMode(StrEnum):
@@ -85,3 +91,31 @@ class RenderSettings:
         if not isinstance(data, Mapping):
             raise VolrenError(f"render settings must be a JSON object, got {type(data).__name__}")
         return cls().with_(**dict(data))
+
+
+def _round_up(x: float, digits: int = 3) -> float:
+    """`x` rounded up to `digits` significant digits: a least step that, printed, is still enough."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
+    return math.ceil(x / unit) * unit
+
+
+def samples_per_ray(step: float, bounds: Sequence[float], unit: float) -> float:
+    """How many samples of `step` (in units of `unit`, the volume's characteristic length) a ray
+    along the diagonal of `bounds` (xmin, xmax, ymin, ymax, zmin, zmax) takes."""
+    diagonal = math.hypot(*(bounds[2 * a + 1] - bounds[2 * a] for a in range(3)))
+    if not unit > 0 or not step > 0:
+        return 0.0  # a degenerate volume or step is refused elsewhere, with its own message
+    return diagonal / unit / step
+
+
+def check_step(step: float, bounds: Sequence[float], unit: float, name: str = "render setting step") -> None:
+    """Refuse a step so small that a ray would take more than MAX_SAMPLES_PER_RAY samples: the
+    renderers would otherwise draw a black image (or run for hours) and report success. `name` is
+    what the caller calls the step (`--step` on the command line)."""
+    samples = samples_per_ray(step, bounds, unit)
+    if samples > MAX_SAMPLES_PER_RAY:
+        least = _round_up(step * samples / MAX_SAMPLES_PER_RAY)
+        raise VolrenError(
+            f"{name} {step:g} would take about {samples:.3g} samples per ray across this volume; "
+            f"at most {MAX_SAMPLES_PER_RAY:,} are allowed (a step of at least {least:.3g})"
+        )
