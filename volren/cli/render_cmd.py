@@ -214,6 +214,15 @@ def _check_scene(args: argparse.Namespace, scene: Scene) -> None:
     check_scene(scene.volume, scene.transfer_function, scene.settings, tf_name, step_name)
 
 
+def _naming_the_input(exc: VolrenError, source: str | None) -> VolrenError:
+    """A rendering error about the data, with the file it came from in front (unless it names a
+    file or a flag already): every message names what is at fault."""
+    text = str(exc)
+    if not source or Path(source).name in text or "--" in text:
+        return exc
+    return VolrenError(f"{source}: {text}")
+
+
 def run(args: argparse.Namespace) -> int:
     from volren import io
     from volren.api import prepared_renderer
@@ -232,10 +241,13 @@ def run(args: argparse.Namespace) -> int:
     _check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
     _check_scene(args, scene)
     width, height = scene.size
-    camera = scene.resolved_camera()
-    with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
-        with progress_bar(f"{scene.renderer} {width}x{height}") as progress:
-            image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
+    try:
+        camera = scene.resolved_camera()
+        with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
+            with progress_bar(f"{scene.renderer} {width}x{height}") as progress:
+                image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
+    except VolrenError as exc:
+        raise _naming_the_input(exc, scene.volume_path or args.scene) from None
     if args.output:
         io.save_image(image, args.output, transparent=args.transparent)
     if args.save_array:

@@ -169,7 +169,8 @@ def scene_document() -> dict[str, Any]:
         "volume": {"path": _VOLUME, "scalars": None},
         "transfer_function": TF_1D,
         "camera": {"azimuth": 30.0, "elevation": 20.0, "zoom": 1.0, "parallel": False},
-        "settings": {"step": 0.5, "shade": True, "blend": "composite", "preintegration": False},
+        "settings": {"step": 0.5, "shade": True, "blend_mode": "composite", "preintegration": False,
+                     "options": {}},
         "renderer": "vtk",
         "size": [24, 24],
     }
@@ -234,7 +235,8 @@ def flag_cases() -> list[Case]:
                 argv += [flag, value]
             strict = always or (value in _STRICT_VALUES and flag in ("--zoom", "--step"))
             strict = strict or (value in ("nan", "inf", "-inf", "abc") and flag in ("--azimuth", "--elevation"))
-            names = (flag, value) if value and len(value) < 100 else (flag,)
+            parts = (value, *value.split("=")) if value and len(value) < 100 else ()
+            names = tuple(n for n in (flag, _VOLUME, *parts) if n)
             out.append(Case(f"flags/{flag.strip('-')}={value[:20] or 'empty'}", "flags", files, tuple(argv),
                             "error" if strict else "any", names))  # fmt: skip
     for combo, expect in (
@@ -248,7 +250,7 @@ def flag_cases() -> list[Case]:
         (("--size", "1x1"), "any"),
     ):
         out.append(Case(f"flags/combo-{'_'.join(a.strip('-') for a in combo)}", "flags", files,
-                        render_argv(_VOLUME, *combo), expect))  # fmt: skip
+                        render_argv(_VOLUME, *combo), expect, (_VOLUME, *combo)))  # fmt: skip
     values = grid_values()
     assert values.size  # the volume the flags are tried on is the valid .vti seed
     return out

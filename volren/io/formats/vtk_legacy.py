@@ -80,6 +80,9 @@ def inspect(path: Path) -> Inspection:
         first = f.readline(256).decode("latin-1")
         if not first.startswith("# vtk DataFile Version"):
             raise file_error(path, "not a legacy VTK file (it does not start with '# vtk DataFile Version')")
+        version = first[len("# vtk DataFile Version") :].strip()
+        if not re.fullmatch(r"[1-5]\.\d", version):
+            raise file_error(path, f"unknown legacy VTK file version {quote(version)} (volren reads 1.0 to 5.1)")
         f.readline(4096)  # the title: free text
         mode = lines.next("ASCII/BINARY line")[0].upper()
         if mode not in ("ASCII", "BINARY"):
@@ -160,21 +163,60 @@ def _unstructured_grid(path: Path, lines: _Lines, binary: bool) -> DataLayout:
     label = f"{n_points:,} points"
     check_memory(path, label, n_points * 24)
     n_cells = n_ids = 0
-    if binary:
-        data_start = lines.offset
-        if path.stat().st_size - data_start < 3 * n_points * size:
-            raise file_error(path, f"truncated: the header declares {label} but the file ends inside them")
-        lines.skip(3 * n_points * size)
-        words = lines.next("CELLS line", required=False)
-        if words and words[0].upper() == "CELLS":
-            n_cells, n_ids = _int(path, words, 1, "CELLS"), _int(path, words, 2, "CELLS")
-    else:
-        with open(path, "rb") as f:
-            m = re.search(rb"^[ \t]*CELLS[ \t]+(\d+)[ \t]+(\d+)", f.read(), re.M)
-        if m:
-            n_cells, n_ids = int(m.group(1)), int(m.group(2))
+    data_start = lines.offset
+    if binary and path.stat().st_size - data_start < 3 * n_points * size:
+        raise file_error(path, f"truncated: the header declares {label} but the file ends inside them")
+    with open(path, "rb") as f:
+        f.seek(data_start + (3 * n_points * size if binary else 0))
+        rest = f.read()
+    m = re.search(rb"^[ \t]*CELLS\b([^\n]*)\n", rest, re.M)
+    if m:
+        words = ["CELLS", *m.group(1).decode("latin-1").split()]
+        n_cells, n_ids = _int(path, words, 1, "CELLS"), _int(path, words, 2, "CELLS")
+        if not binary:
+            _check_ascii_cells(path, rest[m.end() :], n_cells, n_ids)
     label = f"{n_points:,} points and {n_cells:,} cells ({n_ids:,} ids)"
     return DataLayout((n_points,), "points", n_points * 24 + n_ids * 16 + n_cells * 9, label=label)
+
+
+def _check_ascii_cells(path: Path, block: bytes, n_cells: int, n_ids: int) -> None:
+    """The CELLS block of an ASCII file holds what its line declares (VTK's reader crashes or
+    hangs when it does not): for versions before 5, n_cells lists of 'count id id ...' adding up
+    to n_ids numbers; from 5.0 on, an OFFSETS list of n_cells numbers (0 first, rising, the last
+    n_ids) and a CONNECTIVITY list of n_ids."""
+    text = block.decode("latin-1")
+    if text.lstrip().upper().startswith("OFFSETS"):
+        body = text.lstrip().split("\n", 1)[1] if "\n" in text.lstrip() else ""
+        offsets = _numbers(body, n_cells)
+        ok = len(offsets) == n_cells and (n_cells == 0 or (offsets[0] == 0 and offsets[-1] == n_ids))
+        if not ok or (np.diff(offsets) < 0).any():
+            raise file_error(path, f"the CELLS line declares {n_cells:,} offsets ending at {n_ids:,} ids; the OFFSETS list does not match")
+        return
+    numbers = _numbers(text, n_ids)
+    if len(numbers) < n_ids:
+        raise file_error(path, f"truncated: the CELLS line declares {n_ids:,} numbers, {len(numbers):,} follow")
+    if n_cells and n_ids >= n_cells and n_ids % n_cells == 0 and (numbers[:: n_ids // n_cells] == n_ids // n_cells - 1).all():
+        return  # the usual case: cells of one size (all tetrahedra), checked without a loop
+    position = 0
+    for _ in range(n_cells):
+        if position >= n_ids or numbers[position] < 1:
+            raise file_error(path, f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list does not add up")
+        position += 1 + int(numbers[position])
+    if position != n_ids:
+        raise file_error(path, f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list holds {position:,}")
+
+
+def _numbers(text: str, count: int) -> np.ndarray:
+    """Up to `count` leading integers of `text` (fewer where a keyword or the end comes first)."""
+    values = []
+    for word in text.split():
+        if len(values) == count:
+            break
+        try:
+            values.append(int(word))
+        except ValueError:
+            break
+    return np.array(values, dtype=np.int64)
 
 
 # --------------------------------------------------------------------- ASCII completeness
