@@ -23,6 +23,7 @@ def add_parser(sub) -> None:
     add_run_parser(kinds)
     add_stress_parser(kinds)
     add_app_parsers(kinds)
+    add_fuzz_parser(kinds)
 
 
 def float_list(text: str, what: str) -> list[float]:
@@ -300,3 +301,50 @@ def run_app(args: argparse.Namespace) -> int:
     return 0
 
 
+
+
+def add_fuzz_parser(kinds) -> None:
+    """`bench fuzz`: the malformed-input corpus through `volren render` (volren.bench.fuzz)."""
+    f = kinds.add_parser("fuzz", help="malformed inputs through volren render: crashes, hangs, bad errors")
+    f.add_argument("--quick", action="store_true", help="the subset CI runs (every 12th case and the seeds)")
+    f.add_argument("--only", help="run the cases whose name contains this text")
+    f.add_argument("--jobs", type=int, default=2, help="children at a time (default 2)")
+    f.add_argument("--timeout", type=float, default=60.0, help="seconds before a case counts as a hang")
+    f.add_argument("--exec", action="store_true", help="a fresh interpreter per case instead of a fork")
+    f.add_argument("--seed", type=int, default=0, help="seed of the byte-level mutations (default 0)")
+    f.add_argument("--report", metavar="OUT.md", help="write the summary and the failing cases there")
+    f.add_argument("--work", help="folder for the cases' files (default: a temporary folder)")
+    f.set_defaults(run=run_fuzz)
+
+
+def run_fuzz(args: argparse.Namespace) -> int:
+    import tempfile
+    import time
+
+    from tqdm import tqdm
+
+    from volren.bench import fuzz
+    from volren.bench.fuzz import report
+    from volren.bench.fuzz.runner import run_cases
+    from volren.io.safe_write import write_atomically
+
+    if args.jobs < 1 or not args.timeout > 0:
+        raise VolrenError("--jobs must be at least 1 and --timeout positive")
+    cases = fuzz.quick_corpus(args.seed) if args.quick else fuzz.corpus(args.seed)
+    if args.only:
+        cases = [c for c in cases if args.only in c.name]
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="volren-fuzz-", dir=args.work) as work:
+        with tqdm(total=len(cases), desc="fuzz", unit="case", disable=None) as bar:
+            results = run_cases(cases, Path(work), args.jobs, args.timeout, "exec" if args.exec else "fork",
+                                on_result=lambda r: bar.update(1))  # fmt: skip
+    seconds = time.perf_counter() - start
+    print(report.table(results))
+    for r in report.failures(results):
+        print(f"{r.outcome}: {r.case.name}: {r.detail} | {r.first_line}")
+    if args.report:
+        command = "volren bench fuzz" + (" --quick" if args.quick else "")
+        text = report.markdown(results, command, seconds)
+        write_atomically(Path(args.report), lambda tmp: tmp.write_text(text))
+    print(f"{len(results)} cases in {seconds:.0f} s: {len(report.failures(results))} failures")
+    return 1 if report.failures(results) else 0

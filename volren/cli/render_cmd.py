@@ -229,6 +229,8 @@ def run(args: argparse.Namespace) -> int:
     from volren.cli.progress import progress_bar
     from volren.renderers.base import render_frame
 
+    if args.output == "" or args.save_array == "":
+        raise VolrenError(f"{'-o' if args.output == '' else '--save-array'} needs a file name, got ''")
     if not args.output and not args.save_array:
         raise VolrenError("give -o OUT.png (and/or --save-array OUT.npy)")
     for target in (args.output, args.save_array):
@@ -247,7 +249,7 @@ def run(args: argparse.Namespace) -> int:
             with progress_bar(f"{scene.renderer} {width}x{height}") as progress:
                 image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
     except VolrenError as exc:
-        raise _naming_the_input(exc, scene.volume_path or args.scene) from None
+        raise _naming_the_input(exc, args.scene or scene.volume_path) from None
     if args.output:
         io.save_image(image, args.output, transparent=args.transparent)
     if args.save_array:

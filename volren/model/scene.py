@@ -114,6 +114,9 @@ class Scene:
         volume = data.get("volume") or {}
         if not isinstance(volume, Mapping):
             raise VolrenError("scene 'volume' must be an object with 'path' and optional 'scalars'")
+        for key in ("path", "scalars"):
+            if volume.get(key) is not None and not isinstance(volume.get(key), str):
+                raise VolrenError(f"scene 'volume.{key}' must be a string, got {volume.get(key)!r}")
         if "transfer_function" not in data:
             raise VolrenError("scene has no 'transfer_function'")
         size = data.get("size", [512, 512])

@@ -23,6 +23,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -91,10 +92,15 @@ def _child_main(case: Case, folder: Path, perturb: int, memory_limit: int) -> No
             os.dup2(target, fd)
             os.close(target)
         os.dup2(os.open(os.devnull, os.O_RDONLY), 0)
+        sys.stdout = open(1, "w", closefd=False)  # noqa: SIM115 - the child's own streams on fds 1 and 2
+        sys.stderr = open(2, "w", closefd=False)  # noqa: SIM115
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
         if memory_limit:
             resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
         ctypes.CDLL(None).mallopt(_M_PERTURB, perturb)
+        warnings.resetwarnings()  # a fresh interpreter's filters, not the parent's (pytest's)
+        for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning):
+            warnings.simplefilter("ignore", category)
         from volren.cli.main import main
 
         try:

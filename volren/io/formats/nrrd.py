@@ -84,12 +84,12 @@ def _header(path: Path) -> tuple[dict[str, str], int]:
     return fields, -1  # no blank line: a detached header that ends at end of file
 
 
-def _directions(text: str, n_axes: int) -> np.ndarray | None:
+def _directions(text: str | None, n_axes: int) -> np.ndarray | None:
     """The 'space directions' of the spatial axes, one per row (None when absent, or when they
     are not three 3-vectors: a 2D image or a space of other dimension); ValueError when
     malformed: a word that is neither a vector nor 'none', a count that is not the dimension,
     a non-finite entry, a zero vector, or three vectors that span no volume."""
-    if not text:
+    if text is None:
         return None
     words = re.findall(r"\([^)]*\)|[^\s()]+", text)
     if len(words) != n_axes or any(w != "none" and not w.startswith("(") for w in words):
@@ -108,7 +108,7 @@ def _directions(text: str, n_axes: int) -> np.ndarray | None:
 
 def _geometry(fields: dict[str, str], dims: tuple[int, ...]) -> dict:
     """What the later steps need: spacing and direction per axis, and VTK's misreadings to undo."""
-    directions = _directions(fields.get("spacedirections", ""), len(dims))
+    directions = _directions(fields.get("spacedirections"), len(dims))
     if directions is not None:
         spacing = np.linalg.norm(directions, axis=1)
         direction = (directions / np.where(spacing == 0, 1, spacing)[:, None]).T  # columns = axes
