@@ -21,7 +21,6 @@ from vtkmodules.vtkIOImage import (
     vtkMetaImageReader,
     vtkNIFTIImageReader,
     vtkNrrdReader,
-    vtkSLCReader,
 )
 from vtkmodules.vtkIOLegacy import vtkStructuredPointsReader, vtkUnstructuredGridReader
 from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLUnstructuredGridReader
@@ -173,8 +172,8 @@ def _make_reader(reader: ReaderName) -> Any:
         return vtkNrrdReader()
     if reader == "nifti":
         return vtkNIFTIImageReader()
-    if reader == "slc":
-        return vtkSLCReader()
+    # "slc" is read by volren itself (formats/slc.py): vtkSLCReader decodes the run-length slices
+    # with no bounds checks.
     if reader == "dicom":
         return vtkDICOMImageReader()
     raise ValueError(f"unknown reader {reader!r}")  # pragma: no cover - programming error
