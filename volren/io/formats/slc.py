@@ -79,7 +79,9 @@ def inspect(path: Path) -> Inspection:
         spacing = tuple(float(w) for w in words[5:8])
     except ValueError:
         shown = " ".join(w.decode("latin-1") for w in words[5:8])
-        raise file_error(path, f"malformed SLC header: voxel spacing {quote(shown)} must be three numbers") from None
+        raise file_error(
+            path, f"malformed SLC header: voxel spacing {quote(shown)} must be three numbers"
+        ) from None
     facts = check_declared(path, spacing, None, "voxel spacing")  # type: ignore[arg-type]
     for word, field in zip(words[8:11], ("unit type", "data origin", "data modification")):
         _int(path, word, field)
@@ -90,7 +92,9 @@ def inspect(path: Path) -> Inspection:
         )
     m = _ICON.match(head, pos)
     if not m:
-        raise file_error(path, "malformed SLC header: expected the icon size 'width height X' after the flags")
+        raise file_error(
+            path, "malformed SLC header: expected the icon size 'width height X' after the flags"
+        )
     width, height = int(m.group(1)), int(m.group(2))
     if width < 0 or height < 0:
         raise file_error(path, f"malformed SLC header: icon size {width}x{height} is negative")
@@ -113,8 +117,9 @@ def _decode(path: Path, block: bytes, out: memoryview, plane: int, where: str) -
     while True:
         if i >= n:
             raise file_error(
-                path, f"{where}: its {n:,} bytes of runs end without the end-of-slice marker (0) after "
-                f"{o:,} of its {plane:,} samples"
+                path,
+                f"{where}: its {n:,} bytes of runs end without the end-of-slice marker (0) after "
+                f"{o:,} of its {plane:,} samples",
             )
         c = block[i]
         i += 1
@@ -123,32 +128,34 @@ def _decode(path: Path, block: bytes, out: memoryview, plane: int, where: str) -
             break
         if o + count > plane:
             raise file_error(
-                path, f"{where}: a run of {count} samples at sample {o:,} goes past the slice's {plane:,} samples"
+                path,
+                f"{where}: a run of {count} samples at sample {o:,} goes past the slice's {plane:,} samples",
             )
         if c & 0x80:
             if i + count > n:
                 raise file_error(
-                    path, f"{where}: a run of {count} literal bytes at byte {i - 1:,} goes past the slice's "
-                    f"compressed size ({n:,} bytes)"
+                    path,
+                    f"{where}: a run of {count} literal bytes at byte {i - 1:,} goes past the slice's "
+                    f"compressed size ({n:,} bytes)",
                 )
             out[o : o + count] = block[i : i + count]
             i += count
         else:
             if i >= n:
                 raise file_error(
-                    path, f"{where}: a repeated run at byte {i - 1:,} has no value byte before the slice's "
-                    f"compressed size ({n:,} bytes) ends"
+                    path,
+                    f"{where}: a repeated run at byte {i - 1:,} has no value byte before the slice's "
+                    f"compressed size ({n:,} bytes) ends",
                 )
             out[o : o + count] = block[i : i + 1] * count
             i += 1
         o += count
     if o != plane:
-        raise file_error(
-            path, f"{where}: its runs decode to {o:,} samples, the slice has {plane:,}"
-        )
+        raise file_error(path, f"{where}: its runs decode to {o:,} samples, the slice has {plane:,}")
     if i != n:
         raise file_error(
-            path, f"{where}: {n - i:,} bytes follow the end-of-slice marker inside its compressed size of {n:,}"
+            path,
+            f"{where}: {n - i:,} bytes follow the end-of-slice marker inside its compressed size of {n:,}",
         )
 
 
@@ -168,13 +175,15 @@ def read(path: Path, inspection: Inspection) -> Grid:
         if have < plane * nz:
             k = have // plane
             raise file_error(
-                path, f"truncated: raw slice {k + 1} of {nz} holds {have - k * plane:,} of its {nx}x{ny} = "
-                f"{plane:,} bytes (the header declares {nz} raw slices, compression flag 0)"
+                path,
+                f"truncated: raw slice {k + 1} of {nz} holds {have - k * plane:,} of its {nx}x{ny} = "
+                f"{plane:,} bytes (the header declares {nz} raw slices, compression flag 0)",
             )
         if have > plane * nz:
             raise file_error(
-                path, f"{have - plane * nz:,} bytes follow the last of the {nz} raw {nx}x{ny} slices: wrong "
-                "dimensions, or run-length encoded slices under compression flag 0"
+                path,
+                f"{have - plane * nz:,} bytes follow the last of the {nz} raw {nx}x{ny} slices: wrong "
+                "dimensions, or run-length encoded slices under compression flag 0",
             )
         values = np.frombuffer(data, np.uint8, plane * nz, pos).reshape(nz, ny, nx).copy()
     else:
@@ -184,10 +193,13 @@ def read(path: Path, inspection: Inspection) -> Grid:
             m = _SLICE_SIZE.match(data, pos)
             if not m:
                 if pos >= len(data) or not data[pos:].strip():
-                    raise file_error(path, f"truncated: {where} is missing (the file ends at byte {len(data):,})")
+                    raise file_error(
+                        path, f"truncated: {where} is missing (the file ends at byte {len(data):,})"
+                    )
                 raise file_error(
-                    path, f"{where}: no compressed size ('<bytes> X') where the slice starts at byte {pos:,}, "
-                    f"found {quote(data[pos : pos + 12])} (raw slices under compression flag 1?)"
+                    path,
+                    f"{where}: no compressed size ('<bytes> X') where the slice starts at byte {pos:,}, "
+                    f"found {quote(data[pos : pos + 12])} (raw slices under compression flag 1?)",
                 )
             size = int(m.group(1))
             pos = m.end()
@@ -195,8 +207,9 @@ def read(path: Path, inspection: Inspection) -> Grid:
                 raise file_error(path, f"{where}: compressed size {size} is negative")
             if pos + size > len(data):
                 raise file_error(
-                    path, f"truncated or bad size: {where} declares {size:,} compressed bytes, only "
-                    f"{len(data) - pos:,} follow"
+                    path,
+                    f"truncated or bad size: {where} declares {size:,} compressed bytes, only "
+                    f"{len(data) - pos:,} follow",
                 )
             _decode(path, data[pos : pos + size], memoryview(out)[k * plane : (k + 1) * plane], plane, where)
             pos += size
