@@ -118,3 +118,189 @@ def test_slc_header_words(tmp_path):
         fails(tmp_path / "h.slc", problem)
     (tmp_path / "t.slc").write_bytes(b"11111 8 7 6 8 1 1")
     fails(tmp_path / "t.slc", "truncated: the SLC header has 7 of its 12 words")
+
+
+# ----------------------------------------------------------------------------------------- DICOM
+
+from volren.bench.fuzz.volume_cases import _elements, set_element  # noqa: E402
+from volren.testing.dicom_series import element, write_series  # noqa: E402
+
+DCM_SPACING = (0.5, 0.75, 2.0)
+DCM_VALUES = (np.arange(4 * 5 * 7, dtype=np.int16).reshape(4, 5, 7) * 7 - 50).astype(np.int16)
+US = lambda v: int(v).to_bytes(2, "little")  # noqa: E731
+
+
+def series(tmp_path: Path, values: np.ndarray = DCM_VALUES, name: str = "series") -> list[Path]:
+    return write_series(tmp_path / name, values, DCM_SPACING, (0.0, 0.0, 0.0))
+
+
+def edit(path: Path, tag: tuple[int, int], value: bytes, length: int | None = None) -> None:
+    path.write_bytes(set_element(path.read_bytes(), tag, value, length))
+
+
+@pytest.mark.parametrize("tag, value, problem", [
+    ((0x28, 0x10), US(3), "its pixel element holds 70 bytes, but Columns x Rows x BitsAllocated/8 = 7 x 3 x 2 = 42"),
+    ((0x28, 0x11), US(0), "Rows 5 and Columns 0 must both be present and positive"),
+    ((0x28, 0x100), US(12), "BitsAllocated 12: volren reads 8- and 16-bit DICOM pixels only"),
+    ((0x28, 0x100), US(0), "BitsAllocated 0"),
+    ((0x28, 0x02), US(3), "SamplesPerPixel 3: volren reads one sample per pixel"),
+    ((0x28, 0x02), US(0), "SamplesPerPixel 0"),
+    ((0x28, 0x101), US(40), "BitsStored 40 must be 1 to BitsAllocated (16)"),
+    ((0x28, 0x103), US(7), "PixelRepresentation 7 must be 0 (unsigned) or 1 (signed)"),
+    ((0x28, 0x30), b"nan\\1 ", "PixelSpacing 'nan\\\\1' must be finite"),
+    ((0x28, 0x30), b"0\\1 ", "PixelSpacing 0\\1 must be positive"),
+    ((0x28, 0x30), b"1 ", "PixelSpacing '1' must be 2 numbers"),
+    ((0x18, 0x50), b"0 ", "SliceThickness 0 must be positive"),
+    ((0x18, 0x50), b"inf ", "SliceThickness 'inf' must be finite"),
+    ((0x20, 0x32), b"nan\\0\\0 ", "ImagePositionPatient 'nan\\\\0\\\\0' must be finite"),
+    ((0x20, 0x32), b"1\\2 ", "ImagePositionPatient '1\\\\2' must be 3 numbers"),
+    ((0x20, 0x37), b"0\\0\\0\\0\\1\\0 ", "ImageOrientationPatient 0\\0\\0\\0\\1\\0 has a zero direction"),
+    ((0x20, 0x37), b"1\\0\\0\\1\\0\\0 ", "ImageOrientationPatient 1\\0\\0\\1\\0\\0: its row and column directions are not perpendicular"),
+    ((0x28, 0x1053), b"nan ", "RescaleSlope 'nan' must be finite"),
+    ((0x28, 0x1053), b"0 ", "RescaleSlope 0 would make every value the intercept"),
+    ((0x28, 0x1052), b"-inf", "RescaleIntercept '-inf' must be finite"),
+    ((0x2, 0x10), b"1.2.840.10008.1.2.4.50", "compressed pixel data (JPEG Baseline (Process 1)) is not supported"),
+    ((0x2, 0x10), b"garbage\0", "unknown transfer syntax 'garbage'"),
+])  # fmt: skip
+def test_dicom_field_refused_naming_the_slice(tmp_path, tag, value, problem):
+    paths = series(tmp_path)
+    edit(paths[2], tag, value)
+    fails(tmp_path / "series", f"slice slice002.dcm: {problem}")
+
+
+def test_dicom_pixel_element_must_match_the_header(tmp_path):
+    paths = series(tmp_path)
+    data = paths[2].read_bytes()
+    *_, (_, _, _, start, end) = _elements(data)
+    pixels = data[start:end]
+    for content, problem in (
+        (set_element(data, (0x7FE0, 0x10), pixels[:35]), "its pixel element holds 35 bytes, but"),
+        (set_element(data, (0x7FE0, 0x10), pixels[:-1]), "its pixel element holds 69 bytes, but"),
+        (set_element(data, (0x7FE0, 0x10), pixels + bytes(2)), "its pixel element holds 72 bytes, but"),
+        (set_element(data, (0x7FE0, 0x10), pixels, 2 * len(pixels)), "truncated: its pixel element declares 140 bytes, the file holds 70"),
+        (data[: start - 12], "no pixel data after its 7x5 header (truncated?)"),
+        (b"", "empty file (0 bytes)"),
+        (bytes(range(256)) * 4, "not a DICOM image"),
+        (data[:300], "not a DICOM image"),
+    ):  # fmt: skip
+        paths[2].write_bytes(content)
+        fails(tmp_path / "series", f"slice slice002.dcm: {problem}")
+
+
+def test_dicom_duplicated_slice_is_refused(tmp_path):
+    paths = series(tmp_path)
+    (tmp_path / "series" / "zz.dcm").write_bytes(paths[1].read_bytes())
+    fails(tmp_path / "series", "two slices at the same position: slice001.dcm and zz.dcm are both at 0\\0\\2")
+
+
+@pytest.mark.parametrize("slope", ["1e39", "-1e-50", "1e300"])
+def test_dicom_rescale_outside_float32_is_read_not_crashed(tmp_path, slope):
+    # vtkDICOMImageReader died (SIGSEGV, an uncaught C++ exception) parsing these slopes
+    paths = series(tmp_path)
+    for path in paths:
+        edit(path, (0x28, 0x1053), slope.encode() + (b" " if len(slope) % 2 else b""))
+    volume = load_volume(tmp_path / "series")
+    assert volume.values.dtype == np.float64
+    np.testing.assert_array_equal(volume.values, DCM_VALUES.astype(np.float64) * float(slope))
+
+
+def test_dicom_rescale_past_float64_is_refused(tmp_path):
+    paths = series(tmp_path)
+    edit(paths[3], (0x28, 0x1053), b"1e307 ")
+    fails(
+        tmp_path / "series",
+        "slice slice003.dcm: RescaleSlope 1e+307 and RescaleIntercept 0 take its values past the largest float",
+    )
+
+
+def test_dicom_rescale_is_applied_per_slice(tmp_path):
+    # one fractional slope among integer ones: vtkDICOMImageReader overran its buffer (double free)
+    paths = series(tmp_path)
+    edit(paths[1], (0x28, 0x1053), b"0.5 ")
+    volume = load_volume(tmp_path / "series")
+    expected = DCM_VALUES.astype(np.float32)
+    expected[1] *= 0.5
+    assert volume.values.dtype == np.float32
+    np.testing.assert_array_equal(volume.values, expected)
+    for path in paths:
+        edit(path, (0x28, 0x1053), b"2 ")
+        edit(path, (0x28, 0x1052), b"-1024 ")
+    volume = load_volume(tmp_path / "series")
+    assert volume.values.dtype == np.int16
+    np.testing.assert_array_equal(volume.values, DCM_VALUES * 2 - 1024)
+    assert any("applied the DICOM rescale v * 2 + -1024 (as int16)" in n for n in volume.notes)
+
+
+def test_dicom_8_bit_with_an_odd_pixel_count(tmp_path):
+    values = (np.arange(3 * 5 * 7) % 251).astype(np.uint8).reshape(3, 5, 7)  # 35 pixels a slice: one pad byte
+    paths = series(tmp_path, values.astype(np.int16))
+    for path, plane in zip(paths, values):
+        for tag, v in (((0x28, 0x100), 8), ((0x28, 0x101), 8), ((0x28, 0x102), 7), ((0x28, 0x103), 0)):
+            edit(path, tag, US(v))
+        edit(path, (0x7FE0, 0x10), plane.tobytes() + b"\0")
+    volume = load_volume(tmp_path / "series")
+    assert volume.values.dtype == np.uint8
+    np.testing.assert_array_equal(volume.values, values)
+
+
+def test_dicom_geometry_from_the_positions(tmp_path):
+    # SliceThickness 2 (what vtkDICOMImageReader took as the z spacing), positions 3 apart
+    write_series(tmp_path / "s", DCM_VALUES, DCM_SPACING, (1.0, 2.0, 3.0), step=3.0)
+    volume = load_volume(tmp_path / "s")
+    assert volume.spacing == pytest.approx((0.5, 0.75, 3.0))
+    assert volume.origin == pytest.approx((1.0, 2.0, 3.0))
+    (tmp_path / "s" / "slice002.dcm").unlink()
+    with pytest.warns(UserWarning, match=r"the slice positions are 3 to 6 apart \(a missing slice\?\)"):
+        load_volume(tmp_path / "s")
+
+
+def test_dicom_without_positions_orders_by_instance_number(tmp_path):
+    paths = series(tmp_path)
+    for path in paths:
+        edit(path, (0x20, 0x32), b"")
+    paths[0].rename(tmp_path / "series" / "zz.dcm")  # file order no longer the slice order
+    with pytest.warns(UserWarning, match="no ImagePositionPatient; ordered them by InstanceNumber, 2 apart"):
+        volume = load_volume(tmp_path / "series")
+    np.testing.assert_array_equal(volume.values, DCM_VALUES)
+    edit(paths[1], (0x20, 0x32), b"0\\0\\0 ")
+    fails(tmp_path / "series", "has no ImagePositionPatient, while slice001.dcm has one")
+
+
+def test_dicom_two_series_in_one_folder(tmp_path):
+    series(tmp_path)
+    other = write_series(tmp_path / "other", DCM_VALUES[:2], DCM_SPACING, (0.0, 0.0, 50.0))
+    for k, path in enumerate(other):
+        edit(path, (0x20, 0x0E), b"1.2.3.4.5.6\0")
+        path.rename(tmp_path / "series" / f"other{k}.dcm")
+    fails(tmp_path / "series", "holds 2 DICOM series", "name one slice file of the series to read")
+    assert load_volume(tmp_path / "series" / "slice001.dcm").values.shape == (4, 5, 7)
+    assert load_volume(tmp_path / "series" / "other1.dcm").values.shape == (2, 5, 7)
+
+
+def test_dicom_files_without_an_image_are_skipped(tmp_path):
+    series(tmp_path)
+    meta = (
+        element(2, 1, "OB", b"\0\1")
+        + element(2, 2, "UI", "1.2.840.10008.1.3.10")
+        + element(2, 0x10, "UI", "1.2.840.10008.1.2.1")
+    )
+    dicomdir = b"\0" * 128 + b"DICM" + element(2, 0, "UL", len(meta).to_bytes(4, "little")) + meta
+    (tmp_path / "series" / "DICOMDIR").write_bytes(dicomdir + element(0x10, 0x10, "PN", "Someone"))
+    volume = load_volume(tmp_path / "series")
+    np.testing.assert_array_equal(volume.values, DCM_VALUES)
+    assert any("skipped 1 DICOM file(s) that hold no image (DICOMDIR)" in n for n in volume.notes)
+
+
+def test_dicom_slices_differing_in_format(tmp_path):
+    paths = series(tmp_path)
+    edit(paths[3], (0x28, 0x103), US(0))
+    fails(
+        tmp_path / "series",
+        "the slices differ in pixel format: slice000.dcm is 16-bit signed, slice003.dcm is 16-bit unsigned",
+    )
+    edit(paths[3], (0x28, 0x103), US(1))
+    edit(paths[3], (0x28, 0x30), b"1\\1 ")
+    fails(tmp_path / "series", "the slices differ in PixelSpacing")
+    edit(paths[3], (0x28, 0x30), b"0.75\\0.5 ")
+    edit(paths[3], (0x20, 0x37), b"0\\1\\0\\1\\0\\0 ")
+    fails(tmp_path / "series", "the slices are not parallel")
