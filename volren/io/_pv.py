@@ -16,13 +16,7 @@ import numpy as np
 import pyvista as pv
 from numpy.typing import NDArray
 from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
-from vtkmodules.vtkIOImage import (
-    vtkDICOMImageReader,
-    vtkMetaImageReader,
-    vtkNIFTIImageReader,
-    vtkNrrdReader,
-    vtkSLCReader,
-)
+from vtkmodules.vtkIOImage import vtkMetaImageReader, vtkNIFTIImageReader, vtkNrrdReader
 from vtkmodules.vtkIOLegacy import vtkStructuredPointsReader, vtkUnstructuredGridReader
 from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLUnstructuredGridReader
 from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
@@ -173,22 +167,17 @@ def _make_reader(reader: ReaderName) -> Any:
         return vtkNrrdReader()
     if reader == "nifti":
         return vtkNIFTIImageReader()
-    if reader == "slc":
-        return vtkSLCReader()
-    if reader == "dicom":
-        return vtkDICOMImageReader()
+    # "slc" and "dicom" are read by volren itself (formats/slc.py, formats/dicom.py): VTK's readers
+    # of those formats crash or return uninitialized memory on malformed files.
     raise ValueError(f"unknown reader {reader!r}")  # pragma: no cover - programming error
 
 
 def read(path: Path, reader: ReaderName) -> ReadResult:
-    """Run one VTK reader on `path` (a folder for DICOM) with its messages caught."""
+    """Run one VTK reader on `path` with its messages caught."""
     r = _make_reader(reader)
     info: dict[str, Any] = {}
     with vtk_messages() as log:
-        if reader == "dicom":
-            r.SetDirectoryName(str(path))
-        else:
-            r.SetFileName(str(path))
+        r.SetFileName(str(path))
         r.Update()
         output = r.GetOutputDataObject(0)
     if reader == "nifti":
@@ -197,11 +186,6 @@ def read(path: Path, reader: ReaderName) -> ReadResult:
             sform=_matrix(r.GetSFormMatrix()),
             slope=float(r.GetRescaleSlope()),
             intercept=float(r.GetRescaleIntercept()),
-        )
-    elif reader == "dicom":
-        info.update(
-            position=tuple(float(x) for x in r.GetImagePositionPatient()),
-            orientation=tuple(float(x) for x in r.GetImageOrientationPatient()),
         )
     dataset = as_dataset(output) if output is not None else None
     return ReadResult(view(dataset) if dataset is not None else None, log, info)

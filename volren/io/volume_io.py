@@ -3,8 +3,8 @@
 The steps, in order, each able to stop with a one-line VolrenError naming the file: the path
 exists and is not empty; its format is known; its header is sane and fits in memory and its data
 is as long as the header says (checked by volren, so no VTK reader sees a file that would crash
-or hang it); the VTK reader runs with its messages caught; what the reader returned is checked
-again; then the dataset becomes a model volume.
+or hang it); the VTK reader runs with its messages caught (SLC and DICOM: volren's own reader
+instead); what the reader returned is checked again; then the dataset becomes a model volume.
 """
 
 from __future__ import annotations
@@ -108,6 +108,11 @@ def read_volume(
     name = inspection.target.name  # a DICOM series is named after its folder
     if inspection.layout is not None:
         check_layout(path, inspection.layout)
+    if fmt.read is not None:  # volren's own reader: no VTK reader sees the file
+        if scalars is not None and scalars != fmt.array_name:
+            raise file_error(path, f"no array named {scalars!r}; available: {fmt.array_name!r}")
+        grid = fmt.read(path, inspection)
+        return volume_from_grid(signed_as_declared(grid, inspection.facts.get("declared_spacing")), name)
     result = _pv.read(inspection.target, inspection.reader)
     problem = reader_messages.problem(result.log, inspection.target)
     if problem:

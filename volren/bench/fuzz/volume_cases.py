@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterator
 import numpy as np
 
 from volren.bench.fuzz.cases import BAD_NUMBERS, Case, Expect, render_argv
-from volren.bench.fuzz.seeds import Seed, legacy_mesh_text, mesh, seeds
+from volren.bench.fuzz.seeds import SHAPE, SPACING, Seed, grid_values, legacy_mesh_text, mesh, rle, seeds
 
 TOKEN_BAD = ("0", "-1", "nan", "inf", "99999", "4294967296", "x")
 
@@ -327,6 +327,54 @@ def dicom_cases(seed: Seed) -> Iterator[Case]:
     yield Case("dicom/one-file-named", "dicom", seed.files, render_argv(names[0]), "render")
 
 
+# ---------------------------------------------------------------------------------------- SLC
+
+
+def _slc_file(blocks: list[bytes], flag: int = 1, sizes: list[str] | None = None, icon: str = "2 2",
+              bits: int = 8) -> bytes:
+    """An SLC file of the seed's size whose slices are `blocks`, each after its 'size X' when
+    `sizes` is given (the blocks' own lengths by default, for flag 1)."""
+    nx, ny, nz = SHAPE
+    head = f"11111\n{nx} {ny} {nz} {bits}\n{SPACING[0]} {SPACING[1]} {SPACING[2]}\n1 6 0 {flag}\n{icon} X"
+    out = bytearray(head.encode()) + bytes(12)
+    if sizes is None and flag == 1:
+        sizes = [str(len(b)) for b in blocks]
+    for k, block in enumerate(blocks):
+        out += (f"{sizes[k]} X".encode() if sizes else b"") + block
+    return bytes(out)
+
+
+def slc_cases() -> Iterator[Case]:
+    """What vtkSLCReader trusted: the compression flag, the run lengths (no bounds on the slice or
+    the compressed block), the compressed and icon sizes, the bits per voxel."""
+    planes = [np.ascontiguousarray(p).tobytes() for p in (grid_values() // 8).clip(0, 255).astype(np.uint8)]
+    coded = [rle(p) for p in planes]
+    plane = len(planes[0])
+
+    def case(what: str, content: bytes) -> Case:
+        return Case(f"slc/{what}", "slc", {"v.slc": content}, render_argv("v.slc"), "error")
+
+    def with_slice(block: bytes, k: int = 2) -> list[bytes]:
+        return [block if n == k else c for n, c in enumerate(coded)]
+
+    yield case("flag-rle-on-raw-slices", _slc_file(planes, 1, sizes=[]))
+    yield case("flag-raw-on-rle-slices", _slc_file(coded, 0, sizes=[str(len(c)) for c in coded]))
+    yield case("run-longer-than-slice", _slc_file(with_slice(bytes([0x7F, 9, 0]))))
+    yield case("literal-run-past-block", _slc_file(with_slice(bytes([0x80 | plane]) + planes[2][:20] + b"\0")))
+    yield case("repeat-run-without-value", _slc_file(with_slice(bytes([5]))))
+    yield case("runs-short-of-slice", _slc_file(with_slice(rle(planes[2][: plane // 2]))))
+    yield case("no-end-marker", _slc_file(with_slice(coded[2][:-1])))
+    yield case("size-past-end", _slc_file(coded, 1, sizes=[*(str(len(c)) for c in coded[:-1]), "99999"]))
+    yield case("size-negative", _slc_file(coded, 1, sizes=[str(len(c)) if k != 2 else "-5" for k, c in enumerate(coded)]))
+    yield case("size-short", _slc_file(coded, 1, sizes=[str(len(c) - (3 if k == 2 else 0)) for k, c in enumerate(coded)]))
+    yield case("size-long", _slc_file(coded, 1, sizes=[str(len(c) + (5 if k == 2 else 0)) for k, c in enumerate(coded)]))
+    yield case("size-huge", _slc_file(coded, 1, sizes=[str(len(c)) if k != 2 else "9" * 20 for k, c in enumerate(coded)]))
+    yield case("icon-huge", _slc_file(coded, 1, icon="99999 99999"))
+    yield case("icon-negative", _slc_file(coded, 1, icon="-2 2"))
+    yield case("bits-16", _slc_file(coded, 1, bits=16))
+    yield case("slice-missing", _slc_file(coded[:-1], 1))
+
+
 # --------------------------------------------------------------------------------------- meshes
 
 
@@ -455,5 +503,7 @@ def volume_cases(seed_value: int = 0) -> list[Case]:
             out += vtu_text_cases(seed)
         if name == "raw":
             out += raw_cases(seed)
+        if name == "slc-raw":
+            out += slc_cases()
     out += mesh_cases()
     return out

@@ -4,6 +4,9 @@ Loading is: `inspect` the header ourselves (garbage, truncation, sizes; nothing 
 one VTK reader read the file, `check_output` for what the reader got wrong without saying so (and
 undo what it misread), then `adjust` the grid for what the reader knows but does not apply
 (origins kept in side matrices, value scaling, axis flips).
+
+A format whose VTK reader cannot be made safe (SLC, DICOM) has its own `read` instead: it returns
+the grid itself, and no VTK reader sees the file.
 """
 
 from __future__ import annotations
@@ -61,7 +64,8 @@ class FileFormat:
     """A file format volren reads: its suffixes and the three format-specific steps.
 
     `check_output` raises for what the reader got wrong without saying so, and returns the view,
-    corrected where the reader misread something it could have read right.
+    corrected where the reader misread something it could have read right. `read`, when given,
+    replaces the VTK reader and those two steps: it returns the grid of one array, `array_name`.
     """
 
     name: str
@@ -69,6 +73,8 @@ class FileFormat:
     inspect: Callable[[Path], Inspection]
     check_output: Callable[[Path, DatasetView, ReadResult, Inspection], DatasetView] = _no_check
     adjust: Callable[[Grid, ReadResult, Inspection], Grid] = _no_adjust
+    read: Callable[[Path, Inspection], Grid] | None = None
+    array_name: str = ""
 
 
 def read_head(path: Path, n: int = HEAD_BYTES) -> bytes:
