@@ -8,7 +8,6 @@ import ctypes
 import os
 import signal
 from collections import Counter
-from pathlib import Path
 
 import numpy as np
 import pytest

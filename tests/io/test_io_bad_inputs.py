@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 import pyvista as pv
 
-from volren.testing.dicom_series import write_series
 from volren.errors import VolrenError
 from volren.io import load_volume
+from volren.testing.dicom_series import write_series
 
 SPACING = (0.5, 0.75, 2.0)
 ORIGIN = (0.0, 0.0, 0.0)

@@ -11,10 +11,10 @@ import pytest
 import pyvista as pv
 import vtk
 
-from volren.testing.dicom_series import write_series
 from volren.errors import VolrenError, VolrenWarning
 from volren.io import from_pyvista, load_volume
 from volren.model.volume import TetVolume, UniformVolume
+from volren.testing.dicom_series import write_series
 
 SPACING = (0.5, 0.75, 2.0)
 ORIGIN = (10.0, -20.0, 30.0)
