@@ -304,3 +304,69 @@ def test_dicom_slices_differing_in_format(tmp_path):
     edit(paths[3], (0x28, 0x30), b"0.75\\0.5 ")
     edit(paths[3], (0x20, 0x37), b"0\\1\\0\\1\\0\\0 ")
     fails(tmp_path / "series", "the slices are not parallel")
+
+
+# ----------------------------------------------------------------------------------------- NIfTI
+
+import gzip  # noqa: E402
+import struct  # noqa: E402
+
+from volren.bench.fuzz.seeds import seeds  # noqa: E402
+
+
+def nifti(tmp_path: Path, suffix: str = ".nii", **fields: tuple[int, str, float]) -> Path:
+    """The fuzz seed's NIfTI-1 file with `fields` (name=(offset, format, value)) set."""
+    seed = next(s for s in seeds() if s.name == "nii")
+    data = bytearray(seed.files["v.nii"])
+    for offset, fmt, value in fields.values():
+        struct.pack_into(fmt, data, offset, value)
+    path = tmp_path / f"v{suffix}"
+    path.write_bytes(gzip.compress(bytes(data), mtime=0) if suffix == ".nii.gz" else bytes(data))
+    return path
+
+
+NAN, INF = float("nan"), float("inf")
+
+
+@pytest.mark.parametrize("suffix", [".nii", ".nii.gz"])
+@pytest.mark.parametrize("fields, problem", [
+    ({"vox_offset": (108, "<f", NAN)}, "NIfTI vox_offset nan must be a whole number of bytes"),  # was a ValueError
+    ({"vox_offset": (108, "<f", INF)}, "NIfTI vox_offset inf must be a whole number of bytes"),  # was an OverflowError
+    ({"vox_offset": (108, "<f", 0.0)}, "NIfTI vox_offset 0 lies inside the header"),
+    ({"vox_offset": (108, "<f", 100.0)}, "NIfTI vox_offset 100 lies inside the header"),
+    ({"vox_offset": (108, "<f", 353.5)}, "NIfTI vox_offset 353.5 must be a whole number of bytes"),
+    ({"bitpix": (72, "<h", 7)}, "NIfTI bitpix 7 does not match datatype 4 (int16, 16 bits per voxel)"),
+    ({"bitpix": (72, "<h", 64)}, "NIfTI bitpix 64 does not match datatype 4"),
+    ({"pixdim1": (80, "<f", 0.0)}, "NIfTI pixdim[1] is 0"),
+    ({"pixdim3": (88, "<f", NAN)}, "NIfTI header field pixdim[3] is nan"),
+    ({"sform_code": (254, "<h", 1), "srow_x0": (280, "<f", NAN)}, "NIfTI header field srow_x[0] is nan"),
+    ({"srow_z3": (324, "<f", INF)}, "NIfTI header field srow_z[3] is inf"),
+    ({"qoffset_x": (268, "<f", NAN)}, "NIfTI header field qoffset_x is nan"),
+    ({"scl_slope": (112, "<f", INF)}, "NIfTI header field scl_slope is inf"),
+    ({"magic": (344, "4s", b"ni1\0")}, "NIfTI magic 'ni1' says the data is in a separate .img file"),
+    ({"magic": (344, "4s", b"abc\0")}, "not a NIfTI-1 file: magic 'abc?' is not 'n+1'"),
+])  # fmt: skip
+def test_nifti_header_field_refused(tmp_path, suffix, fields, problem):
+    fails(nifti(tmp_path, suffix, **fields), problem)
+
+
+def test_nifti_gz_cut_or_extended_is_refused(tmp_path):
+    path = nifti(tmp_path, ".nii.gz")
+    data = path.read_bytes()
+    path.write_bytes(data[: int(len(data) * 0.99)])
+    fails(path, "truncated: its gzip stream ends before its end marker")
+    path.write_bytes(data + b"trailing garbage")
+    fails(path, "corrupt: bytes that are not gzip data follow its gzip stream")
+    path.write_bytes(data + data)  # two gzip members: one stream, read whole
+    assert load_volume(path).values.shape == (6, 7, 8)
+
+
+def test_nifti_value_scaling_edges(tmp_path):
+    plain = load_volume(nifti(tmp_path)).values
+    # scl_slope 0 means "no scaling": the intercept is not applied either
+    volume = load_volume(nifti(tmp_path, slope=(112, "<f", 0.0), inter=(116, "<f", 5.0)))
+    np.testing.assert_array_equal(volume.values, plain)
+    # a scaling past float32's range is applied in float64, not overflowed to inf
+    volume = load_volume(nifti(tmp_path, slope=(112, "<f", 1e38)))
+    assert volume.values.dtype == np.float64
+    np.testing.assert_array_equal(volume.values, plain.astype(np.float64) * np.float64(np.float32(1e38)))

@@ -1,6 +1,6 @@
 """A minimal DICOM series writer for tests and the fuzz corpus (VTK reads DICOM but cannot write it).
 
-Each slice is a CT image in explicit VR little endian with just the elements vtkDICOMImageReader
+Each slice is a CT image in explicit VR little endian with just the elements volren's DICOM reader
 uses: sizes, pixel format, spacing, position, orientation, rescale, then signed 16-bit pixels.
 """
 
