@@ -104,13 +104,16 @@ def test_a_crashing_reader_is_one_line_naming_the_file():
     assert np.array_equal(back, values) and back.flags.writeable
 
 
-def test_quick_corpus_finds_no_failures(tmp_path):
-    cases = fuzz.quick_corpus()
-    assert len(cases) >= 300
-    results = run_cases(cases, tmp_path, jobs=2, timeout=60)
-    hard = [r for r in results if r.outcome in FAILURES and r.outcome != "silent-accept"]
-    assert not hard, "\n".join(f"{r.outcome}: {r.case.name}: {r.detail} | {r.first_line}" for r in hard)
-    valid = [r for r in results if r.case.expect == "render"]
-    assert valid and all(r.outcome.startswith("render") for r in valid), [
-        (r.case.name, r.outcome, r.first_line) for r in valid if not r.outcome.startswith("render")
-    ]
+def test_quick_corpus_finds_no_failures():
+    """`volren bench fuzz --quick` in a fresh process (forking this one, whose numba kernels have
+    started OpenMP threads, would kill the children): no failure but silent acceptance."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "volren.cli.main", "bench", "fuzz", "--quick"],
+                          capture_output=True, text=True, timeout=900)  # fmt: skip
+    lines = done.stdout.splitlines()
+    summary = [line for line in lines if " cases in " in line]
+    assert summary and int(summary[-1].split()[0]) >= 300, done.stdout[-2000:] + done.stderr[-2000:]
+    hard = [line for line in lines if line.split(":")[0] in FAILURES and not line.startswith("silent-accept")]
+    assert not hard, "\n".join(hard)

@@ -92,11 +92,20 @@ def _context() -> multiprocessing.context.BaseContext | None:
     methods = multiprocessing.get_all_start_methods()
     if "fork" not in methods:
         return None
-    if threading.active_count() == 1:
+    if _single_threaded():
         return multiprocessing.get_context("fork")
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload(["volren.io"])
     return context
+
+
+def _single_threaded() -> bool:
+    """Whether this process has one thread, native ones included (OpenMP, numba and VTK pools
+    that Python's `threading` does not see; GNU OpenMP kills a forked child that uses it)."""
+    try:
+        return len(os.listdir("/proc/self/task")) == 1
+    except OSError:
+        return threading.active_count() == 1 and False
 
 
 def _signal_name(exitcode: int) -> str:

@@ -14,6 +14,7 @@ uninitialized memory differs between them instead of passing by luck.
 from __future__ import annotations
 
 import ctypes
+import faulthandler
 import os
 import re
 import resource
@@ -86,6 +87,7 @@ def _child_main(case: Case, folder: Path, perturb: int, memory_limit: int) -> No
     code = 3
     try:
         os.setpgid(0, 0)
+        faulthandler.disable()  # a crash is the outcome, not something to report on the parent's stderr
         os.chdir(folder)
         for fd, name in ((1, "stdout.txt"), (2, "stderr.txt")):
             target = os.open(name, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o644)
