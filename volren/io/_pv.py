@@ -240,6 +240,8 @@ class TetCells:
 #: Points per cell of the fixed-size VTK cell types (the others list their own count).
 _CELL_SIZES = {1: 1, 3: 2, 5: 3, 8: 4, 9: 4, 10: 4, 11: 8, 12: 8, 13: 6, 14: 5, 15: 10, 16: 12, 21: 3, 22: 6,
                23: 8, 24: 10, 25: 20, 26: 15, 27: 13, 28: 9, 29: 27}  # fmt: skip
+_SIZE_OF_TYPE = np.full(256, -1, np.int64)  # -1: the type lists its own count
+_SIZE_OF_TYPE[list(_CELL_SIZES)] = list(_CELL_SIZES.values())
 
 
 def _cell_offsets(grid: Any) -> NDArray[np.int64]:
@@ -258,10 +260,7 @@ def broken_cells(grid: Any) -> tuple[NDArray[np.bool_], dict[str, int]]:
     if len(sizes) != len(types) or (offsets.size and (offsets[-1] != conn.size or (sizes < 0).any())):
         return np.ones(len(types), bool), {"in a cell list that disagrees with its types and offsets": len(types)}
     known = np.isin(types, [int(c) for c in pv.CellType])
-    lookup = np.full(256, -1, np.int64)
-    for t, n in _CELL_SIZES.items():
-        lookup[t] = n
-    expected = np.where((types >= 0) & (types < 256), lookup[np.clip(types, 0, 255)], -1)
+    expected = np.where((types >= 0) & (types < 256), _SIZE_OF_TYPE[np.clip(types, 0, 255)], -1)
     wrong_size = (expected >= 0) & (sizes != expected)
     outside = (conn < 0) | (conn >= int(grid.n_points))
     cell_of = np.repeat(np.arange(len(sizes)), np.maximum(sizes, 0))

@@ -64,33 +64,13 @@ def load_volume(
     Files with a header are read in a child process (`volren.io.isolation`): a reader that
     crashes on a corrupt file is a one-line error here, not the end of this process.
     """
-    kwargs = {"shape": shape, "dtype": dtype, "byte_order": byte_order, "spacing": spacing,
-              "origin": origin, "header_bytes": header_bytes}  # fmt: skip
-    if shape is not None:  # headerless raw: numpy reads it, nothing native to isolate
-        return read_volume(path, scalars, **kwargs)
-    return run_isolated(path, read_volume, path, scalars, **kwargs)
-
-
-def read_volume(
-    path: str | Path,
-    scalars: str | None = None,
-    *,
-    shape: Sequence[int] | None = None,
-    dtype: DTypeLike | None = None,
-    byte_order: str = "little",
-    spacing: Sequence[float] = (1.0, 1.0, 1.0),
-    origin: Sequence[float] = (0.0, 0.0, 0.0),
-    header_bytes: int = 0,
-) -> UniformVolume | TetVolume:
-    """`load_volume` in this process (the child's side of it)."""
     path = Path(path)
     _existing(path)
-    name = path.name
-    if shape is not None:
+    if shape is not None:  # headerless raw: numpy reads it, nothing native to isolate
         if path.is_dir():
             raise file_error(path, "is a folder; headerless raw data (shape=...) must be a file")
         grid = load_raw(path, shape, dtype, byte_order, spacing, origin, header_bytes)
-        return volume_from_grid(grid, name)
+        return volume_from_grid(grid, path.name)
     given = {
         "dtype": dtype,
         "byte_order": byte_order,
@@ -101,6 +81,12 @@ def read_volume(
     if given != _RAW_DEFAULTS:
         extra = ", ".join(f"{k}=" for k in given if given[k] != _RAW_DEFAULTS[k])
         raise file_error(path, f"{extra} describe headerless raw data only; give shape=(nx, ny, nz) too")
+    return run_isolated(path, read_with_header, path, scalars)
+
+
+def read_with_header(path: Path, scalars: str | None = None) -> UniformVolume | TetVolume:
+    """A file with a header (or a DICOM folder), read in this process: the child's side of
+    `load_volume`."""
     fmt = find_format(path)
     if fmt is None:
         raise file_error(path, "headerless raw data: give shape=(nx, ny, nz) and dtype= to read it")
@@ -108,11 +94,11 @@ def read_volume(
     name = inspection.target.name  # a DICOM series is named after its folder
     if inspection.layout is not None:
         check_layout(path, inspection.layout)
+    declared_spacing = inspection.facts.get("declared_spacing")
     if fmt.read is not None:  # volren's own reader: no VTK reader sees the file
         if scalars is not None and scalars != fmt.array_name:
             raise file_error(path, f"no array named {scalars!r}; available: {fmt.array_name!r}")
-        grid = fmt.read(path, inspection)
-        return volume_from_grid(signed_as_declared(grid, inspection.facts.get("declared_spacing")), name)
+        return volume_from_grid(signed_as_declared(fmt.read(path, inspection), declared_spacing), name)
     result = _pv.read(inspection.target, inspection.reader)
     problem = reader_messages.problem(result.log, inspection.target)
     if problem:
@@ -124,7 +110,7 @@ def read_volume(
     source = str(path)
     if view.kind == "image":
         grid = fmt.adjust(grid_from_view(view, scalars, source, name), result, inspection)
-        return volume_from_grid(signed_as_declared(grid, inspection.facts.get("declared_spacing")), name)
+        return volume_from_grid(signed_as_declared(grid, declared_spacing), name)
     if inspection.reader in ("vtu", "legacy-unstructured"):
         return tets_from_view(view, scalars, source, name)
     raise VolrenError(

@@ -8,7 +8,6 @@ legacy meshes, whose headers the mutations then rewrite field by field.
 from __future__ import annotations
 
 import gzip
-import struct
 import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -211,8 +210,3 @@ def seeds() -> list[Seed]:
         Seed("legacy-mesh-30", {"m.vtk": legacy_mesh_text(points, tets, values).encode()}, "m.vtk", kind="mesh"),
     ]
 
-
-def pack_nifti_field(header: bytes, offset: int, fmt: str, value: float) -> bytes:
-    out = bytearray(header)
-    struct.pack_into(fmt, out, offset, value)
-    return bytes(out)

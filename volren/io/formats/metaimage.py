@@ -82,16 +82,13 @@ def inspect(path: Path) -> Inspection:
         raise file_error(
             path, f"ElementDataFile = {data_name}: volren does not read MetaImage slice lists or patterns"
         )
+    data_file, start = (path, header_end) if data_name.upper() == "LOCAL" else (path.parent / data_name, 0)
     if compressed:
-        _check_compressed(path, fields, header_end if data_name.upper() == "LOCAL" else 0,
-                          path if data_name.upper() == "LOCAL" else path.parent / data_name, nbytes)  # fmt: skip
+        _check_compressed(path, fields, start, data_file, nbytes)
     if compressed or not binary or header_size < 0:
         return Inspection("metaimage", path, layout, facts)  # sizes on disk unknown: VTK reports these
-    if data_name.upper() == "LOCAL":
-        data_file, offset = path, header_end + header_size
-    else:
-        data_file, offset = path.parent / data_name, header_size
-    return Inspection("metaimage", path, DataLayout(dims, type_name, nbytes, data_file, offset, nbytes), facts)
+    layout = DataLayout(dims, type_name, nbytes, data_file, start + header_size, nbytes)
+    return Inspection("metaimage", path, layout, facts)
 
 
 #: zlib's deflate expands at most 1032 times; more declared data than that cannot be in the file.

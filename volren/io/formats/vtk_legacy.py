@@ -163,20 +163,34 @@ def _unstructured_grid(path: Path, lines: _Lines, binary: bool) -> DataLayout:
     label = f"{n_points:,} points"
     check_memory(path, label, n_points * 24)
     n_cells = n_ids = 0
-    data_start = lines.offset
-    if binary and path.stat().st_size - data_start < 3 * n_points * size:
-        raise file_error(path, f"truncated: the header declares {label} but the file ends inside them")
-    with open(path, "rb") as f:
-        f.seek(data_start + (3 * n_points * size if binary else 0))
-        rest = f.read()
-    m = re.search(rb"^[ \t]*CELLS\b([^\n]*)\n", rest, re.M)
-    if m:
-        words = ["CELLS", *m.group(1).decode("latin-1").split()]
-        n_cells, n_ids = _int(path, words, 1, "CELLS"), _int(path, words, 2, "CELLS")
-        if not binary:
+    if binary:
+        if path.stat().st_size - lines.offset < 3 * n_points * size:
+            raise file_error(path, f"truncated: the header declares {label} but the file ends inside them")
+        lines.skip(3 * n_points * size)
+        words = _cells_line(lines)
+        if words:
+            n_cells, n_ids = _int(path, words, 1, "CELLS"), _int(path, words, 2, "CELLS")
+    else:
+        with open(path, "rb") as f:
+            f.seek(lines.offset)
+            rest = f.read()
+        m = re.search(rb"^[ \t]*CELLS\b([^\n]*)\n", rest, re.M)
+        if m:
+            words = ["CELLS", *m.group(1).decode("latin-1").split()]
+            n_cells, n_ids = _int(path, words, 1, "CELLS"), _int(path, words, 2, "CELLS")
             _check_ascii_cells(path, rest[m.end() :], n_cells, n_ids)
     label = f"{n_points:,} points and {n_cells:,} cells ({n_ids:,} ids)"
     return DataLayout((n_points,), "points", n_points * 24 + n_ids * 16 + n_cells * 9, label=label)
+
+
+def _cells_line(lines: _Lines, limit: int = 64) -> list[str]:
+    """The CELLS line after a binary file's points; the text lines between (a version 5 file's
+    METADATA block) are passed over. Empty when the file has no CELLS line there."""
+    for _ in range(limit):
+        words = lines.next("CELLS line", required=False)
+        if not words or words[0].upper() in ("CELLS", "CELL_TYPES", "POINT_DATA", "CELL_DATA"):
+            return words if words and words[0].upper() == "CELLS" else []
+    return []
 
 
 def _check_ascii_cells(path: Path, block: bytes, n_cells: int, n_ids: int) -> None:
@@ -190,32 +204,47 @@ def _check_ascii_cells(path: Path, block: bytes, n_cells: int, n_ids: int) -> No
         offsets = _numbers(body, n_cells)
         ok = len(offsets) == n_cells and (n_cells == 0 or (offsets[0] == 0 and offsets[-1] == n_ids))
         if not ok or (np.diff(offsets) < 0).any():
-            raise file_error(path, f"the CELLS line declares {n_cells:,} offsets ending at {n_ids:,} ids; the OFFSETS list does not match")
+            raise file_error(
+                path,
+                f"the CELLS line declares {n_cells:,} offsets ending at {n_ids:,} ids; "
+                "the OFFSETS list does not match",
+            )
         return
     numbers = _numbers(text, n_ids)
     if len(numbers) < n_ids:
         raise file_error(path, f"truncated: the CELLS line declares {n_ids:,} numbers, {len(numbers):,} follow")
-    if n_cells and n_ids >= n_cells and n_ids % n_cells == 0 and (numbers[:: n_ids // n_cells] == n_ids // n_cells - 1).all():
+    per_cell = n_ids // n_cells if n_cells else 0
+    if per_cell and n_ids % n_cells == 0 and (numbers[::per_cell] == per_cell - 1).all():
         return  # the usual case: cells of one size (all tetrahedra), checked without a loop
     position = 0
     for _ in range(n_cells):
         if position >= n_ids or numbers[position] < 1:
-            raise file_error(path, f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list does not add up")
+            raise file_error(
+                path, f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list does not add up"
+            )
         position += 1 + int(numbers[position])
     if position != n_ids:
-        raise file_error(path, f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list holds {position:,}")
+        raise file_error(
+            path, f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list holds {position:,}"
+        )
 
 
 def _numbers(text: str, count: int) -> np.ndarray:
     """Up to `count` leading integers of `text` (fewer where a keyword or the end comes first)."""
+    words = text.split(None, count)[:count]
+    try:
+        return np.array(words, dtype=np.int64)  # the usual case, converted in C
+    except (ValueError, OverflowError):
+        pass
     values = []
-    for word in text.split():
-        if len(values) == count:
-            break
+    for word in words:
         try:
-            values.append(int(word))
+            value = int(word)
         except ValueError:
             break
+        if not -(2**63) <= value < 2**63:
+            break
+        values.append(value)
     return np.array(values, dtype=np.int64)
 
 
