@@ -214,11 +214,13 @@ def _check_scene(args: argparse.Namespace, scene: Scene) -> None:
     check_scene(scene.volume, scene.transfer_function, scene.settings, tf_name, step_name)
 
 
-def _naming_the_input(exc: VolrenError, source: str | None) -> VolrenError:
-    """A rendering error about the data, with the file it came from in front (unless it names a
-    file or a flag already): every message names what is at fault."""
+def _naming_the_input(exc: VolrenError, source: str | None, chosen_renderer: str | None) -> VolrenError:
+    """A rendering error about the data, with the file it came from in front, unless it names
+    its culprit already: a file, a flag, or the renderer the command line chose (a renderer
+    named by a scene file is the scene's fault): every message names what is at fault."""
     text = str(exc)
-    if not source or Path(source).name in text or "--" in text:
+    named = Path(source).name in text if source else True
+    if named or "--" in text or (chosen_renderer and f"renderer {chosen_renderer} " in f"{text} "):
         return exc
     return VolrenError(f"{source}: {text}")
 
@@ -249,7 +251,8 @@ def run(args: argparse.Namespace) -> int:
             with progress_bar(f"{scene.renderer} {width}x{height}") as progress:
                 image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
     except VolrenError as exc:
-        raise _naming_the_input(exc, args.scene or scene.volume_path) from None
+        chosen = scene.renderer if args.renderer or not args.scene else None
+        raise _naming_the_input(exc, args.scene or scene.volume_path, chosen) from None
     if args.output:
         io.save_image(image, args.output, transparent=args.transparent)
     if args.save_array:

@@ -214,6 +214,9 @@ _FLAGS: tuple[tuple[str, tuple[str, ...], bool], ...] = (
     ("--save-array", ("", ".", "nofolder/a.npy", "v.vti"), False),
 )
 
+#: How a message names the renderer at fault when no --renderer is given (its capabilities).
+_DEFAULT_RENDERER = "renderer vtk "
+
 _STRICT_VALUES = {"0", "-1", "nan", "inf", "-inf", "abc", "", "-5", "1e-300", "1e300", "1e9", "100000"}
 
 
@@ -234,7 +237,7 @@ def flag_cases() -> list[Case]:
             strict = always or (value in _STRICT_VALUES and flag in ("--zoom", "--step"))
             strict = strict or (value in ("nan", "inf", "-inf", "abc") and flag in ("--azimuth", "--elevation"))
             parts = (value, *value.split("=")) if value and len(value) < 100 else ()
-            names = tuple(n for n in (flag, _VOLUME, *parts) if n)
+            names = tuple(n for n in (flag, _VOLUME, _DEFAULT_RENDERER, *parts) if n)
             out.append(Case(f"flags/{flag.strip('-')}={value[:20] or 'empty'}", "flags", files, tuple(argv),
                             "error" if strict else "any", names))  # fmt: skip
     for combo, expect in (
@@ -248,5 +251,5 @@ def flag_cases() -> list[Case]:
         (("--size", "1x1"), "any"),
     ):
         out.append(Case(f"flags/combo-{'_'.join(a.strip('-') for a in combo)}", "flags", files,
-                        render_argv(_VOLUME, *combo), expect, (_VOLUME, *combo)))  # fmt: skip
+                        render_argv(_VOLUME, *combo), expect, (_VOLUME, _DEFAULT_RENDERER, *combo)))  # fmt: skip
     return out
