@@ -370,3 +370,35 @@ def test_nifti_value_scaling_edges(tmp_path):
     volume = load_volume(nifti(tmp_path, slope=(112, "<f", 1e38)))
     assert volume.values.dtype == np.float64
     np.testing.assert_array_equal(volume.values, plain.astype(np.float64) * np.float64(np.float32(1e38)))
+
+
+# ------------------------------------------------------------------------------ MetaImage flags
+
+
+@pytest.mark.parametrize("value", ["1e308", "yes", "1", ""])
+def test_metaimage_true_false_fields_are_words(tmp_path, value):
+    """MetaIO reads any word starting with T, t or 1 as true; volren would read '1e308' as false
+    and check the wrong size, so only True and False are accepted."""
+    data = grid_values().astype("<i2").tobytes()
+    (tmp_path / "v.raw").write_bytes(data)
+    header = "NDims = 3\nDimSize = 8 7 6\nElementType = MET_SHORT\nCompressedData = {}\nElementDataFile = v.raw\n"
+    (tmp_path / "v.mhd").write_text(header.format(value))
+    fails(tmp_path / "v.mhd", "CompressedData", "must be True or False")
+    (tmp_path / "ok.mhd").write_text(header.format("False"))
+    assert load_volume(tmp_path / "ok.mhd").values.shape == (6, 7, 8)
+
+
+def test_a_warning_repeated_in_the_reading_child_comes_back_once(recwarn):
+    from volren.io.isolation import run_isolated
+
+    run_isolated("x", _warn_three_times)
+    assert [str(w.message) for w in recwarn.list if "same note" in str(w.message)] == ["same note"]
+
+
+def _warn_three_times() -> None:
+    import warnings
+
+    from volren.errors import VolrenWarning
+
+    for _ in range(3):
+        warnings.warn("same note", VolrenWarning, stacklevel=1)

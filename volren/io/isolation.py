@@ -142,7 +142,7 @@ def run_isolated(path: object, load: Callable[..., Any], *args: Any, **kwargs: A
         raise file_error(path, f"the reader {how} on this file: it is corrupt or not what its name says")
     status, packed, notes = message
     value = _unpack(*packed)
-    for text, category in notes:
+    for text, category in dict.fromkeys(notes):  # once each: the child recorded every repeat
         warnings.warn(text, VolrenWarning if category == "VolrenWarning" else RuntimeWarning, stacklevel=2)
     if status == "error":
         raise value from None

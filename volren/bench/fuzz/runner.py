@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import ctypes
 import faulthandler
+import logging
 import os
 import re
 import resource
@@ -100,6 +101,7 @@ def _child_main(case: Case, folder: Path, perturb: int, memory_limit: int) -> No
         if memory_limit:
             resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
         ctypes.CDLL(None).mallopt(_M_PERTURB, perturb)
+        logging.getLogger().handlers.clear()  # a fresh interpreter's logging: `bench fuzz` added its own
         warnings.resetwarnings()  # a fresh interpreter's filters, not the parent's (pytest's)
         for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning):
             warnings.simplefilter("ignore", category)

@@ -75,8 +75,8 @@ def inspect(path: Path) -> Inspection:
     nbytes = product(dims) * channels * _TYPE_SIZES[element]
     type_name = element[4:].lower()
     layout = DataLayout(dims, type_name, nbytes)
-    compressed = fields.get("compresseddata", "false").lower() == "true"
-    binary = fields.get("binarydata", "true").lower() == "true"
+    compressed = _flag(path, fields, "CompressedData", False)
+    binary = _flag(path, fields, "BinaryData", True)
     data_name = fields.get("elementdatafile", "")
     if data_name.upper().startswith("LIST") or "%" in data_name:
         raise file_error(
@@ -89,6 +89,17 @@ def inspect(path: Path) -> Inspection:
         return Inspection("metaimage", path, layout, facts)  # sizes on disk unknown: VTK reports these
     layout = DataLayout(dims, type_name, nbytes, data_file, start + header_size, nbytes)
     return Inspection("metaimage", path, layout, facts)
+
+
+def _flag(path: Path, fields: dict[str, str], key: str, default: bool) -> bool:
+    """A True/False field. MetaIO reads any word starting with T, t or 1 as true, so a value
+    that is neither word is refused rather than read one way here and the other way by VTK."""
+    value = fields.get(key.lower())
+    if value is None:
+        return default
+    if value.lower() not in ("true", "false"):
+        raise file_error(path, f"{key} = {quote(value)} must be True or False")
+    return value.lower() == "true"
 
 
 #: zlib's deflate expands at most 1032 times; more declared data than that cannot be in the file.
