@@ -16,6 +16,7 @@ from PyQt5.QtCore import QObject
 from PyQt5.QtWidgets import QWidget
 
 from volren.app.core.state import Change, ViewState, What
+from volren.app.qt_subscription import subscribe_while_alive
 
 
 @contextmanager
@@ -38,10 +39,7 @@ class StatePanel(QWidget):
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.state = state
-        unsubscribe = state.subscribe(self._on_change)
-        self._unsubscribe = unsubscribe
-        # A plain function, not a bound method: it must still run while the C++ object dies.
-        self.destroyed.connect(lambda *_: unsubscribe())
+        self._unsubscribe = subscribe_while_alive(state, self, "_on_change")
 
     def _on_change(self, change: Change) -> None:
         if change.what in self.watches:

@@ -39,6 +39,7 @@ from PyQt5.QtWidgets import (
 from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset, unit_stops
 from volren.app.core.state import Change, ViewState
 from volren.app.core.value_histogram import value_histogram
+from volren.app.qt_subscription import subscribe_while_alive
 from volren.app.tf_editor.one_d.color_bar import ColorBar
 from volren.app.tf_editor.one_d.opacity_curve import OpacityCurve
 from volren.app.tf_editor.one_d.point_canvas import ValueAxis
@@ -107,9 +108,7 @@ class TransferFunction1DEditor(QWidget):
         self._shown_tf: TransferFunction | None = None
         self._last_folder = ""
         self._build()
-        self._unsubscribe = state.subscribe(self._on_state_change)
-        unsubscribe = self._unsubscribe
-        self.destroyed.connect(lambda *_: unsubscribe())
+        self._unsubscribe = subscribe_while_alive(state, self, "_on_state_change")
         self._set_volume()
         self.refresh()
 

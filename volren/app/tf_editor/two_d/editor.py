@@ -36,6 +36,7 @@ from PyQt5.QtWidgets import (
 from volren.app.core import tf_widget_geometry as geometry
 from volren.app.core.joint_histogram import joint_histogram, suggested_gradient_max
 from volren.app.core.state import Change, ViewState
+from volren.app.qt_subscription import subscribe_while_alive
 from volren.app.tf_editor.two_d.widget_canvas import TFWidgetCanvas
 from volren.errors import VolrenError
 from volren.model.transfer_function_2d import TransferFunction2D
@@ -76,8 +77,7 @@ class TransferFunction2DEditor(QWidget):
         layout.addWidget(self._pages)
         self.canvas.selectionChanged.connect(lambda _index: self._sync_controls())
         self.canvas.errorOccurred.connect(self.errorOccurred)
-        self._unsubscribe = unsubscribe = state.subscribe(self._on_change)
-        self.destroyed.connect(lambda *_: unsubscribe())
+        self._unsubscribe = subscribe_while_alive(state, self, "_on_change")
         self._refresh()
 
     # ------------------------------------------------------------------ construction
