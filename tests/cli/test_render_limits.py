@@ -11,7 +11,7 @@ import pytest
 import volren
 from volren.cli.main import main
 from volren.errors import VolrenError, VolrenWarning
-from volren.model.settings import MAX_SAMPLES_PER_RAY, RenderSettings, check_step, samples_per_ray
+from volren.model.settings import MAX_SAMPLES_PER_RAY, MAX_STEP, RenderSettings, check_step, samples_per_ray
 from volren.model.tf_coverage import coverage_problem
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
@@ -31,7 +31,7 @@ def _render(tmp_path, volume, *flags: str) -> list[str]:
 @pytest.mark.parametrize(
     "flags",
     [
-        ["--step", "0"], ["--step", "-1"], ["--step", "nan"], ["--step", "inf"],
+        ["--step", "0"], ["--step", "-1"], ["--step", "nan"], ["--step", "inf"], ["--step", "1e300"],
         ["--size", "0"], ["--size", "100000"], ["--size", "10x0"], ["--size", "-5"],
         ["--zoom", "0"], ["--zoom", "-1"], ["--zoom", "nan"],
         ["--azimuth", "nan"], ["--elevation", "inf"], ["--elevation", "-inf"],
@@ -157,3 +157,16 @@ def test_the_api_warns_alike():
 def test_settings_still_refuse_non_positive_steps():
     with pytest.raises(VolrenError, match="step must be finite and positive"):
         RenderSettings(step=0.0)
+
+
+def test_settings_refuse_steps_past_the_longest():
+    RenderSettings(step=MAX_STEP)
+    with pytest.raises(VolrenError, match=r"^render setting step must be at most 1000 \(in voxel lengths\), got 1e\+300$"):
+        RenderSettings(step=1e300)
+
+
+def test_an_empty_renderer_name_is_refused_naming_the_flag(tmp_path, capsys, ml_volume):
+    assert main(_render(tmp_path, ml_volume, "--renderer", "")) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["volren: error: --renderer: give a renderer name (see `volren renderers`), got an empty one"]
+    assert not (tmp_path / "x.png").exists()

@@ -402,3 +402,79 @@ def _warn_three_times() -> None:
 
     for _ in range(3):
         warnings.warn("same note", VolrenWarning, stacklevel=1)
+
+
+# ------------------------------------------------------------------------------------------ NRRD
+
+
+@pytest.mark.parametrize("detached", [False, True])
+def test_nrrd_ascii_data_cut_short_is_refused(tmp_path, detached):
+    """vtkNrrdReader fills missing ASCII numbers with zeros and reports success."""
+    from volren.bench.fuzz.seeds import SHAPE, nrrd_header
+
+    text = " ".join(str(v) for v in grid_values().reshape(-1)).encode()
+    count = int(np.prod(SHAPE))
+    if detached:
+        (tmp_path / "v.nhdr").write_text(nrrd_header("ascii", "v.txt"))
+        (tmp_path / "v.txt").write_bytes(text[: len(text) // 2])
+        path = tmp_path / "v.nhdr"
+    else:
+        path = tmp_path / "v.nrrd"
+        path.write_bytes((nrrd_header("ascii") + "\n").encode() + text[: len(text) // 2])
+    fails(path, "truncated: its ASCII data has", f"the sizes declare {count:,}")
+
+
+def test_nrrd_ascii_reads_as_its_raw_twin(tmp_path):
+    """vtkNrrdReader returns unfilled memory for ASCII data: volren parses it, same geometry."""
+    from volren.bench.fuzz.seeds import nrrd_header
+
+    text = " ".join(str(v) for v in grid_values().reshape(-1)).encode()
+    (tmp_path / "text.nrrd").write_bytes((nrrd_header("ascii") + "\n").encode() + text + b"\n")
+    (tmp_path / "raw.nrrd").write_bytes((nrrd_header() + "\n").encode() + grid_values().astype("<i2").tobytes())
+    text_volume, raw_volume = load_volume(tmp_path / "text.nrrd"), load_volume(tmp_path / "raw.nrrd")
+    assert np.array_equal(text_volume.values, raw_volume.values) and text_volume.values.dtype == np.int16
+    assert text_volume.spacing == raw_volume.spacing == SEED_SPACING
+    assert text_volume.origin == raw_volume.origin == (1.0, -2.0, 0.5)
+
+
+@pytest.mark.parametrize("data, problem", [
+    (b"1 2 3 4 5 6 7 8 9", "more than the 8"),
+    (b"1 2 3 4 5 6 7 1.5", "ASCII number 8 (1.5) is not a short"),
+    (b"1 2 3 4 5 6 7 40000", "ASCII number 8 (40000) is not a short"),
+    (b"1 2 3 4 5 6 7 x", "a word that is not a number"),
+])  # fmt: skip
+def test_nrrd_ascii_numbers_must_fit_the_type(tmp_path, data, problem):
+    head = b"NRRD0004\ntype: short\ndimension: 3\nsizes: 2 2 2\nencoding: ascii\n\n"
+    (tmp_path / "v.nrrd").write_bytes(head + data)
+    fails(tmp_path / "v.nrrd", problem)
+    (tmp_path / "ok.nrrd").write_bytes(head + b"1 2\n3 4\n5 6\n7 -8\n")
+    assert load_volume(tmp_path / "ok.nrrd").values.tolist() == [[[1, 2], [3, 4]], [[5, 6], [7, -8]]]
+
+
+# ------------------------------------------------------------------------------------- isolation
+
+
+def test_the_reading_child_is_forked_beside_numpys_blas_threads():
+    """numpy's OpenBLAS pool, running since import, is fork-safe: a fresh process reads by fork
+    (a forkserver cost the CLI 0.47 s a command); a thread started later makes it use the server."""
+    import subprocess
+    import sys
+
+    code = (
+        "import threading, time\n"
+        "from volren.io import isolation\n"
+        "print(isolation._context()._name)\n"
+        "threading.Thread(target=time.sleep, args=(1,), daemon=True).start()\n"
+        "print(isolation._context()._name)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["fork", "forkserver"], out
+
+
+def test_arrays_come_back_mapped_writable_and_private():
+    from volren.io.isolation import run_isolated
+
+    values = np.arange(300_000, dtype=np.float64)
+    first, second = run_isolated("a", np.copy, values), run_isolated("b", np.copy, values)
+    first[0] = -1.0
+    assert second[0] == 0.0 and np.array_equal(first[1:], values[1:])

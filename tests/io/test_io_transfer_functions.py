@@ -58,6 +58,17 @@ def test_newer_version_is_refused(tmp_path):
     fails(path, "transfer function format version 2 is newer than this volren reads (up to 1)")
 
 
+@pytest.mark.parametrize("version", [0, -1])
+def test_versions_below_one_do_not_exist(tmp_path, version):
+    doc = {"version": version, "kind": "1d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]}
+    fails(write(tmp_path / "old.json", doc), f"transfer function format version {version} does not exist")
+
+
+def test_an_opacity_unit_distance_of_true_is_not_a_number(tmp_path):
+    doc = {"version": 1, "kind": "1d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]], "opacity_unit_distance": True}
+    fails(write(tmp_path / "unit.json", doc), "opacity_unit_distance must be a number, got True")
+
+
 @pytest.mark.parametrize(
     "content, fragment",
     [

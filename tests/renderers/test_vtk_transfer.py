@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from volren.model.transfer_function import MAX_OPACITY, TransferFunction1D
@@ -59,6 +59,7 @@ def test_unstructured_functions_give_extinction_and_a_colour_at_every_opacity_no
 
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(st.floats(0, 100), st.floats(0, 1)), min_size=1, max_size=6))
+@example([(0.0, 1.0), (1.0, 0.99999)])  # a ramp that starts inside the opacity clamp
 def test_extinction_nodes_keep_linear_interpolation_close(points):
     tf = TransferFunction1D([[0, 1, 1, 1]], [list(p) for p in points])
     nodes, values = extinction_nodes(tf)

@@ -16,7 +16,7 @@ from typing import Any
 from volren.errors import VolrenError
 from volren.model.camera import check_zoom
 from volren.model.scene import OrbitView, Scene
-from volren.model.settings import MAX_SAMPLES_PER_RAY, BlendMode
+from volren.model.settings import MAX_SAMPLES_PER_RAY, MAX_STEP, BlendMode
 
 
 def finite_float(text: str) -> float:
@@ -36,6 +36,14 @@ def positive_float(text: str) -> float:
     value = finite_float(text)
     if value <= 0:
         raise argparse.ArgumentTypeError(f"expected a number above 0, got {text!r}")
+    return value
+
+
+def step_length(text: str) -> float:
+    """An argparse type for --step: above 0 and at most MAX_STEP voxel lengths."""
+    value = positive_float(text)
+    if value > MAX_STEP:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_STEP:g} (voxel lengths), got {text!r}")
     return value
 
 
@@ -68,7 +76,7 @@ def add_parser(sub) -> None:
     p.add_argument("--parallel", action="store_true", default=None, help="parallel projection")
     p.add_argument(
         "--step",
-        type=positive_float,
+        type=step_length,
         help=f"sample distance in mean voxel spacings / tet edges (at most {MAX_SAMPLES_PER_RAY:,} per ray)",
     )
     p.add_argument("--preintegration", action=argparse.BooleanOptionalAction, help="pre-integrated TF")
@@ -166,7 +174,9 @@ def build_scene(args: argparse.Namespace) -> Scene:
         raise VolrenError("give an INPUT volume or --scene SCENE.json")
     if args.tf and args.scene:
         scene = replace(scene, transfer_function=io.load_transfer_function(args.tf))
-    if args.renderer:
+    if args.renderer is not None:
+        if not args.renderer.strip():
+            raise VolrenError("--renderer: give a renderer name (see `volren renderers`), got an empty one")
         scene = replace(scene, renderer=args.renderer)
     if args.size:
         scene = replace(scene, size=args.size)

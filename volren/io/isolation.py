@@ -16,16 +16,20 @@ or with VOLREN_READ_IN_PROCESS=1, the load runs in this process.
 
 from __future__ import annotations
 
+import mmap
 import multiprocessing
 import os
 import pickle
 import signal
 import tempfile
+import threading
 import traceback
 import warnings
 from collections.abc import Callable
 from multiprocessing.connection import Connection
 from typing import Any
+
+import numpy  # noqa: F401 - start its BLAS pool before _BASELINE is taken
 
 from volren.errors import VolrenError, VolrenWarning, file_error
 
@@ -52,17 +56,20 @@ def _pack(value: Any) -> tuple[bytes, str | None, list[int]]:
 
 
 def _unpack(data: bytes, name: str | None, sizes: list[int]) -> Any:
+    """The value `_pack` wrote. Its arrays map the file in memory copy-on-write (private): no
+    copy is made, they stay writable, and the memory is freed with the last array."""
     if name is None:
         return pickle.loads(data)
     try:
         with open(name, "rb") as f:
-            buffers = []
-            for size in sizes:
-                buffer = bytearray(size)  # our own, writable memory
-                f.readinto(buffer)
-                buffers.append(buffer)
+            total = sum(sizes)
+            whole = mmap.mmap(f.fileno(), total, flags=mmap.MAP_PRIVATE) if total else b""
     finally:
         os.unlink(name)
+    view, buffers, start = memoryview(whole), [], 0
+    for size in sizes:
+        buffers.append(view[start : start + size])
+        start += size
     return pickle.loads(data, buffers=buffers)
 
 
@@ -98,13 +105,30 @@ def _context() -> multiprocessing.context.BaseContext | None:
     return context
 
 
-def _single_threaded() -> bool:
-    """Whether this process has one thread, native ones included (OpenMP, numba and VTK pools
-    that Python's `threading` does not see; GNU OpenMP kills a forked child that uses it)."""
+def _task_ids() -> frozenset[str] | None:
+    """The ids of this process's threads, native ones included (OpenMP, numba and VTK pools that
+    Python's `threading` does not see), or None where they cannot be listed."""
     try:
-        return len(os.listdir("/proc/self/task")) == 1
-    except OSError:  # native threads cannot be counted: assume some, fork from a server
+        return frozenset(os.listdir("/proc/self/task"))
+    except OSError:
+        return None
+
+
+#: The threads this process had when this module was imported, if no Python thread ran then:
+#: numpy's OpenBLAS pool, started on import (numpy is imported above). OpenBLAS quiesces it
+#: around fork (pthread_atfork), so those threads do not make fork unsafe; threads started
+#: later (GNU OpenMP, which kills a forked child that uses it, Qt, VTK) do.
+_BASELINE = _task_ids() if threading.active_count() == 1 else None
+
+
+def _single_threaded() -> bool:
+    """Whether fork is safe here: one thread, or only the threads of the import-time baseline."""
+    tasks = _task_ids()
+    if tasks is None:  # threads cannot be counted: assume some, fork from a server
         return False
+    if len(tasks) == 1:
+        return True
+    return _BASELINE is not None and threading.active_count() == 1 and tasks <= _BASELINE
 
 
 def _signal_name(exitcode: int) -> str:

@@ -95,10 +95,11 @@ def read_with_header(path: Path, scalars: str | None = None) -> UniformVolume | 
     if inspection.layout is not None:
         check_layout(path, inspection.layout)
     declared_spacing = inspection.facts.get("declared_spacing")
-    if fmt.read is not None:  # volren's own reader: no VTK reader sees the file
+    own = fmt.read(path, inspection) if fmt.read is not None else None
+    if own is not None:  # volren's own reader: no VTK reader sees the file
         if scalars is not None and scalars != fmt.array_name:
             raise file_error(path, f"no array named {scalars!r}; available: {fmt.array_name!r}")
-        return volume_from_grid(signed_as_declared(fmt.read(path, inspection), declared_spacing), name)
+        return volume_from_grid(signed_as_declared(own, declared_spacing), name)
     result = _pv.read(inspection.target, inspection.reader)
     problem = reader_messages.problem(result.log, inspection.target)
     if problem:

@@ -15,6 +15,8 @@ def check_format_version(data: Any, what: str, newest: int, default: int | None 
     version = data.get("version", default)
     if not isinstance(version, int) or isinstance(version, bool):
         raise VolrenError(f"{what} 'version' must be an integer, got {version!r}")
+    if version < 1:
+        raise VolrenError(f"{what} format version {version} does not exist: versions start at 1")
     if version > newest:
         raise VolrenError(
             f"{what} format version {version} is newer than this volren reads (up to {newest}); upgrade volren"

@@ -15,6 +15,9 @@ from volren.errors import VolrenError
 #: it (VTK and the slicer go blank near 700,000 samples); 100,000 is about a 512^3 grid at step
 #: 0.009, the slicer's cap on slices, and still honoured by every renderer.
 MAX_SAMPLES_PER_RAY = 100_000
+#: Longest step, in characteristic lengths: past it every ray of any volume volren can hold takes
+#: one sample or none, so a larger value is a typo (1e300), not a setting.
+MAX_STEP = 1000.0
 
 
 class BlendMode(StrEnum):
@@ -68,6 +71,10 @@ class RenderSettings:
             if not math.isfinite(value) or value < 0 or (name == "step" and value == 0):
                 bound = "positive" if name == "step" else ">= 0"
                 raise VolrenError(f"render setting {name} must be finite and {bound}, got {value!r}")
+        if self.step > MAX_STEP:
+            raise VolrenError(
+                f"render setting step must be at most {MAX_STEP:g} (in voxel lengths), got {self.step!r}"
+            )
         for name in ("preintegration", "shade", "jitter"):
             if not isinstance(getattr(self, name), bool):
                 raise VolrenError(f"render setting {name} must be true or false, got {getattr(self, name)!r}")

@@ -95,6 +95,8 @@ class TransferFunction1D(Versioned):
 
     @staticmethod
     def _check_unit(value: float) -> float:
+        if isinstance(value, bool):
+            raise VolrenError(f"opacity_unit_distance must be a number, got {value!r}")
         try:
             unit = float(value)
         except (TypeError, ValueError):

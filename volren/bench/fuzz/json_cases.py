@@ -98,18 +98,40 @@ def _document_cases(group: str, doc: dict, file: str, argv: tuple[str, ...], fil
 
 
 def _harmless(path: tuple, wrong: Any) -> bool:
-    """Values that are legal where they stand (a 0 opacity, -1 as a data value, ...)."""
-    if wrong in (0, -1) and not isinstance(wrong, bool):
+    """Values that are legal where they stand: a data value or an angle of -1, 0 or 1e308 (fmod
+    of a double is exact), an opacity of 0, a flag turned on, an empty settings object (defaults),
+    a widget placed or sized anywhere on the value and gradient axes (it then misses the data)."""
+    if path[0] == "transfer_function":  # a scene's inline TF: the TF's own rules
+        path = path[1:]
+    if not path or isinstance(wrong, bool) and wrong is not True:
+        return False
+    number = isinstance(wrong, int | float) and not isinstance(wrong, bool)
+    key = path[-1] if not isinstance(path[-1], int) else path[-2]
+    if number and wrong in (0, -1, 1e308):
         if path[0] in ("color", "opacity") and len(path) == 3 and path[2] == 0:
             return True  # a data value
-        if path[0] == "opacity" and len(path) == 3 and wrong == 0:
+        if path[0] in ("color", "opacity") and len(path) == 3 and wrong == 0:
+            return True  # a colour or opacity of 0
+        if key in ("azimuth", "elevation"):
             return True
-        if path[0] == "color" and len(path) == 3 and wrong == 0:
+        if path[0] in ("value_range", "gradient_range") and wrong != 0:
+            return True  # the table's range: wide, or below zero on the value axis
+        if path[0] == "widgets" and key in ("center", "value", "value_range", "gradient_range") and wrong != 0:
+            return True  # a widget anywhere
+        if path[0] == "widgets" and key in ("width", "half_width", "gradient_max") and wrong == 1e308:
+            return True  # a widget that covers everything
+        if path[0] == "widgets" and key == "value" and wrong == 0:
             return True
-    if wrong == 1e308 and path[0] in ("color", "opacity") and len(path) == 3 and path[2] == 0:
+        if path[0] == "widgets" and key == "opacity" and wrong == 0:
+            return True
+        if key == "opacity_unit_distance" and wrong == 1e308:
+            return True  # nearly transparent, as asked
+    if wrong is True and key in ("parallel", "shade", "preintegration", "jitter"):
         return True
-    if path[0] == "widgets" and wrong == 0 and path[-1] in ("opacity",):
-        return True
+    if wrong == {} and key in ("camera", "settings", "options"):
+        return True  # the defaults
+    if wrong is None and key == "scalars":
+        return True  # the first point array, as when it is left out
     return False
 
 

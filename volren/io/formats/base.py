@@ -5,8 +5,8 @@ one VTK reader read the file, `check_output` for what the reader got wrong witho
 undo what it misread), then `adjust` the grid for what the reader knows but does not apply
 (origins kept in side matrices, value scaling, axis flips).
 
-A format whose VTK reader cannot be made safe (SLC, DICOM) has its own `read` instead: it returns
-the grid itself, and no VTK reader sees the file.
+A format whose VTK reader cannot be made safe (SLC, DICOM, ASCII NRRD) has its own `read` instead:
+it returns the grid itself, and no VTK reader sees the file.
 """
 
 from __future__ import annotations
@@ -65,7 +65,8 @@ class FileFormat:
 
     `check_output` raises for what the reader got wrong without saying so, and returns the view,
     corrected where the reader misread something it could have read right. `read`, when given,
-    replaces the VTK reader and those two steps: it returns the grid of one array, `array_name`.
+    replaces the VTK reader and those two steps: it returns the grid of one array, `array_name`,
+    or None where the inspection leaves the file to the VTK reader.
     """
 
     name: str
@@ -73,7 +74,7 @@ class FileFormat:
     inspect: Callable[[Path], Inspection]
     check_output: Callable[[Path, DatasetView, ReadResult, Inspection], DatasetView] = _no_check
     adjust: Callable[[Grid, ReadResult, Inspection], Grid] = _no_adjust
-    read: Callable[[Path, Inspection], Grid] | None = None
+    read: Callable[[Path, Inspection], Grid | None] | None = None
     array_name: str = ""
 
 

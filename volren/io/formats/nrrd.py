@@ -9,8 +9,9 @@ Quirks of vtkNrrdReader (VTK 9.7), each handled here:
   is put back;
 - it keeps only the lengths of 'space directions' (the rotation is reported as ignored);
 - for raw data in a left-handed 'space' (LAS) it flips the rows, and gzip data it never
-  byte-swaps (big-endian gzip comes back garbled): both are undone. (Its gzip and ASCII paths
-  do not flip LAS rows.)
+  byte-swaps (big-endian gzip comes back garbled): both are undone. (Its gzip path does not flip
+  LAS rows.)
+- for ASCII data it returns unfilled memory: volren parses ASCII data itself (`read`).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ _TYPES = {
 }  # fmt: skip
 _TYPE_SIZES = {name: size for size, names in _TYPES.items() for name in names}
 _RAW = ("raw",)
+_TEXT = ("ascii", "text", "txt")
 _HEADER_LIMIT = 1 << 20
 _SPATIAL_KINDS = ("domain", "space", "time", "none", "???")
 _KINDS = frozenset(
@@ -182,8 +184,10 @@ def inspect(path: Path) -> Inspection:
         raise file_error(
             path, "truncated: the NRRD header is not ended by a blank line and names no data file"
         )
+    if encoding in _TEXT:
+        return _text_inspection(path, fields, dims, facts, layout, origin, header_end)
     if encoding not in _RAW or data_name.upper().startswith("LIST") or " " in data_name:
-        return Inspection("nrrd", path, layout, facts)  # compressed or text: VTK reports short data
+        return Inspection("nrrd", path, layout, facts)  # compressed: VTK reports short data
     try:
         skip, line_skip = int(fields.get("byteskip", "0") or 0), int(fields.get("lineskip", "0") or 0)
     except ValueError:
@@ -192,6 +196,82 @@ def inspect(path: Path) -> Inspection:
         return Inspection("nrrd", path, layout, facts)
     data_file, offset = (path.parent / data_name, skip) if data_name else (path, header_end + skip)
     return Inspection("nrrd", path, DataLayout(dims, type_name, nbytes, data_file, offset, nbytes), facts)
+
+
+def _text_dtype(type_name: str) -> np.dtype:
+    size = _TYPE_SIZES[type_name]
+    if type_name in ("float", "double"):
+        return np.dtype(f"f{size}")
+    unsigned = type_name.startswith(("u", "unsigned")) or type_name in ("uchar",)
+    return np.dtype(f"{'u' if unsigned else 'i'}{size}")
+
+
+def _text_inspection(path: Path, fields: dict[str, str], dims: tuple[int, ...], facts: dict,
+                     layout: DataLayout, origin: tuple | None, header_end: int) -> Inspection:  # fmt: skip
+    """What `read` needs for ASCII data: one data file (or the rest of this one), three or two
+    spatial axes of scalars."""
+    data_name = fields.get("datafile", "")
+    if data_name.upper().startswith("LIST") or " " in data_name:
+        raise file_error(path, f"ASCII data in several files ({quote(data_name)}) is not supported; give one data file")
+    kinds = fields.get("kinds", "").lower().split()
+    if len(dims) not in (2, 3) or any(k not in _SPATIAL_KINDS for k in kinds):
+        raise file_error(
+            path, f"ASCII NRRD of {len(dims)} axes (kinds {quote(fields.get('kinds', 'none given'))}) is not "
+            "supported: volren reads ASCII data on 2 or 3 spatial axes"
+        )  # fmt: skip
+    try:
+        line_skip = int(fields.get("lineskip", "0") or 0)
+        byte_skip = int(fields.get("byteskip", "0") or 0)
+    except ValueError:
+        raise file_error(path, "malformed NRRD header: byte skip and line skip must be integers") from None
+    if line_skip < 0 or byte_skip != 0:
+        raise file_error(path, "ASCII NRRD data takes a line skip of 0 or more and no byte skip")
+    facts.update(text=(path.parent / data_name if data_name else path, line_skip, fields["type"].lower()),
+                 data_start=max(header_end, 0), origin=origin)  # fmt: skip
+    if len(dims) == 2:
+        facts["spacing"] = (*facts["spacing"][:2], 1.0)
+        facts["unsplit"] = False
+    return Inspection("nrrd", path, layout, facts)
+
+
+def read(path: Path, inspection: Inspection) -> Grid | None:
+    """ASCII data, parsed here: vtkNrrdReader (VTK 9.7) returns unfilled memory for every ASCII
+    file, whole or cut. Other encodings: None, for VTK's reader."""
+    text = inspection.facts.get("text")
+    if text is None:
+        return None
+    data_file, line_skip, type_name = text
+    sizes = inspection.facts["sizes"]
+    expected = product(sizes)
+    try:
+        with open(data_file, "rb") as f:
+            if data_file == path:
+                f.seek(inspection.facts["data_start"])
+            for _ in range(line_skip):
+                f.readline()
+            text = f.read()
+    except OSError as exc:
+        raise file_error(path, f"cannot read its ASCII data {quote(str(data_file))}: {exc.strerror}") from None
+    try:
+        numbers = np.fromstring(text, dtype=np.float64, sep=" ")  # in C: no Python object per number
+    except ValueError:
+        raise file_error(path, "its ASCII data holds a word that is not a number") from None
+    if numbers.size < expected:
+        raise file_error(path, f"truncated: its ASCII data has {numbers.size:,} numbers, the sizes declare {expected:,}")
+    if numbers.size > expected:
+        raise file_error(path, f"its ASCII data has {numbers.size:,} numbers, more than the {expected:,} the sizes declare")
+    dtype = _text_dtype(type_name)
+    if dtype.kind in "iu":
+        info = np.iinfo(dtype)
+        bad = ~np.isfinite(numbers) | (numbers != np.round(numbers)) | (numbers < info.min) | (numbers > info.max)
+        if bad.any():
+            at = int(np.argmax(bad))
+            raise file_error(path, f"ASCII number {at + 1:,} ({numbers[at]:g}) is not a {type_name}")
+    nx, ny, nz = (*sizes, 1)[:3]
+    values = numbers.astype(dtype).reshape(nz, ny, nx)
+    origin = inspection.facts.get("origin") or (0.0, 0.0, 0.0)
+    spacing = inspection.facts["spacing"] if len(sizes) == 3 else (*inspection.facts["spacing"][:2], 1.0)
+    return Grid(values, spacing, origin, inspection.facts.get("direction"))
 
 
 def check_output(path: Path, view: DatasetView, result: ReadResult, inspection: Inspection) -> DatasetView:
@@ -216,4 +296,4 @@ def adjust(grid: Grid, result: ReadResult, inspection: Inspection) -> Grid:
     return grid
 
 
-NRRD = FileFormat("NRRD", (".nrrd", ".nhdr"), inspect, check_output, adjust)
+NRRD = FileFormat("NRRD", (".nrrd", ".nhdr"), inspect, check_output, adjust, read, array_name="ImageFile")

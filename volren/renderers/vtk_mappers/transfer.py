@@ -114,13 +114,15 @@ def uniform_functions(
 
 
 def _opacity_steps(a0: float, a1: float) -> NDArray[np.float64]:
-    """Opacities strictly between a0 and a1 (ascending) where linear interpolation of
-    -ln(1 - a) stays within MAX_EXTINCTION_ERROR of the curve."""
+    """Opacities strictly between a0 and a1 (ascending where a0 < a1) where linear interpolation
+    of -ln(1 - min(a, MAX_OPACITY)) stays within MAX_EXTINCTION_ERROR of the curve."""
     lo, hi = sorted((min(a0, MAX_OPACITY), min(a1, MAX_OPACITY)))
     shrink = 1.0 / (1.0 + np.sqrt(8.0 * MAX_EXTINCTION_ERROR))
     count = np.log((1.0 - hi) / (1.0 - lo)) / np.log(shrink) if hi > lo else 0.0
     k = np.arange(1, min(int(np.ceil(count)), MAX_SUBDIVISIONS))
     steps = 1.0 - (1.0 - lo) * shrink**k
+    if min(a0, a1) < MAX_OPACITY < max(a0, a1):  # the kink where the clamp starts: -ln(1 - a) flat past it
+        steps = np.append(steps, MAX_OPACITY)
     return steps if a1 >= a0 else steps[::-1]
 
 
