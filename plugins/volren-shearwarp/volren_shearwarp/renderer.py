@@ -17,10 +17,11 @@ How a frame goes (module per step):
 4. `composite`: slabs front to back, in blocks of slices, progress after each block.
 5. `warp`: every output pixel's ray resampled from the intermediate image.
 
-Sampling: the rays cross every slice along the principal axis, and `step` adds planes between
-slices: ceil(slice spacing / (step * mean spacing)) segments per slab (1 at step 1, 2 at the
-default 0.5), sampled trilinearly; pre-integration treats each segment as linear between its end
-values. Blend modes maximum / minimum / average take the values at the same planes.
+Sampling: the rays cross every slice along the principal axis (shear-warp's own rate: a bilinear
+sample in a slice is an exact trilinear sample, and pre-integration integrates the segment between
+two of them exactly for data linear along it). `step` below 0.5 adds planes between slices:
+ceil(slice spacing / (2 step mean spacing)) segments per slab (1 at the default 0.5 and above,
+2 at 0.25), sampled trilinearly. Blend modes maximum / minimum / average take the values at the same planes.
 
 Counters: samples (segments composited), rays (intermediate pixels), empty_pixels_skipped (pixel
 slabs skipped by the runs), pixels_terminated, slices, planes_per_slab, intermediate_width /
@@ -266,9 +267,8 @@ class ShearWarpRenderer(RendererBase):
         light = -np.asarray(camera.direction, np.float64)[list(fac.perm)]
         half = light.copy()  # parallel: the view vector is the light's
         ray_dirs = np.zeros((1, 1, 3))
-        if shading and fac.perspective:
+        if shading and fac.perspective:  # the view vector differs per ray: H per intermediate pixel
             a0, b0 = fac.origin_ab
-        if shading and fac.perspective:
             h = 1.0 / fac.scale
             da = (a0 + h * np.arange(fac.width) - fac.eye[0]) * fac.spacing[0]
             db = (b0 + h * np.arange(fac.height) - fac.eye[1]) * fac.spacing[1]
