@@ -21,3 +21,7 @@ def test_registered_renderer_conforms(name, check):
 
 def test_the_example_plugin_is_registered():
     assert "example" in NAMES, "scripts/setup.sh installs plugins/volren-example"
+
+
+def test_the_shearwarp_plugin_is_registered():
+    assert "shearwarp" in NAMES, "scripts/setup.sh installs plugins/volren-shearwarp"

@@ -1,0 +1,232 @@
+"""The classified volume: one slice-ordered copy of the values per principal axis, and per copy
+the runs of cells that the transfer function may make visible.
+
+Why: shear-warp walks slices in order, so each principal axis needs the volume laid out slice by
+slice with scanlines contiguous (three copies, built lazily, float32 so NaN survives). Empty
+space is skipped by run-length encoding (Lacroute and Levoy 1994): per slab (two adjacent
+slices) and per cell row, the runs of cells where something may show.
+
+When a cell is transparent, for pre-integration: a slab's segment runs linearly from a front
+value (bilinear in one slice) to a back value (bilinear in the next), so its colour is zero only
+when the TF opacity is zero on the whole interval between them. A ray whose front point lies in
+cell (a, b) has its back point within r = ceil(largest shear) cells of it (r = 1 for every
+parallel view, since the principal axis has the largest slope), so every value it can meet lies
+between the min and the max of the corners of the (2r + 1)^2 block of 3D cells around (a, b). The cell is skipped only when the opacity is zero on all of [min, max]: the
+interval, not the union of its cells' ranges, since a segment between two values passes
+through everything in between. Cells with a NaN corner are transparent (DESIGN.md) and add
+nothing to the range.
+
+The test reads the TF only through which value bins have nonzero opacity (`OpacitySupport`):
+colour edits, and opacity edits that keep the support, reuse the runs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit, prange
+from numpy.typing import NDArray
+
+from volren.model import TransferFunction1D, UniformVolume
+from volren_shearwarp.factorization import PERMS
+
+#: Value bins of the opacity support over the volume's value range.
+SUPPORT_BINS = 4096
+
+
+@dataclass(frozen=True)
+class OpacitySupport:
+    """Which of `SUPPORT_BINS` equal bins of [lo, hi] hold a value with nonzero TF opacity, as a
+    prefix count (`counts[i]` = nonzero bins before bin i), and a digest that keys the runs."""
+
+    lo: float
+    hi: float
+    counts: NDArray[np.int32]
+    digest: str
+
+    @classmethod
+    def of(cls, tf: TransferFunction1D, lo: float, hi: float, bins: int = SUPPORT_BINS) -> OpacitySupport:
+        """The support of `tf` over [lo, hi]: exact for piecewise-linear opacity (a bin is nonzero when
+        the opacity is nonzero at either end or at a control point inside it)."""
+        if not hi > lo:
+            hi = lo + 1.0
+        edges = np.linspace(lo, hi, bins + 1)
+        points = tf.opacity_points
+        _, at_edges = tf.sample(edges)
+        nonzero = (at_edges[:-1] > 0) | (at_edges[1:] > 0)
+        inside = (points[:, 0] > lo) & (points[:, 0] < hi) & (points[:, 1] > 0)
+        if inside.any():
+            which = np.clip(((points[inside, 0] - lo) / (hi - lo) * bins).astype(np.int64), 0, bins - 1)
+            nonzero[which] = True
+        counts = np.zeros(bins + 1, np.int32)
+        np.cumsum(nonzero, out=counts[1:])
+        digest = hashlib.sha256(np.packbits(nonzero).tobytes() + np.array([lo, hi]).tobytes()).hexdigest()
+        return cls(float(lo), float(hi), counts, digest)
+
+    @property
+    def empty(self) -> bool:
+        return int(self.counts[-1]) == 0
+
+
+@dataclass
+class AxisCopy:
+    """The volume's values laid out for one principal axis: `values[k, b, a]` float32."""
+
+    axis: int
+    values: NDArray[np.float32]
+    runs: dict[int, Runs] = field(default_factory=dict)  #: by radius
+
+
+@dataclass(frozen=True)
+class Runs:
+    """Runs of possibly visible cells: for slab k (slices k, k+1) and cell row b, the runs
+    `starts[i]:ends[i]` (cell indices along a) for i in `offsets[k * (nb - 1) + b]` up to the next."""
+
+    offsets: NDArray[np.int64]
+    starts: NDArray[np.int32]
+    ends: NDArray[np.int32]
+    digest: str
+    radius: int
+    build_ms: float
+    visible_cells: int
+    total_cells: int
+
+    @property
+    def nbytes(self) -> int:
+        return int(self.offsets.nbytes + self.starts.nbytes + self.ends.nbytes)
+
+
+@njit(cache=True)
+def _visible(mn, mx, lo, scale, counts, bins):
+    if mn > mx:  # no finite cell around: transparent
+        return False
+    b0 = int((mn - lo) * scale)
+    b1 = int((mx - lo) * scale)
+    b0 = min(max(b0, 0), bins - 1)
+    b1 = min(max(b1, 0), bins - 1)
+    return counts[b1 + 1] - counts[b0] > 0
+
+
+@njit(parallel=True, cache=True)
+def _visible_cells(vol, lo, scale, counts, radius, mask):
+    """mask[k, b, a] = 1 where the block of cells within `radius` of (a, b) in slab k may be visible."""
+    nc, nb, na = vol.shape
+    bins = counts.shape[0] - 1
+    for k in prange(nc - 1):
+        cmin = np.empty((nb - 1, na - 1), np.float32)
+        cmax = np.empty((nb - 1, na - 1), np.float32)
+        for b in range(nb - 1):
+            for a in range(na - 1):
+                lo_v = np.inf
+                hi_v = -np.inf
+                bad = False
+                for dk in range(2):
+                    for db in range(2):
+                        for da in range(2):
+                            v = vol[k + dk, b + db, a + da]
+                            if v != v or v == np.inf or v == -np.inf:
+                                bad = True
+                            lo_v = min(lo_v, v)
+                            hi_v = max(hi_v, v)
+                if bad:
+                    cmin[b, a] = np.inf
+                    cmax[b, a] = -np.inf
+                else:
+                    cmin[b, a] = lo_v
+                    cmax[b, a] = hi_v
+        for b in range(nb - 1):
+            for a in range(na - 1):
+                mn = np.inf
+                mx = -np.inf
+                for b2 in range(max(b - radius, 0), min(b + radius + 1, nb - 1)):
+                    for a2 in range(max(a - radius, 0), min(a + radius + 1, na - 1)):
+                        mn = min(mn, cmin[b2, a2])
+                        mx = max(mx, cmax[b2, a2])
+                mask[k, b, a] = 1 if _visible(mn, mx, lo, scale, counts, bins) else 0
+
+
+@njit(cache=True)
+def _runs_from_mask(mask):
+    nk, nb, na = mask.shape
+    offsets = np.zeros(nk * nb + 1, np.int64)
+    count = 0
+    for r in range(nk * nb):
+        k = r // nb
+        b = r % nb
+        prev = 0
+        for a in range(na):
+            cur = mask[k, b, a]
+            if cur and not prev:
+                count += 1
+            prev = cur
+        offsets[r + 1] = count
+    starts = np.empty(count, np.int32)
+    ends = np.empty(count, np.int32)
+    i = 0
+    for r in range(nk * nb):
+        k = r // nb
+        b = r % nb
+        a = 0
+        while a < na:
+            if mask[k, b, a]:
+                e = a
+                while e < na and mask[k, b, e]:
+                    e += 1
+                starts[i] = a
+                ends[i] = e
+                i += 1
+                a = e
+            else:
+                a += 1
+    return offsets, starts, ends
+
+
+def build_runs(values: NDArray[np.float32], support: OpacitySupport, radius: int = 1) -> Runs:
+    """The runs of one axis copy for this opacity support, for rays that move at most `radius`
+    cells in the slice plane from one slice to the next."""
+    start = time.perf_counter()
+    nc, nb, na = values.shape
+    mask = np.zeros((nc - 1, nb - 1, na - 1), np.uint8)
+    bins = support.counts.shape[0] - 1
+    _visible_cells(values, support.lo, bins / (support.hi - support.lo), support.counts, radius, mask)
+    offsets, starts, ends = _runs_from_mask(mask)
+    visible = int(mask.sum(dtype=np.int64))
+    ms = (time.perf_counter() - start) * 1000.0
+    return Runs(offsets, starts, ends, support.digest, radius, ms, visible, int(mask.size))
+
+
+@dataclass
+class ClassifiedVolume:
+    """The three axis copies of one volume (made on first use) and their runs for the current support."""
+
+    volume: UniformVolume
+    copies: dict[int, AxisCopy] = field(default_factory=dict)
+    copy_ms: dict[int, float] = field(default_factory=dict)
+
+    def copy(self, axis: int) -> AxisCopy:
+        found = self.copies.get(axis)
+        if found is None:
+            start = time.perf_counter()
+            a, b, c = PERMS[axis]
+            # values are indexed [z, y, x]: volume axis i is array axis 2 - i
+            values = np.ascontiguousarray(np.transpose(self.volume.values, (2 - c, 2 - b, 2 - a)), dtype=np.float32)
+            found = AxisCopy(axis, values)
+            self.copies[axis] = found
+            self.copy_ms[axis] = (time.perf_counter() - start) * 1000.0
+        return found
+
+    def runs(self, axis: int, support: OpacitySupport, radius: int = 1) -> Runs:
+        """The runs of `axis` for `support` and `radius`, rebuilt only when the support changed."""
+        copy = self.copy(axis)
+        found = copy.runs.get(radius)
+        if found is None or found.digest != support.digest:
+            found = copy.runs[radius] = build_runs(copy.values, support, radius)
+        return found
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the copies and their runs."""
+        return sum(c.values.nbytes + sum(r.nbytes for r in c.runs.values()) for c in self.copies.values())

@@ -1,0 +1,533 @@
+"""Compositing kernels: slabs between consecutive sample planes, front to back, into the
+intermediate image, one parallel loop over intermediate scanlines.
+
+Why this shape: the intermediate image's scanlines are independent, so each thread takes whole
+scanlines (interleaved, for balance) and walks a block of slabs front to back for each; a
+scanline of the image meets one scanline of each slice (the factorization keeps b a function of
+the image row alone), so memory is read a slice scanline at a time.
+
+Per scanline and slab:
+1. Which pixels to visit: the run-length runs of possibly visible cells of the slab's cell row
+   (`classified`), turned into pixel ranges through the pixel -> slice map, and inside them the
+   pixels not yet opaque, found through skip links (VolPack's early ray termination: an opaque
+   pixel points past itself; chains are shortened as they are walked).
+2. The segment of each ray inside the slab, clipped to the slice rectangle (rays that enter or
+   leave through a side face cross part of a slab).
+3. `sub` sub-planes per slab (the render setting `step`): plane w in [0, 1) between slices kf and
+   kb is sampled by interpolating bilinear samples of both slices at the ray's point, which is
+   trilinear interpolation; w = 0 is a bilinear sample of one slice. The value at the back of a
+   segment is kept in a buffer on the intermediate grid (the 003 seed's intermediate-image-sized
+   buffer slice) with the plane it belongs to, and is the next segment's front value; a pixel
+   skipped in between recomputes it.
+4. Pre-integrated: one lookup in the table for this pixel's segment length, by the front and back
+   values (nearest or bilinear in the table); with shading, Lum et al.'s interpolated lighting
+   from the front- and back-weighted tables. Post-classified: the segment is two halves, the
+   front half with the front value's colour and opacity, the back half with the back value's, each
+   corrected to the half length (LUT per length). A clipped segment's opacity is corrected to its
+   part, 1 - (1 - a)^f, and its colour by the same factor (Schulze et al.'s correction).
+5. A segment touching a NaN value is transparent (a cell with a NaN corner is).
+
+Values are carried as table coordinates x = (s - lo) * scale in [0, n - 1].
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit, prange
+
+#: Modes of `project_slabs`.
+MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def bilinear(vol, k, a, b):
+    """Bilinear sample of slice k at in-plane (a, b), clamped to the slice; NaN where a corner with
+    weight is NaN (NaN * 0 is NaN too: a cell with a NaN corner is transparent)."""
+    nb = vol.shape[1]
+    na = vol.shape[2]
+    a = min(max(a, 0.0), na - 1.0)
+    b = min(max(b, 0.0), nb - 1.0)
+    ia = min(int(a), na - 2)
+    ib = min(int(b), nb - 2)
+    fa = a - ia
+    fb = b - ib
+    v0 = vol[k, ib, ia] * (1.0 - fa) + vol[k, ib, ia + 1] * fa
+    v1 = vol[k, ib + 1, ia] * (1.0 - fa) + vol[k, ib + 1, ia + 1] * fa
+    return v0 * (1.0 - fb) + v1 * fb
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _diff(vol, k, b, a, axis):
+    """Central difference along axis (0 = a, 1 = b, 2 = c) at grid point (k, b, a), in index units;
+    one-sided at the borders (the reference's rule)."""
+    nc, nb, na = vol.shape
+    if axis == 0:
+        if a == 0:
+            return vol[k, b, 1] - vol[k, b, 0]
+        if a == na - 1:
+            return vol[k, b, na - 1] - vol[k, b, na - 2]
+        return 0.5 * (vol[k, b, a + 1] - vol[k, b, a - 1])
+    if axis == 1:
+        if b == 0:
+            return vol[k, 1, a] - vol[k, 0, a]
+        if b == nb - 1:
+            return vol[k, nb - 1, a] - vol[k, nb - 2, a]
+        return 0.5 * (vol[k, b + 1, a] - vol[k, b - 1, a])
+    if k == 0:
+        return vol[1, b, a] - vol[0, b, a]
+    if k == nc - 1:
+        return vol[nc - 1, b, a] - vol[nc - 2, b, a]
+    return 0.5 * (vol[k + 1, b, a] - vol[k - 1, b, a])
+
+
+@njit(cache=True, error_model="numpy")
+def gradient(vol, k, a, b, inv_sp):
+    """World-unit gradient (along a, b, c) at in-plane (a, b) of slice k: central differences at the
+    grid points, interpolated bilinearly like the values."""
+    nb = vol.shape[1]
+    na = vol.shape[2]
+    a = min(max(a, 0.0), na - 1.0)
+    b = min(max(b, 0.0), nb - 1.0)
+    ia = min(int(a), na - 2)
+    ib = min(int(b), nb - 2)
+    fa = a - ia
+    fb = b - ib
+    w00 = (1.0 - fa) * (1.0 - fb)
+    w01 = fa * (1.0 - fb)
+    w10 = (1.0 - fa) * fb
+    w11 = fa * fb
+    out0 = 0.0
+    out1 = 0.0
+    out2 = 0.0
+    for axis in range(3):
+        g = (w00 * _diff(vol, k, ib, ia, axis) + w01 * _diff(vol, k, ib, ia + 1, axis)
+             + w10 * _diff(vol, k, ib + 1, ia, axis) + w11 * _diff(vol, k, ib + 1, ia + 1, axis))  # fmt: skip
+        if axis == 0:
+            out0 = g * inv_sp[0]
+        elif axis == 1:
+            out1 = g * inv_sp[1]
+        else:
+            out2 = g * inv_sp[2]
+    return out0, out1, out2
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _lighting(gx, gy, gz, light, hx, hy, hz, ka, kd, ks, power, gthr):
+    """(diffuse factor, specular term) of Blinn-Phong with a headlight, two-sided (DESIGN.md);
+    (1, 0) where the gradient is about zero (no shading)."""
+    mag = math.sqrt(gx * gx + gy * gy + gz * gz)
+    if not (mag > gthr) or not math.isfinite(mag):
+        return 1.0, 0.0
+    nx = -gx / mag
+    ny = -gy / mag
+    nz = -gz / mag
+    ndl = nx * light[0] + ny * light[1] + nz * light[2]
+    if ndl < 0.0:
+        nx = -nx
+        ny = -ny
+        nz = -nz
+        ndl = -ndl
+    ndh = nx * hx + ny * hy + nz * hz
+    return ka + kd * ndl, ks * max(ndh, 0.0) ** power
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _plane_value(vol, kf, kb, w, a, b, lo, scale):
+    """Table coordinate of the value at plane w (0 = slice kf, 1 = slice kb) and in-plane (a, b)."""
+    if w == 0.0:
+        s = bilinear(vol, kf, a, b)
+    elif w == 1.0:
+        s = bilinear(vol, kb, a, b)
+    else:
+        s = (1.0 - w) * bilinear(vol, kf, a, b) + w * bilinear(vol, kb, a, b)
+    return (s - lo) * scale
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr):
+    if w == 0.0:
+        gx, gy, gz = gradient(vol, kf, a, b, inv_sp)
+    elif w == 1.0:
+        gx, gy, gz = gradient(vol, kb, a, b, inv_sp)
+    else:
+        fx, fy, fz = gradient(vol, kf, a, b, inv_sp)
+        bx, by, bz = gradient(vol, kb, a, b, inv_sp)
+        gx = (1.0 - w) * fx + w * bx
+        gy = (1.0 - w) * fy + w * by
+        gz = (1.0 - w) * fz + w * bz
+    return _lighting(gx, gy, gz, light, hx, hy, hz, ka, kd, ks, power, gthr)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _lookup(table, layer, xf, xb, c, bilinear_lookup):
+    """Channel c of the 2D table `table[layer]` at fractional entries (xf, xb)."""
+    n = table.shape[1]
+    if not bilinear_lookup:
+        i = min(max(int(xf + 0.5), 0), n - 1)
+        j = min(max(int(xb + 0.5), 0), n - 1)
+        return table[layer, i, j, c]
+    xf = min(max(xf, 0.0), n - 1.0)
+    xb = min(max(xb, 0.0), n - 1.0)
+    i = min(int(xf), n - 2)
+    j = min(int(xb), n - 2)
+    fi = xf - i
+    fj = xb - j
+    return ((table[layer, i, j, c] * (1.0 - fj) + table[layer, i, j + 1, c] * fj) * (1.0 - fi)
+            + (table[layer, i + 1, j, c] * (1.0 - fj) + table[layer, i + 1, j + 1, c] * fj) * fi)  # fmt: skip
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _lut(lut, layer, x, c, bilinear_lookup):
+    """Channel c of the 1D LUT `lut[layer]` at fractional entry x."""
+    n = lut.shape[1]
+    if not bilinear_lookup:
+        return lut[layer, min(max(int(x + 0.5), 0), n - 1), c]
+    x = min(max(x, 0.0), n - 1.0)
+    i = min(int(x), n - 2)
+    f = x - i
+    return lut[layer, i, c] * (1.0 - f) + lut[layer, i + 1, c] * f
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _next_open(skip, q, p, end):
+    """The first pixel >= p of row q that is not opaque (or `end`), shortening the skip links walked."""
+    r = p
+    while r < end and skip[q, r] > 0:
+        r += skip[q, r]
+    s = p
+    while s < r and s < end:
+        nxt = s + skip[q, s]
+        skip[q, s] = r - s
+        s = nxt
+    return r
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _clip(x0, x1, hi, t0, t1):
+    """Clip the parameter range [t0, t1] of the segment x0 -> x1 (x = x0 + t (x1 - x0)) to [0, hi]."""
+    d = x1 - x0
+    if d == 0.0:
+        if x0 < 0.0 or x0 > hi:
+            return 1.0, 0.0
+        return t0, t1
+    ta = (0.0 - x0) / d
+    tb = (hi - x0) / d
+    if ta > tb:
+        ta, tb = tb, ta
+    return max(t0, ta), min(t1, tb)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _first_at_least(alpha, beta, bound, p):
+    """The first pixel p' (searching around p) with alpha + beta p' >= bound, beta > 0."""
+    while p > -(1 << 30) and alpha + beta * (p - 1) >= bound:
+        p -= 1
+    while alpha + beta * p < bound:
+        p += 1
+    return p
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _pixel_range(af0, afs, ab0, abs_, hi):
+    """Pixels whose segment (front a = af0 + afs p, back a = ab0 + abs_ p) may meet [0, hi]."""
+    p_lo = math.ceil(min((0.0 - af0) / afs, (0.0 - ab0) / abs_)) - 1
+    p_hi = math.floor(max((hi - af0) / afs, (hi - ab0) / abs_)) + 2
+    return p_lo, p_hi
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _row_position(b, nb):
+    """(cell row, weight) of in-plane row coordinate b, clamped to the slice."""
+    b = min(max(b, 0.0), nb - 1.0)
+    ib = min(int(b), nb - 2)
+    return ib, b - ib
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _sample_row(vol, k, ib, fb, a, lo, scale):
+    """Table coordinate of the bilinear sample of slice k at (a, row ib + fb), a clamped."""
+    na = vol.shape[2]
+    a = min(max(a, 0.0), na - 1.0)
+    ia = min(int(a), na - 2)
+    fa = a - ia
+    v0 = vol[k, ib, ia] + (vol[k, ib, ia + 1] - vol[k, ib, ia]) * fa
+    v1 = vol[k, ib + 1, ia] + (vol[k, ib + 1, ia + 1] - vol[k, ib + 1, ia]) * fa
+    return (v0 + (v1 - v0) * fb - lo) * scale
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _composite_segment(rgba, q, p, xf, xb, df, sf, db, sb, frac, layer, table, table_back, lut,
+                       preintegrated, shading, bilinear_lookup):  # fmt: skip
+    """Composite one segment (front value xf, back value xb, as table coordinates) behind what
+    pixel (q, p) holds; returns whether anything was added."""
+    if preintegrated:
+        alpha = _lookup(table, layer, xf, xb, 3, bilinear_lookup)
+        if alpha <= 0.0:
+            return False
+        if shading:
+            spec_back = _lookup(table_back, layer, xf, xb, 3, bilinear_lookup)
+            spec = (alpha - spec_back) * sf + spec_back * sb
+            cr = _lookup(table, layer, xf, xb, 0, bilinear_lookup) * df \
+                + _lookup(table_back, layer, xf, xb, 0, bilinear_lookup) * db + spec
+            cg = _lookup(table, layer, xf, xb, 1, bilinear_lookup) * df \
+                + _lookup(table_back, layer, xf, xb, 1, bilinear_lookup) * db + spec
+            cb = _lookup(table, layer, xf, xb, 2, bilinear_lookup) * df \
+                + _lookup(table_back, layer, xf, xb, 2, bilinear_lookup) * db + spec
+            cr = min(max(cr, 0.0), alpha)
+            cg = min(max(cg, 0.0), alpha)
+            cb = min(max(cb, 0.0), alpha)
+        else:
+            cr = _lookup(table, layer, xf, xb, 0, bilinear_lookup)
+            cg = _lookup(table, layer, xf, xb, 1, bilinear_lookup)
+            cb = _lookup(table, layer, xf, xb, 2, bilinear_lookup)
+        if frac < 1.0:
+            corrected = -math.expm1(frac * math.log1p(-min(alpha, 1.0 - 1e-7)))
+            factor = corrected / alpha
+            cr *= factor
+            cg *= factor
+            cb *= factor
+            alpha = corrected
+        t = 1.0 - rgba[q, p, 3]
+        rgba[q, p, 0] += t * cr
+        rgba[q, p, 1] += t * cg
+        rgba[q, p, 2] += t * cb
+        rgba[q, p, 3] += t * alpha
+        return True
+    added = False
+    for half_ in range(2):
+        x = xf if half_ == 0 else xb
+        alpha = _lut(lut, layer, x, 3, bilinear_lookup)
+        if alpha <= 0.0:
+            continue
+        if frac < 1.0:
+            alpha = -math.expm1(frac * math.log1p(-min(alpha, 1.0 - 1e-7)))
+        cr = _lut(lut, layer, x, 0, bilinear_lookup)
+        cg = _lut(lut, layer, x, 1, bilinear_lookup)
+        cb = _lut(lut, layer, x, 2, bilinear_lookup)
+        if shading:
+            dd = df if half_ == 0 else db
+            ss = sf if half_ == 0 else sb
+            cr = min(max(cr * dd + ss, 0.0), 1.0)
+            cg = min(max(cg * dd + ss, 0.0), 1.0)
+            cb = min(max(cb * dd + ss, 0.0), 1.0)
+        ta = (1.0 - rgba[q, p, 3]) * alpha
+        rgba[q, p, 0] += ta * cr
+        rgba[q, p, 1] += ta * cg
+        rgba[q, p, 2] += ta * cb
+        rgba[q, p, 3] += ta
+        added = True
+    return added
+
+
+@njit(parallel=True, cache=True, error_model="numpy")
+def composite_slabs(
+    vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows,
+    rgba, buf_x, buf_d, buf_s, stamp, skip,
+    layers, per_pixel_layer, table, table_back, lut, preintegrated, bilinear_lookup, lo, scale,
+    offsets, starts, ends, use_runs, use_termination, term_alpha,
+    shading, light, half, ray_dirs, ka, kd, ks, power, gthr, inv_sp,
+    counters,
+):  # fmt: skip
+    """Composite the slabs between order[m - 1] and order[m] for m in [m0, m1) into `rgba`
+    (intermediate image, premultiplied RGBA float32). counters[q] += (segments composited,
+    pixels skipped as empty, pixels terminated)."""
+    nc, nb, na = vol.shape
+    width = rgba.shape[1]
+    inv_sub = 1.0 / sub
+    top_a = na - 1.0
+    top_b = nb - 1.0
+    for r in prange(rows.shape[0]):
+        q = rows[r]
+        n_comp = 0
+        n_empty = 0
+        n_term = 0
+        hx = half[0]
+        hy = half[1]
+        hz = half[2]
+        for m in range(max(m0, 1), m1):
+            kf = order[m - 1]
+            kb = order[m]
+            slab = min(kf, kb)
+            bf = alpha_b[kf] + beta_b[kf] * q
+            bb = alpha_b[kb] + beta_b[kb] * q
+            if max(bf, bb) < 0.0 or min(bf, bb) > top_b:
+                continue
+            row_inside = min(bf, bb) >= 0.0 and max(bf, bb) <= top_b
+            ibf, fbf = _row_position(bf, nb)
+            ibb, fbb = _row_position(bb, nb)
+            af0 = alpha_a[kf]
+            afs = beta_a[kf]
+            ab0 = alpha_a[kb]
+            abs_ = beta_a[kb]
+            p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, top_a)
+            p_lo = max(p_lo, 0)
+            p_hi = min(p_hi, width)
+            if p_lo >= p_hi:
+                continue
+            if use_runs:
+                row = min(max(int(math.floor(bf)), 0), nb - 2)
+                first = offsets[slab * (nb - 1) + row]
+                last = offsets[slab * (nb - 1) + row + 1]
+            else:
+                first = 0
+                last = 1
+            covered = 0
+            for run in range(first, last):
+                lo_p = p_lo
+                hi_p = p_hi
+                if use_runs:
+                    a_s = starts[run]
+                    a_e = ends[run]
+                    if a_s > 0:
+                        lo_p = max(lo_p, _first_at_least(af0, afs, a_s, int(math.ceil((a_s - af0) / afs))))
+                    if a_e < na - 1:
+                        hi_p = min(hi_p, _first_at_least(af0, afs, a_e, int(math.ceil((a_e - af0) / afs))))
+                    if lo_p >= hi_p:
+                        continue
+                    covered += hi_p - lo_p
+                p = lo_p
+                while True:
+                    if use_termination:
+                        p = _next_open(skip, q, p, hi_p)
+                    if p >= hi_p:
+                        break
+                    af = af0 + afs * p
+                    ab = ab0 + abs_ * p
+                    if row_inside and min(af, ab) >= 0.0 and max(af, ab) <= top_a:
+                        t0 = 0.0
+                        t1 = 1.0
+                    else:
+                        t0, t1 = _clip(af, ab, top_a, 0.0, 1.0)
+                        t0, t1 = _clip(bf, bb, top_b, t0, t1)
+                        if t1 <= t0:
+                            p += 1
+                            continue
+                    layer = layers[q, p] if per_pixel_layer else layers[0, 0]
+                    if shading and ray_dirs.shape[0] > 1:
+                        hx = light[0] - ray_dirs[q, p, 0]
+                        hy = light[1] - ray_dirs[q, p, 1]
+                        hz = light[2] - ray_dirs[q, p, 2]
+                        hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+                        if hn > 0.0:
+                            hx /= hn
+                            hy /= hn
+                            hz /= hn
+                    if sub == 1 and not shading:
+                        # one segment per slab, no lighting: the common case, kept lean
+                        plane = m - 1
+                        if stamp[q, p] == plane:
+                            xf = buf_x[q, p]
+                        else:
+                            xf = _sample_row(vol, kf, ibf, fbf, af, lo, scale)
+                        xb = _sample_row(vol, kb, ibb, fbb, ab, lo, scale)
+                        stamp[q, p] = plane + 1
+                        buf_x[q, p] = xb
+                        if xf == xf and xb == xb:
+                            n_comp += 1
+                            _composite_segment(rgba, q, p, xf, xb, 1.0, 0.0, 1.0, 0.0, t1 - t0, layer, table,
+                                               table_back, lut, preintegrated, False, bilinear_lookup)  # fmt: skip
+                            if use_termination and rgba[q, p, 3] >= term_alpha:
+                                skip[q, p] = 1
+                                n_term += 1
+                        p += 1
+                        continue
+                    for j in range(sub):
+                        u0 = max(j * inv_sub, t0)
+                        u1 = min((j + 1) * inv_sub, t1)
+                        if u1 <= u0:
+                            continue
+                        frac = (u1 - u0) * sub
+                        plane = (m - 1) * sub + j
+                        w0 = j * inv_sub
+                        w1 = (j + 1) * inv_sub if j + 1 < sub else 1.0
+                        if stamp[q, p] == plane:
+                            xf = buf_x[q, p]
+                            df = buf_d[q, p]
+                            sf = buf_s[q, p]
+                        else:
+                            xf = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), lo, scale)
+                            df = 1.0
+                            sf = 0.0
+                            if shading:
+                                df, sf = _plane_light(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf),
+                                                      inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
+                        xb = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), lo, scale)
+                        db = 1.0
+                        sb = 0.0
+                        if shading:
+                            db, sb = _plane_light(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf),
+                                                  inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
+                        stamp[q, p] = plane + 1
+                        buf_x[q, p] = xb
+                        buf_d[q, p] = db
+                        buf_s[q, p] = sb
+                        if xf != xf or xb != xb:
+                            continue
+                        n_comp += 1
+                        _composite_segment(rgba, q, p, xf, xb, df, sf, db, sb, frac, layer, table, table_back,
+                                           lut, preintegrated, shading, bilinear_lookup)  # fmt: skip
+                        if use_termination and rgba[q, p, 3] >= term_alpha:
+                            skip[q, p] = 1
+                            n_term += 1
+                            break
+                    p += 1
+            if use_runs:
+                n_empty += (p_hi - p_lo) - covered
+        counters[q, 0] += n_comp
+        counters[q, 1] += n_empty
+        counters[q, 2] += n_term
+
+
+@njit(parallel=True, cache=True, error_model="numpy")
+def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows, acc, mode, lengths):
+    """Maximum, minimum or length-weighted average of the values along each intermediate ray, over
+    the segments inside the volume whose ends are finite: acc[q, p] = (value, weight)."""
+    nc, nb, na = vol.shape
+    width = acc.shape[1]
+    inv_sub = 1.0 / sub
+    for r in prange(rows.shape[0]):
+        q = rows[r]
+        for m in range(max(m0, 1), m1):
+            kf = order[m - 1]
+            kb = order[m]
+            bf = alpha_b[kf] + beta_b[kf] * q
+            bb = alpha_b[kb] + beta_b[kb] * q
+            if max(bf, bb) < 0.0 or min(bf, bb) > nb - 1.0:
+                continue
+            af0 = alpha_a[kf]
+            afs = beta_a[kf]
+            ab0 = alpha_a[kb]
+            abs_ = beta_a[kb]
+            p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, na - 1.0)
+            for p in range(max(p_lo, 0), min(p_hi, width)):
+                af = af0 + afs * p
+                ab = ab0 + abs_ * p
+                t0, t1 = _clip(af, ab, na - 1.0, 0.0, 1.0)
+                t0, t1 = _clip(bf, bb, nb - 1.0, t0, t1)
+                if t1 <= t0:
+                    continue
+                for j in range(sub):
+                    u0 = max(j * inv_sub, t0)
+                    u1 = min((j + 1) * inv_sub, t1)
+                    if u1 <= u0:
+                        continue
+                    w0 = j * inv_sub
+                    w1 = (j + 1) * inv_sub if j + 1 < sub else 1.0
+                    s0 = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), 0.0, 1.0)
+                    s1 = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), 0.0, 1.0)
+                    if s0 != s0 or s1 != s1:
+                        continue
+                    length = (u1 - u0) * lengths[q, p]
+                    if mode == AVERAGE:
+                        acc[q, p, 0] += 0.5 * (s0 + s1) * length
+                        acc[q, p, 1] += length
+                    else:
+                        hi_v = max(s0, s1) if mode == MAXIMUM else min(s0, s1)
+                        if acc[q, p, 1] == 0.0:
+                            acc[q, p, 0] = hi_v
+                        elif mode == MAXIMUM:
+                            acc[q, p, 0] = max(acc[q, p, 0], hi_v)
+                        else:
+                            acc[q, p, 0] = min(acc[q, p, 0], hi_v)
+                        acc[q, p, 1] += max(length, 1e-300)

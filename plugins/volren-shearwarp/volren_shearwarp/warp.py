@@ -1,0 +1,75 @@
+"""The final 2D warp: each output pixel's ray meets the intermediate image's plane at one point,
+where the composited intermediate image is resampled bilinearly.
+
+Why per output pixel (not per intermediate pixel): it is exactly DESIGN.md's pixel ray through
+NDC ((i + .5) / w * 2 - 1, 1 - (j + .5) / h * 2), so the image lands where every other renderer
+puts it; the map is a 3x3 matrix (`factorization.WarpMap`), affine for a parallel camera and
+projective under perspective. Outside the intermediate image is transparent black.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+from numpy.typing import NDArray
+
+
+@njit(parallel=True, cache=True, error_model="numpy")
+def warp_image(inter, hom, sign, a0, b0, scale, out):
+    """out[j, i] = bilinear sample of `inter` (premultiplied RGBA) where pixel (i, j)'s ray meets the
+    plane; then clamped to the output rules (values in [0, 1], colour <= alpha)."""
+    height, width = out.shape[0], out.shape[1]
+    ih, iw = inter.shape[0], inter.shape[1]
+    for j in prange(height):
+        y = 1.0 - (j + 0.5) / height * 2.0
+        for i in range(width):
+            x = (i + 0.5) / width * 2.0 - 1.0
+            for c in range(4):
+                out[j, i, c] = 0.0
+            hw = hom[2, 0] * x + hom[2, 1] * y + hom[2, 2]
+            if not (hw * sign > 0.0):
+                continue
+            a = (hom[0, 0] * x + hom[0, 1] * y + hom[0, 2]) / hw
+            b = (hom[1, 0] * x + hom[1, 1] * y + hom[1, 2]) / hw
+            p = (a - a0) * scale
+            q = (b - b0) * scale
+            if not (p > -1.0 and p < iw and q > -1.0 and q < ih):
+                continue
+            p0 = int(math.floor(p))
+            q0 = int(math.floor(q))
+            fp = p - p0
+            fq = q - q0
+            r = 0.0
+            g = 0.0
+            bl = 0.0
+            al = 0.0
+            for dq in range(2):
+                qq = q0 + dq
+                if qq < 0 or qq >= ih:
+                    continue
+                wq = fq if dq == 1 else 1.0 - fq
+                for dp in range(2):
+                    pp = p0 + dp
+                    if pp < 0 or pp >= iw:
+                        continue
+                    w = wq * (fp if dp == 1 else 1.0 - fp)
+                    r += w * inter[qq, pp, 0]
+                    g += w * inter[qq, pp, 1]
+                    bl += w * inter[qq, pp, 2]
+                    al += w * inter[qq, pp, 3]
+            al = min(max(al, 0.0), 1.0)
+            out[j, i, 0] = min(max(r, 0.0), al)
+            out[j, i, 1] = min(max(g, 0.0), al)
+            out[j, i, 2] = min(max(bl, 0.0), al)
+            out[j, i, 3] = al
+
+
+def warp(inter: NDArray[np.float32], homography: NDArray[np.float64], sign: float, origin_ab: tuple[float, float],
+         scale: float, width: int, height: int) -> NDArray[np.float32]:  # fmt: skip
+    """The output image (height, width, 4) float32 from the intermediate image."""
+    out = np.empty((height, width, 4), np.float32)
+    warp_image(inter, np.ascontiguousarray(homography), float(sign), float(origin_ab[0]), float(origin_ab[1]),
+               float(scale), out)  # fmt: skip
+    return out
