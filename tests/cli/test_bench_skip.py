@@ -129,8 +129,10 @@ def test_cli_writes_csv_and_markdown(tmp_path, capsys, opengl):
     ):
         assert column in table[0], column
     found = {(r["dataset"], r["renderer"], r["variant"]) for r in table}
-    # phantom_ct: slicer (6 rows) and vtk (3); hollow_cylinder: tetra (6) and vtk without shading (2)
-    assert len(table) == 17 and ("hollow_cylinder", "vtk", "shading") not in found
+    # phantom_ct: slicer (6 rows), vtk (3) and the shearwarp plugin (6); hollow_cylinder: tetra (6)
+    # and vtk without shading (2)
+    assert len(table) == 23 and ("hollow_cylinder", "vtk", "shading") not in found
+    assert ("phantom_ct", "shearwarp", "no_early_termination") in found
     assert ("phantom_ct", "slicer", "no_empty_space") in found and (
         "hollow_cylinder",
         "tetra",

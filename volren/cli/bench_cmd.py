@@ -44,7 +44,7 @@ def add_skip_parser(kinds) -> None:
     k.add_argument("--samples", action="store_true", help="the bundled samples instead of the shared datasets")
     k.add_argument("--datasets", help="comma-separated (default: every shared dataset, or every sample)")
     k.add_argument("--styles", help="TF styles (default smooth,spiky,opaque)")
-    k.add_argument("--renderers", default="slicer,tetra,vtk", help="comma-separated (default: all three)")
+    k.add_argument("--renderers", help="comma-separated of slicer, tetra, vtk, shearwarp (default: those installed)")
     k.add_argument("--size", type=int, help="image side in pixels (default 512; 128 with --quick)")
     k.add_argument("--frames", type=int, help="timed frames per row, median (default 5; 3 with --quick)")
     k.add_argument("--turn", type=float, default=1.0, help="azimuth degrees between timed frames (0: fixed)")
@@ -66,7 +66,12 @@ def run_skip(args: argparse.Namespace) -> int:
     finite = math.isfinite(args.turn) and math.isfinite(args.step)
     if size < 8 or frames < 1 or not (finite and args.step > 0):
         raise VolrenError("--size must be at least 8, --frames at least 1, --turn finite and --step positive")
-    renderers = [r for r in args.renderers.split(",") if r]
+    if args.renderers is None:
+        from volren.renderers.registry import registry
+
+        renderers = [r for r in skipping.RENDERERS if r in registry.names()]
+    else:
+        renderers = [r for r in args.renderers.split(",") if r]
     if not renderers or set(renderers) - set(skipping.RENDERERS):
         names = ", ".join(skipping.RENDERERS)
         raise VolrenError(f"--renderers must name some of {names}, got {args.renderers!r}")
