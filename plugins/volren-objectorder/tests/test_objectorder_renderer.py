@@ -1,0 +1,254 @@
+"""The object-order plugin: the conformance kit, the same samples as a ray caster (a numpy march at
+the same positions), the skipping techniques changing nothing they should not, the octree reused
+on colour edits, and bad input (thin, constant, NaN, anisotropic volumes, axis and 45 degree views)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from volren_objectorder import ObjectOrderRenderer
+from volren_objectorder.patterns import pixel_offsets
+
+from volren.errors import VolrenError
+from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume
+from volren.model.crop import crop_volume
+from volren.testing import conformance_test, image_error, oracles
+from volren.testing.reference_images import reference_image
+
+# one pytest test per check of the kit
+test_conformance = conformance_test(ObjectOrderRenderer, quick=True)
+
+SMOOTH_TF = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.6]], 1.5)
+# opacity zero below 1.37 and above 2.23: much of the field is transparent (breakpoints off the data)
+SHELL_TF = TransferFunction1D([[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.37, 0.0], [1.61, 0.7], [2.23, 0.0]], 1.0)
+OPAQUE_TF = TransferFunction1D([[-2, 1, 1, 1], [4, 1, 0.4, 0.2]], [[-2, 0.0], [0.3, 1.0]], 1.0)
+
+
+def field(shape=(14, 16, 18), spacing=(1.0, 1.0, 1.0)) -> UniformVolume:
+    z, y, x = np.mgrid[0 : shape[0], 0 : shape[1], 0 : shape[2]]
+    values = np.sin(x / 3.0) + np.cos(y / 4.0) + z / 8.0
+    return UniformVolume(values.astype(np.float32), spacing=spacing)
+
+
+def draw(volume, tf, camera, size=(40, 32), **settings) -> tuple[np.ndarray, ObjectOrderRenderer]:
+    renderer = ObjectOrderRenderer()
+    renderer.set_volume(volume)
+    renderer.set_transfer_function(tf)
+    renderer.set_settings(RenderSettings(**settings))
+    image = renderer.render(camera, *size)
+    assert image.dtype == np.float32 and np.all(np.isfinite(image))
+    assert image.min() >= 0 and image.max() <= 1 and np.all(image[..., :3] <= image[..., 3:4] + 1e-6)
+    return image, renderer
+
+
+# ------------------------------------------------------------------- same samples as a ray caster
+def numpy_march(volume: UniformVolume, tf: TransferFunction1D, camera: Camera, w: int, h_px: int, step: float,
+                offsets: np.ndarray) -> np.ndarray:  # fmt: skip
+    """A plain ray caster: every pixel ray clipped to the box and the clipping planes, cut into
+    segments of the step from its entry (the last shorter), sample k at fraction o of its segment,
+    trilinear, post-classified with the opacity corrected to the segment's length, front to back."""
+    origins, dirs = camera.pixel_rays(w, h_px)
+    origins, dirs = origins.reshape(-1, 3), dirs.reshape(-1, 3)
+    b = np.asarray(volume.bounds)
+    lo, hi = b[0::2], b[1::2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ta, tb = (lo - origins) / dirs, (hi - origins) / dirs
+    flat = dirs == 0
+    inside = (origins >= lo) & (origins <= hi)
+    t_in = np.where(flat, np.where(inside, -np.inf, np.inf), np.minimum(ta, tb)).max(axis=1)
+    t_out = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(ta, tb)).min(axis=1)
+    near, far = camera.clipping_range
+    t0 = np.maximum(t_in, 0.0)
+    t1 = np.minimum(t_out, (far - near) / (dirs @ camera.direction))
+    hstep = step * volume.characteristic_length
+    values = volume.values.astype(np.float64)
+    dims = np.asarray(volume.dimensions)
+    out = np.zeros((len(origins), 4))
+    for p in range(len(origins)):
+        length = t1[p] - t0[p]
+        if not length > 0:
+            continue
+        n_full = int(np.floor(length / hstep))
+        rem = length - n_full * hstep
+        seg = [(t0[p] + (k + offsets[p]) * hstep, hstep) for k in range(n_full)]
+        if rem > 1e-9 * hstep:
+            seg.append((t0[p] + n_full * hstep + offsets[p] * rem, rem))
+        tr = 1.0
+        for t, seg_len in seg:
+            idx = (origins[p] + t * dirs[p] - np.asarray(volume.origin)) / np.asarray(volume.spacing)
+            base = np.clip(np.floor(idx), 0, dims - 2).astype(int)
+            f = np.clip(idx - base, 0, 1)
+            s = 0.0
+            for c in range(8):
+                d = np.array([c & 1, (c >> 1) & 1, c >> 2])
+                wgt = np.prod(np.where(d == 1, f, 1 - f))
+                s += wgt * values[base[2] + d[2], base[1] + d[1], base[0] + d[0]]
+            rgb, a = tf.sample(s)
+            alpha = 1 - (1 - min(float(a), 1 - 1e-6)) ** (seg_len / tf.opacity_unit_distance)
+            out[p, :3] += tr * alpha * rgb
+            out[p, 3] += tr * alpha
+            tr *= 1 - alpha
+    return out.reshape(h_px, w, 4)
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+@pytest.mark.parametrize("offsets", ["interleaved", "random"])
+def test_the_samples_are_a_ray_casters(parallel, offsets):
+    """Object order, octree skipping and all, composites exactly the samples of a ray caster at the
+    same step and offsets: the images agree to float precision."""
+    volume = field((7, 8, 9), spacing=(1.0, 1.3, 0.8))
+    camera = Camera.orbit(volume.bounds, 35, 25, zoom=1.2, parallel=parallel)
+    w, h = 20, 16
+    image, _ = draw(volume, SHELL_TF, camera, (w, h), step=0.37,
+                    options={"depth_offsets": offsets, "jitter_seed": 3, "hidden_volume_removal": False})  # fmt: skip
+    expected = numpy_march(volume, SHELL_TF, camera, w, h, 0.37, pixel_offsets(offsets, w, h, 3))
+    assert expected[..., 3].max() > 0.3
+    np.testing.assert_allclose(image, expected, atol=2e-6)
+
+
+# ------------------------------------------------------------------------------ skipping
+@pytest.mark.parametrize("parallel", [False, True])
+@pytest.mark.parametrize("pre", [False, True])
+def test_octree_skipping_changes_no_pixel(parallel, pre):
+    volume = field((16, 16, 16))
+    camera = Camera.orbit(volume.bounds, 35, 25, parallel=parallel)
+    common = {"hidden_volume_removal": False}
+    on, r_on = draw(volume, SHELL_TF, camera, preintegration=pre, options={**common, "octree_skipping": True})
+    off, r_off = draw(volume, SHELL_TF, camera, preintegration=pre, options={**common, "octree_skipping": False})
+    assert r_on.last_frame.counters["cells"] < 0.8 * r_off.last_frame.counters["cells"]
+    if pre:  # a segment that starts in a skipped cell fetches its front sample: rounding only
+        np.testing.assert_allclose(on, off, atol=1e-6)
+    else:
+        np.testing.assert_array_equal(on, off)
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_hidden_volume_removal_skips_cells_and_changes_little(parallel):
+    volume = field((24, 24, 24))
+    camera = Camera.orbit(volume.bounds, 30, 20, parallel=parallel)
+    term = 0.98
+    on, r_on = draw(volume, OPAQUE_TF, camera, (48, 48), options={"termination_alpha": term})
+    off, r_off = draw(volume, OPAQUE_TF, camera, (48, 48), options={"hidden_volume_removal": False})
+    c_on, c_off = r_on.last_frame.counters, r_off.last_frame.counters
+    assert c_on["cells_occluded"] > 0 and c_on["occluded_ratio"] > 0.3
+    assert c_on["cells"] < c_off["cells"] and c_on["samples"] < c_off["samples"]
+    assert c_off["cells_occluded"] == 0
+    assert np.abs(on - off).max() <= 1 - term + 1e-6
+
+
+def test_a_colour_edit_reuses_the_octree_and_an_opacity_edit_reclassifies_it():
+    volume = field()
+    tf = SHELL_TF.copy()
+    camera = Camera.orbit(volume.bounds, 30, 20, parallel=True)
+    renderer = ObjectOrderRenderer()
+    renderer.set_volume(volume)
+    renderer.set_transfer_function(tf)
+    renderer.set_settings(RenderSettings(options={"hidden_volume_removal": False}))
+    renderer.render(camera, 24, 24)
+    octree = renderer.octree
+    (first,) = octree._cache.values()
+    before = renderer.last_frame.counters["cells"]
+    tf.set_color_points([[-2, 0.0, 1.0, 0.0], [4, 1.0, 0.0, 1.0]])
+    renderer.render(camera, 24, 24)
+    assert renderer.octree is octree and list(octree._cache.values()) == [first]  # nothing rebuilt or redone
+    tf.set_opacity_points([[2.5, 0.0], [4, 0.6]])
+    renderer.render(camera, 24, 24)
+    assert renderer.octree is octree and len(octree._cache) == 2
+    assert renderer.last_frame.counters["cells"] != before
+
+
+# ------------------------------------------------------------------------------ accuracy
+@pytest.mark.parametrize("parallel", [False, True])
+def test_a_smooth_tf_matches_the_reference_shaded_and_preintegrated(parallel):
+    volume = field()
+    camera = Camera.orbit(volume.bounds, 30, 20, parallel=parallel)
+    for settings in ({}, {"preintegration": True}, {"shade": True}, {"shade": True, "preintegration": True}):
+        truth = reference_image(volume, SMOOTH_TF, camera, 40, 32, RenderSettings(**settings))
+        image, _ = draw(volume, SMOOTH_TF, camera, **settings)
+        assert image_error(image, truth).rmse < 0.01, settings
+
+
+def test_preintegration_beats_post_classification_on_a_spiky_tf():
+    volume = field((12, 12, 12))
+    spiky = TransferFunction1D([[-2, 0.9, 0.9, 0.2], [4, 0.2, 0.6, 1.0]],
+                               [[0.9, 0.0], [1.0, 0.9], [1.1, 0.0]], opacity_unit_distance=1.0)  # fmt: skip
+    camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.2)
+    truth = reference_image(volume, spiky, camera, 48, 48)
+    pre, _ = draw(volume, spiky, camera, (48, 48), preintegration=True, step=1.0)
+    post, _ = draw(volume, spiky, camera, (48, 48), preintegration=False, step=1.0)
+    assert 3 * image_error(pre, truth).rmse <= image_error(post, truth).rmse
+
+
+# ----------------------------------------------------------------------------- bad input
+def test_a_grid_two_samples_thick_renders_along_every_axis():
+    for shape in [(2, 9, 9), (9, 2, 9), (9, 9, 2)]:
+        volume = UniformVolume(np.random.default_rng(1).random(shape).astype(np.float32))
+        tf = TransferFunction1D([[0, 1, 0.5, 0.2]], [[0, 0.2], [1, 0.9]], 0.3)
+        for parallel in (False, True):
+            for pre in (False, True):
+                image, _ = draw(volume, tf, Camera.orbit(volume.bounds, 30, 20, parallel=parallel), preintegration=pre)
+                assert image[..., 3].max() > 0
+
+
+def test_a_constant_volume_draws_the_closed_form():
+    volume = UniformVolume(np.full((6, 7, 8), 1.0, np.float32), spacing=(0.9, 1.1, 1.0))
+    tf = TransferFunction1D.constant(0.3, (0.4, 0.7, 0.2), opacity_unit_distance=0.8)
+    for parallel in (False, True):
+        camera = Camera.orbit(volume.bounds, 25, 15, zoom=1.3, parallel=parallel)
+        expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, 40, 40, volume.bounds),
+                                             (0.4, 0.7, 0.2), 0.3, 0.8)  # fmt: skip
+        for pre in (False, True):
+            image, _ = draw(volume, tf, camera, (40, 40), preintegration=pre)
+            assert image_error(image, expected).rmse < 1e-4
+
+
+def test_nan_cells_are_transparent_and_the_rest_draws():
+    values = np.ones((8, 8, 8), np.float32)
+    values[:, :, 5:] = np.nan
+    values[2, 2, 2] = np.nan
+    volume = UniformVolume(values)
+    tf = TransferFunction1D.constant(0.4, (0.3, 0.6, 0.9))
+    for mode in ("composite", "maximum", "minimum", "average"):
+        for pre in (False, True) if mode == "composite" else (False,):
+            image, _ = draw(volume, tf, Camera.orbit(volume.bounds, 30, 20), blend_mode=mode, preintegration=pre)
+            assert image[..., 3].max() > 0.1
+
+
+@pytest.mark.parametrize("spacing", [(1.0, 1.0, 100.0), (0.01, 1.0, 1.0)])
+def test_anisotropic_spacing_up_to_1_to_100(spacing):
+    volume = field((5, 16, 16), spacing=spacing)
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    truth = reference_image(volume, SMOOTH_TF, camera, 32, 32)
+    for pre in (False, True):
+        image, _ = draw(volume, SMOOTH_TF, camera, (32, 32), preintegration=pre)
+        assert image[..., 3].max() > 0.05
+        assert image_error(image, truth).rmse < 0.02
+
+
+@pytest.mark.parametrize("azimuth, elevation", [(0, 0), (90, 0), (0, 90), (45, 0), (45, 35.26), (180, 0)])
+@pytest.mark.parametrize("parallel", [False, True])
+def test_axis_and_diagonal_views_match_the_reference(azimuth, elevation, parallel):
+    """Rays along grid planes (axis views) and through cell edges and corners (45 degrees)."""
+    volume = field((9, 10, 11))
+    camera = Camera.orbit(volume.bounds, azimuth, elevation, parallel=parallel)
+    truth = reference_image(volume, SMOOTH_TF, camera, 24, 24)
+    image, _ = draw(volume, SMOOTH_TF, camera, (24, 24))
+    assert image_error(image, truth).rmse < 0.01
+
+
+def test_a_cropped_volume_renders_its_part():
+    volume = field()
+    cropped = crop_volume(volume, (2.0, 9.5, 0.0, 15.0, 3.0, 12.0))
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    image, _ = draw(cropped, SMOOTH_TF, camera, (32, 32))
+    truth = reference_image(cropped, SMOOTH_TF, camera, 32, 32)
+    assert image_error(image, truth).rmse < 0.01
+
+
+@pytest.mark.parametrize("options", [{"octree_skipping": 1}, {"hidden_volume_removal": "no"}, {"termination_alpha": 2},
+                                     {"depth_offsets": "halton"}, {"jitter_seed": -1}, {"table_size": 3},
+                                     {"band_rows": 0}, {"nope": 1}])  # fmt: skip
+def test_bad_options_are_one_line_errors(options):
+    with pytest.raises(VolrenError) as info:
+        ObjectOrderRenderer().set_settings(RenderSettings(options=options))
+    assert "\n" not in str(info.value)

@@ -1,0 +1,520 @@
+"""The numba kernels: object-order traversal of one band of image rows, cell by cell.
+
+Why one kernel per band: a band's pixels are written by nobody else, so bands run in parallel
+(prange) without locks, each with its own occlusion map; each band walks the octree front to back
+and visits only the nodes whose footprint meets its rows (the top levels are walked by every
+band, a few hundred nodes). Inside a leaf cell its eight corners (and, when shading, their
+central-difference gradients) are loaded once and shared by every ray of its footprint, the point
+of object order (the seed's section 3).
+
+Per pixel of a cell's footprint: the exact slab test gives the ray's interval [tlo, thi) in the
+cell; the pixel's depth indicator (`nextk`, its next sample) is moved past samples of skipped cells
+and the samples with t in [tlo, thi) are taken, trilinearly, in order. Consecutive cells of a ray
+share the plane crossing they meet at (computed by one formula from the plane's index), so every
+sample of a ray falls in exactly one cell: the same samples as a ray caster's.
+
+Compositing (front to back, premultiplied): post-classified, sample k stands for its segment of
+length h (the last one `rem`), opacity 1 - (1 - a)^(L / d_u); pre-integrated, sample k closes the
+segment from sample k - 1 (table lookup, length-corrected when it is not h), and the pieces from
+the ray's entry point on the box to the first sample and from the last to the exit point too. Maximum / minimum take
+the samples and the ray's entry and exit points of each cell; average the length-weighted samples.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from volren_objectorder.occlusion import hom_covered, hom_finish, hom_init, hom_layout
+from volren_objectorder.traversal import child_order_mask, footprint
+
+COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
+MAX_OPACITY = 1.0 - 1e-6
+
+# indices into the float parameter array
+F_H, F_DU, F_LO, F_SCALE, F_KA, F_KD, F_KS, F_P, F_GTHR, F_TERM, F_LX, F_LY, F_LZ, F_ISX, F_ISY, F_ISZ = range(16)
+# indices into the integer parameter array
+I_MODE, I_PRE, I_SHADE, I_HVR = range(4)
+# per-band counters
+S_NODES, S_CELLS, S_OCCLUDED_CELLS, S_OCCLUDED_NODES, S_SAMPLES, S_SATURATED = range(6)
+N_STATS = 6
+
+
+@njit(cache=True)
+def tf_lookup(xs, tab, s):
+    """Colour and opacity of the piecewise-linear TF (rows of `tab` at `xs`) at s."""
+    n = xs.shape[0]
+    if s <= xs[0]:
+        return tab[0, 0], tab[0, 1], tab[0, 2], tab[0, 3]
+    if s >= xs[n - 1]:
+        return tab[n - 1, 0], tab[n - 1, 1], tab[n - 1, 2], tab[n - 1, 3]
+    a = 0
+    b = n - 1
+    while b - a > 1:
+        m = (a + b) >> 1
+        if xs[m] <= s:
+            a = m
+        else:
+            b = m
+    w = xs[b] - xs[a]
+    f = (s - xs[a]) / w if w > 0.0 else 1.0
+    return (tab[a, 0] + f * (tab[b, 0] - tab[a, 0]), tab[a, 1] + f * (tab[b, 1] - tab[a, 1]),
+            tab[a, 2] + f * (tab[b, 2] - tab[a, 2]), tab[a, 3] + f * (tab[b, 3] - tab[a, 3]))  # fmt: skip
+
+
+@njit(cache=True)
+def _point_gradient(vol, x, y, z, fp):
+    """Central differences at grid point (x, y, z) in world units, one-sided at the borders."""
+    nz, ny, nx = vol.shape
+    if x == 0:
+        gx = (vol[z, y, 1] - vol[z, y, 0]) * fp[F_ISX]
+    elif x == nx - 1:
+        gx = (vol[z, y, x] - vol[z, y, x - 1]) * fp[F_ISX]
+    else:
+        gx = (vol[z, y, x + 1] - vol[z, y, x - 1]) * 0.5 * fp[F_ISX]
+    if y == 0:
+        gy = (vol[z, 1, x] - vol[z, 0, x]) * fp[F_ISY]
+    elif y == ny - 1:
+        gy = (vol[z, y, x] - vol[z, y - 1, x]) * fp[F_ISY]
+    else:
+        gy = (vol[z, y + 1, x] - vol[z, y - 1, x]) * 0.5 * fp[F_ISY]
+    if z == 0:
+        gz = (vol[1, y, x] - vol[0, y, x]) * fp[F_ISZ]
+    elif z == nz - 1:
+        gz = (vol[z, y, x] - vol[z - 1, y, x]) * fp[F_ISZ]
+    else:
+        gz = (vol[z + 1, y, x] - vol[z - 1, y, x]) * 0.5 * fp[F_ISZ]
+    return gx, gy, gz
+
+
+@njit(cache=True)
+def _load_cell(vol, i, j, k, shade, fp, c8, g8):
+    """The eight corner values (bit 0: +x, bit 1: +y, bit 2: +z) and, when shading, gradients."""
+    for c in range(8):
+        x = i + (c & 1)
+        y = j + ((c >> 1) & 1)
+        z = k + (c >> 2)
+        c8[c] = vol[z, y, x]
+        if shade:
+            gx, gy, gz = _point_gradient(vol, x, y, z, fp)
+            g8[c, 0] = gx
+            g8[c, 1] = gy
+            g8[c, 2] = gz
+
+
+@njit(cache=True)
+def _trilinear(c8, fx, fy, fz):
+    x00 = c8[0] + fx * (c8[1] - c8[0])
+    x10 = c8[2] + fx * (c8[3] - c8[2])
+    x01 = c8[4] + fx * (c8[5] - c8[4])
+    x11 = c8[6] + fx * (c8[7] - c8[6])
+    y0 = x00 + fy * (x10 - x00)
+    y1 = x01 + fy * (x11 - x01)
+    return y0 + fz * (y1 - y0)
+
+
+@njit(cache=True)
+def _trilinear_g(g8, comp, fx, fy, fz):
+    x00 = g8[0, comp] + fx * (g8[1, comp] - g8[0, comp])
+    x10 = g8[2, comp] + fx * (g8[3, comp] - g8[2, comp])
+    x01 = g8[4, comp] + fx * (g8[5, comp] - g8[4, comp])
+    x11 = g8[6, comp] + fx * (g8[7, comp] - g8[6, comp])
+    y0 = x00 + fy * (x10 - x00)
+    y1 = x01 + fy * (x11 - x01)
+    return y0 + fz * (y1 - y0)
+
+
+@njit(cache=True)
+def _clamp01(x):
+    return 0.0 if x < 0.0 else (1.0 if x > 1.0 else x)
+
+
+@njit(cache=True)
+def _locate(vol, px, py, pz):
+    """The cell holding index point (px, py, pz) and the point's local coordinates in it."""
+    nz, ny, nx = vol.shape
+    i = min(max(int(math.floor(px)), 0), nx - 2)
+    j = min(max(int(math.floor(py)), 0), ny - 2)
+    k = min(max(int(math.floor(pz)), 0), nz - 2)
+    return i, j, k, _clamp01(px - i), _clamp01(py - j), _clamp01(pz - k)
+
+
+@njit(cache=True)
+def _light(gx, gy, gz, hx, hy, hz, fp):
+    """(diffuse factor, specular term) of Blinn-Phong with a headlight (two-sided, DESIGN.md);
+    (1, 0) where the gradient is about zero or not finite: no shading there."""
+    mag = math.sqrt(gx * gx + gy * gy + gz * gz)
+    if not (mag > fp[F_GTHR]) or not math.isfinite(mag):
+        return 1.0, 0.0
+    nx = -gx / mag
+    ny = -gy / mag
+    nz = -gz / mag
+    ndl = nx * fp[F_LX] + ny * fp[F_LY] + nz * fp[F_LZ]
+    if ndl < 0.0:
+        nx, ny, nz, ndl = -nx, -ny, -nz, -ndl
+    ndh = nx * hx + ny * hy + nz * hz
+    return fp[F_KA] + fp[F_KD] * ndl, fp[F_KS] * max(ndh, 0.0) ** fp[F_P]
+
+
+@njit(cache=True)
+def _over(rgba, p, r, g, b, a):
+    """Front-to-back over of premultiplied (r, g, b, a) into pixel p."""
+    t = 1.0 - rgba[p, 3]
+    rgba[p, 0] += t * r
+    rgba[p, 1] += t * g
+    rgba[p, 2] += t * b
+    rgba[p, 3] += t * a
+
+
+@njit(cache=True)
+def _post(rgba, p, xs, tab, s, length, fd, sp, fp):
+    """A post-classified piece of `length` at value s, shaded with (fd, sp)."""
+    if length <= 0.0:
+        return
+    r, g, b, a = tf_lookup(xs, tab, s)
+    if a <= 0.0:
+        return
+    alpha = -math.expm1(length / fp[F_DU] * math.log1p(-min(a, MAX_OPACITY)))
+    r = _clamp01(r * fd + sp)
+    g = _clamp01(g * fd + sp)
+    b = _clamp01(b * fd + sp)
+    _over(rgba, p, r * alpha, g * alpha, b * alpha, alpha)
+
+
+@njit(cache=True)
+def _bilinear(table, fi, fj, c):
+    n = table.shape[0]
+    i0 = min(int(fi), n - 2)
+    j0 = min(int(fj), n - 2)
+    wi = fi - i0
+    wj = fj - j0
+    return ((1.0 - wi) * ((1.0 - wj) * table[i0, j0, c] + wj * table[i0, j0 + 1, c])
+            + wi * ((1.0 - wj) * table[i0 + 1, j0, c] + wj * table[i0 + 1, j0 + 1, c]))  # fmt: skip
+
+
+@njit(cache=True)
+def _segment(rgba, p, sf, sb, length, fd_f, sp_f, fd_b, sp_b, shade, table, front, back, fp):
+    """A pre-integrated segment from value sf (front) to sb (back), `length` long; lit by
+    interpolated pre-integrated lighting (Lum et al.) when shading."""
+    n = table.shape[0] if not shade else front.shape[0]
+    fi = min(max((sf - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
+    fj = min(max((sb - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
+    if shade:
+        a = _bilinear(front, fi, fj, 3)
+        if a <= 0.0:
+            return
+        sb_spec = _bilinear(back, fi, fj, 3)
+        sf_spec = a - sb_spec
+        spec = sf_spec * sp_f + sb_spec * sp_b
+        r = _bilinear(front, fi, fj, 0) * fd_f + _bilinear(back, fi, fj, 0) * fd_b + spec
+        g = _bilinear(front, fi, fj, 1) * fd_f + _bilinear(back, fi, fj, 1) * fd_b + spec
+        b = _bilinear(front, fi, fj, 2) * fd_f + _bilinear(back, fi, fj, 2) * fd_b + spec
+    else:
+        a = _bilinear(table, fi, fj, 3)
+        if a <= 0.0:
+            return
+        r = _bilinear(table, fi, fj, 0)
+        g = _bilinear(table, fi, fj, 1)
+        b = _bilinear(table, fi, fj, 2)
+    h = fp[F_H]
+    if abs(length - h) > 1e-9 * h:  # opacity and colour correction to this length
+        ratio = length / h
+        corrected = -math.expm1(ratio * math.log1p(-min(a, MAX_OPACITY)))
+        scale = corrected / a
+        r, g, b, a = r * scale, g * scale, b * scale, corrected
+    _over(rgba, p, min(max(r, 0.0), a), min(max(g, 0.0), a), min(max(b, 0.0), a), a)
+
+
+@njit(cache=True)
+def _fetch(vol, px, py, pz):
+    """The trilinear value at index point (px, py, pz); NaN when a corner of its cell is not finite."""
+    i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
+    c8 = np.empty(8)
+    for c in range(8):
+        v = vol[k + (c >> 2), j + ((c >> 1) & 1), i + (c & 1)]
+        if not np.isfinite(v):
+            return np.nan
+        c8[c] = v
+    return _trilinear(c8, fx, fy, fz)
+
+
+@njit(cache=True)
+def _fetch_light(vol, px, py, pz, hx, hy, hz, fp):
+    i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
+    c8 = np.empty(8)
+    g8 = np.empty((8, 3))
+    _load_cell(vol, i, j, k, True, fp, c8, g8)
+    return _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz), _trilinear_g(g8, 2, fx, fy, fz),
+                  hx, hy, hz, fp)  # fmt: skip
+
+
+@njit(cache=True)
+def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz, shade, table, front, back, fp):
+    """The pre-integrated piece between a ray's end point at `te` (its entry or exit on the box) and
+    its first or last sample (value s, lighting fd, sp); transparent when the end point's cell
+    has a non-finite corner."""
+    if length <= 0.0:
+        return
+    px = ro[p, 0] + te * dx
+    py = ro[p, 1] + te * dy
+    pz = ro[p, 2] + te * dz
+    se = _fetch(vol, px, py, pz)
+    if not np.isfinite(se):
+        return
+    fde = 1.0
+    spe = 0.0
+    if shade:
+        fde, spe = _fetch_light(vol, px, py, pz, hx, hy, hz, fp)
+    if entry:
+        _segment(rgba, p, se, s, length, fde, spe, fd, sp, shade, table, front, back, fp)
+    else:
+        _segment(rgba, p, s, se, length, fd, sp, fde, spe, shade, table, front, back, fp)
+
+
+@njit(cache=True)
+def _sample_t(t0, off, h, full, rem, k):
+    """Where sample k of a ray lies (patterns.RayTable's rule)."""
+    if k < full:
+        return t0 + (k + off) * h
+    return t0 + full * h + off * rem
+
+
+@njit(cache=True)
+def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+                ro, rd, rwd, rt0, rcount, rfull, rrem, roff, ip, fp, xs, tab, table, front, back,
+                rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
+    """Rows r0..r1 - 1: walk the octree front to back, skipping transparent nodes and (with hidden
+    volume removal) nodes on finished pixels, and sample every leaf cell's rays."""
+    mode = ip[I_MODE]
+    pre = ip[I_PRE] != 0
+    shade = ip[I_SHADE] != 0
+    hvr = ip[I_HVR] != 0 and mode == COMPOSITE
+    h = fp[F_H]
+    term = fp[F_TERM]
+    rows = r1 - r0
+    hl, hoff, hcols, hsize = hom_layout(rows, width)
+    hom = np.empty(hsize, np.int32)
+    hom_init(hom, hl, hoff, hcols, rows, width)
+    for r in range(r0, r1):
+        for c in range(width):
+            if rcount[r * width + c] == 0:
+                finished[r * width + c] = 1
+                hom_finish(hom, hl, hoff, hcols, r - r0, c)
+    levels = shapes.shape[0]
+    ncx = shapes[0, 2]
+    ncy = shapes[0, 1]
+    ncz = shapes[0, 0]
+    depth = 8 * levels + 8
+    st_l = np.empty(depth, np.int64)
+    st_i = np.empty(depth, np.int64)
+    st_j = np.empty(depth, np.int64)
+    st_k = np.empty(depth, np.int64)
+    top = 0
+    st_l[0] = levels - 1
+    st_i[0] = 0
+    st_j[0] = 0
+    st_k[0] = 0
+    top = 1
+    c8 = np.empty(8)
+    g8 = np.zeros((8, 3))
+    while top > 0:
+        top -= 1
+        lv = st_l[top]
+        i = st_i[top]
+        j = st_j[top]
+        k = st_k[top]
+        count = counts[offsets[lv] + (k * shapes[lv, 1] + j) * shapes[lv, 2] + i]
+        if count == 0:
+            continue
+        size = 1 << lv
+        x0 = i * size
+        y0 = j * size
+        z0 = k * size
+        x1 = min(x0 + size, ncx)
+        y1 = min(y0 + size, ncy)
+        z1 = min(z0 + size, ncz)
+        c0, c1, fr0, fr1 = footprint(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1), width, height)
+        if c0 > c1 or fr0 > fr1:
+            continue
+        q0 = max(fr0, r0)
+        q1 = min(fr1, r1 - 1)
+        if q0 > q1:
+            continue
+        mid = (fr0 + fr1) // 2
+        own = mid >= r0 and mid < r1  # counters: each node counted by the band holding its middle row
+        if own:
+            stats[S_NODES] += 1
+        if hvr and hom_covered(hom, hl, hoff, hcols, q0 - r0, q1 - r0, c0, c1):
+            if own:
+                stats[S_OCCLUDED_CELLS] += count
+                stats[S_OCCLUDED_NODES] += 1
+            continue
+        if lv > 0:
+            mask = child_order_mask(lv, i, j, k, perspective, eye, vdir)
+            cl = lv - 1
+            for n in range(7, -1, -1):
+                bits = n ^ mask
+                ci = 2 * i + (bits & 1)
+                cj = 2 * j + ((bits >> 1) & 1)
+                ck = 2 * k + (bits >> 2)
+                if ci < shapes[cl, 2] and cj < shapes[cl, 1] and ck < shapes[cl, 0]:
+                    st_l[top] = cl
+                    st_i[top] = ci
+                    st_j[top] = cj
+                    st_k[top] = ck
+                    top += 1
+            continue
+        # ------------------------------------------------------------ a leaf cell
+        if own:
+            stats[S_CELLS] += 1
+        _load_cell(vol, i, j, k, shade, fp, c8, g8)
+        for r in range(q0, q1 + 1):
+            for c in range(c0, c1 + 1):
+                p = r * width + c
+                if finished[p]:
+                    continue
+                ns = rcount[p]
+                k0 = nextk[p]
+                # exact slab test in index space: [tlo, thi) of this ray in this cell
+                tlo = -math.inf
+                thi = math.inf
+                empty = False
+                for ax in range(3):
+                    o = ro[p, ax]
+                    d = rd[p, ax]
+                    q = float(i if ax == 0 else (j if ax == 1 else k))
+                    last = (ncx if ax == 0 else (ncy if ax == 1 else ncz)) - 1
+                    if d == 0.0:
+                        if o < q or o > q + 1.0 or (o == q + 1.0 and q < last):
+                            empty = True
+                            break
+                    else:
+                        inv = 1.0 / d
+                        ta = (q - o) * inv
+                        tb = (q + 1.0 - o) * inv
+                        if ta > tb:
+                            ta, tb = tb, ta
+                        tlo = max(tlo, ta)
+                        thi = min(thi, tb)
+                if empty or not thi > tlo:
+                    continue
+                t0 = rt0[p]
+                off = roff[p]
+                full = rfull[p]
+                rem = rrem[p]
+                kk = k0
+                if _sample_t(t0, off, h, full, rem, kk) < tlo:  # samples of skipped cells: pass them
+                    guess = int(math.ceil((tlo - t0) / h - off))
+                    if guess > kk:
+                        kk = min(guess, ns)
+                    while kk < ns and _sample_t(t0, off, h, full, rem, kk) < tlo:
+                        kk += 1
+                    while kk > k0 and _sample_t(t0, off, h, full, rem, kk - 1) >= tlo:
+                        kk -= 1
+                dx = rd[p, 0]
+                dy = rd[p, 1]
+                dz = rd[p, 2]
+                ox = ro[p, 0] - i
+                oy = ro[p, 1] - j
+                oz = ro[p, 2] - k
+                hx = hy = hz = 0.0
+                if shade:
+                    hx = fp[F_LX] - rwd[p, 0]
+                    hy = fp[F_LY] - rwd[p, 1]
+                    hz = fp[F_LZ] - rwd[p, 2]
+                    hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+                    if hn > 0.0:
+                        hx, hy, hz = hx / hn, hy / hn, hz / hn
+                if mode == MAXIMUM or mode == MINIMUM:  # the ray's entry and exit points of the cell
+                    t_end = t0 + full * h + rem
+                    te = max(tlo, t0)
+                    tx = min(thi, t_end)
+                    if te < tx and ns > 0:
+                        for tt in (te, tx):
+                            v = _trilinear(c8, _clamp01(ox + tt * dx), _clamp01(oy + tt * dy), _clamp01(oz + tt * dz))
+                            if mode == MAXIMUM:
+                                acc[p, 0] = max(acc[p, 0], v)
+                            else:
+                                acc[p, 0] = min(acc[p, 0], v)
+                            acc[p, 1] = 1.0
+                while kk < ns:
+                    t = _sample_t(t0, off, h, full, rem, kk)
+                    if t >= thi:
+                        break
+                    fx = _clamp01(ox + t * dx)
+                    fy = _clamp01(oy + t * dy)
+                    fz = _clamp01(oz + t * dz)
+                    s = _trilinear(c8, fx, fy, fz)
+                    length = h if kk < full else rem
+                    stats[S_SAMPLES] += 1
+                    if mode == COMPOSITE:
+                        fd = 1.0
+                        sp = 0.0
+                        if shade:
+                            fd, sp = _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz),
+                                            _trilinear_g(g8, 2, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
+                        if not pre:
+                            _post(rgba, p, xs, tab, s, length, fd, sp, fp)
+                        else:
+                            if kk == 0:  # from the ray's entry point (on the box) to its first sample
+                                _edge(rgba, p, vol, ro, t0, dx, dy, dz, s, t - t0, fd, sp, True, hx, hy, hz,
+                                      shade, table, front, back, fp)  # fmt: skip
+                            else:
+                                tp = _sample_t(t0, off, h, full, rem, kk - 1)
+                                if prev_k[p] == kk - 1:
+                                    sf = prev_s[p]
+                                    fd_f = prev_fd[p]
+                                    sp_f = prev_sp[p]
+                                else:  # the previous sample lies in a skipped cell: fetch it
+                                    px = ro[p, 0] + tp * dx
+                                    py = ro[p, 1] + tp * dy
+                                    pz = ro[p, 2] + tp * dz
+                                    sf = _fetch(vol, px, py, pz)
+                                    fd_f = 1.0
+                                    sp_f = 0.0
+                                    if shade and np.isfinite(sf):
+                                        fd_f, sp_f = _fetch_light(vol, px, py, pz, hx, hy, hz, fp)
+                                if np.isfinite(sf):
+                                    _segment(rgba, p, sf, s, t - tp, fd_f, sp_f, fd, sp, shade, table, front, back, fp)
+                            if kk == ns - 1:  # from the last sample to the ray's exit point
+                                t_end = t0 + full * h + rem
+                                _edge(rgba, p, vol, ro, t_end, dx, dy, dz, s, t_end - t, fd, sp, False, hx, hy, hz,
+                                      shade, table, front, back, fp)  # fmt: skip
+                            prev_s[p] = s
+                            prev_k[p] = kk
+                            prev_fd[p] = fd
+                            prev_sp[p] = sp
+                        if hvr and rgba[p, 3] >= term:
+                            kk += 1
+                            stats[S_SATURATED] += 1
+                            break
+                    elif mode == AVERAGE:
+                        acc[p, 0] += s * length
+                        acc[p, 1] += length
+                    elif mode == MAXIMUM:
+                        acc[p, 0] = max(acc[p, 0], s)
+                        acc[p, 1] = 1.0
+                    else:
+                        acc[p, 0] = min(acc[p, 0], s)
+                        acc[p, 1] = 1.0
+                    kk += 1
+                nextk[p] = kk
+                if kk >= ns or (hvr and rgba[p, 3] >= term):
+                    finished[p] = 1
+                    hom_finish(hom, hl, hoff, hcols, r - r0, c)
+
+
+@njit(cache=True, parallel=True)
+def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+                 ro, rd, rwd, rt0, rcount, rfull, rrem, roff, ip, fp, xs, tab, table, front, back,
+                 rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
+    """The bands listed in `bands`, in parallel (each band's rows belong to it alone)."""
+    for q in prange(bands.shape[0]):
+        b = bands[q]
+        r0 = b * band_rows
+        r1 = min(height, r0 + band_rows)
+        render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+                    ro, rd, rwd, rt0, rcount, rfull, rrem, roff, ip, fp, xs, tab, table, front, back,
+                    rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats[b])  # fmt: skip

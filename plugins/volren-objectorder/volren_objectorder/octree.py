@@ -1,0 +1,214 @@
+"""The min-max octree over the grid's cells, classified per transfer function.
+
+Why: object order pays for every cell it visits, so transparent regions must be skipped whole,
+and the classification must follow TF edits at interactive rates (the seed's section 4.1). The
+tree is implicit, a pyramid: level 0 holds one node per cell (the box between eight neighbouring
+samples), level l one node per 2^l x 2^l x 2^l cells; node (l, i, j, k) has the children
+(l - 1, 2i + a, 2j + b, 2k + c) that exist. Built once per volume: the min and max of each cell's
+eight corners (a cell with a non-finite corner is *empty*: min = +inf, max = -inf, transparent in
+every mode). Classified per TF without rebuilding: a cell is visible when the TF's opacity is
+non-zero somewhere on [min, max] (exact for a piecewise-linear TF: its largest value on an
+interval is at an end or at a control point inside), and an upper node holds the number of
+visible cells below it (zero: skip it whole; the count also gives the occluded-cell counter).
+
+Pre-integration composites the segment between two consecutive samples of a ray, which may start
+in a neighbouring cell, so its classification uses ranges dilated by the cells a segment can
+reach (`reach`, per axis): a cell that is transparent then starts only transparent segments.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit, prange
+from numpy.typing import NDArray
+
+from volren.model import TransferFunction1D, UniformVolume
+
+
+@njit(cache=True, parallel=True)
+def _cell_ranges(values, lo, hi):
+    """Min and max of each cell's eight corners; +inf / -inf for a cell with a non-finite corner."""
+    nz, ny, nx = values.shape
+    for k in prange(nz - 1):
+        for j in range(ny - 1):
+            for i in range(nx - 1):
+                mn = np.inf
+                mx = -np.inf
+                bad = False
+                for c in range(8):
+                    v = values[k + (c >> 2), j + ((c >> 1) & 1), i + (c & 1)]
+                    if not np.isfinite(v):
+                        bad = True
+                    if v < mn:
+                        mn = v
+                    if v > mx:
+                        mx = v
+                if bad:
+                    mn = np.inf
+                    mx = -np.inf
+                lo[k, j, i] = mn
+                hi[k, j, i] = mx
+
+
+@njit(cache=True)
+def _opacity_at(xs, alphas, s):
+    """The piecewise-linear opacity at s (constant beyond the end points)."""
+    n = xs.shape[0]
+    if s <= xs[0]:
+        return alphas[0]
+    if s >= xs[n - 1]:
+        return alphas[n - 1]
+    a = 0
+    b = n - 1
+    while b - a > 1:
+        m = (a + b) >> 1
+        if xs[m] <= s:
+            a = m
+        else:
+            b = m
+    w = xs[b] - xs[a]
+    if w <= 0.0:
+        return alphas[b]
+    f = (s - xs[a]) / w
+    return alphas[a] + f * (alphas[b] - alphas[a])
+
+
+@njit(cache=True, parallel=True)
+def _classify(own_lo, own_hi, lo, hi, xs, alphas, out):
+    """out[cell] = 1 where the opacity is non-zero somewhere on [lo, hi] (the cell's range, or its
+    dilated one); a cell that is itself empty (a non-finite corner) is 0 whatever its neighbours."""
+    nz, ny, nx = lo.shape
+    npts = xs.shape[0]
+    for k in prange(nz):
+        for j in range(ny):
+            for i in range(nx):
+                a = lo[k, j, i]
+                b = hi[k, j, i]
+                if own_lo[k, j, i] > own_hi[k, j, i] or a > b:
+                    out[k, j, i] = 0
+                    continue
+                best = max(_opacity_at(xs, alphas, a), _opacity_at(xs, alphas, b))
+                if best <= 0.0:
+                    for p in range(npts):  # control points inside (a, b)
+                        if xs[p] > a and xs[p] < b and alphas[p] > best:
+                            best = alphas[p]
+                out[k, j, i] = 1 if best > 0.0 else 0
+
+
+@njit(cache=True)
+def _reduce_counts(child, cshape, parent, pshape):
+    """parent node = sum of its (up to eight) children's visible-cell counts."""
+    for k in range(pshape[0]):
+        for j in range(pshape[1]):
+            for i in range(pshape[2]):
+                s = 0
+                for c in range(8):
+                    kk = 2 * k + (c >> 2)
+                    jj = 2 * j + ((c >> 1) & 1)
+                    ii = 2 * i + (c & 1)
+                    if kk < cshape[0] and jj < cshape[1] and ii < cshape[2]:
+                        s += child[(kk * cshape[1] + jj) * cshape[2] + ii]
+                parent[(k * pshape[1] + j) * pshape[2] + i] = s
+
+
+def _dilate(a: NDArray, radius: tuple[int, int, int], reduce) -> NDArray:
+    """`reduce` (np.minimum / np.maximum) of every element with its neighbours up to `radius`
+    cells away along each axis (x, y, z): a separable box filter."""
+    out = a
+    for axis_xyz, r in enumerate(radius):
+        axis = 2 - axis_xyz
+        n = out.shape[axis]
+        r = min(int(r), n - 1)
+        acc = out.copy()
+        for d in range(1, r + 1):
+            lead = [slice(None)] * 3
+            trail = [slice(None)] * 3
+            lead[axis], trail[axis] = slice(d, None), slice(None, n - d)
+            acc[tuple(trail)] = reduce(acc[tuple(trail)], out[tuple(lead)])
+            acc[tuple(lead)] = reduce(acc[tuple(lead)], out[tuple(trail)])
+        out = acc
+    return out
+
+
+@dataclass
+class Classification:
+    """One TF's classification of the octree: level 0 as 0/1 per cell, levels 1.. as counts of
+    visible cells, flattened into one int32 array at `offsets` (level shapes (z, y, x) in `shapes`)."""
+
+    key: tuple
+    counts: NDArray[np.int32]
+    offsets: NDArray[np.int64]
+    shapes: NDArray[np.int64]
+
+    @property
+    def visible_cells(self) -> int:
+        return int(self.counts[self.offsets[-2]])  # the root, the last level's one node
+
+
+class MinMaxOctree:
+    """Per-cell value ranges of one volume and its pyramid geometry; classifications per TF."""
+
+    def __init__(self, volume: UniformVolume) -> None:
+        values = np.ascontiguousarray(volume.values, dtype=np.float32)
+        self.values = values
+        nz, ny, nx = values.shape
+        self.cell_shape = (nz - 1, ny - 1, nx - 1)
+        self.lo = np.empty(self.cell_shape, np.float32)
+        self.hi = np.empty(self.cell_shape, np.float32)
+        _cell_ranges(values, self.lo, self.hi)
+        shapes = [self.cell_shape]
+        while max(shapes[-1]) > 1:
+            shapes.append(tuple((n + 1) // 2 for n in shapes[-1]))
+        self.shapes = np.array(shapes, dtype=np.int64)
+        sizes = [int(np.prod(s)) for s in shapes]
+        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        self._dilated: dict[tuple[int, int, int], tuple[NDArray, NDArray]] = {}
+        self._cache: dict[tuple, Classification] = {}
+
+    @property
+    def levels(self) -> int:
+        return len(self.shapes)
+
+    @property
+    def cells(self) -> int:
+        return int(np.prod(self.cell_shape))
+
+    def ranges(self, reach: tuple[int, int, int] = (0, 0, 0)) -> tuple[NDArray, NDArray]:
+        """Per-cell (min, max), dilated by `reach` cells along x, y, z (cached per reach)."""
+        if reach == (0, 0, 0):
+            return self.lo, self.hi
+        if reach not in self._dilated:
+            self._dilated.clear()  # one dilation kept: reaches change only with the step
+            self._dilated[reach] = (_dilate(self.lo, reach, np.minimum), _dilate(self.hi, reach, np.maximum))
+        return self._dilated[reach]
+
+    def classify(self, tf: TransferFunction1D | None, reach: tuple[int, int, int] = (0, 0, 0)) -> Classification:
+        """The visibility pyramid for `tf` (None: every cell without a non-finite corner), cached on
+        the TF's opacity points and unit distance, not its colours: a colour edit reuses it."""
+        if tf is None:
+            key: tuple = ("finite",)
+        else:
+            key = ("tf", tf.opacity_points.tobytes(), reach)
+        found = self._cache.get(key)
+        if found is not None:
+            return found
+        counts = np.empty(int(self.offsets[-1]), np.int32)
+        level0 = np.empty(self.cell_shape, np.uint8)
+        if tf is None:
+            level0[...] = self.lo <= self.hi
+        else:
+            lo, hi = self.ranges(reach)
+            points = tf.opacity_points
+            _classify(self.lo, self.hi, lo, hi, np.ascontiguousarray(points[:, 0], dtype=np.float64),
+                      np.ascontiguousarray(np.clip(points[:, 1], 0.0, 1.0), dtype=np.float64), level0)
+        counts[: self.offsets[1]] = level0.reshape(-1)
+        for level in range(1, self.levels):
+            _reduce_counts(counts[self.offsets[level - 1] : self.offsets[level]], self.shapes[level - 1],
+                           counts[self.offsets[level] : self.offsets[level + 1]], self.shapes[level])
+        result = Classification(key, counts, self.offsets, self.shapes)
+        if len(self._cache) > 8:
+            self._cache.clear()
+        self._cache[key] = result
+        return result
