@@ -25,3 +25,7 @@ def test_the_example_plugin_is_registered():
 
 def test_the_shearwarp_plugin_is_registered():
     assert "shearwarp" in NAMES, "scripts/setup.sh installs plugins/volren-shearwarp"
+
+
+def test_the_objectorder_plugin_is_registered():
+    assert "objectorder" in NAMES, "scripts/setup.sh installs plugins/volren-objectorder"
