@@ -19,9 +19,11 @@ checkerboard: neighbouring pixels start half a step apart, the seed's Fig. 3d), 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit, prange
 from numpy.typing import NDArray
 
 from volren.model import Camera, UniformVolume
@@ -53,42 +55,73 @@ def pixel_offsets(mode: str, width: int, height: int, seed: int) -> NDArray[np.f
     return np.random.default_rng(seed).random(width * height)
 
 
-def box_interval(origin: NDArray, direction: NDArray, upper: NDArray) -> tuple[NDArray, NDArray]:
-    """Entry and exit t of rays (index space) through the box [0, upper], with the kernels' own
-    plane formula (q - o) * (1 / d): the box faces then cut rays exactly where the cells' do."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / direction
-        ta = (0.0 - origin) * inv
-        tb = (upper - origin) * inv
-    flat = direction == 0.0
-    inside = (origin >= 0.0) & (origin <= upper)
-    t_in = np.where(flat, np.where(inside, -np.inf, np.inf), np.minimum(ta, tb)).max(axis=1)
-    t_out = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(ta, tb)).min(axis=1)
-    return t_in, t_out
+@njit(cache=True, parallel=True)
+def _fill_rays(inv, width, height, grid_origin, spacing, upper, view_dir, t_far_eye, h, offsets,
+               o_out, d_out, w_out, t0_out, count_out, full_out, rem_out):  # fmt: skip
+    """Every pixel's ray as `Camera.pixel_rays` makes it (unproject the pixel centre at NDC depth
+    -1 and 1), clipped to the box [0, upper] (index space) and the clipping planes."""
+    for j in prange(height):
+        ny = 1.0 - (j + 0.5) / height * 2.0
+        near = np.empty(3)
+        far = np.empty(3)
+        for i in range(width):
+            nx = (i + 0.5) / width * 2.0 - 1.0
+            wn = inv[3, 0] * nx + inv[3, 1] * ny - inv[3, 2] + inv[3, 3]
+            wf = inv[3, 0] * nx + inv[3, 1] * ny + inv[3, 2] + inv[3, 3]
+            for a in range(3):
+                near[a] = (inv[a, 0] * nx + inv[a, 1] * ny - inv[a, 2] + inv[a, 3]) / wn
+                far[a] = (inv[a, 0] * nx + inv[a, 1] * ny + inv[a, 2] + inv[a, 3]) / wf
+            p = j * width + i
+            dx = far[0] - near[0]
+            dy = far[1] - near[1]
+            dz = far[2] - near[2]
+            n = math.sqrt(dx * dx + dy * dy + dz * dz)
+            dx, dy, dz = dx / n, dy / n, dz / n
+            w_out[p, 0], w_out[p, 1], w_out[p, 2] = dx, dy, dz
+            t_in = -math.inf
+            t_out = math.inf
+            for a in range(3):
+                o = (near[a] - grid_origin[a]) / spacing[a]
+                d = (dx if a == 0 else (dy if a == 1 else dz)) / spacing[a]
+                o_out[p, a] = o
+                d_out[p, a] = d
+                if d == 0.0:
+                    if o < 0.0 or o > upper[a]:
+                        t_in = math.inf
+                else:
+                    inv_d = 1.0 / d
+                    ta = (0.0 - o) * inv_d
+                    tb = (upper[a] - o) * inv_d
+                    t_in = max(t_in, min(ta, tb))
+                    t_out = min(t_out, max(ta, tb))
+            t_far = t_far_eye / (dx * view_dir[0] + dy * view_dir[1] + dz * view_dir[2])
+            t0 = max(t_in, 0.0)
+            t1 = min(t_out, t_far)
+            length = t1 - t0 if t1 > t0 else 0.0
+            full = math.floor(length / h)
+            rem = length - full * h
+            if not rem > 1e-9 * h:  # a sliver below rounding adds no sample
+                rem = 0.0
+            t0_out[p] = t0 if length > 0.0 else 0.0
+            full_out[p] = int(full)
+            count_out[p] = int(full) + (1 if rem > 0.0 else 0)
+            rem_out[p] = rem
 
 
 def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h: float,
               offsets: NDArray[np.float64]) -> RayTable:  # fmt: skip
     """Every pixel's ray (through its centre, origin on the near plane) and its samples at step h."""
-    origins, directions = camera.pixel_rays(width, height)
-    origins = origins.reshape(-1, 3)
-    directions = directions.reshape(-1, 3)
-    spacing = np.asarray(volume.spacing, dtype=np.float64)
-    o = (origins - np.asarray(volume.origin, dtype=np.float64)) / spacing
-    d = directions / spacing
-    upper = np.asarray(volume.dimensions, dtype=np.float64) - 1.0
-    t_in, t_out = box_interval(o, d, upper)
+    inv = np.linalg.inv(camera.projection_matrix(width / height) @ camera.view_matrix())
+    p = width * height
+    o, d, w = np.empty((p, 3)), np.empty((p, 3)), np.empty((p, 3))
+    t0, rem = np.empty(p), np.empty(p)
+    count, full = np.empty(p, np.int32), np.empty(p, np.int32)
     near, far = camera.clipping_range
-    t_far = (far - near) / (directions @ np.asarray(camera.direction, dtype=np.float64))
-    t0 = np.maximum(t_in, 0.0)
-    t1 = np.minimum(t_out, t_far)
-    length = np.where(t1 > t0, t1 - t0, 0.0)
-    full = np.floor(length / h)
-    rem = length - full * h
-    rem = np.where(rem > 1e-9 * h, rem, 0.0)  # a sliver below rounding adds no sample
-    count = full + (rem > 0)
-    return RayTable(o, d, directions, np.where(length > 0, t0, 0.0), count.astype(np.int32),
-                    full.astype(np.int32), rem, np.ascontiguousarray(offsets, dtype=np.float64))  # fmt: skip
+    _fill_rays(inv, width, height, np.asarray(volume.origin, dtype=np.float64),
+               np.asarray(volume.spacing, dtype=np.float64), np.asarray(volume.dimensions, dtype=np.float64) - 1.0,
+               np.asarray(camera.direction, dtype=np.float64), far - near, float(h), offsets,
+               o, d, w, t0, count, full, rem)  # fmt: skip
+    return RayTable(o, d, w, t0, count, full, rem, np.ascontiguousarray(offsets, dtype=np.float64))
 
 
 def sample_positions(table: RayTable, h: float, pixel: int) -> NDArray[np.float64]:
