@@ -129,10 +129,11 @@ def test_cli_writes_csv_and_markdown(tmp_path, capsys, opengl):
     ):
         assert column in table[0], column
     found = {(r["dataset"], r["renderer"], r["variant"]) for r in table}
-    # phantom_ct: slicer (6 rows), vtk (3) and the shearwarp plugin (6); hollow_cylinder: tetra (6)
-    # and vtk without shading (2)
-    assert len(table) == 23 and ("hollow_cylinder", "vtk", "shading") not in found
+    # phantom_ct: slicer (6 rows), vtk (3) and the shearwarp and objectorder plugins (6 each);
+    # hollow_cylinder: tetra (6) and vtk without shading (2)
+    assert len(table) == 29 and ("hollow_cylinder", "vtk", "shading") not in found
     assert ("phantom_ct", "shearwarp", "no_early_termination") in found
+    assert ("phantom_ct", "objectorder", "no_hidden_volume_removal") in found
     assert ("phantom_ct", "slicer", "no_empty_space") in found and (
         "hollow_cylinder",
         "tetra",

@@ -23,6 +23,10 @@ Techniques and their switches:
 - shearwarp (plugin): `empty_space_skipping` (runs of cells whose value range, widened by the
   slab's shear, maps to zero opacity are not visited: exact) and `early_termination` at its
   `termination_alpha` (0.995; VolPack's skip links jump over opaque intermediate pixels).
+- objectorder (plugin): `octree_skipping` (min-max octree nodes whose value range maps to zero
+  opacity are not entered: exact) and `hidden_volume_removal` (nodes whose footprint the
+  hierarchical occlusion map shows finished are skipped whole: within 1 - its termination_alpha
+  0.995); `cells` counts the leaf cells processed.
 - vtk: VTK's mappers skip on their own (the GPU ray caster stops a ray at opacity 1 - 1/255, a
   shader constant) with no switch, so vtk gets the all-on row only, as the peer, plus its lighting
   (grids) and TF-edit rows.
@@ -62,10 +66,10 @@ from volren.testing.metrics import image_error
 #: most 1 - alpha per channel.
 ALPHA = 0.999
 #: Renderers whose default termination opacity is another (their option `termination_alpha`).
-TERMINATION_ALPHA = {"shearwarp": 0.995}
+TERMINATION_ALPHA = {"shearwarp": 0.995, "objectorder": 0.995}
 #: Float32 rounding allowed on top of a bound (the slicer composites in float32 on the GPU).
 ROUNDING = 1e-5
-RENDERERS = ("slicer", "tetra", "vtk", "shearwarp")
+RENDERERS = ("slicer", "tetra", "vtk", "shearwarp", "objectorder")
 
 
 @dataclass(frozen=True)
@@ -122,6 +126,24 @@ VARIANTS: dict[str, tuple[Variant, ...]] = {
         Variant("shading", "all on, shading on", kind="shading", shade=True),
         Variant("tf_edit", "all on, TF edited every frame", kind="reuse", tf_edit=True),
     ),
+    "objectorder": (
+        Variant("all_on", "all on"),
+        Variant("no_octree_skipping", "octree skipping off", {"octree_skipping": False}),
+        Variant(
+            "no_hidden_volume_removal",
+            "hidden volume removal off",
+            {"hidden_volume_removal": False},
+            terminates=False,
+        ),
+        Variant(
+            "all_off",
+            "all off",
+            {"octree_skipping": False, "hidden_volume_removal": False},
+            terminates=False,
+        ),
+        Variant("shading", "all on, shading on", kind="shading", shade=True),
+        Variant("tf_edit", "all on, TF edited every frame", kind="reuse", tf_edit=True),
+    ),
     "vtk": (
         Variant("all_on", "VTK's own skipping (no switch)"),
         Variant("shading", "shading on", kind="shading", shade=True),
@@ -139,6 +161,9 @@ TECHNIQUES = {
     ("shearwarp", "no_empty_space"): ("run-length skipping", "samples"),
     ("shearwarp", "no_early_termination"): ("early termination", "samples"),
     ("shearwarp", "all_off"): ("all skipping", "samples"),
+    ("objectorder", "no_octree_skipping"): ("octree skipping", "cells"),
+    ("objectorder", "no_hidden_volume_removal"): ("hidden volume removal", "cells"),
+    ("objectorder", "all_off"): ("all skipping", "cells"),
 }
 WORK_COUNTERS = (
     "samples",
@@ -151,6 +176,9 @@ WORK_COUNTERS = (
     "rays_hit",
     "empty_pixels_skipped",
     "pixels_terminated",
+    "cells",
+    "cells_occluded",
+    "nodes",
 )
 COLUMNS = (
     "dataset",
@@ -446,7 +474,7 @@ def intro(size: int, frames: int, turn: float, base: RenderSettings, command: st
         "at the scene's view. Image "
         "differences are DESIGN.md's max abs / RMSE over premultiplied RGBA against the same renderer's "
         "all-on and all-off images; skipping must be exact, early termination within 1 - termination_alpha "
-        f"= {1 - ALPHA:.0e} (shearwarp: {1 - TERMINATION_ALPHA['shearwarp']:.0e}; plus {ROUNDING:.0e} float "
+        f"= {1 - ALPHA:.0e} (shearwarp and objectorder: {1 - TERMINATION_ALPHA['shearwarp']:.0e}; plus {ROUNDING:.0e} float "
         "rounding). shearwarp's run-length skipping is exact. tetra's transparent-cell skip is exact to "
         "the optical model but not to the image with those cells integrated: its 3D pre-integration table "
         "interpolates between value bins and so gives cells just beside an opacity spike a little opacity. "

@@ -44,7 +44,7 @@ def add_skip_parser(kinds) -> None:
     k.add_argument("--samples", action="store_true", help="the bundled samples instead of the shared datasets")
     k.add_argument("--datasets", help="comma-separated (default: every shared dataset, or every sample)")
     k.add_argument("--styles", help="TF styles (default smooth,spiky,opaque)")
-    k.add_argument("--renderers", help="comma-separated of slicer, tetra, vtk, shearwarp (default: those installed)")
+    k.add_argument("--renderers", help="comma-separated of slicer, tetra, vtk, shearwarp, objectorder (default: those installed)")
     k.add_argument("--size", type=int, help="image side in pixels (default 512; 128 with --quick)")
     k.add_argument("--frames", type=int, help="timed frames per row, median (default 5; 3 with --quick)")
     k.add_argument("--turn", type=float, default=1.0, help="azimuth degrees between timed frames (0: fixed)")
