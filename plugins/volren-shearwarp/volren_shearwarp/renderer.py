@@ -51,7 +51,7 @@ from volren.renderers.base import (
 from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport
 from volren_shearwarp.composite import AVERAGE, MAXIMUM, MINIMUM, composite_slabs, project_slabs
 from volren_shearwarp.factorization import Factorization, WarpMap, factorize
-from volren_shearwarp.tables import GRID_MARGIN, TablePool, grid_ids, grid_length, pixel_slots
+from volren_shearwarp.tables import GRID_MARGIN, TablePool, grid_ids, grid_length, pixel_slots, slot_bounds
 from volren_shearwarp.warp import warp
 
 #: Intermediate rows per dynamically scheduled chunk of the parallel kernels.
@@ -291,7 +291,7 @@ class ShearWarpRenderer(RendererBase):
             grid = [grid_length(i, reference) for i in range(id_lo, id_hi + 1)]
             extra = [grid_length(i, reference) for i in range(id_lo - GRID_MARGIN, id_hi + GRID_MARGIN + 1)]
             slots = pool.gather(tf, n, lo, hi, grid, extra)
-            pixel_slots(col_d2, row_d2, dc2, inv_norm, reference, id_lo, slots, layers)
+            pixel_slots(col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm), slots, layers)
         else:
             grid = [fac.slab_length / planes]
             layers[0, 0] = pool.gather(tf, n, lo, hi, grid)[0]

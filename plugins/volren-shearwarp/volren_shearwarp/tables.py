@@ -40,16 +40,27 @@ def grid_length(i: int, reference: float) -> float:
 
 
 @njit(parallel=True, cache=True)
-def pixel_slots(col_d2, row_d2, dc2, inv_norm, reference, id_lo, slot_of_id, out):
-    """out[q, p] = pool slot of the grid length nearest (in ratio) to the pixel's segment length
-    sqrt(col_d2[p] + row_d2[q] + dc2) * inv_norm."""
-    inv_step = 1.0 / math.log(LENGTH_RATIO)
+def pixel_slots(col_d2, row_d2, dc2, bounds, slot_of_id, out):
+    """out[q, p] = pool slot of the grid length nearest (in ratio) to the pixel's segment length,
+    found by walking `bounds` (the squares, in the units of col_d2 + row_d2 + dc2, of the lengths
+    halfway in ratio between neighbouring grid lengths): lengths vary slowly along a row, so
+    this is a comparison or two per pixel instead of a logarithm."""
     last = slot_of_id.shape[0] - 1
     for q in prange(out.shape[0]):
+        i = 0
         for p in range(out.shape[1]):
-            length = math.sqrt(col_d2[p] + row_d2[q] + dc2) * inv_norm
-            i = int(np.rint(math.log(length / reference) * inv_step)) - id_lo
-            out[q, p] = slot_of_id[min(max(i, 0), last)]
+            s = col_d2[p] + row_d2[q] + dc2
+            while i > 0 and s < bounds[i - 1]:
+                i -= 1
+            while i < last and s >= bounds[i]:
+                i += 1
+            out[q, p] = slot_of_id[i]
+
+
+def slot_bounds(id_lo: int, id_hi: int, reference: float, inv_norm: float) -> NDArray[np.float64]:
+    """The `bounds` of `pixel_slots` for grid indices id_lo..id_hi."""
+    halfway = reference * LENGTH_RATIO ** (np.arange(id_lo, id_hi, dtype=np.float64) + 0.5)
+    return (halfway / inv_norm) ** 2
 
 
 def post_lut(tf: TransferFunction1D, n: int, lo: float, hi: float, length: float) -> NDArray[np.float32]:
