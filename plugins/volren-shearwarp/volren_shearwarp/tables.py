@@ -17,7 +17,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 from numpy.typing import NDArray
 
 from volren.model import TransferFunction1D
@@ -39,14 +39,14 @@ def grid_length(i: int, reference: float) -> float:
     return reference * LENGTH_RATIO**i
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def pixel_slots(col_d2, row_d2, dc2, bounds, slot_of_id, out):
     """out[q, p] = pool slot of the grid length nearest (in ratio) to the pixel's segment length,
     found by walking `bounds` (the squares, in the units of col_d2 + row_d2 + dc2, of the lengths
     halfway in ratio between neighbouring grid lengths): lengths vary slowly along a row, so
     this is a comparison or two per pixel instead of a logarithm."""
     last = slot_of_id.shape[0] - 1
-    for q in prange(out.shape[0]):
+    for q in range(out.shape[0]):  # serial: about a millisecond, less than a parallel barrier costs under load
         i = 0
         for p in range(out.shape[1]):
             s = col_d2[p] + row_d2[q] + dc2
