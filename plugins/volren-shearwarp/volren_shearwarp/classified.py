@@ -23,6 +23,7 @@ colour edits, and opacity edits that keep the support, reuse the runs.
 from __future__ import annotations
 
 import hashlib
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -35,6 +36,9 @@ from volren_shearwarp.factorization import PERMS
 
 #: Value bins of the opacity support over the volume's value range.
 SUPPORT_BINS = 4096
+#: Gaps between runs shorter than this many cells are bridged: the compositing kernel pays more
+#: per run (its pixel bounds) than for a few transparent cells.
+MIN_GAP = 3
 
 
 @dataclass(frozen=True)
@@ -112,75 +116,96 @@ def _visible(mn, mx, lo, scale, counts, bins):
 
 @njit(parallel=True, cache=True)
 def _visible_cells(vol, lo, scale, counts, radius, mask):
-    """mask[k, b, a] = 1 where the block of cells within `radius` of (a, b) in slab k may be visible."""
+    """mask[k, b, a] = 1 where the block of cells within `radius` of (a, b) in slab k may be visible.
+
+    The block's value range is the min and max over its vertices in both slices, taken
+    separably (slices, then a, then b: a window of 2 radius + 2 vertices per axis) rather than
+    per cell and block, 3x fewer operations. Non-finite vertices are left out, which can only
+    widen the range of a block whose cells are transparent anyway (conservative)."""
     nc, nb, na = vol.shape
     bins = counts.shape[0] - 1
     for k in prange(nc - 1):
-        cmin = np.empty((nb - 1, na - 1), np.float32)
-        cmax = np.empty((nb - 1, na - 1), np.float32)
-        for b in range(nb - 1):
-            for a in range(na - 1):
-                lo_v = np.inf
-                hi_v = -np.inf
-                bad = False
-                for dk in range(2):
-                    for db in range(2):
-                        for da in range(2):
-                            v = vol[k + dk, b + db, a + da]
-                            if v != v or v == np.inf or v == -np.inf:
-                                bad = True
-                            lo_v = min(lo_v, v)
-                            hi_v = max(hi_v, v)
-                if bad:
-                    cmin[b, a] = np.inf
-                    cmax[b, a] = -np.inf
+        vmin = np.empty((nb, na), np.float32)
+        vmax = np.empty((nb, na), np.float32)
+        for b in range(nb):
+            for a in range(na):
+                v0 = vol[k, b, a]
+                v1 = vol[k + 1, b, a]
+                ok0 = math.isfinite(v0)
+                ok1 = math.isfinite(v1)
+                if ok0 and ok1:
+                    vmin[b, a] = min(v0, v1)
+                    vmax[b, a] = max(v0, v1)
+                elif ok0 or ok1:
+                    vmin[b, a] = v0 if ok0 else v1
+                    vmax[b, a] = v0 if ok0 else v1
                 else:
-                    cmin[b, a] = lo_v
-                    cmax[b, a] = hi_v
+                    vmin[b, a] = np.inf
+                    vmax[b, a] = -np.inf
+        rmin = np.empty((nb, na - 1), np.float32)
+        rmax = np.empty((nb, na - 1), np.float32)
+        for b in range(nb):
+            for a in range(na - 1):
+                mn = np.float32(np.inf)
+                mx = np.float32(-np.inf)
+                for a2 in range(max(a - radius, 0), min(a + radius + 1, na - 1) + 1):
+                    mn = min(mn, vmin[b, a2])
+                    mx = max(mx, vmax[b, a2])
+                rmin[b, a] = mn
+                rmax[b, a] = mx
         for b in range(nb - 1):
             for a in range(na - 1):
-                mn = np.inf
-                mx = -np.inf
-                for b2 in range(max(b - radius, 0), min(b + radius + 1, nb - 1)):
-                    for a2 in range(max(a - radius, 0), min(a + radius + 1, na - 1)):
-                        mn = min(mn, cmin[b2, a2])
-                        mx = max(mx, cmax[b2, a2])
+                mn = np.float32(np.inf)
+                mx = np.float32(-np.inf)
+                for b2 in range(max(b - radius, 0), min(b + radius + 1, nb - 1) + 1):
+                    mn = min(mn, rmin[b2, a])
+                    mx = max(mx, rmax[b2, a])
                 mask[k, b, a] = 1 if _visible(mn, mx, lo, scale, counts, bins) else 0
 
 
-@njit(cache=True)
-def _runs_from_mask(mask):
-    nk, nb, na = mask.shape
-    offsets = np.zeros(nk * nb + 1, np.int64)
+@njit(cache=True, inline="always")
+def _row_runs(mask, k, b, min_gap, starts, ends, at):
+    """The runs of row (k, b) of `mask`, gaps shorter than `min_gap` cells bridged; written at
+    `at` when starts has room, counted either way."""
+    na = mask.shape[2]
     count = 0
-    for r in range(nk * nb):
-        k = r // nb
-        b = r % nb
-        prev = 0
-        for a in range(na):
-            cur = mask[k, b, a]
-            if cur and not prev:
-                count += 1
-            prev = cur
-        offsets[r + 1] = count
-    starts = np.empty(count, np.int32)
-    ends = np.empty(count, np.int32)
-    i = 0
-    for r in range(nk * nb):
-        k = r // nb
-        b = r % nb
-        a = 0
-        while a < na:
-            if mask[k, b, a]:
-                e = a
-                while e < na and mask[k, b, e]:
-                    e += 1
-                starts[i] = a
-                ends[i] = e
-                i += 1
-                a = e
+    a = 0
+    while a < na:
+        if not mask[k, b, a]:
+            a += 1
+            continue
+        e = a
+        while e < na:
+            while e < na and mask[k, b, e]:
+                e += 1
+            g = e
+            while g < na and not mask[k, b, g]:
+                g += 1
+            if g < na and g - e < min_gap:
+                e = g  # a short gap: walking it costs less than a run
             else:
-                a += 1
+                break
+        if starts.shape[0] > 0:
+            starts[at + count] = a
+            ends[at + count] = e
+        count += 1
+        a = e
+    return count
+
+
+@njit(parallel=True, cache=True)
+def _runs_from_mask(mask, min_gap):
+    nk, nb, na = mask.shape
+    per_row = np.zeros(nk * nb, np.int64)
+    empty = np.empty(0, np.int32)
+    for r in prange(nk * nb):
+        per_row[r] = _row_runs(mask, r // nb, r % nb, min_gap, empty, empty, 0)
+    offsets = np.zeros(nk * nb + 1, np.int64)
+    offsets[1:] = np.cumsum(per_row)
+    starts = np.empty(offsets[-1], np.int32)
+    ends = np.empty(offsets[-1], np.int32)
+    for r in prange(nk * nb):
+        _row_runs(mask, r // nb, r % nb, min_gap, starts, ends, offsets[r])
     return offsets, starts, ends
 
 
@@ -192,7 +217,7 @@ def build_runs(values: NDArray[np.float32], support: OpacitySupport, radius: int
     mask = np.zeros((nc - 1, nb - 1, na - 1), np.uint8)
     bins = support.counts.shape[0] - 1
     _visible_cells(values, support.lo, bins / (support.hi - support.lo), support.counts, radius, mask)
-    offsets, starts, ends = _runs_from_mask(mask)
+    offsets, starts, ends = _runs_from_mask(mask, MIN_GAP)
     visible = int(mask.sum(dtype=np.int64))
     ms = (time.perf_counter() - start) * 1000.0
     return Runs(offsets, starts, ends, support.digest, radius, ms, visible, int(mask.size))

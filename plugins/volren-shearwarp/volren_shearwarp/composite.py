@@ -28,6 +28,11 @@ Per scanline and slab:
 5. A segment touching a NaN value is transparent (a cell with a NaN corner is).
 
 Values are carried as table coordinates x = (s - lo) * scale in [0, n - 1].
+
+Speed: most segments lie wholly inside the slab (both ends inside the slice rectangle), with one
+segment per slab and no lighting; `_fast_span` takes those pixel ranges, found once per row and
+slab, without clipping, clamping or sub-planes, and looks the table up once for all four
+channels. Everything else (edge pixels, `step` below 0.5, shading) goes the general way.
 """
 
 from __future__ import annotations
@@ -160,36 +165,6 @@ def _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, po
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _lookup(table, layer, xf, xb, c, bilinear_lookup):
-    """Channel c of the 2D table `table[layer]` at fractional entries (xf, xb)."""
-    n = table.shape[1]
-    if not bilinear_lookup:
-        i = min(max(int(xf + 0.5), 0), n - 1)
-        j = min(max(int(xb + 0.5), 0), n - 1)
-        return table[layer, i, j, c]
-    xf = min(max(xf, 0.0), n - 1.0)
-    xb = min(max(xb, 0.0), n - 1.0)
-    i = min(int(xf), n - 2)
-    j = min(int(xb), n - 2)
-    fi = xf - i
-    fj = xb - j
-    return ((table[layer, i, j, c] * (1.0 - fj) + table[layer, i, j + 1, c] * fj) * (1.0 - fi)
-            + (table[layer, i + 1, j, c] * (1.0 - fj) + table[layer, i + 1, j + 1, c] * fj) * fi)  # fmt: skip
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _lut(lut, layer, x, c, bilinear_lookup):
-    """Channel c of the 1D LUT `lut[layer]` at fractional entry x."""
-    n = lut.shape[1]
-    if not bilinear_lookup:
-        return lut[layer, min(max(int(x + 0.5), 0), n - 1), c]
-    x = min(max(x, 0.0), n - 1.0)
-    i = min(int(x), n - 2)
-    f = x - i
-    return lut[layer, i, c] * (1.0 - f) + lut[layer, i + 1, c] * f
-
-
-@njit(cache=True, inline="always", error_model="numpy")
 def _next_open(skip, q, p, end):
     """The first pixel >= p of row q that is not opaque (or `end`), shortening the skip links walked."""
     r = p
@@ -219,16 +194,6 @@ def _clip(x0, x1, hi, t0, t1):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _first_at_least(alpha, beta, bound, p):
-    """The first pixel p' (searching around p) with alpha + beta p' >= bound, beta > 0."""
-    while p > -(1 << 30) and alpha + beta * (p - 1) >= bound:
-        p -= 1
-    while alpha + beta * p < bound:
-        p += 1
-    return p
-
-
-@njit(cache=True, inline="always", error_model="numpy")
 def _pixel_range(af0, afs, ab0, abs_, hi):
     """Pixels whose segment (front a = af0 + afs p, back a = ab0 + abs_ p) may meet [0, hi]."""
     p_lo = math.ceil(min((0.0 - af0) / afs, (0.0 - ab0) / abs_)) - 1
@@ -245,79 +210,157 @@ def _row_position(b, nb):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _sample_row(vol, k, ib, fb, a, lo, scale):
-    """Table coordinate of the bilinear sample of slice k at (a, row ib + fb), a clamped."""
-    na = vol.shape[2]
-    a = min(max(a, 0.0), na - 1.0)
-    ia = min(int(a), na - 2)
-    fa = a - ia
-    v0 = vol[k, ib, ia] + (vol[k, ib, ia + 1] - vol[k, ib, ia]) * fa
-    v1 = vol[k, ib + 1, ia] + (vol[k, ib + 1, ia + 1] - vol[k, ib + 1, ia]) * fa
-    return (v0 + (v1 - v0) * fb - lo) * scale
+def _table_rgba(table, layer, xf, xb, bilinear_lookup):
+    """The 2D table `table[layer]` at fractional entries (xf, xb), all four channels (the indices
+    and weights are computed once: the lookup is most of a segment's cost)."""
+    n = table.shape[1]
+    if not bilinear_lookup:
+        i = min(max(int(xf + 0.5), 0), n - 1)
+        j = min(max(int(xb + 0.5), 0), n - 1)
+        return table[layer, i, j, 0], table[layer, i, j, 1], table[layer, i, j, 2], table[layer, i, j, 3]
+    xf = min(max(xf, 0.0), n - 1.0)
+    xb = min(max(xb, 0.0), n - 1.0)
+    i = min(int(xf), n - 2)
+    j = min(int(xb), n - 2)
+    fi = xf - i
+    fj = xb - j
+    w11 = fi * fj
+    w10 = fi - w11
+    w01 = fj - w11
+    w00 = 1.0 - fi - w01
+    out0 = 0.0
+    out1 = 0.0
+    out2 = 0.0
+    out3 = 0.0
+    for c in range(4):
+        v = (w00 * table[layer, i, j, c] + w01 * table[layer, i, j + 1, c]
+             + w10 * table[layer, i + 1, j, c] + w11 * table[layer, i + 1, j + 1, c])  # fmt: skip
+        if c == 0:
+            out0 = v
+        elif c == 1:
+            out1 = v
+        elif c == 2:
+            out2 = v
+        else:
+            out3 = v
+    return out0, out1, out2, out3
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _composite_segment(rgba, q, p, xf, xb, df, sf, db, sb, frac, layer, table, table_back, lut,
-                       preintegrated, shading, bilinear_lookup):  # fmt: skip
-    """Composite one segment (front value xf, back value xb, as table coordinates) behind what
-    pixel (q, p) holds; returns whether anything was added."""
+def _lut_rgba(lut, layer, x, bilinear_lookup):
+    """The 1D LUT `lut[layer]` at fractional entry x: colour (not premultiplied) and opacity."""
+    n = lut.shape[1]
+    if not bilinear_lookup:
+        i = min(max(int(x + 0.5), 0), n - 1)
+        return lut[layer, i, 0], lut[layer, i, 1], lut[layer, i, 2], lut[layer, i, 3]
+    x = min(max(x, 0.0), n - 1.0)
+    i = min(int(x), n - 2)
+    f = x - i
+    g = 1.0 - f
+    return (lut[layer, i, 0] * g + lut[layer, i + 1, 0] * f, lut[layer, i, 1] * g + lut[layer, i + 1, 1] * f,
+            lut[layer, i, 2] * g + lut[layer, i + 1, 2] * f, lut[layer, i, 3] * g + lut[layer, i + 1, 3] * f)  # fmt: skip
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _segment(xf, xb, df, sf, db, sb, layer, table, table_back, lut, preintegrated, shading, bilinear_lookup):
+    """Premultiplied RGBA of one whole segment (front value xf, back value xb as table coordinates;
+    diffuse factors and specular terms of its ends when shading)."""
     if preintegrated:
-        alpha = _lookup(table, layer, xf, xb, 3, bilinear_lookup)
-        if alpha <= 0.0:
-            return False
-        if shading:
-            spec_back = _lookup(table_back, layer, xf, xb, 3, bilinear_lookup)
-            spec = (alpha - spec_back) * sf + spec_back * sb
-            cr = _lookup(table, layer, xf, xb, 0, bilinear_lookup) * df \
-                + _lookup(table_back, layer, xf, xb, 0, bilinear_lookup) * db + spec
-            cg = _lookup(table, layer, xf, xb, 1, bilinear_lookup) * df \
-                + _lookup(table_back, layer, xf, xb, 1, bilinear_lookup) * db + spec
-            cb = _lookup(table, layer, xf, xb, 2, bilinear_lookup) * df \
-                + _lookup(table_back, layer, xf, xb, 2, bilinear_lookup) * db + spec
-            cr = min(max(cr, 0.0), alpha)
-            cg = min(max(cg, 0.0), alpha)
-            cb = min(max(cb, 0.0), alpha)
+        cr, cg, cb, alpha = _table_rgba(table, layer, xf, xb, bilinear_lookup)
+        if not shading or alpha <= 0.0:
+            return cr, cg, cb, alpha
+        br, bg, bb, spec_back = _table_rgba(table_back, layer, xf, xb, bilinear_lookup)
+        spec = (alpha - spec_back) * sf + spec_back * sb
+        cr = min(max(cr * df + br * db + spec, 0.0), alpha)
+        cg = min(max(cg * df + bg * db + spec, 0.0), alpha)
+        cb = min(max(cb * df + bb * db + spec, 0.0), alpha)
+        return cr, cg, cb, alpha
+    # post-classified: the front half with the front value's colour and opacity, then the back half
+    r0, g0, b0, a0 = _lut_rgba(lut, layer, xf, bilinear_lookup)
+    r1, g1, b1, a1 = _lut_rgba(lut, layer, xb, bilinear_lookup)
+    if shading:
+        r0 = min(max(r0 * df + sf, 0.0), 1.0)
+        g0 = min(max(g0 * df + sf, 0.0), 1.0)
+        b0 = min(max(b0 * df + sf, 0.0), 1.0)
+        r1 = min(max(r1 * db + sb, 0.0), 1.0)
+        g1 = min(max(g1 * db + sb, 0.0), 1.0)
+        b1 = min(max(b1 * db + sb, 0.0), 1.0)
+    t1 = (1.0 - a0) * a1
+    return a0 * r0 + t1 * r1, a0 * g0 + t1 * g1, a0 * b0 + t1 * b1, a0 + t1
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _blend(rgba, q, p, cr, cg, cb, alpha):
+    """rgba[q, p] += (1 - its alpha) * (cr, cg, cb, alpha): front-to-back 'over'."""
+    t = 1.0 - rgba[q, p, 3]
+    rgba[q, p, 0] += t * cr
+    rgba[q, p, 1] += t * cg
+    rgba[q, p, 2] += t * cb
+    rgba[q, p, 3] += t * alpha
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p0, p1, rgba, buf_x, stamp, skip,
+               layers, per_pixel_layer, table, lut, preintegrated, bilinear_lookup, lo, scale,
+               use_termination, term_alpha):  # fmt: skip
+    """Pixels p0..p1 of row q whose whole segment lies inside the slab, one segment per slab, no
+    lighting: the common case, with no clipping or clamping. Returns (segments, terminated)."""
+    na = vol.shape[2]
+    n_comp = 0
+    n_term = 0
+    p = p0
+    layer = layers[0, 0]
+    while p < p1:
+        if use_termination and skip[q, p] > 0:
+            p = _next_open(skip, q, p, p1)
+            if p >= p1:
+                break
+        ab = ab0 + abs_ * p
+        ia = min(int(ab), na - 2)
+        fa = ab - ia
+        v0 = vol[kb, ibb, ia] + (vol[kb, ibb, ia + 1] - vol[kb, ibb, ia]) * fa
+        v1 = vol[kb, ibb + 1, ia] + (vol[kb, ibb + 1, ia + 1] - vol[kb, ibb + 1, ia]) * fa
+        xb = (v0 + (v1 - v0) * fbb - lo) * scale
+        if stamp[q, p] == plane:
+            xf = buf_x[q, p]
         else:
-            cr = _lookup(table, layer, xf, xb, 0, bilinear_lookup)
-            cg = _lookup(table, layer, xf, xb, 1, bilinear_lookup)
-            cb = _lookup(table, layer, xf, xb, 2, bilinear_lookup)
-        if frac < 1.0:
-            corrected = -math.expm1(frac * math.log1p(-min(alpha, 1.0 - 1e-7)))
-            factor = corrected / alpha
-            cr *= factor
-            cg *= factor
-            cb *= factor
-            alpha = corrected
-        t = 1.0 - rgba[q, p, 3]
-        rgba[q, p, 0] += t * cr
-        rgba[q, p, 1] += t * cg
-        rgba[q, p, 2] += t * cb
-        rgba[q, p, 3] += t * alpha
-        return True
-    added = False
-    for half_ in range(2):
-        x = xf if half_ == 0 else xb
-        alpha = _lut(lut, layer, x, 3, bilinear_lookup)
-        if alpha <= 0.0:
-            continue
-        if frac < 1.0:
-            alpha = -math.expm1(frac * math.log1p(-min(alpha, 1.0 - 1e-7)))
-        cr = _lut(lut, layer, x, 0, bilinear_lookup)
-        cg = _lut(lut, layer, x, 1, bilinear_lookup)
-        cb = _lut(lut, layer, x, 2, bilinear_lookup)
-        if shading:
-            dd = df if half_ == 0 else db
-            ss = sf if half_ == 0 else sb
-            cr = min(max(cr * dd + ss, 0.0), 1.0)
-            cg = min(max(cg * dd + ss, 0.0), 1.0)
-            cb = min(max(cb * dd + ss, 0.0), 1.0)
-        ta = (1.0 - rgba[q, p, 3]) * alpha
-        rgba[q, p, 0] += ta * cr
-        rgba[q, p, 1] += ta * cg
-        rgba[q, p, 2] += ta * cb
-        rgba[q, p, 3] += ta
-        added = True
-    return added
+            af = af0 + afs * p
+            ia = min(int(af), na - 2)
+            fa = af - ia
+            v0 = vol[kf, ibf, ia] + (vol[kf, ibf, ia + 1] - vol[kf, ibf, ia]) * fa
+            v1 = vol[kf, ibf + 1, ia] + (vol[kf, ibf + 1, ia + 1] - vol[kf, ibf + 1, ia]) * fa
+            xf = (v0 + (v1 - v0) * fbf - lo) * scale
+        stamp[q, p] = plane + 1
+        buf_x[q, p] = xb
+        if xf == xf and xb == xb:
+            if per_pixel_layer:
+                layer = layers[q, p]
+            cr, cg, cb, alpha = _segment(xf, xb, 1.0, 0.0, 1.0, 0.0, layer, table, table, lut, preintegrated,
+                                         False, bilinear_lookup)  # fmt: skip
+            n_comp += 1
+            if alpha > 0.0:
+                _blend(rgba, q, p, cr, cg, cb, alpha)
+                if use_termination and rgba[q, p, 3] >= term_alpha:
+                    skip[q, p] = 1
+                    n_term += 1
+        p += 1
+    return n_comp, n_term
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _first_past(alpha, beta, bound, strict, p):
+    """The first pixel p' (searching around the guess p) with alpha + beta p' >= bound (> bound
+    when strict), beta > 0: exact in the same arithmetic the kernels use."""
+    while p > -(1 << 30) and (alpha + beta * (p - 1) > bound or (not strict and alpha + beta * (p - 1) == bound)):
+        p -= 1
+    while alpha + beta * p < bound or (strict and alpha + beta * p == bound):
+        p += 1
+    return p
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _guess(alpha, beta, bound):
+    return int(max(min(math.ceil((bound - alpha) / beta), 1 << 30), -(1 << 30)))
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
@@ -330,15 +373,22 @@ def composite_slabs(
     counters,
 ):  # fmt: skip
     """Composite the slabs between order[m - 1] and order[m] for m in [m0, m1) into `rgba`
-    (intermediate image, premultiplied RGBA float32). counters[q] += (segments composited,
-    pixels skipped as empty, pixels terminated)."""
+    (intermediate image, premultiplied RGBA float32), clearing each row's image, stamps and skip
+    links first when m0 <= 1 (the buffers are reused from frame to frame). counters[q] +=
+    (segments composited, pixels skipped as empty, pixels terminated)."""
     nc, nb, na = vol.shape
     width = rgba.shape[1]
     inv_sub = 1.0 / sub
     top_a = na - 1.0
     top_b = nb - 1.0
+    lean = sub == 1 and not shading
     for r in prange(rows.shape[0]):
         q = rows[r]
+        if m0 <= 1:
+            rgba[q, :, :] = 0.0
+            stamp[q, :] = -1
+            skip[q, :] = 0
+            counters[q, :] = 0
         n_comp = 0
         n_empty = 0
         n_term = 0
@@ -365,6 +415,16 @@ def composite_slabs(
             p_hi = min(p_hi, width)
             if p_lo >= p_hi:
                 continue
+            # pixels whose segment has both ends inside the slice rectangle: no clipping
+            in_lo = p_hi
+            in_hi = p_hi
+            if row_inside and lean:
+                in_lo = max(_first_past(af0, afs, 0.0, False, _guess(af0, afs, 0.0)),
+                            _first_past(ab0, abs_, 0.0, False, _guess(ab0, abs_, 0.0)))  # fmt: skip
+                in_hi = min(_first_past(af0, afs, top_a, True, _guess(af0, afs, top_a)),
+                            _first_past(ab0, abs_, top_a, True, _guess(ab0, abs_, top_a)))  # fmt: skip
+                in_lo = min(max(in_lo, p_lo), p_hi)
+                in_hi = min(max(in_hi, in_lo), p_hi)
             if use_runs:
                 row = min(max(int(math.floor(bf)), 0), nb - 2)
                 first = offsets[slab * (nb - 1) + row]
@@ -380,29 +440,36 @@ def composite_slabs(
                     a_s = starts[run]
                     a_e = ends[run]
                     if a_s > 0:
-                        lo_p = max(lo_p, _first_at_least(af0, afs, a_s, int(math.ceil((a_s - af0) / afs))))
+                        lo_p = max(lo_p, _first_past(af0, afs, a_s, False, _guess(af0, afs, a_s)))
                     if a_e < na - 1:
-                        hi_p = min(hi_p, _first_at_least(af0, afs, a_e, int(math.ceil((a_e - af0) / afs))))
+                        hi_p = min(hi_p, _first_past(af0, afs, a_e, False, _guess(af0, afs, a_e)))
                     if lo_p >= hi_p:
                         continue
                     covered += hi_p - lo_p
+                f0 = min(max(in_lo, lo_p), hi_p)
+                f1 = min(max(in_hi, f0), hi_p)
+                if f1 > f0:
+                    c, t = _fast_span(vol, kf, kb, m - 1, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, f0, f1,
+                                      rgba, buf_x, stamp, skip, layers, per_pixel_layer, table, lut, preintegrated,
+                                      bilinear_lookup, lo, scale, use_termination, term_alpha)  # fmt: skip
+                    n_comp += c
+                    n_term += t
                 p = lo_p
                 while True:
                     if use_termination:
                         p = _next_open(skip, q, p, hi_p)
+                    if f0 <= p < f1:
+                        p = f1  # done by the fast span
+                        continue
                     if p >= hi_p:
                         break
                     af = af0 + afs * p
                     ab = ab0 + abs_ * p
-                    if row_inside and min(af, ab) >= 0.0 and max(af, ab) <= top_a:
-                        t0 = 0.0
-                        t1 = 1.0
-                    else:
-                        t0, t1 = _clip(af, ab, top_a, 0.0, 1.0)
-                        t0, t1 = _clip(bf, bb, top_b, t0, t1)
-                        if t1 <= t0:
-                            p += 1
-                            continue
+                    t0, t1 = _clip(af, ab, top_a, 0.0, 1.0)
+                    t0, t1 = _clip(bf, bb, top_b, t0, t1)
+                    if t1 <= t0:
+                        p += 1
+                        continue
                     layer = layers[q, p] if per_pixel_layer else layers[0, 0]
                     if shading and ray_dirs.shape[0] > 1:
                         hx = light[0] - ray_dirs[q, p, 0]
@@ -413,25 +480,6 @@ def composite_slabs(
                             hx /= hn
                             hy /= hn
                             hz /= hn
-                    if sub == 1 and not shading:
-                        # one segment per slab, no lighting: the common case, kept lean
-                        plane = m - 1
-                        if stamp[q, p] == plane:
-                            xf = buf_x[q, p]
-                        else:
-                            xf = _sample_row(vol, kf, ibf, fbf, af, lo, scale)
-                        xb = _sample_row(vol, kb, ibb, fbb, ab, lo, scale)
-                        stamp[q, p] = plane + 1
-                        buf_x[q, p] = xb
-                        if xf == xf and xb == xb:
-                            n_comp += 1
-                            _composite_segment(rgba, q, p, xf, xb, 1.0, 0.0, 1.0, 0.0, t1 - t0, layer, table,
-                                               table_back, lut, preintegrated, False, bilinear_lookup)  # fmt: skip
-                            if use_termination and rgba[q, p, 3] >= term_alpha:
-                                skip[q, p] = 1
-                                n_term += 1
-                        p += 1
-                        continue
                     for j in range(sub):
                         u0 = max(j * inv_sub, t0)
                         u1 = min((j + 1) * inv_sub, t1)
@@ -441,14 +489,15 @@ def composite_slabs(
                         plane = (m - 1) * sub + j
                         w0 = j * inv_sub
                         w1 = (j + 1) * inv_sub if j + 1 < sub else 1.0
+                        df = 1.0
+                        sf = 0.0
                         if stamp[q, p] == plane:
                             xf = buf_x[q, p]
-                            df = buf_d[q, p]
-                            sf = buf_s[q, p]
+                            if shading:
+                                df = buf_d[q, p]
+                                sf = buf_s[q, p]
                         else:
                             xf = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), lo, scale)
-                            df = 1.0
-                            sf = 0.0
                             if shading:
                                 df, sf = _plane_light(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf),
                                                       inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
@@ -458,15 +507,25 @@ def composite_slabs(
                         if shading:
                             db, sb = _plane_light(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf),
                                                   inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
+                            buf_d[q, p] = db
+                            buf_s[q, p] = sb
                         stamp[q, p] = plane + 1
                         buf_x[q, p] = xb
-                        buf_d[q, p] = db
-                        buf_s[q, p] = sb
                         if xf != xf or xb != xb:
                             continue
                         n_comp += 1
-                        _composite_segment(rgba, q, p, xf, xb, df, sf, db, sb, frac, layer, table, table_back,
-                                           lut, preintegrated, shading, bilinear_lookup)  # fmt: skip
+                        cr, cg, cb, alpha = _segment(xf, xb, df, sf, db, sb, layer, table, table_back, lut,
+                                                     preintegrated, shading, bilinear_lookup)  # fmt: skip
+                        if alpha <= 0.0:
+                            continue
+                        if frac < 1.0:  # a clipped segment: the seed's opacity and colour correction
+                            corrected = -math.expm1(frac * math.log1p(-min(alpha, 1.0 - 1e-7)))
+                            factor = corrected / alpha
+                            cr *= factor
+                            cg *= factor
+                            cb *= factor
+                            alpha = corrected
+                        _blend(rgba, q, p, cr, cg, cb, alpha)
                         if use_termination and rgba[q, p, 3] >= term_alpha:
                             skip[q, p] = 1
                             n_term += 1

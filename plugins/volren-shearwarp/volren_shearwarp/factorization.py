@@ -64,6 +64,17 @@ class Factorization:
     max_shear: float  #: largest |da/dc|, |db/dc| of any ray through the volume (index units)
     slab_length: float  #: world length between two slices along a ray (parallel), else 0
 
+    def length_terms(self) -> tuple[NDArray[np.float64], NDArray[np.float64], float, float]:
+        """(col_d2, row_d2, dc2, inv_norm): under perspective the slice-to-slice length of the ray
+        through pixel (q, p) is sqrt(col_d2[p] + row_d2[q] + dc2) * inv_norm (see `pixel_lengths`),
+        separable so that kernels need not hold a per-pixel array."""
+        a0, b0 = self.origin_ab
+        h = 1.0 / self.scale
+        da = (a0 + h * np.arange(self.width) - self.eye[0]) * self.spacing[0]
+        db = (b0 + h * np.arange(self.height) - self.eye[1]) * self.spacing[1]
+        dc = (self.plane - self.eye[2]) * self.spacing[2]
+        return da**2, db**2, float(dc**2), 1.0 / abs(self.plane - self.eye[2])
+
     def pixel_lengths(self) -> NDArray[np.float64]:
         """(height, width) world length of one slice-to-slice step along each intermediate ray.
 
@@ -72,12 +83,8 @@ class Factorization:
         per pixel and the same for every slab, so tables are looked up by pixel."""
         if not self.perspective:
             return np.full((self.height, self.width), self.slab_length)
-        a0, b0 = self.origin_ab
-        h = 1.0 / self.scale
-        da = (a0 + h * np.arange(self.width) - self.eye[0]) * self.spacing[0]
-        db = (b0 + h * np.arange(self.height) - self.eye[1]) * self.spacing[1]
-        dc = (self.plane - self.eye[2]) * self.spacing[2]
-        return np.sqrt(da[None, :] ** 2 + db[:, None] ** 2 + dc**2) / abs(self.plane - self.eye[2])
+        col_d2, row_d2, dc2, inv_norm = self.length_terms()
+        return np.sqrt(col_d2[None, :] + row_d2[:, None] + dc2) * inv_norm
 
 
 def index_frame(volume: UniformVolume) -> tuple[NDArray, NDArray, NDArray]:

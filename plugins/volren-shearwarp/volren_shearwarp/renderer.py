@@ -10,12 +10,13 @@ skip links, and one 2D warp makes the final image. It is built only on volren's 
 How a frame goes (module per step):
 1. `factorization`: the principal axis, the per-slice maps onto the intermediate image (shear and
    translation, or shear and scale under perspective), its size (`oversampling` intermediate
-   pixels per output pixel, at least one per voxel) and the warp matrix.
+   pixels per output pixel, at least one per voxel; by default from the TF, `auto_oversampling`)
+   and the warp matrix.
 2. `classified`: the volume copy for that axis and its runs of possibly visible cells for the TF's
    opacity support (rebuilt only when the support changes).
 3. `tables`: pre-integration tables (or post-classification LUTs) for this view's segment lengths.
 4. `composite`: slabs front to back, in blocks of slices, progress after each block.
-5. `warp`: every output pixel's ray resampled from the intermediate image.
+5. `warp`: every output pixel's ray resampled from the intermediate image (Catmull-Rom).
 
 Sampling: the rays cross every slice along the principal axis (shear-warp's own rate: a bilinear
 sample in a slice is an exact trilinear sample, and pre-integration integrates the segment between
@@ -51,13 +52,14 @@ from volren.renderers.base import (
 from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport
 from volren_shearwarp.composite import AVERAGE, MAXIMUM, MINIMUM, composite_slabs, project_slabs
 from volren_shearwarp.factorization import Factorization, WarpMap, factorize
-from volren_shearwarp.tables import TablePool, snap_lengths
+from volren_shearwarp.tables import GRID_MARGIN, TablePool, grid_ids, grid_length, pixel_slots, slot_bounds
 from volren_shearwarp.warp import warp
 
 #: Intermediate rows per dynamically scheduled chunk of the parallel kernels.
 ROW_CHUNK = 4
-#: Progress calls (blocks of slices) per frame.
-BLOCKS = 16
+#: Progress calls (blocks of slices) per frame: each block ends at a barrier of the parallel kernel, which on a
+#: shared machine waits for a preempted thread (16 blocks cost bonsai 30% more than 4 under load).
+BLOCKS = 4
 #: Most planes per slab that `step` may ask for.
 MAX_PLANES_PER_SLAB = 256
 #: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
@@ -68,11 +70,13 @@ MAX_RUN_RADIUS = 3
 MAX_POOL_LENGTHS = 512
 
 OPTIONS: dict[str, tuple[Any, str]] = {
-    "oversampling": (2.0, "intermediate-image pixels per output pixel along each axis (0.25 to 8; at least one per "
-                          "voxel is kept); 2 by default: the warp's bilinear resampling blurs silhouettes by an "
-                          "intermediate pixel, the largest error left at 1"),
+    "oversampling": ("auto", "intermediate-image pixels per output pixel along each axis (0.25 to 8, at least one "
+                             "per voxel is kept), or 'auto': from the TF's sharpness (`auto_oversampling`), 1 for a "
+                             "translucent TF up to 2 for one that makes a voxel opaque"),
     "table_size": (256, "entries per axis of the pre-integration table / classification LUT (16 to 4096)"),
-    "lookup": ("bilinear", "table lookup: 'bilinear' or 'nearest' (the seed's two variants)"),
+    "lookup": ("nearest", "table lookup: 'nearest' or 'bilinear' (the seed's two variants; nearest by default: "
+                          "3x cheaper, RMSE within 0.0005 of bilinear on the shared scenes at 256 entries)"),
+    "warp_filter": ("cubic", "the warp's resampling of the intermediate image: 'cubic' (Catmull-Rom) or 'bilinear'"),
     "empty_space_skipping": (True, "skip the runs of cells the TF makes transparent (true/false)"),
     "early_termination": (True, "stop compositing pixels once opaque (true/false)"),
     "termination_alpha": (0.995, "opacity at which a pixel counts as opaque (0.5 to 1)"),
@@ -92,17 +96,32 @@ def _read_options(options: Mapping[str, Any]) -> dict[str, Any]:
             raise VolrenError(f"renderer shearwarp: option {name} must be a number in [{lo:g}, {hi:g}], got {value!r}")
         return float(value)
 
-    out["oversampling"] = number("oversampling", 0.25, 8.0)
+    if out["oversampling"] != "auto":
+        out["oversampling"] = number("oversampling", 0.25, 8.0)
     out["termination_alpha"] = number("termination_alpha", 0.5, 1.0)
     size = out["table_size"]
     if isinstance(size, bool) or not isinstance(size, int) or not (16 <= size <= 4096):
         raise VolrenError(f"renderer shearwarp: option table_size must be an integer in 16..4096, got {size!r}")
     if out["lookup"] not in ("bilinear", "nearest"):
         raise VolrenError(f"renderer shearwarp: option lookup must be 'bilinear' or 'nearest', got {out['lookup']!r}")
+    if out["warp_filter"] not in ("cubic", "bilinear"):
+        raise VolrenError(f"renderer shearwarp: option warp_filter must be 'cubic' or 'bilinear', got {out['warp_filter']!r}")
     for name in ("empty_space_skipping", "early_termination"):
         if not isinstance(out[name], bool):
             raise VolrenError(f"renderer shearwarp: option {name} must be true or false, got {out[name]!r}")
     return out
+
+
+def auto_oversampling(tf: TransferFunction1D, mean_spacing: float) -> float:
+    """2 tau, clamped to [1, 2], for the largest optical depth tau of one voxel spacing the TF
+    gives. Why: the warp's resampling blurs the intermediate image by about one of its pixels,
+    which costs accuracy only where the image has sharp edges, and those come from TFs that
+    make a voxel or two opaque (silhouettes of surfaces); a translucent TF's image is smooth.
+    Measured on the shared scenes (docs/shearwarp.md): smooth TFs need 1 (bonsai, tau 0.36) to
+    about 1.5 (aneurism's thin vessels, tau 0.92); opaque TFs 2. Compositing costs the square."""
+    alpha = float(np.max(tf.opacity_points[:, 1])) if len(tf.opacity_points) else 0.0
+    tau = -math.log1p(-min(max(alpha, 0.0), 1.0 - 1e-6)) * mean_spacing / tf.opacity_unit_distance
+    return min(max(2.0 * tau, 1.0), 2.0)
 
 
 def _rows(height: int) -> NDArray[np.int64]:
@@ -123,22 +142,22 @@ class ShearWarpRenderer(RendererBase):
                 preintegration=True,
                 shading=True,
                 blend_modes=frozenset(BlendMode),
-                # measured with the full kit (docs/conformance/shearwarp.txt): RMSE up to 0.0049 (the
-                # ramp seen along +x: post-classified samples at the slices), the point 0.058 px off
+                # measured with the full kit (docs/conformance/shearwarp.txt): RMSE up to 0.0058 (the
+                # NaN scene), 0.0049 (the ramp seen along +x), the point 0.058 px off
                 accuracy=Accuracy(rmse=0.01, position_px=0.1),
             )
         },
         backend="cpu",
         summary="shear-warp (numba): RLE empty-space skipping, early termination, pre-integration, 2D warp",
         quality=(
-            QualityLevel("post-classified, oversampling 1, nearest", step=0.5, preintegration=False,
-                         options={"oversampling": 1.0, "lookup": "nearest"}),
-            QualityLevel("pre-integrated, oversampling 1, nearest", step=0.5, preintegration=True,
-                         options={"oversampling": 1.0, "lookup": "nearest"}),
+            QualityLevel("post-classified, oversampling 1", step=0.5, preintegration=False,
+                         options={"oversampling": 1.0}),
             QualityLevel("pre-integrated, oversampling 1", step=0.5, preintegration=True, options={"oversampling": 1.0}),
-            QualityLevel("pre-integrated, oversampling 2 (default)", step=0.5, preintegration=True),
-            QualityLevel("pre-integrated, oversampling 3, step 0.25", step=0.25, preintegration=True,
-                         options={"oversampling": 3.0}),
+            QualityLevel("pre-integrated, oversampling auto (default)", step=0.5, preintegration=True),
+            QualityLevel("pre-integrated, oversampling 2, bilinear lookup", step=0.5, preintegration=True,
+                         options={"oversampling": 2.0, "lookup": "bilinear"}),
+            QualityLevel("pre-integrated, oversampling 3, step 0.25, bilinear lookup", step=0.25, preintegration=True,
+                         options={"oversampling": 3.0, "lookup": "bilinear"}),
         ),
     )  # fmt: skip
     option_help: ClassVar[Mapping[str, str]] = {name: text for name, (_, text) in OPTIONS.items()}
@@ -148,6 +167,7 @@ class ShearWarpRenderer(RendererBase):
         self._classified: ClassifiedVolume | None = None
         self._support: tuple[tuple, OpacitySupport] | None = None
         self._pools: dict[str, TablePool] = {}
+        self._buffers: dict[str, NDArray] = {}
 
     # ------------------------------------------------------------------------- state
     def _volume_changed(self) -> None:
@@ -165,7 +185,17 @@ class ShearWarpRenderer(RendererBase):
         self._classified = None
         self._support = None
         self._pools.clear()
+        self._buffers.clear()
         super().release()
+
+    def _scratch(self, name: str, shape: tuple[int, ...], dtype: type) -> NDArray:
+        """A buffer of `shape` reused from frame to frame (the kernels clear what they use): fresh
+        zeroed arrays cost page faults on every frame."""
+        size = math.prod(shape)
+        flat = self._buffers.get(name)
+        if flat is None or flat.size < size or flat.dtype != dtype:
+            flat = self._buffers[name] = np.empty(max(size, 1), dtype)
+        return flat[:size].reshape(shape)
 
     @property
     def classified(self) -> ClassifiedVolume | None:
@@ -196,7 +226,10 @@ class ShearWarpRenderer(RendererBase):
         assert self._classified is not None
         settings = self.settings
         opts = _read_options(settings.options)
-        fac = factorize(camera, volume, width, height, opts["oversampling"])
+        oversampling = opts["oversampling"]
+        if oversampling == "auto":
+            oversampling = auto_oversampling(tf, volume.mean_spacing)
+        fac = factorize(camera, volume, width, height, oversampling)
         copy = self._classified.copy(fac.axis)
         values = copy.values
         spacing_c = float(fac.spacing[2])
@@ -209,7 +242,6 @@ class ShearWarpRenderer(RendererBase):
         n = int(opts["table_size"])
         order = fac.order
         rows = _rows(fac.height)
-        lengths = fac.pixel_lengths() / planes
         counters: dict[str, float] = {
             "rays": float(fac.width * fac.height), "slices": float(len(order)), "planes_per_slab": float(planes),
             "intermediate_width": float(fac.width), "intermediate_height": float(fac.height),
@@ -217,6 +249,7 @@ class ShearWarpRenderer(RendererBase):
 
         if settings.blend_mode is not BlendMode.COMPOSITE:
             acc = np.zeros((fac.height, fac.width, 2))
+            lengths = fac.pixel_lengths() / planes
             self._blocks(progress, len(order), lambda m0, m1: project_slabs(
                 values, order, m0, m1, planes, fac.alpha_a, fac.beta_a, fac.alpha_b, fac.beta_b, rows, acc,
                 _MODES[settings.blend_mode], lengths))  # fmt: skip
@@ -227,7 +260,7 @@ class ShearWarpRenderer(RendererBase):
             rgb, a = tf.sample(value)
             a = np.where(hit, a, 0.0)
             inter = np.concatenate([rgb * a[..., None], a[..., None]], axis=-1).astype(np.float32)
-            image = self._warp(inter, fac, camera, volume, width, height)
+            image = self._warp(inter, fac, camera, volume, width, height, opts)
             counters["samples"] = float(np.count_nonzero(hit))
             return image, counters
 
@@ -245,16 +278,25 @@ class ShearWarpRenderer(RendererBase):
         else:
             offsets, starts, ends = np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32)
 
-        # tables by segment length: exact for a parallel view, snapped to a fine grid under perspective
-        if fac.perspective:
-            slot_of_pixel, grid = snap_lengths(lengths, volume.mean_spacing)
-        else:
-            slot_of_pixel, grid = np.zeros((1, 1), np.int32), np.array([lengths.flat[0]])
+        # tables by segment length: exact for a parallel view, snapped to a grid under perspective
         shading = bool(settings.shade)
         kind = ("lit" if shading else "pre") if settings.preintegration else "post"
         pool = self._pool(kind, tf, n, lo, hi)
-        slots = pool.gather(tf, n, lo, hi, grid)
-        layers = np.ascontiguousarray(slots[slot_of_pixel]) if fac.perspective else slots.reshape(1, 1)
+        layers = self._scratch("layers", (fac.height, fac.width) if fac.perspective else (1, 1), np.int32)
+        if fac.perspective:
+            col_d2, row_d2, dc2, inv_norm = fac.length_terms()
+            inv_norm /= planes
+            shortest = math.sqrt(col_d2.min() + row_d2.min() + dc2) * inv_norm
+            longest = math.sqrt(col_d2.max() + row_d2.max() + dc2) * inv_norm
+            reference = volume.mean_spacing
+            id_lo, id_hi = grid_ids(shortest, longest, reference)
+            grid = [grid_length(i, reference) for i in range(id_lo, id_hi + 1)]
+            extra = [grid_length(i, reference) for i in range(id_lo - GRID_MARGIN, id_hi + GRID_MARGIN + 1)]
+            slots = pool.gather(tf, n, lo, hi, grid, extra)
+            pixel_slots(col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm), slots, layers)
+        else:
+            grid = [fac.slab_length / planes]
+            layers[0, 0] = pool.gather(tf, n, lo, hi, grid)[0]
         counters["table_lengths"] = float(len(grid))
         front = pool.front
         back = pool.back if pool.back is not None else np.zeros((1, 1, 1, 4), np.float32)
@@ -282,13 +324,13 @@ class ShearWarpRenderer(RendererBase):
         gthr = GRADIENT_EPS * span / volume.mean_spacing
 
         shape = (fac.height, fac.width)
-        rgba = np.zeros(shape + (4,), np.float32)
-        buf_x = np.zeros(shape, np.float32)
-        buf_d = np.zeros(shape, np.float32)
-        buf_s = np.zeros(shape, np.float32)
-        stamp = np.full(shape, -1, np.int32)
-        skip = np.zeros(shape, np.int32)
-        per_row = np.zeros((fac.height, 4), np.int64)
+        rgba = self._scratch("rgba", shape + (4,), np.float32)
+        buf_x = self._scratch("buf_x", shape, np.float32)
+        buf_d = self._scratch("buf_d", shape if shading else (1, 1), np.float32)
+        buf_s = self._scratch("buf_s", shape if shading else (1, 1), np.float32)
+        stamp = self._scratch("stamp", shape, np.int32)
+        skip = self._scratch("skip", shape, np.int32)
+        per_row = self._scratch("per_row", (fac.height, 4), np.int64)
         scale = (n - 1) / (hi - lo)
         inv_sp = 1.0 / fac.spacing
 
@@ -304,7 +346,7 @@ class ShearWarpRenderer(RendererBase):
             )  # fmt: skip
 
         self._blocks(progress, len(order), block)
-        image = self._warp(rgba, fac, camera, volume, width, height)
+        image = self._warp(rgba, fac, camera, volume, width, height, opts)
         totals = per_row.sum(axis=0)
         counters.update(samples=float(totals[0]), empty_pixels_skipped=float(totals[1]),
                         pixels_terminated=float(totals[2]), runs=1.0 if use_runs else 0.0)  # fmt: skip
@@ -329,6 +371,7 @@ class ShearWarpRenderer(RendererBase):
 
     @staticmethod
     def _warp(inter: NDArray[np.float32], fac: Factorization, camera: Camera, volume: UniformVolume,
-              width: int, height: int) -> NDArray[np.float32]:  # fmt: skip
+              width: int, height: int, opts: Mapping[str, Any]) -> NDArray[np.float32]:  # fmt: skip
         wm = WarpMap.build(camera, volume, fac.perm, fac.plane, width, height)
-        return warp(inter, wm.homography, wm.sign, fac.origin_ab, fac.scale, width, height)
+        return warp(inter, wm.homography, wm.sign, fac.origin_ab, fac.scale, width, height,
+                    opts["warp_filter"] == "cubic")

@@ -1,10 +1,16 @@
 """The final 2D warp: each output pixel's ray meets the intermediate image's plane at one point,
-where the composited intermediate image is resampled bilinearly.
+where the composited intermediate image is resampled (Catmull-Rom bicubic by default, or
+bilinear).
 
 Why per output pixel (not per intermediate pixel): it is exactly DESIGN.md's pixel ray through
 NDC ((i + .5) / w * 2 - 1, 1 - (j + .5) / h * 2), so the image lands where every other renderer
 puts it; the map is a 3x3 matrix (`factorization.WarpMap`), affine for a parallel camera and
 projective under perspective. Outside the intermediate image is transparent black.
+
+Why bicubic: the intermediate image is a point-sampled image at about the output's density, and
+bilinear reconstruction blurs it by up to an intermediate pixel (the largest error left at one
+intermediate pixel per output pixel); Catmull-Rom interpolates with a much flatter pass band
+for 4x the taps, far cheaper than compositing more intermediate pixels.
 """
 
 from __future__ import annotations
@@ -16,9 +22,19 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _weights(f, cubic):
+    """Weights of taps -1, 0, 1, 2 at fraction f (Catmull-Rom, or bilinear on taps 0 and 1)."""
+    if not cubic:
+        return 0.0, 1.0 - f, f, 0.0
+    f2 = f * f
+    f3 = f2 * f
+    return (-0.5 * f3 + f2 - 0.5 * f, 1.5 * f3 - 2.5 * f2 + 1.0, -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2)
+
+
 @njit(parallel=True, cache=True, error_model="numpy")
-def warp_image(inter, hom, sign, a0, b0, scale, out):
-    """out[j, i] = bilinear sample of `inter` (premultiplied RGBA) where pixel (i, j)'s ray meets the
+def warp_image(inter, hom, sign, a0, b0, scale, cubic, out):
+    """out[j, i] = `inter` (premultiplied RGBA) resampled where pixel (i, j)'s ray meets the
     plane; then clamped to the output rules (values in [0, 1], colour <= alpha)."""
     height, width = out.shape[0], out.shape[1]
     ih, iw = inter.shape[0], inter.shape[1]
@@ -35,26 +51,28 @@ def warp_image(inter, hom, sign, a0, b0, scale, out):
             b = (hom[1, 0] * x + hom[1, 1] * y + hom[1, 2]) / hw
             p = (a - a0) * scale
             q = (b - b0) * scale
-            if not (p > -1.0 and p < iw and q > -1.0 and q < ih):
+            if not (p > -2.0 and p < iw + 1.0 and q > -2.0 and q < ih + 1.0):
                 continue
             p0 = int(math.floor(p))
             q0 = int(math.floor(q))
-            fp = p - p0
-            fq = q - q0
+            wp0, wp1, wp2, wp3 = _weights(p - p0, cubic)
+            wq0, wq1, wq2, wq3 = _weights(q - q0, cubic)
             r = 0.0
             g = 0.0
             bl = 0.0
             al = 0.0
-            for dq in range(2):
+            for dq in range(-1, 3):
                 qq = q0 + dq
                 if qq < 0 or qq >= ih:
                     continue
-                wq = fq if dq == 1 else 1.0 - fq
-                for dp in range(2):
+                wq = wq0 if dq == -1 else (wq1 if dq == 0 else (wq2 if dq == 1 else wq3))
+                if wq == 0.0:
+                    continue
+                for dp in range(-1, 3):
                     pp = p0 + dp
                     if pp < 0 or pp >= iw:
                         continue
-                    w = wq * (fp if dp == 1 else 1.0 - fp)
+                    w = wq * (wp0 if dp == -1 else (wp1 if dp == 0 else (wp2 if dp == 1 else wp3)))
                     r += w * inter[qq, pp, 0]
                     g += w * inter[qq, pp, 1]
                     bl += w * inter[qq, pp, 2]
@@ -67,9 +85,9 @@ def warp_image(inter, hom, sign, a0, b0, scale, out):
 
 
 def warp(inter: NDArray[np.float32], homography: NDArray[np.float64], sign: float, origin_ab: tuple[float, float],
-         scale: float, width: int, height: int) -> NDArray[np.float32]:  # fmt: skip
+         scale: float, width: int, height: int, cubic: bool = True) -> NDArray[np.float32]:  # fmt: skip
     """The output image (height, width, 4) float32 from the intermediate image."""
     out = np.empty((height, width, 4), np.float32)
     warp_image(inter, np.ascontiguousarray(homography), float(sign), float(origin_ab[0]), float(origin_ab[1]),
-               float(scale), out)  # fmt: skip
+               float(scale), bool(cubic), out)  # fmt: skip
     return out
