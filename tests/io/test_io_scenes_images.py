@@ -86,6 +86,10 @@ TF = "../tfs/ramp.json"
         ("{", "invalid JSON at line 1"),
         ("[]", "a scene must be a JSON object, got list"),
         ({"version": 1, "volume": {"path": "v.vti"}}, "scene has no 'transfer_function'"),
+        (
+            {"version": 1, "kind": "1d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]]},
+            "this is a transfer function, not a scene: give it with --tf",
+        ),
         ({"version": 9, "transfer_function": "x.json"}, "transfer function: "),
         (
             {"version": 9, "transfer_function": {"color": [[0, 1, 1, 1]], "opacity": [[0, 1]]}},

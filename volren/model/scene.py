@@ -118,6 +118,8 @@ class Scene:
             if volume.get(key) is not None and not isinstance(volume.get(key), str):
                 raise VolrenError(f"scene 'volume.{key}' must be a string, got {volume.get(key)!r}")
         if "transfer_function" not in data:
+            if data.get("kind") in ("1d", "2d") or "opacity" in data or "widgets" in data:
+                raise VolrenError("this is a transfer function, not a scene: give it with --tf (and the volume as INPUT)")
             raise VolrenError("scene has no 'transfer_function'")
         size = data.get("size", [512, 512])
         if not isinstance(size, Sequence) or isinstance(size, str) or len(size) != 2:
