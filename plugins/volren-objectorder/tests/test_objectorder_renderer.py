@@ -45,7 +45,7 @@ def draw(volume, tf, camera, size=(40, 32), **settings) -> tuple[np.ndarray, Obj
 def numpy_march(volume: UniformVolume, tf: TransferFunction1D, camera: Camera, w: int, h_px: int, step: float,
                 offsets: np.ndarray) -> np.ndarray:  # fmt: skip
     """A plain ray caster: every pixel ray clipped to the box and the clipping planes, cut into
-    segments of the step at its entry + (phase + j) steps (the first and last shorter), each sampled
+    segments of the step at (phase + j) steps from its origin (the first and last shorter), each sampled
     at its middle, trilinear, post-classified with the opacity corrected to the segment's length,
     front to back."""
     origins, dirs = camera.pixel_rays(w, h_px)
@@ -69,7 +69,8 @@ def numpy_march(volume: UniformVolume, tf: TransferFunction1D, camera: Camera, w
         length = t1[p] - t0[p]
         if not length > 0:
             continue
-        cuts = t0[p] + (offsets[p] + np.arange(0, int(length / hstep) + 2)) * hstep
+        j0 = np.floor(t0[p] / hstep)
+        cuts = (offsets[p] + j0 + np.arange(0, int(length / hstep) + 3)) * hstep
         cuts = cuts[(cuts > t0[p] + 1e-9 * hstep) & (cuts < t1[p] - 1e-9 * hstep)]
         ends = np.concatenate([[t0[p]], cuts, [t1[p]]])
         seg = [((a + b) / 2, b - a) for a, b in zip(ends[:-1], ends[1:], strict=True)]

@@ -11,13 +11,15 @@ perspective views alike (each pixel has its own direction).
 
 Sample positions (world length t along the unit ray from its origin on the near plane), a ray
 caster's midpoint rule: the ray is clipped to the grid's box and the near and far planes, [t0, t1];
-it is cut into segments of the step h at the boundaries t0 + (phase + j) h (the first segment,
-`first` long, is shorter when the pixel's phase is not 0; the last one, `last` long, where the ray
-ends); each segment has one sample, at its middle, standing for its length. That is exactly the
-slicer's post-classified march (samples midway between its sample planes), second order in h:
-sampling a segment off its middle (1/4 or 3/4 of the way) is first order and costs RMSE on smooth
-TFs. Phases: `midpoint` (0: the boundaries start at the entry), `interleaved` (0 and 1/2 on a
-checkerboard: neighbouring pixels sample half a step apart, the seed's Fig. 3d), `random` (seeded).
+it is cut into segments of the step h at the boundaries t = (phase + j) h, counted from the ray's
+origin on the near plane (under a parallel projection: view-aligned planes shared by all pixels;
+the first segment, `first` long, and the last, `last` long, are cut by the box); each segment has
+one sample, at its middle, standing for its length. That is exactly the slicer's post-classified
+march (samples midway between its sample planes), second order in h: sampling a segment off its
+middle (1/4 or 3/4 of the way) is first order and costs RMSE on smooth TFs, and boundaries counted
+from each ray's entry instead of shared planes cost it on opaque ones (engine: 0.043 against 0.038).
+Phases: `midpoint` (0), `interleaved` (0 and 1/2 on a checkerboard: neighbouring pixels sample half
+a step apart, the seed's Fig. 3d), `random` (seeded).
 """
 
 from __future__ import annotations
@@ -60,8 +62,8 @@ def pixel_offsets(mode: str, width: int, height: int, seed: int) -> NDArray[np.f
 
 @njit(cache=True)
 def segments(length, h, phase):
-    """(count, first, last) of a ray `length` long cut at phase + j steps (slivers below 1e-9 h
-    add no sample)."""
+    """(count, first, last) of a ray `length` long cut at phase + j steps from its start (slivers
+    below 1e-9 h add no sample)."""
     if not length > 1e-9 * h:
         return 0, 0.0, 0.0
     first = phase * h if phase > 0.0 else h
@@ -119,7 +121,7 @@ def _fill_rays(inv, width, height, grid_origin, spacing, upper, view_dir, t_far_
             t0 = max(t_in, 0.0)
             t1 = min(t_out, t_far)
             length = t1 - t0 if t1 > t0 else 0.0
-            count, first, last = segments(length, h, offsets[p])
+            count, first, last = segments(length, h, (offsets[p] - t0 / h) % 1.0)  # planes from the origin
             t0_out[p] = t0 if count > 0 else 0.0
             count_out[p] = count
             first_out[p] = first
