@@ -8,7 +8,9 @@ on and off.
 The cached reference images of the shared scenes are for their perspective cameras; the parallel
 ones are rendered here (and cached as volren.testing.reference_images does, $VOLREN_REFERENCE_CACHE)
 at ERROR_SIZE x ERROR_SIZE (default 256: the float64 reference is slow), and the RMSE of both
-renderers is taken at that size. docs/objectorder.md holds a run. The shared folder is
+renderers is taken at that size. FRAMES (default 5) warm frames per median; the machine's load
+average is printed at the start and the end (the timings share the cores with whatever else runs).
+docs/objectorder.md holds a run. The shared folder is
 $VOLREN_SHARED (default ../shared)."""
 
 import os
@@ -33,9 +35,10 @@ def main() -> None:
     names = sys.argv[1].split(",") if len(sys.argv) > 1 else ["ironProt", "bonsai", "engine", "aneurism"]
     styles = sys.argv[2].split(",") if len(sys.argv) > 2 else ["smooth", "spiky", "opaque"]
     size = int(sys.argv[3]) if len(sys.argv) > 3 else 256
-    frames = int(sys.argv[4]) if len(sys.argv) > 4 else 3
+    frames = int(sys.argv[4]) if len(sys.argv) > 4 else 5
     ds = shared_datasets(Path(os.environ.get("VOLREN_SHARED", "../shared")))
     settings = RenderSettings(step=0.5)
+    print("load average (1, 5, 15 min) at the start: %.2f %.2f %.2f" % os.getloadavg(), flush=True)
     print(f"{'scene':17s} {'RMSE oo':>8s} {'RMSE slicer':>11s} | {'HVR':3s} {'ms':>7s} {'cells':>8s} {'occluded':>8s} "
           f"{'nodes':>8s} {'samples':>9s} {'Mcells/s':>8s}", flush=True)  # fmt: skip
     for name in names:
@@ -71,6 +74,7 @@ def main() -> None:
                       f"{c['nodes'] / 1e3:7.0f}K {c['samples'] / 1e3:8.0f}K {c['cells'] / ms / 1e3:8.2f}", flush=True)  # fmt: skip
             print(f"{'':17s} speedup with hidden volume removal: {rows[1][1] / rows[0][1]:.2f}x", flush=True)
         r.release()
+    print("load average (1, 5, 15 min) at the end: %.2f %.2f %.2f" % os.getloadavg(), flush=True)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,8 @@ share the plane crossing they meet at (computed by one formula from the plane's 
 sample of a ray falls in exactly one cell: the same samples as a ray caster's.
 
 Compositing (front to back, premultiplied): post-classified, sample k stands for its segment of
-length h (the last one `rem`), opacity 1 - (1 - a)^(L / d_u); pre-integrated, sample k closes the
+length L (h, or the first or last segment's), opacity 1 - (1 - a)^(L / d_u) (from a table made for L = h,
+or exactly per sample, `_post_table` and `_post`); pre-integrated, sample k closes the
 segment from sample k - 1 (table lookup, length-corrected when it is not h), and the pieces from
 the ray's entry point on the box to the first sample and from the last to the exit point too. Maximum / minimum take
 the samples and the ray's entry and exit points of each cell; average the length-weighted samples.
@@ -28,13 +29,16 @@ import numpy as np
 from numba import njit, prange
 
 from volren_objectorder.occlusion import hom_covered, hom_finish, hom_init, hom_layout
-from volren_objectorder.traversal import child_order_mask, footprint
+from volren_objectorder.patterns import ray_end, sample_length, sample_t
+from volren_objectorder.traversal import child_order_mask, footprint, footprint_affine
 
 COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
 MAX_OPACITY = 1.0 - 1e-6
 
 # indices into the float parameter array
-F_H, F_DU, F_LO, F_SCALE, F_KA, F_KD, F_KS, F_P, F_GTHR, F_TERM, F_LX, F_LY, F_LZ, F_ISX, F_ISY, F_ISZ = range(16)
+(F_H, F_DU, F_LO, F_SCALE, F_KA, F_KD, F_KS, F_P, F_GTHR, F_TERM, F_LX, F_LY, F_LZ, F_ISX, F_ISY, F_ISZ, F_PLO,
+ F_PSCALE) = range(18)  # fmt: skip
+N_F = 18
 # indices into the integer parameter array
 I_MODE, I_PRE, I_SHADE, I_HVR = range(4)
 # per-band counters
@@ -184,6 +188,24 @@ def _post(rgba, p, xs, tab, s, length, fd, sp, fp):
 
 
 @njit(cache=True)
+def _post_table(rgba, p, post, s, fd, sp, fp):
+    """A post-classified full step at value s from `post`, the TF sampled evenly with the opacity
+    already corrected to the step h: a lookup instead of a search over the breakpoints and an exp
+    and a log per sample (every sample but a ray's first and last stands for exactly h)."""
+    n = post.shape[0]
+    fi = min(max((s - fp[F_PLO]) * fp[F_PSCALE], 0.0), n - 1.0)
+    i0 = min(int(fi), n - 2)
+    w = fi - i0
+    alpha = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
+    if alpha <= 0.0:
+        return
+    r = _clamp01((post[i0, 0] + w * (post[i0 + 1, 0] - post[i0, 0])) * fd + sp)
+    g = _clamp01((post[i0, 1] + w * (post[i0 + 1, 1] - post[i0, 1])) * fd + sp)
+    b = _clamp01((post[i0, 2] + w * (post[i0 + 1, 2] - post[i0, 2])) * fd + sp)
+    _over(rgba, p, r * alpha, g * alpha, b * alpha, alpha)
+
+
+@njit(cache=True)
 def _bilinear(table, fi, fj, c):
     n = table.shape[0]
     i0 = min(int(fi), n - 2)
@@ -274,16 +296,8 @@ def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz
 
 
 @njit(cache=True)
-def _sample_t(t0, off, h, full, rem, k):
-    """Where sample k of a ray lies (patterns.RayTable's rule)."""
-    if k < full:
-        return t0 + (k + off) * h
-    return t0 + full * h + off * rem
-
-
-@njit(cache=True)
 def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
-                ro, rd, rwd, rt0, rcount, rfull, rrem, roff, ip, fp, xs, tab, table, front, back,
+                ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                 rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
     """Rows r0..r1 - 1: walk the octree front to back, skipping transparent nodes and (with hidden
     volume removal) nodes on finished pixels, and sample every leaf cell's rays."""
@@ -293,6 +307,7 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
     hvr = ip[I_HVR] != 0 and mode == COMPOSITE
     h = fp[F_H]
     term = fp[F_TERM]
+    use_post = post.shape[0] > 1
     rows = r1 - r0
     hl, hoff, hcols, hsize = hom_layout(rows, width)
     hom = np.empty(hsize, np.int32)
@@ -335,7 +350,12 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
         x1 = min(x0 + size, ncx)
         y1 = min(y0 + size, ncy)
         z1 = min(z0 + size, ncz)
-        c0, c1, fr0, fr1 = footprint(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1), width, height)
+        if perspective:
+            c0, c1, fr0, fr1 = footprint(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
+                                         width, height)  # fmt: skip
+        else:
+            c0, c1, fr0, fr1 = footprint_affine(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
+                                                width, height)  # fmt: skip
         if c0 > c1 or fr0 > fr1:
             continue
         q0 = max(fr0, r0)
@@ -383,15 +403,14 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
                 empty = False
                 for ax in range(3):
                     o = ro[p, ax]
-                    d = rd[p, ax]
                     q = float(i if ax == 0 else (j if ax == 1 else k))
-                    last = (ncx if ax == 0 else (ncy if ax == 1 else ncz)) - 1
-                    if d == 0.0:
-                        if o < q or o > q + 1.0 or (o == q + 1.0 and q < last):
+                    if rd[p, ax] == 0.0:
+                        top_cell = (ncx if ax == 0 else (ncy if ax == 1 else ncz)) - 1
+                        if o < q or o > q + 1.0 or (o == q + 1.0 and q < top_cell):
                             empty = True
                             break
                     else:
-                        inv = 1.0 / d
+                        inv = ri[p, ax]
                         ta = (q - o) * inv
                         tb = (q + 1.0 - o) * inv
                         if ta > tb:
@@ -401,17 +420,16 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
                 if empty or not thi > tlo:
                     continue
                 t0 = rt0[p]
-                off = roff[p]
-                full = rfull[p]
-                rem = rrem[p]
+                first = rfirst[p]
+                last = rlast[p]
                 kk = k0
-                if _sample_t(t0, off, h, full, rem, kk) < tlo:  # samples of skipped cells: pass them
-                    guess = int(math.ceil((tlo - t0) / h - off))
+                if sample_t(t0, first, h, ns, last, kk) < tlo:  # samples of skipped cells: pass them
+                    guess = int(math.ceil((tlo - t0 - first) / h + 0.5))
                     if guess > kk:
                         kk = min(guess, ns)
-                    while kk < ns and _sample_t(t0, off, h, full, rem, kk) < tlo:
+                    while kk < ns and sample_t(t0, first, h, ns, last, kk) < tlo:
                         kk += 1
-                    while kk > k0 and _sample_t(t0, off, h, full, rem, kk - 1) >= tlo:
+                    while kk > k0 and sample_t(t0, first, h, ns, last, kk - 1) >= tlo:
                         kk -= 1
                 dx = rd[p, 0]
                 dy = rd[p, 1]
@@ -428,7 +446,7 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
                     if hn > 0.0:
                         hx, hy, hz = hx / hn, hy / hn, hz / hn
                 if mode == MAXIMUM or mode == MINIMUM:  # the ray's entry and exit points of the cell
-                    t_end = t0 + full * h + rem
+                    t_end = ray_end(t0, first, h, ns, last)
                     te = max(tlo, t0)
                     tx = min(thi, t_end)
                     if te < tx and ns > 0:
@@ -440,14 +458,14 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
                                 acc[p, 0] = min(acc[p, 0], v)
                             acc[p, 1] = 1.0
                 while kk < ns:
-                    t = _sample_t(t0, off, h, full, rem, kk)
+                    t = sample_t(t0, first, h, ns, last, kk)
                     if t >= thi:
                         break
                     fx = _clamp01(ox + t * dx)
                     fy = _clamp01(oy + t * dy)
                     fz = _clamp01(oz + t * dz)
                     s = _trilinear(c8, fx, fy, fz)
-                    length = h if kk < full else rem
+                    length = sample_length(first, h, ns, last, kk)
                     stats[S_SAMPLES] += 1
                     if mode == COMPOSITE:
                         fd = 1.0
@@ -456,13 +474,16 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
                             fd, sp = _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz),
                                             _trilinear_g(g8, 2, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
                         if not pre:
-                            _post(rgba, p, xs, tab, s, length, fd, sp, fp)
+                            if use_post and length == h:
+                                _post_table(rgba, p, post, s, fd, sp, fp)
+                            else:
+                                _post(rgba, p, xs, tab, s, length, fd, sp, fp)
                         else:
                             if kk == 0:  # from the ray's entry point (on the box) to its first sample
                                 _edge(rgba, p, vol, ro, t0, dx, dy, dz, s, t - t0, fd, sp, True, hx, hy, hz,
                                       shade, table, front, back, fp)  # fmt: skip
                             else:
-                                tp = _sample_t(t0, off, h, full, rem, kk - 1)
+                                tp = sample_t(t0, first, h, ns, last, kk - 1)
                                 if prev_k[p] == kk - 1:
                                     sf = prev_s[p]
                                     fd_f = prev_fd[p]
@@ -479,7 +500,7 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
                                 if np.isfinite(sf):
                                     _segment(rgba, p, sf, s, t - tp, fd_f, sp_f, fd, sp, shade, table, front, back, fp)
                             if kk == ns - 1:  # from the last sample to the ray's exit point
-                                t_end = t0 + full * h + rem
+                                t_end = ray_end(t0, first, h, ns, last)
                                 _edge(rgba, p, vol, ro, t_end, dx, dy, dz, s, t_end - t, fd, sp, False, hx, hy, hz,
                                       shade, table, front, back, fp)  # fmt: skip
                             prev_s[p] = s
@@ -508,7 +529,7 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
 
 @njit(cache=True, parallel=True)
 def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
-                 ro, rd, rwd, rt0, rcount, rfull, rrem, roff, ip, fp, xs, tab, table, front, back,
+                 ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                  rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
     """The bands listed in `bands`, in parallel (each band's rows belong to it alone)."""
     for q in prange(bands.shape[0]):
@@ -516,5 +537,16 @@ def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, 
         r0 = b * band_rows
         r1 = min(height, r0 + band_rows)
         render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
-                    ro, rd, rwd, rt0, rcount, rfull, rrem, roff, ip, fp, xs, tab, table, front, back,
+                    ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                     rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats[b])  # fmt: skip
+
+
+@njit(cache=True, parallel=True)
+def finish(rgba, out):
+    """The composited pixels as the image: clamped to [0, 1], colour at most opacity, float32, in
+    one parallel pass (numpy takes four passes over the float64 pixels)."""
+    for p in prange(rgba.shape[0]):
+        a = _clamp01(rgba[p, 3])
+        for c in range(3):
+            out[p, c] = min(_clamp01(rgba[p, c]), a)
+        out[p, 3] = a

@@ -9,12 +9,17 @@ is the index of its next sample: the ray-cell pattern of a cell is then the exac
 pixel of its footprint, which is as cheap as a template lookup and exact for parallel and
 perspective views alike (each pixel has its own direction).
 
-Sample positions (world length t along the unit ray from its origin on the near plane), exactly a
-ray caster's: the ray is clipped to the grid's box and the near and far planes, [t0, t1]; it is cut
-into segments of the step h from t0 (the last one shorter, `rem`); sample k sits at
-t0 + (k + o) h in its segment, o in [0, 1) the pixel's offset (the last, short segment at the same
-fraction o of its length). Offsets: `midpoint` (o = 1/2), `interleaved` (1/4 and 3/4 on a
-checkerboard: neighbouring pixels start half a step apart, the seed's Fig. 3d), `random` (seeded).
+Sample positions (world length t along the unit ray from its origin on the near plane), a ray
+caster's midpoint rule: the ray is clipped to the grid's box and the near and far planes, [t0, t1];
+it is cut into segments of the step h at the boundaries t = (phase + j) h, counted from the ray's
+origin on the near plane (under a parallel projection: view-aligned planes shared by all pixels;
+the first segment, `first` long, and the last, `last` long, are cut by the box); each segment has
+one sample, at its middle, standing for its length. That is exactly the slicer's post-classified
+march (samples midway between its sample planes), second order in h: sampling a segment off its
+middle (1/4 or 3/4 of the way) is first order and costs RMSE on smooth TFs, and boundaries counted
+from each ray's entry instead of shared planes cost it on opaque ones (engine: 0.043 against 0.038).
+Phases: `midpoint` (0), `interleaved` (0 and 1/2 on a checkerboard: neighbouring pixels sample half
+a step apart, the seed's Fig. 3d), `random` (seeded).
 """
 
 from __future__ import annotations
@@ -37,27 +42,44 @@ class RayTable:
 
     origin: NDArray[np.float64]  #: (P, 3) ray origin in grid-index coordinates (x, y, z)
     direction: NDArray[np.float64]  #: (P, 3) index units per world unit along the ray
+    inverse: NDArray[np.float64]  #: (P, 3) 1 / direction (inf along a zero component): divide-free slab tests
     world_direction: NDArray[np.float64]  #: (P, 3) unit world direction (shading's view vector)
-    t0: NDArray[np.float64]  #: (P,) where sampling starts (world length from the origin)
-    count: NDArray[np.int32]  #: (P,) samples of the ray
-    full: NDArray[np.int32]  #: (P,) full-length segments (count - full is 0 or 1)
-    rem: NDArray[np.float64]  #: (P,) length of the last, short segment (0 when none)
-    offset: NDArray[np.float64]  #: (P,) o in [0, 1)
+    t0: NDArray[np.float64]  #: (P,) where the ray enters (world length from the origin)
+    count: NDArray[np.int32]  #: (P,) samples (segments) of the ray
+    first: NDArray[np.float64]  #: (P,) length of the first segment (all of the ray when count is 1)
+    last: NDArray[np.float64]  #: (P,) length of the last segment (h, or shorter where the ray ends)
 
 
 def pixel_offsets(mode: str, width: int, height: int, seed: int) -> NDArray[np.float64]:
-    """The offsets o of every pixel for `mode` (see the module docstring)."""
+    """The phase in [0, 1) of every pixel's segment boundaries for `mode` (see the module docstring)."""
     if mode == "midpoint":
-        return np.full(width * height, 0.5)
+        return np.zeros(width * height)
     if mode == "interleaved":
         jj, ii = np.mgrid[0:height, 0:width]
-        return np.where((ii + jj) % 2 == 0, 0.25, 0.75).reshape(-1)
+        return np.where((ii + jj) % 2 == 0, 0.0, 0.5).reshape(-1)
     return np.random.default_rng(seed).random(width * height)
+
+
+@njit(cache=True)
+def segments(length, h, phase):
+    """(count, first, last) of a ray `length` long cut at phase + j steps from its start (slivers
+    below 1e-9 h add no sample)."""
+    if not length > 1e-9 * h:
+        return 0, 0.0, 0.0
+    first = phase * h if phase > 0.0 else h
+    if length <= first + 1e-9 * h:
+        return 1, length, length
+    rest = length - first
+    full = math.floor(rest / h)
+    rem = rest - full * h
+    if rem > 1e-9 * h:
+        return int(full) + 2, first, rem
+    return int(full) + 1, first, h
 
 
 @njit(cache=True, parallel=True)
 def _fill_rays(inv, width, height, grid_origin, spacing, upper, view_dir, t_far_eye, h, offsets,
-               o_out, d_out, w_out, t0_out, count_out, full_out, rem_out):  # fmt: skip
+               o_out, d_out, i_out, w_out, t0_out, count_out, first_out, last_out):  # fmt: skip
     """Every pixel's ray as `Camera.pixel_rays` makes it (unproject the pixel centre at NDC depth
     -1 and 1), clipped to the box [0, upper] (index space) and the clipping planes."""
     for j in prange(height):
@@ -85,6 +107,7 @@ def _fill_rays(inv, width, height, grid_origin, spacing, upper, view_dir, t_far_
                 d = (dx if a == 0 else (dy if a == 1 else dz)) / spacing[a]
                 o_out[p, a] = o
                 d_out[p, a] = d
+                i_out[p, a] = 1.0 / d if d != 0.0 else math.inf
                 if d == 0.0:
                     if o < 0.0 or o > upper[a]:
                         t_in = math.inf
@@ -98,14 +121,11 @@ def _fill_rays(inv, width, height, grid_origin, spacing, upper, view_dir, t_far_
             t0 = max(t_in, 0.0)
             t1 = min(t_out, t_far)
             length = t1 - t0 if t1 > t0 else 0.0
-            full = math.floor(length / h)
-            rem = length - full * h
-            if not rem > 1e-9 * h:  # a sliver below rounding adds no sample
-                rem = 0.0
-            t0_out[p] = t0 if length > 0.0 else 0.0
-            full_out[p] = int(full)
-            count_out[p] = int(full) + (1 if rem > 0.0 else 0)
-            rem_out[p] = rem
+            count, first, last = segments(length, h, (offsets[p] - t0 / h) % 1.0)  # planes from the origin
+            t0_out[p] = t0 if count > 0 else 0.0
+            count_out[p] = count
+            first_out[p] = first
+            last_out[p] = last
 
 
 def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h: float,
@@ -113,24 +133,43 @@ def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h:
     """Every pixel's ray (through its centre, origin on the near plane) and its samples at step h."""
     inv = np.linalg.inv(camera.projection_matrix(width / height) @ camera.view_matrix())
     p = width * height
-    o, d, w = np.empty((p, 3)), np.empty((p, 3)), np.empty((p, 3))
-    t0, rem = np.empty(p), np.empty(p)
-    count, full = np.empty(p, np.int32), np.empty(p, np.int32)
+    o, d, i, w = np.empty((p, 3)), np.empty((p, 3)), np.empty((p, 3)), np.empty((p, 3))
+    t0, first, last = np.empty(p), np.empty(p), np.empty(p)
+    count = np.empty(p, np.int32)
     near, far = camera.clipping_range
     _fill_rays(inv, width, height, np.asarray(volume.origin, dtype=np.float64),
                np.asarray(volume.spacing, dtype=np.float64), np.asarray(volume.dimensions, dtype=np.float64) - 1.0,
                np.asarray(camera.direction, dtype=np.float64), far - near, float(h), offsets,
-               o, d, w, t0, count, full, rem)  # fmt: skip
-    return RayTable(o, d, w, t0, count, full, rem, np.ascontiguousarray(offsets, dtype=np.float64))
+               o, d, i, w, t0, count, first, last)  # fmt: skip
+    return RayTable(o, d, i, w, t0, count, first, last)
 
 
-def sample_positions(table: RayTable, h: float, pixel: int) -> NDArray[np.float64]:
-    """The t of every sample of one pixel's ray (for tests and comparisons)."""
-    k = np.arange(int(table.count[pixel]), dtype=np.float64)
-    t = table.t0[pixel] + (k + table.offset[pixel]) * h
-    if table.count[pixel] > table.full[pixel]:
-        t[-1] = table.t0[pixel] + table.full[pixel] * h + table.offset[pixel] * table.rem[pixel]
-    return t
+@njit(cache=True)
+def sample_t(t0, first, h, count, last, k):
+    """Where sample k of a ray lies: the middle of its segment."""
+    if k == 0:
+        return t0 + 0.5 * first
+    if k == count - 1:
+        return t0 + first + (k - 1) * h + 0.5 * last
+    return t0 + first + (k - 0.5) * h
+
+
+@njit(cache=True)
+def ray_end(t0, first, h, count, last):
+    """Where the ray's last segment ends (its exit from the box or the far plane)."""
+    if count < 2:
+        return t0 + first
+    return t0 + first + (count - 2) * h + last
+
+
+@njit(cache=True)
+def sample_length(first, h, count, last, k):
+    """The length of the segment sample k stands for."""
+    if k == 0:
+        return first
+    if k == count - 1:
+        return last
+    return h
 
 
 def screen_matrix(camera: Camera, volume: UniformVolume, width: int, height: int) -> NDArray[np.float64]:

@@ -58,11 +58,15 @@ OPTIONS: dict[str, tuple[Any, str]] = {
     "octree_skipping": (True, "skip octree nodes the TF makes transparent (true/false; the image is the same)"),
     "hidden_volume_removal": (True, "stop pixels at termination_alpha and skip octree nodes whose footprint lies on "
                                     "finished pixels (hierarchical occlusion map; true/false; composite only)"),
-    "termination_alpha": (0.995, "opacity at which a pixel counts as opaque (0.5 to 1)"),
-    "depth_offsets": ("interleaved", "where each pixel's samples sit in their step: 'interleaved' (1/4 and 3/4 on a "
-                                     "checkerboard, the seed's), 'midpoint', 'random' (seeded; also the jitter setting)"),
+    "termination_alpha": (0.999, "opacity at which a pixel counts as opaque (0.5 to 1)"),
+    "depth_offsets": ("interleaved", "where each pixel's sample segments start, each sampled at its middle: "
+                                     "'interleaved' (phase 0 and 1/2 of a step on a checkerboard, the seed's), "
+                                     "'midpoint' (all on the same planes), 'random' (seeded; also the jitter setting)"),
     "jitter_seed": (0, "seed of the random depth offsets (an integer >= 0)"),
     "table_size": (256, "entries per axis of the pre-integration table (16 to 4096)"),
+    "classification_table": (4096, "entries of the post-classification table, colour and opacity per full step "
+                                   "(0: classify every sample exactly, a search and an exp and a log each; or 16 "
+                                   "to 65536)"),
     "band_rows": (32, "image rows per parallel band (1 to 4096; smaller bands are used for small images)"),
 }  # fmt: skip
 
@@ -87,10 +91,13 @@ def read_options(options: Mapping[str, Any]) -> dict[str, Any]:
     out["termination_alpha"] = float(t)
     if out["depth_offsets"] not in OFFSET_MODES:
         fail("depth_offsets", "one of " + ", ".join(repr(m) for m in OFFSET_MODES))
-    for name, lo, hi in (("jitter_seed", 0, 2**63 - 1), ("table_size", 16, 4096), ("band_rows", 1, 4096)):
+    for name, lo, hi in (("jitter_seed", 0, 2**63 - 1), ("table_size", 16, 4096), ("band_rows", 1, 4096),
+                         ("classification_table", 0, 65536)):  # fmt: skip
         v = out[name]
         if isinstance(v, bool) or not isinstance(v, int) or not (lo <= v <= hi):
             fail(name, f"an integer in {lo}..{hi}")
+    if 0 < out["classification_table"] < 16:
+        fail("classification_table", "0 or an integer in 16..65536")
     return out
 
 
@@ -106,9 +113,9 @@ class ObjectOrderRenderer(RendererBase):
                 preintegration=True,
                 shading=True,
                 blend_modes=frozenset(BlendMode),
-                # measured with the full kit (docs/conformance/objectorder.txt): RMSE up to 0.015 (the
-                # NaN box: a sample next to the NaN cells stands for its whole step), 0.0064 elsewhere
-                # (the ramp), the point 0.022 px off
+                # measured with the full kit (docs/conformance/objectorder.txt): RMSE up to 0.011 (the
+                # NaN box: a sample next to the NaN cells stands for its whole step), 0.0063 elsewhere
+                # (the ramp), the point 0.024 px off
                 accuracy=Accuracy(rmse=0.02, position_px=0.05),
             )
         },
@@ -127,6 +134,7 @@ class ObjectOrderRenderer(RendererBase):
     def __init__(self) -> None:
         super().__init__()
         self._octree: MinMaxOctree | None = None
+        self._phases: tuple[tuple[str, int, int, int], NDArray[np.float64]] | None = None
 
     # ------------------------------------------------------------------------- state
     def _volume_changed(self) -> None:
@@ -141,6 +149,13 @@ class ObjectOrderRenderer(RendererBase):
     def release(self) -> None:
         self._octree = None
         super().release()
+
+    def _offsets(self, mode: str, width: int, height: int, seed: int) -> NDArray[np.float64]:
+        """The pixels' phases, kept while the mode and image size stay (a frame's worth of numpy)."""
+        key = (mode, width, height, seed)
+        if self._phases is None or self._phases[0] != key:
+            self._phases = (key, pixel_offsets(mode, width, height, seed))
+        return self._phases[1]
 
     @property
     def octree(self) -> MinMaxOctree | None:
@@ -178,7 +193,7 @@ class ObjectOrderRenderer(RendererBase):
         hvr = bool(opts["hidden_volume_removal"]) and composite
 
         offset_mode = "random" if settings.jitter else opts["depth_offsets"]
-        rays = ray_table(camera, volume, width, height, h, pixel_offsets(offset_mode, width, height, opts["jitter_seed"]))
+        rays = ray_table(camera, volume, width, height, h, self._offsets(offset_mode, width, height, opts["jitter_seed"]))
         cls = self._classification(tf, composite, bool(opts["octree_skipping"]), pre, h)
         M = screen_matrix(camera, volume, width, height)
         spacing = np.asarray(volume.spacing, dtype=np.float64)
@@ -202,35 +217,46 @@ class ObjectOrderRenderer(RendererBase):
             front, back = lit.front, lit.back
         elif pre:
             table = preintegrate(tf, n, step=h, value_range=(lo, hi))
+        post = np.zeros((1, 4))  # one row: no table, every sample classified exactly
+        n_post = int(opts["classification_table"])
+        if composite and not pre and n_post:
+            rgb, a = tf.sample(np.linspace(lo, hi, n_post))
+            alpha = -np.expm1(h / tf.opacity_unit_distance * np.log1p(-np.minimum(a, K.MAX_OPACITY)))
+            post = np.ascontiguousarray(np.concatenate([rgb, alpha[:, None]], axis=1), dtype=np.float64)
         light = -np.asarray(camera.direction, dtype=np.float64)
-        fp = np.zeros(16)
+        fp = np.zeros(K.N_F)
         fp[K.F_H], fp[K.F_DU], fp[K.F_LO], fp[K.F_SCALE] = h, tf.opacity_unit_distance, lo, (n - 1) / (hi - lo)
         fp[K.F_KA], fp[K.F_KD], fp[K.F_KS], fp[K.F_P] = settings.ambient, settings.diffuse, settings.specular, settings.specular_power
         fp[K.F_GTHR] = GRADIENT_EPS * (vhi - vlo) / volume.characteristic_length
         fp[K.F_TERM] = opts["termination_alpha"] if hvr else 2.0
         fp[K.F_LX:K.F_LZ + 1] = light
         fp[K.F_ISX:K.F_ISZ + 1] = 1.0 / spacing
+        fp[K.F_PLO], fp[K.F_PSCALE] = lo, (len(post) - 1) / (hi - lo)
         ip = np.array([mode, pre, shade, hvr], dtype=np.int64)
 
         pixels = width * height
+        # per-pixel state; what a mode never reads is one element long (less to allocate and clear)
         rgba = np.zeros((pixels, 4))
-        acc = np.zeros((pixels, 2))
+        acc = np.zeros((pixels if not composite else 1, 2))
         if mode == K.MAXIMUM:
             acc[:, 0] = -np.inf
         elif mode == K.MINIMUM:
             acc[:, 0] = np.inf
         nextk = np.zeros(pixels, np.int32)
-        prev_k = np.full(pixels, -1, np.int32)
-        prev_s = np.zeros(pixels)
-        prev_fd = np.ones(pixels)
-        prev_sp = np.zeros(pixels)
+        n_pre = pixels if pre else 1
+        prev_k = np.full(n_pre, -1, np.int32)
+        prev_s = np.zeros(n_pre)
+        prev_fd = np.ones(n_pre)
+        prev_sp = np.zeros(n_pre)
         finished = np.zeros(pixels, np.uint8)
 
         threads = numba.get_num_threads()
         band_rows = int(min(opts["band_rows"], max(8, math.ceil(height / (4 * threads)))))
         n_bands = math.ceil(height / band_rows)
         stats = np.zeros((n_bands, K.N_STATS))
-        group = 2 * threads
+        # bands are taken one at a time by whichever thread is free (their costs differ widely);
+        # a group per progress call, large enough that no thread idles at a group's end for long
+        group = max(16, 8 * threads)
         order = np.arange(n_bands, dtype=np.int64)
         values = self._octree.values
         for g0 in range(0, n_bands, group):
@@ -239,15 +265,16 @@ class ObjectOrderRenderer(RendererBase):
             try:
                 K.render_bands(bands, band_rows, width, height, values, cls.counts, cls.offsets, cls.shapes, M,
                                not camera.parallel, eye, vdir, rays.origin, rays.direction, rays.world_direction,
-                               rays.t0, rays.count, rays.full, rays.rem, rays.offset, ip, fp, xs, tab, table, front,
-                               back, rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats)  # fmt: skip
+                               rays.inverse, rays.t0, rays.count, rays.first, rays.last, ip, fp, xs, tab, post, table,
+                               front, back, rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats)  # fmt: skip
             finally:
                 numba.set_parallel_chunksize(old)
             if progress is not None:
                 progress(min(1.0, (g0 + len(bands)) / n_bands))
 
         if composite:
-            out = rgba
+            image = np.empty((height, width, 4), np.float32)
+            K.finish(rgba, image.reshape(-1, 4))
         else:
             hit = acc[:, 1] > 0
             value = np.where(hit, acc[:, 0], 0.0)
@@ -256,9 +283,9 @@ class ObjectOrderRenderer(RendererBase):
             rgb, a = tf.sample(value)
             a = np.where(hit, a, 0.0)
             out = np.concatenate([rgb * a[:, None], a[:, None]], axis=1)
-        out = np.clip(out, 0.0, 1.0)
-        out[:, :3] = np.minimum(out[:, :3], out[:, 3:4])
-        image = out.reshape(height, width, 4).astype(np.float32)
+            out = np.clip(out, 0.0, 1.0)
+            out[:, :3] = np.minimum(out[:, :3], out[:, 3:4])
+            image = out.reshape(height, width, 4).astype(np.float32)
 
         totals = stats.sum(axis=0)
         cells, occluded = float(totals[K.S_CELLS]), float(totals[K.S_OCCLUDED_CELLS])

@@ -8,7 +8,8 @@ parallel projection the eye's side is the same for every node (the sign of the d
 perspective it is the side of the split plane the eye is on, per node, which keeps the order exact.
 
 The footprint is the pixel rectangle of the node's eight projected corners (`screen_matrix`); a
-node that reaches behind the eye's plane covers the whole image (conservative).
+node that reaches behind the eye's plane covers the whole image (conservative). Under a parallel
+projection the same rectangle comes from one corner and the edges' images (`footprint_affine`).
 """
 
 from __future__ import annotations
@@ -61,6 +62,36 @@ def footprint(M, x0, y0, z0, x1, y1, z1, width, height):
         umax = max(umax, u)
         vmin = min(vmin, v)
         vmax = max(vmax, v)
+    return pixel_rect(umin, umax, vmin, vmax, width, height)
+
+
+@njit(cache=True)
+def footprint_affine(M, x0, y0, z0, x1, y1, z1, width, height):
+    """`footprint` under a parallel projection (W = 1): the map is affine, so the rectangle is the
+    low corner's image widened by each edge's image on its own side, 6 products instead of 24 and
+    no divisions (the traversal computes one per node visited)."""
+    u = M[0, 0] * x0 + M[0, 1] * y0 + M[0, 2] * z0 + M[0, 3]
+    v = M[1, 0] * x0 + M[1, 1] * y0 + M[1, 2] * z0 + M[1, 3]
+    umin = umax = u
+    vmin = vmax = v
+    for a in range(3):
+        e = (x1 - x0) if a == 0 else ((y1 - y0) if a == 1 else (z1 - z0))
+        du = M[0, a] * e
+        dv = M[1, a] * e
+        if du < 0.0:
+            umin += du
+        else:
+            umax += du
+        if dv < 0.0:
+            vmin += dv
+        else:
+            vmax += dv
+    return pixel_rect(umin, umax, vmin, vmax, width, height)
+
+
+@njit(cache=True)
+def pixel_rect(umin, umax, vmin, vmax, width, height):
+    """(c0, c1, r0, r1): the pixels whose centres lie in [umin, umax] x [vmin, vmax] (a hair wider)."""
     eps = 1e-6
     umin = max(umin, -2.0)  # far off screen: keep the integer conversions in range
     vmin = max(vmin, -2.0)
