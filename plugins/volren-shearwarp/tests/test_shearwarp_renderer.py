@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from volren_shearwarp import ShearWarpRenderer
 from volren_shearwarp.factorization import factorize
+from volren_shearwarp.renderer import auto_oversampling, auto_table_size, voxel_optical_depth
 
 from volren.errors import VolrenError
 from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume
@@ -235,3 +236,28 @@ def test_shading_and_lookups_render(pre, lookup):
                          options={"lookup": lookup})  # fmt: skip
     assert np.abs(lit - plain).max() > 0.02
     assert renderer.last_frame.counters["planes_per_slab"] == 2
+
+
+def test_a_fast_frame_is_one_block_and_can_still_be_cancelled():
+    """Blocks of slices follow the previous frame's time (one parallel launch for a fast frame), and
+    the one progress call of such a frame still cancels it."""
+    volume = field()
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    _, renderer = draw(volume, SMOOTH_TF, camera, preintegration=True)
+    calls: list[float] = []
+    renderer.render(camera, 40, 32, progress=calls.append)
+    assert calls == [1.0]
+
+    def cancel(fraction: float) -> None:
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        renderer.render(camera.azimuth(10), 40, 32, progress=cancel)
+
+
+def test_auto_levels_follow_the_tf_sharpness():
+    """Translucent TFs get one intermediate pixel per voxel at least and 128 table entries; sharp ones 2 and 256."""
+    translucent = voxel_optical_depth(TransferFunction1D.ramp(0.0, 1.0, 0.2), 1.0)
+    opaque = voxel_optical_depth(TransferFunction1D.ramp(0.0, 1.0, 0.95), 1.0)
+    assert (auto_oversampling(translucent), auto_table_size(translucent)) == (0.5, 128)
+    assert (auto_oversampling(opaque), auto_table_size(opaque)) == (2.0, 256)

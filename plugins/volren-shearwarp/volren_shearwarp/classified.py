@@ -230,6 +230,11 @@ class ClassifiedVolume:
     volume: UniformVolume
     copies: dict[int, AxisCopy] = field(default_factory=dict)
     copy_ms: dict[int, float] = field(default_factory=dict)
+    has_nan: bool = field(init=False)
+
+    def __post_init__(self) -> None:
+        # the compositing kernels test segments for NaN only when the volume has one (a test per segment)
+        self.has_nan = bool(np.isnan(self.volume.values).any()) if self.volume.values.dtype.kind == "f" else False
 
     def copy(self, axis: int) -> AxisCopy:
         found = self.copies.get(axis)

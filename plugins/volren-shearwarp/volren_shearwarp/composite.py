@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 #: Modes of `project_slabs`.
@@ -302,47 +303,86 @@ def _blend(rgba, q, p, cr, cg, cb, alpha):
 @njit(cache=True, inline="always", error_model="numpy")
 def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p0, p1, rgba, buf_x, stamp, skip,
                layers, per_pixel_layer, table, lut, preintegrated, bilinear_lookup, lo, scale,
-               use_termination, term_alpha):  # fmt: skip
+               use_termination, term_alpha, has_nan):  # fmt: skip
     """Pixels p0..p1 of row q whose whole segment lies inside the slab, one segment per slab, no
-    lighting: the common case, with no clipping or clamping. Returns (segments, terminated)."""
-    na = vol.shape[2]
+    lighting: the common case (most of a frame's segments). Returns (segments, terminated).
+
+    Why it is written this way (each measured on bonsai, in isolation): float32 arithmetic
+    (values, table coordinates, blending) with no float64 promotion, 1D row views hoisted out of
+    the loop and unsigned column indices (no negative-index wrap-around per access), no clipping
+    or clamping of the sample position, blending without a test on the segment's opacity, and the
+    default nearest pre-integrated lookup inline (other lookups through `_segment`, cast back to
+    float32): together about 25% less time per segment than the general path's helpers."""
+    one = np.uint32(1)
+    lo32 = np.float32(lo)
+    sc32 = np.float32(scale)
+    wbb = np.float32(fbb)
+    wbf = np.float32(fbf)
+    half = np.float32(0.5)
+    n = table.shape[1]
+    back0 = vol[kb, ibb]
+    back1 = vol[kb, ibb + 1]
+    front0 = vol[kf, ibf]
+    front1 = vol[kf, ibf + 1]
+    image = rgba[q]
+    stamps = stamp[q]
+    values = buf_x[q]
+    links = skip[q]
+    row_layers = layers[q] if per_pixel_layer else layers[0]
+    layer = layers[0, 0]
     n_comp = 0
     n_term = 0
     p = p0
-    layer = layers[0, 0]
     while p < p1:
-        if use_termination and skip[q, p] > 0:
+        if use_termination and links[p] > 0:
             p = _next_open(skip, q, p, p1)
             if p >= p1:
                 break
-        ab = ab0 + abs_ * p
-        ia = min(int(ab), na - 2)
-        fa = ab - ia
-        v0 = vol[kb, ibb, ia] + (vol[kb, ibb, ia + 1] - vol[kb, ibb, ia]) * fa
-        v1 = vol[kb, ibb + 1, ia] + (vol[kb, ibb + 1, ia + 1] - vol[kb, ibb + 1, ia]) * fa
-        xb = (v0 + (v1 - v0) * fbb - lo) * scale
-        if stamp[q, p] == plane:
-            xf = buf_x[q, p]
+        a = ab0 + abs_ * p
+        ia = np.uint32(a)
+        fa = np.float32(a - ia)
+        v0 = back0[ia] + (back0[ia + one] - back0[ia]) * fa
+        v1 = back1[ia] + (back1[ia + one] - back1[ia]) * fa
+        xb = (v0 + (v1 - v0) * wbb - lo32) * sc32
+        if stamps[p] == plane:
+            xf = values[p]
         else:
-            af = af0 + afs * p
-            ia = min(int(af), na - 2)
-            fa = af - ia
-            v0 = vol[kf, ibf, ia] + (vol[kf, ibf, ia + 1] - vol[kf, ibf, ia]) * fa
-            v1 = vol[kf, ibf + 1, ia] + (vol[kf, ibf + 1, ia + 1] - vol[kf, ibf + 1, ia]) * fa
-            xf = (v0 + (v1 - v0) * fbf - lo) * scale
-        stamp[q, p] = plane + 1
-        buf_x[q, p] = xb
-        if xf == xf and xb == xb:
-            if per_pixel_layer:
-                layer = layers[q, p]
-            cr, cg, cb, alpha = _segment(xf, xb, 1.0, 0.0, 1.0, 0.0, layer, table, table, lut, preintegrated,
-                                         False, bilinear_lookup)  # fmt: skip
-            n_comp += 1
-            if alpha > 0.0:
-                _blend(rgba, q, p, cr, cg, cb, alpha)
-                if use_termination and rgba[q, p, 3] >= term_alpha:
-                    skip[q, p] = 1
-                    n_term += 1
+            a = af0 + afs * p
+            ia = np.uint32(a)
+            fa = np.float32(a - ia)
+            v0 = front0[ia] + (front0[ia + one] - front0[ia]) * fa
+            v1 = front1[ia] + (front1[ia + one] - front1[ia]) * fa
+            xf = (v0 + (v1 - v0) * wbf - lo32) * sc32
+        stamps[p] = plane + 1
+        values[p] = xb
+        if has_nan and (xf != xf or xb != xb):
+            p += 1
+            continue
+        if per_pixel_layer:
+            layer = row_layers[p]
+        if preintegrated and not bilinear_lookup:
+            i = min(max(np.int32(xf + half), 0), n - 1)
+            j = min(max(np.int32(xb + half), 0), n - 1)
+            cr = table[layer, i, j, 0]
+            cg = table[layer, i, j, 1]
+            cb = table[layer, i, j, 2]
+            alpha = table[layer, i, j, 3]
+        else:
+            r, g, b, a_ = _segment(xf, xb, 1.0, 0.0, 1.0, 0.0, layer, table, table, lut, preintegrated, False,
+                                   bilinear_lookup)  # fmt: skip
+            cr = np.float32(r)
+            cg = np.float32(g)
+            cb = np.float32(b)
+            alpha = np.float32(a_)
+        t = np.float32(1.0) - image[p, 3]
+        image[p, 0] += t * cr
+        image[p, 1] += t * cg
+        image[p, 2] += t * cb
+        image[p, 3] += t * alpha
+        n_comp += 1
+        if use_termination and image[p, 3] >= term_alpha:
+            links[p] = 1
+            n_term += 1
         p += 1
     return n_comp, n_term
 
@@ -368,7 +408,7 @@ def composite_slabs(
     vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows,
     rgba, buf_x, buf_d, buf_s, stamp, skip,
     layers, per_pixel_layer, table, table_back, lut, preintegrated, bilinear_lookup, lo, scale,
-    offsets, starts, ends, use_runs, use_termination, term_alpha,
+    offsets, starts, ends, use_runs, use_termination, term_alpha, has_nan,
     shading, light, half, ray_dirs, ka, kd, ks, power, gthr, inv_sp,
     counters,
 ):  # fmt: skip
@@ -451,7 +491,7 @@ def composite_slabs(
                 if f1 > f0:
                     c, t = _fast_span(vol, kf, kb, m - 1, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, f0, f1,
                                       rgba, buf_x, stamp, skip, layers, per_pixel_layer, table, lut, preintegrated,
-                                      bilinear_lookup, lo, scale, use_termination, term_alpha)  # fmt: skip
+                                      bilinear_lookup, lo, scale, use_termination, term_alpha, has_nan)  # fmt: skip
                     n_comp += c
                     n_term += t
                 p = lo_p

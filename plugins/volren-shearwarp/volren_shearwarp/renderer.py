@@ -32,7 +32,8 @@ _height, table_lengths.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+import time
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 import numba
@@ -57,23 +58,34 @@ from volren_shearwarp.warp import warp
 
 #: Intermediate rows per dynamically scheduled chunk of the parallel kernels.
 ROW_CHUNK = 4
-#: Progress calls (blocks of slices) per frame: each block ends at a barrier of the parallel kernel, which on a
-#: shared machine waits for a preempted thread (16 blocks cost bonsai 30% more than 4 under load).
-BLOCKS = 4
+#: Compositing time (ms, the previous frame's) per block of slices, one progress call after each block. Why not
+#: a fixed count: each block is a parallel launch ending at a barrier, which on a shared machine waits for a
+#: preempted thread (16 blocks cost bonsai 30% more than 4 under load), so a fast frame runs as one launch and
+#: a slow one (large volume, fine settings) still reports progress, and can be cancelled, every ~BLOCK_MS.
+BLOCK_MS = 60.0
+#: Blocks per frame at most, and for the first frame (no measurement yet).
+MAX_BLOCKS, FIRST_BLOCKS = 16, 4
 #: Most planes per slab that `step` may ask for.
 MAX_PLANES_PER_SLAB = 256
 #: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
 GRADIENT_EPS = 1e-6
 #: Runs are built for rays moving up to this many cells per slice (steeper views go without).
 MAX_RUN_RADIUS = 3
+#: Runs are built for at least this radius: perspective views turning about an axis cross max shear 1 (a
+#: rebuild of 140 ms on bonsai), and radius 2 composites no more than 1 on bonsai (within 2%).
+MIN_RUN_RADIUS = 2
+#: Under perspective, tables are made for segment lengths up to this many times the axial slab length at once
+#: (rays 60 degrees off the principal axis; bonsai turning about its axes needs up to 2.05).
+TURNING_SPAN = 2.0
 #: A pool holding more lengths than this is started afresh.
 MAX_POOL_LENGTHS = 512
 
 OPTIONS: dict[str, tuple[Any, str]] = {
     "oversampling": ("auto", "intermediate-image pixels per output pixel along each axis (0.25 to 8, at least one "
-                             "per voxel is kept), or 'auto': from the TF's sharpness (`auto_oversampling`), 1 for a "
+                             "per voxel is kept), or 'auto': from the TF's sharpness (`auto_oversampling`), 0.5 for a "
                              "translucent TF up to 2 for one that makes a voxel opaque"),
-    "table_size": (256, "entries per axis of the pre-integration table / classification LUT (16 to 4096)"),
+    "table_size": ("auto", "entries per axis of the pre-integration table / classification LUT (16 to 4096), or "
+                           "'auto': 128 for a translucent TF, 256 otherwise (`auto_table_size`)"),
     "lookup": ("nearest", "table lookup: 'nearest' or 'bilinear' (the seed's two variants; nearest by default: "
                           "3x cheaper, RMSE within 0.0005 of bilinear on the shared scenes at 256 entries)"),
     "warp_filter": ("cubic", "the warp's resampling of the intermediate image: 'cubic' (Catmull-Rom) or 'bilinear'"),
@@ -100,8 +112,8 @@ def _read_options(options: Mapping[str, Any]) -> dict[str, Any]:
         out["oversampling"] = number("oversampling", 0.25, 8.0)
     out["termination_alpha"] = number("termination_alpha", 0.5, 1.0)
     size = out["table_size"]
-    if isinstance(size, bool) or not isinstance(size, int) or not (16 <= size <= 4096):
-        raise VolrenError(f"renderer shearwarp: option table_size must be an integer in 16..4096, got {size!r}")
+    if size != "auto" and (isinstance(size, bool) or not isinstance(size, int) or not (16 <= size <= 4096)):
+        raise VolrenError(f"renderer shearwarp: option table_size must be 'auto' or an integer in 16..4096, got {size!r}")
     if out["lookup"] not in ("bilinear", "nearest"):
         raise VolrenError(f"renderer shearwarp: option lookup must be 'bilinear' or 'nearest', got {out['lookup']!r}")
     if out["warp_filter"] not in ("cubic", "bilinear"):
@@ -112,16 +124,32 @@ def _read_options(options: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def auto_oversampling(tf: TransferFunction1D, mean_spacing: float) -> float:
-    """2 tau, clamped to [1, 2], for the largest optical depth tau of one voxel spacing the TF
-    gives. Why: the warp's resampling blurs the intermediate image by about one of its pixels,
-    which costs accuracy only where the image has sharp edges, and those come from TFs that
-    make a voxel or two opaque (silhouettes of surfaces); a translucent TF's image is smooth.
-    Measured on the shared scenes (docs/shearwarp.md): smooth TFs need 1 (bonsai, tau 0.36) to
-    about 1.5 (aneurism's thin vessels, tau 0.92); opaque TFs 2. Compositing costs the square."""
+def voxel_optical_depth(tf: TransferFunction1D, mean_spacing: float) -> float:
+    """The largest optical depth tau of one voxel spacing the TF gives (its sharpness, for the 'auto' options)."""
     alpha = float(np.max(tf.opacity_points[:, 1])) if len(tf.opacity_points) else 0.0
-    tau = -math.log1p(-min(max(alpha, 0.0), 1.0 - 1e-6)) * mean_spacing / tf.opacity_unit_distance
-    return min(max(2.0 * tau, 1.0), 2.0)
+    return -math.log1p(-min(max(alpha, 0.0), 1.0 - 1e-6)) * mean_spacing / tf.opacity_unit_distance
+
+
+def auto_oversampling(tau: float) -> float:
+    """2 tau, clamped to [0.5, 2] (the factorization keeps at least one intermediate pixel per
+    voxel whatever this is). Why: the warp's resampling blurs the intermediate image by about one
+    of its pixels, which costs accuracy only where the image has sharp edges, and those come from
+    TFs that make a voxel or two opaque (silhouettes of surfaces); a translucent TF's image is as
+    smooth as the data, which one intermediate pixel per voxel resolves even where a voxel covers
+    more than one output pixel. Measured on the shared scenes (docs/shearwarp.md): bonsai smooth
+    (tau 0.36) RMSE 0.0025 at 1 and 0.0032 at one pixel per voxel, with 1.7x fewer segments;
+    aneurism's thin vessels (tau 0.92) need about 1.5; opaque TFs 2. Compositing costs the square."""
+    return min(max(2.0 * tau, 0.5), 2.0)
+
+
+def auto_table_size(tau: float) -> int:
+    """128 entries where 2 tau < 1 (the TFs `auto_oversampling` draws at under one intermediate pixel
+    per output pixel), else 256. Why: a segment's table entry is off by the TF's change over half an
+    entry's value step, which matters in proportion to the segment's opacity, small for a translucent
+    TF; a table of 128 entries is 4x smaller and cheaper to build. Measured (docs/shearwarp.md):
+    bonsai smooth RMSE 0.00323 -> 0.00325, 15% less frame time, a colour edit 215 -> 94 ms; on spiky
+    and opaque TFs 128 entries cost up to 0.0011 (bonsai spiky), so they keep 256."""
+    return 128 if 2.0 * tau < 1.0 else 256
 
 
 def _rows(height: int) -> NDArray[np.int64]:
@@ -168,6 +196,7 @@ class ShearWarpRenderer(RendererBase):
         self._support: tuple[tuple, OpacitySupport] | None = None
         self._pools: dict[str, TablePool] = {}
         self._buffers: dict[str, NDArray] = {}
+        self._slab_ms: float | None = None  # the last frame's slab loop (ms), which sets the block count
 
     # ------------------------------------------------------------------------- state
     def _volume_changed(self) -> None:
@@ -227,10 +256,12 @@ class ShearWarpRenderer(RendererBase):
         settings = self.settings
         opts = _read_options(settings.options)
         oversampling = opts["oversampling"]
+        tau = voxel_optical_depth(tf, volume.mean_spacing)
         if oversampling == "auto":
-            oversampling = auto_oversampling(tf, volume.mean_spacing)
+            oversampling = auto_oversampling(tau)
         fac = factorize(camera, volume, width, height, oversampling)
         copy = self._classified.copy(fac.axis)
+        has_nan = self._classified.has_nan
         values = copy.values
         spacing_c = float(fac.spacing[2])
         planes = int(min(MAX_PLANES_PER_SLAB, max(1, math.ceil(spacing_c / (2.0 * settings.step * volume.mean_spacing) - 1e-9))))
@@ -239,7 +270,7 @@ class ShearWarpRenderer(RendererBase):
         lo, hi = min(vlo, tlo), max(vhi, thi)
         if not hi > lo:
             hi = lo + 1.0
-        n = int(opts["table_size"])
+        n = auto_table_size(tau) if opts["table_size"] == "auto" else int(opts["table_size"])
         order = fac.order
         rows = _rows(fac.height)
         counters: dict[str, float] = {
@@ -270,7 +301,7 @@ class ShearWarpRenderer(RendererBase):
                 progress(1.0)
             counters.update(samples=0.0, empty_pixels_skipped=0.0, pixels_terminated=0.0, table_lengths=0.0)
             return np.zeros((height, width, 4), np.float32), counters
-        radius = max(1, math.ceil(fac.max_shear - 1e-9))
+        radius = max(MIN_RUN_RADIUS, math.ceil(fac.max_shear - 1e-9))
         use_runs = bool(opts["empty_space_skipping"]) and radius <= MAX_RUN_RADIUS
         if use_runs:
             runs = self._classified.runs(fac.axis, support, radius)
@@ -291,7 +322,12 @@ class ShearWarpRenderer(RendererBase):
             reference = volume.mean_spacing
             id_lo, id_hi = grid_ids(shortest, longest, reference)
             grid = [grid_length(i, reference) for i in range(id_lo, id_hi + 1)]
-            extra = [grid_length(i, reference) for i in range(id_lo - GRID_MARGIN, id_hi + GRID_MARGIN + 1)]
+            # the batch that makes missing tables also makes every length from the axial one to TURNING_SPAN x it:
+            # a camera turning about the volume then rarely waits for tables (without, bonsai turning 2 degrees a
+            # frame needed a batch every 2-3 frames, about 9 ms a frame)
+            ax_lo, ax_hi = grid_ids(spacing_c / planes, TURNING_SPAN * spacing_c / planes, reference)
+            extra = [grid_length(i, reference)
+                     for i in range(min(id_lo, ax_lo) - GRID_MARGIN, max(id_hi, ax_hi) + GRID_MARGIN + 1)]
             slots = pool.gather(tf, n, lo, hi, grid, extra)
             pixel_slots(col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm), slots, layers)
         else:
@@ -341,6 +377,7 @@ class ShearWarpRenderer(RendererBase):
                 layers, fac.perspective, table, back, lut, bool(settings.preintegration),
                 opts["lookup"] == "bilinear", float(lo), float(scale),
                 offsets, starts, ends, use_runs, bool(opts["early_termination"]), float(opts["termination_alpha"]),
+                has_nan,
                 shading, light, half, ray_dirs, float(settings.ambient), float(settings.diffuse),
                 float(settings.specular), float(settings.specular_power), float(gthr), inv_sp, per_row,
             )  # fmt: skip
@@ -352,22 +389,26 @@ class ShearWarpRenderer(RendererBase):
                         pixels_terminated=float(totals[2]), runs=1.0 if use_runs else 0.0)  # fmt: skip
         return image, counters
 
-    @staticmethod
-    def _blocks(progress: ProgressCallback | None, slices: int, run) -> None:
-        """Slices 1.. in BLOCKS blocks, progress after each (the callback may raise: it propagates)."""
-        edges = np.unique(np.linspace(1, max(slices, 1), BLOCKS + 1).round().astype(int))
+    def _blocks(self, progress: ProgressCallback | None, slices: int, run: Callable[[int, int], None]) -> None:
+        """Slices 1.. in blocks of about BLOCK_MS, progress after each (the callback may raise: it propagates)."""
+        spent = 0.0
+        count = FIRST_BLOCKS if self._slab_ms is None else min(MAX_BLOCKS, max(1, round(self._slab_ms / BLOCK_MS)))
+        edges = np.unique(np.linspace(1, max(slices, 1), count + 1).round().astype(int))
         if len(edges) < 2:
             edges = np.array([1, max(slices, 1)])
         for m0, m1 in zip(edges[:-1], edges[1:], strict=False):
             old = numba.set_parallel_chunksize(ROW_CHUNK)
+            start = time.perf_counter()
             try:
                 run(int(m0), int(m1))
             finally:
                 numba.set_parallel_chunksize(old)
+            spent += time.perf_counter() - start
             if progress is not None:
                 progress(float(m1) / max(slices, 1))
         if progress is not None and edges[-1] < slices:
             progress(1.0)
+        self._slab_ms = spent * 1000.0
 
     @staticmethod
     def _warp(inter: NDArray[np.float32], fac: Factorization, camera: Camera, volume: UniformVolume,

@@ -7,8 +7,9 @@ are snapped to a geometric grid L_ref r^i (r = `LENGTH_RATIO`, anchored at a fix
 grid does not move with the camera): the opacity of a segment is off by at most (r - 1) / 2 of its
 optical depth, 1% at r = 1.02, and the tables of a turning camera are mostly the ones already
 made. Each length's table is computed once per TF version and kept in a pool; a frame that needs
-lengths the pool lacks computes them in one batch with `GRID_MARGIN` more on each side, so that a
-turning camera rarely waits for a table (about 2.7 ms each at n = 256, batched).
+lengths the pool lacks computes them in one batch with the lengths that any view along the same
+axis needs (the renderer's choice) and `GRID_MARGIN` more on each side, so that a turning camera
+does not wait for tables (about 2.7 ms each at n = 256, batched).
 """
 
 from __future__ import annotations
