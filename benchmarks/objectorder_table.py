@@ -38,7 +38,7 @@ def main() -> None:
     frames = int(sys.argv[4]) if len(sys.argv) > 4 else 5
     ds = shared_datasets(Path(os.environ.get("VOLREN_SHARED", "../shared")))
     settings = RenderSettings(step=0.5)
-    print("load average (1, 5, 15 min) at the start: %.2f %.2f %.2f" % os.getloadavg(), flush=True)
+    print("load average (1, 5, 15 min) at the start: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()), flush=True)
     print(f"{'scene':17s} {'RMSE oo':>8s} {'RMSE slicer':>11s} | {'HVR':3s} {'ms':>7s} {'cells':>8s} {'occluded':>8s} "
           f"{'nodes':>8s} {'samples':>9s} {'Mcells/s':>8s}", flush=True)  # fmt: skip
     for name in names:
@@ -74,7 +74,7 @@ def main() -> None:
                       f"{c['nodes'] / 1e3:7.0f}K {c['samples'] / 1e3:8.0f}K {c['cells'] / ms / 1e3:8.2f}", flush=True)  # fmt: skip
             print(f"{'':17s} speedup with hidden volume removal: {rows[1][1] / rows[0][1]:.2f}x", flush=True)
         r.release()
-    print("load average (1, 5, 15 min) at the end: %.2f %.2f %.2f" % os.getloadavg(), flush=True)
+    print("load average (1, 5, 15 min) at the end: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()), flush=True)
 
 
 if __name__ == "__main__":
