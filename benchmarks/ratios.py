@@ -1,0 +1,55 @@
+"""`python -m benchmarks.ratios RUNS.csv RENDERER`: one renderer's speed against each other
+renderer at equal or lower error, from one `volren bench run`'s runs.csv.
+
+For every setting of every other renderer (a row of runs.csv), the fastest setting of RENDERER
+whose RMSE is at most that row's, and the time ratio (other ms / ours ms: above 1, ours is faster).
+Prints, per TF and peer renderer, the ratio at the peer's fastest setting that RENDERER reaches and
+the range over all the peer's settings it reaches.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+
+def ratios(rows: list[dict], ours: str) -> dict[tuple[str, str, str], list[tuple[float, float, str, str]]]:
+    """(dataset, tf, peer) -> [(ratio, peer ms, peer settings, our settings)] over the peer's rows we reach."""
+    mine = defaultdict(list)
+    for r in rows:
+        if r["renderer"] == ours:
+            mine[r["dataset"], r["tf"]].append((float(r["rmse"]), float(r["ms"]), r["settings"]))
+    out: dict[tuple[str, str, str], list[tuple[float, float, str, str]]] = defaultdict(list)
+    for r in rows:
+        if r["renderer"] == ours:
+            continue
+        reach = [m for m in mine[r["dataset"], r["tf"]] if m[0] <= float(r["rmse"])]
+        if reach:
+            best = min(reach, key=lambda m: m[1])
+            out[r["dataset"], r["tf"], r["renderer"]].append((float(r["ms"]) / best[1], float(r["ms"]), r["settings"], best[2]))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.ratios", description=__doc__.split("\n")[0])
+    parser.add_argument("runs", type=Path, help="runs.csv of `volren bench run`")
+    parser.add_argument("renderer", help="the renderer measured against the others")
+    args = parser.parse_args(argv)
+    with args.runs.open() as f:
+        rows = list(csv.DictReader(f))
+    found = ratios(rows, args.renderer)
+    print("| dataset | TF | peer | ratio at the peer's fastest setting reached | range over the peer's settings reached |")
+    print("|---|---|---|---|---|")
+    for (dataset, tf, peer), items in sorted(found.items()):
+        fastest = min(items, key=lambda i: i[1])
+        lo, hi = min(i[0] for i in items), max(i[0] for i in items)
+        print(f"| {dataset} | {tf} | {peer} | {fastest[0]:.2f} ({fastest[2]}: {fastest[1]:.0f} ms; ours: {fastest[3]}) "
+              f"| {lo:.2f}-{hi:.2f} ({len(items)} settings) |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,32 @@
+"""`python -m benchmarks.ratios`: a renderer against each peer setting at equal or lower error."""
+
+from __future__ import annotations
+
+import csv
+
+from benchmarks import ratios
+
+ROWS = [
+    {"dataset": "d", "tf": "t", "renderer": "ours", "settings": "fast", "ms": "10", "rmse": "0.02"},
+    {"dataset": "d", "tf": "t", "renderer": "ours", "settings": "fine", "ms": "40", "rmse": "0.005"},
+    {"dataset": "d", "tf": "t", "renderer": "peer", "settings": "coarse", "ms": "50", "rmse": "0.03"},
+    {"dataset": "d", "tf": "t", "renderer": "peer", "settings": "exact", "ms": "200", "rmse": "0.01"},
+    {"dataset": "d", "tf": "t", "renderer": "peer", "settings": "beyond", "ms": "900", "rmse": "0.001"},
+]
+
+
+def test_the_fastest_of_ours_at_or_below_each_peer_error():
+    found = ratios.ratios(ROWS, "ours")[("d", "t", "peer")]
+    # coarse: our fast setting (5x); exact: only the fine one reaches 0.01 (5x); beyond: none reaches
+    assert sorted(found) == [(5.0, 50.0, "coarse", "fast"), (5.0, 200.0, "exact", "fine")]
+
+
+def test_the_table(tmp_path, capsys):
+    path = tmp_path / "runs.csv"
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(ROWS[0]))
+        writer.writeheader()
+        writer.writerows(ROWS)
+    assert ratios.main([str(path), "ours"]) == 0
+    out = capsys.readouterr().out
+    assert "| d | t | peer | 5.00 (coarse: 50 ms; ours: fast) | 5.00-5.00 (2 settings) |" in out
