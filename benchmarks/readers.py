@@ -21,9 +21,7 @@ from __future__ import annotations
 
 import argparse
 import gzip
-import statistics
 import tempfile
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -33,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from benchmarks._cli import run
+from benchmarks.preint import median_seconds
 from volren.bench.datasets import shared_folder
 
 
@@ -51,14 +50,10 @@ WRITTEN = ("legacy .vtk", "MetaImage .mha", "MetaImage .mha zlib", "NRRD raw", "
            "NIfTI .nii", "NIfTI .nii.gz", "SLC (RLE)", "DICOM (256 slices)")  # fmt: skip
 
 
-def _median_ms(read: Callable[[], object], repeats: int) -> float:
-    read()  # warm: imports, page cache, numba
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        read()
-        times.append((time.perf_counter() - start) * 1000.0)
-    return statistics.median(times)
+def _median_ms(read: Callable[[], NDArray], repeats: int) -> tuple[float, NDArray]:
+    """Median ms of `repeats` reads after a warm one (imports, page cache, numba), and the values read."""
+    seconds, values = median_seconds(read, repeats)
+    return seconds * 1000.0, values
 
 
 def _vtk_values(path: Path, flipped: bool) -> NDArray:
@@ -177,17 +172,16 @@ def measure(args: argparse.Namespace) -> int:
             if args.only and args.only not in case.label:
                 continue
             path, flipped = case.path, case.vtk_rows_flipped
-            vtk_ms = _median_ms(partial(_vtk_values, path, flipped), args.repeats)
-            checked_ms = _median_ms(partial(_volren_values, path, True), args.repeats)
-            volren_ms = _median_ms(partial(_volren_values, path, False), args.repeats)
+            vtk_ms, vtk_values = _median_ms(partial(_vtk_values, path, flipped), args.repeats)
+            checked_ms, _ = _median_ms(partial(_volren_values, path, True), args.repeats)
+            volren_ms, values = _median_ms(partial(_volren_values, path, False), args.repeats)
             cells = []
             for _, suffixes, reader in extra.values():
                 hit = any(path.name.endswith(s) for s in suffixes)
-                cells.append(f"{_median_ms(partial(reader, path), args.repeats):.1f}" if hit else "-")
-            values = _volren_values(path, False)
+                cells.append(f"{_median_ms(partial(reader, path), args.repeats)[0]:.1f}" if hit else "-")
             print(f"| {case.label} | {vtk_ms:.1f} | {checked_ms:.1f} | {volren_ms:.1f} | {volren_ms / vtk_ms:.2f} | "
                   + "".join(f"{c} | " for c in cells)
-                  + f"{_difference(values, _vtk_values(path, flipped))} | {_difference(values, case.truth)} |",
+                  + f"{_difference(values, vtk_values)} | {_difference(values, case.truth)} |",
                   flush=True)  # fmt: skip
     return 0
 

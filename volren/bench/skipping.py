@@ -85,64 +85,38 @@ class Variant:
     terminates: bool = True
 
 
+def _two_switches(
+    skip: tuple[str, str, Mapping[str, Any]], stop: tuple[str, str, Mapping[str, Any]]
+) -> tuple[Variant, ...]:
+    """The rows of a renderer with a skipping switch and an early-termination switch, each given as
+    (variant key, label, options that turn it off): all on, each off alone, all off, shading, TF edit."""
+    (skip_key, skip_label, skip_off), (stop_key, stop_label, stop_off) = skip, stop
+    return (
+        Variant("all_on", "all on"),
+        Variant(skip_key, skip_label, skip_off),
+        Variant(stop_key, stop_label, stop_off, terminates=False),
+        Variant("all_off", "all off", {**skip_off, **stop_off}, terminates=False),
+        Variant("shading", "all on, shading on", kind="shading", shade=True),
+        Variant("tf_edit", "all on, TF edited every frame", kind="reuse", tf_edit=True),
+    )
+
+
+_EARLY_TERMINATION_OFF = ("no_early_termination", "early termination off", {"early_termination": False})
+
 VARIANTS: dict[str, tuple[Variant, ...]] = {
-    "slicer": (
-        Variant("all_on", "all on"),
-        Variant("no_empty_space", "empty-space skipping off", {"empty_space_skipping": False}),
-        Variant(
-            "no_early_termination", "early termination off", {"early_termination": False}, terminates=False
-        ),
-        Variant(
-            "all_off",
-            "all off",
-            {"empty_space_skipping": False, "early_termination": False},
-            terminates=False,
-        ),
-        Variant("shading", "all on, shading on", kind="shading", shade=True),
-        Variant("tf_edit", "all on, TF edited every frame", kind="reuse", tf_edit=True),
+    "slicer": _two_switches(
+        ("no_empty_space", "empty-space skipping off", {"empty_space_skipping": False}), _EARLY_TERMINATION_OFF
     ),
-    "tetra": (
-        Variant("all_on", "all on"),
-        Variant("no_transparent_skip", "transparent cells integrated", {"skip_transparent": False}),
-        Variant(
-            "no_early_termination", "early termination off", {"termination_alpha": 1.0}, terminates=False
-        ),
-        Variant("all_off", "all off", {"termination_alpha": 1.0, "skip_transparent": False}, terminates=False),
-        Variant("shading", "all on, shading on", kind="shading", shade=True),
-        Variant("tf_edit", "all on, TF edited every frame", kind="reuse", tf_edit=True),
+    "tetra": _two_switches(
+        ("no_transparent_skip", "transparent cells integrated", {"skip_transparent": False}),
+        ("no_early_termination", "early termination off", {"termination_alpha": 1.0}),
     ),
-    "shearwarp": (
-        Variant("all_on", "all on"),
-        Variant("no_empty_space", "run-length skipping off", {"empty_space_skipping": False}),
-        Variant(
-            "no_early_termination", "early termination off", {"early_termination": False}, terminates=False
-        ),
-        Variant(
-            "all_off",
-            "all off",
-            {"empty_space_skipping": False, "early_termination": False},
-            terminates=False,
-        ),
-        Variant("shading", "all on, shading on", kind="shading", shade=True),
-        Variant("tf_edit", "all on, TF edited every frame", kind="reuse", tf_edit=True),
+    "shearwarp": _two_switches(
+        ("no_empty_space", "run-length skipping off", {"empty_space_skipping": False}), _EARLY_TERMINATION_OFF
     ),
-    "objectorder": (
-        Variant("all_on", "all on"),
-        Variant("no_octree_skipping", "octree skipping off", {"octree_skipping": False}),
-        Variant(
-            "no_hidden_volume_removal",
-            "hidden volume removal off",
-            {"hidden_volume_removal": False},
-            terminates=False,
-        ),
-        Variant(
-            "all_off",
-            "all off",
-            {"octree_skipping": False, "hidden_volume_removal": False},
-            terminates=False,
-        ),
-        Variant("shading", "all on, shading on", kind="shading", shade=True),
-        Variant("tf_edit", "all on, TF edited every frame", kind="reuse", tf_edit=True),
+    "objectorder": _two_switches(
+        ("no_octree_skipping", "octree skipping off", {"octree_skipping": False}),
+        ("no_hidden_volume_removal", "hidden volume removal off", {"hidden_volume_removal": False}),
     ),
     "vtk": (
         Variant("all_on", "VTK's own skipping (no switch)"),

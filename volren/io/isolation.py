@@ -7,8 +7,9 @@ unsaved transfer function. So the whole load (header checks, the VTK reader, the
 model volume) runs in a child; the volume, or the one-line error, and the warnings come back
 through a pipe; a child killed by a signal becomes one line naming the file.
 
-How the child starts: `fork` where this process has a single thread (the CLI, scripts): it costs
-a few milliseconds and no imports. In a process with other threads (the app, a notebook), a
+How the child starts: `fork` where this process has a single thread, or only the threads numpy's
+BLAS pool started at import (the CLI, scripts): it costs a few milliseconds and no imports. In a
+process with other threads (the app, a notebook), a
 forked child could inherit a lock that another thread held, so a `forkserver` started once (it
 imports volren.io itself) forks the children instead. Without fork (Windows, macOS's default),
 or with VOLREN_READ_IN_PROCESS=1, the load runs in this process.
@@ -98,7 +99,7 @@ def _context() -> multiprocessing.context.BaseContext | None:
     methods = multiprocessing.get_all_start_methods()
     if "fork" not in methods:
         return None
-    if _single_threaded():
+    if _fork_is_safe():
         return multiprocessing.get_context("fork")
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload(["volren.io"])
@@ -121,7 +122,7 @@ def _task_ids() -> frozenset[str] | None:
 _BASELINE = _task_ids() if threading.active_count() == 1 else None
 
 
-def _single_threaded() -> bool:
+def _fork_is_safe() -> bool:
     """Whether fork is safe here: one thread, or only the threads of the import-time baseline."""
     tasks = _task_ids()
     if tasks is None:  # threads cannot be counted: assume some, fork from a server

@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit, prange
 
 from volren_objectorder.occlusion import hom_covered, hom_finish, hom_init, hom_layout
+from volren_objectorder.octree import bracket
 from volren_objectorder.patterns import ray_end, sample_length, sample_t
 from volren_objectorder.traversal import child_order_mask, footprint, footprint_affine
 
@@ -49,21 +50,7 @@ N_STATS = 6
 @njit(cache=True)
 def tf_lookup(xs, tab, s):
     """Colour and opacity of the piecewise-linear TF (rows of `tab` at `xs`) at s."""
-    n = xs.shape[0]
-    if s <= xs[0]:
-        return tab[0, 0], tab[0, 1], tab[0, 2], tab[0, 3]
-    if s >= xs[n - 1]:
-        return tab[n - 1, 0], tab[n - 1, 1], tab[n - 1, 2], tab[n - 1, 3]
-    a = 0
-    b = n - 1
-    while b - a > 1:
-        m = (a + b) >> 1
-        if xs[m] <= s:
-            a = m
-        else:
-            b = m
-    w = xs[b] - xs[a]
-    f = (s - xs[a]) / w if w > 0.0 else 1.0
+    a, b, f = bracket(xs, s)
     return (tab[a, 0] + f * (tab[b, 0] - tab[a, 0]), tab[a, 1] + f * (tab[b, 1] - tab[a, 1]),
             tab[a, 2] + f * (tab[b, 2] - tab[a, 2]), tab[a, 3] + f * (tab[b, 3] - tab[a, 3]))  # fmt: skip
 

@@ -52,14 +52,16 @@ def _cell_ranges(values, lo, hi):
                 hi[k, j, i] = mx
 
 
-@njit(cache=True)
-def _opacity_at(xs, alphas, s):
-    """The piecewise-linear opacity at s (constant beyond the end points)."""
+@njit(cache=True, inline="always")
+def bracket(xs, s):
+    """(a, b, f): the control points a <= b around s of the ascending `xs` and the weight of b, so
+    that a piecewise-linear function is v[a] + f (v[b] - v[a]) there (constant beyond the ends;
+    at a step, repeated x, the right-hand value)."""
     n = xs.shape[0]
     if s <= xs[0]:
-        return alphas[0]
+        return 0, 0, 0.0
     if s >= xs[n - 1]:
-        return alphas[n - 1]
+        return n - 1, n - 1, 0.0
     a = 0
     b = n - 1
     while b - a > 1:
@@ -69,9 +71,13 @@ def _opacity_at(xs, alphas, s):
         else:
             b = m
     w = xs[b] - xs[a]
-    if w <= 0.0:
-        return alphas[b]
-    f = (s - xs[a]) / w
+    return a, b, (s - xs[a]) / w if w > 0.0 else 1.0
+
+
+@njit(cache=True)
+def _opacity_at(xs, alphas, s):
+    """The piecewise-linear opacity at s (constant beyond the end points)."""
+    a, b, f = bracket(xs, s)
     return alphas[a] + f * (alphas[b] - alphas[a])
 
 

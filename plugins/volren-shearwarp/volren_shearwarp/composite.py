@@ -47,17 +47,19 @@ MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _cell_position(x, n):
+    """(cell index, weight in it) of coordinate x along an axis of n samples, clamped to the axis."""
+    x = min(max(x, 0.0), n - 1.0)
+    i = min(int(x), n - 2)
+    return i, x - i
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def bilinear(vol, k, a, b):
     """Bilinear sample of slice k at in-plane (a, b), clamped to the slice; NaN where a corner with
     weight is NaN (NaN * 0 is NaN too: a cell with a NaN corner is transparent)."""
-    nb = vol.shape[1]
-    na = vol.shape[2]
-    a = min(max(a, 0.0), na - 1.0)
-    b = min(max(b, 0.0), nb - 1.0)
-    ia = min(int(a), na - 2)
-    ib = min(int(b), nb - 2)
-    fa = a - ia
-    fb = b - ib
+    ia, fa = _cell_position(a, vol.shape[2])
+    ib, fb = _cell_position(b, vol.shape[1])
     v0 = vol[k, ib, ia] * (1.0 - fa) + vol[k, ib, ia + 1] * fa
     v1 = vol[k, ib + 1, ia] * (1.0 - fa) + vol[k, ib + 1, ia + 1] * fa
     return v0 * (1.0 - fb) + v1 * fb
@@ -91,14 +93,8 @@ def _diff(vol, k, b, a, axis):
 def gradient(vol, k, a, b, inv_sp):
     """World-unit gradient (along a, b, c) at in-plane (a, b) of slice k: central differences at the
     grid points, interpolated bilinearly like the values."""
-    nb = vol.shape[1]
-    na = vol.shape[2]
-    a = min(max(a, 0.0), na - 1.0)
-    b = min(max(b, 0.0), nb - 1.0)
-    ia = min(int(a), na - 2)
-    ib = min(int(b), nb - 2)
-    fa = a - ia
-    fb = b - ib
+    ia, fa = _cell_position(a, vol.shape[2])
+    ib, fb = _cell_position(b, vol.shape[1])
     w00 = (1.0 - fa) * (1.0 - fb)
     w01 = fa * (1.0 - fb)
     w10 = (1.0 - fa) * fb
@@ -200,14 +196,6 @@ def _pixel_range(af0, afs, ab0, abs_, hi):
     p_lo = math.ceil(min((0.0 - af0) / afs, (0.0 - ab0) / abs_)) - 1
     p_hi = math.floor(max((hi - af0) / afs, (hi - ab0) / abs_)) + 2
     return p_lo, p_hi
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _row_position(b, nb):
-    """(cell row, weight) of in-plane row coordinate b, clamped to the slice."""
-    b = min(max(b, 0.0), nb - 1.0)
-    ib = min(int(b), nb - 2)
-    return ib, b - ib
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -444,8 +432,8 @@ def composite_slabs(
             if max(bf, bb) < 0.0 or min(bf, bb) > top_b:
                 continue
             row_inside = min(bf, bb) >= 0.0 and max(bf, bb) <= top_b
-            ibf, fbf = _row_position(bf, nb)
-            ibb, fbb = _row_position(bb, nb)
+            ibf, fbf = _cell_position(bf, nb)
+            ibb, fbb = _cell_position(bb, nb)
             af0 = alpha_a[kf]
             afs = beta_a[kf]
             ab0 = alpha_a[kb]
