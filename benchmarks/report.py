@@ -27,6 +27,8 @@ SECTIONS = (
     ("summary.md", "Run time against error", "How fast is each renderer for a given error, against VTK?"),
     ("skip.md", "The cost of skipping", "What does each skipping technique save, and what does it change?"),
     ("stress.md", "Numerical stress", "Do extreme inputs give NaN, Inf or out-of-range pixels?"),
+    ("plugins.md", "The plugin renderers (shear-warp, object order)",
+     "How do the seeds' CPU algorithms compare with VTK and the slicer at equal error, and with their papers' tables?"),
     ("app.md", "Desktop app responsiveness", "How long from a TF edit to the new frame; frames per second."),
     ("gpu.md", "On a GPU", "How fast are the OpenGL renderers on a real GPU, at what error? "
      "(`python -m benchmarks.gpu`, on a machine with one)"),
@@ -96,11 +98,12 @@ def run_all(args: argparse.Namespace) -> int:
     """Every benchmark into one folder, then BENCHMARKS.md from their fragments (`compose`)."""
     out = Path(args.out)
     shared = ["--shared", args.shared] if args.shared else []
-    commands = {
+    commands: dict[str, list[str] | None] = {
         "run": ["bench", "run", "--out", str(out), *shared, *shlex.split(args.run_args)],
         "skip": ["bench", "skip", "--out", str(out), *shared],
         "stress": ["bench", "stress", "--out", str(out)],
         "app": ["bench", "app", "--out", str(out), *shared],
+        "plugins": None,  # benchmarks.plugins_report, not a volren command
     }
     chosen = [c for c in args.only.split(",") if c]
     unknown = set(chosen) - set(commands)
@@ -109,7 +112,13 @@ def run_all(args: argparse.Namespace) -> int:
     status = 0
     for name in chosen:
         start = time.perf_counter()
-        code = volren_main(commands[name])
+        argv = commands[name]
+        if argv is None:
+            from benchmarks.plugins_report import main as plugins_main
+
+            code = plugins_main(["--out", str(out), *shared])
+        else:
+            code = volren_main(argv)
         print(f"bench {name}: exit {code} after {time.perf_counter() - start:.0f} s", flush=True)
         status = status or code
     markdown = Path(args.markdown)
@@ -128,7 +137,8 @@ def main(argv: list[str] | None = None) -> int:
     b.add_argument("--markdown", default="BENCHMARKS.md", help="the summary file (default BENCHMARKS.md)")
     b.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     b.add_argument("--run-args", default="", help="extra arguments for `bench run`, e.g. '--steps 1,0.5'")
-    b.add_argument("--only", default="run,skip,stress,app", help="which benchmarks to run (default: all four)")
+    b.add_argument("--only", default="run,skip,stress,app,plugins",
+                   help="which benchmarks to run, of run, skip, stress, app, plugins (default: all)")
     return run(run_all, b, argv)
 
 

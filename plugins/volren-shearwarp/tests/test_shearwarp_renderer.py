@@ -14,6 +14,7 @@ from volren_shearwarp.renderer import auto_oversampling, auto_table_size, voxel_
 
 from volren.errors import VolrenError
 from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume
+from volren.model.downsample import downsample
 from volren.testing import conformance_test, image_error, oracles
 from volren.testing.reference_images import reference_image
 
@@ -94,6 +95,27 @@ def test_a_smooth_tf_matches_the_reference():
         assert image_error(image, truth).rmse < 0.01
 
 
+@pytest.mark.parametrize("pre", [False, True])
+def test_downsample_draws_the_coarse_volume_and_keeps_the_full_one(pre):
+    """The option renders `volren.model.downsample`'s copy exactly as if that copy were the volume,
+    the tables still span the full data's value range, and the full level is untouched."""
+    volume = field((33, 29, 35))
+    coarse = downsample(volume, 2)
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    direct, direct_renderer = draw(coarse, SMOOTH_TF, camera, preintegration=pre)
+    image, renderer = draw(volume, SMOOTH_TF, camera, preintegration=pre, options={"downsample": 2})
+    # equal up to the table range (the coarse copy's value range is a little narrower than the full one)
+    assert image_error(image, direct).rmse < 2e-3
+    counters, coarse_counters = renderer.last_frame.counters, direct_renderer.last_frame.counters
+    assert counters["slices"] == coarse_counters["slices"]
+    assert abs(counters["samples"] - coarse_counters["samples"]) <= 1e-3 * coarse_counters["samples"]
+    full, _ = draw(volume, SMOOTH_TF, camera, preintegration=pre)
+    renderer.set_settings(RenderSettings(preintegration=pre))
+    assert np.array_equal(renderer.render(camera, 40, 32), full)
+    truth = reference_image(volume, SMOOTH_TF, camera, 40, 32)
+    assert image_error(image, truth).rmse < 0.03  # a draft, coarser than the default's 0.01
+
+
 # ----------------------------------------------------------------------------- skipping
 @pytest.mark.parametrize("parallel", [False, True])
 def test_empty_space_skipping_changes_no_pixel(parallel):
@@ -153,6 +175,28 @@ def test_a_colour_edit_reuses_the_runs_and_an_opacity_edit_rebuilds_them():
     tf.set_opacity_points([[2.5, 0.0], [4, 0.6]])  # the support shrinks
     renderer.render(camera, 24, 24)
     assert any(copy.runs[r] is not runs[r] for r in runs)
+
+
+@pytest.mark.parametrize("pre", [False, True])
+@pytest.mark.parametrize("parallel", [True, False])
+def test_opacity_correction_off_draws_each_slab_as_one_unit_distance(pre, parallel):
+    """The seed's NC variant: every slab gets the TF's opacity as it is, whatever its length (here
+    spacing 0.5 against d_u 1: 31 slabs of half a unit). On, the closed form 1 - (1 - a)^(L / d_u)."""
+    a = 0.05
+    volume = UniformVolume(np.full((32, 32, 32), 2.0, np.float32), spacing=(0.5, 0.5, 0.5))
+    tf = TransferFunction1D([[0, 1, 1, 1], [4, 1, 1, 1]], [[0, a], [4, a]])
+    c = 7.75
+    camera = Camera(position=(c, c, 40.0), focal_point=(c, c, c), parallel=parallel, parallel_scale=12.0,
+                    view_angle=40.0, clipping_range=(1.0, 100.0))  # fmt: skip
+    on, _ = draw(volume, tf, camera, (16, 16), preintegration=pre)
+    off, _ = draw(volume, tf, camera, (16, 16), preintegration=pre, options={"opacity_correction": False})
+    assert on[8, 8, 3] == pytest.approx(1 - (1 - a) ** (31 * 0.5), abs=2e-3)
+    if parallel:  # every ray crosses 31 slabs
+        assert off[8, 8, 3] == pytest.approx(1 - (1 - a) ** 31, abs=2e-3)
+    else:  # central rays cross the same 31 slabs, longer ones off the axis: one opacity without correction
+        centre_on, centre_off = on[5:11, 5:11, 3], off[5:11, 5:11, 3]
+        assert np.ptp(centre_off) < 1e-4 < 1e-3 < np.ptp(centre_on)
+        assert centre_off.mean() == pytest.approx(1 - (1 - a) ** 31, abs=2e-3)
 
 
 # ----------------------------------------------------------------------------- bad input
@@ -219,7 +263,8 @@ def test_an_eye_inside_the_volume_is_refused_in_one_line_under_perspective():
 
 
 @pytest.mark.parametrize("options", [{"oversampling": 0}, {"table_size": 3}, {"lookup": "cubic"},
-                                     {"early_termination": "yes"}, {"termination_alpha": 2}, {"nope": 1}])  # fmt: skip
+                                     {"early_termination": "yes"}, {"termination_alpha": 2}, {"nope": 1},
+                                     {"downsample": 3}, {"downsample": 2.0}, {"downsample": True}])  # fmt: skip
 def test_bad_options_are_one_line_errors(options):
     with pytest.raises(VolrenError) as info:
         ShearWarpRenderer().set_settings(RenderSettings(options=options))
