@@ -9,11 +9,20 @@ from volren.testing import CHECKS, run_check
 from volren.testing.runner import renderer_factory
 
 NAMES = registry.names()
+#: Checks a renderer is known to fail, and why: the kit is right, the renderer is not (yet). Strict, so
+#: a fix shows up as an unexpected pass and the entry goes.
+KNOWN_FAILURES = {
+    ("vtk", "clip"): "VTK's unstructured-grid ray cast mapper draws almost nothing where the near plane cuts a "
+                     "tetrahedral mesh (RMSE 0.41), and the uniform GPU mapper clips at whole samples (RMSE up to "
+                     "0.083 against its declared 0.07)",
+}  # fmt: skip
 
 
 @pytest.mark.parametrize("check", CHECKS, ids=[c.name for c in CHECKS])
 @pytest.mark.parametrize("name", NAMES)
-def test_registered_renderer_conforms(name, check):
+def test_registered_renderer_conforms(name, check, request):
+    if (name, check.name) in KNOWN_FAILURES:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN_FAILURES[name, check.name]))
     result = run_check(check, renderer_factory(name), quick=True)
     print("\n".join(result.lines()))
     assert result.passed, "\n".join(result.failures())

@@ -14,7 +14,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -200,6 +200,53 @@ def check_box(ctx: CheckContext) -> list[Measurement]:
                                                  (0.9, 0.4, 0.2), 0.35, 0.8)  # fmt: skip
             case = f"{kind}, {'parallel' if parallel else 'perspective'}"
             out.append(Measurement("box", case, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
+    return out
+
+
+#: Clipping cases: (projection, near, far) as fractions of the box's depth range along the view
+#: direction (0 at its nearest corner, 1 at its farthest); None leaves that plane well clear of it.
+CLIP_CASES = (
+    ("parallel, near", True, 0.35, None),
+    ("parallel, far", True, None, 0.55),
+    ("perspective, near", False, 0.4, None),
+    ("perspective, near and far", False, 0.25, 0.7),
+)
+#: The cases a quick run keeps: one cut by each plane, in each projection.
+CLIP_QUICK = ("parallel, far", "perspective, near and far")
+
+
+def clipped_camera(camera: Camera, bounds: Sequence[float], near: float | None, far: float | None) -> Camera:
+    """`camera` with its near / far planes at those fractions of the depth range of `bounds` (depth:
+    distance from the eye along the view direction, vtkCamera's clipping range); None puts that
+    plane a whole depth range in front of the box (near, never below half the eye's distance to the
+    box) or behind it (far)."""
+    corners = np.array([[x, y, z] for x in bounds[0:2] for y in bounds[2:4] for z in bounds[4:6]], dtype=np.float64)
+    depth = (corners - np.asarray(camera.position)) @ camera.direction
+    d_lo, d_hi = float(depth.min()), float(depth.max())
+    span = d_hi - d_lo
+    lo = d_lo + near * span if near is not None else max(d_lo - span, 0.5 * d_lo)
+    hi = d_lo + far * span if far is not None else d_hi + span
+    return replace(camera, clipping_range=(lo, hi))
+
+
+def check_clip(ctx: CheckContext) -> list[Measurement]:
+    """A homogeneous box cut by the near plane, the far plane or both (planes perpendicular to the
+    view direction, parallel and perspective): only the part between them is drawn, against
+    1 - (1 - a)^(L / d_u) with L the clipped path length."""
+    out = []
+    tf = TransferFunction1D.constant(0.45, (0.3, 0.8, 0.6), opacity_unit_distance=0.6)
+    cases = [c for c in CLIP_CASES if not ctx.quick or c[0] in CLIP_QUICK]
+    for kind in ctx.kinds():
+        volume = _box(kind)
+        renderer = ctx.renderer()
+        for name, parallel, near, far in cases:
+            w, h = 48, 40
+            camera = Camera.orbit(volume.bounds, -35, 25, zoom=1.3, parallel=parallel, aspect=w / h)
+            camera = clipped_camera(camera, volume.bounds, near, far)
+            image = ctx.draw(renderer, volume, tf, camera, w, h)
+            expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, volume.bounds),
+                                                 (0.3, 0.8, 0.6), 0.45, 0.6)  # fmt: skip
+            out.append(Measurement("clip", f"{kind}, {name}", "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
     return out
 
 
@@ -500,6 +547,6 @@ class Check:
 
 CHECKS: Sequence[Check] = tuple(
     Check(fn.__name__.removeprefix("check_"), fn)
-    for fn in (check_output, check_empty, check_box, check_ramp, check_projection, check_nan, check_point,
+    for fn in (check_output, check_empty, check_box, check_clip, check_ramp, check_projection, check_nan, check_point,
                check_step, check_shading, check_progress, check_cancel, check_release, check_capabilities)
 )  # fmt: skip

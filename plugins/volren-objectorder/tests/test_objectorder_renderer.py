@@ -265,3 +265,57 @@ def test_bad_options_are_one_line_errors(options):
     with pytest.raises(VolrenError) as info:
         ObjectOrderRenderer().set_settings(RenderSettings(options=options))
     assert "\n" not in str(info.value)
+
+
+# ----------------------------------------------------------------------------- clipping
+def _user_camera(volume: UniformVolume, cut: float, parallel: bool) -> Camera:
+    """A camera far out along an oblique direction with the default clipping range (far = 1000.01),
+    placed so that the far plane cuts the volume `cut` of the way through its depth (the bonsai
+    report against shearwarp: a user camera, not one from `Camera.orbit`)."""
+    b = np.asarray(volume.bounds)
+    centre = (b[0::2] + b[1::2]) / 2
+    out = np.array([0.3, -0.4, 1.0]) / np.linalg.norm([0.3, -0.4, 1.0])  # toward the eye
+    corners = np.array([[x, y, z] for x in b[0:2] for y in b[2:4] for z in b[4:6]])
+    reach = float(np.abs((corners - centre) @ out).max())  # depths span distance -+ reach
+    distance = Camera().clipping_range[1] + reach - 2 * reach * cut
+    return Camera(position=tuple(centre + distance * out), focal_point=tuple(centre), parallel=parallel,
+                  parallel_scale=0.6 * (b[3] - b[2]), view_angle=1.2)  # fmt: skip
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+@pytest.mark.parametrize("settings", [{}, {"preintegration": True}, {"step": 0.25, "shade": True},
+                                      {"options": {"hidden_volume_removal": False,
+                                                   "classification_table": 0}}])  # fmt: skip
+def test_the_near_and_far_planes_cut_a_constant_box_exactly(parallel, settings):
+    """Only the part of the box between the planes is drawn (rays start on the near plane and end on
+    the far one): the closed form with the clipped path lengths, to float precision."""
+    from volren.testing.checks import clipped_camera
+
+    volume = UniformVolume(np.full((6, 7, 8), 1.0, np.float32), spacing=(0.9, 1.1, 1.0), origin=(0.5, -1.0, 2.0))
+    tf = TransferFunction1D.constant(0.15, (0.4, 0.7, 0.2), opacity_unit_distance=0.7)
+    camera = Camera.orbit(volume.bounds, 35, -20, zoom=1.3, parallel=parallel)
+    lengths = oracles.box_path_lengths(camera, 40, 40, volume.bounds)
+    whole = oracles.homogeneous_image(lengths, (0.4, 0.7, 0.2), 0.15, 0.7)
+    for near, far in ((0.3, None), (None, 0.6), (0.2, 0.65)):
+        clipped = clipped_camera(camera, volume.bounds, near, far)
+        image, _ = draw(volume, tf, clipped, (40, 40), **settings)
+        expected = oracles.homogeneous_image(oracles.box_path_lengths(clipped, 40, 40, volume.bounds),
+                                             (0.4, 0.7, 0.2), 0.15, 0.7)  # fmt: skip
+        assert image_error(expected, whole).rmse > 0.03  # the planes matter
+        assert image_error(image, expected).rmse < 1e-5, (near, far)
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+def test_a_user_camera_whose_far_plane_cuts_the_volume_matches_the_reference(parallel):
+    """A camera far out with the default clipping range, its far plane halfway through the volume:
+    every blend mode against the reference, and the unclipped image differs."""
+    volume = field()
+    camera = _user_camera(volume, 0.45, parallel)
+    unclipped = Camera(**{**camera.to_dict(), "clipping_range": (0.01, 2000.0)})
+    for mode in ("composite", "maximum", "minimum", "average"):
+        truth = reference_image(volume, SMOOTH_TF, camera, 40, 32, RenderSettings(blend_mode=mode))
+        image, _ = draw(volume, SMOOTH_TF, camera, blend_mode=mode)
+        whole, _ = draw(volume, SMOOTH_TF, unclipped, blend_mode=mode)
+        if mode != "maximum":  # the maximum lies at the top, in front of the far plane
+            assert image_error(whole, truth).rmse > 0.05, mode
+        assert image_error(image, truth).rmse < 0.01, mode

@@ -5,6 +5,7 @@ input (thin, constant, NaN, anisotropic volumes, axis-aligned and diagonal views
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -306,3 +307,77 @@ def test_auto_levels_follow_the_tf_sharpness():
     opaque = voxel_optical_depth(TransferFunction1D.ramp(0.0, 1.0, 0.95), 1.0)
     assert (auto_oversampling(translucent), auto_table_size(translucent)) == (0.5, 128)
     assert (auto_oversampling(opaque), auto_table_size(opaque)) == (2.0, 256)
+
+
+# ----------------------------------------------------------------------------- clipping
+def _user_camera(volume: UniformVolume, cut: float, parallel: bool) -> Camera:
+    """A camera far out along an oblique direction with the default clipping range (far = 1000.01),
+    placed so that the far plane cuts the volume `cut` of the way through its depth (the bonsai
+    report: a user camera, not one from `Camera.orbit`)."""
+    b = np.asarray(volume.bounds)
+    centre = (b[0::2] + b[1::2]) / 2
+    out = np.array([0.3, -0.4, 1.0]) / np.linalg.norm([0.3, -0.4, 1.0])  # toward the eye
+    corners = np.array([[x, y, z] for x in b[0:2] for y in b[2:4] for z in b[4:6]])
+    reach = float(np.abs((corners - centre) @ out).max())  # depths span distance -+ reach
+    distance = Camera().clipping_range[1] + reach - 2 * reach * cut
+    return Camera(position=tuple(centre + distance * out), focal_point=tuple(centre), parallel=parallel,
+                  parallel_scale=0.6 * (b[3] - b[2]), view_angle=1.2)  # fmt: skip
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+@pytest.mark.parametrize("settings, bound", [
+    ({}, 0.01), ({"preintegration": False}, 0.01), ({"step": 0.25}, 0.01), ({"shade": True}, 0.01),
+    ({"options": {"lookup": "bilinear", "early_termination": False}}, 0.01),
+    # two intermediate pixels per output pixel: the warp's blur of the silhouettes, most of the error
+    # above (0.005 parallel, 0.0075 perspective, clipped or not), drops out and what is left is the clipping's
+    ({"options": {"oversampling": 2.0}}, 0.002),
+])  # fmt: skip
+def test_the_near_and_far_planes_cut_a_constant_box_exactly(parallel, settings, bound):
+    """Only the part of the box between the planes is drawn: the closed form with the clipped path
+    lengths (planes perpendicular to the view direction, at depths along it)."""
+    from volren.testing.checks import clipped_camera
+
+    volume = UniformVolume(np.full((6, 7, 8), 1.0, np.float32), spacing=(0.9, 1.1, 1.0), origin=(0.5, -1.0, 2.0))
+    tf = TransferFunction1D.constant(0.15, (0.4, 0.7, 0.2), opacity_unit_distance=0.7)
+    camera = Camera.orbit(volume.bounds, 35, -20, zoom=1.3, parallel=parallel)
+    lengths = oracles.box_path_lengths(camera, 40, 40, volume.bounds)
+    whole = oracles.homogeneous_image(lengths, (0.4, 0.7, 0.2), 0.15, 0.7)
+    for near, far in ((0.3, None), (None, 0.6), (0.2, 0.65)):
+        clipped = clipped_camera(camera, volume.bounds, near, far)
+        image, renderer = draw(volume, tf, clipped, (40, 40), **settings)
+        expected = oracles.homogeneous_image(oracles.box_path_lengths(clipped, 40, 40, volume.bounds),
+                                             (0.4, 0.7, 0.2), 0.15, 0.7)  # fmt: skip
+        assert renderer.last_frame.counters["clipped"] == 1.0
+        assert image_error(expected, whole).rmse > 0.03  # the planes matter
+        assert image_error(image, expected).rmse < bound, (near, far)
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+def test_a_user_camera_whose_far_plane_cuts_the_volume_matches_the_reference(parallel):
+    """The bonsai report in small: a camera far up +z with the default clipping range, its far plane
+    halfway down the volume; every blend mode against the reference, and the unclipped image differs."""
+    volume = field()
+    camera = _user_camera(volume, 0.45, parallel)
+    unclipped = replace(camera, clipping_range=(camera.clipping_range[0], 2 * camera.clipping_range[1]))
+    for mode in ("composite", "maximum", "minimum", "average"):
+        truth = reference_image(volume, SMOOTH_TF, camera, 40, 32, RenderSettings(blend_mode=mode))
+        image, renderer = draw(volume, SMOOTH_TF, camera, blend_mode=mode)
+        whole, _ = draw(volume, SMOOTH_TF, unclipped, blend_mode=mode)
+        assert renderer.last_frame.counters["clipped"] == 1.0
+        if mode != "maximum":  # the maximum lies at the top, in front of the far plane
+            assert image_error(whole, truth).rmse > 0.05, mode
+        # the projections' error on oblique views is the renderer's own (0.022 unclipped, 0.031 clipped)
+        assert image_error(image, truth).rmse < (0.01 if mode == "composite" else 0.04), mode
+
+
+def test_planes_clear_of_the_volume_keep_the_fast_path_and_the_image():
+    """Cameras from `Camera.orbit` (and any whose planes clear the volume) do not clip: same image,
+    bit for bit, as with the planes moved further out."""
+    volume = field()
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    near, far = camera.clipping_range
+    image, renderer = draw(volume, SMOOTH_TF, camera, preintegration=True)
+    assert renderer.last_frame.counters["clipped"] == 0.0
+    wider, renderer = draw(volume, SMOOTH_TF, replace(camera, clipping_range=(near / 2, far * 2)), preintegration=True)
+    assert renderer.last_frame.counters["clipped"] == 0.0
+    assert np.array_equal(image, wider)

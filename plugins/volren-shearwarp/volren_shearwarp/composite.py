@@ -12,7 +12,8 @@ Per scanline and slab:
    pixels not yet opaque, found through skip links (VolPack's early ray termination: an opaque
    pixel points past itself; chains are shortened as they are walked).
 2. The segment of each ray inside the slab, clipped to the slice rectangle (rays that enter or
-   leave through a side face cross part of a slab).
+   leave through a side face cross part of a slab) and, when a clipping plane cuts the volume,
+   to the ray's interval between the near and far planes (values then taken at the cut).
 3. `sub` sub-planes per slab (the render setting `step`): plane w in [0, 1) between slices kf and
    kb is sampled by interpolating bilinear samples of both slices at the ray's point, which is
    trilinear interpolation; w = 0 is a bilinear sample of one slice. The value at the back of a
@@ -32,7 +33,8 @@ Values are carried as table coordinates x = (s - lo) * scale in [0, n - 1].
 Speed: most segments lie wholly inside the slab (both ends inside the slice rectangle), with one
 segment per slab and no lighting; `_fast_span` takes those pixel ranges, found once per row and
 slab, without clipping, clamping or sub-planes, and looks the table up once for all four
-channels. Everything else (edge pixels, `step` below 0.5, shading) goes the general way.
+channels. Everything else (edge pixels, `step` below 0.5, shading, segments that a near or far
+plane cuts or hides) goes the general way.
 """
 
 from __future__ import annotations
@@ -409,12 +411,17 @@ def composite_slabs(
     layers, per_pixel_layer, table, table_back, lut, preintegrated, bilinear_lookup, lo, scale,
     offsets, starts, ends, use_runs, use_termination, term_alpha, has_nan,
     shading, light, half, ray_dirs, ka, kd, ks, power, gthr, inv_sp,
-    counters,
+    clipping, clip_lo, clip_hi, counters,
 ):  # fmt: skip
     """Composite the slabs between order[m - 1] and order[m] for m in [m0, m1) into `rgba`
     (intermediate image, premultiplied RGBA float32), clearing each row's image, stamps and skip
     links first when m0 <= 1 (the buffers are reused from frame to frame). counters[q] +=
-    (segments composited, pixels skipped as empty, pixels terminated)."""
+    (segments composited, pixels skipped as empty, pixels terminated).
+
+    With `clipping`, pixel (q, p)'s ray is drawn only for u in [clip_lo[q, p], clip_hi[q, p]]
+    (`Factorization.clip_limits`; slab m spans u in [m - 1, m]): the fast spans keep the pixels
+    whose whole slab lies inside, the general way takes the rest (a segment cut by a plane sampled
+    at the cut and corrected to its part, one wholly outside skipped)."""
     nc, nb, na = vol.shape
     width = rgba.shape[1]
     inv_sub = 1.0 / sub
@@ -487,6 +494,12 @@ def composite_slabs(
                     covered += hi_p - lo_p
                 f0 = min(max(in_lo, lo_p), hi_p)
                 f1 = min(max(in_hi, f0), hi_p)
+                if clipping:  # only pixels whose whole slab lies between the planes (an interval: the
+                    # clip limits are monotonic along a row); the others go the general way
+                    while f0 < f1 and not (clip_lo[q, f0] <= m - 1 and clip_hi[q, f0] >= m):
+                        f0 += 1
+                    while f1 > f0 and not (clip_lo[q, f1 - 1] <= m - 1 and clip_hi[q, f1 - 1] >= m):
+                        f1 -= 1
                 if f1 > f0:
                     c, t = _fast_span(vol, kf, kb, m - 1, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, f0, f1,
                                       rgba, buf_x, stamp, skip, layers, per_pixel_layer, table, lut, preintegrated,
@@ -506,6 +519,13 @@ def composite_slabs(
                     ab = ab0 + abs_ * p
                     t0, t1 = _clip(af, ab, top_a, 0.0, 1.0)
                     t0, t1 = _clip(bf, bb, top_b, t0, t1)
+                    v0 = 0.0
+                    v1 = 1.0
+                    if clipping:  # the near and far planes, as this slab's parameter
+                        v0 = clip_lo[q, p] - (m - 1)
+                        v1 = clip_hi[q, p] - (m - 1)
+                        t0 = max(t0, v0)
+                        t1 = min(t1, v1)
                     if t1 <= t0:
                         p += 1
                         continue
@@ -528,9 +548,16 @@ def composite_slabs(
                         plane = (m - 1) * sub + j
                         w0 = j * inv_sub
                         w1 = (j + 1) * inv_sub if j + 1 < sub else 1.0
+                        # a plane cutting this segment: its values are taken at the cut
+                        cut_front = v0 > w0
+                        cut_back = v1 < w1
+                        if cut_front:
+                            w0 = v0
+                        if cut_back:
+                            w1 = v1
                         df = 1.0
                         sf = 0.0
-                        if stamp[q, p] == plane:
+                        if stamp[q, p] == plane and not cut_front:
                             xf = buf_x[q, p]
                             if shading:
                                 df = buf_d[q, p]
@@ -546,10 +573,12 @@ def composite_slabs(
                         if shading:
                             db, sb = _plane_light(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf),
                                                   inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
-                            buf_d[q, p] = db
-                            buf_s[q, p] = sb
-                        stamp[q, p] = plane + 1
-                        buf_x[q, p] = xb
+                            if not cut_back:
+                                buf_d[q, p] = db
+                                buf_s[q, p] = sb
+                        if not cut_back:
+                            stamp[q, p] = plane + 1
+                            buf_x[q, p] = xb
                         if xf != xf or xb != xb:
                             continue
                         n_comp += 1
@@ -578,9 +607,12 @@ def composite_slabs(
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
-def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows, acc, mode, lengths):
+def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows, acc, mode, lengths,
+                  clipping, clip_lo, clip_hi):  # fmt: skip
     """Maximum, minimum or length-weighted average of the values along each intermediate ray, over
-    the segments inside the volume whose ends are finite: acc[q, p] = (value, weight)."""
+    the segments inside the volume whose ends are finite: acc[q, p] = (value, weight). With
+    `clipping`, only the part of each ray between the near and far planes (as `composite_slabs`),
+    a cut segment sampled at the cut."""
     nc, nb, na = vol.shape
     width = acc.shape[1]
     inv_sub = 1.0 / sub
@@ -603,6 +635,13 @@ def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, row
                 ab = ab0 + abs_ * p
                 t0, t1 = _clip(af, ab, na - 1.0, 0.0, 1.0)
                 t0, t1 = _clip(bf, bb, nb - 1.0, t0, t1)
+                v0 = 0.0
+                v1 = 1.0
+                if clipping:
+                    v0 = clip_lo[q, p] - (m - 1)
+                    v1 = clip_hi[q, p] - (m - 1)
+                    t0 = max(t0, v0)
+                    t1 = min(t1, v1)
                 if t1 <= t0:
                     continue
                 for j in range(sub):
@@ -610,8 +649,8 @@ def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, row
                     u1 = min((j + 1) * inv_sub, t1)
                     if u1 <= u0:
                         continue
-                    w0 = j * inv_sub
-                    w1 = (j + 1) * inv_sub if j + 1 < sub else 1.0
+                    w0 = max(j * inv_sub, v0)
+                    w1 = min((j + 1) * inv_sub if j + 1 < sub else 1.0, v1)
                     s0 = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), 0.0, 1.0)
                     s1 = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), 0.0, 1.0)
                     if s0 != s0 or s1 != s1:

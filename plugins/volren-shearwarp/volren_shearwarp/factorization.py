@@ -86,6 +86,45 @@ class Factorization:
         col_d2, row_d2, dc2, inv_norm = self.length_terms()
         return np.sqrt(col_d2[None, :] + row_d2[:, None] + dc2) * inv_norm
 
+    def clip_limits(self, camera: Camera, volume: UniformVolume) -> tuple[NDArray, NDArray] | None:
+        """Where each intermediate ray lies between the camera's near and far planes: (lo, hi), each
+        (height, width), an interval of u = |c - c0| (slices behind the front slice; slab m of the
+        compositing order spans u in [m - 1, m]); None when neither plane cuts the volume's box, so
+        that every ray is whole (the common case: cameras from `Camera.orbit` or
+        `reset_clipping_range`).
+
+        Why linear in u: the planes are at fixed depths (distance from the eye along the view
+        direction, vtkCamera's clipping range), and along a ray the depth is linear in c. With D0
+        the depth of the ray's point on the plane c0: a parallel ray runs along the view direction,
+        so depth = D0 + u * slab_length; a perspective ray through the eye E has depth
+        f(c) D0 with f = (c - E_c) / (c0 - E_c) = 1 + u / |c0 - E_c|. A perspective ray whose
+        point on the plane is not ahead of the eye (D0 <= 0) is empty."""
+        near, far = camera.clipping_range
+        bounds = volume.bounds
+        corners = np.array([[x, y, z] for x in bounds[0:2] for y in bounds[2:4] for z in bounds[4:6]], np.float64)
+        view = np.asarray(camera.direction, np.float64)
+        depth = (corners - np.asarray(camera.position, np.float64)) @ view
+        if near <= depth.min() and far >= depth.max():
+            return None
+        perm = list(self.perm)
+        # depth of plane point (A0 + h p, B0 + h q, c0) in index units: separable in p and q
+        rel = (np.asarray(volume.origin, np.float64) - np.asarray(camera.position, np.float64))[perm]
+        a0, b0 = self.origin_ab
+        h = 1.0 / self.scale
+        d = self.direction
+        col = (rel[0] + (a0 + h * np.arange(self.width)) * self.spacing[0]) * d[0]
+        row = (rel[1] + (b0 + h * np.arange(self.height)) * self.spacing[1]) * d[1]
+        d0 = row[:, None] + col[None, :] + (rel[2] + self.plane * self.spacing[2]) * d[2]
+        if self.perspective:
+            rate = d0 / abs(self.plane - self.eye[2])
+        else:
+            rate = np.full_like(d0, self.slab_length)
+        ahead = rate > 0.0
+        safe = np.where(ahead, rate, 1.0)
+        lo = np.where(ahead, (near - d0) / safe, np.inf)
+        hi = np.where(ahead, (far - d0) / safe, -np.inf)
+        return np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+
 
 def index_frame(volume: UniformVolume) -> tuple[NDArray, NDArray, NDArray]:
     """(origin, spacing, dims as floats) in x, y, z order."""

@@ -24,9 +24,16 @@ two of them exactly for data linear along it). `step` below 0.5 adds planes betw
 ceil(slice spacing / (2 step mean spacing)) segments per slab (1 at the default 0.5 and above,
 2 at 0.25), sampled trilinearly. Blend modes maximum / minimum / average take the values at the same planes.
 
+Clipping: only what lies between the camera's near and far planes is drawn. Along each intermediate
+ray the depth is linear in the slice index, so each ray keeps an interval of slices
+(`Factorization.clip_limits`); only when a plane cuts the volume's box (never for cameras from
+`Camera.orbit` or `reset_clipping_range`) does compositing take those intervals: segments wholly
+between the planes stay on the fast path, the few that a plane cuts go the general way (sampled at
+the cut and corrected to their part), those outside are skipped; the default frame runs as before.
+
 Counters: samples (segments composited), rays (intermediate pixels), empty_pixels_skipped (pixel
 slabs skipped by the runs), pixels_terminated, slices, planes_per_slab, intermediate_width /
-_height, table_lengths.
+_height, table_lengths, clipped (1 when the near or far plane cut the volume).
 """
 
 from __future__ import annotations
@@ -299,9 +306,13 @@ class ShearWarpRenderer(RendererBase):
         n = auto_table_size(tau) if opts["table_size"] == "auto" else int(opts["table_size"])
         order = fac.order
         rows = _rows(fac.height)
+        limits = fac.clip_limits(camera, volume)  # None unless the near or far plane cuts the volume
+        clipping = limits is not None
+        clip_lo, clip_hi = limits if limits is not None else (np.zeros((1, 1)), np.zeros((1, 1)))
         counters: dict[str, float] = {
             "rays": float(fac.width * fac.height), "slices": float(len(order)), "planes_per_slab": float(planes),
             "intermediate_width": float(fac.width), "intermediate_height": float(fac.height),
+            "clipped": float(clipping),
         }  # fmt: skip
 
         if settings.blend_mode is not BlendMode.COMPOSITE:
@@ -309,7 +320,7 @@ class ShearWarpRenderer(RendererBase):
             lengths = fac.pixel_lengths() / planes
             self._blocks(progress, len(order), lambda m0, m1: project_slabs(
                 values, order, m0, m1, planes, fac.alpha_a, fac.beta_a, fac.alpha_b, fac.beta_b, rows, acc,
-                _MODES[settings.blend_mode], lengths))  # fmt: skip
+                _MODES[settings.blend_mode], lengths, clipping, clip_lo, clip_hi))  # fmt: skip
             hit = acc[..., 1] > 0
             value = np.where(hit, acc[..., 0], 0.0)
             if settings.blend_mode is BlendMode.AVERAGE:
@@ -409,7 +420,8 @@ class ShearWarpRenderer(RendererBase):
                 offsets, starts, ends, use_runs, bool(opts["early_termination"]), float(opts["termination_alpha"]),
                 has_nan,
                 shading, light, half, ray_dirs, float(settings.ambient), float(settings.diffuse),
-                float(settings.specular), float(settings.specular_power), float(gthr), inv_sp, per_row,
+                float(settings.specular), float(settings.specular_power), float(gthr), inv_sp,
+                clipping, clip_lo, clip_hi, per_row,
             )  # fmt: skip
 
         self._blocks(progress, len(order), block)
