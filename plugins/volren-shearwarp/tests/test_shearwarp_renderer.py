@@ -224,6 +224,40 @@ def test_a_constant_volume_draws_the_closed_form():
         assert image_error(image, expected).rmse < 0.03
 
 
+@pytest.mark.parametrize("pre", [False, True])
+@pytest.mark.parametrize("step", [0.5, 0.2])
+def test_jittered_samples_keep_the_closed_form_of_a_constant_volume(pre, step):
+    """Jitter moves the samples, never the length each ray integrates: a constant volume draws the
+    closed form with and without it, rays entering and leaving through every face."""
+    volume = UniformVolume(np.full((6, 7, 8), 1.0, np.float32), spacing=(0.9, 1.1, 1.0))
+    tf = TransferFunction1D.constant(0.3, (0.4, 0.7, 0.2), opacity_unit_distance=0.8)
+    for parallel in (False, True):
+        camera = Camera.orbit(volume.bounds, 25, 15, zoom=1.3, parallel=parallel)
+        expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, 40, 40, volume.bounds),
+                                             (0.4, 0.7, 0.2), 0.3, 0.8)  # fmt: skip
+        plain, _ = draw(volume, tf, camera, (40, 40), preintegration=pre, step=step)
+        jittered, _ = draw(volume, tf, camera, (40, 40), preintegration=pre, step=step, jitter=True)
+        assert image_error(jittered, expected).rmse < 0.03
+        assert image_error(jittered, plain).rmse < 2e-3
+
+
+@pytest.mark.parametrize("pre", [False, True])
+@pytest.mark.parametrize("shade", [False, True])
+def test_jitter_is_seeded_moves_the_samples_and_stays_accurate(pre, shade):
+    volume = field()
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    truth = reference_image(volume, SMOOTH_TF, camera, 40, 32, RenderSettings(shade=shade)) if shade else \
+        reference_image(volume, SMOOTH_TF, camera, 40, 32)  # fmt: skip
+    plain, _ = draw(volume, SMOOTH_TF, camera, preintegration=pre, shade=shade)
+    first, renderer = draw(volume, SMOOTH_TF, camera, preintegration=pre, shade=shade, jitter=True)
+    assert np.array_equal(renderer.render(camera, 40, 32), first)  # the same seed, the same image
+    other, _ = draw(volume, SMOOTH_TF, camera, preintegration=pre, shade=shade, jitter=True,
+                    options={"jitter_seed": 7})  # fmt: skip
+    assert not np.array_equal(other, first) and not np.array_equal(first, plain)
+    for image in (plain, first, other):
+        assert image_error(image, truth).rmse < 0.01
+
+
 def test_nan_cells_are_transparent_and_the_rest_draws():
     values = np.ones((8, 8, 8), np.float32)
     values[:, :, 5:] = np.nan
@@ -265,7 +299,8 @@ def test_an_eye_inside_the_volume_is_refused_in_one_line_under_perspective():
 
 @pytest.mark.parametrize("options", [{"oversampling": 0}, {"table_size": 3}, {"lookup": "cubic"},
                                      {"early_termination": "yes"}, {"termination_alpha": 2}, {"nope": 1},
-                                     {"downsample": 3}, {"downsample": 2.0}, {"downsample": True}])  # fmt: skip
+                                     {"downsample": 3}, {"downsample": 2.0}, {"downsample": True},
+                                     {"jitter_seed": -1}, {"jitter_seed": 1.5}])  # fmt: skip
 def test_bad_options_are_one_line_errors(options):
     with pytest.raises(VolrenError) as info:
         ShearWarpRenderer().set_settings(RenderSettings(options=options))

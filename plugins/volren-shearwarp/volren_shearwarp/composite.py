@@ -404,6 +404,102 @@ def _guess(alpha, beta, bound):
     return int(max(min(math.ceil((bound - alpha) / beta), 1 << 30), -(1 << 30)))
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, table, table_back, lut, preintegrated,
+                     shading, bilinear_lookup, use_termination, term_alpha):  # fmt: skip
+    """Blend one segment (front value xf, back value xb, `frac` of a whole segment's length) into
+    pixel (q, p). Returns (composited: 0 or 1, terminated: 0 or 1)."""
+    if xf != xf or xb != xb:
+        return 0, 0
+    cr, cg, cb, alpha = _segment(xf, xb, df, sf, db, sb, layer, table, table_back, lut, preintegrated, shading,
+                                 bilinear_lookup)  # fmt: skip
+    if alpha <= 0.0:
+        return 1, 0
+    if frac < 1.0:  # a partial segment: the seed's opacity and colour correction
+        corrected = -math.expm1(frac * math.log1p(-min(alpha, 1.0 - 1e-7)))
+        factor = corrected / alpha
+        cr *= factor
+        cg *= factor
+        cb *= factor
+        alpha = corrected
+    _blend(rgba, q, p, cr, cg, cb, alpha)
+    if use_termination and rgba[q, p, 3] >= term_alpha:
+        skip[q, p] = 1
+        return 1, 1
+    return 1, 0
+
+
+@njit(cache=True, error_model="numpy")
+def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u, rgba, buf_x, buf_d, buf_s, buf_len,
+                    stamp, skip, layer, table, table_back, lut, preintegrated, shading, bilinear_lookup, lo, scale,
+                    inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr, use_termination, term_alpha):  # fmt: skip
+    """Slab m of pixel (q, p) with jittered samples: at w = (j + u) / sub, j = 0 .. sub - 1 (u in
+    [0, 1) fixed per pixel), instead of on the slices. Segments run from sample to sample across
+    slab boundaries: the segment open at the end of a slab is carried to the next one in the
+    buffers (start value, its lighting, and the length so far, in whole-segment units, stamp = m);
+    a ray's first and last segments run from where it enters and to where it leaves, corrected to
+    their length like clipped ones. A slab skipped as empty closes nothing: the next slab starts
+    afresh where the ray enters it. Returns (segments composited, terminated)."""
+    n_comp = 0
+    if stamp[q, p] == m - 1 and t0 <= 0.0:
+        xs = buf_x[q, p]
+        ds = buf_d[q, p] if shading else 1.0
+        ss = buf_s[q, p] if shading else 0.0
+        done = buf_len[q, p]
+    else:
+        xs = _plane_value(vol, kf, kb, t0, af + t0 * (ab - af), bf + t0 * (bb - bf), lo, scale)
+        ds = 1.0
+        ss = 0.0
+        if shading:
+            ds, ss = _plane_light(vol, kf, kb, t0, af + t0 * (ab - af), bf + t0 * (bb - bf), inv_sp, light, hx, hy, hz,
+                                  ka, kd, ks, power, gthr)  # fmt: skip
+        done = 0.0
+    stamp[q, p] = -1
+    pos = t0
+    for j in range(sub):
+        w = (j + u) / sub
+        if w < t0 or w > t1:
+            continue
+        xw = _plane_value(vol, kf, kb, w, af + w * (ab - af), bf + w * (bb - bf), lo, scale)
+        dw = 1.0
+        sw = 0.0
+        if shading:
+            dw, sw = _plane_light(vol, kf, kb, w, af + w * (ab - af), bf + w * (bb - bf), inv_sp, light, hx, hy, hz,
+                                  ka, kd, ks, power, gthr)  # fmt: skip
+        frac = done + (w - pos) * sub
+        if frac > 0.0:
+            c, t = _composite_piece(rgba, skip, q, p, xs, xw, ds, ss, dw, sw, min(frac, 1.0), layer, table, table_back,
+                                    lut, preintegrated, shading, bilinear_lookup, use_termination, term_alpha)  # fmt: skip
+            n_comp += c
+            if t:
+                return n_comp, 1
+        xs = xw
+        ds = dw
+        ss = sw
+        done = 0.0
+        pos = w
+    if t1 < 1.0 or m == m_last:  # the ray leaves in this slab: close the open segment where it leaves
+        frac = done + (t1 - pos) * sub
+        if frac > 0.0:
+            xe = _plane_value(vol, kf, kb, t1, af + t1 * (ab - af), bf + t1 * (bb - bf), lo, scale)
+            de = 1.0
+            se = 0.0
+            if shading:
+                de, se = _plane_light(vol, kf, kb, t1, af + t1 * (ab - af), bf + t1 * (bb - bf), inv_sp, light,
+                                      hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
+            c, t = _composite_piece(rgba, skip, q, p, xs, xe, ds, ss, de, se, min(frac, 1.0), layer, table, table_back,
+                                    lut, preintegrated, shading, bilinear_lookup, use_termination, term_alpha)  # fmt: skip
+            return n_comp + c, t
+        return n_comp, 0
+    buf_x[q, p] = xs
+    if shading:
+        buf_d[q, p] = ds
+        buf_s[q, p] = ss
+    buf_len[q, p] = done + (1.0 - pos) * sub
+    stamp[q, p] = m
+    return n_comp, 0
+
+
 @njit(parallel=True, cache=True, error_model="numpy")
 def composite_slabs(
     vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows,
@@ -411,7 +507,7 @@ def composite_slabs(
     layers, per_pixel_layer, table, table_back, lut, preintegrated, bilinear_lookup, lo, scale,
     offsets, starts, ends, use_runs, use_termination, term_alpha, has_nan,
     shading, light, half, ray_dirs, ka, kd, ks, power, gthr, inv_sp,
-    clipping, clip_lo, clip_hi, counters,
+    clipping, clip_lo, clip_hi, jitter, offsets_u, buf_len, counters,
 ):  # fmt: skip
     """Composite the slabs between order[m - 1] and order[m] for m in [m0, m1) into `rgba`
     (intermediate image, premultiplied RGBA float32), clearing each row's image, stamps and skip
@@ -421,13 +517,17 @@ def composite_slabs(
     With `clipping`, pixel (q, p)'s ray is drawn only for u in [clip_lo[q, p], clip_hi[q, p]]
     (`Factorization.clip_limits`; slab m spans u in [m - 1, m]): the fast spans keep the pixels
     whose whole slab lies inside, the general way takes the rest (a segment cut by a plane sampled
-    at the cut and corrected to its part, one wholly outside skipped)."""
+    at the cut and corrected to its part, one wholly outside skipped).
+
+    With `jitter`, pixel (q, p)'s samples sit at offsets_u[q, p] of the way between planes
+    (`_jittered_pixel`), every pixel through the general way."""
     nc, nb, na = vol.shape
     width = rgba.shape[1]
     inv_sub = 1.0 / sub
     top_a = na - 1.0
     top_b = nb - 1.0
-    lean = sub == 1 and not shading
+    lean = sub == 1 and not shading and not jitter
+    m_last = order.shape[0] - 1  # the back slab
     for r in prange(rows.shape[0]):
         q = rows[r]
         if m0 <= 1:
@@ -539,6 +639,16 @@ def composite_slabs(
                             hx /= hn
                             hy /= hn
                             hz /= hn
+                    if jitter:
+                        c, t = _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, offsets_u[q, p],
+                                               rgba, buf_x, buf_d, buf_s, buf_len, stamp, skip, layer, table,
+                                               table_back, lut, preintegrated, shading, bilinear_lookup, lo, scale,
+                                               inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr, use_termination,
+                                               term_alpha)  # fmt: skip
+                        n_comp += c
+                        n_term += t
+                        p += 1
+                        continue
                     for j in range(sub):
                         u0 = max(j * inv_sub, t0)
                         u1 = min((j + 1) * inv_sub, t1)
@@ -579,23 +689,11 @@ def composite_slabs(
                         if not cut_back:
                             stamp[q, p] = plane + 1
                             buf_x[q, p] = xb
-                        if xf != xf or xb != xb:
-                            continue
-                        n_comp += 1
-                        cr, cg, cb, alpha = _segment(xf, xb, df, sf, db, sb, layer, table, table_back, lut,
-                                                     preintegrated, shading, bilinear_lookup)  # fmt: skip
-                        if alpha <= 0.0:
-                            continue
-                        if frac < 1.0:  # a clipped segment: the seed's opacity and colour correction
-                            corrected = -math.expm1(frac * math.log1p(-min(alpha, 1.0 - 1e-7)))
-                            factor = corrected / alpha
-                            cr *= factor
-                            cg *= factor
-                            cb *= factor
-                            alpha = corrected
-                        _blend(rgba, q, p, cr, cg, cb, alpha)
-                        if use_termination and rgba[q, p, 3] >= term_alpha:
-                            skip[q, p] = 1
+                        c, t = _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, table,
+                                                table_back, lut, preintegrated, shading, bilinear_lookup,
+                                                use_termination, term_alpha)  # fmt: skip
+                        n_comp += c
+                        if t:
                             n_term += 1
                             break
                     p += 1

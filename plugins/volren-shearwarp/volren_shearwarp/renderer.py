@@ -31,6 +31,12 @@ ray the depth is linear in the slice index, so each ray keeps an interval of sli
 between the planes stay on the fast path, the few that a plane cuts go the general way (sampled at
 the cut and corrected to their part), those outside are skipped; the default frame runs as before.
 
+Jitter (the `jitter` setting): each intermediate pixel's samples move off the slices by a seeded
+offset in [0, 1) of the plane spacing (`jitter_seed`), so that slice-aligned sampling artifacts turn
+into noise; its segments run from sample to sample across slices (`composite._jittered_pixel`),
+which takes the general way, and its first and last segments from where the ray enters and to where
+it leaves. Maximum, minimum and average are exact along the piecewise-linear ray and take no jitter.
+
 Counters: samples (segments composited), rays (intermediate pixels), empty_pixels_skipped (pixel
 slabs skipped by the runs), pixels_terminated, slices, planes_per_slab, intermediate_width /
 _height, table_lengths, clipped (1 when the near or far plane cut the volume).
@@ -104,6 +110,7 @@ OPTIONS: dict[str, tuple[Any, str]] = {
     "opacity_correction": (True, "correct each segment's opacity (and colour) to its length, 1 - (1 - a)^(d / d_u) "
                                  "(true/false; false draws every slab as if d_u long: the seed's 'NC' column, for "
                                  "measuring what the correction costs, not for use)"),
+    "jitter_seed": (0, "seed of the per-pixel sample offsets drawn with the `jitter` setting (an integer >= 0)"),
     "downsample": (1, "render a copy of the volume reduced this many times along each axis (1, 2, 4 or 8; "
                       "`volren.model.downsample`): a draft at about 1/factor^3 of the compositing"),
 }
@@ -132,6 +139,9 @@ def _read_options(options: Mapping[str, Any]) -> dict[str, Any]:
         raise VolrenError(f"renderer shearwarp: option lookup must be 'bilinear' or 'nearest', got {out['lookup']!r}")
     if out["warp_filter"] not in ("cubic", "bilinear"):
         raise VolrenError(f"renderer shearwarp: option warp_filter must be 'cubic' or 'bilinear', got {out['warp_filter']!r}")
+    seed = out["jitter_seed"]
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise VolrenError(f"renderer shearwarp: option jitter_seed must be an integer >= 0, got {seed!r}")
     factor = out["downsample"]
     if isinstance(factor, bool) or not isinstance(factor, int) or factor not in DOWNSAMPLE_FACTORS:
         raise VolrenError(f"renderer shearwarp: option downsample must be one of "
@@ -411,6 +421,13 @@ class ShearWarpRenderer(RendererBase):
         scale = (n - 1) / (hi - lo)
         inv_sp = 1.0 / fac.spacing
 
+        jitter = bool(settings.jitter)
+        if jitter:  # a fixed offset per intermediate pixel, from the seed: the same view draws the same image
+            offsets_u = np.random.default_rng(int(opts["jitter_seed"])).random(shape, dtype=np.float32)
+        else:
+            offsets_u = np.zeros((1, 1), np.float32)
+        buf_len = self._scratch("buf_len", shape if jitter else (1, 1), np.float32)
+
         def block(m0: int, m1: int) -> None:
             composite_slabs(
                 values, order, m0, m1, planes, fac.alpha_a, fac.beta_a, fac.alpha_b, fac.beta_b, rows,
@@ -421,7 +438,7 @@ class ShearWarpRenderer(RendererBase):
                 has_nan,
                 shading, light, half, ray_dirs, float(settings.ambient), float(settings.diffuse),
                 float(settings.specular), float(settings.specular_power), float(gthr), inv_sp,
-                clipping, clip_lo, clip_hi, per_row,
+                clipping, clip_lo, clip_hi, jitter, offsets_u, buf_len, per_row,
             )  # fmt: skip
 
         self._blocks(progress, len(order), block)
