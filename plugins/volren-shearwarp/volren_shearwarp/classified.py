@@ -18,6 +18,9 @@ nothing to the range.
 
 The test reads the TF only through which value bins have nonzero opacity (`OpacitySupport`):
 colour edits, and opacity edits that keep the support, reuse the runs.
+Each block's value range does not depend on the TF: it is computed once per axis copy and kept as
+two bytes per cell (`AxisCopy.ranges`, half the copy's size), so an opacity edit that changes the
+support only compares ranges with it and re-extracts the runs.
 """
 
 from __future__ import annotations
@@ -82,6 +85,9 @@ class AxisCopy:
     axis: int
     values: NDArray[np.float32]
     runs: dict[int, Runs] = field(default_factory=dict)  #: by radius
+    #: by radius: each block's (lowest, highest) range bin, uint8 (`_block_ranges`), kept across TF edits
+    ranges: dict[int, tuple[NDArray[np.uint8], NDArray[np.uint8]]] = field(default_factory=dict)
+    ranges_key: tuple[float, float] | None = None  #: the value range the bins span
 
 
 @dataclass(frozen=True)
@@ -103,27 +109,27 @@ class Runs:
         return int(self.offsets.nbytes + self.starts.nbytes + self.ends.nbytes)
 
 
-@njit(cache=True)
-def _visible(mn, mx, lo, scale, counts, bins):
-    if mn > mx:  # no finite cell around: transparent
-        return False
-    b0 = int((mn - lo) * scale)
-    b1 = int((mx - lo) * scale)
-    b0 = min(max(b0, 0), bins - 1)
-    b1 = min(max(b1, 0), bins - 1)
-    return counts[b1 + 1] - counts[b0] > 0
+#: Bins of the cached block ranges (`AxisCopy.ranges`): one byte each for a block's lowest and highest
+#: value, 16 support bins per range bin (a range bin is visible when any of its support bins is:
+#: conservative, so a TF edit can never hide a visible cell).
+RANGE_BINS = 256
 
 
 @njit(parallel=True, cache=True)
-def _visible_cells(vol, lo, scale, counts, radius, mask):
-    """mask[k, b, a] = 1 where the block of cells within `radius` of (a, b) in slab k may be visible.
+def _block_ranges(vol, lo, scale, bins, radius, bmin, bmax):
+    """bmin, bmax[k, b, a] = the range bins (of RANGE_BINS over [lo, hi]) of the lowest and highest
+    value over the vertices, in both slices of slab k, of the block of cells within `radius` of
+    (a, b); bmin > bmax where the block has no finite vertex (transparent).
 
-    The block's value range is the min and max over its vertices in both slices, taken
-    separably (slices, then a, then b: a window of 2 radius + 2 vertices per axis) rather than
-    per cell and block, 3x fewer operations. Non-finite vertices are left out, which can only
-    widen the range of a block whose cells are transparent anyway (conservative)."""
+    Why cached: this is the TF-independent part of classifying a cell, and most of its cost; an
+    opacity edit then only compares each block's range with the new support (`_mask_from_ranges`).
+    The range is taken separably (slices, then a, then b: a window of 2 radius + 2 vertices per
+    axis), 3x fewer operations than per cell and block. Non-finite vertices are left out, which can
+    only widen the range of a block whose cells are transparent anyway (conservative)."""
     nc, nb, na = vol.shape
-    bins = counts.shape[0] - 1
+    shift = 0
+    while (RANGE_BINS << shift) < bins:
+        shift += 1
     for k in prange(nc - 1):
         vmin = np.empty((nb, na), np.float32)
         vmax = np.empty((nb, na), np.float32)
@@ -160,7 +166,36 @@ def _visible_cells(vol, lo, scale, counts, radius, mask):
                 for b2 in range(max(b - radius, 0), min(b + radius + 1, nb - 1) + 1):
                     mn = min(mn, rmin[b2, a])
                     mx = max(mx, rmax[b2, a])
-                mask[k, b, a] = 1 if _visible(mn, mx, lo, scale, counts, bins) else 0
+                if mn > mx:
+                    bmin[k, b, a] = RANGE_BINS - 1
+                    bmax[k, b, a] = 0
+                else:  # the support's own bins (as `OpacitySupport` bins values), then 2^shift of them per range bin
+                    bmin[k, b, a] = min(max(int((mn - lo) * scale), 0), bins - 1) >> shift
+                    bmax[k, b, a] = min(max(int((mx - lo) * scale), 0), bins - 1) >> shift
+
+
+@njit(parallel=True, cache=True)
+def _mask_from_ranges(bmin, bmax, counts, mask):
+    """mask = 1 where a block's range bins hold a bin with nonzero opacity (`counts`: prefix counts
+    over the range bins)."""
+    nk, nb, na = bmin.shape
+    for k in prange(nk):
+        for b in range(nb):
+            for a in range(na):
+                lo_bin = bmin[k, b, a]
+                hi_bin = bmax[k, b, a]
+                mask[k, b, a] = 1 if lo_bin <= hi_bin and counts[hi_bin + 1] - counts[lo_bin] > 0 else 0
+
+
+def range_counts(support: OpacitySupport) -> NDArray[np.int32]:
+    """Prefix counts over RANGE_BINS bins of the support (a range bin counts when any of its bins does)."""
+    bins = support.counts.shape[0] - 1
+    per = max(1, bins // RANGE_BINS)
+    edges = np.minimum(np.arange(RANGE_BINS + 1) * per, bins)
+    nonzero = support.counts[edges[1:]] - support.counts[edges[:-1]] > 0
+    counts = np.zeros(RANGE_BINS + 1, np.int32)
+    np.cumsum(nonzero, out=counts[1:])
+    return counts
 
 
 @njit(cache=True, inline="always")
@@ -209,14 +244,23 @@ def _runs_from_mask(mask, min_gap):
     return offsets, starts, ends
 
 
-def build_runs(values: NDArray[np.float32], support: OpacitySupport, radius: int = 1) -> Runs:
-    """The runs of one axis copy for this opacity support, for rays that move at most `radius`
-    cells in the slice plane from one slice to the next."""
-    start = time.perf_counter()
+def block_ranges(values: NDArray[np.float32], support: OpacitySupport, radius: int) -> tuple[NDArray, NDArray]:
+    """`_block_ranges` of one axis copy (bins over the support's value range, fixed per volume)."""
     nc, nb, na = values.shape
-    mask = np.zeros((nc - 1, nb - 1, na - 1), np.uint8)
+    bmin = np.empty((nc - 1, nb - 1, na - 1), np.uint8)
+    bmax = np.empty((nc - 1, nb - 1, na - 1), np.uint8)
     bins = support.counts.shape[0] - 1
-    _visible_cells(values, support.lo, bins / (support.hi - support.lo), support.counts, radius, mask)
+    _block_ranges(values, support.lo, bins / (support.hi - support.lo), bins, radius, bmin, bmax)
+    return bmin, bmax
+
+
+def build_runs(ranges: tuple[NDArray, NDArray], support: OpacitySupport, radius: int) -> Runs:
+    """The runs of one axis copy for this opacity support, for rays that move at most `radius`
+    cells in the slice plane from one slice to the next, from its cached block ranges."""
+    start = time.perf_counter()
+    bmin, bmax = ranges
+    mask = np.empty(bmin.shape, np.uint8)
+    _mask_from_ranges(bmin, bmax, range_counts(support), mask)
     offsets, starts, ends = _runs_from_mask(mask, MIN_GAP)
     visible = int(mask.sum(dtype=np.int64))
     ms = (time.perf_counter() - start) * 1000.0
@@ -253,10 +297,16 @@ class ClassifiedVolume:
         copy = self.copy(axis)
         found = copy.runs.get(radius)
         if found is None or found.digest != support.digest:
-            found = copy.runs[radius] = build_runs(copy.values, support, radius)
+            if copy.ranges_key != (support.lo, support.hi):
+                copy.ranges.clear()
+                copy.ranges_key = (support.lo, support.hi)
+            if radius not in copy.ranges:
+                copy.ranges[radius] = block_ranges(copy.values, support, radius)
+            found = copy.runs[radius] = build_runs(copy.ranges[radius], support, radius)
         return found
 
     @property
     def nbytes(self) -> int:
-        """Bytes held by the copies and their runs."""
-        return sum(c.values.nbytes + sum(r.nbytes for r in c.runs.values()) for c in self.copies.values())
+        """Bytes held by the copies, their runs and their cached block ranges."""
+        return sum(c.values.nbytes + sum(r.nbytes for r in c.runs.values())
+                   + sum(lo.nbytes + hi.nbytes for lo, hi in c.ranges.values()) for c in self.copies.values())  # fmt: skip
