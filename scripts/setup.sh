@@ -105,3 +105,17 @@ if [ "${installed%% *}" != "$hash" ] || { [ "$extras" != app ] && [ "${installed
   done
   echo "$hash $extras" > "$stamp"
 fi
+
+# Compile the renderers' kernels now rather than at the first frame (numba caches them on disk;
+# `volren prepare`), once per change of the sources: a fresh install's first `tetra` or `reference`
+# frame otherwise waits 40-55 s. A renderer that cannot be prepared (no OpenGL) is reported, not fatal.
+prepared=.venv/.volren-prepared
+sources=$( { find volren plugins -name '*.py' -not -path '*/tests/*' | LC_ALL=C sort | xargs cat; cat "$stamp"; } | sha256sum | cut -d' ' -f1)
+if [ "$(cat "$prepared" 2>/dev/null || true)" != "$sources" ]; then
+  echo "setup: compiling the renderers' kernels (volren prepare; once per change of the sources)"
+  if .venv/bin/volren prepare; then
+    echo "$sources" > "$prepared"
+  else
+    echo "setup: volren prepare failed; first frames will compile instead" >&2
+  fi
+fi

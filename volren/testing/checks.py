@@ -469,11 +469,11 @@ def check_release(ctx: CheckContext) -> list[Measurement]:
     return [Measurement("release", kind, "uses after release not refused in one line", bad, 0)]
 
 
-def _tf_2d() -> TransferFunction2D:
+def kit_tf_2d() -> TransferFunction2D:
     return TransferFunction2D((-2.0, 4.0), (0.0, 3.0), [TFWidget.gaussian((1.0, 1.0), (1.0, 1.0), (1, 0.5, 0), 0.6)])
 
 
-def _combinations(kind_support: Any) -> Iterator[tuple[int, RenderSettings, bool]]:
+def contract_combinations(kind_support: Any) -> Iterator[tuple[int, RenderSettings, bool]]:
     """Every (TF dims, settings) the contract knows, and whether `kind_support` claims it."""
     for dims, pre, shade, mode in itertools.product((1, 2), (False, True), (False, True), list(BlendMode)):
         settings = RenderSettings(preintegration=pre, shade=shade, blend_mode=mode)
@@ -498,10 +498,10 @@ def check_capabilities(ctx: CheckContext) -> list[Measurement]:
                 out.append(Measurement("capabilities", f"{kind} not claimed", "accepted", 0, 0))
                 continue
             raise ContractError(f"set_volume accepted a {kind} volume that the capabilities do not claim")
-        tf2 = _tf_2d()
+        tf2 = kit_tf_2d()
         renderer, refusing = ctx.renderer(), ctx.renderer()
         claimed = refused = 0
-        for dims, settings, is_claimed in _combinations(caps.kinds[kind]):  # type: ignore[index]
+        for dims, settings, is_claimed in contract_combinations(caps.kinds[kind]):  # type: ignore[index]
             what = f"{kind} {dims}D TF, pre-integration {settings.preintegration}, shade {settings.shade}, {settings.blend_mode}"
             tf = tf1 if dims == 1 else tf2
             if ctx.quick and is_claimed and claimed >= 6:

@@ -1,0 +1,105 @@
+"""Compile the renderers' kernels ahead of their first use, so that a first frame does not wait.
+
+Why: the CPU renderers' kernels are numba functions cached on disk (``cache=True``) per argument
+types, and a fresh install has no cache: the first `tetra` frame waited 37-46 s and the first
+`reference` frame 54 s while numba compiled. `scripts/setup.sh` runs `volren prepare` once per
+change of the sources, which draws a tiny scene with every registered renderer in every
+combination its capabilities claim (TF dimensions, pre-integration, shading, blend modes; both
+projections; every kept scalar type of a uniform grid), so that every specialization a real scene
+needs is compiled and cached (and the OpenGL drivers' shader caches are warm). numba checks each
+cached function against its source file's time stamp, and packages whose kernels span modules drop
+stale caches themselves (`volren.numba_cache`), so an edit recompiles only what changed.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from volren.errors import VolrenError
+from volren.model import Camera, TransferFunction1D, UniformVolume, Volume
+from volren.model.volume import KEPT_DTYPES
+from volren.testing.checks import contract_combinations, kit_tf_2d
+from volren.testing.scenes import lattice_volume
+
+#: Side of the images drawn (small: only the compilation matters).
+SIZE = 12
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """One renderer's preparation: how long it took, how many frames, and the error that stopped it."""
+
+    name: str
+    seconds: float
+    frames: int
+    error: str | None = None
+
+
+def _volumes(kind: str) -> Iterator[Volume]:
+    """Small volumes of `kind`: a uniform grid in every kept scalar type, or a tetrahedral lattice."""
+    if kind == "tet":
+        yield lattice_volume("tet", lambda x, y, z: x + 0.5 * y - 0.3 * z, (4, 4, 3), name="prepare")
+        return
+    z, y, x = np.mgrid[0:5, 0:6, 0:7]
+    ramp = (x * 7 + y * 3 + z * 5).astype(np.float64)
+    for dtype in KEPT_DTYPES:
+        yield UniformVolume(ramp.astype(dtype), spacing=(1.0, 0.9, 1.1), name=f"prepare {np.dtype(dtype).name}")
+
+
+def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Camera]]]]:
+    """Per small volume, the (TF, settings, camera) of every combination `name`'s capabilities claim."""
+    from volren.renderers.registry import registry
+
+    capabilities = registry.capabilities(name)
+    for kind, support in capabilities.kinds.items():
+        for volume in _volumes(kind):
+            lo, hi = volume.value_range
+            tf1 = TransferFunction1D([[lo, 0.2, 0.4, 0.9], [hi, 1.0, 0.6, 0.1]], [[lo, 0.0], [hi, 0.8]])
+            tf2 = kit_tf_2d()
+            cameras = [Camera.orbit(volume.bounds, 30, 20, parallel=parallel) for parallel in (False, True)]
+            yield volume, [(tf1 if dims == 1 else tf2, settings, camera)
+                           for dims, settings, claimed in contract_combinations(support) if claimed
+                           for camera in cameras]  # fmt: skip
+
+
+def prepare_renderer(name: str) -> Prepared:
+    """Draw every claimed combination with renderer `name` (one renderer per volume, as the app keeps
+    one); an error stops it and is reported in one line."""
+    from volren.renderers.registry import registry
+
+    start = time.perf_counter()
+    frames = 0
+    try:
+        for volume, frames_of_volume in _scenes(name):
+            renderer = registry.create(name)
+            try:
+                renderer.set_volume(volume)
+                for tf, settings, camera in frames_of_volume:
+                    renderer.set_transfer_function(tf)
+                    renderer.set_settings(settings)
+                    renderer.render(camera, SIZE, SIZE)
+                    frames += 1
+            finally:
+                renderer.release()
+    except VolrenError as exc:
+        return Prepared(name, time.perf_counter() - start, frames, str(exc))
+    except Exception as exc:  # noqa: BLE001 - a plugin's failure is reported, never fatal to set-up
+        return Prepared(name, time.perf_counter() - start, frames, f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+    return Prepared(name, time.perf_counter() - start, frames)
+
+
+def prepare(names: list[str] | None = None, on_done: Callable[[Prepared], None] | None = None) -> list[Prepared]:
+    """`prepare_renderer` for `names` (default: every registered renderer), in order."""
+    from volren.renderers.registry import registry
+
+    out = []
+    for name in names if names is not None else registry.names():
+        result = prepare_renderer(name)
+        out.append(result)
+        if on_done is not None:
+            on_done(result)
+    return out
