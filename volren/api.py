@@ -121,10 +121,26 @@ def prepared_renderer(
         renderer.release()
 
 
+def at_quality(volume: Volume, tf: TransferFunction, renderer: str, quality: str, settings: RenderSettings,
+               explicit: dict[str, Any]) -> tuple[str, RenderSettings]:  # fmt: skip
+    """(renderer, settings): `auto` resolved, the level's measured settings applied, then the
+    `explicit` fields again on top (they win)."""
+    from volren import quality as levels
+    from volren.model import TransferFunction2D
+    from volren.renderers.registry import registry
+
+    levels.check_level(quality)
+    if renderer == levels.AUTO:
+        tf_dim = 2 if isinstance(tf, TransferFunction2D) else 1
+        renderer, _ = levels.choose_renderer(volume.kind, quality, tf_dim, settings, registry.names())
+    at_level = levels.settings_for(renderer, volume.kind, quality, settings)
+    return renderer, at_level.with_(**{k: v for k, v in explicit.items() if k != "options"})
+
+
 def render(
     volume: Any,
     tf: Any = None,
-    renderer: str = "vtk",
+    renderer: str = "auto",
     size: Any = (512, 512),
     azimuth: float = 0.0,
     elevation: float = 0.0,
@@ -133,6 +149,7 @@ def render(
     camera: Camera | None = None,
     scalars: str | None = None,
     progress: ProgressCallback | None = None,
+    quality: str = "default",
     **settings: Any,
 ) -> NDArray[np.float32]:
     """Render offscreen; returns float32 (H, W, 4) premultiplied RGBA over black, row 0 on top.
@@ -140,8 +157,10 @@ def render(
     `volume` may be a UniformVolume/TetVolume, a file path or a PyVista dataset; `tf` a
     TransferFunction1D or TransferFunction2D, a TF JSON path or dict, or None for a default. The
     camera is DESIGN.md's orbit (reset on the bounds, then azimuth, elevation, zoom) unless
-    `camera` is given. Other keyword arguments are RenderSettings fields (step, preintegration,
-    shade, blend_mode, ...).
+    `camera` is given. `renderer` "auto" is the fastest measured renderer that draws the scene at
+    `quality` (`volren.quality`: draft, interactive, default, high, exact), whose measured settings
+    apply; other keyword arguments are RenderSettings fields (step, preintegration, shade,
+    blend_mode, options, ...) and win over the level's.
     """
     vol = as_volume(volume, scalars)
     transfer = as_transfer_function(tf, vol)
@@ -150,6 +169,7 @@ def render(
         if not math.isfinite(value):
             raise VolrenError(f"{name} must be finite, got {value}")
     render_settings = RenderSettings().with_(**settings)
+    renderer, render_settings = at_quality(vol, transfer, renderer, quality, render_settings, settings)
     check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
     cam = camera or Camera.orbit(vol.bounds, azimuth, elevation, zoom, parallel, width / height)
     with prepared_renderer(renderer, vol, transfer, render_settings) as r:

@@ -13,6 +13,7 @@ import pytest
 from PIL import Image
 
 from volren.cli.main import main
+from volren.renderers.registry import registry
 from volren.samples import sample_paths
 
 pytestmark = pytest.mark.usefixtures("opengl")
@@ -36,7 +37,9 @@ def test_render_writes_png_and_array_and_prints_one_line(tmp_path, capsys, ml_sa
                  "--azimuth", "30", "--elevation", "20", "--save-array", str(npy)])
     assert code == 0
     out = capsys.readouterr().out.strip().splitlines()
-    assert len(out) == 1 and out[0].startswith("vtk: 40x30 in ") and "ms" in out[0]
+    # no --renderer: `auto` names its choice and why
+    name, _, rest = out[0].partition(" (auto: ")
+    assert len(out) == 1 and name in registry.names() and "): 40x30 in " in rest and "ms" in rest
     assert Image.open(png).size == (40, 30)
     array = np.load(npy)
     assert array.shape == (30, 40, 4) and array.dtype == np.float32
@@ -59,6 +62,7 @@ def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
         "camera": {"azimuth": 30, "elevation": 20, "zoom": 1.2},
         "settings": {"step": 0.5},
         "renderer": "vtk",
+        "quality": "default",
         "size": [24, 24],
     }
     scene_path = tmp_path / "scene.json"
@@ -69,7 +73,7 @@ def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
     a, b = np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy")
     assert a.shape == (24, 24, 4) and b.shape == (16, 16, 4)
     direct = tmp_path / "c.npy"
-    assert main(["render", str(volume), "--tf", str(tf), "--size", "24", "--azimuth", "30",
+    assert main(["render", str(volume), "--tf", str(tf), "--size", "24", "--azimuth", "30", "--renderer", "vtk",
                  "--elevation", "20", "--zoom", "1.2", "--save-array", str(direct)]) == 0
     assert np.array_equal(a, np.load(direct))
     capsys.readouterr()
@@ -81,7 +85,8 @@ def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
         (["render", "{missing}", "-o", "{out}"], "missing.vti"),
         (["render", "{volume}", "-o", "{out}", "--renderer", "nope"], "unknown renderer 'nope'"),
         (["render", "{volume}", "-o", "{out}", "--tf", "{missing}"], "missing.vti"),
-        (["render", "{volume}", "-o", "{out}", "--option", "mapper=warp"], "unknown vtk mapper"),
+        (["render", "{volume}", "-o", "{out}", "--renderer", "vtk", "--option", "mapper=warp"], "unknown vtk mapper"),
+        (["render", "{volume}", "-o", "{out}", "--option", "mapper=warp"], "--option mapper: renderer "),
         (["render", "{volume}", "-o", "{tmp}/no/such/dir/x.png"], "does not exist"),
         (["render", "{volume}"], "-o OUT.png"),
         (["render", "-o", "{out}"], "INPUT"),
@@ -112,7 +117,7 @@ def test_subprocess_missing_file_is_one_line_and_nonzero(tmp_path):
 def test_subprocess_render_and_console_script(tmp_path, ml_sample):
     result = run_cli("render", str(ml_sample[0]), "-o", str(tmp_path / "x.png"), "--size", "16")
     assert result.returncode == 0, result.stderr
-    assert result.stdout.startswith("vtk: 16x16 in ")
+    assert " (auto: " in result.stdout and "): 16x16 in " in result.stdout
     script = Path(sys.executable).parent / "volren"
     if script.exists():
         version = subprocess.run([str(script), "--version"], capture_output=True, text=True, timeout=60)

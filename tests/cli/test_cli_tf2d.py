@@ -40,7 +40,8 @@ def test_render_with_a_2d_tf_file(files, capsys):
 
 def test_vtk_refuses_a_2d_tf_file_in_one_line(files, capsys):
     folder, _ = files
-    code = main(["render", str(folder / "ramp.vti"), "--tf", str(folder / "tf2d.json"), "-o", str(folder / "x.png")])
+    code = main(["render", str(folder / "ramp.vti"), "--tf", str(folder / "tf2d.json"), "-o", str(folder / "x.png"),
+                 "--renderer", "vtk"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and len(err) == 1, err
     assert err[0] == "volren: error: renderer vtk does not support 2D transfer functions on uniform volumes"

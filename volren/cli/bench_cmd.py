@@ -24,6 +24,40 @@ def add_parser(sub) -> None:
     add_stress_parser(kinds)
     add_app_parsers(kinds)
     add_fuzz_parser(kinds)
+    add_quality_parser(kinds)
+
+
+def add_quality_parser(kinds) -> None:
+    q = kinds.add_parser("quality", help="the quality levels (--quality) and `auto`'s data from bench run results")
+    q.add_argument("runs", nargs="+", help="runs.csv files of `volren bench run` (a later file wins on overlaps)")
+    q.add_argument("--out", help="the table to write (default: volren/quality_levels.json, the one volren uses)")
+    q.set_defaults(run=run_quality)
+
+
+def run_quality(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from volren.bench.quality import derive, read_rows
+    from volren.quality import LEVELS, TABLE_PATH
+
+    paths = [Path(p) for p in args.runs]
+    source = "volren bench quality " + " ".join(str(p) for p in paths)
+    quality = derive(read_rows(paths), source)
+    if not quality.levels:
+        raise VolrenError(f"{', '.join(args.runs)}: no scene has VTK's default measured, which the levels are defined against")
+    out = Path(args.out) if args.out else TABLE_PATH
+    try:
+        out.write_text(json.dumps(quality.to_json(), indent=1) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise VolrenError(f"{out}: cannot write: {exc.strerror or exc}") from None
+    for kind, renderers in quality.levels.items():
+        for name, per in renderers.items():
+            print(f"{kind:8s} {name:12s} " + " | ".join(f"{level}: {per[level].label} "
+                  f"(x{per[level].worst_error_ratio:.2g} VTK's error, {sum(per[level].ms.values()):.0f} ms)"
+                  for level in LEVELS))  # fmt: skip
+    print(f"wrote {out}")
+    return 0
 
 
 def float_list(text: str, what: str) -> list[float]:

@@ -17,6 +17,11 @@ from volren.errors import VolrenError
 from volren.model.camera import check_zoom
 from volren.model.scene import OrbitView, Scene
 from volren.model.settings import MAX_SAMPLES_PER_RAY, MAX_STEP, BlendMode
+from volren.model.transfer_function_2d import TransferFunction2D
+from volren.quality import AUTO, DEFAULT_LEVEL, LEVELS
+
+#: How messages mark a renderer that the user did not name.
+CHOSEN_BY_AUTO = "(chosen by --renderer auto)"
 
 
 def finite_float(text: str) -> float:
@@ -66,7 +71,10 @@ def add_parser(sub) -> None:
     p.add_argument("input", nargs="?", help="volume file or DICOM folder (optional with --scene)")
     p.add_argument("-o", "--output", help="PNG file to write")
     p.add_argument("--scene", help="scene JSON with volume, TF, camera and settings")
-    p.add_argument("--renderer", help="renderer name (see `volren renderers`; default vtk)")
+    p.add_argument("--renderer", help="renderer name (see `volren renderers`), or auto (the default: the fastest "
+                   "measured renderer that draws the scene at the quality asked for)")
+    p.add_argument("--quality", choices=LEVELS, help="settings measured for this level (volren renderers lists them; "
+                   "default: default, or the scene file's settings as they are); explicit flags win")
     p.add_argument("--tf", help="transfer function JSON (DESIGN.md format or a ParaView preset)")
     p.add_argument("--scalars", help="name of the point array to render")
     p.add_argument("--size", type=image_size, help="image size W or WxH (default 512)")
@@ -156,8 +164,9 @@ def _load_input(args: argparse.Namespace):
     return io.load_volume(args.input, **kwargs)
 
 
-def build_scene(args: argparse.Namespace) -> Scene:
-    """The scene to render: from --scene and/or INPUT, with explicit flags applied on top."""
+def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:
+    """The scene to render: from --scene and/or INPUT, at the quality asked for, with explicit flags
+    applied on top; and why `auto` chose its renderer (None when a renderer was named)."""
     from volren import io
     from volren.api import as_transfer_function
 
@@ -198,11 +207,52 @@ def build_scene(args: argparse.Namespace) -> Scene:
         "blend_mode": args.blend,
     }
     changes = {k: v for k, v in changes.items() if v is not None}
+    if changes.get("blend_mode") is not None or changes.get("shade") is not None:  # they decide what `auto` may pick
+        scene = replace(scene, settings=scene.settings.with_(**{k: changes[k] for k in ("shade", "blend_mode") if k in changes}))
+    scene, why = _at_quality(args, scene)
     if args.option:
-        changes["options"] = {**scene.settings.options, **parse_options(args.option)}
+        given = parse_options(args.option)
+        _check_option_names(given, scene.renderer, why)
+        changes["options"] = {**scene.settings.options, **given}
     if changes:
         scene = replace(scene, settings=scene.settings.with_(**changes))
-    return scene
+    return scene, why
+
+
+def _check_option_names(options: dict[str, Any], renderer: str, why: str | None) -> None:
+    """--option keys the renderer does not have, as a one-line error naming the flag (and saying
+    that `auto` chose the renderer, when it did)."""
+    from volren.renderers.registry import registry
+
+    valid = registry.get(renderer).option_help
+    unknown = [key for key in options if key not in valid]
+    if unknown:
+        key = unknown[0] if len(unknown[0]) <= 40 else unknown[0][:40] + "..."
+        chosen = f"{CHOSEN_BY_AUTO} " if why else ""
+        raise VolrenError(f"--option {key}: renderer {renderer} {chosen}has no such option; valid: "
+                          f"{', '.join(sorted(valid)) or 'none'}")  # fmt: skip
+
+
+def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | None]:
+    """The scene's renderer resolved (`auto`) and its settings at the quality level asked for: the
+    flag, the scene file's "quality", or `default` for a render without a scene file (a scene
+    file's own settings are kept as they are unless a level is named)."""
+    from volren.quality import check_level, choose_renderer, settings_for
+    from volren.renderers.registry import registry
+
+    if scene.volume is None:
+        return scene, None
+    named = args.quality or scene.extra.get("quality")
+    level = check_level(str(named)) if named is not None else (None if args.scene else DEFAULT_LEVEL)
+    tf_dim = 2 if isinstance(scene.transfer_function, TransferFunction2D) else 1
+    kind = scene.volume.kind
+    why = None
+    if scene.renderer == AUTO:
+        name, why = choose_renderer(kind, level or DEFAULT_LEVEL, tf_dim, scene.settings, registry.names())
+        scene = replace(scene, renderer=name)
+    if level is not None:
+        scene = replace(scene, settings=settings_for(scene.renderer, kind, level, scene.settings))
+    return scene, why
 
 
 def _check_outputs(outputs, inputs, force: bool) -> None:
@@ -251,7 +301,7 @@ def run(args: argparse.Namespace) -> int:
     outputs = (("-o", args.output), ("--save-array", args.save_array))
     inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
     _check_outputs(outputs, inputs, args.force)  # before the (maybe long) load
-    scene = build_scene(args)
+    scene, why = build_scene(args)
     _check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
     _check_scene(args, scene)
     width, height = scene.size
@@ -262,11 +312,14 @@ def run(args: argparse.Namespace) -> int:
                 image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
     except VolrenError as exc:
         chosen = scene.renderer if args.renderer or not args.scene else None
+        if why and f"renderer {scene.renderer} " in f"{exc} ":  # the user did not name it: say who did
+            exc = VolrenError(f"{exc} ".replace(f"renderer {scene.renderer} ", f"renderer {scene.renderer} {CHOSEN_BY_AUTO} ", 1).rstrip())
         raise _naming_the_input(exc, args.scene or scene.volume_path, chosen) from None
     if args.output:
         io.save_image(image, args.output, transparent=args.transparent)
     if args.save_array:
         io.save_array(image, args.save_array)
     written = " ".join(str(p) for p in (args.output, args.save_array) if p)
-    print(f"{scene.renderer}: {width}x{height} in {stats.ms:.1f} ms -> {written}")
+    chosen_by = f" (auto: {why})" if why else ""
+    print(f"{scene.renderer}{chosen_by}: {width}x{height} in {stats.ms:.1f} ms -> {written}")
     return 0

@@ -67,7 +67,7 @@ class Scene:
     camera: OrbitView | Camera = OrbitView()
     settings: RenderSettings = RenderSettings()
     scalars: str | None = None
-    renderer: str = "vtk"
+    renderer: str = "auto"  #: a registered name, or "auto" (`volren.quality.choose_renderer`)
     size: tuple[int, int] = (512, 512)
     volume: Volume | None = None
     extra: Mapping[str, Any] = field(default_factory=dict)
@@ -131,7 +131,7 @@ class Scene:
             transfer_function=transfer_function_from_dict(data["transfer_function"]),
             camera=camera_from_dict(data.get("camera", {})),
             settings=RenderSettings.from_dict(data.get("settings", {})),
-            renderer=str(data.get("renderer", "vtk")),
+            renderer=str(data.get("renderer", "auto")),
             size=(size[0], size[1]),
             extra={k: v for k, v in data.items() if k not in known},
         )

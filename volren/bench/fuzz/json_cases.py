@@ -236,8 +236,8 @@ _FLAGS: tuple[tuple[str, tuple[str, ...], bool], ...] = (
     ("--save-array", ("", ".", "nofolder/a.npy", "v.vti"), False),
 )
 
-#: How a message names the renderer at fault when no --renderer is given (its capabilities).
-_DEFAULT_RENDERER = "renderer vtk "
+#: How a message names the renderer at fault when no --renderer is given (`auto` chose it).
+_DEFAULT_RENDERER = "(chosen by --renderer auto)"
 
 _STRICT_VALUES = {"0", "-1", "nan", "inf", "-inf", "abc", "", "-5", "1e-300", "1e300", "1e9", "100000"}
 

@@ -1,0 +1,131 @@
+"""Quality levels and `auto` (`volren.quality`) and their derivation from bench results (`volren.bench.quality`)."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from volren import quality
+from volren.bench.quality import derive, read_rows
+from volren.cli.main import main
+from volren.errors import VolrenError
+from volren.model import RenderSettings
+from volren.quality import LevelChoice, QualityTable, choose_renderer, settings_for
+from volren.renderers.registry import registry
+
+SCENES = [("a", "smooth"), ("b", "opaque")]
+
+
+def rows_for(curve: str, label: str, errors: tuple[float, float], ms: float, kind: str = "uniform") -> list[dict]:
+    return [{"dataset": d, "tf": tf, "kind": kind, "renderer": curve, "settings": label, "ms": str(ms),
+             "rmse": str(e)} for (d, tf), e in zip(SCENES, errors, strict=True)]  # fmt: skip
+
+
+def test_levels_are_the_fastest_configurations_within_each_bound_of_vtks_error():
+    rows = rows_for("vtk-smart", "default", (0.01, 0.02), 300)
+    rows += rows_for("slicer", "step 2, post", (0.05, 0.07), 40)  # 5x / 3.5x VTK's error
+    rows += rows_for("slicer", "step 1, post", (0.03, 0.03), 60)  # 3x / 1.5x
+    rows += rows_for("slicer", "step 0.5, post", (0.015, 0.02), 100)  # 1.5x / 1x
+    rows += rows_for("slicer", "step 0.25, post", (0.008, 0.01), 180)  # 0.8x / 0.5x
+    rows += rows_for("slicer", "step 0.25, pre 512", (0.002, 0.004), 200)  # 0.2x
+    levels = derive(rows, "test").levels["uniform"]["slicer"]
+    assert levels["draft"].label == "step 1, post"  # within 4x; step 2 is 5x on scene a
+    assert levels["interactive"].label == "step 0.5, post"
+    assert levels["default"].label == "step 0.25, post"
+    assert levels["high"].label == levels["exact"].label == "step 0.25, pre 512"
+    assert levels["default"].step == 0.25 and not levels["default"].preintegration
+    assert levels["high"].preintegration and levels["high"].options["table_size"] == 512
+    assert levels["draft"].ms == {"a/smooth": 60.0, "b/opaque": 60.0} and levels["draft"].worst_error_ratio == 3.0
+    assert all(c.meets for c in levels.values())
+    # VTK's own levels: its default configuration
+    assert derive(rows, "test").levels["uniform"]["vtk"]["default"].options == {"mapper": "smart"}
+
+
+def test_a_renderer_that_never_reaches_vtks_error_keeps_its_default_and_faster_drafts():
+    rows = rows_for("vtk-smart", "default", (0.01, 0.01), 300)
+    rows += rows_for("slicer", "step 1, post", (0.08, 0.09), 60)  # 9x
+    rows += rows_for("slicer", "step 0.5, post", (0.05, 0.05), 100)  # 5x: the renderer's own default
+    rows += rows_for("slicer", "step 0.25, pre 512", (0.02, 0.03), 900)  # 3x, its most accurate, slow
+    levels = derive(rows, "test").levels["uniform"]["slicer"]
+    assert levels["default"].label == "step 0.5, post" and not levels["default"].meets
+    # draft's 4x bound is met only by the slow accurate setting: drafts are never slower than the default
+    assert levels["draft"].label == levels["interactive"].label == "step 1, post"
+    assert levels["exact"].label == "step 0.25, pre 512"
+
+
+def test_read_rows_lets_a_later_file_win_and_refuses_other_files(tmp_path):
+    first, second = tmp_path / "1.csv", tmp_path / "2.csv"
+    for path, ms in ((first, 10), (second, 20)):
+        rows = rows_for("slicer", "step 1, post", (0.1, 0.1), ms)
+        with path.open("w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+    assert {r["ms"] for r in read_rows([first, second])} == {"20"}
+    (tmp_path / "x.csv").write_text("a,b\n1,2\n")
+    with pytest.raises(VolrenError, match="x.csv: not a `volren bench run` runs.csv"):
+        read_rows([tmp_path / "x.csv"])
+
+
+def choice(ms: float, meets: bool = True, step: float = 0.5) -> LevelChoice:
+    return LevelChoice("x", step, False, {}, {"a/smooth": ms}, 1.0, meets)
+
+
+def table_of(**renderers) -> QualityTable:
+    return QualityTable({"uniform": {name: {level: c for level in quality.LEVELS} for name, c in renderers.items()}}, "t")
+
+
+def test_auto_takes_the_fastest_that_meets_the_level_and_can_draw_the_scene():
+    table = table_of(slicer=choice(100), objectorder=choice(50), shearwarp=choice(10, meets=False))
+    names = registry.names()
+    assert choose_renderer("uniform", "default", 1, RenderSettings(), names, table)[0] == "objectorder"
+    # a 2D TF: only the slicer of the three draws it
+    assert choose_renderer("uniform", "default", 2, RenderSettings(), names, table)[0] == "slicer"
+    # none meeting: the fastest measured
+    table = table_of(slicer=choice(100, meets=False), shearwarp=choice(10, meets=False))
+    assert choose_renderer("uniform", "draft", 1, RenderSettings(), names, table)[0] == "shearwarp"
+    # nothing measured draws it: a registered renderer that can, never the reference
+    name, why = choose_renderer("tet", "default", 1, RenderSettings(), names, table)
+    assert name != "reference" and "no measured renderer" in why
+    with pytest.raises(VolrenError, match="quality must be one of"):
+        choose_renderer("uniform", "best", 1, RenderSettings(), names, table)
+
+
+def test_settings_for_applies_the_level_and_keeps_the_callers_options():
+    table = QualityTable({"uniform": {"slicer": {"draft": LevelChoice("s", 2.0, True, {"table_size": 64, "path": "march"},
+                                                                      {}, 3.0)}}}, "t")  # fmt: skip
+    got = settings_for("slicer", "uniform", "draft", RenderSettings(shade=True, options={"table_size": 128}), table)
+    assert (got.step, got.preintegration, got.shade) == (2.0, True, True)
+    assert got.options == {"table_size": 128, "path": "march"}
+    assert settings_for("tetra", "uniform", "draft", RenderSettings(), table) == RenderSettings()
+
+
+def test_the_committed_table_round_trips_and_covers_both_kinds():
+    table = quality.table()
+    assert QualityTable.from_json(json.loads(json.dumps(table.to_json())), "again") == table
+    assert set(table.levels) == {"uniform", "tet"}
+    for kind, renderers in table.levels.items():
+        for name, levels in renderers.items():
+            assert list(levels) == list(quality.LEVELS), (kind, name)
+            assert levels["exact"].worst_error_ratio <= levels["draft"].worst_error_ratio
+
+
+def test_the_cli_quality_flag_sets_the_measured_settings_and_flags_win(tmp_path, capsys, monkeypatch):
+    table = QualityTable({"uniform": {"slicer": {level: LevelChoice("s", 2.0, False, {}, {"a/smooth": 1.0}, 1.0)
+                                                 for level in quality.LEVELS}}}, "t")  # fmt: skip
+    monkeypatch.setattr(quality, "table", lambda: table)
+    from pathlib import Path
+
+    volume = str(Path(__file__).parents[1] / "data_samples" / "marschner_lobb.vti")
+    out = {}
+    for name, extra in (("draft", ["--quality", "draft"]), ("step2", ["--step", "2"]), ("override", ["--quality", "draft", "--step", "1"]),
+                        ("step1", ["--step", "1"])):  # fmt: skip
+        out[name] = tmp_path / f"{name}.npy"
+        assert main(["render", volume, "--renderer", "slicer", "--size", "24", "--save-array", str(out[name]), *extra]) == 0
+    capsys.readouterr()
+    assert np.array_equal(np.load(out["draft"]), np.load(out["step2"]))
+    assert np.array_equal(np.load(out["override"]), np.load(out["step1"]))
+    assert not np.array_equal(np.load(out["draft"]), np.load(out["step1"]))

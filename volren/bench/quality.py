@@ -1,0 +1,142 @@
+"""`volren bench quality RUNS.csv ...`: the quality levels (`volren.quality`) from `bench run` results.
+
+Each row of runs.csv is one configuration of one curve (`volren.bench.sweep`) on one scene
+(dataset and TF) with its median frame time and RMSE. Per volume kind, a configuration counts
+for a level when its RMSE is within the level's bound of VTK's default's RMSE on every scene both
+were measured on; the level's choice is the fastest such configuration (total time over those
+scenes); a renderer with no configuration within a bound has it scaled by its own default
+configuration's error (its `meets` flag false), and `exact` is the most accurate configuration. The curves of one registered renderer (VTK's mappers are the `vtk` renderer's) compete
+for that renderer's levels. Later files win where two give the same configuration and scene.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections import defaultdict
+from pathlib import Path
+
+from volren.bench import sweep
+from volren.errors import VolrenError
+from volren.quality import LEVELS, LevelChoice, QualityTable
+
+#: Each level's bound on RMSE / VTK default's RMSE (None: the most accurate configuration).
+BOUNDS: dict[str, float | None] = {"draft": 4.0, "interactive": 2.0, "default": 1.0, "high": 0.25, "exact": None}
+#: VTK's default configuration per kind (curve, settings label), the reference for the bounds.
+VTK_DEFAULT = {"uniform": ("vtk-smart", "default"), "tet": ("vtk-raycast", "linear")}
+#: The built-in curves' configurations at each renderer's default settings.
+OWN_DEFAULTS = {("slicer", "step 0.5, post"), ("tetra", "table 256x32"), *VTK_DEFAULT.values()}
+
+
+def read_rows(paths: list[Path]) -> list[dict]:
+    """The rows of every file, a later file's row replacing an earlier one for the same configuration and scene."""
+    rows: dict[tuple, dict] = {}
+    for path in paths:
+        try:
+            with path.open(newline="", encoding="utf-8") as f:
+                for row in csv.DictReader(f):
+                    rows[row["dataset"], row["tf"], row["renderer"], row["settings"]] = row
+        except OSError as exc:
+            raise VolrenError(f"{path}: cannot read: {exc.strerror or exc}") from None
+        except (KeyError, csv.Error) as exc:
+            raise VolrenError(f"{path}: not a `volren bench run` runs.csv ({exc})") from None
+    return list(rows.values())
+
+
+def _configs(kind: str, curves: set[str]) -> dict[tuple[str, str], sweep.Config]:
+    """(curve, label) -> Config of every configuration the sweeps define for these curves now."""
+    builtin = [c for c in curves if c in sweep.BUILTIN_CURVES]
+    out = {(c.curve, c.label): c for c in sweep.configs(kind, curves=builtin)} if builtin else {}
+    from volren.renderers.registry import registry
+
+    for name in curves - set(sweep.BUILTIN_CURVES):
+        if name in registry.names():
+            out.update({(c.curve, c.label): c for c in sweep.quality_axis(name, kind)})
+    return out
+
+
+def derive(rows: list[dict], source: str) -> QualityTable:
+    """The quality table of these rows (see the module docstring)."""
+    levels: dict[str, dict[str, dict[str, LevelChoice]]] = {}
+    for kind, (peer_curve, peer_label) in VTK_DEFAULT.items():
+        kind_rows = [r for r in rows if r.get("kind") == kind and _number(r.get("rmse")) is not None]
+        peer = {(r["dataset"], r["tf"]): float(r["rmse"]) for r in kind_rows
+                if r["renderer"] == peer_curve and r["settings"] == peer_label}  # fmt: skip
+        if not peer:
+            continue
+        known = _configs(kind, {r["renderer"] for r in kind_rows})
+        # renderer -> (curve, label) -> scene -> (ms, rmse / peer's)
+        measured: dict[str, dict[tuple[str, str], dict[str, tuple[float, float]]]] = defaultdict(lambda: defaultdict(dict))
+        for r in kind_rows:
+            config = known.get((r["renderer"], r["settings"]))
+            scene = (r["dataset"], r["tf"])
+            ms = _number(r.get("ms"))
+            if config is None or scene not in peer or ms is None or peer[scene] <= 0:
+                continue
+            measured[config.renderer][config.curve, config.label][f"{scene[0]}/{scene[1]}"] = (ms, float(r["rmse"]) / peer[scene])
+        for renderer, configs in measured.items():
+            scenes = set.intersection(*(set(per) for per in configs.values()))
+            complete = {key: per for key, per in configs.items() if set(per) >= scenes and scenes}
+            if not complete:
+                continue
+            per_level = {}
+            own = _own_default(complete)
+            chosen = {"default": _choose(complete, scenes, BOUNDS["default"], own)}
+            ceiling = sum(complete[chosen["default"]][s][0] for s in scenes)
+            for level in LEVELS:
+                if level not in chosen:
+                    below = LEVELS.index(level) < LEVELS.index("default")
+                    chosen[level] = _choose(complete, scenes, BOUNDS[level], own, ceiling if below else math.inf)
+            for level in LEVELS:
+                key = chosen[level]
+                config = known[key]
+                per = complete[key]
+                settings = config.settings()
+                per_level[level] = LevelChoice(
+                    label=f"{key[0]}: {key[1]}" if key[0] != renderer else key[1],
+                    step=settings.step, preintegration=settings.preintegration, options=dict(settings.options),
+                    ms={s: per[s][0] for s in sorted(scenes)}, worst_error_ratio=max(per[s][1] for s in scenes),
+                    meets=BOUNDS[level] is None or max(per[s][1] for s in scenes) <= BOUNDS[level],
+                )  # fmt: skip
+            levels.setdefault(kind, {})[renderer] = per_level
+    return QualityTable(levels, source)
+
+
+def _choose(configs: dict, scenes: set[str], bound: float | None, own: tuple[str, str] | None,
+            ceiling_ms: float = math.inf) -> tuple[str, str]:  # fmt: skip
+    """The fastest configuration within `bound` on every scene (and, for the levels below
+    `default`, no slower than the default level's choice, `ceiling_ms`). A renderer with none gets
+    the bound scaled by its own default configuration's error (`own`): its default stays its
+    default and its drafts stay faster, instead of its slowest setting being the only one within.
+    The most accurate configuration where nothing is within, and for no bound (`exact`)."""
+
+    def total_ms(key) -> float:
+        return sum(configs[key][s][0] for s in scenes)
+
+    def worst(key) -> float:
+        return max(configs[key][s][1] for s in scenes)
+
+    best = min(configs, key=lambda key: (worst(key), total_ms(key)))
+    if bound is None:
+        return best
+    within = [key for key in configs if worst(key) <= bound and total_ms(key) <= ceiling_ms]
+    if not within and own in configs:
+        within = [key for key in configs if worst(key) <= bound * worst(own) and total_ms(key) <= ceiling_ms]
+    return min(within, key=total_ms) if within else best
+
+
+def _own_default(keys) -> tuple[str, str] | None:
+    """The configuration a renderer draws with no settings: its quality axis's '(default)' level,
+    or the built-in sweeps' point at the default settings."""
+    for key in keys:
+        if "(default)" in key[1] or key in OWN_DEFAULTS:
+            return key
+    return None
+
+
+def _number(text: str | None) -> float | None:
+    try:
+        value = float(text) if text not in (None, "") else None
+    except ValueError:
+        return None
+    return value if value is not None and math.isfinite(value) else None

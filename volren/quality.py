@@ -1,0 +1,164 @@
+"""Quality levels and the `auto` renderer, from measurements (DESIGN.md: `--quality`, `--renderer auto`).
+
+Why data, not constants: which settings give which error at which speed differs per renderer and
+per volume kind, and only the benchmark knows. `volren bench quality RUNS.csv ...`
+(`volren.bench.quality`) reads `volren bench run` results and writes `quality_levels.json` next to
+this module: per volume kind, per renderer, per level, the settings chosen from the run's
+configurations and what they measured. Levels are defined against VTK's default (vtkSmartVolumeMapper
+on grids, the unstructured ray caster on meshes) on the same scenes:
+
+- `draft`: the fastest configuration whose error is at most 4x VTK's default's on every scene;
+- `interactive`: at most 2x;
+- `default`: at most VTK's default's error (the fastest such: DESIGN.md);
+- `high`: at most a quarter of it;
+- `exact`: the most accurate configuration measured.
+
+A renderer whose most accurate configuration is beyond VTK's error on some scene has its bounds
+scaled by that factor (`LevelChoice.meets` false). `auto` picks, for the scene's kind, the
+registered renderer whose configuration for the level was fastest over the scenes every candidate
+was measured on, among those that can draw the scene (TF dimensions, shading, blend mode) and that
+meet the level's bound (any, where none does); renderers without measurements take part only when
+no measured one can draw the scene.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from volren.errors import VolrenError
+from volren.model.settings import RenderSettings
+
+LEVELS = ("draft", "interactive", "default", "high", "exact")
+DEFAULT_LEVEL = "default"
+AUTO = "auto"
+#: The committed table (`volren bench quality` writes it).
+TABLE_PATH = Path(__file__).with_name("quality_levels.json")
+#: Never chosen by `auto`: the float64 reference (minutes per frame) and the plugin template.
+NOT_AUTO = frozenset({"reference", "example"})
+
+
+@dataclass(frozen=True)
+class LevelChoice:
+    """One renderer's configuration for one level on one volume kind, as measured."""
+
+    label: str  #: the benchmark's name of the configuration
+    step: float
+    preintegration: bool
+    options: Mapping[str, Any]
+    ms: Mapping[str, float]  #: median frame time per scene ("dataset/tf"), 512x512
+    worst_error_ratio: float  #: largest RMSE / VTK default's RMSE over the scenes
+    meets: bool = True  #: within the level's own bound (False: the bound was scaled to what the renderer reaches)
+
+    def apply(self, settings: RenderSettings) -> RenderSettings:
+        """`settings` with this level's step, pre-integration and options (options merged, the
+        caller's own winning)."""
+        return settings.with_(step=self.step, preintegration=self.preintegration,
+                              options={**self.options, **settings.options})  # fmt: skip
+
+
+@dataclass(frozen=True)
+class QualityTable:
+    """Level choices by volume kind and renderer, with where they came from."""
+
+    levels: Mapping[str, Mapping[str, Mapping[str, LevelChoice]]]  #: kind -> renderer -> level -> choice
+    source: str  #: the command and runs that made it
+
+    def choice(self, renderer: str, kind: str, level: str) -> LevelChoice | None:
+        check_level(level)
+        return self.levels.get(kind, {}).get(renderer, {}).get(level)
+
+    def measured(self, kind: str) -> list[str]:
+        return list(self.levels.get(kind, {}))
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "version": 1,
+            "source": self.source,
+            "levels": {kind: {name: {level: {"label": c.label, "step": c.step, "preintegration": c.preintegration,
+                                             "options": dict(c.options), "ms": dict(c.ms),
+                                             "worst_error_ratio": c.worst_error_ratio, "meets": c.meets}
+                                     for level, c in per.items()}
+                              for name, per in renderers.items()}
+                       for kind, renderers in self.levels.items()},
+        }  # fmt: skip
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any], where: str) -> QualityTable:
+        try:
+            if data.get("version") != 1:
+                raise ValueError(f"version {data.get('version')!r}, expected 1")
+            levels = {kind: {name: {level: LevelChoice(str(c["label"]), float(c["step"]), bool(c["preintegration"]),
+                                                       dict(c["options"]), {k: float(v) for k, v in c["ms"].items()},
+                                                       float(c["worst_error_ratio"]), bool(c.get("meets", True)))
+                                    for level, c in per.items()}
+                             for name, per in renderers.items()}
+                      for kind, renderers in data["levels"].items()}  # fmt: skip
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:
+            raise VolrenError(f"{where}: not a quality table ({exc})") from None
+        return cls(levels, str(data.get("source", "")))
+
+
+def check_level(level: str) -> str:
+    if level not in LEVELS:
+        raise VolrenError(f"quality must be one of {', '.join(LEVELS)}, got {level!r}")
+    return level
+
+
+@lru_cache(maxsize=1)
+def table() -> QualityTable:
+    """The committed table (an empty one where the file is missing: every renderer keeps its defaults)."""
+    try:
+        text = TABLE_PATH.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return QualityTable({}, "")
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise VolrenError(f"{TABLE_PATH}: not JSON ({exc.msg} at line {exc.lineno})") from None
+    return QualityTable.from_json(data, str(TABLE_PATH))
+
+
+def settings_for(renderer: str, kind: str, level: str, settings: RenderSettings,
+                 quality: QualityTable | None = None) -> RenderSettings:  # fmt: skip
+    """`settings` at `level` for `renderer` on `kind` volumes: the measured choice applied, or
+    `settings` unchanged where the renderer has no measurements."""
+    choice = (quality or table()).choice(renderer, kind, level)
+    return choice.apply(settings) if choice is not None else settings
+
+
+def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings, names: Iterable[str],
+                    quality: QualityTable | None = None) -> tuple[str, str]:  # fmt: skip
+    """(`auto`'s renderer, why) for a scene of this kind, TF dimension and settings at `level`,
+    among the registered `names`. Candidates are tried fastest first (those meeting the level's
+    bound before the others), so only the chosen renderer and the faster ones that cannot draw
+    the scene are imported."""
+    from volren.renderers.registry import registry
+
+    quality = quality or table()
+    check_level(level)
+    names = [n for n in names if n not in NOT_AUTO]
+
+    def drawable(name: str) -> bool:
+        try:
+            capabilities = registry.capabilities(name)
+        except VolrenError:  # a plugin that does not import: not a candidate
+            return False
+        level_settings = settings_for(name, kind, level, settings, quality)
+        return capabilities.unsupported_reason(kind, tf_dim, level_settings) is None
+
+    choices = {n: c for n in quality.measured(kind) if n in names and (c := quality.choice(n, kind, level))}
+    if choices:
+        common = set.intersection(*(set(c.ms) for c in choices.values())) or set.union(*(set(c.ms) for c in choices.values()))
+        cost = {n: sum(c.ms.get(scene, float("inf")) for scene in common) for n, c in choices.items()}
+        for name in sorted(choices, key=lambda n: (not choices[n].meets, cost[n])):
+            if drawable(name):
+                return name, f"the fastest measured at quality {level} that draws this scene"
+    for name in names:
+        if name not in choices and drawable(name):
+            return name, f"no measured renderer draws this scene; {name} can"
+    raise VolrenError(f"no registered renderer can draw this {kind} scene (see `volren renderers`)")
