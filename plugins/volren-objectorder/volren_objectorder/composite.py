@@ -490,8 +490,86 @@ def _pixel_other(p, kk, tlo, thi, mode, pre, shade, c8, g8, vol, ro, ox, oy, oz,
     return kk, taken, 0
 
 
+@njit(cache=True, inline="always")
+def _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1):
+    """(c0, c1, q0, q1, own): the columns and the band's rows (q0 > q1: none) of node (lv, i, j, k)'s
+    footprint, and 1 when the band holds its middle row (it counts the node)."""
+    size = 1 << lv
+    x0 = i * size
+    y0 = j * size
+    z0 = k * size
+    x1 = min(x0 + size, ncx)
+    y1 = min(y0 + size, ncy)
+    z1 = min(z0 + size, ncz)
+    if perspective:
+        c0, c1, fr0, fr1 = footprint(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
+                                     width, height)  # fmt: skip
+    else:
+        c0, c1, fr0, fr1 = footprint_affine(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
+                                            width, height)  # fmt: skip
+    if c0 > c1 or fr0 > fr1:
+        return 0, -1, 1, 0, 0
+    mid = (fr0 + fr1) // 2
+    return c0, c1, max(fr0, r0), min(fr1, r1 - 1), 1 if (mid >= r0 and mid < r1) else 0
+
+
+@njit(cache=True, inline="always")
+def _cell(i, j, k, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch, fp, mode, pre, shade,
+          hvr, use_post, ncx, ncy, ncz):  # fmt: skip
+    """Leaf cell (i, j, k): its corners loaded once, then the samples of every unfinished pixel of
+    rows q0..q1, columns c0..c1 that lie in it. Returns (samples taken, pixels saturated). The arrays
+    come in tuples: numba inlines a call of at most 30 arguments only (more are passed as *args)."""
+    ro, rd, rwd, ri, rt0, rcount, rfirst, rlast = rays
+    xs, tab, post, table, front, back = tables
+    rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished = state
+    hom, hl, hoff, hcols = occlusion
+    c8, g8, e8, eg8 = scratch
+    h = fp[F_H]
+    term = fp[F_TERM]
+    post_path = mode == COMPOSITE and not pre
+    n_samples = 0
+    n_saturated = 0
+    _load_cell(vol, i, j, k, shade, fp, c8, g8)
+    for r in range(q0, q1 + 1):
+        for c in range(c0, c1 + 1):
+            p = r * width + c
+            if finished[p]:
+                continue
+            tlo, thi = _slab(ro, rd, ri, p, i, j, k, ncx, ncy, ncz)
+            if not thi > tlo:
+                continue
+            ns = rcount[p]
+            t0 = rt0[p]
+            first = rfirst[p]
+            last = rlast[p]
+            kk = _first_sample(t0, first, h, ns, last, nextk[p], tlo)
+            dx = rd[p, 0]
+            dy = rd[p, 1]
+            dz = rd[p, 2]
+            ox = ro[p, 0] - i
+            oy = ro[p, 1] - j
+            oz = ro[p, 2] - k
+            hx = hy = hz = 0.0
+            if shade:
+                hx, hy, hz = _half_vector(rwd, p, fp)
+            if post_path:
+                kk, taken, sat = _pixel_post(p, kk, thi, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first,
+                                             last, ns, shade, use_post, xs, tab, post, fp, rgba)  # fmt: skip
+            else:
+                kk, taken, sat = _pixel_other(p, kk, tlo, thi, mode, pre, shade, c8, g8, vol, ro, ox, oy, oz,
+                                              dx, dy, dz, hx, hy, hz, t0, first, last, ns, table, front, back,
+                                              fp, rgba, acc, prev_s, prev_k, prev_fd, prev_sp, e8, eg8)  # fmt: skip
+            n_samples += taken
+            n_saturated += sat
+            nextk[p] = kk
+            if kk >= ns or (hvr and rgba[p, 3] >= term):
+                finished[p] = 1
+                hom_finish(hom, hl, hoff, hcols, r - r0, c)
+    return n_samples, n_saturated
+
+
 @njit(cache=True)
-def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+def render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                 ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                 rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
     """Rows r0..r1 - 1 (`_walk_band`), with the band's scratch arrays allocated here: the walk is
@@ -507,14 +585,14 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspect
     g8 = np.zeros((8, 3))
     e8 = np.empty(8)
     eg8 = np.zeros((8, 3))
-    _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+    _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats,
                hom, hl, hoff, hcols, stack, c8, g8, e8, eg8)  # fmt: skip
 
 
 @njit(cache=True, _nrt=False)
-def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats,
                hom, hl, hoff, hcols, stack, c8, g8, e8, eg8):  # fmt: skip
@@ -526,10 +604,12 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspecti
     pre = ip[I_PRE] != 0
     shade = ip[I_SHADE] != 0
     hvr = ip[I_HVR] != 0 and mode == COMPOSITE
-    post_path = mode == COMPOSITE and not pre
-    h = fp[F_H]
-    term = fp[F_TERM]
     use_post = post.shape[0] > 1
+    rays = (ro, rd, rwd, ri, rt0, rcount, rfirst, rlast)
+    tables = (xs, tab, post, table, front, back)
+    state = (rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished)
+    occlusion = (hom, hl, hoff, hcols)
+    scratch = (c8, g8, e8, eg8)
     rows = r1 - r0
     hom_init(hom, hl, hoff, hcols, rows, width)
     for r in range(r0, r1):
@@ -561,88 +641,57 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspecti
         count = counts[offsets[lv] + (k * shapes[lv, 1] + j) * shapes[lv, 2] + i]
         if count == 0:
             continue
-        size = 1 << lv
-        x0 = i * size
-        y0 = j * size
-        z0 = k * size
-        x1 = min(x0 + size, ncx)
-        y1 = min(y0 + size, ncy)
-        z1 = min(z0 + size, ncz)
-        if perspective:
-            c0, c1, fr0, fr1 = footprint(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
-                                         width, height)  # fmt: skip
-        else:
-            c0, c1, fr0, fr1 = footprint_affine(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
-                                                width, height)  # fmt: skip
-        if c0 > c1 or fr0 > fr1:
-            continue
-        q0 = max(fr0, r0)
-        q1 = min(fr1, r1 - 1)
+        c0, c1, q0, q1, own = _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1)
         if q0 > q1:
             continue
-        mid = (fr0 + fr1) // 2
-        own = mid >= r0 and mid < r1  # counters: each node counted by the band holding its middle row
-        if own:
-            n_nodes += 1
+        n_nodes += own
         if hvr and hom_covered(hom, hl, hoff, hcols, q0 - r0, q1 - r0, c0, c1):
-            if own:
-                n_occ_cells += count
-                n_occ_nodes += 1
+            n_occ_cells += count * own
+            n_occ_nodes += own
             continue
-        if lv > 0:
-            mask = child_order_mask(lv, i, j, k, perspective, eye, vdir)
-            cl = lv - 1
-            for n in range(7, -1, -1):
+        if lv == 0:  # the root of a one-cell grid
+            n_cells += own
+            taken, sat = _cell(i, j, k, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch, fp,
+                               mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
+            n_samples += taken
+            n_saturated += sat
+            continue
+        mask = child_order_mask(lv, i, j, k, perspective, eye, vdir)
+        if lv == 1:  # the leaf cells, nearest first, from the node's byte of bits (no stack, no counts)
+            bits8 = leaves[k, j, i]
+            for n in range(8):
                 bits = n ^ mask
+                if not (bits8 >> bits) & 1:
+                    continue
                 ci = 2 * i + (bits & 1)
                 cj = 2 * j + ((bits >> 1) & 1)
                 ck = 2 * k + (bits >> 2)
-                if ci < shapes[cl, 2] and cj < shapes[cl, 1] and ck < shapes[cl, 0]:
-                    stack[top, 0] = cl
-                    stack[top, 1] = ci
-                    stack[top, 2] = cj
-                    stack[top, 3] = ck
-                    top += 1
-            continue
-        # ------------------------------------------------------------ a leaf cell
-        if own:
-            n_cells += 1
-        _load_cell(vol, i, j, k, shade, fp, c8, g8)
-        for r in range(q0, q1 + 1):
-            for c in range(c0, c1 + 1):
-                p = r * width + c
-                if finished[p]:
+                c0, c1, q0, q1, own = _node_rect(M, 0, ci, cj, ck, ncx, ncy, ncz, perspective, width, height, r0, r1)
+                if q0 > q1:
                     continue
-                tlo, thi = _slab(ro, rd, ri, p, i, j, k, ncx, ncy, ncz)
-                if not thi > tlo:
+                n_nodes += own
+                if hvr and hom_covered(hom, hl, hoff, hcols, q0 - r0, q1 - r0, c0, c1):
+                    n_occ_cells += own
+                    n_occ_nodes += own
                     continue
-                ns = rcount[p]
-                t0 = rt0[p]
-                first = rfirst[p]
-                last = rlast[p]
-                kk = _first_sample(t0, first, h, ns, last, nextk[p], tlo)
-                dx = rd[p, 0]
-                dy = rd[p, 1]
-                dz = rd[p, 2]
-                ox = ro[p, 0] - i
-                oy = ro[p, 1] - j
-                oz = ro[p, 2] - k
-                hx = hy = hz = 0.0
-                if shade:
-                    hx, hy, hz = _half_vector(rwd, p, fp)
-                if post_path:
-                    kk, taken, sat = _pixel_post(p, kk, thi, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first,
-                                                 last, ns, shade, use_post, xs, tab, post, fp, rgba)  # fmt: skip
-                else:
-                    kk, taken, sat = _pixel_other(p, kk, tlo, thi, mode, pre, shade, c8, g8, vol, ro, ox, oy, oz,
-                                                  dx, dy, dz, hx, hy, hz, t0, first, last, ns, table, front, back,
-                                                  fp, rgba, acc, prev_s, prev_k, prev_fd, prev_sp, e8, eg8)  # fmt: skip
+                n_cells += own
+                taken, sat = _cell(ci, cj, ck, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion,
+                                   scratch, fp, mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
                 n_samples += taken
                 n_saturated += sat
-                nextk[p] = kk
-                if kk >= ns or (hvr and rgba[p, 3] >= term):
-                    finished[p] = 1
-                    hom_finish(hom, hl, hoff, hcols, r - r0, c)
+            continue
+        cl = lv - 1
+        for n in range(7, -1, -1):  # pushed farthest first: the nearest is visited next
+            bits = n ^ mask
+            ci = 2 * i + (bits & 1)
+            cj = 2 * j + ((bits >> 1) & 1)
+            ck = 2 * k + (bits >> 2)
+            if ci < shapes[cl, 2] and cj < shapes[cl, 1] and ck < shapes[cl, 0]:
+                stack[top, 0] = cl
+                stack[top, 1] = ci
+                stack[top, 2] = cj
+                stack[top, 3] = ck
+                top += 1
     stats[S_NODES] += n_nodes
     stats[S_CELLS] += n_cells
     stats[S_OCCLUDED_CELLS] += n_occ_cells
@@ -652,7 +701,7 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspecti
 
 
 @njit(cache=True, parallel=True)
-def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                  ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                  rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
     """The bands listed in `bands`, in parallel (each band's rows belong to it alone)."""
@@ -660,7 +709,7 @@ def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, 
         b = bands[q]
         r0 = b * band_rows
         r1 = min(height, r0 + band_rows)
-        render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+        render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                     ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                     rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats[b])  # fmt: skip
 

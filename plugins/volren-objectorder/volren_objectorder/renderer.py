@@ -263,7 +263,7 @@ class ObjectOrderRenderer(RendererBase):
             bands = order[g0 : g0 + group]
             old = numba.set_parallel_chunksize(1)
             try:
-                K.render_bands(bands, band_rows, width, height, values, cls.counts, cls.offsets, cls.shapes, M,
+                K.render_bands(bands, band_rows, width, height, values, cls.counts, cls.offsets, cls.shapes, cls.leaves, M,
                                not camera.parallel, eye, vdir, rays.origin, rays.direction, rays.world_direction,
                                rays.inverse, rays.t0, rays.count, rays.first, rays.last, ip, fp, xs, tab, post, table,
                                front, back, rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats)  # fmt: skip
