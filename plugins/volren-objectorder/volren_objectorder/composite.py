@@ -612,11 +612,16 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, p
     scratch = (c8, g8, e8, eg8)
     rows = r1 - r0
     hom_init(hom, hl, hoff, hcols, rows, width)
-    for r in range(r0, r1):
-        for c in range(width):
-            if rcount[r * width + c] == 0:
-                finished[r * width + c] = 1
-                hom_finish(hom, hl, hoff, hcols, r - r0, c)
+    for p in range(r0 * width, r1 * width):  # the band's pixels start clear (buffers are reused across frames)
+        rgba[p, 0] = 0.0
+        rgba[p, 1] = 0.0
+        rgba[p, 2] = 0.0
+        rgba[p, 3] = 0.0
+        nextk[p] = 0
+        finished[p] = 0
+        if rcount[p] == 0:
+            finished[p] = 1
+            hom_finish(hom, hl, hoff, hcols, p // width - r0, p % width)
     levels = shapes.shape[0]
     ncx = shapes[0, 2]
     ncy = shapes[0, 1]
