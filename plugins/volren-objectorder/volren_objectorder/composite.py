@@ -237,10 +237,10 @@ def _segment(rgba, p, sf, sb, length, fd_f, sp_f, fd_b, sp_b, shade, table, fron
 
 
 @njit(cache=True)
-def _fetch(vol, px, py, pz):
-    """The trilinear value at index point (px, py, pz); NaN when a corner of its cell is not finite."""
+def _fetch(vol, px, py, pz, c8):
+    """The trilinear value at index point (px, py, pz); NaN when a corner of its cell is not finite
+    (c8: scratch for the corners)."""
     i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
-    c8 = np.empty(8)
     for c in range(8):
         v = vol[k + (c >> 2), j + ((c >> 1) & 1), i + (c & 1)]
         if not np.isfinite(v):
@@ -250,17 +250,17 @@ def _fetch(vol, px, py, pz):
 
 
 @njit(cache=True)
-def _fetch_light(vol, px, py, pz, hx, hy, hz, fp):
+def _fetch_light(vol, px, py, pz, hx, hy, hz, fp, c8, g8):
+    """The lighting (diffuse factor, specular term) at index point (px, py, pz) (c8, g8: scratch)."""
     i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
-    c8 = np.empty(8)
-    g8 = np.empty((8, 3))
     _load_cell(vol, i, j, k, True, fp, c8, g8)
     return _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz), _trilinear_g(g8, 2, fx, fy, fz),
                   hx, hy, hz, fp)  # fmt: skip
 
 
 @njit(cache=True)
-def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz, shade, table, front, back, fp):
+def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz, shade, table, front, back, fp,
+          e8, eg8):  # fmt: skip
     """The pre-integrated piece between a ray's end point at `te` (its entry or exit on the box) and
     its first or last sample (value s, lighting fd, sp); transparent when the end point's cell
     has a non-finite corner."""
@@ -269,253 +269,444 @@ def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz
     px = ro[p, 0] + te * dx
     py = ro[p, 1] + te * dy
     pz = ro[p, 2] + te * dz
-    se = _fetch(vol, px, py, pz)
+    se = _fetch(vol, px, py, pz, e8)
     if not np.isfinite(se):
         return
     fde = 1.0
     spe = 0.0
     if shade:
-        fde, spe = _fetch_light(vol, px, py, pz, hx, hy, hz, fp)
+        fde, spe = _fetch_light(vol, px, py, pz, hx, hy, hz, fp, e8, eg8)
     if entry:
         _segment(rgba, p, se, s, length, fde, spe, fd, sp, shade, table, front, back, fp)
     else:
         _segment(rgba, p, s, se, length, fd, sp, fde, spe, shade, table, front, back, fp)
 
 
+@njit(cache=True, inline="always")
+def _slab(ro, rd, ri, p, i, j, k, ncx, ncy, ncz):
+    """[tlo, thi) of pixel p's ray in cell (i, j, k), the exact slab test in index space; thi <= tlo
+    when the ray misses the cell. Each plane's crossing is (q - o) / d from the plane's index q alone,
+    so two cells sharing a face agree on it and every sample falls in exactly one cell."""
+    tlo = -math.inf
+    thi = math.inf
+    for ax in range(3):
+        o = ro[p, ax]
+        q = float(i if ax == 0 else (j if ax == 1 else k))
+        if rd[p, ax] == 0.0:
+            top_cell = (ncx if ax == 0 else (ncy if ax == 1 else ncz)) - 1
+            if o < q or o > q + 1.0 or (o == q + 1.0 and q < top_cell):
+                return 0.0, -math.inf
+        else:
+            inv = ri[p, ax]
+            ta = (q - o) * inv
+            tb = (q + 1.0 - o) * inv
+            if ta > tb:
+                ta, tb = tb, ta
+            tlo = max(tlo, ta)
+            thi = min(thi, tb)
+    return tlo, thi
+
+
+@njit(cache=True, inline="always")
+def _first_sample(t0, first, h, ns, last, k0, tlo):
+    """The ray's first sample at or after tlo, starting from its depth indicator k0 (the samples of
+    cells skipped since, transparent or occluded, are passed by a guess and a short walk)."""
+    kk = k0
+    if sample_t(t0, first, h, ns, last, kk) < tlo:
+        guess = int(math.ceil((tlo - t0 - first) / h + 0.5))
+        if guess > kk:
+            kk = min(guess, ns)
+        while kk < ns and sample_t(t0, first, h, ns, last, kk) < tlo:
+            kk += 1
+        while kk > k0 and sample_t(t0, first, h, ns, last, kk - 1) >= tlo:
+            kk -= 1
+    return kk
+
+
+@njit(cache=True, inline="always")
+def _half_vector(rwd, p, fp):
+    """Blinn-Phong's half vector of pixel p's view direction and the headlight."""
+    hx = fp[F_LX] - rwd[p, 0]
+    hy = fp[F_LY] - rwd[p, 1]
+    hz = fp[F_LZ] - rwd[p, 2]
+    hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+    if hn > 0.0:
+        hx, hy, hz = hx / hn, hy / hn, hz / hn
+    return hx, hy, hz
+
+
+@njit(cache=True, inline="always")
+def _post_rgba(xs, tab, post, use_post, s, length, fd, sp, fp):
+    """Premultiplied (r, g, b, alpha) of a post-classified piece of `length` at value s, shaded with
+    (fd, sp): from the table for a full step (`_post_table`), exactly otherwise (`_post`)."""
+    h = fp[F_H]
+    if use_post and length == h:
+        n = post.shape[0]
+        fi = min(max((s - fp[F_PLO]) * fp[F_PSCALE], 0.0), n - 1.0)
+        i0 = min(int(fi), n - 2)
+        w = fi - i0
+        alpha = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
+        if alpha <= 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        r = _clamp01((post[i0, 0] + w * (post[i0 + 1, 0] - post[i0, 0])) * fd + sp)
+        g = _clamp01((post[i0, 1] + w * (post[i0 + 1, 1] - post[i0, 1])) * fd + sp)
+        b = _clamp01((post[i0, 2] + w * (post[i0 + 1, 2] - post[i0, 2])) * fd + sp)
+        return r * alpha, g * alpha, b * alpha, alpha
+    if length <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    r, g, b, a = tf_lookup(xs, tab, s)
+    if a <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    alpha = -math.expm1(length / fp[F_DU] * math.log1p(-min(a, MAX_OPACITY)))
+    r = _clamp01(r * fd + sp)
+    g = _clamp01(g * fd + sp)
+    b = _clamp01(b * fd + sp)
+    return r * alpha, g * alpha, b * alpha, alpha
+
+
+@njit(cache=True, inline="always")
+def _pixel_post(p, kk, thi, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, shade, use_post,
+                xs, tab, post, fp, rgba):  # fmt: skip
+    """Composite, post-classified: pixel p's samples kk.. with t < thi in the current cell, front to
+    back. The pixel's colour stays in registers for the cell (one load and one store instead of a
+    read-modify-write of memory per sample). Returns (next sample, samples taken, 1 if it saturated)."""
+    h = fp[F_H]
+    term = fp[F_TERM]
+    r = rgba[p, 0]
+    g = rgba[p, 1]
+    b = rgba[p, 2]
+    a = rgba[p, 3]
+    taken = 0
+    saturated = 0
+    while kk < ns:
+        t = sample_t(t0, first, h, ns, last, kk)
+        if t >= thi:
+            break
+        fx = _clamp01(ox + t * dx)
+        fy = _clamp01(oy + t * dy)
+        fz = _clamp01(oz + t * dz)
+        s = _trilinear(c8, fx, fy, fz)
+        taken += 1
+        fd = 1.0
+        sp = 0.0
+        if shade:
+            fd, sp = _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz),
+                            _trilinear_g(g8, 2, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
+        cr, cg, cb, ca = _post_rgba(xs, tab, post, use_post, s, sample_length(first, h, ns, last, kk), fd, sp, fp)
+        if ca > 0.0:
+            tr = 1.0 - a
+            r += tr * cr
+            g += tr * cg
+            b += tr * cb
+            a += tr * ca
+        kk += 1
+        if a >= term:  # term is 2 without hidden volume removal
+            saturated = 1
+            break
+    rgba[p, 0] = r
+    rgba[p, 1] = g
+    rgba[p, 2] = b
+    rgba[p, 3] = a
+    return kk, taken, saturated
+
+
 @njit(cache=True)
-def render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+def _pixel_other(p, kk, tlo, thi, mode, pre, shade, c8, g8, vol, ro, ox, oy, oz, dx, dy, dz, hx, hy, hz,
+                 t0, first, last, ns, table, front, back, fp, rgba, acc, prev_s, prev_k, prev_fd, prev_sp, e8, eg8):  # fmt: skip
+    """Pre-integrated compositing, maximum, minimum and average: pixel p's samples kk.. with
+    t < thi in the current cell (t >= tlo). Returns (next sample, samples taken, 1 if it saturated)."""
+    h = fp[F_H]
+    term = fp[F_TERM]
+    taken = 0
+    if mode == MAXIMUM or mode == MINIMUM:  # the ray's entry and exit points of the cell
+        t_end = ray_end(t0, first, h, ns, last)
+        te = max(tlo, t0)
+        tx = min(thi, t_end)
+        if te < tx and ns > 0:
+            for end in range(2):
+                tt = te if end == 0 else tx
+                v = _trilinear(c8, _clamp01(ox + tt * dx), _clamp01(oy + tt * dy), _clamp01(oz + tt * dz))
+                if mode == MAXIMUM:
+                    acc[p, 0] = max(acc[p, 0], v)
+                else:
+                    acc[p, 0] = min(acc[p, 0], v)
+                acc[p, 1] = 1.0
+    while kk < ns:
+        t = sample_t(t0, first, h, ns, last, kk)
+        if t >= thi:
+            break
+        fx = _clamp01(ox + t * dx)
+        fy = _clamp01(oy + t * dy)
+        fz = _clamp01(oz + t * dz)
+        s = _trilinear(c8, fx, fy, fz)
+        length = sample_length(first, h, ns, last, kk)
+        taken += 1
+        if mode == COMPOSITE:  # pre-integrated
+            fd = 1.0
+            sp = 0.0
+            if shade:
+                fd, sp = _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz),
+                                _trilinear_g(g8, 2, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
+            if kk == 0:  # from the ray's entry point (on the box) to its first sample
+                _edge(rgba, p, vol, ro, t0, dx, dy, dz, s, t - t0, fd, sp, True, hx, hy, hz,
+                      shade, table, front, back, fp, e8, eg8)  # fmt: skip
+            else:
+                tp = sample_t(t0, first, h, ns, last, kk - 1)
+                if prev_k[p] == kk - 1:
+                    sf = prev_s[p]
+                    fd_f = prev_fd[p]
+                    sp_f = prev_sp[p]
+                else:  # the previous sample lies in a skipped cell: fetch it
+                    px = ro[p, 0] + tp * dx
+                    py = ro[p, 1] + tp * dy
+                    pz = ro[p, 2] + tp * dz
+                    sf = _fetch(vol, px, py, pz, e8)
+                    fd_f = 1.0
+                    sp_f = 0.0
+                    if shade and np.isfinite(sf):
+                        fd_f, sp_f = _fetch_light(vol, px, py, pz, hx, hy, hz, fp, e8, eg8)
+                if np.isfinite(sf):
+                    _segment(rgba, p, sf, s, t - tp, fd_f, sp_f, fd, sp, shade, table, front, back, fp)
+            if kk == ns - 1:  # from the last sample to the ray's exit point
+                t_end = ray_end(t0, first, h, ns, last)
+                _edge(rgba, p, vol, ro, t_end, dx, dy, dz, s, t_end - t, fd, sp, False, hx, hy, hz,
+                      shade, table, front, back, fp, e8, eg8)  # fmt: skip
+            prev_s[p] = s
+            prev_k[p] = kk
+            prev_fd[p] = fd
+            prev_sp[p] = sp
+            if rgba[p, 3] >= term:
+                return kk + 1, taken, 1
+        elif mode == AVERAGE:
+            acc[p, 0] += s * length
+            acc[p, 1] += length
+        elif mode == MAXIMUM:
+            acc[p, 0] = max(acc[p, 0], s)
+            acc[p, 1] = 1.0
+        else:
+            acc[p, 0] = min(acc[p, 0], s)
+            acc[p, 1] = 1.0
+        kk += 1
+    return kk, taken, 0
+
+
+@njit(cache=True, inline="always")
+def _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1):
+    """(c0, c1, q0, q1, own): the columns and the band's rows (q0 > q1: none) of node (lv, i, j, k)'s
+    footprint, and 1 when the band holds its middle row (it counts the node)."""
+    size = 1 << lv
+    x0 = i * size
+    y0 = j * size
+    z0 = k * size
+    x1 = min(x0 + size, ncx)
+    y1 = min(y0 + size, ncy)
+    z1 = min(z0 + size, ncz)
+    if perspective:
+        c0, c1, fr0, fr1 = footprint(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
+                                     width, height)  # fmt: skip
+    else:
+        c0, c1, fr0, fr1 = footprint_affine(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
+                                            width, height)  # fmt: skip
+    if c0 > c1 or fr0 > fr1:
+        return 0, -1, 1, 0, 0
+    mid = (fr0 + fr1) // 2
+    return c0, c1, max(fr0, r0), min(fr1, r1 - 1), 1 if (mid >= r0 and mid < r1) else 0
+
+
+@njit(cache=True, inline="always")
+def _cell(i, j, k, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch, fp, mode, pre, shade,
+          hvr, use_post, ncx, ncy, ncz):  # fmt: skip
+    """Leaf cell (i, j, k): its corners loaded once, then the samples of every unfinished pixel of
+    rows q0..q1, columns c0..c1 that lie in it. Returns (samples taken, pixels saturated). The arrays
+    come in tuples: numba inlines a call of at most 30 arguments only (more are passed as *args)."""
+    ro, rd, rwd, ri, rt0, rcount, rfirst, rlast = rays
+    xs, tab, post, table, front, back = tables
+    rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished = state
+    hom, hl, hoff, hcols = occlusion
+    c8, g8, e8, eg8 = scratch
+    h = fp[F_H]
+    term = fp[F_TERM]
+    post_path = mode == COMPOSITE and not pre
+    n_samples = 0
+    n_saturated = 0
+    _load_cell(vol, i, j, k, shade, fp, c8, g8)
+    for r in range(q0, q1 + 1):
+        for c in range(c0, c1 + 1):
+            p = r * width + c
+            if finished[p]:
+                continue
+            tlo, thi = _slab(ro, rd, ri, p, i, j, k, ncx, ncy, ncz)
+            if not thi > tlo:
+                continue
+            ns = rcount[p]
+            t0 = rt0[p]
+            first = rfirst[p]
+            last = rlast[p]
+            kk = _first_sample(t0, first, h, ns, last, nextk[p], tlo)
+            dx = rd[p, 0]
+            dy = rd[p, 1]
+            dz = rd[p, 2]
+            ox = ro[p, 0] - i
+            oy = ro[p, 1] - j
+            oz = ro[p, 2] - k
+            hx = hy = hz = 0.0
+            if shade:
+                hx, hy, hz = _half_vector(rwd, p, fp)
+            if post_path:
+                kk, taken, sat = _pixel_post(p, kk, thi, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first,
+                                             last, ns, shade, use_post, xs, tab, post, fp, rgba)  # fmt: skip
+            else:
+                kk, taken, sat = _pixel_other(p, kk, tlo, thi, mode, pre, shade, c8, g8, vol, ro, ox, oy, oz,
+                                              dx, dy, dz, hx, hy, hz, t0, first, last, ns, table, front, back,
+                                              fp, rgba, acc, prev_s, prev_k, prev_fd, prev_sp, e8, eg8)  # fmt: skip
+            n_samples += taken
+            n_saturated += sat
+            nextk[p] = kk
+            if kk >= ns or (hvr and rgba[p, 3] >= term):
+                finished[p] = 1
+                hom_finish(hom, hl, hoff, hcols, r - r0, c)
+    return n_samples, n_saturated
+
+
+@njit(cache=True)
+def render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                 ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                 rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
+    """Rows r0..r1 - 1 (`_walk_band`), with the band's scratch arrays allocated here: the walk is
+    compiled without numba's reference counting, which otherwise left atomic increments and
+    decrements of shared arrays' counts in the per-pixel loop (slow on one thread, and the two
+    threads fought over those counters' cache lines)."""
+    rows = r1 - r0
+    hl, hoff, hcols, hsize = hom_layout(rows, width)
+    hom = np.empty(hsize, np.int32)
+    depth = 8 * shapes.shape[0] + 8
+    stack = np.empty((depth, 4), np.int64)
+    c8 = np.empty(8)
+    g8 = np.zeros((8, 3))
+    e8 = np.empty(8)
+    eg8 = np.zeros((8, 3))
+    _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
+               ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
+               rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats,
+               hom, hl, hoff, hcols, stack, c8, g8, e8, eg8)  # fmt: skip
+
+
+@njit(cache=True, _nrt=False)
+def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
+               ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
+               rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats,
+               hom, hl, hoff, hcols, stack, c8, g8, e8, eg8):  # fmt: skip
     """Rows r0..r1 - 1: walk the octree front to back, skipping transparent nodes and (with hidden
-    volume removal) nodes on finished pixels, and sample every leaf cell's rays."""
+    volume removal) nodes on finished pixels, and sample every leaf cell's rays. The counters are
+    kept in locals and written once at the end (`stats` rows of neighbouring bands share cache
+    lines: an increment per sample there made the two threads fight over them)."""
     mode = ip[I_MODE]
     pre = ip[I_PRE] != 0
     shade = ip[I_SHADE] != 0
     hvr = ip[I_HVR] != 0 and mode == COMPOSITE
-    h = fp[F_H]
-    term = fp[F_TERM]
     use_post = post.shape[0] > 1
+    rays = (ro, rd, rwd, ri, rt0, rcount, rfirst, rlast)
+    tables = (xs, tab, post, table, front, back)
+    state = (rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished)
+    occlusion = (hom, hl, hoff, hcols)
+    scratch = (c8, g8, e8, eg8)
     rows = r1 - r0
-    hl, hoff, hcols, hsize = hom_layout(rows, width)
-    hom = np.empty(hsize, np.int32)
     hom_init(hom, hl, hoff, hcols, rows, width)
-    for r in range(r0, r1):
-        for c in range(width):
-            if rcount[r * width + c] == 0:
-                finished[r * width + c] = 1
-                hom_finish(hom, hl, hoff, hcols, r - r0, c)
+    for p in range(r0 * width, r1 * width):  # the band's pixels start clear (buffers are reused across frames)
+        rgba[p, 0] = 0.0
+        rgba[p, 1] = 0.0
+        rgba[p, 2] = 0.0
+        rgba[p, 3] = 0.0
+        nextk[p] = 0
+        finished[p] = 0
+        if rcount[p] == 0:
+            finished[p] = 1
+            hom_finish(hom, hl, hoff, hcols, p // width - r0, p % width)
     levels = shapes.shape[0]
     ncx = shapes[0, 2]
     ncy = shapes[0, 1]
     ncz = shapes[0, 0]
-    depth = 8 * levels + 8
-    st_l = np.empty(depth, np.int64)
-    st_i = np.empty(depth, np.int64)
-    st_j = np.empty(depth, np.int64)
-    st_k = np.empty(depth, np.int64)
-    top = 0
-    st_l[0] = levels - 1
-    st_i[0] = 0
-    st_j[0] = 0
-    st_k[0] = 0
+    stack[0, 0] = levels - 1  # (level, i, j, k) of the nodes still to visit, the nearest on top
+    stack[0, 1] = 0
+    stack[0, 2] = 0
+    stack[0, 3] = 0
     top = 1
-    c8 = np.empty(8)
-    g8 = np.zeros((8, 3))
+    n_nodes = 0
+    n_cells = 0
+    n_occ_cells = 0
+    n_occ_nodes = 0
+    n_samples = 0
+    n_saturated = 0
     while top > 0:
         top -= 1
-        lv = st_l[top]
-        i = st_i[top]
-        j = st_j[top]
-        k = st_k[top]
+        lv = stack[top, 0]
+        i = stack[top, 1]
+        j = stack[top, 2]
+        k = stack[top, 3]
         count = counts[offsets[lv] + (k * shapes[lv, 1] + j) * shapes[lv, 2] + i]
         if count == 0:
             continue
-        size = 1 << lv
-        x0 = i * size
-        y0 = j * size
-        z0 = k * size
-        x1 = min(x0 + size, ncx)
-        y1 = min(y0 + size, ncy)
-        z1 = min(z0 + size, ncz)
-        if perspective:
-            c0, c1, fr0, fr1 = footprint(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
-                                         width, height)  # fmt: skip
-        else:
-            c0, c1, fr0, fr1 = footprint_affine(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
-                                                width, height)  # fmt: skip
-        if c0 > c1 or fr0 > fr1:
-            continue
-        q0 = max(fr0, r0)
-        q1 = min(fr1, r1 - 1)
+        c0, c1, q0, q1, own = _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1)
         if q0 > q1:
             continue
-        mid = (fr0 + fr1) // 2
-        own = mid >= r0 and mid < r1  # counters: each node counted by the band holding its middle row
-        if own:
-            stats[S_NODES] += 1
+        n_nodes += own
         if hvr and hom_covered(hom, hl, hoff, hcols, q0 - r0, q1 - r0, c0, c1):
-            if own:
-                stats[S_OCCLUDED_CELLS] += count
-                stats[S_OCCLUDED_NODES] += 1
+            n_occ_cells += count * own
+            n_occ_nodes += own
             continue
-        if lv > 0:
-            mask = child_order_mask(lv, i, j, k, perspective, eye, vdir)
-            cl = lv - 1
-            for n in range(7, -1, -1):
+        if lv == 0:  # the root of a one-cell grid
+            n_cells += own
+            taken, sat = _cell(i, j, k, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch, fp,
+                               mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
+            n_samples += taken
+            n_saturated += sat
+            continue
+        mask = child_order_mask(lv, i, j, k, perspective, eye, vdir)
+        if lv == 1:  # the leaf cells, nearest first, from the node's byte of bits (no stack, no counts)
+            bits8 = leaves[k, j, i]
+            for n in range(8):
                 bits = n ^ mask
+                if not (bits8 >> bits) & 1:
+                    continue
                 ci = 2 * i + (bits & 1)
                 cj = 2 * j + ((bits >> 1) & 1)
                 ck = 2 * k + (bits >> 2)
-                if ci < shapes[cl, 2] and cj < shapes[cl, 1] and ck < shapes[cl, 0]:
-                    st_l[top] = cl
-                    st_i[top] = ci
-                    st_j[top] = cj
-                    st_k[top] = ck
-                    top += 1
+                c0, c1, q0, q1, own = _node_rect(M, 0, ci, cj, ck, ncx, ncy, ncz, perspective, width, height, r0, r1)
+                if q0 > q1:
+                    continue
+                n_nodes += own
+                if hvr and hom_covered(hom, hl, hoff, hcols, q0 - r0, q1 - r0, c0, c1):
+                    n_occ_cells += own
+                    n_occ_nodes += own
+                    continue
+                n_cells += own
+                taken, sat = _cell(ci, cj, ck, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion,
+                                   scratch, fp, mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
+                n_samples += taken
+                n_saturated += sat
             continue
-        # ------------------------------------------------------------ a leaf cell
-        if own:
-            stats[S_CELLS] += 1
-        _load_cell(vol, i, j, k, shade, fp, c8, g8)
-        for r in range(q0, q1 + 1):
-            for c in range(c0, c1 + 1):
-                p = r * width + c
-                if finished[p]:
-                    continue
-                ns = rcount[p]
-                k0 = nextk[p]
-                # exact slab test in index space: [tlo, thi) of this ray in this cell
-                tlo = -math.inf
-                thi = math.inf
-                empty = False
-                for ax in range(3):
-                    o = ro[p, ax]
-                    q = float(i if ax == 0 else (j if ax == 1 else k))
-                    if rd[p, ax] == 0.0:
-                        top_cell = (ncx if ax == 0 else (ncy if ax == 1 else ncz)) - 1
-                        if o < q or o > q + 1.0 or (o == q + 1.0 and q < top_cell):
-                            empty = True
-                            break
-                    else:
-                        inv = ri[p, ax]
-                        ta = (q - o) * inv
-                        tb = (q + 1.0 - o) * inv
-                        if ta > tb:
-                            ta, tb = tb, ta
-                        tlo = max(tlo, ta)
-                        thi = min(thi, tb)
-                if empty or not thi > tlo:
-                    continue
-                t0 = rt0[p]
-                first = rfirst[p]
-                last = rlast[p]
-                kk = k0
-                if sample_t(t0, first, h, ns, last, kk) < tlo:  # samples of skipped cells: pass them
-                    guess = int(math.ceil((tlo - t0 - first) / h + 0.5))
-                    if guess > kk:
-                        kk = min(guess, ns)
-                    while kk < ns and sample_t(t0, first, h, ns, last, kk) < tlo:
-                        kk += 1
-                    while kk > k0 and sample_t(t0, first, h, ns, last, kk - 1) >= tlo:
-                        kk -= 1
-                dx = rd[p, 0]
-                dy = rd[p, 1]
-                dz = rd[p, 2]
-                ox = ro[p, 0] - i
-                oy = ro[p, 1] - j
-                oz = ro[p, 2] - k
-                hx = hy = hz = 0.0
-                if shade:
-                    hx = fp[F_LX] - rwd[p, 0]
-                    hy = fp[F_LY] - rwd[p, 1]
-                    hz = fp[F_LZ] - rwd[p, 2]
-                    hn = math.sqrt(hx * hx + hy * hy + hz * hz)
-                    if hn > 0.0:
-                        hx, hy, hz = hx / hn, hy / hn, hz / hn
-                if mode == MAXIMUM or mode == MINIMUM:  # the ray's entry and exit points of the cell
-                    t_end = ray_end(t0, first, h, ns, last)
-                    te = max(tlo, t0)
-                    tx = min(thi, t_end)
-                    if te < tx and ns > 0:
-                        for tt in (te, tx):
-                            v = _trilinear(c8, _clamp01(ox + tt * dx), _clamp01(oy + tt * dy), _clamp01(oz + tt * dz))
-                            if mode == MAXIMUM:
-                                acc[p, 0] = max(acc[p, 0], v)
-                            else:
-                                acc[p, 0] = min(acc[p, 0], v)
-                            acc[p, 1] = 1.0
-                while kk < ns:
-                    t = sample_t(t0, first, h, ns, last, kk)
-                    if t >= thi:
-                        break
-                    fx = _clamp01(ox + t * dx)
-                    fy = _clamp01(oy + t * dy)
-                    fz = _clamp01(oz + t * dz)
-                    s = _trilinear(c8, fx, fy, fz)
-                    length = sample_length(first, h, ns, last, kk)
-                    stats[S_SAMPLES] += 1
-                    if mode == COMPOSITE:
-                        fd = 1.0
-                        sp = 0.0
-                        if shade:
-                            fd, sp = _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz),
-                                            _trilinear_g(g8, 2, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
-                        if not pre:
-                            if use_post and length == h:
-                                _post_table(rgba, p, post, s, fd, sp, fp)
-                            else:
-                                _post(rgba, p, xs, tab, s, length, fd, sp, fp)
-                        else:
-                            if kk == 0:  # from the ray's entry point (on the box) to its first sample
-                                _edge(rgba, p, vol, ro, t0, dx, dy, dz, s, t - t0, fd, sp, True, hx, hy, hz,
-                                      shade, table, front, back, fp)  # fmt: skip
-                            else:
-                                tp = sample_t(t0, first, h, ns, last, kk - 1)
-                                if prev_k[p] == kk - 1:
-                                    sf = prev_s[p]
-                                    fd_f = prev_fd[p]
-                                    sp_f = prev_sp[p]
-                                else:  # the previous sample lies in a skipped cell: fetch it
-                                    px = ro[p, 0] + tp * dx
-                                    py = ro[p, 1] + tp * dy
-                                    pz = ro[p, 2] + tp * dz
-                                    sf = _fetch(vol, px, py, pz)
-                                    fd_f = 1.0
-                                    sp_f = 0.0
-                                    if shade and np.isfinite(sf):
-                                        fd_f, sp_f = _fetch_light(vol, px, py, pz, hx, hy, hz, fp)
-                                if np.isfinite(sf):
-                                    _segment(rgba, p, sf, s, t - tp, fd_f, sp_f, fd, sp, shade, table, front, back, fp)
-                            if kk == ns - 1:  # from the last sample to the ray's exit point
-                                t_end = ray_end(t0, first, h, ns, last)
-                                _edge(rgba, p, vol, ro, t_end, dx, dy, dz, s, t_end - t, fd, sp, False, hx, hy, hz,
-                                      shade, table, front, back, fp)  # fmt: skip
-                            prev_s[p] = s
-                            prev_k[p] = kk
-                            prev_fd[p] = fd
-                            prev_sp[p] = sp
-                        if hvr and rgba[p, 3] >= term:
-                            kk += 1
-                            stats[S_SATURATED] += 1
-                            break
-                    elif mode == AVERAGE:
-                        acc[p, 0] += s * length
-                        acc[p, 1] += length
-                    elif mode == MAXIMUM:
-                        acc[p, 0] = max(acc[p, 0], s)
-                        acc[p, 1] = 1.0
-                    else:
-                        acc[p, 0] = min(acc[p, 0], s)
-                        acc[p, 1] = 1.0
-                    kk += 1
-                nextk[p] = kk
-                if kk >= ns or (hvr and rgba[p, 3] >= term):
-                    finished[p] = 1
-                    hom_finish(hom, hl, hoff, hcols, r - r0, c)
+        cl = lv - 1
+        for n in range(7, -1, -1):  # pushed farthest first: the nearest is visited next
+            bits = n ^ mask
+            ci = 2 * i + (bits & 1)
+            cj = 2 * j + ((bits >> 1) & 1)
+            ck = 2 * k + (bits >> 2)
+            if ci < shapes[cl, 2] and cj < shapes[cl, 1] and ck < shapes[cl, 0]:
+                stack[top, 0] = cl
+                stack[top, 1] = ci
+                stack[top, 2] = cj
+                stack[top, 3] = ck
+                top += 1
+    stats[S_NODES] += n_nodes
+    stats[S_CELLS] += n_cells
+    stats[S_OCCLUDED_CELLS] += n_occ_cells
+    stats[S_OCCLUDED_NODES] += n_occ_nodes
+    stats[S_SAMPLES] += n_samples
+    stats[S_SATURATED] += n_saturated
 
 
 @njit(cache=True, parallel=True)
-def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                  ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                  rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
     """The bands listed in `bands`, in parallel (each band's rows belong to it alone)."""
@@ -523,7 +714,7 @@ def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, 
         b = bands[q]
         r0 = b * band_rows
         r1 = min(height, r0 + band_rows)
-        render_band(r0, r1, width, height, vol, counts, offsets, shapes, M, perspective, eye, vdir,
+        render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                     ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                     rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats[b])  # fmt: skip
 

@@ -49,7 +49,7 @@ from volren.renderers.base import (
 )
 from volren_objectorder import composite as K
 from volren_objectorder.octree import Classification, MinMaxOctree
-from volren_objectorder.patterns import OFFSET_MODES, pixel_offsets, ray_table, screen_matrix
+from volren_objectorder.patterns import OFFSET_MODES, RayTable, pixel_offsets, ray_table, screen_matrix
 
 #: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
 GRADIENT_EPS = 1e-6
@@ -135,6 +135,8 @@ class ObjectOrderRenderer(RendererBase):
         super().__init__()
         self._octree: MinMaxOctree | None = None
         self._phases: tuple[tuple[str, int, int, int], NDArray[np.float64]] | None = None
+        self._rays: RayTable | None = None
+        self._buffers: dict[str, NDArray[Any]] = {}
 
     # ------------------------------------------------------------------------- state
     def _volume_changed(self) -> None:
@@ -148,7 +150,17 @@ class ObjectOrderRenderer(RendererBase):
 
     def release(self) -> None:
         self._octree = None
+        self._rays = None
+        self._buffers = {}
         super().release()
+
+    def _buffer(self, name: str, shape: tuple[int, ...], dtype: type) -> NDArray[Any]:
+        """A per-pixel array kept from frame to frame (contents undefined), new when the size changes."""
+        found = self._buffers.get(name)
+        if found is None or found.shape != shape or found.dtype != dtype:
+            found = np.empty(shape, dtype)
+            self._buffers[name] = found
+        return found
 
     def _offsets(self, mode: str, width: int, height: int, seed: int) -> NDArray[np.float64]:
         """The pixels' phases, kept while the mode and image size stay (a frame's worth of numpy)."""
@@ -193,7 +205,9 @@ class ObjectOrderRenderer(RendererBase):
         hvr = bool(opts["hidden_volume_removal"]) and composite
 
         offset_mode = "random" if settings.jitter else opts["depth_offsets"]
-        rays = ray_table(camera, volume, width, height, h, self._offsets(offset_mode, width, height, opts["jitter_seed"]))
+        rays = ray_table(camera, volume, width, height, h, self._offsets(offset_mode, width, height, opts["jitter_seed"]),
+                         self._rays)  # fmt: skip
+        self._rays = rays
         cls = self._classification(tf, composite, bool(opts["octree_skipping"]), pre, h)
         M = screen_matrix(camera, volume, width, height)
         spacing = np.asarray(volume.spacing, dtype=np.float64)
@@ -235,20 +249,23 @@ class ObjectOrderRenderer(RendererBase):
         ip = np.array([mode, pre, shade, hvr], dtype=np.int64)
 
         pixels = width * height
-        # per-pixel state; what a mode never reads is one element long (less to allocate and clear)
-        rgba = np.zeros((pixels, 4))
-        acc = np.zeros((pixels if not composite else 1, 2))
-        if mode == K.MAXIMUM:
-            acc[:, 0] = -np.inf
-        elif mode == K.MINIMUM:
-            acc[:, 0] = np.inf
-        nextk = np.zeros(pixels, np.int32)
+        # per-pixel state, kept across frames (no page faults on fresh memory); rgba, nextk and
+        # finished are cleared by each band in the kernel; what a mode never reads is one element long
+        rgba = self._buffer("rgba", (pixels, 4), np.float64)
+        nextk = self._buffer("nextk", (pixels,), np.int32)
+        finished = self._buffer("finished", (pixels,), np.uint8)
+        acc = self._buffer("acc", (pixels if not composite else 1, 2), np.float64)
+        acc[:, 0] = -np.inf if mode == K.MAXIMUM else (np.inf if mode == K.MINIMUM else 0.0)
+        acc[:, 1] = 0.0
         n_pre = pixels if pre else 1
-        prev_k = np.full(n_pre, -1, np.int32)
-        prev_s = np.zeros(n_pre)
-        prev_fd = np.ones(n_pre)
-        prev_sp = np.zeros(n_pre)
-        finished = np.zeros(pixels, np.uint8)
+        prev_k = self._buffer("prev_k", (n_pre,), np.int32)
+        prev_s = self._buffer("prev_s", (n_pre,), np.float64)
+        prev_fd = self._buffer("prev_fd", (n_pre,), np.float64)
+        prev_sp = self._buffer("prev_sp", (n_pre,), np.float64)
+        prev_k.fill(-1)
+        prev_s.fill(0.0)
+        prev_fd.fill(1.0)
+        prev_sp.fill(0.0)
 
         threads = numba.get_num_threads()
         band_rows = int(min(opts["band_rows"], max(8, math.ceil(height / (4 * threads)))))
@@ -263,7 +280,7 @@ class ObjectOrderRenderer(RendererBase):
             bands = order[g0 : g0 + group]
             old = numba.set_parallel_chunksize(1)
             try:
-                K.render_bands(bands, band_rows, width, height, values, cls.counts, cls.offsets, cls.shapes, M,
+                K.render_bands(bands, band_rows, width, height, values, cls.counts, cls.offsets, cls.shapes, cls.leaves, M,
                                not camera.parallel, eye, vdir, rays.origin, rays.direction, rays.world_direction,
                                rays.inverse, rays.t0, rays.count, rays.first, rays.last, ip, fp, xs, tab, post, table,
                                front, back, rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats)  # fmt: skip
