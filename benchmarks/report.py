@@ -67,9 +67,10 @@ def compose(folder: Path, relative_to: Path, date: datetime.date | None = None, 
     lines = [
         "# Benchmarks",
         "",
-        f"Measured {date.isoformat()} on {machine()}.",
+        f"Assembled {date.isoformat()} on {machine()}, from the fragments in `{rel}`; a section regenerated alone "
+        "(`--only`) says when it was measured, the others date from the fragment's last commit.",
         "",
-        f"Regenerate with `{command or 'python -m benchmarks.report --out ' + rel}`; every number below comes from that run.",
+        f"Regenerate every section with `{command or 'python -m benchmarks.report --out ' + rel}`, or some with `--only`.",
         "Times are medians of several frames after a warm-up; errors are DESIGN.md's RMSE over premultiplied",
         "RGBA against the float64 `reference` renderer at the same view.",
     ]

@@ -24,7 +24,7 @@ no measured one can draw the scene.
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -132,11 +132,12 @@ def settings_for(renderer: str, kind: str, level: str, settings: RenderSettings,
 
 
 def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings, names: Iterable[str],
-                    quality: QualityTable | None = None) -> tuple[str, str]:  # fmt: skip
+                    quality: QualityTable | None = None,
+                    can_draw: Callable[[str], bool] | None = None) -> tuple[str, str]:  # fmt: skip
     """(`auto`'s renderer, why) for a scene of this kind, TF dimension and settings at `level`,
     among the registered `names`. Candidates are tried fastest first (those meeting the level's
     bound before the others), so only the chosen renderer and the faster ones that cannot draw
-    the scene are imported."""
+    the scene are imported. `can_draw` replaces the capabilities test (the app has its own list)."""
     from volren.renderers.registry import registry
 
     quality = quality or table()
@@ -144,6 +145,8 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
     names = [n for n in names if n not in NOT_AUTO]
 
     def drawable(name: str) -> bool:
+        if can_draw is not None:
+            return can_draw(name)
         try:
             capabilities = registry.capabilities(name)
         except VolrenError:  # a plugin that does not import: not a candidate

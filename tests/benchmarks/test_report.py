@@ -13,7 +13,7 @@ def test_benchmarks_md_collects_the_fragments_and_relinks_plots(tmp_path):
     (out / "summary.md").write_text("ratio 0.3\n\n![engine](engine.png)\n")
     (out / "stress.md").write_text("0 NaN\n")
     text = report.compose(out, tmp_path, date=datetime.date(2026, 11, 22), command="python -m benchmarks.report")
-    assert "Measured 2026-11-22" in text and "`python -m benchmarks.report`" in text
+    assert "Assembled 2026-11-22" in text and "`python -m benchmarks.report`" in text
     assert "![engine](docs/bench/engine.png)" in text
     assert text.index("## Run time against error") < text.index("## Numerical stress")
     assert "Not in this run: skip.md, plugins.md, app.md, gpu.md." in text

@@ -116,8 +116,8 @@ def run(
     """Open the app on `input` (default: the bundled sample); returns the exit status."""
     from volren.renderers.registry import registry
 
-    if renderer is not None and renderer not in registry.names():
-        return _error(f"unknown renderer {renderer!r}; registered: {', '.join(registry.names())}")
+    if renderer is not None and renderer != "auto" and renderer not in registry.names():
+        return _error(f"unknown renderer {renderer!r}; registered: {', '.join(registry.names())} (or auto)")
     if not _has_display():
         if screenshot is None:
             return _error("no display (DISPLAY is not set); run in a desktop session or under xvfb-run")

@@ -13,7 +13,8 @@ def add_parser(sub) -> None:
     p.add_argument("input", nargs="?", help="volume file, DICOM folder or scene JSON")
     p.add_argument("--tf", help="transfer function JSON")
     p.add_argument("--scalars", help="name of the point array to render")
-    p.add_argument("--renderer", help="renderer to start with")
+    p.add_argument("--renderer", help="renderer to start with (default auto: the fastest measured renderer that draws "
+                   "the volume; a scene file's renderer when it names one)")
     p.add_argument(
         "--screenshot",
         metavar="OUT.png",

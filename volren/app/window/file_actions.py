@@ -24,6 +24,7 @@ from volren.app.rendering.viewport import Viewport
 from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
 from volren.errors import VolrenError
+from volren.quality import AUTO
 
 OPEN_FILTER = (
     "Volumes and scenes (*.vti *.vtk *.vtu *.vtr *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw *.json);;"
@@ -123,7 +124,8 @@ class FileActions(QObject):
         state, volume = self._state, loaded.volume
         assert volume is not None and loaded.transfer_function is not None
         settings = loaded.settings or state.settings
-        wanted = requested_renderer or loaded.renderer or state.renderer
+        # the first volume shown gets `auto` unless something names a renderer; later ones keep the user's
+        wanted = requested_renderer or loaded.renderer or (AUTO if state.volume is None else state.renderer)
         renderer, notes = self._renderers.choose_for(
             volume, settings, loaded.transfer_function.dims, wanted, requested_renderer
         )

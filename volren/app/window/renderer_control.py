@@ -19,8 +19,10 @@ from volren.app.core.state import Change, ViewState
 from volren.app.rendering.render_service import Frame, RenderRequest
 from volren.app.rendering.renderer_chooser import RendererChooser
 from volren.app.rendering.viewport import Viewport
+from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
 from volren.model.volume import Volume
+from volren.quality import AUTO, DEFAULT_LEVEL, choose_renderer
 from volren.renderers.registry import RendererRegistry
 
 
@@ -78,10 +80,20 @@ class RendererControl:
         """The renderer for a volume about to be shown, and notes for the status bar.
 
         `requested` is an explicit request (the command line): if it cannot draw the volume that
-        is an error; another `wanted` one (a scene's) that cannot is replaced quietly. A new scene
-        also clears the memory of the last failure, so it is reported again.
+        is an error; another `wanted` one (a scene's) that cannot is replaced quietly; "auto" is
+        the fastest measured renderer that can (`volren.quality`). A new scene also clears the
+        memory of the last failure, so it is reported again.
         """
         options, notes = renderer_options(volume.kind, settings, self._registry, tf_dims)
+        if wanted == AUTO:  # the fastest measured renderer that draws this (volren.quality)
+            drawable = {o.name for o in options if o.reason is None}
+            try:
+                wanted, why = choose_renderer(volume.kind, DEFAULT_LEVEL, tf_dims, settings, list(drawable),
+                                              can_draw=drawable.__contains__)  # fmt: skip
+                notes.append(f"renderer {wanted}: {why} (auto)")
+            except VolrenError as exc:
+                self._report_error("Renderer unavailable", str(exc))
+                return next(iter(sorted(drawable)), "vtk"), notes
         chosen = pick_renderer(options, wanted)
         if chosen != wanted:
             reason = next((o.reason for o in options if o.name == wanted), None)
