@@ -112,3 +112,18 @@ def column_camera(dims: Sequence[int], spacing: Triple, origin: Triple, z_top: f
         parallel_scale=ny * spacing[1] / 2.0,
         clipping_range=(1.0, 100.0 + z_top),
     )
+
+
+def distant_camera_cut_by_far_plane(bounds: Sequence[float], cut: float, parallel: bool) -> Camera:
+    """A user camera far out along an oblique direction with the default clipping range (far =
+    1000.01), placed so that the far plane cuts the box `bounds` `cut` of the way through its depth:
+    what `Camera.orbit` never makes (it fits the clipping range to the data), and what a camera
+    from a script or a scene file can (renderers that ignored the planes drew the whole box)."""
+    b = np.asarray(bounds, dtype=np.float64)
+    centre = (b[0::2] + b[1::2]) / 2
+    out = np.array([0.3, -0.4, 1.0]) / np.linalg.norm([0.3, -0.4, 1.0])  # toward the eye
+    corners = np.array([[x, y, z] for x in b[0:2] for y in b[2:4] for z in b[4:6]])
+    reach = float(np.abs((corners - centre) @ out).max())  # depths span distance -+ reach
+    distance = Camera().clipping_range[1] + reach - 2 * reach * cut
+    return Camera(position=tuple(centre + distance * out), focal_point=tuple(centre), parallel=parallel,
+                  parallel_scale=0.6 * (b[3] - b[2]), view_angle=1.2)  # fmt: skip

@@ -14,6 +14,7 @@ from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolu
 from volren.model.crop import crop_volume
 from volren.testing import conformance_test, image_error, oracles
 from volren.testing.reference_images import reference_image
+from volren.testing.scenes import distant_camera_cut_by_far_plane
 
 # one pytest test per check of the kit
 test_conformance = conformance_test(ObjectOrderRenderer, quick=True)
@@ -268,20 +269,6 @@ def test_bad_options_are_one_line_errors(options):
 
 
 # ----------------------------------------------------------------------------- clipping
-def _user_camera(volume: UniformVolume, cut: float, parallel: bool) -> Camera:
-    """A camera far out along an oblique direction with the default clipping range (far = 1000.01),
-    placed so that the far plane cuts the volume `cut` of the way through its depth (the bonsai
-    report against shearwarp: a user camera, not one from `Camera.orbit`)."""
-    b = np.asarray(volume.bounds)
-    centre = (b[0::2] + b[1::2]) / 2
-    out = np.array([0.3, -0.4, 1.0]) / np.linalg.norm([0.3, -0.4, 1.0])  # toward the eye
-    corners = np.array([[x, y, z] for x in b[0:2] for y in b[2:4] for z in b[4:6]])
-    reach = float(np.abs((corners - centre) @ out).max())  # depths span distance -+ reach
-    distance = Camera().clipping_range[1] + reach - 2 * reach * cut
-    return Camera(position=tuple(centre + distance * out), focal_point=tuple(centre), parallel=parallel,
-                  parallel_scale=0.6 * (b[3] - b[2]), view_angle=1.2)  # fmt: skip
-
-
 @pytest.mark.parametrize("parallel", [True, False])
 @pytest.mark.parametrize("settings", [{}, {"preintegration": True}, {"step": 0.25, "shade": True},
                                       {"options": {"hidden_volume_removal": False,
@@ -310,7 +297,7 @@ def test_a_user_camera_whose_far_plane_cuts_the_volume_matches_the_reference(par
     """A camera far out with the default clipping range, its far plane halfway through the volume:
     every blend mode against the reference, and the unclipped image differs."""
     volume = field()
-    camera = _user_camera(volume, 0.45, parallel)
+    camera = distant_camera_cut_by_far_plane(volume.bounds, 0.45, parallel)
     unclipped = Camera(**{**camera.to_dict(), "clipping_range": (0.01, 2000.0)})
     for mode in ("composite", "maximum", "minimum", "average"):
         truth = reference_image(volume, SMOOTH_TF, camera, 40, 32, RenderSettings(blend_mode=mode))

@@ -18,6 +18,7 @@ from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolu
 from volren.model.downsample import downsample
 from volren.testing import conformance_test, image_error, oracles
 from volren.testing.reference_images import reference_image
+from volren.testing.scenes import distant_camera_cut_by_far_plane
 
 # one pytest test per check of the kit
 test_conformance = conformance_test(ShearWarpRenderer, quick=True)
@@ -345,20 +346,6 @@ def test_auto_levels_follow_the_tf_sharpness():
 
 
 # ----------------------------------------------------------------------------- clipping
-def _user_camera(volume: UniformVolume, cut: float, parallel: bool) -> Camera:
-    """A camera far out along an oblique direction with the default clipping range (far = 1000.01),
-    placed so that the far plane cuts the volume `cut` of the way through its depth (the bonsai
-    report: a user camera, not one from `Camera.orbit`)."""
-    b = np.asarray(volume.bounds)
-    centre = (b[0::2] + b[1::2]) / 2
-    out = np.array([0.3, -0.4, 1.0]) / np.linalg.norm([0.3, -0.4, 1.0])  # toward the eye
-    corners = np.array([[x, y, z] for x in b[0:2] for y in b[2:4] for z in b[4:6]])
-    reach = float(np.abs((corners - centre) @ out).max())  # depths span distance -+ reach
-    distance = Camera().clipping_range[1] + reach - 2 * reach * cut
-    return Camera(position=tuple(centre + distance * out), focal_point=tuple(centre), parallel=parallel,
-                  parallel_scale=0.6 * (b[3] - b[2]), view_angle=1.2)  # fmt: skip
-
-
 @pytest.mark.parametrize("parallel", [True, False])
 @pytest.mark.parametrize("settings, bound", [
     ({}, 0.01), ({"preintegration": False}, 0.01), ({"step": 0.25}, 0.01), ({"shade": True}, 0.01),
@@ -392,7 +379,7 @@ def test_a_user_camera_whose_far_plane_cuts_the_volume_matches_the_reference(par
     """The bonsai report in small: a camera far up +z with the default clipping range, its far plane
     halfway down the volume; every blend mode against the reference, and the unclipped image differs."""
     volume = field()
-    camera = _user_camera(volume, 0.45, parallel)
+    camera = distant_camera_cut_by_far_plane(volume.bounds, 0.45, parallel)
     unclipped = replace(camera, clipping_range=(camera.clipping_range[0], 2 * camera.clipping_range[1]))
     for mode in ("composite", "maximum", "minimum", "average"):
         truth = reference_image(volume, SMOOTH_TF, camera, 40, 32, RenderSettings(blend_mode=mode))

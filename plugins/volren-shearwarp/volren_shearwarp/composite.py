@@ -429,6 +429,18 @@ def _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, tabl
     return 1, 0
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _point(vol, kf, kb, w, af, ab, bf, bb, lo, scale, shading, inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr):
+    """(table coordinate, diffuse factor, specular term) of the ray at plane w of the slab; (x, 1, 0) unshaded."""
+    a = af + w * (ab - af)
+    b = bf + w * (bb - bf)
+    x = _plane_value(vol, kf, kb, w, a, b, lo, scale)
+    if not shading:
+        return x, 1.0, 0.0
+    d, s = _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)
+    return x, d, s
+
+
 @njit(cache=True, error_model="numpy")
 def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u, rgba, buf_x, buf_d, buf_s, buf_len,
                     stamp, skip, layer, table, table_back, lut, preintegrated, shading, bilinear_lookup, lo, scale,
@@ -447,25 +459,20 @@ def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u
         ss = buf_s[q, p] if shading else 0.0
         done = buf_len[q, p]
     else:
-        xs = _plane_value(vol, kf, kb, t0, af + t0 * (ab - af), bf + t0 * (bb - bf), lo, scale)
-        ds = 1.0
-        ss = 0.0
-        if shading:
-            ds, ss = _plane_light(vol, kf, kb, t0, af + t0 * (ab - af), bf + t0 * (bb - bf), inv_sp, light, hx, hy, hz,
-                                  ka, kd, ks, power, gthr)  # fmt: skip
+        xs, ds, ss = _point(vol, kf, kb, t0, af, ab, bf, bb, lo, scale, shading, inv_sp, light, hx, hy, hz,
+                            ka, kd, ks, power, gthr)  # fmt: skip
         done = 0.0
     stamp[q, p] = -1
     pos = t0
-    for j in range(sub):
-        w = (j + u) / sub
+    for j in range(sub + 1):
+        last_piece = j == sub  # after the samples: where the ray leaves, if it leaves in this slab
+        if last_piece and not (t1 < 1.0 or m == m_last):
+            break
+        w = t1 if last_piece else (j + u) / sub
         if w < t0 or w > t1:
             continue
-        xw = _plane_value(vol, kf, kb, w, af + w * (ab - af), bf + w * (bb - bf), lo, scale)
-        dw = 1.0
-        sw = 0.0
-        if shading:
-            dw, sw = _plane_light(vol, kf, kb, w, af + w * (ab - af), bf + w * (bb - bf), inv_sp, light, hx, hy, hz,
-                                  ka, kd, ks, power, gthr)  # fmt: skip
+        xw, dw, sw = _point(vol, kf, kb, w, af, ab, bf, bb, lo, scale, shading, inv_sp, light, hx, hy, hz,
+                            ka, kd, ks, power, gthr)  # fmt: skip
         frac = done + (w - pos) * sub
         if frac > 0.0:
             c, t = _composite_piece(rgba, skip, q, p, xs, xw, ds, ss, dw, sw, min(frac, 1.0), layer, table, table_back,
@@ -473,24 +480,13 @@ def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u
             n_comp += c
             if t:
                 return n_comp, 1
+        if last_piece:
+            return n_comp, 0
         xs = xw
         ds = dw
         ss = sw
         done = 0.0
         pos = w
-    if t1 < 1.0 or m == m_last:  # the ray leaves in this slab: close the open segment where it leaves
-        frac = done + (t1 - pos) * sub
-        if frac > 0.0:
-            xe = _plane_value(vol, kf, kb, t1, af + t1 * (ab - af), bf + t1 * (bb - bf), lo, scale)
-            de = 1.0
-            se = 0.0
-            if shading:
-                de, se = _plane_light(vol, kf, kb, t1, af + t1 * (ab - af), bf + t1 * (bb - bf), inv_sp, light,
-                                      hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
-            c, t = _composite_piece(rgba, skip, q, p, xs, xe, ds, ss, de, se, min(frac, 1.0), layer, table, table_back,
-                                    lut, preintegrated, shading, bilinear_lookup, use_termination, term_alpha)  # fmt: skip
-            return n_comp + c, t
-        return n_comp, 0
     buf_x[q, p] = xs
     if shading:
         buf_d[q, p] = ds
