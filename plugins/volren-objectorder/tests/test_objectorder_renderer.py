@@ -306,3 +306,18 @@ def test_a_user_camera_whose_far_plane_cuts_the_volume_matches_the_reference(par
         if mode != "maximum":  # the maximum lies at the top, in front of the far plane
             assert image_error(whole, truth).rmse > 0.05, mode
         assert image_error(image, truth).rmse < 0.01, mode
+
+
+@pytest.mark.parametrize("radius", [(1, 1, 1), (2, 0, 3), (0, 0, 0), (5, 5, 5)])
+@pytest.mark.parametrize("shape", [(5, 6, 7), (1, 3, 9), (17, 2, 4)])
+def test_the_dilated_ranges_are_the_min_and_max_over_each_box(shape, radius):
+    """`_dilate` against brute force: every element's box of +-radius cells (clipped to the grid)."""
+    from volren_objectorder.octree import _dilate
+
+    a = np.random.default_rng(sum(shape)).random(shape).astype(np.float32)
+    rx, ry, rz = radius
+    for take_max, reduce in ((True, np.max), (False, np.min)):
+        got = _dilate(a, radius, take_max)
+        for k, j, i in np.ndindex(shape):
+            box = a[max(k - rz, 0):k + rz + 1, max(j - ry, 0):j + ry + 1, max(i - rx, 0):i + rx + 1]
+            assert got[k, j, i] == reduce(box)

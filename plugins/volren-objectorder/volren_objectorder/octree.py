@@ -139,22 +139,42 @@ def _pack_leaves(level0, out):
                 out[k, j, i] = bits
 
 
-def _dilate(a: NDArray, radius: tuple[int, int, int], reduce) -> NDArray:
-    """`reduce` (np.minimum / np.maximum) of every element with its neighbours up to `radius`
-    cells away along each axis (x, y, z): a separable box filter."""
+@njit(cache=True, parallel=True)
+def _window_pass(src, dst, axis, r, take_max):
+    """dst = the min (max) of src over a window of `r` cells either side along array axis `axis`
+    (one loop nest per axis, so that the innermost loop runs along memory)."""
+    nz, ny, nx = src.shape
+    for k in prange(nz):
+        for j in range(ny):
+            if axis == 2:
+                for i in range(nx):
+                    v = src[k, j, i]
+                    for q in range(max(i - r, 0), min(i + r, nx - 1) + 1):
+                        v = max(v, src[k, j, q]) if take_max else min(v, src[k, j, q])
+                    dst[k, j, i] = v
+            else:
+                lo = max((k if axis == 0 else j) - r, 0)
+                hi = min((k if axis == 0 else j) + r, (nz if axis == 0 else ny) - 1)
+                for i in range(nx):
+                    dst[k, j, i] = src[k, j, i]
+                for q in range(lo, hi + 1):
+                    for i in range(nx):
+                        w = src[q, j, i] if axis == 0 else src[k, q, i]
+                        dst[k, j, i] = max(dst[k, j, i], w) if take_max else min(dst[k, j, i], w)
+
+
+def _dilate(a: NDArray, radius: tuple[int, int, int], take_max: bool) -> NDArray:
+    """The max (or min) of every element with its neighbours up to `radius` cells away along each
+    axis (x, y, z): a separable box filter, one parallel pass per axis (numpy's shifted
+    minimum/maximum took bonsai's first pre-integrated frame 1.0 s of 1.9)."""
     out = a
     for axis_xyz, r in enumerate(radius):
-        axis = 2 - axis_xyz
-        n = out.shape[axis]
-        r = min(int(r), n - 1)
-        acc = out.copy()
-        for d in range(1, r + 1):
-            lead = [slice(None)] * 3
-            trail = [slice(None)] * 3
-            lead[axis], trail[axis] = slice(d, None), slice(None, n - d)
-            acc[tuple(trail)] = reduce(acc[tuple(trail)], out[tuple(lead)])
-            acc[tuple(lead)] = reduce(acc[tuple(lead)], out[tuple(trail)])
-        out = acc
+        r = min(int(r), a.shape[2 - axis_xyz] - 1)
+        if r <= 0:
+            continue
+        dst = np.empty_like(out)
+        _window_pass(out, dst, 2 - axis_xyz, r, take_max)
+        out = dst
     return out
 
 
@@ -209,7 +229,7 @@ class MinMaxOctree:
             return self.lo, self.hi
         if reach not in self._dilated:
             self._dilated.clear()  # one dilation kept: reaches change only with the step
-            self._dilated[reach] = (_dilate(self.lo, reach, np.minimum), _dilate(self.hi, reach, np.maximum))
+            self._dilated[reach] = (_dilate(self.lo, reach, False), _dilate(self.hi, reach, True))
         return self._dilated[reach]
 
     def classify(self, tf: TransferFunction1D | None, reach: tuple[int, int, int] = (0, 0, 0)) -> Classification:
