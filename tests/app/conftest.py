@@ -137,6 +137,18 @@ class TetOnlyRenderer(FakeRenderer):
     capabilities: ClassVar[Capabilities] = Capabilities(kinds={"tet": KindSupport()}, summary="tet only")
 
 
+class SlowSetupRenderer(FakeRenderer):
+    """Takes `setup_s` to take a volume (a large mesh's preparation, an octree)."""
+
+    name: ClassVar[str] = "fake_slow_setup"
+    setup_s: ClassVar[float] = 0.8
+
+    def _volume_changed(self) -> None:
+        import time
+
+        time.sleep(self.setup_s)
+
+
 class BrokenRenderer(FakeRenderer):
     name: ClassVar[str] = "fake_broken"
 
@@ -147,7 +159,7 @@ class BrokenRenderer(FakeRenderer):
 @pytest.fixture
 def fake_renderers() -> Iterator[dict[str, type]]:
     """Register the fake renderers in-process; unregistered afterwards."""
-    classes = {cls.name: cls for cls in (FakeRenderer, TetOnlyRenderer, BrokenRenderer)}
+    classes = {cls.name: cls for cls in (FakeRenderer, TetOnlyRenderer, BrokenRenderer, SlowSetupRenderer)}
     FakeRenderer.calls.clear()
     for name, cls in classes.items():
         registry.register(name, cls, replace=True)

@@ -349,3 +349,22 @@ def test_the_first_volume_gets_the_auto_renderer_and_the_status_bar_says_why(mak
     assert w.state.renderer == blocker.args[0].renderer == expected != "auto"
     assert f"renderer {expected}: " in w.statusBar().currentMessage() and "(auto)" in w.statusBar().currentMessage()
     assert error_boxes == []
+
+
+def test_a_long_renderer_set_up_says_preparing_until_the_frame(make_window, fake_renderers, sample, qtbot):
+    """A set-up over 0.3 s (the slow fake takes 0.8 s to take the volume) shows "preparing" in the
+    frame label, and the frame's numbers replace it; a quick renderer never shows it."""
+    w = make_window()
+    seen = []
+    w.renderers.frame_label.setText("")
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake_slow_setup")
+        qtbot.waitUntil(lambda: "preparing" in w.renderers.frame_label.text(), timeout=2000)
+        seen.append(w.renderers.frame_label.text())
+    assert seen == ["fake_slow_setup  |  preparing the renderer…"]
+    qtbot.waitUntil(lambda: "ms" in w.renderers.frame_label.text(), timeout=2000)
+    assert "preparing" not in w.renderers.frame_label.text()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.state.set_renderer("fake")
+    qtbot.wait(400)
+    assert "preparing" not in w.renderers.frame_label.text()

@@ -121,6 +121,7 @@ class RenderWorker(QObject):
     frameReady = pyqtSignal(object)  # Frame
     failed = pyqtSignal(object, str)  # RenderRequest, one-line reason
     progressed = pyqtSignal(int, str, float)  # serial, renderer, fraction done (slow frames only)
+    preparing = pyqtSignal(int, str)  # serial, renderer: a new renderer or volume is being set up
 
     def __init__(self, mailbox: _Mailbox, factory: RendererFactory = _registry_factory) -> None:
         super().__init__()
@@ -150,6 +151,10 @@ class RenderWorker(QObject):
             self.frameReady.emit(frame)
 
     def _sync(self, request: RenderRequest) -> Renderer:
+        if self._renderer is None or self._renderer_name != request.renderer or self._volume is not request.volume:
+            # set-up ahead (the renderer's imports, its per-volume structures, its first frame's tables):
+            # the GUI says so when no frame follows within PREPARING_AFTER_S
+            self.preparing.emit(request.serial, request.renderer)
         if self._renderer is None or self._renderer_name != request.renderer:
             self._release()
             self._renderer = self._factory(request.renderer)
@@ -226,6 +231,7 @@ class RenderService(QObject):
     frameReady = pyqtSignal(object)  # Frame
     renderFailed = pyqtSignal(object, str)  # RenderRequest, one-line reason
     progressed = pyqtSignal(int, str, float)  # serial, renderer, fraction done (slow frames only)
+    preparing = pyqtSignal(int, str)  # serial, renderer: set-up of a new renderer or volume began
     _wake = pyqtSignal()
     _stop = pyqtSignal()
 
@@ -243,6 +249,7 @@ class RenderService(QObject):
         self._worker.frameReady.connect(self._on_frame)
         self._worker.failed.connect(self._on_failed)
         self._worker.progressed.connect(self._on_progress)
+        self._worker.preparing.connect(self._on_preparing)
         self._thread.start()
 
     @property
@@ -292,6 +299,11 @@ class RenderService(QObject):
     def _on_progress(self, serial: int, renderer: str, fraction: float) -> None:
         if self._running and serial == self._serial:
             self.progressed.emit(serial, renderer, fraction)
+
+    @pyqtSlot(int, str)
+    def _on_preparing(self, serial: int, renderer: str) -> None:
+        if self._running:
+            self.preparing.emit(serial, renderer)
 
     @pyqtSlot(object, str)
     def _on_failed(self, request: RenderRequest, message: str) -> None:

@@ -101,6 +101,7 @@ class MainWindow(QMainWindow):
         self.service.frameReady.connect(self._on_frame)
         self.service.renderFailed.connect(self.renderers.render_failed)
         self.service.progressed.connect(self.renderers.frame_progressed)
+        self.service.preparing.connect(self.renderers.preparing)
         self._unsubscribe = self.state.subscribe(self._on_state_change)
         self.renderers.refresh()
 

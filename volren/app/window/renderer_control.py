@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from PyQt5.QtCore import QTimer
 from PyQt5.QtWidgets import QLabel, QStatusBar, QWidget
 
 from volren.app.core.renderer_choice import RendererOption, pick_renderer, renderer_options
@@ -24,6 +25,9 @@ from volren.model.settings import RenderSettings
 from volren.model.volume import Volume
 from volren.quality import AUTO, DEFAULT_LEVEL, choose_renderer
 from volren.renderers.registry import RendererRegistry
+
+#: A set-up (new renderer or volume) longer than this without a frame is shown as "preparing".
+PREPARING_AFTER_S = 0.3
 
 
 def renderer_message(name: str, reason: str | None) -> str:
@@ -52,6 +56,7 @@ class RendererControl:
         self._last_good_renderer: str | None = None
         self._failure_key: tuple[Any, ...] | None = None
         self._shown_tf_dims = 1
+        self._preparing: tuple[int, str] | None = None  # (serial, renderer) set up with no frame yet
         self.chooser = RendererChooser(parent)
         self.chooser.rendererChosen.connect(state.set_renderer)
         #: "vtk  |  800 x 600  |  12.3 ms", or how far a slow frame is.
@@ -139,6 +144,7 @@ class RendererControl:
     # ------------------------------------------------------------------ frames
     def frame_shown(self, frame: Frame) -> None:
         """The renderer drew: it is the one to fall back to, and its numbers go in the label."""
+        self._preparing = None
         self._last_good_renderer = frame.renderer
         self._failure_key = None
         quality = "" if frame.full else ", preview"
@@ -146,12 +152,24 @@ class RendererControl:
             f"{frame.renderer}  |  {frame.width} x {frame.height}{quality}  |  {frame.ms:.1f} ms"
         )
 
+    def preparing(self, serial: int, renderer: str) -> None:
+        """A new renderer or volume is being set up: after PREPARING_AFTER_S without a frame or
+        progress, the label says so (a set-up that long would otherwise look like a frozen view)."""
+        self._preparing = (serial, renderer)
+        QTimer.singleShot(int(PREPARING_AFTER_S * 1000), lambda: self._show_preparing(serial))
+
+    def _show_preparing(self, serial: int) -> None:
+        if self._preparing is not None and self._preparing[0] == serial:
+            self.frame_label.setText(f"{self._preparing[1]}  |  preparing the renderer…")
+
     def frame_progressed(self, _serial: int, renderer: str, fraction: float) -> None:
         """Slow renderers (reference) report how far the newest frame is."""
+        self._preparing = None
         self.frame_label.setText(f"{renderer}  |  rendering {100 * fraction:.0f}%")
 
     def render_failed(self, request: RenderRequest, message: str) -> None:
         """Back to the last renderer that drew, if it can; report once per renderer and scene."""
+        self._preparing = None
         name = request.renderer
         if name != self._state.renderer:
             return  # the person switched away already
