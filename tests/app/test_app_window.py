@@ -368,3 +368,26 @@ def test_a_long_renderer_set_up_says_preparing_until_the_frame(make_window, fake
         w.state.set_renderer("fake")
     qtbot.wait(400)
     assert "preparing" not in w.renderers.frame_label.text()
+
+
+def test_resting_before_release_draws_one_full_frame_not_two(loaded_window, qtbot):
+    """Input quiet during a drag gives a full frame; the release that follows, with the camera
+    unchanged, must not draw the same full frame again (issue 22: duplicate frames)."""
+    w = loaded_window
+    frames = []
+    w.frameShown.connect(frames.append)
+    window = w.viewport.window().windowHandle()
+    c = w.viewport.mapTo(w, w.viewport.rect().center())
+    qtbot.mousePress(window, Qt.LeftButton, pos=c)
+    for i in range(1, 4):
+        qtbot.mouseMove(window, c + QPoint(8 * i, 2 * i))
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        pass  # resting: the settle timer asks for the full frame
+    qtbot.mouseRelease(window, Qt.LeftButton, pos=c + QPoint(24, 6))
+    qtbot.wait(600)  # longer than the settle time: a second full frame would have come by now
+    full = [f for f in frames if f.full]
+    assert len(full) == 1 and full[0].camera == w.state.camera
+    assert any(not f.full for f in frames)  # the drag itself previewed
+    # a later change still draws
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.reset_view()

@@ -3,8 +3,9 @@
 Interactive changes (a drag in progress) get an immediate preview frame with at most a quarter of
 the pixels (half of each side, scaled up for display; fewer when the renderer is slow, so that a
 preview stays within about 50 ms), and restart a short settle timer; when no
-input has come for `settle_ms`, one full-quality frame follows. Every other change (a new
-volume, another renderer, a reset view) asks for a full-quality frame at once.
+input has come for `settle_ms`, one full-quality frame follows, and none again for the same
+request (a gesture that rests before its release asks twice). Every other change (a new volume,
+another renderer, a reset view) asks for a full-quality frame at once.
 
 This is the only place that builds requests, so other panels (TF editors) get the same policy
 just by changing the `ViewState` inside `state.begin_interaction()` / `end_interaction()`.
@@ -52,6 +53,7 @@ class FrameScheduler(QObject):
         self._timer.setInterval(settle_ms)
         self._timer.timeout.connect(self.request_full)
         self._requested_any = False
+        self._last_full: tuple | None = None  # what the newest full frame asked for, while nothing else was asked
         self._unsubscribe = state.subscribe(self._on_change)
 
     def _on_change(self, change: Change) -> None:
@@ -93,11 +95,20 @@ class FrameScheduler(QObject):
         width, height = self._viewport_size()
         if s.volume is None or s.transfer_function is None or s.camera is None or width < 1 or height < 1:
             return None
-        if not full:
-            width, height = preview_size(width, height, self.current_preview_scale())
-        self._requested_any = True
         volume = s.render_volume
         assert volume is not None
+        tf = s.transfer_function
+        if full:
+            # a gesture that rested before it ended asks twice for the same full frame: once when input
+            # went quiet, again on release; the second would redraw what is already on screen
+            key = (s.renderer, id(volume), id(tf), tf.version, s.settings, s.camera, width, height, s.background)
+            if key == self._last_full:
+                return None
+            self._last_full = key
+        else:
+            self._last_full = None  # a preview replaces what is on screen: the next full frame is needed
+            width, height = preview_size(width, height, self.current_preview_scale())
+        self._requested_any = True
         return self._service.submit(
             s.renderer, volume, s.transfer_function, s.settings, s.camera, width, height, full, s.background
         )
