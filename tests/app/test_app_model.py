@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from volren.app.core import interaction
-from volren.app.core.frame_sizes import adaptive_preview_scale, preview_size
+from volren.app.core.frame_sizes import FrameCost, adaptive_preview_scale, preview_size
 from volren.app.core.renderer_choice import RendererOption, pick_renderer, renderer_options
 from volren.app.core.state import Change, ViewState, default_camera
 from volren.io.image_io import to_png_pixels
@@ -125,6 +125,27 @@ def test_preview_scale_adapts_to_renderer_cost():
     slow = adaptive_preview_scale(400 / 700_000, 700_000)  # 400 ms full frames
     assert slow == pytest.approx((50 / 400) ** 0.5) and 0.1 < slow < 0.5
     assert adaptive_preview_scale(18000 / 700_000, 700_000) == 0.1  # the reference renderer: 18 s
+
+
+def test_a_fixed_cost_over_the_budget_keeps_previews_at_a_quarter_of_the_pixels():
+    # a software-GL slicer: 100 ms whatever the size, plus a little per pixel
+    assert adaptive_preview_scale(1e-5, 700_000, fixed_ms=100.0) == 0.5
+    # half the budget fixed: the per-pixel part gets the other half
+    scale = adaptive_preview_scale(400 / 700_000, 700_000, fixed_ms=25.0)
+    assert scale == pytest.approx((25 / 400) ** 0.5)
+
+
+def test_frame_cost_fits_fixed_and_per_pixel_parts_from_two_sizes():
+    cost = FrameCost()
+    assert cost.model() is None
+    cost.note(10_000, 50.0)
+    assert cost.model() == (0.0, 50.0 / 10_000)  # one size: all per pixel
+    cost.note(40_000, 80.0)  # 30 ms more for 30,000 more pixels
+    fixed, per_pixel = cost.model()
+    assert per_pixel == pytest.approx(1e-3) and fixed == pytest.approx(40.0)
+    cost.note(160_000, 80.0)  # the oldest size goes: 40,000 and 160,000 pixels both 80 ms
+    fixed, per_pixel = cost.model()
+    assert fixed == pytest.approx(80.0) and per_pixel < 1e-6
 
 
 def test_pick_renderer_keeps_current_else_prefers_vtk():

@@ -19,15 +19,48 @@ def adaptive_preview_scale(
     budget_ms: float = 50.0,
     max_scale: float = 0.5,
     min_scale: float = 0.1,
+    fixed_ms: float = 0.0,
 ) -> float:
     """The side scale of preview frames that keeps one within `budget_ms`.
 
-    Cost is taken as proportional to the pixel count (what ray casters do), measured from the
-    renderer's last frame. Fast renderers get `max_scale` (a quarter of the pixels); slow ones
-    (the exact reference renderer takes seconds per full frame) get coarser previews, down to
-    `min_scale`, so dragging still answers.
+    A frame is taken to cost `fixed_ms` plus `ms_per_pixel` per pixel (`FrameCost` fits both from
+    the renderer's frames of two sizes). Fast renderers get `max_scale` (a quarter of the pixels);
+    slow ones (the exact reference renderer takes seconds per full frame) get coarser previews,
+    down to `min_scale`, so dragging still answers. Where the fixed part alone exceeds the budget
+    (a software-GL slicer's passes, shear-warp's compositing at the volume's resolution), fewer
+    pixels would only blur the preview without making it faster: it gets `max_scale`. (Assuming
+    cost proportional to pixels kept such renderers at the floor, 1 % of the pixels.)
     """
     if not ms_per_pixel or ms_per_pixel <= 0 or full_pixels <= 0:
         return max_scale
-    scale = (budget_ms / (ms_per_pixel * full_pixels)) ** 0.5
+    if fixed_ms >= budget_ms:
+        return max_scale
+    scale = ((budget_ms - fixed_ms) / (ms_per_pixel * full_pixels)) ** 0.5
     return float(min(max_scale, max(min_scale, scale)))
+
+
+class FrameCost:
+    """A renderer's frame time as fixed + per-pixel cost, from its latest frames of two sizes."""
+
+    def __init__(self) -> None:
+        self._latest: dict[int, float] = {}  # pixels -> ms, the two most recent sizes
+
+    def note(self, pixels: int, ms: float) -> None:
+        self._latest.pop(pixels, None)
+        self._latest[pixels] = ms
+        while len(self._latest) > 2:
+            self._latest.pop(next(iter(self._latest)))
+
+    def model(self) -> tuple[float, float] | None:
+        """(fixed ms, ms per pixel), or None before any frame; from one size, all of it per pixel."""
+        if not self._latest:
+            return None
+        if len(self._latest) == 1:
+            (pixels, ms), = self._latest.items()
+            return 0.0, ms / max(pixels, 1)
+        (p0, t0), (p1, t1) = sorted(self._latest.items())
+        per_pixel = max((t1 - t0) / (p1 - p0), 0.0)
+        fixed = max(t1 - per_pixel * p1, 0.0)
+        if per_pixel == 0.0:  # no growth with size measured: call it all fixed, with a floor per pixel
+            per_pixel = 1e-9
+        return fixed, per_pixel

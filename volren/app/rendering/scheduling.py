@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 from PyQt5.QtCore import QObject, QTimer
 
-from volren.app.core.frame_sizes import adaptive_preview_scale, preview_size
+from volren.app.core.frame_sizes import FrameCost, adaptive_preview_scale, preview_size
 from volren.app.core.state import Change, ViewState
 from volren.app.rendering.render_service import Frame, RenderService
 
@@ -47,7 +47,7 @@ class FrameScheduler(QObject):
         self._viewport_size = viewport_size
         self.preview_scale = preview_scale
         self.preview_budget_ms = PREVIEW_BUDGET_MS
-        self._cost: tuple[str, float] | None = None  # (renderer, ms per pixel) of the last frame
+        self._costs: dict[str, FrameCost] = {}  # per renderer: fixed and per-pixel ms, from its frames
         self._timer = QTimer(self)
         self._timer.setSingleShot(True)
         self._timer.setInterval(settle_ms)
@@ -75,13 +75,18 @@ class FrameScheduler(QObject):
         self._timer.start()
 
     def note_frame(self, frame: Frame) -> None:
-        """Remember what the renderer's last frame cost, to size the next previews."""
-        self._cost = (frame.renderer, frame.ms / max(frame.width * frame.height, 1))
+        """Remember what the renderer's frames cost, to size the next previews."""
+        self._costs.setdefault(frame.renderer, FrameCost()).note(frame.width * frame.height, frame.ms)
 
     def current_preview_scale(self) -> float:
         width, height = self._viewport_size()
-        cost = self._cost[1] if self._cost and self._cost[0] == self._state.renderer else None
-        return adaptive_preview_scale(cost, width * height, self.preview_budget_ms, self.preview_scale)
+        cost = self._costs.get(self._state.renderer)
+        model = cost.model() if cost is not None else None
+        if model is None:
+            return self.preview_scale
+        fixed, per_pixel = model
+        return adaptive_preview_scale(per_pixel, width * height, self.preview_budget_ms, self.preview_scale,
+                                      fixed_ms=fixed)  # fmt: skip
 
     def request_preview(self) -> int | None:
         return self._request(full=False)
