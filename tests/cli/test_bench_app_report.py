@@ -30,6 +30,8 @@ def test_app_latency_measures_frames_on_a_sample(qapp):
     assert timing.settle_ms > 0
     w, h = timing.preview_size
     assert 0 < w < app_latency.VIEWPORT[0] and 0 < h < app_latency.VIEWPORT[1]
+    assert 0 < timing.preview_fraction <= 0.25 + 1e-3  # previews: at most a quarter of the pixels
+    assert timing.duplicate_frames == 0 and math.isfinite(timing.rest_release_ms)
     assert app_latency.markdown_row(timing).count("|") == app_latency.HEADER.splitlines()[0].count("|")
 
 

@@ -46,6 +46,13 @@ class AppTiming:
     rotate_fps: float  # frames shown per second while the camera turns
     settle_ms: float  # median mouse release -> full frame shown
     preview_size: tuple[int, int]  # the size of the preview frames seen while rotating
+    rest_release_ms: float = math.nan  # a rotation that rests 0.4 s before its release: release -> full frame
+    duplicate_frames: int = 0  # full frames that repeated the one before them (same camera, same TF)
+
+    @property
+    def preview_fraction(self) -> float:
+        """The rotating previews' share of the viewport's pixels."""
+        return self.preview_size[0] * self.preview_size[1] / (VIEWPORT[0] * VIEWPORT[1])
 
 
 def application():
@@ -173,6 +180,23 @@ def measure(
                 timeout_s,
             )
             settle.append((probe.full[-1][0] - released) * 1000.0)
+
+        # a rotation that rests before its release (the settle timer draws the full frame, then the
+        # release must not draw it again): release -> the newest full frame, and full frames of
+        # the final camera beyond the first count as duplicates
+        count = len(probe.full)
+        state.begin_interaction()
+        for _ in range(10):
+            state.set_camera(state.camera.azimuth(2.0))
+            _wait(app, lambda: False, 1 / 60)
+        _wait(app, lambda: False, 0.4)
+        released = time.perf_counter()
+        state.end_interaction()
+        _wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
+        _wait(app, lambda: False, 0.5)  # a second full frame would come within the settle time
+        rest_release = max(0.0, (probe.full[-1][0] - released) * 1000.0)
+        final = state.camera
+        duplicates = max(0, sum(1 for _, f in probe.full[count:] if f.camera == final) - 1)
         return AppTiming(
             dataset,
             renderer,
@@ -182,6 +206,8 @@ def measure(
             statistics.median(rotate_fps),
             statistics.median(settle),
             preview,
+            rest_release,
+            duplicates,
         )
     finally:
         window.shutdown()
@@ -225,19 +251,23 @@ NOTE = (
     "shown; *its render ms*: the renderer's own time for that frame. *fps*: frames shown per second "
     "while a TF point is dragged or the camera turns 2 degrees every 16 ms (previews at reduced size). "
     "*release -> full frame*: from the end of the rotation to the full-quality frame (includes the "
-    "150 ms settle delay)."
+    "150 ms settle delay). *preview pixels*: the rotating previews' share of the viewport's pixels. "
+    "*after a rest*: a rotation that rests 0.4 s before its release, release -> full frame (0 when "
+    "the settle timer drew it already); *duplicates*: full frames that repeated the one before them."
 )
 
 HEADER = (
     "| dataset | renderer | TF edit -> frame ms | its render ms | fps, TF drag | fps, rotating "
-    "| release -> full frame ms | preview size |\n|---|---|---|---|---|---|---|---|"
+    "| release -> full frame ms | preview size | preview pixels | after a rest ms | duplicates |"
+    "\n|---|---|---|---|---|---|---|---|---|---|---|"
 )
 
 
 def markdown_row(t: AppTiming) -> str:
     return (
         f"| {t.dataset} | {t.renderer} | {t.edit_ms:.0f} | {t.edit_frame_ms:.0f} | {t.drag_fps:.1f} "
-        f"| {t.rotate_fps:.1f} | {t.settle_ms:.0f} | {t.preview_size[0]}x{t.preview_size[1]} |"
+        f"| {t.rotate_fps:.1f} | {t.settle_ms:.0f} | {t.preview_size[0]}x{t.preview_size[1]} "
+        f"| {100 * t.preview_fraction:.0f}% | {t.rest_release_ms:.0f} | {t.duplicate_frames} |"
     )
 
 
