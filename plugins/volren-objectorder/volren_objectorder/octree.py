@@ -178,10 +178,15 @@ def _dilate(a: NDArray, radius: tuple[int, int, int], take_max: bool) -> NDArray
     return out
 
 
+#: Bits set in each byte value (a level-1 node's visible leaves).
+_BITS_SET = np.array([bin(v).count("1") for v in range(256)], np.int32)
+
+
 @dataclass
 class Classification:
-    """One TF's classification of the octree: level 0 as 0/1 per cell, levels 1.. as counts of
-    visible cells, flattened into one int32 array at `offsets` (level shapes (z, y, x) in `shapes`)."""
+    """One TF's classification of the octree: levels 1.. as counts of visible cells, flattened into
+    one int32 array at `offsets` (level shapes (z, y, x) in `shapes`); level 0's slots are left
+    unwritten (the cells are in `leaves`) except for a one-cell grid, whose root it is."""
 
     key: tuple
     counts: NDArray[np.int32]
@@ -251,13 +256,18 @@ class MinMaxOctree:
             points = tf.opacity_points
             _classify(self.lo, self.hi, lo, hi, np.ascontiguousarray(points[:, 0], dtype=np.float64),
                       np.ascontiguousarray(np.clip(points[:, 1], 0.0, 1.0), dtype=np.float64), level0)
-        counts[: self.offsets[1]] = level0.reshape(-1)
-        for level in range(1, self.levels):
-            _reduce_counts(counts[self.offsets[level - 1] : self.offsets[level]], self.shapes[level - 1],
-                           counts[self.offsets[level] : self.offsets[level + 1]], self.shapes[level])
         shape1 = tuple(int(n) for n in self.shapes[min(1, self.levels - 1)])
         leaves = np.empty(shape1, np.uint8)
         _pack_leaves(level0, leaves)
+        if self.levels == 1:  # a one-cell grid: the walk reads its root, level 0
+            counts[: self.offsets[1]] = level0.reshape(-1)
+        else:
+            # level 0 is never read (the walk takes leaves from their level-1 node's bits), so its
+            # counts stay unwritten: writing them cost an opacity edit on bonsai 64 MB and ~50 ms
+            counts[self.offsets[1] : self.offsets[2]] = _BITS_SET[leaves.reshape(-1)]
+        for level in range(2, self.levels):
+            _reduce_counts(counts[self.offsets[level - 1] : self.offsets[level]], self.shapes[level - 1],
+                           counts[self.offsets[level] : self.offsets[level + 1]], self.shapes[level])
         result = Classification(key, counts, self.offsets, self.shapes, leaves)
         if len(self._cache) > 8:
             self._cache.clear()
