@@ -67,10 +67,12 @@ class Frame:
 
 #: Frames slower than this report their progress, at most this often.
 PROGRESS_INTERVAL_S = 0.25
-#: A frame is abandoned for a newer request only after it ran this long. Interrupting every
-#: frame that a newer request overtakes would starve a continuous drag (requests at 60 Hz,
-#: frames at 20 Hz: nothing would ever be shown); a short frame is finished and shown, a slow
-#: one (the reference renderer) gives way.
+#: A frame is abandoned for a newer request only after it ran this long since its first progress
+#: report. Interrupting every frame that a newer request overtakes would starve a continuous drag
+#: (requests at 60 Hz, frames at 20 Hz: nothing would ever be shown); a short frame is finished and
+#: shown, a slow one (the reference renderer) gives way. Counted from the first report, not the
+#: start: a renderer's set-up for a new TF (tetra's tables, 0.3 s on oxygen) comes before it, and
+#: abandoning a frame whose set-up is paid starved a TF drag (tetra showed nothing until release).
 INTERRUPT_AFTER_S = 0.25
 
 
@@ -176,10 +178,13 @@ class RenderWorker(QObject):
 
         start = time.perf_counter()
         last_report = [start]
+        first_report: list[float] = []
 
         def progress(fraction: float) -> None:
             now = time.perf_counter()
-            if fraction < 1.0 and now - start > INTERRUPT_AFTER_S and self._mailbox.waiting():
+            if not first_report:
+                first_report.append(now)
+            if fraction < 1.0 and now - first_report[0] > INTERRUPT_AFTER_S and self._mailbox.waiting():
                 raise _Superseded()
             if now - last_report[0] > PROGRESS_INTERVAL_S:  # only slow frames, and not too often
                 last_report[0] = now
