@@ -135,17 +135,20 @@ def test_a_fixed_cost_over_the_budget_keeps_previews_at_a_quarter_of_the_pixels(
     assert scale == pytest.approx((25 / 400) ** 0.5)
 
 
-def test_frame_cost_fits_fixed_and_per_pixel_parts_from_two_sizes():
+def test_frame_cost_fits_fixed_and_per_pixel_parts_from_full_frames_and_the_latest_previews():
     cost = FrameCost()
     assert cost.model() is None
-    cost.note(10_000, 50.0)
-    assert cost.model() == (0.0, 50.0 / 10_000)  # one size: all per pixel
-    cost.note(40_000, 80.0)  # 30 ms more for 30,000 more pixels
+    cost.note(40_000, 80.0)
+    assert cost.model() == (0.0, 80.0 / 40_000)  # full frames only: all per pixel
+    cost.note(10_000, 50.0)  # a preview: 30 ms less for 30,000 fewer pixels
     fixed, per_pixel = cost.model()
     assert per_pixel == pytest.approx(1e-3) and fixed == pytest.approx(40.0)
-    cost.note(160_000, 80.0)  # the oldest size goes: 40,000 and 160,000 pixels both 80 ms
-    fixed, per_pixel = cost.model()
-    assert fixed == pytest.approx(80.0) and per_pixel < 1e-6
+    cost.note(40_000, 500.0)  # a full frame that also paid a TF edit's reclassification: the fastest counts
+    assert cost.model() == pytest.approx((40.0, 1e-3))
+    cost.note(12_000, 52.0)  # a newer preview size replaces the older one
+    assert cost.model() == pytest.approx((40.0, 28.0 / 28_000))  # 28 ms less for 28,000 fewer pixels
+    cost.note(25_000, 79.0)  # a preview over half the full frame's pixels: no fit, all per pixel
+    assert cost.model() == (0.0, 80.0 / 40_000)
 
 
 def test_pick_renderer_keeps_current_else_prefers_vtk():

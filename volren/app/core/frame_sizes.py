@@ -39,26 +39,40 @@ def adaptive_preview_scale(
     return float(min(max_scale, max(min_scale, scale)))
 
 
+#: Frames remembered per size; the fastest of them stands for the size. Why the fastest: a frame
+#: right after a TF edit also pays the renderer's reclassification, which previews of a rotation
+#: do not, and one such frame taken as the full size's cost made the previews 2 % of the pixels.
+FRAMES_PER_SIZE = 5
+
+
 class FrameCost:
-    """A renderer's frame time as fixed + per-pixel cost, from its latest frames of two sizes."""
+    """A renderer's frame time as fixed + per-pixel cost, fitted through its full frames and its
+    latest preview size. Why those two: consecutive previews differ little in size (each is sized
+    from the last estimate), and a line through two nearly equal sizes is mostly noise; and the
+    latest previews only, because earlier ones may have paid for something else (a TF drag's
+    previews each rebuild the renderer's tables; a rotation's do not)."""
 
     def __init__(self) -> None:
-        self._latest: dict[int, float] = {}  # pixels -> ms, the two most recent sizes
+        self._full: tuple[int, list[float]] | None = None  # the largest size drawn, its recent ms
+        self._preview: tuple[int, list[float]] | None = None  # the latest smaller size, its ms
 
     def note(self, pixels: int, ms: float) -> None:
-        self._latest.pop(pixels, None)
-        self._latest[pixels] = ms
-        while len(self._latest) > 2:
-            self._latest.pop(next(iter(self._latest)))
+        if self._full is None or pixels >= self._full[0]:
+            times = self._full[1] if self._full is not None and self._full[0] == pixels else []
+            self._full = (pixels, (times + [ms])[-FRAMES_PER_SIZE:])
+        else:
+            times = self._preview[1] if self._preview is not None and self._preview[0] == pixels else []
+            self._preview = (pixels, (times + [ms])[-FRAMES_PER_SIZE:])
 
     def model(self) -> tuple[float, float] | None:
-        """(fixed ms, ms per pixel), or None before any frame; from one size, all of it per pixel."""
-        if not self._latest:
+        """(fixed ms, ms per pixel), or None before any frame; all of it per pixel until a preview
+        at most half the full frame's pixels has been drawn."""
+        if self._full is None:
             return None
-        if len(self._latest) == 1:
-            (pixels, ms), = self._latest.items()
-            return 0.0, ms / max(pixels, 1)
-        (p0, t0), (p1, t1) = sorted(self._latest.items())
+        p1, t1 = self._full[0], min(self._full[1])
+        if self._preview is None or p1 < 2 * self._preview[0]:
+            return 0.0, t1 / max(p1, 1)
+        p0, t0 = self._preview[0], min(self._preview[1])
         per_pixel = max((t1 - t0) / (p1 - p0), 0.0)
         fixed = max(t1 - per_pixel * p1, 0.0)
         if per_pixel == 0.0:  # no growth with size measured: call it all fixed, with a floor per pixel
