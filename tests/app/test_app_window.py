@@ -391,3 +391,37 @@ def test_resting_before_release_draws_one_full_frame_not_two(loaded_window, qtbo
     # a later change still draws
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.reset_view()
+
+
+def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_foreign_options(
+    make_window, sample, qtbot, monkeypatch
+):
+    from volren import quality
+    from volren.quality import LevelChoice, QualityTable
+
+    draft = LevelChoice("step 2, table 64", 2.0, True, {"table_size": 64}, {"a/smooth": 10.0}, 3.0)
+    table = QualityTable({"uniform": {"slicer": {"draft": draft}}}, "test")
+    monkeypatch.setattr(quality, "table", lambda: table)
+    monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "slicer")
+    combo = w.quality.chooser
+    model = combo.model()
+    assert combo.currentText() == "custom"
+    assert model.item(combo.findText("draft")).isEnabled() and not model.item(combo.findText("exact")).isEnabled()
+    assert "step 2, table 64" in model.item(combo.findText("draft")).toolTip()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        combo.activated.emit(combo.findText("draft"))
+    s = w.state.settings
+    assert (s.step, s.preintegration, dict(s.options)) == (2.0, True, {"table_size": 64})
+    assert combo.currentText() == "draft"
+    w.state.set_settings(s.with_(step=1.0, preintegration=False))  # any other edit: custom (vtk: no pre-integration on grids)
+    assert combo.currentText() == "custom"
+    # vtk has no table_size option: switching drops it instead of failing the frame
+    shown = []
+    w.fullFrameShown.connect(shown.append)
+    w.renderers.switch("vtk")
+    qtbot.waitUntil(lambda: any(f.renderer == "vtk" for f in shown), timeout=FRAME_TIMEOUT_MS)
+    assert dict(w.state.settings.options) == {} and w.state.renderer == "vtk"
+    assert not model.item(combo.findText("draft")).isEnabled()  # nothing measured for vtk in this table

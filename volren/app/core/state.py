@@ -12,7 +12,7 @@ and renders one full-quality frame once the input stops.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Collection, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Literal
@@ -204,9 +204,15 @@ class ViewState:
         self._settings = settings
         self._emit("settings")
 
-    def set_renderer(self, name: str) -> None:
+    def set_renderer(self, name: str, option_names: Collection[str] | None = None) -> None:
+        """Switch renderer; with `option_names` (the new renderer's options), renderer options it
+        does not have are dropped first (a quality level's options belong to the renderer it was
+        chosen for, and a renderer refuses options it does not know)."""
         if name == self._renderer:
             return
+        if option_names is not None and any(key not in option_names for key in self._settings.options):
+            kept = {k: v for k, v in self._settings.options.items() if k in option_names}
+            self._settings = self._settings.with_(options=kept)
         self._renderer = name
         self._emit("renderer", interactive=False)
 

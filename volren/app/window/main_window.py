@@ -33,6 +33,7 @@ from volren.app.rendering.viewport import Viewport
 from volren.app.window.docks import Docks
 from volren.app.window.file_actions import FileActions
 from volren.app.window.file_drops import FileDrops
+from volren.app.window.quality_control import QualityControl
 from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
 from volren.app.window.screenshot_actions import ScreenshotActions
@@ -77,6 +78,7 @@ class MainWindow(QMainWindow):
         self.renderers = RendererControl(
             self.state, registry, self.viewport, status_bar, self.report_error, self
         )
+        self.quality = QualityControl(self.state, self)
         self.scenes = SceneActions(self, self.state, self.viewport, recent, self.report_error)
         self.screenshots = ScreenshotActions(self, self.state, self.viewport, renderer_factory, self.report_error)
         self.files = FileActions(
@@ -132,6 +134,8 @@ class MainWindow(QMainWindow):
         self.toolbar.addSeparator()
         self.toolbar.addWidget(QLabel(" Renderer: ", self.toolbar))
         self.toolbar.addWidget(self.renderers.chooser)
+        self.toolbar.addWidget(QLabel(" Quality: ", self.toolbar))
+        self.toolbar.addWidget(self.quality.chooser)
         self.addToolBar(self.toolbar)
 
     # ------------------------------------------------------------------ errors
@@ -148,6 +152,7 @@ class MainWindow(QMainWindow):
         if change.what == "volume":
             self.setWindowTitle(f"volren - {self.state.source}" if self.state.source else "volren")
         self.renderers.on_state_change(change)
+        self.quality.on_state_change(change)
 
     def reset_view(self) -> None:
         self.state.reset_camera(self.viewport.aspect())

@@ -58,9 +58,17 @@ class RendererControl:
         self._shown_tf_dims = 1
         self._preparing: tuple[int, str] | None = None  # (serial, renderer) set up with no frame yet
         self.chooser = RendererChooser(parent)
-        self.chooser.rendererChosen.connect(state.set_renderer)
+        self.chooser.rendererChosen.connect(self.switch)
         #: "vtk  |  800 x 600  |  12.3 ms", or how far a slow frame is.
         self.frame_label = QLabel("", parent)
+
+    def switch(self, name: str) -> None:
+        """Make `name` the renderer, dropping renderer options it does not have."""
+        try:
+            option_names = self._registry.get(name).option_help
+        except VolrenError:
+            option_names = None
+        self._state.set_renderer(name, option_names)
 
     # ------------------------------------------------------------------ options
     def options(self) -> list[RendererOption]:
@@ -139,7 +147,7 @@ class RendererControl:
         if chosen is not None and chosen != state.renderer:
             reason = next((o.reason for o in options if o.name == state.renderer), None)
             self._status_bar.showMessage(f"{renderer_message(state.renderer, reason)}; using {chosen}", 15000)
-            state.set_renderer(chosen)
+            self.switch(chosen)
 
     # ------------------------------------------------------------------ frames
     def frame_shown(self, frame: Frame) -> None:
@@ -180,7 +188,7 @@ class RendererControl:
             fallback = None
         if fallback is not None:
             text += f"; switched back to {fallback}"
-            self._state.set_renderer(fallback)  # re-renders behind the message box
+            self.switch(fallback)  # re-renders behind the message box
         else:
             self.frame_label.setText(f"{name}  |  render failed")
             if self._viewport.frame is None:

@@ -1,0 +1,81 @@
+"""The toolbar's quality chooser: the measured settings of a `--quality` level (`volren.quality`)
+for the renderer and volume shown, in one click.
+
+Why in the toolbar beside the renderer: a level is a renderer's setting (the same name means a
+different step, table or option for each renderer), so it is offered for the renderer in use,
+with what was measured for it as the tooltip; levels with no measurements for that renderer and
+kind are disabled. Choosing one replaces the step, pre-integration and renderer options and keeps
+everything else (lighting, blend mode, crop); any later edit of those settings shows "custom".
+"""
+
+from __future__ import annotations
+
+from PyQt5.QtWidgets import QComboBox, QWidget
+
+from volren.app.core.state import Change, ViewState
+from volren.quality import LEVELS, LevelChoice, table
+
+#: The chooser's first entry: settings that are not exactly one level's.
+CUSTOM = "custom"
+
+
+def level_tooltip(level: str, choice: LevelChoice) -> str:
+    mean_ms = sum(choice.ms.values()) / max(len(choice.ms), 1)
+    return (f"{level}: {choice.label} (measured {mean_ms:.0f} ms a 512x512 frame on average, RMSE up to "
+            f"{choice.worst_error_ratio:.2g}x VTK's default's over {len(choice.ms)} scenes)")  # fmt: skip
+
+
+class QualityControl:
+    """Owns the quality combo box and keeps it in step with the state."""
+
+    def __init__(self, state: ViewState, parent: QWidget) -> None:
+        self._state = state
+        self.chooser = QComboBox(parent)
+        self.chooser.setObjectName("quality-chooser")
+        self.chooser.addItems([CUSTOM, *LEVELS])
+        self.chooser.setToolTip("Settings measured for this renderer at each quality level (volren renderers)")
+        self.chooser.activated.connect(self._chosen)
+        self._applying = False
+        self.refresh()
+
+    def _choice(self, level: str) -> LevelChoice | None:
+        volume = self._state.volume
+        if volume is None:
+            return None
+        return table().choice(self._state.renderer, volume.kind, level)
+
+    def refresh(self) -> None:
+        """Enable the levels measured for the renderer and volume shown; show which one the settings are."""
+        model = self.chooser.model()
+        current = CUSTOM
+        for row, level in enumerate(LEVELS, start=1):
+            choice = self._choice(level)
+            item = model.item(row)
+            item.setEnabled(choice is not None)
+            item.setToolTip(level_tooltip(level, choice) if choice is not None else
+                            f"no measurements of {self._state.renderer} at {level} on this kind of volume")  # fmt: skip
+            if choice is not None and current == CUSTOM and self._matches(choice):
+                current = level
+        self.chooser.setCurrentIndex(self.chooser.findText(current))
+
+    def _matches(self, choice: LevelChoice) -> bool:
+        s = self._state.settings
+        return s.step == choice.step and s.preintegration == choice.preintegration and dict(s.options) == dict(choice.options)
+
+    def _chosen(self, index: int) -> None:
+        level = self.chooser.itemText(index)
+        choice = self._choice(level) if level != CUSTOM else None
+        if choice is None:
+            self.refresh()
+            return
+        self._applying = True
+        try:
+            self._state.set_settings(self._state.settings.with_(
+                step=choice.step, preintegration=choice.preintegration, options=dict(choice.options)))  # fmt: skip
+        finally:
+            self._applying = False
+        self.chooser.setCurrentIndex(index)
+
+    def on_state_change(self, change: Change) -> None:
+        if change.what in ("renderer", "volume", "settings") and not self._applying:
+            self.refresh()
