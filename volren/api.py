@@ -121,22 +121,6 @@ def prepared_renderer(
         renderer.release()
 
 
-def at_quality(volume: Volume, tf: TransferFunction, renderer: str, quality: str, settings: RenderSettings,
-               explicit: dict[str, Any]) -> tuple[str, RenderSettings]:  # fmt: skip
-    """(renderer, settings): `auto` resolved, the level's measured settings applied, then the
-    `explicit` fields again on top (they win)."""
-    from volren import quality as levels
-    from volren.model import TransferFunction2D
-    from volren.renderers.registry import registry
-
-    levels.check_level(quality)
-    if renderer == levels.AUTO:
-        tf_dim = 2 if isinstance(tf, TransferFunction2D) else 1
-        renderer, _ = levels.choose_renderer(volume.kind, quality, tf_dim, settings, registry.names())
-    at_level = levels.settings_for(renderer, volume.kind, quality, settings)
-    return renderer, at_level.with_(**{k: v for k, v in explicit.items() if k != "options"})
-
-
 def render(
     volume: Any,
     tf: Any = None,
@@ -168,8 +152,11 @@ def render(
     for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
         if not math.isfinite(value):
             raise VolrenError(f"{name} must be finite, got {value}")
-    render_settings = RenderSettings().with_(**settings)
-    renderer, render_settings = at_quality(vol, transfer, renderer, quality, render_settings, settings)
+    from volren.quality import resolve
+
+    # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
+    renderer, at_level, _ = resolve(vol.kind, transfer.dims, renderer, quality, RenderSettings().with_(**settings))
+    render_settings = at_level.with_(**{k: v for k, v in settings.items() if k != "options"})
     check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
     cam = camera or Camera.orbit(vol.bounds, azimuth, elevation, zoom, parallel, width / height)
     with prepared_renderer(renderer, vol, transfer, render_settings) as r:

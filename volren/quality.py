@@ -165,3 +165,20 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
         if name not in choices and drawable(name):
             return name, f"no measured renderer draws this scene; {name} can"
     raise VolrenError(f"no registered renderer can draw this {kind} scene (see `volren renderers`)")
+
+
+def resolve(kind: str, tf_dim: int, renderer: str, level: str | None,
+            settings: RenderSettings) -> tuple[str, RenderSettings, str | None]:  # fmt: skip
+    """(renderer, settings, why): `auto` resolved at `level` (`default` when None), the level's
+    measured settings applied (none when `level` is None), and why `auto` chose its renderer (None
+    when one was named). The one place the CLI and the API turn a request into what is drawn."""
+    from volren.renderers.registry import registry
+
+    if level is not None:
+        check_level(level)
+    why = None
+    if renderer == AUTO:
+        renderer, why = choose_renderer(kind, level or DEFAULT_LEVEL, tf_dim, settings, registry.names())
+    if level is not None:
+        settings = settings_for(renderer, kind, level, settings)
+    return renderer, settings, why

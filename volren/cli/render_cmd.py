@@ -17,8 +17,7 @@ from volren.errors import VolrenError
 from volren.model.camera import check_zoom
 from volren.model.scene import OrbitView, Scene
 from volren.model.settings import MAX_SAMPLES_PER_RAY, MAX_STEP, BlendMode
-from volren.model.transfer_function_2d import TransferFunction2D
-from volren.quality import AUTO, DEFAULT_LEVEL, LEVELS
+from volren.quality import DEFAULT_LEVEL, LEVELS
 
 #: How messages mark a renderer that the user did not name.
 CHOSEN_BY_AUTO = "(chosen by --renderer auto)"
@@ -200,22 +199,19 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:
         if args.zoom is not None:
             check_zoom(args.zoom, bool(args.parallel or base.parallel), name="--zoom")
         scene = replace(scene, camera=replace(base, **{k: v for k, v in orbit_flags.items() if v is not None}))
-    changes: dict[str, Any] = {
-        "step": args.step,
-        "preintegration": args.preintegration,
-        "shade": args.shade,
-        "blend_mode": args.blend,
-    }
-    changes = {k: v for k, v in changes.items() if v is not None}
-    if changes.get("blend_mode") is not None or changes.get("shade") is not None:  # they decide what `auto` may pick
-        scene = replace(scene, settings=scene.settings.with_(**{k: changes[k] for k in ("shade", "blend_mode") if k in changes}))
+    # shading and the blend mode decide what `auto` may pick; step, pre-integration and options win over the level's
+    shown = {k: v for k, v in (("shade", args.shade), ("blend_mode", args.blend)) if v is not None}
+    if shown:
+        scene = replace(scene, settings=scene.settings.with_(**shown))
     scene, why = _at_quality(args, scene)
+    sampling: dict[str, Any] = {k: v for k, v in (("step", args.step), ("preintegration", args.preintegration))
+                                if v is not None}  # fmt: skip
     if args.option:
         given = parse_options(args.option)
         _check_option_names(given, scene.renderer, why)
-        changes["options"] = {**scene.settings.options, **given}
-    if changes:
-        scene = replace(scene, settings=scene.settings.with_(**changes))
+        sampling["options"] = {**scene.settings.options, **given}
+    if sampling:
+        scene = replace(scene, settings=scene.settings.with_(**sampling))
     return scene, why
 
 
@@ -236,23 +232,16 @@ def _check_option_names(options: dict[str, Any], renderer: str, why: str | None)
 def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | None]:
     """The scene's renderer resolved (`auto`) and its settings at the quality level asked for: the
     flag, the scene file's "quality", or `default` for a render without a scene file (a scene
-    file's own settings are kept as they are unless a level is named)."""
-    from volren.quality import check_level, choose_renderer, settings_for
-    from volren.renderers.registry import registry
+    file's own settings are kept as they are unless a level is named); and why `auto` chose."""
+    from volren.quality import resolve
 
     if scene.volume is None:
         return scene, None
     named = args.quality or scene.extra.get("quality")
-    level = check_level(str(named)) if named is not None else (None if args.scene else DEFAULT_LEVEL)
-    tf_dim = 2 if isinstance(scene.transfer_function, TransferFunction2D) else 1
-    kind = scene.volume.kind
-    why = None
-    if scene.renderer == AUTO:
-        name, why = choose_renderer(kind, level or DEFAULT_LEVEL, tf_dim, scene.settings, registry.names())
-        scene = replace(scene, renderer=name)
-    if level is not None:
-        scene = replace(scene, settings=settings_for(scene.renderer, kind, level, scene.settings))
-    return scene, why
+    level = str(named) if named is not None else (None if args.scene else DEFAULT_LEVEL)
+    renderer, settings, why = resolve(scene.volume.kind, scene.transfer_function.dims, scene.renderer, level,
+                                      scene.settings)  # fmt: skip
+    return replace(scene, renderer=renderer, settings=settings), why
 
 
 def _check_outputs(outputs, inputs, force: bool) -> None:
