@@ -60,6 +60,16 @@ class LevelChoice:
         return settings.with_(step=self.step, preintegration=self.preintegration,
                               options={**self.options, **settings.options})  # fmt: skip
 
+    def replace(self, settings: RenderSettings) -> RenderSettings:
+        """`settings` with exactly this level's step, pre-integration and options (the app's
+        chooser: a level picked there replaces the options of the one before)."""
+        return settings.with_(step=self.step, preintegration=self.preintegration, options=dict(self.options))
+
+    def matches(self, settings: RenderSettings) -> bool:
+        """Whether `settings` are this level's (step, pre-integration and options all equal)."""
+        return (settings.step == self.step and settings.preintegration == self.preintegration
+                and dict(settings.options) == dict(self.options))  # fmt: skip
+
 
 @dataclass(frozen=True)
 class QualityTable:
@@ -129,6 +139,22 @@ def settings_for(renderer: str, kind: str, level: str, settings: RenderSettings,
     `settings` unchanged where the renderer has no measurements."""
     choice = (quality or table()).choice(renderer, kind, level)
     return choice.apply(settings) if choice is not None else settings
+
+
+def level_of(renderer: str, kind: str, settings: RenderSettings, quality: QualityTable | None = None) -> str | None:
+    """The first level whose measured settings `settings` are for `renderer` on `kind` volumes,
+    or None (custom settings)."""
+    quality = quality or table()
+    return next((level for level in LEVELS
+                 if (c := quality.choice(renderer, kind, level)) is not None and c.matches(settings)), None)  # fmt: skip
+
+
+def at_level(renderer: str, kind: str, level: str | None, settings: RenderSettings) -> RenderSettings | None:
+    """`settings` with exactly `level`'s measured step, pre-integration and options for `renderer`
+    on `kind` volumes (options replaced, as the app's chooser does); None for no level (custom
+    settings) or where nothing was measured."""
+    choice = table().choice(renderer, kind, level) if level is not None else None
+    return choice.replace(settings) if choice is not None else None
 
 
 def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings, names: Iterable[str],

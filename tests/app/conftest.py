@@ -149,6 +149,16 @@ class SlowSetupRenderer(FakeRenderer):
         time.sleep(self.setup_s)
 
 
+class DragOptionsRenderer(FakeRenderer):
+    """Has a table-size option and asks for a small table while a TF is dragged."""
+
+    name: ClassVar[str] = "fake_drag"
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        kinds={"uniform": KindSupport()}, summary="test double", tf_drag_options={"table_size": 8}
+    )
+    option_help: ClassVar[Mapping[str, str]] = {"table_size": "entries"}
+
+
 class BrokenRenderer(FakeRenderer):
     name: ClassVar[str] = "fake_broken"
 
@@ -159,7 +169,8 @@ class BrokenRenderer(FakeRenderer):
 @pytest.fixture
 def fake_renderers() -> Iterator[dict[str, type]]:
     """Register the fake renderers in-process; unregistered afterwards."""
-    classes = {cls.name: cls for cls in (FakeRenderer, TetOnlyRenderer, BrokenRenderer, SlowSetupRenderer)}
+    classes = {cls.name: cls for cls in (FakeRenderer, TetOnlyRenderer, BrokenRenderer, SlowSetupRenderer,
+                                         DragOptionsRenderer)}  # fmt: skip
     FakeRenderer.calls.clear()
     for name, cls in classes.items():
         registry.register(name, cls, replace=True)

@@ -82,7 +82,7 @@ def test_panels_follow_the_renderer_capabilities(loaded_window, qtbot):
     assert w.docks.current_support() == w.registry.capabilities("vtk").kinds["uniform"]
     vtk_pre = w.registry.capabilities("vtk").kinds["uniform"].preintegration
     assert w.docks.sampling.preintegration.isEnabled() == vtk_pre
-    frame_after(qtbot, w, lambda: w.state.set_renderer("slicer"))
+    frame_after(qtbot, w, lambda: w.renderers.switch("slicer"))
     assert w.docks.sampling.preintegration.isEnabled()  # the slicer pre-integrates
 
 

@@ -425,3 +425,93 @@ def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_fo
     qtbot.waitUntil(lambda: any(f.renderer == "vtk" for f in shown), timeout=FRAME_TIMEOUT_MS)
     assert dict(w.state.settings.options) == {} and w.state.renderer == "vtk"
     assert not model.item(combo.findText("draft")).isEnabled()  # nothing measured for vtk in this table
+
+
+def test_the_first_volume_opens_at_the_default_level_and_a_switch_keeps_the_level(make_window, sample, qtbot, monkeypatch):
+    """Issue 22: what the app shows with no options is the `default` level's measured settings,
+    as in the CLI; switching renderer gives the new renderer's settings at the same level, and
+    custom settings stay custom."""
+    from volren import quality
+    from volren.quality import LevelChoice, QualityTable
+
+    def level(step, pre, options):
+        return LevelChoice(f"step {step}", step, pre, options, {"a/smooth": 10.0}, 1.0)
+
+    table = QualityTable({"uniform": {"slicer": {"default": level(0.5, True, {"table_size": 128}),
+                                                 "draft": level(2.0, False, {"table_size": 64})},
+                                      "vtk": {"default": level(0.75, False, {})}}}, "test")  # fmt: skip
+    monkeypatch.setattr(quality, "table", lambda: table)
+    monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "slicer")
+    s = w.state.settings
+    assert (s.step, s.preintegration, dict(s.options)) == (0.5, True, {"table_size": 128})
+    assert w.quality.chooser.currentText() == "default"
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.renderers.switch("vtk")
+    s = w.state.settings
+    assert (w.state.renderer, s.step, s.preintegration, dict(s.options)) == ("vtk", 0.75, False, {})
+    assert w.quality.chooser.currentText() == "default" and w.docks.sampling.step.spin.value() == 0.75
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.state.set_settings(s.with_(step=0.3))  # custom now
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.renderers.switch("slicer")
+    s = w.state.settings
+    assert (w.state.renderer, s.step, dict(s.options)) == ("slicer", 0.3, {})
+    assert w.quality.chooser.currentText() == "custom"
+    # a second volume keeps the level shown: draft for slicer stays draft
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.quality.chooser.activated.emit(w.quality.chooser.findText("draft"))
+    w.files.apply_loaded(sample)  # the same scene again: nothing new to draw
+    assert w.state.settings.step == 2.0 and w.quality.chooser.currentText() == "draft"
+
+
+def test_previews_use_the_interactive_level_and_a_tf_drag_the_renderers_drag_options(
+    make_window, fake_renderers, sample, qtbot, monkeypatch
+):
+    """Issue 22: previews draw with cheaper measured settings (the `interactive` level), and while
+    a TF point is dragged with the renderer's `tf_drag_options` too; the still frame after the
+    gesture has the user's level, and the frame label says the preview was cheaper."""
+    from volren import quality
+    from volren.quality import LevelChoice, QualityTable
+
+    def level(step):
+        return LevelChoice(f"step {step}", step, False, {"table_size": 256}, {"a/smooth": 10.0}, 1.0)
+
+    table = QualityTable({"uniform": {"fake_drag": {"default": level(0.25), "interactive": level(0.5)}}}, "test")
+    monkeypatch.setattr(quality, "table", lambda: table)
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.files.apply_loaded(sample, "fake_drag")
+    assert blocker.args[0].settings.step == 0.25  # the default level
+
+    labels = []
+
+    def gesture(change):
+        previews = []
+        w.frameShown.connect(lambda f: previews.append(f) if not f.full else None)
+        w.state.begin_interaction()
+        change()
+        qtbot.waitUntil(lambda: bool(previews), timeout=FRAME_TIMEOUT_MS)
+        labels.append(w.renderers.frame_label.text())
+        with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as still:
+            w.state.end_interaction()
+        return previews[0].settings, still.args[0].settings
+
+    preview, still = gesture(lambda: w.state.set_camera(w.state.camera.azimuth(5.0)))
+    assert "preview at lower quality" in labels[-1]
+    assert (preview.step, dict(preview.options)) == (0.5, {"table_size": 256})
+    assert (still.step, dict(still.options)) == (0.25, {"table_size": 256})
+    tf = w.state.transfer_function
+    points = tf.opacity_points.copy()
+    points[-1, 1] *= 0.5
+    preview, still = gesture(lambda: tf.set_opacity_points(points))
+    assert (preview.step, dict(preview.options)) == (0.5, {"table_size": 8})
+    assert (still.step, dict(still.options)) == (0.25, {"table_size": 256})
+    # custom settings are previewed as they are, apart from the drag options
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.state.set_settings(w.state.settings.with_(step=0.3))
+    preview, _ = gesture(lambda: w.state.set_camera(w.state.camera.azimuth(5.0)))
+    assert (preview.step, dict(preview.options)) == (0.3, {"table_size": 256})
+    assert "preview" in labels[-1] and "lower quality" not in labels[-1]

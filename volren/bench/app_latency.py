@@ -48,11 +48,17 @@ class AppTiming:
     preview_size: tuple[int, int]  # the size of the preview frames seen while rotating
     rest_release_ms: float = math.nan  # a rotation that rests 0.4 s before its release: release -> full frame
     duplicate_frames: int = 0  # full frames that repeated the one before them (same camera, same TF)
+    drag_preview_size: tuple[int, int] = (0, 0)  # the size of the preview frames seen while a TF point is dragged
 
     @property
     def preview_fraction(self) -> float:
         """The rotating previews' share of the viewport's pixels."""
         return self.preview_size[0] * self.preview_size[1] / (VIEWPORT[0] * VIEWPORT[1])
+
+    @property
+    def drag_preview_fraction(self) -> float:
+        """The TF drag's previews' share of the viewport's pixels."""
+        return self.drag_preview_size[0] * self.drag_preview_size[1] / (VIEWPORT[0] * VIEWPORT[1])
 
 
 def application():
@@ -69,13 +75,26 @@ def application():
     return QApplication.instance() or QApplication(["volren"])
 
 
+#: While waiting, the event loop wakes at least this often (ms) to test time-based conditions.
+WAKE_MS = 2
+
+
 def _wait(app, condition: Callable[[], bool], timeout_s: float) -> bool:
+    """Run the event loop until `condition()` holds (False after `timeout_s`). It sleeps in the
+    loop between events, as the app does: polling it every 0.5 ms took a third of a core from
+    the renderer's two threads, which made TF-drag previews on oxygen 1.6x slower than alone."""
+    from PyQt5.QtCore import QEventLoop, QTimer
+
     end = time.perf_counter() + timeout_s
-    while not condition():
-        if time.perf_counter() > end:
-            return False
-        app.processEvents()
-        time.sleep(0.0005)
+    timer = QTimer()
+    timer.start(WAKE_MS)
+    try:
+        while not condition():
+            if time.perf_counter() > end:
+                return False
+            app.processEvents(QEventLoop.AllEvents | QEventLoop.WaitForMoreEvents)
+    finally:
+        timer.stop()
     return True
 
 
@@ -134,9 +153,12 @@ def measure(
     window.show()
     probe = _Probe(window)
     try:
-        _full_frame_after(app, window, probe, lambda: window.files.apply_loaded(LoadedInput(volume, tf), renderer), timeout_s)
-        if errors or window.state.renderer != renderer:
+        requested = None if renderer == "auto" else renderer  # auto: what the app opens with by default
+        _full_frame_after(app, window, probe, lambda: window.files.apply_loaded(LoadedInput(volume, tf), requested), timeout_s)
+        if errors or window.state.renderer != (requested or window.state.renderer):
             raise RuntimeError(f"{renderer} could not show {dataset}: {'; '.join(errors) or window.state.renderer}")
+        if requested is None:
+            renderer = f"{window.state.renderer} (auto)"
         state = window.state
         edit_ms, frame_ms = [], []
         for i in range(edits + 1):
@@ -163,6 +185,8 @@ def measure(
             return shown / elapsed
 
         drag_fps = gesture(lambda k: _move_point(state.transfer_function, (k % 60) / 59.0))
+        drag_previews = [f for _, f in probe.shown[-5:] if not f.full]
+        drag_preview = (drag_previews[-1].width, drag_previews[-1].height) if drag_previews else (0, 0)
         _wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
         settle = []
         rotate_fps = []
@@ -208,6 +232,7 @@ def measure(
             preview,
             rest_release,
             duplicates,
+            drag_preview,
         )
     finally:
         window.shutdown()
@@ -251,14 +276,17 @@ NOTE = (
     "shown; *its render ms*: the renderer's own time for that frame. *fps*: frames shown per second "
     "while a TF point is dragged or the camera turns 2 degrees every 16 ms (previews at reduced size). "
     "*release -> full frame*: from the end of the rotation to the full-quality frame (includes the "
-    "150 ms settle delay). *preview pixels*: the rotating previews' share of the viewport's pixels. "
+    "150 ms settle delay). *preview pixels*: the previews' share of the viewport's pixels (while "
+    "dragging a TF point / while rotating; previews also use the `interactive` quality level and, in a "
+    "TF drag, the renderer's `tf_drag_options`). "
     "*after a rest*: a rotation that rests 0.4 s before its release, release -> full frame (0 when "
     "the settle timer drew it already); *duplicates*: full frames that repeated the one before them."
 )
 
 HEADER = (
     "| dataset | renderer | TF edit -> frame ms | its render ms | fps, TF drag | fps, rotating "
-    "| release -> full frame ms | preview size | preview pixels | after a rest ms | duplicates |"
+    "| release -> full frame ms | preview size, TF drag / rotating | preview pixels, TF drag / rotating "
+    "| after a rest ms | duplicates |"
     "\n|---|---|---|---|---|---|---|---|---|---|---|"
 )
 
@@ -266,8 +294,10 @@ HEADER = (
 def markdown_row(t: AppTiming) -> str:
     return (
         f"| {t.dataset} | {t.renderer} | {t.edit_ms:.0f} | {t.edit_frame_ms:.0f} | {t.drag_fps:.1f} "
-        f"| {t.rotate_fps:.1f} | {t.settle_ms:.0f} | {t.preview_size[0]}x{t.preview_size[1]} "
-        f"| {100 * t.preview_fraction:.0f}% | {t.rest_release_ms:.0f} | {t.duplicate_frames} |"
+        f"| {t.rotate_fps:.1f} | {t.settle_ms:.0f} "
+        f"| {t.drag_preview_size[0]}x{t.drag_preview_size[1]} / {t.preview_size[0]}x{t.preview_size[1]} "
+        f"| {100 * t.drag_preview_fraction:.0f}% / {100 * t.preview_fraction:.0f}% "
+        f"| {t.rest_release_ms:.0f} | {t.duplicate_frames} |"
     )
 
 

@@ -108,6 +108,10 @@ class Capabilities:
     summary: str = ""
     #: The quality axis, fast to accurate, that `volren bench run` sweeps (empty: defaults only).
     quality: tuple[QualityLevel, ...] = ()
+    #: Options that make a new transfer function cheap to apply (a smaller pre-integration
+    #: table), added by the app to its preview frames while a TF is dragged; the still frame after
+    #: the drag uses the user's settings. Empty: TF changes are cheap already.
+    tf_drag_options: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def volume_kinds(self) -> frozenset[str]:

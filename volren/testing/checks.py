@@ -530,6 +530,13 @@ def check_capabilities(ctx: CheckContext) -> list[Measurement]:
             raise ContractError(f"{what} is not claimed but rendered")
         out.append(Measurement("capabilities", f"{kind}, {claimed} claimed rendered, {refused} refused",
                                "violations", 0, 0))  # fmt: skip
+        if caps.tf_drag_options:  # the app adds them to its previews during TF drags: they must draw
+            try:
+                ctx.draw(renderer, volume, tf1, camera, 12, 12, RenderSettings(options=dict(caps.tf_drag_options)))
+            except Exception as exc:  # noqa: BLE001
+                raise ContractError(f"tf_drag_options {dict(caps.tf_drag_options)} failed on {kind}: "
+                                    f"{type(exc).__name__}: {exc}") from None  # fmt: skip
+            out.append(Measurement("capabilities", f"{kind}, tf_drag_options rendered", "violations", 0, 0))
     return out
 
 

@@ -204,12 +204,16 @@ class ViewState:
         self._settings = settings
         self._emit("settings")
 
-    def set_renderer(self, name: str, option_names: Collection[str] | None = None) -> None:
+    def set_renderer(self, name: str, option_names: Collection[str] | None = None,
+                     settings: RenderSettings | None = None) -> None:  # fmt: skip
         """Switch renderer; with `option_names` (the new renderer's options), renderer options it
         does not have are dropped first (a quality level's options belong to the renderer it was
-        chosen for, and a renderer refuses options it does not know)."""
+        chosen for, and a renderer refuses options it does not know); with `settings`, those
+        settings come with it in the same change (the same quality level for the new renderer)."""
         if name == self._renderer:
             return
+        if settings is not None:
+            self._settings = settings
         if option_names is not None and any(key not in option_names for key in self._settings.options):
             kept = {k: v for k, v in self._settings.options.items() if k in option_names}
             self._settings = self._settings.with_(options=kept)

@@ -11,7 +11,7 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtGui import QStandardItemModel
 from PyQt5.QtWidgets import QComboBox, QFormLayout, QWidget
 
-from volren.app.core.state import ViewState
+from volren.app.core.state import Change, ViewState
 from volren.app.panels.base import StatePanel, signals_blocked, unsupported
 from volren.model.settings import BlendMode
 from volren.renderers.base import KindSupport
@@ -35,6 +35,7 @@ class BlendPanel(StatePanel):
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(state, parent)
         self._support: KindSupport | None = None
+        self._shown_tf_dims = 1
         self.combo = QComboBox(self)
         for mode in BlendMode:
             self.combo.addItem(LABELS[mode][0], mode.value)
@@ -42,6 +43,15 @@ class BlendPanel(StatePanel):
         layout = QFormLayout(self)
         layout.addRow("Blend mode", self.combo)
         self.refresh()
+
+    def _on_change(self, change: Change) -> None:
+        """A TF edit changes what is offered only when it changes the TF's dimension (2D TFs
+        allow fewer modes): not on every edit of a drag."""
+        tf = self.state.transfer_function
+        dims = tf.dims if tf is not None else 1
+        if change.what != "tf" or dims != self._shown_tf_dims:
+            self._shown_tf_dims = dims
+            super()._on_change(change)
 
     def set_capabilities(self, support: KindSupport | None) -> None:
         """What the current renderer can do with the loaded volume (None: assume everything)."""

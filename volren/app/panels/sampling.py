@@ -28,7 +28,7 @@ JITTER_TIP = "Start each ray at a random offset: trades wood-grain artefacts for
 class SamplingPanel(StatePanel):
     """Step (0.05..4) with its length in world units, pre-integration and jitter checkboxes."""
 
-    watches = frozenset({"settings", "volume"})
+    watches = frozenset({"settings", "volume", "renderer"})  # a renderer switch brings its quality level's step
 
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(state, parent)

@@ -63,6 +63,7 @@ class Frame:
     full: bool
     rgb: NDArray[np.uint8]
     camera: Camera
+    settings: RenderSettings | None = None  #: what it was drawn with (previews may be cheaper than the state's)
 
 
 #: Frames slower than this report their progress, at most this often.
@@ -195,7 +196,8 @@ class RenderWorker(QObject):
         )
         rgb = to_png_pixels(image, request.background)
         return Frame(
-            request.serial, request.renderer, request.width, request.height, stats.ms, request.full, rgb, request.camera
+            request.serial, request.renderer, request.width, request.height, stats.ms, request.full, rgb, request.camera,
+            request.settings,
         )
 
     def _release(self) -> None:

@@ -2,7 +2,8 @@
 
 Interactive changes (a drag in progress) get an immediate preview frame with at most a quarter of
 the pixels (half of each side, scaled up for display; fewer when the renderer is slow, so that a
-preview stays within about 80 ms), and restart a short settle timer; when no
+preview stays within about 80 ms) and cheaper settings (`preview_settings`: the `interactive`
+quality level, and cheap TF tables while a TF is dragged), and restart a short settle timer; when no
 input has come for `settle_ms`, one full-quality frame follows, and none again for the same
 request (a gesture that rests before its release asks twice). Every other change (a new volume,
 another renderer, a reset view) asks for a full-quality frame at once.
@@ -13,13 +14,16 @@ just by changing the `ViewState` inside `state.begin_interaction()` / `end_inter
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from typing import Any
 
 from PyQt5.QtCore import QObject, QTimer
 
 from volren.app.core.frame_sizes import FrameCost, adaptive_preview_scale, preview_size
+from volren.app.core.preview_settings import preview_settings
 from volren.app.core.state import Change, ViewState
 from volren.app.rendering.render_service import Frame, RenderService
+from volren.model.settings import RenderSettings
 
 #: Input quiet for this long means the gesture stopped: render at full quality.
 SETTLE_MS = 150
@@ -41,14 +45,19 @@ class FrameScheduler(QObject):
         parent: QObject | None = None,
         settle_ms: int = SETTLE_MS,
         preview_scale: float = PREVIEW_SCALE,
+        tf_drag_options: Callable[[str], Mapping[str, Any]] = lambda _renderer: {},
     ) -> None:
         super().__init__(parent)
         self._state = state
         self._service = service
         self._viewport_size = viewport_size
+        self._tf_drag_options = tf_drag_options  # a renderer's Capabilities.tf_drag_options
         self.preview_scale = preview_scale
         self.preview_budget_ms = PREVIEW_BUDGET_MS
-        self._costs: dict[str, FrameCost] = {}  # per renderer: fixed and per-pixel ms, from its frames
+        self._costs: dict[tuple[str, str], FrameCost] = {}  # per renderer and settings (repr: options are a dict)
+        self._tf_dragged = False  # the gesture in progress drags the TF
+        self._preview: tuple[tuple, RenderSettings] | None = None  # (inputs, preview settings) last made
+        self._cost_keys: tuple[RenderSettings | None, str] | None = None  # (settings, its repr) last asked
         self._timer = QTimer(self)
         self._timer.setSingleShot(True)
         self._timer.setInterval(settle_ms)
@@ -59,8 +68,10 @@ class FrameScheduler(QObject):
 
     def _on_change(self, change: Change) -> None:
         if change.what == "interaction":  # a gesture ended: full quality once input is quiet
+            self._tf_dragged = False
             self._timer.start()
         elif change.interactive:
+            self._tf_dragged = change.what == "tf"
             self.request_preview()
             self._timer.start()
         else:
@@ -77,11 +88,29 @@ class FrameScheduler(QObject):
 
     def note_frame(self, frame: Frame) -> None:
         """Remember what the renderer's frames cost, to size the next previews."""
-        self._costs.setdefault(frame.renderer, FrameCost()).note(frame.width * frame.height, frame.ms)
+        self._costs.setdefault((frame.renderer, repr(frame.settings)), FrameCost()).note(frame.width * frame.height, frame.ms)
 
-    def current_preview_scale(self) -> float:
+    def preview_settings(self) -> RenderSettings:
+        """What the next preview draws with (the state's settings for its still frames); kept
+        while the inputs stay the same objects, since a drag asks for it at the mouse's rate."""
+        s = self._state
+        kind = s.volume.kind if s.volume is not None else "uniform"
+        inputs = (s.renderer, kind, s.settings, self._tf_dragged)
+        if self._preview is None or any(a is not b for a, b in zip(self._preview[0], inputs, strict=True)):
+            drag = self._tf_drag_options(s.renderer) if self._tf_dragged else None
+            self._preview = (inputs, preview_settings(s.renderer, kind, s.settings, drag))
+        return self._preview[1]
+
+    def _cost_key(self, settings: RenderSettings | None) -> tuple[str, str]:
+        """Frame costs are kept per renderer and settings (by repr: options are a dict)."""
+        if self._cost_keys is None or self._cost_keys[0] is not settings:
+            self._cost_keys = (settings, repr(settings))
+        return self._state.renderer, self._cost_keys[1]
+
+    def current_preview_scale(self, settings: RenderSettings | None = None) -> float:
+        """The side scale of the next preview, from what frames with its settings cost."""
         width, height = self._viewport_size()
-        cost = self._costs.get(self._state.renderer)
+        cost = self._costs.get(self._cost_key(settings or self.preview_settings()))
         model = cost.model() if cost is not None else None
         if model is None:
             return self.preview_scale
@@ -104,6 +133,7 @@ class FrameScheduler(QObject):
         volume = s.render_volume
         assert volume is not None
         tf = s.transfer_function
+        settings = s.settings
         if full:
             # a gesture that rested before it ended asks twice for the same full frame: once when input
             # went quiet, again on release; the second would redraw what is already on screen
@@ -113,10 +143,11 @@ class FrameScheduler(QObject):
             self._last_full = key
         else:
             self._last_full = None  # a preview replaces what is on screen: the next full frame is needed
-            width, height = preview_size(width, height, self.current_preview_scale())
+            settings = self.preview_settings()
+            width, height = preview_size(width, height, self.current_preview_scale(settings))
         self._requested_any = True
         return self._service.submit(
-            s.renderer, volume, s.transfer_function, s.settings, s.camera, width, height, full, s.background
+            s.renderer, volume, s.transfer_function, settings, s.camera, width, height, full, s.background
         )
 
     def detach(self) -> None:

@@ -99,6 +99,7 @@ class Docks:
             source.errorOccurred.connect(window.report_error)
         window.viewport.pointPicked.connect(self.pick)
         self._unsubscribe = state.subscribe(self._on_change)
+        self._shown_tf_dims = 1
         self._update_capabilities()
 
     def _dock(self, title: str, name: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
@@ -110,7 +111,12 @@ class Docks:
 
     # ------------------------------------------------------------------ capabilities
     def _on_change(self, change: Change) -> None:
-        if change.what in ("renderer", "volume", "tf"):
+        # a TF edit matters only when it changes the TF's dimension: during a drag, refreshing
+        # three panels on every edit took the GUI thread's time from the render thread
+        tf = self.window.state.transfer_function
+        dims = tf.dims if tf is not None else 1
+        if change.what in ("renderer", "volume") or (change.what == "tf" and dims != self._shown_tf_dims):
+            self._shown_tf_dims = dims
             self._update_capabilities()
 
     def current_support(self) -> KindSupport | None:

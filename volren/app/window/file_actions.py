@@ -24,7 +24,8 @@ from volren.app.rendering.viewport import Viewport
 from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
 from volren.errors import VolrenError
-from volren.quality import AUTO
+from volren.model.settings import RenderSettings
+from volren.quality import AUTO, DEFAULT_LEVEL, at_level, level_of
 
 OPEN_FILTER = (
     "Volumes and scenes (*.vti *.vtk *.vtu *.vtr *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw *.json);;"
@@ -129,6 +130,8 @@ class FileActions(QObject):
         renderer, notes = self._renderers.choose_for(
             volume, settings, loaded.transfer_function.dims, wanted, requested_renderer
         )
+        if loaded.settings is None:
+            settings = self._at_level(renderer, volume.kind, settings)
         aspect = self._viewport.aspect()
         camera = loaded.resolve_camera(aspect) or default_camera(volume, aspect)
         self._scenes.remember_volume_file(loaded.volume_path, loaded.scalars)
@@ -136,6 +139,14 @@ class FileActions(QObject):
         self._apply_view_extras(loaded)
         if notes:
             self._window.statusBar().showMessage("; ".join(notes), 15000)
+
+    def _at_level(self, renderer: str, kind: str, settings: RenderSettings) -> RenderSettings:
+        """`settings` at the quality level shown (`default` for the first volume), measured for
+        the renderer and volume kind about to be shown; unchanged for custom settings or where
+        nothing was measured. A scene file's own settings are kept as they are."""
+        state = self._state
+        level = DEFAULT_LEVEL if state.volume is None else level_of(state.renderer, state.volume.kind, state.settings)
+        return at_level(renderer, kind, level, settings) or settings
 
     def _apply_view_extras(self, loaded: LoadedInput) -> None:
         """A scene's crop box and background (state.load just cleared the crop of the old volume)."""

@@ -54,13 +54,9 @@ class QualityControl:
             item.setEnabled(choice is not None)
             item.setToolTip(level_tooltip(level, choice) if choice is not None else
                             f"no measurements of {self._state.renderer} at {level} on this kind of volume")  # fmt: skip
-            if choice is not None and current == CUSTOM and self._matches(choice):
+            if choice is not None and current == CUSTOM and choice.matches(self._state.settings):
                 current = level
         self.chooser.setCurrentIndex(self.chooser.findText(current))
-
-    def _matches(self, choice: LevelChoice) -> bool:
-        s = self._state.settings
-        return s.step == choice.step and s.preintegration == choice.preintegration and dict(s.options) == dict(choice.options)
 
     def _chosen(self, index: int) -> None:
         level = self.chooser.itemText(index)
@@ -70,8 +66,7 @@ class QualityControl:
             return
         self._applying = True
         try:
-            self._state.set_settings(self._state.settings.with_(
-                step=choice.step, preintegration=choice.preintegration, options=dict(choice.options)))  # fmt: skip
+            self._state.set_settings(choice.replace(self._state.settings))
         finally:
             self._applying = False
         self.chooser.setCurrentIndex(index)

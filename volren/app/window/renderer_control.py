@@ -23,7 +23,7 @@ from volren.app.rendering.viewport import Viewport
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
 from volren.model.volume import Volume
-from volren.quality import AUTO, DEFAULT_LEVEL, choose_renderer
+from volren.quality import AUTO, DEFAULT_LEVEL, at_level, choose_renderer, level_of
 from volren.renderers.registry import RendererRegistry
 
 #: A set-up (new renderer or volume) longer than this without a frame is shown as "preparing".
@@ -63,12 +63,17 @@ class RendererControl:
         self.frame_label = QLabel("", parent)
 
     def switch(self, name: str) -> None:
-        """Make `name` the renderer, dropping renderer options it does not have."""
+        """Make `name` the renderer, dropping renderer options it does not have; settings at a
+        quality level move to the same level for the new renderer (its own measured settings)."""
         try:
             option_names = self._registry.get(name).option_help
         except VolrenError:
             option_names = None
-        self._state.set_renderer(name, option_names)
+        state, settings = self._state, None
+        if state.volume is not None:
+            level = level_of(state.renderer, state.volume.kind, state.settings)
+            settings = at_level(name, state.volume.kind, level, state.settings)
+        state.set_renderer(name, option_names, settings)
 
     # ------------------------------------------------------------------ options
     def options(self) -> list[RendererOption]:
@@ -155,7 +160,8 @@ class RendererControl:
         self._preparing = None
         self._last_good_renderer = frame.renderer
         self._failure_key = None
-        quality = "" if frame.full else ", preview"
+        cheaper = frame.settings is not None and frame.settings != self._state.settings
+        quality = "" if frame.full else (", preview at lower quality" if cheaper else ", preview")
         self.frame_label.setText(
             f"{frame.renderer}  |  {frame.width} x {frame.height}{quality}  |  {frame.ms:.1f} ms"
         )

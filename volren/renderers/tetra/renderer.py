@@ -29,7 +29,7 @@ from volren.kernels.image_refinement import check_stride, refine_image
 from volren.kernels.row_blocks import parallel_chunk_size, run_in_row_blocks
 from volren.kernels.shading import shade_params
 from volren.kernels.tet_projection import bin_rows, pixel_coordinates, ray_far
-from volren.model.bricks import max_opacity_between
+from volren.kernels.visible_ranges import visible_ranges
 from volren.model.camera import Camera
 from volren.model.preintegration import LengthAxis, preintegrate
 from volren.model.settings import BlendMode
@@ -53,6 +53,7 @@ from volren.renderers.tetra.entry_bins import (
     project_faces,
 )
 from volren.renderers.tetra.gl_walk import GLWalk, WalkParameters, gl_mesh, gpu_renderer, near_plane_cells
+from volren.renderers.tetra.optical_tables import optical_tables
 from volren.renderers.tetra.traversal import (
     AVERAGE,
     COMPOSITE,
@@ -95,6 +96,8 @@ class TetraRenderer(RendererBase):
             QualityLevel("table 256 (default)"),
             QualityLevel("table 512", options={"table_size": 512}),
         ),
+        # a new TF rebuilds the 3D table: 289 -> 95 ms a 400x300 preview on oxygen (TF change + frame)
+        tf_drag_options={"table_size": 64, "table_lengths": 8},
     )
     option_help: ClassVar[Mapping[str, str]] = {
         "table_size": "value entries per axis of the 3D table (default 256)",
@@ -260,14 +263,11 @@ class TetraRenderer(RendererBase):
         key = (tf.version, n, layers, lo, hi, lmax)  # type: ignore[union-attr]
         if key != self._table_key:
             axis = LengthAxis(lmax, layers)
-            table = np.asarray(preintegrate(tf, n, lengths=axis.lengths, value_range=(lo, hi)), dtype=np.float64)
-            alpha = np.minimum(table[..., 3], 1.0 - 1e-7)
-            depth = -np.log1p(-alpha[0]) / axis.lengths[0]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ratio = np.where(alpha[..., None] > 0, table[..., :3] / alpha[..., None], 0.0)
+            table = preintegrate(tf, n, lengths=axis.lengths, value_range=(lo, hi))
+            depth, ratio = optical_tables(table, axis.lengths[0])
             cell_lo, cell_hi = self._cell_value_ranges()
             visible = _visible_cells(tf, cell_lo, cell_hi)
-            self._table = (np.ascontiguousarray(depth[..., None]), np.ascontiguousarray(ratio), lo,
+            self._table = (depth, ratio, lo,
                            (n - 1) / (hi - lo), lmax, visible)
             self._table_key = key
         assert self._table is not None
@@ -415,6 +415,4 @@ def _morton_order(centres: NDArray[np.float64]) -> NDArray[np.int64]:
 
 def _visible_cells(tf, lo: NDArray, hi: NDArray) -> NDArray[np.bool_]:
     """Cells whose value range [lo, hi] reaches a non-zero opacity (NaN ranges: no)."""
-    bad = ~(np.isfinite(lo) & np.isfinite(hi))
-    best = max_opacity_between(tf, np.where(bad, 0.0, lo), np.where(bad, 0.0, hi))
-    return (best > 0.0) & ~bad
+    return visible_ranges(tf, lo, hi)

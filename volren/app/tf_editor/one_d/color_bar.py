@@ -12,6 +12,8 @@ the viewport previews it and the undo history records it as one step.
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 from PyQt5.QtCore import QPoint, QPointF, QRectF, QSize, Qt
 from PyQt5.QtGui import (
@@ -36,13 +38,25 @@ from volren.app.tf_editor.one_d.point_canvas import (
 )
 from volren.model.transfer_function import TransferFunction1D
 
+#: Colour strips kept, newest last: the opacity curve and the colour bar draw the same TF version
+#: at their widths, each repaint of a TF drag (the strip was most of a repaint's time).
+_STRIPS: OrderedDict[tuple, QImage] = OrderedDict()
+STRIPS_KEPT = 4
+
 
 def color_strip(tf: TransferFunction1D, axis: ValueAxis, width: int) -> QImage:
     """A one-row image of the TF's colours, one column per widget pixel (sampled at its centre)."""
     width = max(width, 1)
-    rgb, _ = tf.sample(axis.to_value(np.arange(width) + 0.5, width))
-    pixels = np.ascontiguousarray(np.round(rgb * 255.0).astype(np.uint8).reshape(1, width, 3))
-    return QImage(pixels.data, width, 1, 3 * width, QImage.Format_RGB888).copy()
+    key = (id(tf), tf.version, axis, width)
+    image = _STRIPS.get(key)
+    if image is None:
+        rgb, _ = tf.sample(axis.to_value(np.arange(width) + 0.5, width))
+        pixels = np.ascontiguousarray(np.round(rgb * 255.0).astype(np.uint8).reshape(1, width, 3))
+        image = QImage(pixels.data, width, 1, 3 * width, QImage.Format_RGB888).copy()
+        _STRIPS[key] = image
+        while len(_STRIPS) > STRIPS_KEPT:
+            _STRIPS.popitem(last=False)
+    return image
 
 
 def tf_color(tf: TransferFunction1D, value: float) -> QColor:

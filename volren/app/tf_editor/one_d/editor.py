@@ -126,6 +126,9 @@ class TransferFunction1DEditor(QWidget):
 
         self.min_spin = self._spin_box("Lowest value of the transfer function (its points are rescaled)")
         self.max_spin = self._spin_box("Highest value of the transfer function (its points are rescaled)")
+        self._numbers_shown: tuple[float, float, float] | None = None  # (lo, hi, unit) in the spin boxes
+        for spin in (self.min_spin, self.max_spin):  # typed in: show the TF's numbers again next time
+            spin.valueChanged.connect(self._forget_numbers)
         self.min_spin.valueChanged.connect(self._on_min_changed)
         self.max_spin.valueChanged.connect(self._on_max_changed)
         self.reset_range_button = QToolButton(self)
@@ -137,6 +140,7 @@ class TransferFunction1DEditor(QWidget):
             "Opacity unit distance: the thickness (world units) that the opacities above refer to"
         )
         self.unit_spin.setStepType(QAbstractSpinBox.AdaptiveDecimalStepType)
+        self.unit_spin.valueChanged.connect(self._forget_numbers)
         self.unit_spin.valueChanged.connect(self._on_unit_changed)
 
         self.open_button = QPushButton("Open…", self)
@@ -247,7 +251,17 @@ class TransferFunction1DEditor(QWidget):
         self.curve.model_changed()
         self.color_bar.model_changed()
 
+    def _forget_numbers(self) -> None:
+        self._numbers_shown = None
+
     def _show_numbers(self, tf: TransferFunction1D) -> None:
+        """The range and unit distance in their spin boxes; skipped when they are what is shown
+        already (a point dragged inside the range changes neither, and setting the spin boxes'
+        decimals and ranges relaid them out on every edit of the drag)."""
+        shown = (*tf.value_range, tf.opacity_unit_distance)
+        if shown == self._numbers_shown:
+            return
+        self._numbers_shown = shown
         lo, hi = tf.value_range
         span = hi - lo if hi > lo else max(abs(lo), 1.0)
         bound = 1e3 * max(abs(lo), abs(hi), span)

@@ -1,0 +1,45 @@
+"""Preview settings: the `interactive` level where the user's level is slower, the user's own
+otherwise, plus the renderer's TF-drag options (no Qt)."""
+
+import pytest
+
+from volren import quality
+from volren.app.core.preview_settings import preview_settings
+from volren.model.settings import RenderSettings
+from volren.quality import LevelChoice, QualityTable
+
+
+def _level(step: float, options: dict) -> LevelChoice:
+    return LevelChoice(f"step {step}", step, False, options, {"a/smooth": 1.0}, 1.0)
+
+
+@pytest.fixture
+def levels(monkeypatch):
+    table = QualityTable({"uniform": {"r": {"draft": _level(2.0, {"n": 16}), "interactive": _level(1.0, {"n": 64}),
+                                            "default": _level(0.5, {"n": 256}), "exact": _level(0.1, {"n": 512})}}},
+                         "test")  # fmt: skip
+    monkeypatch.setattr(quality, "table", lambda: table)
+    return table
+
+
+@pytest.mark.parametrize("level", ["default", "exact"])
+def test_a_slower_level_previews_at_interactive(levels, level) -> None:
+    settings = levels.choice("r", "uniform", level).replace(RenderSettings(shade=True))
+    preview = preview_settings("r", "uniform", settings)
+    assert (preview.step, dict(preview.options), preview.shade) == (1.0, {"n": 64}, True)
+
+
+@pytest.mark.parametrize("level", ["draft", "interactive"])
+def test_a_level_as_fast_as_interactive_previews_as_it_is(levels, level) -> None:
+    settings = levels.choice("r", "uniform", level).replace(RenderSettings())
+    assert preview_settings("r", "uniform", settings) == settings
+
+
+def test_custom_settings_and_unmeasured_renderers_preview_as_they_are_plus_drag_options(levels) -> None:
+    custom = RenderSettings(step=0.7, options={"n": 100})
+    assert preview_settings("r", "uniform", custom) == custom
+    assert preview_settings("other", "uniform", custom) == custom
+    dragged = preview_settings("r", "uniform", custom, {"n": 8})
+    assert (dragged.step, dict(dragged.options)) == (0.7, {"n": 8})
+    default = levels.choice("r", "uniform", "default").replace(RenderSettings())
+    assert dict(preview_settings("r", "uniform", default, {"n": 8}).options) == {"n": 8}
