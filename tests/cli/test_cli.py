@@ -171,3 +171,20 @@ def test_headerless_raw_without_a_shape_names_the_flags(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--raw-shape NX,NY,NZ" in err[0] and "--raw-dtype" in err[0] and "shape=" not in err[0]
     assert main(["render", str(raw), "--raw-shape", "4,4,4", "-o", str(tmp_path / "x.png"), "--size", "8"]) == 0
+
+
+def test_timings_print_each_stage_and_the_renderers_own_parts(tmp_path, capsys):
+    """Issue 22: `--timings` says where a one-shot render's wall time goes, in one stderr line;
+    tetra adds what its frame paid for the mesh and the tables."""
+    from benchmarks.oneshot import _stages
+
+    volume, tf = sample_paths("hollow_cylinder")
+    assert main(["render", str(volume), "--tf", str(tf), "--renderer", "tetra", "-o", str(tmp_path / "a.png"),
+                 "--size", "64x48", "--timings"]) == 0  # fmt: skip
+    err = capsys.readouterr().err
+    assert len([ln for ln in err.splitlines() if "timings:" in ln]) == 1
+    stages = _stages(err)
+    assert {"load", "set-up", "frame", "write", "frame: prepare", "frame: tables", "total"} <= set(stages)
+    top = sum(v for k, v in stages.items() if ":" not in k and k != "total")
+    assert stages["total"] == pytest.approx(top, abs=0.02)
+    assert stages["frame: prepare"] + stages["frame: tables"] <= stages["frame"] + 0.01

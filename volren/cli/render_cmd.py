@@ -9,10 +9,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
+from contextlib import ExitStack
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from volren.cli.stage_clock import StageClock
 from volren.errors import VolrenError
 from volren.model.camera import check_zoom
 from volren.model.scene import OrbitView, Scene
@@ -95,6 +98,8 @@ def add_parser(sub) -> None:
     p.add_argument("--save-array", metavar="OUT.npy", help="also save float32 (H, W, 4) RGBA, row 0 on top")
     p.add_argument("--transparent", action="store_true", help="PNG with alpha instead of over black")
     p.add_argument("--force", action="store_true", help="write -o / --save-array even over an input file")
+    p.add_argument("--timings", action="store_true",
+                   help="print the wall time of each stage (start-up, load, set-up, frame, write) on stderr")
     raw = p.add_argument_group("headerless raw input")
     raw.add_argument("--raw-shape", help="NX,NY,NZ (needed for headerless raw data, and only for it)")
     raw.add_argument("--raw-dtype", help="numpy dtype, e.g. uint8, int16, float32 (default uint8)")
@@ -290,24 +295,33 @@ def run(args: argparse.Namespace) -> int:
     outputs = (("-o", args.output), ("--save-array", args.save_array))
     inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
     _check_outputs(outputs, inputs, args.force)  # before the (maybe long) load
-    scene, why = build_scene(args)
-    _check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
-    _check_scene(args, scene)
+    clock = StageClock()
+    with clock.stage("load"):
+        scene, why = build_scene(args)
+        _check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
+        _check_scene(args, scene)
     width, height = scene.size
     try:
         camera = scene.resolved_camera()
-        with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
-            with progress_bar(f"{scene.renderer} {width}x{height}") as progress:
+        with ExitStack() as stack:
+            with clock.stage("set-up"):
+                renderer = stack.enter_context(
+                    prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings))
+            with clock.stage("frame"), progress_bar(f"{scene.renderer} {width}x{height}") as progress:
                 image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
+        clock.note_counters(stats.counters)
     except VolrenError as exc:
         chosen = scene.renderer if args.renderer or not args.scene else None
         if why and f"renderer {scene.renderer} " in f"{exc} ":  # the user did not name it: say who did
             exc = VolrenError(f"{exc} ".replace(f"renderer {scene.renderer} ", f"renderer {scene.renderer} {CHOSEN_BY_AUTO} ", 1).rstrip())
         raise _naming_the_input(exc, args.scene or scene.volume_path, chosen) from None
-    if args.output:
-        io.save_image(image, args.output, transparent=args.transparent)
-    if args.save_array:
-        io.save_array(image, args.save_array)
+    with clock.stage("write"):
+        if args.output:
+            io.save_image(image, args.output, transparent=args.transparent)
+        if args.save_array:
+            io.save_array(image, args.save_array)
+    if args.timings:
+        print(f"volren: {clock.line()}", file=sys.stderr)
     written = " ".join(str(p) for p in (args.output, args.save_array) if p)
     chosen_by = f" (auto: {why})" if why else ""
     print(f"{scene.renderer}{chosen_by}: {width}x{height} in {stats.ms:.1f} ms -> {written}")
