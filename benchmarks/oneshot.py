@@ -11,6 +11,7 @@ prepare` (run by scripts/setup.sh) left; delete it to measure compilation too.
 from __future__ import annotations
 
 import argparse
+import datetime
 import os
 import re
 import statistics
@@ -22,6 +23,7 @@ from pathlib import Path
 
 from benchmarks._cli import run
 from volren.bench.datasets import SCENES, shared_folder
+from volren.errors import VolrenError
 from volren.samples import sample_paths
 
 #: (label, volume path relative to data_samples/ or the shared data folder, scalars, renderer)
@@ -63,6 +65,8 @@ def _render(args: list[str], env: dict[str, str], out: Path) -> tuple[float, dic
 
 
 def measure(args: argparse.Namespace) -> int:
+    if args.runs < 1:
+        raise VolrenError(f"--runs must be at least 1, got {args.runs}")
     cases = []
     for label, sample, renderer in SAMPLE_CASES:
         volume, tf = sample_paths(sample)
@@ -74,9 +78,22 @@ def measure(args: argparse.Namespace) -> int:
             flags = ["--scalars", scalars] if scalars else []
             tf = shared / "scenes" / f"{name}-smooth.json"
             cases.append((name, renderer, [str(shared / "data" / rel), *flags, "--tf", str(tf), "--renderer", renderer]))
-    print(f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
-    print("| case | renderer | run | wall s | " + " | ".join(STAGES) + " |")
-    print("|---|---|---|---:|" + "---:|" * len(STAGES))
+    lines: list[str] = []
+
+    def say(text: str = "") -> None:
+        print(text, flush=True)
+        lines.append(text)
+
+    command = "python -m benchmarks.oneshot" + (f" --shared {args.shared}" if args.shared else "")
+    say(f"Measured {datetime.date.today().isoformat()} by `{command}`: each case is `volren render ... --timings` "
+        f"in a new process, {args.runs} times in a row, the first with an empty mesh cache (numba's cache as "
+        "`volren prepare` left it). Seconds; *wall*: the process from start to exit; *frame: prepare* and *frame: "
+        "tables*: what tetra's first frame paid for its mesh and pre-integration tables.")  # fmt: skip
+    say()
+    say(f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+    say()
+    say("| case | renderer | run | wall | " + " | ".join(STAGES) + " |")
+    say("|---|---|---|---:|" + "---:|" * len(STAGES))
     summary = []
     with tempfile.TemporaryDirectory(prefix="volren-oneshot-") as tmp:
         for i, (label, renderer, flags) in enumerate(cases):
@@ -86,14 +103,19 @@ def measure(args: argparse.Namespace) -> int:
                 wall, stages = _render(flags, env, Path(tmp) / "out.png")
                 walls.append(wall)
                 cells = " | ".join(f"{stages[s]:.2f}" if s in stages else "" for s in STAGES)
-                print(f"| {label} | {renderer} | {'first (no mesh cache)' if k == 0 else k + 1} | {wall:.2f} | {cells} |",
-                      flush=True)  # fmt: skip
+                say(f"| {label} | {renderer} | {'first (no mesh cache)' if k == 0 else k + 1} | {wall:.2f} | {cells} |")
             summary.append((label, renderer, walls[0], statistics.median(walls[1:]) if len(walls) > 1 else walls[0]))
-    print(f"\nload average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}\n")
-    print("| case | renderer | first run s | later runs s (median) | first - later s |")
-    print("|---|---|---:|---:|---:|")
+    say()
+    say(f"load average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+    say()
+    say("| case | renderer | first run s | later runs s (median) | first - later s |")
+    say("|---|---|---:|---:|---:|")
     for label, renderer, first, later in summary:
-        print(f"| {label} | {renderer} | {first:.2f} | {later:.2f} | {first - later:+.2f} |")
+        say(f"| {label} | {renderer} | {first:.2f} | {later:.2f} | {first - later:+.2f} |")
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "oneshot.md").write_text("\n".join(lines) + "\n", encoding="utf-8")
     return 0
 
 
@@ -106,6 +128,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED; without it, "
                         "the bundled samples only)")  # fmt: skip
     parser.add_argument("--samples-only", action="store_true", help="only the bundled samples")
+    parser.add_argument("--out", help="folder to write oneshot.md into (BENCHMARKS.md's section)")
     parser.add_argument("--runs", type=int, default=3, help="processes per case, the first with an empty mesh cache (default 3)")
     return run(measure, parser, argv)
 

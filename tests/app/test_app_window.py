@@ -515,3 +515,42 @@ def test_previews_use_the_interactive_level_and_a_tf_drag_the_renderers_drag_opt
     preview, _ = gesture(lambda: w.state.set_camera(w.state.camera.azimuth(5.0)))
     assert (preview.step, dict(preview.options)) == (0.3, {"table_size": 256})
     assert "preview" in labels[-1] and "lower quality" not in labels[-1]
+
+
+def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
+    make_window, fake_renderers, sample, qtbot, monkeypatch
+):
+    """Issue 22, progressive refinement: when the still frame is measured slow and the preview
+    settings are at most half its cost, the whole view comes first at the preview settings, then
+    the still frame; one that is cheap comes alone."""
+    from volren import quality
+    from volren.app.rendering.render_service import Frame
+    from volren.quality import LevelChoice, QualityTable
+
+    def level(step):
+        return LevelChoice(f"step {step}", step, False, {"table_size": 256}, {"a/smooth": 10.0}, 1.0)
+
+    table = QualityTable({"uniform": {"fake_drag": {"default": level(0.25), "interactive": level(0.5)}}}, "test")
+    monkeypatch.setattr(quality, "table", lambda: table)
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake_drag")
+    frames = []
+    w.frameShown.connect(frames.append)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.state.set_camera(w.state.camera.azimuth(5.0))  # measured cheap: no refinement
+    assert [f.full for f in frames] == [True]
+
+    # what the scheduler has measured, as if the still frames took 900 ms and the coarse ones 200 ms
+    width, height = w.viewport.pixel_size()
+    still, coarse = w.state.settings, w.scheduler.preview_settings()
+    w.scheduler._costs.clear()  # forget the fake renderer's real (instant) frames
+    for settings, ms in ((still, 900.0), (coarse, 200.0)):
+        w.scheduler.note_frame(Frame(0, "fake_drag", width, height, ms, True, np.zeros((1, 1, 3), np.uint8),
+                                     w.state.camera, settings))  # fmt: skip
+    frames.clear()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.state.set_camera(w.state.camera.azimuth(5.0))
+    assert [(f.full, (f.width, f.height), f.settings.step) for f in frames] == [
+        (False, (width, height), 0.5), (True, (width, height), 0.25)]  # fmt: skip
+    assert frames[1].camera == frames[0].camera == w.state.camera

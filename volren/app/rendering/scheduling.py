@@ -6,7 +6,9 @@ preview stays within about 80 ms) and cheaper settings (`preview_settings`: the 
 quality level, and cheap TF tables while a TF is dragged), and restart a short settle timer; when no
 input has come for `settle_ms`, one full-quality frame follows, and none again for the same
 request (a gesture that rests before its release asks twice). Every other change (a new volume,
-another renderer, a reset view) asks for a full-quality frame at once.
+another renderer, a reset view) asks for a full-quality frame at once. A full-quality frame
+measured slower than REFINE_AFTER_MS comes after a coarse frame of the whole view at the preview
+settings (progressive refinement: something sharp at once, the exact frame when it is ready).
 
 This is the only place that builds requests, so other panels (TF editors) get the same policy
 just by changing the `ViewState` inside `state.begin_interaction()` / `end_interaction()`.
@@ -29,6 +31,9 @@ from volren.model.settings import RenderSettings
 SETTLE_MS = 150
 #: Largest side scale of preview frames (0.5: a quarter of the pixels).
 PREVIEW_SCALE = 0.5
+#: A still frame measured slower than this (ms) comes after a coarse frame of the whole view at the
+#: preview settings (progressive refinement), when that costs at most half as much.
+REFINE_AFTER_MS = 400.0
 #: What a preview frame may cost; slower renderers get coarser previews. 80 ms (12.5 fps, above the
 #: 10 fps a drag needs): at 50 ms objectorder's bonsai previews were 3 % of the pixels at 17 fps.
 PREVIEW_BUDGET_MS = 80.0
@@ -58,6 +63,7 @@ class FrameScheduler(QObject):
         self._tf_dragged = False  # the gesture in progress drags the TF
         self._preview: tuple[tuple, RenderSettings] | None = None  # (inputs, preview settings) last made
         self._cost_keys: tuple[RenderSettings | None, str] | None = None  # (settings, its repr) last asked
+        self._pending_final: tuple[int, tuple] | None = None  # (coarse frame's serial, the still frame's request)
         self._timer = QTimer(self)
         self._timer.setSingleShot(True)
         self._timer.setInterval(settle_ms)
@@ -89,6 +95,7 @@ class FrameScheduler(QObject):
     def note_frame(self, frame: Frame) -> None:
         """Remember what the renderer's frames cost, to size the next previews."""
         self._costs.setdefault((frame.renderer, repr(frame.settings)), FrameCost()).note(frame.width * frame.height, frame.ms)
+        self._refine(frame)
 
     def preview_settings(self) -> RenderSettings:
         """What the next preview draws with (the state's settings for its still frames); kept
@@ -127,6 +134,7 @@ class FrameScheduler(QObject):
 
     def _request(self, full: bool) -> int | None:
         s = self._state
+        self._pending_final = None  # a newer request replaces a refinement under way
         width, height = self._viewport_size()
         if s.volume is None or s.transfer_function is None or s.camera is None or width < 1 or height < 1:
             return None
@@ -146,9 +154,32 @@ class FrameScheduler(QObject):
             settings = self.preview_settings()
             width, height = preview_size(width, height, self.current_preview_scale(settings))
         self._requested_any = True
-        return self._service.submit(
-            s.renderer, volume, s.transfer_function, settings, s.camera, width, height, full, s.background
-        )
+        request = (s.renderer, volume, s.transfer_function, settings, s.camera, width, height, full, s.background)
+        coarse = preview_settings(s.renderer, volume.kind, settings) if full else settings
+        if full and coarse != settings and self._worth_refining(width * height, settings, coarse):
+            # progressive refinement: the whole view at the cheaper settings first, then the still frame
+            serial = self._service.submit(*request[:3], coarse, *request[4:7], False, s.background)
+            self._pending_final = (serial, request)
+            return serial
+        return self._service.submit(*request)
+
+    def _worth_refining(self, pixels: int, settings: RenderSettings, coarse: RenderSettings) -> bool:
+        """Whether a still frame is slow enough (REFINE_AFTER_MS, as measured for its settings) and
+        the coarse one cheap enough (at most half of it) to show the coarse one first."""
+        still, cheap = (self._costs.get(self._cost_key(x)) for x in (settings, coarse))
+        still_model = still.model() if still is not None else None
+        if still_model is None:
+            return False
+        still_ms = still_model[0] + still_model[1] * pixels
+        cheap_model = cheap.model() if cheap is not None else None
+        cheap_ms = cheap_model[0] + cheap_model[1] * pixels if cheap_model is not None else 0.0
+        return still_ms > REFINE_AFTER_MS and cheap_ms <= 0.5 * still_ms
+
+    def _refine(self, frame: Frame) -> None:
+        """The coarse frame of a refinement is shown: ask for the still frame it stands in for."""
+        if self._pending_final is not None and frame.serial == self._pending_final[0]:
+            request, self._pending_final = self._pending_final[1], None
+            self._service.submit(*request)
 
     def detach(self) -> None:
         """Stop listening (the window is closing)."""
