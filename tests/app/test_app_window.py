@@ -427,19 +427,19 @@ def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_fo
     assert not model.item(combo.findText("draft")).isEnabled()  # nothing measured for vtk in this table
 
 
-def test_the_first_volume_opens_at_the_default_level_and_a_switch_keeps_the_level(make_window, sample, qtbot, monkeypatch):
-    """Issue 22: what the app shows with no options is the `default` level's measured settings,
-    as in the CLI; switching renderer gives the new renderer's settings at the same level, and
-    custom settings stay custom."""
+def test_the_first_volume_opens_at_the_app_level_and_a_switch_keeps_the_level(make_window, sample, qtbot, monkeypatch):
+    """Issue 22: what the app shows with no options is the `interactive` level's measured settings
+    (the CLI's is `default`: the app draws a still frame after every gesture); switching renderer
+    gives the new renderer's settings at the same level, and custom settings stay custom."""
     from volren import quality
     from volren.quality import LevelChoice, QualityTable
 
     def level(step, pre, options):
         return LevelChoice(f"step {step}", step, pre, options, {"a/smooth": 10.0}, 1.0)
 
-    table = QualityTable({"uniform": {"slicer": {"default": level(0.5, True, {"table_size": 128}),
+    table = QualityTable({"uniform": {"slicer": {"interactive": level(0.5, True, {"table_size": 128}),
                                                  "draft": level(2.0, False, {"table_size": 64})},
-                                      "vtk": {"default": level(0.75, False, {})}}}, "test")  # fmt: skip
+                                      "vtk": {"interactive": level(0.75, False, {})}}}, "test")  # fmt: skip
     monkeypatch.setattr(quality, "table", lambda: table)
     monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
     w = make_window()
@@ -447,12 +447,12 @@ def test_the_first_volume_opens_at_the_default_level_and_a_switch_keeps_the_leve
         w.files.apply_loaded(sample, "slicer")
     s = w.state.settings
     assert (s.step, s.preintegration, dict(s.options)) == (0.5, True, {"table_size": 128})
-    assert w.quality.chooser.currentText() == "default"
+    assert w.quality.chooser.currentText() == "interactive"
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.renderers.switch("vtk")
     s = w.state.settings
     assert (w.state.renderer, s.step, s.preintegration, dict(s.options)) == ("vtk", 0.75, False, {})
-    assert w.quality.chooser.currentText() == "default" and w.docks.sampling.step.spin.value() == 0.75
+    assert w.quality.chooser.currentText() == "interactive" and w.docks.sampling.step.spin.value() == 0.75
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.state.set_settings(s.with_(step=0.3))  # custom now
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
@@ -481,9 +481,12 @@ def test_previews_use_the_interactive_level_and_a_tf_drag_the_renderers_drag_opt
 
     table = QualityTable({"uniform": {"fake_drag": {"default": level(0.25), "interactive": level(0.5)}}}, "test")
     monkeypatch.setattr(quality, "table", lambda: table)
+    monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
     w = make_window()
-    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "fake_drag")
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.quality.chooser.activated.emit(w.quality.chooser.findText("default"))
     assert blocker.args[0].settings.step == 0.25  # the default level
 
     labels = []
@@ -532,9 +535,12 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
 
     table = QualityTable({"uniform": {"fake_drag": {"default": level(0.25), "interactive": level(0.5)}}}, "test")
     monkeypatch.setattr(quality, "table", lambda: table)
+    monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "fake_drag")
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.quality.chooser.activated.emit(w.quality.chooser.findText("default"))
     frames = []
     w.frameShown.connect(frames.append)
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):

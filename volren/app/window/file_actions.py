@@ -25,12 +25,20 @@ from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
-from volren.quality import AUTO, DEFAULT_LEVEL, at_level, level_of
+from volren.quality import AUTO, at_level, level_of
 
 OPEN_FILTER = (
     "Volumes and scenes (*.vti *.vtk *.vtu *.vtr *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw *.json);;"
     "All files (*)"
 )
+
+
+#: The level the app opens at. Not the command line's `default`: in the app a still frame follows
+#: every gesture, and `default` measured 2.4 s a still frame of bonsai at 800x600 with objectorder
+#: (its one configuration that is as accurate as VTK on every shared scene, step 0.25 pre-integrated,
+#: which only ironProt needs) against 0.45 s at `interactive` (RMSE within 1.65x VTK default's on
+#: the shared scenes, 0.12x on bonsai). The Quality box offers the others.
+APP_LEVEL = "interactive"
 
 
 class FileActions(QObject):
@@ -141,11 +149,11 @@ class FileActions(QObject):
             self._window.statusBar().showMessage("; ".join(notes), 15000)
 
     def _at_level(self, renderer: str, kind: str, settings: RenderSettings) -> RenderSettings:
-        """`settings` at the quality level shown (`default` for the first volume), measured for
+        """`settings` at the quality level shown (APP_LEVEL for the first volume), measured for
         the renderer and volume kind about to be shown; unchanged for custom settings or where
         nothing was measured. A scene file's own settings are kept as they are."""
         state = self._state
-        level = DEFAULT_LEVEL if state.volume is None else level_of(state.renderer, state.volume.kind, state.settings)
+        level = APP_LEVEL if state.volume is None else level_of(state.renderer, state.volume.kind, state.settings)
         return at_level(renderer, kind, level, settings) or settings
 
     def _apply_view_extras(self, loaded: LoadedInput) -> None:
