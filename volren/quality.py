@@ -181,16 +181,34 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
         return capabilities.unsupported_reason(kind, tf_dim, level_settings) is None
 
     choices = {n: c for n in quality.measured(kind) if n in names and (c := quality.choice(n, kind, level))}
-    if choices:
-        common = set.intersection(*(set(c.ms) for c in choices.values())) or set.union(*(set(c.ms) for c in choices.values()))
-        cost = {n: sum(c.ms.get(scene, float("inf")) for scene in common) for n, c in choices.items()}
-        for name in sorted(choices, key=lambda n: (not choices[n].meets, cost[n])):
-            if drawable(name):
-                return name, f"the fastest measured at quality {level} that draws this scene"
+    cost = _costs(choices)
+    for name in sorted(choices, key=lambda n: (not choices[n].meets, cost[n])):
+        if drawable(name):
+            return name, f"the fastest measured at quality {level} that draws this scene"
     for name in names:
         if name not in choices and drawable(name):
             return name, f"no measured renderer draws this scene; {name} can"
     raise VolrenError(f"no registered renderer can draw this {kind} scene (see `volren renderers`)")
+
+
+def _costs(choices: Mapping[str, LevelChoice]) -> dict[str, float]:
+    """Each choice's summed frame time over the scenes all of them were measured on (over all
+    scenes where they share none)."""
+    if not choices:
+        return {}
+    common = set.intersection(*(set(c.ms) for c in choices.values())) or set.union(*(set(c.ms) for c in choices.values()))
+    return {n: sum(c.ms.get(scene, float("inf")) for scene in common) for n, c in choices.items()}
+
+
+def fastest_measured(kind: str, level: str, names: Iterable[str], can_draw: Callable[[str], bool],
+                     quality: QualityTable | None = None) -> str | None:  # fmt: skip
+    """The renderer among `names` measured fastest at `level` on `kind` volumes that `can_draw`,
+    whatever its error (the app's previews: speed first); None when none is measured."""
+    quality = quality or table()
+    names = [n for n in names if n not in NOT_AUTO]
+    choices = {n: c for n in quality.measured(kind) if n in names and (c := quality.choice(n, kind, level))}
+    cost = _costs(choices)
+    return next((name for name in sorted(choices, key=cost.__getitem__) if can_draw(name)), None)
 
 
 def resolve(kind: str, tf_dim: int, renderer: str, level: str | None,

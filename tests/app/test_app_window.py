@@ -549,7 +549,7 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
 
     # what the scheduler has measured, as if the still frames took 900 ms and the coarse ones 200 ms
     width, height = w.viewport.pixel_size()
-    still, coarse = w.state.settings, w.scheduler.preview_settings()
+    still, coarse = w.state.settings, w.scheduler.preview()[1]
     w.scheduler._costs.clear()  # forget the fake renderer's real (instant) frames
     for settings, ms in ((still, 900.0), (coarse, 200.0)):
         w.scheduler.note_frame(Frame(0, "fake_drag", width, height, ms, True, np.zeros((1, 1, 3), np.uint8),
@@ -560,3 +560,62 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
     assert [(f.full, (f.width, f.height), f.settings.step) for f in frames] == [
         (False, (width, height), 0.5), (True, (width, height), 0.25)]  # fmt: skip
     assert frames[1].camera == frames[0].camera == w.state.camera
+
+
+def test_previews_are_drawn_by_the_fastest_measured_renderer_and_the_label_says_so(
+    make_window, fake_renderers, sample, qtbot, monkeypatch
+):
+    """Issue 22: "the fastest renderer for previews and the chosen one for the still frame, saying
+    so": with `fake` measured faster at `interactive`, a rotation of a `fake_drag` scene at a level
+    previews with `fake` (named in the frame label) and ends with `fake_drag`'s still frame."""
+    from volren import quality
+    from volren.quality import LevelChoice, QualityTable
+
+    def level(step, ms):
+        return LevelChoice(f"step {step}", step, False, {}, {"a/smooth": ms}, 1.0)
+
+    table = QualityTable({"uniform": {"fake_drag": {"interactive": level(0.5, 50.0)},
+                                      "fake": {"interactive": level(1.0, 5.0)}}}, "test")  # fmt: skip
+    monkeypatch.setattr(quality, "table", lambda: table)
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake_drag")
+    frames, labels = [], []
+    w.frameShown.connect(lambda f: (frames.append(f), labels.append(w.renderers.frame_label.text())))
+    w.state.begin_interaction()
+    w.state.set_camera(w.state.camera.azimuth(5.0))
+    qtbot.waitUntil(lambda: bool(frames), timeout=FRAME_TIMEOUT_MS)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as still:
+        w.state.end_interaction()
+    assert (frames[0].full, frames[0].renderer, frames[0].settings.step) == (False, "fake", 1.0)
+    assert labels[0].startswith("fake  |") and "preview" in labels[0]
+    assert (still.args[0].renderer, still.args[0].settings.step) == ("fake_drag", 0.5)
+    assert w.state.renderer == "fake_drag"
+
+
+def test_a_preview_renderer_that_fails_previews_no_more_and_the_still_frame_comes(
+    make_window, fake_renderers, sample, qtbot, monkeypatch, error_boxes
+):
+    from volren import quality
+    from volren.quality import LevelChoice, QualityTable
+
+    def level(step, ms):
+        return LevelChoice(f"step {step}", step, False, {}, {"a/smooth": ms}, 1.0)
+
+    table = QualityTable({"uniform": {"fake_drag": {"interactive": level(0.5, 50.0)},
+                                      "fake_broken": {"interactive": level(1.0, 5.0)}}}, "test")  # fmt: skip
+    monkeypatch.setattr(quality, "table", lambda: table)
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake_drag")
+    w.state.begin_interaction()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as still:
+        w.state.set_camera(w.state.camera.azimuth(5.0))  # fake_broken's preview fails: the still frame follows
+    assert still.args[0].renderer == "fake_drag" and still.args[0].camera == w.state.camera
+    frames = []
+    w.frameShown.connect(frames.append)
+    w.state.set_camera(w.state.camera.azimuth(5.0))
+    qtbot.waitUntil(lambda: bool(frames), timeout=FRAME_TIMEOUT_MS)
+    assert frames[0].renderer == "fake_drag" and not frames[0].full
+    w.state.end_interaction()
+    assert error_boxes == [] and w.state.renderer == "fake_drag"

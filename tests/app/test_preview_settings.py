@@ -43,3 +43,28 @@ def test_custom_settings_and_unmeasured_renderers_preview_as_they_are_plus_drag_
     assert (dragged.step, dict(dragged.options)) == (0.7, {"n": 8})
     default = levels.choice("r", "uniform", "default").replace(RenderSettings())
     assert dict(preview_settings("r", "uniform", default, {"n": 8}).options) == {"n": 8}
+
+
+def test_previews_go_to_the_fastest_renderer_measured_that_can_draw_the_scene(monkeypatch) -> None:
+    from volren.app.core.preview_settings import preview_choice
+    from volren.renderers.base import Capabilities, KindSupport
+
+    table = QualityTable({"uniform": {
+        "slow": {"interactive": _level(1.0, {"n": 64}), "default": _level(0.5, {"n": 256})},
+        "fast": {"interactive": LevelChoice("fast", 1.0, False, {"m": 1}, {"a/smooth": 0.1}, 9.0, False)},
+    }}, "test")  # fmt: skip
+    monkeypatch.setattr(quality, "table", lambda: table)
+    shading = KindSupport(shading=True)
+    caps = {"slow": Capabilities(kinds={"uniform": shading}),
+            "fast": Capabilities(kinds={"uniform": KindSupport()}, tf_drag_options={"m": 2})}  # fmt: skip
+    default = table.choice("slow", "uniform", "default").replace(RenderSettings())
+    names = ["slow", "fast", "unimportable"]
+    renderer, settings = preview_choice("slow", "uniform", 1, default, names, caps.get, False)
+    assert (renderer, settings.step, dict(settings.options)) == ("fast", 1.0, {"m": 1})  # worse error: still fastest
+    renderer, settings = preview_choice("slow", "uniform", 1, default, names, caps.get, True)
+    assert (renderer, dict(settings.options)) == ("fast", {"m": 2})  # its own drag options
+    shaded = default.with_(shade=True)  # fast cannot shade: the user's renderer previews
+    renderer, settings = preview_choice("slow", "uniform", 1, shaded, names, caps.get, False)
+    assert (renderer, settings.step, settings.shade) == ("slow", 1.0, True)
+    custom = RenderSettings(step=0.7)
+    assert preview_choice("slow", "uniform", 1, custom, names, caps.get, False) == ("slow", custom)

@@ -215,6 +215,8 @@ class ShearWarpRenderer(RendererBase):
             QualityLevel("pre-integrated, oversampling 3, step 0.25, bilinear lookup", step=0.25, preintegration=True,
                          options={"oversampling": 3.0, "lookup": "bilinear"}),
         ),
+        # a TF drag rebuilds the pre-integration table each edit: 81 -> 49 ms a 400x300 bonsai preview
+        tf_drag_options={"table_size": 64},
     )  # fmt: skip
     option_help: ClassVar[Mapping[str, str]] = {name: text for name, (_, text) in OPTIONS.items()}
 

@@ -1,21 +1,25 @@
-"""What preview frames draw with: cheaper settings than the still frame, chosen from measurements.
+"""What preview frames draw with: a cheaper renderer and settings than the still frame, chosen
+from measurements.
 
 Why: a preview (a frame while the mouse drags) must come within the frame budget at a useful
 size; the still frame that follows has the user's quality. As in ParaView's and VTK's
 level-of-detail rendering, previews of a scene at a measured quality level use the `interactive`
-level's settings for the same renderer (`volren.quality`, measured by `volren bench run`), and
-while a transfer function is dragged, the renderer's `Capabilities.tf_drag_options` (options
-that make a new TF cheap to apply, e.g. a smaller pre-integration table). Custom settings are
-previewed as they are: the user chose them.
+level's settings (`volren.quality`, measured by `volren bench run`) of the renderer measured
+fastest at that level that can draw the scene (issue 22: "the fastest renderer for previews and
+the chosen one for the still frame, saying so": the frame label names it), and while a transfer
+function is dragged, that renderer's `Capabilities.tf_drag_options` (options that make a new TF
+cheap to apply, e.g. a smaller pre-integration table). Custom settings are previewed as they are,
+by the user's renderer: the user chose them.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from volren.model.settings import RenderSettings
-from volren.quality import LEVELS, at_level, level_of
+from volren.quality import LEVELS, at_level, fastest_measured, level_of
+from volren.renderers.base import Capabilities
 
 #: The level previews use when the user's level is slower.
 PREVIEW_LEVEL = "interactive"
@@ -31,3 +35,28 @@ def preview_settings(renderer: str, kind: str, settings: RenderSettings,
     if tf_drag_options:
         settings = settings.with_(options={**settings.options, **tf_drag_options})
     return settings
+
+
+def preview_choice(renderer: str, kind: str, tf_dims: int, settings: RenderSettings, names: Iterable[str],
+                   capabilities: Callable[[str], Capabilities | None], tf_dragged: bool) -> tuple[str, RenderSettings]:  # fmt: skip
+    """(renderer, settings) of a preview frame of a scene whose still frames `renderer` draws with
+    `settings`: the fastest renderer measured at the `interactive` level that can draw the scene
+    (the user's own when it is the fastest, or when the settings are custom); `capabilities`
+    gives a renderer's (None: it does not import)."""
+
+    def drag(name: str) -> Mapping[str, Any] | None:
+        caps = capabilities(name)
+        return caps.tf_drag_options if tf_dragged and caps is not None else None
+
+    if level_of(renderer, kind, settings) is not None:
+        def can_draw(name: str) -> bool:
+            caps = capabilities(name)
+            at = at_level(name, kind, PREVIEW_LEVEL, settings)
+            return caps is not None and at is not None and caps.unsupported_reason(kind, tf_dims, at) is None
+
+        fastest = fastest_measured(kind, PREVIEW_LEVEL, names, can_draw)
+        if fastest is not None and fastest != renderer:
+            at = at_level(fastest, kind, PREVIEW_LEVEL, settings)
+            assert at is not None
+            return fastest, preview_settings(fastest, kind, at, drag(fastest))
+    return renderer, preview_settings(renderer, kind, settings, drag(renderer))

@@ -19,6 +19,7 @@ from __future__ import annotations
 import sys
 import threading
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -64,6 +65,7 @@ class Frame:
     rgb: NDArray[np.uint8]
     camera: Camera
     settings: RenderSettings | None = None  #: what it was drawn with (previews may be cheaper than the state's)
+    setup: bool = False  #: its time includes a renderer set-up (a new renderer or volume)
 
 
 #: Frames slower than this report their progress, at most this often.
@@ -111,6 +113,20 @@ class _Mailbox:
 
 RendererFactory = Callable[[str], Renderer]
 
+#: Renderers the worker keeps set up: the still frames' and the previews' (`preview_choice`), so
+#: that alternating between them does not rebuild either's per-volume structures.
+RENDERERS_KEPT = 2
+
+
+@dataclass(eq=False)
+class _Slot:
+    """A renderer and what it was last given."""
+
+    renderer: Renderer
+    volume: Volume | None = None
+    tf_key: tuple[int, int] | None = None
+    settings: RenderSettings | None = None
+
 
 def _registry_factory(name: str) -> Renderer:
     from volren.renderers.registry import registry
@@ -130,11 +146,7 @@ class RenderWorker(QObject):
         super().__init__()
         self._mailbox = mailbox
         self._factory = factory
-        self._renderer: Renderer | None = None
-        self._renderer_name: str | None = None
-        self._volume: Volume | None = None
-        self._tf_key: tuple[int, int] | None = None
-        self._settings: RenderSettings | None = None
+        self._slots: OrderedDict[str, _Slot] = OrderedDict()  # by renderer name, most recently used last
 
     @pyqtSlot()
     def process(self) -> None:
@@ -148,34 +160,40 @@ class RenderWorker(QObject):
             except Exception as exc:  # noqa: BLE001 - a renderer must not take the app down
                 if isinstance(exc, _Superseded) or self._mailbox.waiting():
                     continue  # interrupted (or failing) on the way to a newer frame
-                self._release()  # a renderer that raised may be in any state: start afresh
+                self._release(request.renderer)  # a renderer that raised may be in any state: start afresh
                 self.failed.emit(request, _one_line(exc))
                 continue
             self.frameReady.emit(frame)
 
-    def _sync(self, request: RenderRequest) -> Renderer:
-        if self._renderer is None or self._renderer_name != request.renderer or self._volume is not request.volume:
+    def _sync(self, request: RenderRequest) -> tuple[Renderer, bool]:
+        """The request's renderer, given what it needs; and whether that meant a set-up (a new
+        renderer or volume: that frame's time says little about the next ones')."""
+        slot = self._slots.get(request.renderer)
+        setup = slot is None or slot.volume is not request.volume
+        if slot is None or slot.volume is not request.volume:
             # set-up ahead (the renderer's imports, its per-volume structures, its first frame's tables):
             # the GUI says so when no frame follows within PREPARING_AFTER_S
             self.preparing.emit(request.serial, request.renderer)
-        if self._renderer is None or self._renderer_name != request.renderer:
-            self._release()
-            self._renderer = self._factory(request.renderer)
-            self._renderer_name = request.renderer
-        renderer = self._renderer
-        if self._settings != request.settings:
+        if slot is None:
+            slot = _Slot(self._factory(request.renderer))
+            self._slots[request.renderer] = slot
+            while len(self._slots) > RENDERERS_KEPT:  # the least recently used one goes
+                self._release(next(iter(self._slots)))
+        self._slots.move_to_end(request.renderer)
+        renderer = slot.renderer
+        if slot.settings != request.settings:
             renderer.set_settings(request.settings)
-            self._settings = request.settings
-        if self._volume is not request.volume:
+            slot.settings = request.settings
+        if slot.volume is not request.volume:
             renderer.set_volume(request.volume)
-            self._volume = request.volume
-        if self._tf_key != request.tf_key:
+            slot.volume = request.volume
+        if slot.tf_key != request.tf_key:
             renderer.set_transfer_function(request.tf)
-            self._tf_key = request.tf_key
-        return renderer
+            slot.tf_key = request.tf_key
+        return renderer, setup
 
     def _render(self, request: RenderRequest) -> Frame:
-        renderer = self._sync(request)
+        renderer, setup = self._sync(request)
 
         start = time.perf_counter()
         last_report = [start]
@@ -197,23 +215,22 @@ class RenderWorker(QObject):
         rgb = to_png_pixels(image, request.background)
         return Frame(
             request.serial, request.renderer, request.width, request.height, stats.ms, request.full, rgb, request.camera,
-            request.settings,
+            request.settings, setup,
         )
 
-    def _release(self) -> None:
-        renderer, self._renderer = self._renderer, None
-        self._renderer_name = None
-        self._volume = self._tf_key = self._settings = None
-        if renderer is not None:
+    def _release(self, name: str) -> None:
+        slot = self._slots.pop(name, None)
+        if slot is not None:
             try:
-                renderer.release()
+                slot.renderer.release()
             except Exception as exc:  # noqa: BLE001 - releasing must not fail the next frame
                 print(f"volren: warning: releasing the renderer failed: {_one_line(exc)}", file=sys.stderr)
 
     @pyqtSlot()
     def stop(self) -> None:
-        """Release the renderer here, in its own thread, then end the thread's event loop."""
-        self._release()
+        """Release the renderers here, in their own thread, then end the thread's event loop."""
+        for name in list(self._slots):
+            self._release(name)
         thread = self.thread()
         if thread is not None:
             thread.quit()

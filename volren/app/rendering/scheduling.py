@@ -16,16 +16,17 @@ just by changing the `ViewState` inside `state.begin_interaction()` / `end_inter
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-from typing import Any
+from collections.abc import Callable
 
 from PyQt5.QtCore import QObject, QTimer
 
 from volren.app.core.frame_sizes import FrameCost, adaptive_preview_scale, preview_size
-from volren.app.core.preview_settings import preview_settings
+from volren.app.core.preview_settings import preview_choice
 from volren.app.core.state import Change, ViewState
-from volren.app.rendering.render_service import Frame, RenderService
+from volren.app.rendering.render_service import Frame, RenderRequest, RenderService
 from volren.model.settings import RenderSettings
+from volren.renderers.base import Capabilities
+from volren.renderers.registry import RendererRegistry
 
 #: Input quiet for this long means the gesture stopped: render at full quality.
 SETTLE_MS = 150
@@ -50,18 +51,20 @@ class FrameScheduler(QObject):
         parent: QObject | None = None,
         settle_ms: int = SETTLE_MS,
         preview_scale: float = PREVIEW_SCALE,
-        tf_drag_options: Callable[[str], Mapping[str, Any]] = lambda _renderer: {},
+        registry: RendererRegistry | None = None,
     ) -> None:
         super().__init__(parent)
         self._state = state
         self._service = service
         self._viewport_size = viewport_size
-        self._tf_drag_options = tf_drag_options  # a renderer's Capabilities.tf_drag_options
+        self._registry = registry  # the renderers previews may use (None: the state's only)
+        self._failed_previewers: set[str] = set()  # renderers whose previews raised: not asked again
+        service.renderFailed.connect(self._on_failed)
         self.preview_scale = preview_scale
         self.preview_budget_ms = PREVIEW_BUDGET_MS
         self._costs: dict[tuple[str, str], FrameCost] = {}  # per renderer and settings (repr: options are a dict)
         self._tf_dragged = False  # the gesture in progress drags the TF
-        self._preview: tuple[tuple, RenderSettings] | None = None  # (inputs, preview settings) last made
+        self._preview: tuple[tuple, tuple[str, RenderSettings]] | None = None  # (inputs, preview) last made
         self._cost_keys: tuple[RenderSettings | None, str] | None = None  # (settings, its repr) last asked
         self._pending_final: tuple[int, tuple] | None = None  # (coarse frame's serial, the still frame's request)
         self._timer = QTimer(self)
@@ -93,31 +96,54 @@ class FrameScheduler(QObject):
         self._timer.start()
 
     def note_frame(self, frame: Frame) -> None:
-        """Remember what the renderer's frames cost, to size the next previews."""
-        self._costs.setdefault((frame.renderer, repr(frame.settings)), FrameCost()).note(frame.width * frame.height, frame.ms)
+        """Remember what the renderer's frames cost, to size the next previews (not a frame that
+        paid a set-up: a preview renderer's first frame of bonsai took 0.7 s, ten times the next,
+        and kept the previews at a tenth of the pixels)."""
+        if not frame.setup:
+            self._costs.setdefault((frame.renderer, repr(frame.settings)), FrameCost()).note(frame.width * frame.height, frame.ms)
         self._refine(frame)
 
-    def preview_settings(self) -> RenderSettings:
-        """What the next preview draws with (the state's settings for its still frames); kept
-        while the inputs stay the same objects, since a drag asks for it at the mouse's rate."""
+    def preview(self, tf_dragged: bool | None = None) -> tuple[str, RenderSettings]:
+        """(renderer, settings) the next preview draws with (`preview_choice`); kept while the
+        inputs stay the same objects, since a drag asks for it at the mouse's rate."""
         s = self._state
         kind = s.volume.kind if s.volume is not None else "uniform"
-        inputs = (s.renderer, kind, s.settings, self._tf_dragged)
+        dims = s.transfer_function.dims if s.transfer_function is not None else 1
+        dragged = self._tf_dragged if tf_dragged is None else tf_dragged
+        inputs = (s.renderer, kind, s.settings, dragged, dims)
         if self._preview is None or any(a is not b for a, b in zip(self._preview[0], inputs, strict=True)):
-            drag = self._tf_drag_options(s.renderer) if self._tf_dragged else None
-            self._preview = (inputs, preview_settings(s.renderer, kind, s.settings, drag))
+            names = [n for n in self._registry.names() if n not in self._failed_previewers] \
+                if self._registry is not None else [s.renderer]  # fmt: skip
+            self._preview = (inputs, preview_choice(s.renderer, kind, dims, s.settings, names, self._capabilities, dragged))
         return self._preview[1]
 
-    def _cost_key(self, settings: RenderSettings | None) -> tuple[str, str]:
+    def _on_failed(self, request: RenderRequest, _message: str) -> None:
+        """A preview renderer that raised previews no more (the still frames' renderer's own
+        failures are the renderer control's to report)."""
+        if request.renderer != self._state.renderer:
+            self._failed_previewers.add(request.renderer)
+            self._preview = None
+            self._last_full = None
+            self.request_full()
+
+    def _capabilities(self, name: str) -> Capabilities | None:
+        if self._registry is None:
+            return None
+        try:
+            return self._registry.capabilities(name)
+        except Exception:  # noqa: BLE001 - a plugin that does not import draws no previews
+            return None
+
+    def _cost_key(self, renderer: str, settings: RenderSettings | None) -> tuple[str, str]:
         """Frame costs are kept per renderer and settings (by repr: options are a dict)."""
         if self._cost_keys is None or self._cost_keys[0] is not settings:
             self._cost_keys = (settings, repr(settings))
-        return self._state.renderer, self._cost_keys[1]
+        return renderer, self._cost_keys[1]
 
-    def current_preview_scale(self, settings: RenderSettings | None = None) -> float:
-        """The side scale of the next preview, from what frames with its settings cost."""
+    def current_preview_scale(self, preview: tuple[str, RenderSettings] | None = None) -> float:
+        """The side scale of the next preview, from what frames of its renderer and settings cost."""
         width, height = self._viewport_size()
-        cost = self._costs.get(self._cost_key(settings or self.preview_settings()))
+        cost = self._costs.get(self._cost_key(*(preview or self.preview())))
         model = cost.model() if cost is not None else None
         if model is None:
             return self.preview_scale
@@ -141,7 +167,7 @@ class FrameScheduler(QObject):
         volume = s.render_volume
         assert volume is not None
         tf = s.transfer_function
-        settings = s.settings
+        renderer, settings = s.renderer, s.settings
         if full:
             # a gesture that rested before it ended asks twice for the same full frame: once when input
             # went quiet, again on release; the second would redraw what is already on screen
@@ -151,22 +177,24 @@ class FrameScheduler(QObject):
             self._last_full = key
         else:
             self._last_full = None  # a preview replaces what is on screen: the next full frame is needed
-            settings = self.preview_settings()
-            width, height = preview_size(width, height, self.current_preview_scale(settings))
+            preview = renderer, settings = self.preview()
+            width, height = preview_size(width, height, self.current_preview_scale(preview))
         self._requested_any = True
-        request = (s.renderer, volume, s.transfer_function, settings, s.camera, width, height, full, s.background)
-        coarse = preview_settings(s.renderer, volume.kind, settings) if full else settings
-        if full and coarse != settings and self._worth_refining(width * height, settings, coarse):
-            # progressive refinement: the whole view at the cheaper settings first, then the still frame
-            serial = self._service.submit(*request[:3], coarse, *request[4:7], False, s.background)
-            self._pending_final = (serial, request)
-            return serial
+        request = (renderer, volume, s.transfer_function, settings, s.camera, width, height, full, s.background)
+        if full:
+            coarse = self.preview(tf_dragged=False)
+            if coarse != (renderer, settings) and self._worth_refining(width * height, (renderer, settings), coarse):
+                # progressive refinement: the whole view at the preview's renderer and settings first
+                serial = self._service.submit(coarse[0], *request[1:3], coarse[1], *request[4:7], False, s.background)
+                self._pending_final = (serial, request)
+                return serial
         return self._service.submit(*request)
 
-    def _worth_refining(self, pixels: int, settings: RenderSettings, coarse: RenderSettings) -> bool:
+    def _worth_refining(self, pixels: int, still_frame: tuple[str, RenderSettings],
+                        coarse_frame: tuple[str, RenderSettings]) -> bool:  # fmt: skip
         """Whether a still frame is slow enough (REFINE_AFTER_MS, as measured for its settings) and
         the coarse one cheap enough (at most half of it) to show the coarse one first."""
-        still, cheap = (self._costs.get(self._cost_key(x)) for x in (settings, coarse))
+        still, cheap = (self._costs.get(self._cost_key(*x)) for x in (still_frame, coarse_frame))
         still_model = still.model() if still is not None else None
         if still_model is None:
             return False

@@ -19,9 +19,6 @@ bar and a message box) and goes on with what it had.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
-
 from PyQt5.QtCore import QSettings, pyqtSignal
 from PyQt5.QtGui import QCloseEvent, QKeySequence
 from PyQt5.QtWidgets import QAction, QLabel, QMainWindow, QMessageBox, QToolBar, QWidget
@@ -75,8 +72,7 @@ class MainWindow(QMainWindow):
         self.viewport = Viewport(self.state, self)
         self.setCentralWidget(self.viewport)
         self.service = RenderService(self, renderer_factory)
-        self.scheduler = FrameScheduler(self.state, self.service, self.viewport.pixel_size, self,
-                                        tf_drag_options=self._tf_drag_options)  # fmt: skip
+        self.scheduler = FrameScheduler(self.state, self.service, self.viewport.pixel_size, self, registry=registry)
         status_bar = self.statusBar()
         recent = RecentFiles(settings, parent=self)
         self.renderers = RendererControl(
@@ -157,13 +153,6 @@ class MainWindow(QMainWindow):
             self.setWindowTitle(f"volren - {self.state.source}" if self.state.source else "volren")
         self.renderers.on_state_change(change)
         self.quality.on_state_change(change)
-
-    def _tf_drag_options(self, renderer: str) -> Mapping[str, Any]:
-        """The renderer's options for previews while a TF is dragged (none when unknown)."""
-        try:
-            return self.registry.capabilities(renderer).tf_drag_options
-        except Exception:  # noqa: BLE001 - a broken plugin is reported by the chooser
-            return {}
 
     def reset_view(self) -> None:
         self.state.reset_camera(self.viewport.aspect())

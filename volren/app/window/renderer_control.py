@@ -158,8 +158,9 @@ class RendererControl:
     def frame_shown(self, frame: Frame) -> None:
         """The renderer drew: it is the one to fall back to, and its numbers go in the label."""
         self._preparing = None
-        self._last_good_renderer = frame.renderer
-        self._failure_key = None
+        if frame.renderer == self._state.renderer:  # not a preview by the fastest renderer
+            self._last_good_renderer = frame.renderer
+            self._failure_key = None
         cheaper = frame.settings is not None and frame.settings != self._state.settings
         quality = "" if frame.full else (", preview at lower quality" if cheaper else ", preview")
         self.frame_label.setText(
