@@ -68,3 +68,15 @@ def test_previews_go_to_the_fastest_renderer_measured_that_can_draw_the_scene(mo
     assert (renderer, settings.step, settings.shade) == ("slow", 1.0, True)
     custom = RenderSettings(step=0.7)
     assert preview_choice("slow", "uniform", 1, custom, names, caps.get, False) == ("slow", custom)
+
+
+def test_reference_is_previewed_by_the_fastest_renderer_whatever_its_settings(monkeypatch) -> None:
+    from volren.app.core.preview_settings import preview_choice
+    from volren.renderers.base import Capabilities, KindSupport
+
+    table = QualityTable({"uniform": {"fast": {"interactive": _level(1.0, {"m": 1})}}}, "test")
+    monkeypatch.setattr(quality, "table", lambda: table)
+    caps = {"reference": Capabilities(kinds={"uniform": KindSupport()}), "fast": Capabilities(kinds={"uniform": KindSupport()})}
+    custom = RenderSettings(step=0.1)
+    renderer, settings = preview_choice("reference", "uniform", 1, custom, ["reference", "fast"], caps.get, False)
+    assert (renderer, settings.step, dict(settings.options)) == ("fast", 1.0, {"m": 1})

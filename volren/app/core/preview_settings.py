@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from volren.model.settings import RenderSettings
-from volren.quality import LEVELS, at_level, fastest_measured, level_of
+from volren.quality import LEVELS, NOT_AUTO, at_level, fastest_measured, level_of
 from volren.renderers.base import Capabilities
 
 #: The level previews use when the user's level is slower.
@@ -42,13 +42,14 @@ def preview_choice(renderer: str, kind: str, tf_dims: int, settings: RenderSetti
     """(renderer, settings) of a preview frame of a scene whose still frames `renderer` draws with
     `settings`: the fastest renderer measured at the `interactive` level that can draw the scene
     (the user's own when it is the fastest, or when the settings are custom); `capabilities`
-    gives a renderer's (None: it does not import)."""
+    gives a renderer's (None: it does not import). `reference` is previewed by the fastest renderer
+    whatever its settings: its frames take seconds, and a drag showed nothing until release."""
 
     def drag(name: str) -> Mapping[str, Any] | None:
         caps = capabilities(name)
         return caps.tf_drag_options if tf_dragged and caps is not None else None
 
-    if level_of(renderer, kind, settings) is not None:
+    if level_of(renderer, kind, settings) is not None or renderer in NOT_AUTO:  # reference: a frame takes seconds
         def can_draw(name: str) -> bool:
             caps = capabilities(name)
             at = at_level(name, kind, PREVIEW_LEVEL, settings)
