@@ -97,8 +97,9 @@ class TetraRenderer(RendererBase):
             QualityLevel("table 256 (default)"),
             QualityLevel("table 512", options={"table_size": 512}),
         ),
-        # a new TF rebuilds the 3D table: 289 -> 95 ms a 400x300 preview on oxygen (TF change + frame)
-        tf_drag_options={"table_size": 64, "table_lengths": 8},
+        # a new TF rebuilds the 3D table: 289 -> 95 ms a 400x300 preview on oxygen (TF change + frame);
+        # refining where neighbours differ by 0.1 (the draft level's) instead of 0.05: 95 -> 65 ms
+        tf_drag_options={"table_size": 64, "table_lengths": 8, "refine_tolerance": 0.1},
     )
     option_help: ClassVar[Mapping[str, str]] = {
         "table_size": "value entries per axis of the 3D table (default 256)",
