@@ -68,6 +68,26 @@ def main() -> int:
             else False
         ),
     }
+    # issue 23: 1D -> 2D -> 1D through the tabs' buttons keeps the edited TFs; a mesh offers no 2D TF
+    panel = window.docks.tf_panel
+    edited_1d = window.state.transfer_function
+    panel.tabs.setCurrentIndex(1)
+    QTest.mouseClick(panel.editor_2d.use_2d_button, Qt.LeftButton)
+    wait_full(3)
+    seeded = window.state.transfer_function
+    panel.tabs.setCurrentIndex(0)
+    QTest.mouseClick(panel.editor_1d.use_1d_button, Qt.LeftButton)
+    wait_full(4)
+    result["round_trip"] = [seeded.dims, [w.type for w in seeded.widgets].count("box") == len(seeded.widgets) > 0,
+                            window.state.transfer_function is edited_1d]  # fmt: skip
+    window.files.apply_loaded(load_input("data_samples/hollow_cylinder.vtu"), "tetra")
+    wait_full(5)
+    panel.tabs.setCurrentIndex(1)
+    button = panel.editor_2d.use_2d_button
+    QTest.mouseClick(button, Qt.LeftButton)  # disabled: nothing happens
+    app.processEvents()
+    result["mesh_2d"] = [button.isEnabled(), button.toolTip(), window.state.transfer_function.dims,
+                         window.statusBar().currentMessage()]  # fmt: skip
     print(json.dumps(result))
     window.shutdown()
     return 0

@@ -66,6 +66,9 @@ def test_a_tf_edit_in_the_real_window_changes_the_frame_on_screen():
     assert report["points_added"] == 1
     assert report["changed_fraction"] > 0.02, report
     assert report["frame_matches_screen"], report
+    assert report["round_trip"] == [2, True, True], report  # seeded 2D boxes, then the edited 1D TF back
+    enabled, tooltip, dims, _status = report["mesh_2d"]
+    assert not enabled and "No renderer draws 2D transfer functions on tetrahedral volumes" in tooltip and dims == 1
 
 
 def test_view_with_an_unknown_renderer_fails_in_one_line(tmp_path):

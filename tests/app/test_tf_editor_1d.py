@@ -443,13 +443,19 @@ def test_a_2d_tf_file_goes_into_the_state(editor, state, tmp_path):
 
 # ---------------------------------------------------------------------------- 2D transfer functions
 def test_a_2d_tf_offers_a_1d_one(qtbot, editor, state):
+    """Back to the 1D TF the 2D one replaced (issue 23: the user's work); a scene opened with a
+    2D TF has none, and gets the volume's default."""
+    edited = state.transfer_function
     state.set_transfer_function(TransferFunction2D((0.0, 1.0), (0.0, 2.0)))
     assert editor.pages.currentWidget() is editor.page_2d
     assert editor.point_positions() == []
     assert editor.use_1d_button.isEnabled()
     qtbot.mouseClick(editor.use_1d_button, Qt.LeftButton)
-    assert state.transfer_function == default_transfer_function(state.volume)
+    assert state.transfer_function is edited
     assert editor.pages.currentWidget() is editor.page_1d
+    state.load(state.volume, TransferFunction2D((0.0, 1.0), (0.0, 2.0)), state.camera)
+    qtbot.mouseClick(editor.use_1d_button, Qt.LeftButton)
+    assert state.transfer_function == default_transfer_function(state.volume)
 
 
 def test_without_a_volume_the_1d_button_is_disabled(make_editor):

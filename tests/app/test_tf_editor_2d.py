@@ -3,6 +3,8 @@ given an opacity and deleted; the editor following the model; undo; the 1D -> 2D
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from PyQt5.QtCore import QPoint, Qt
@@ -296,19 +298,61 @@ def test_a_new_volume_recomputes_the_histogram(editor, state):
 # ---------------------------------------------------------------------------- 1D -> 2D
 def test_with_a_1d_tf_the_button_makes_a_2d_one(qtbot, editor, state, history):
     old = TransferFunction1D.ramp(0.0, 1.7, opacity_unit_distance=0.3)
-    state.set_transfer_function(old)
+    state.load(state.volume, old, state.camera)  # a fresh scene: no 2D TF of this volume to return to
     assert editor.use_2d_button.isVisibleTo(editor) and not editor.canvas.isVisibleTo(editor)
     assert editor.use_2d_button.isEnabled()
     qtbot.mouseClick(editor.use_2d_button, Qt.LeftButton)
     tf = state.transfer_function
     assert isinstance(tf, TransferFunction2D)
     assert tf.value_range == state.volume.value_range
-    assert tf.gradient_range == (0.0, suggested_gradient_max(state.volume))
+    gmax = suggested_gradient_max(state.volume)
+    assert tf.gradient_range == (0.0, gmax)
     assert tf.opacity_unit_distance == 0.3
-    (widget,) = tf.widgets
-    assert widget.type == "triangle" and widget.value > sum(tf.value_range) / 2
+    # seeded from the 1D TF (issue 23): a box per stretch between its opacity points, over every
+    # gradient, with its colour and opacity at the stretch's middle
+    lo, hi = tf.value_range
+    edges = sorted({lo, hi, *(x for x in old.opacity_points[:, 0] if lo < x < hi)})
+    assert [w.type for w in tf.widgets] == ["box"] * (len(edges) - 1)
+    for widget, a, b in zip(tf.widgets, edges[:-1], edges[1:], strict=True):
+        assert tuple(widget.value_range) == (a, b) and tuple(widget.gradient_range) == (0.0, gmax)
+        rgb, alpha = old.sample([(a + b) / 2])
+        assert widget.opacity == pytest.approx(alpha[0]) and tuple(widget.color) == pytest.approx(tuple(rgb[0]))
+        for g in (0.0, 0.5 * gmax, gmax):
+            _, a2 = tf.sample([(a + b) / 2], [g])
+            assert a2[0] == pytest.approx(alpha[0])
     assert editor.canvas.isVisibleTo(editor) and editor.canvas.transfer_function is tf
     history.undo()
+    assert state.transfer_function.dims == 1
+
+
+def test_switching_to_2d_and_back_keeps_both_tfs(qtbot, editor, state):
+    """Issue 23: 1D -> 2D -> 1D returns to the edited 1D TF, and 2D again to the edited 2D TF."""
+    from volren.app.tf_editor.one_d.editor import TransferFunction1DEditor
+
+    one_d = TransferFunction1DEditor(state)
+    qtbot.addWidget(one_d)
+    edited_1d = TransferFunction1D.ramp(0.2, 1.5, 0.7, (0.9, 0.3, 0.1))
+    state.load(state.volume, edited_1d, state.camera)
+    qtbot.mouseClick(editor.use_2d_button, Qt.LeftButton)
+    edited_2d = state.transfer_function
+    edited_2d.replace_widget(0, replace(edited_2d.widgets[0], opacity=0.123))
+    one_d.use_1d_button.setVisible(True)
+    qtbot.mouseClick(one_d.use_1d_button, Qt.LeftButton)
+    assert state.transfer_function is edited_1d
+    qtbot.mouseClick(editor.use_2d_button, Qt.LeftButton)
+    assert state.transfer_function is edited_2d and edited_2d.widgets[0].opacity == 0.123
+
+
+def test_no_2d_tf_is_offered_where_no_renderer_draws_one(qtbot, state):
+    """Issue 23: on a kind of volume no renderer draws 2D TFs for (tetrahedral meshes), the button
+    is disabled with the reason, instead of making a TF that fails to render."""
+    reason = "No renderer draws 2D transfer functions on uniform volumes"
+    editor = TransferFunction2DEditor(state, two_d_reason=lambda kind: reason if kind == "uniform" else None)
+    qtbot.addWidget(editor)
+    state.set_transfer_function(TransferFunction1D.ramp(0.0, 1.0))
+    assert not editor.use_2d_button.isEnabled() and editor.use_2d_button.toolTip() == reason
+    assert reason in editor.message_label.text()
+    editor.use_2d_transfer_function()  # a scripted call is refused as well
     assert state.transfer_function.dims == 1
 
 

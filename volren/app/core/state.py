@@ -67,6 +67,7 @@ class ViewState:
         self._background: tuple[float, float, float] = DEFAULT_BACKGROUND
         self._listeners: list[Listener] = []
         self._tf_unhook: Callable[[], None] | None = None
+        self._replaced: dict[int, TransferFunction] = {}  # by dimension: the last TF replaced by another
         self._interaction_depth = 0
         #: What is loaded, for titles and messages (a file name or "sample ...").
         self.source = ""
@@ -176,6 +177,7 @@ class ViewState:
         self._volume = volume
         self._crop = None
         self._cropped = None
+        self._replaced = {}  # the old volume's TFs do not fit the new one
         self._hook_tf(tf)
         self._camera = camera
         if settings is not None:
@@ -186,9 +188,17 @@ class ViewState:
         self._emit("volume", interactive=False)
 
     def set_transfer_function(self, tf: TransferFunction) -> None:
-        """Use another TF object; in-place edits of the current one are announced as well."""
+        """Use another TF object; in-place edits of the current one are announced as well. The
+        one replaced is remembered by its dimension (`replaced_transfer_function`)."""
+        if self._tf is not None and self._tf is not tf:
+            self._replaced[self._tf.dims] = self._tf
         self._hook_tf(tf)
         self._emit("tf")
+
+    def replaced_transfer_function(self, dims: int) -> TransferFunction | None:
+        """The last TF of dimension `dims` that another replaced for this volume (switching 1D to
+        2D and back returns to the user's TF instead of a default), or None."""
+        return self._replaced.get(dims)
 
     def _hook_tf(self, tf: TransferFunction) -> None:
         if self._tf_unhook is not None:

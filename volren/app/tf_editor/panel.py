@@ -8,6 +8,8 @@ button). Undo and redo come from one `TFHistory` shared by both editors.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from PyQt5.QtCore import pyqtSignal
 from PyQt5.QtWidgets import QHBoxLayout, QTabWidget, QToolButton, QVBoxLayout, QWidget
 
@@ -22,12 +24,14 @@ class TransferFunctionPanel(QWidget):
 
     errorOccurred = pyqtSignal(str, str)
 
-    def __init__(self, state: ViewState, history: TFHistory, parent: QWidget | None = None) -> None:
+    def __init__(self, state: ViewState, history: TFHistory, parent: QWidget | None = None,
+                 two_d_reason: Callable[[str], str | None] = lambda _kind: None) -> None:  # fmt: skip
+        """`two_d_reason(kind)`: why no renderer can draw a 2D TF on such volumes (None: one can)."""
         super().__init__(parent)
         self.state = state
         self.history = history
         self.editor_1d = TransferFunction1DEditor(state, self)
-        self.editor_2d = TransferFunction2DEditor(state, self)
+        self.editor_2d = TransferFunction2DEditor(state, self, two_d_reason)
         self.tabs = QTabWidget(self)
         self.tabs.addTab(self.editor_1d, "1D: value")
         self.tabs.addTab(self.editor_2d, "2D: value x gradient")

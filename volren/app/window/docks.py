@@ -58,7 +58,7 @@ class Docks:
         self.window = window
         state = window.state
         self.history = TFHistory(state, window)
-        self.tf_panel = TransferFunctionPanel(state, self.history, window)
+        self.tf_panel = TransferFunctionPanel(state, self.history, window, self.two_d_reason)
         self.lighting = LightingPanel(state)
         self.sampling = SamplingPanel(state)
         self.blend = BlendPanel(state)
@@ -110,6 +110,19 @@ class Docks:
         return dock
 
     # ------------------------------------------------------------------ capabilities
+    def two_d_reason(self, kind: str) -> str | None:
+        """Why no registered renderer draws a 2D TF on `kind` volumes (the 2D tab then offers
+        none: it used to make one, which failed to render and left every renderer greyed out)."""
+        for name in self.window.registry.names():
+            try:
+                support = self.window.registry.capabilities(name).kinds.get(kind)  # type: ignore[call-overload]
+            except Exception:  # noqa: BLE001 - a broken plugin is reported by the chooser
+                continue
+            if support is not None and 2 in support.tf_dims:
+                return None
+        return f"No renderer draws 2D transfer functions on {'tetrahedral' if kind == 'tet' else kind} volumes"
+
+
     def _on_change(self, change: Change) -> None:
         # a TF edit matters only when it changes the TF's dimension: during a drag, refreshing
         # three panels on every edit took the GUI thread's time from the render thread

@@ -312,13 +312,15 @@ class TransferFunction1DEditor(QWidget):
             self.set_value_range(*volume.value_range)
 
     def use_1d_transfer_function(self) -> None:
-        """Replace the TF (a 2D one) with the default 1D TF of the volume."""
+        """Replace the TF (a 2D one) with the 1D TF it replaced for this volume (the user's work),
+        or the volume's default 1D TF."""
         volume = self._state.volume
         if volume is None:
             return
         from volren.api import default_transfer_function
 
-        self._state.set_transfer_function(default_transfer_function(volume))
+        previous = self._state.replaced_transfer_function(1)
+        self._state.set_transfer_function(previous if previous is not None else default_transfer_function(volume))
 
     def open_file(self, path: str | Path) -> bool:
         """Put the TF in `path` into the state; False (and errorOccurred) if it cannot be read.

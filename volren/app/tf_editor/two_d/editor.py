@@ -18,6 +18,7 @@ Dual-domain picking: the main window passes `core.picking.pick`'s (value, gradie
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 from PyQt5.QtCore import Qt, pyqtSignal
@@ -36,9 +37,11 @@ from PyQt5.QtWidgets import (
 from volren.app.core import tf_widget_geometry as geometry
 from volren.app.core.joint_histogram import joint_histogram, suggested_gradient_max
 from volren.app.core.state import Change, ViewState
+from volren.app.core.tf_seeding import seeded_2d
 from volren.app.qt_subscription import subscribe_while_alive
 from volren.app.tf_editor.two_d.widget_canvas import TFWidgetCanvas
 from volren.errors import VolrenError
+from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction2D
 
 #: Colours new widgets take in turn.
@@ -56,6 +59,7 @@ _MESSAGE_1D = (
     "The transfer function is 1D. A 2D transfer function assigns colour and opacity over value and "
     "gradient magnitude, which separates the boundaries between materials from the materials."
 )
+_USE_2D_TIP = "Switch to a 2D transfer function that draws what the 1D one draws (boxes over every gradient magnitude)"
 _MESSAGE_NO_VOLUME = "Open a volume to edit a 2D transfer function over its values and gradient magnitudes."
 
 
@@ -65,9 +69,12 @@ class TransferFunction2DEditor(QWidget):
     #: (title, one-line message) of every error.
     errorOccurred = pyqtSignal(str, str)
 
-    def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
+    def __init__(self, state: ViewState, parent: QWidget | None = None,
+                 two_d_reason: Callable[[str], str | None] = lambda _kind: None) -> None:  # fmt: skip
+        """`two_d_reason(kind)`: why no registered renderer can draw a 2D TF on such volumes (None: one can)."""
         super().__init__(parent)
         self._state = state
+        self._two_d_reason = two_d_reason
         self._histogram_key: tuple | None = None
         self._pages = QStackedWidget(self)
         self._pages.addWidget(self._build_1d_page())
@@ -169,9 +176,12 @@ class TransferFunction2DEditor(QWidget):
     def _refresh(self) -> None:
         tf = self.transfer_function
         self._pages.setCurrentIndex(0 if tf is None else 1)
-        has_volume = self._state.volume is not None
-        self.use_2d_button.setEnabled(has_volume)
-        self.message_label.setText(_MESSAGE_1D if has_volume else _MESSAGE_NO_VOLUME)
+        volume = self._state.volume
+        reason = self._two_d_reason(volume.kind) if volume is not None else None
+        self.use_2d_button.setEnabled(volume is not None and reason is None)
+        self.use_2d_button.setToolTip(reason or _USE_2D_TIP)
+        self.message_label.setText(_MESSAGE_NO_VOLUME if volume is None else (f"{_MESSAGE_1D}\n\n{reason}." if reason
+                                                                               else _MESSAGE_1D))  # fmt: skip
         self.canvas.set_transfer_function(tf)
         self._update_histogram(tf)
         self._sync_controls()
@@ -303,9 +313,15 @@ class TransferFunction2DEditor(QWidget):
             self.set_gradient_max(suggested_gradient_max(self._state.volume))
 
     def use_2d_transfer_function(self) -> None:
-        """Replace the 1D TF with a 2D one over the volume's value and robust gradient ranges."""
+        """Replace the 1D TF with a 2D one: the 2D TF this volume had before, or one seeded from
+        the 1D TF (`seeded_2d`: what it drew, as boxes over every gradient magnitude) over the
+        volume's value and robust gradient ranges."""
         volume = self._state.volume
-        if volume is None:
+        if volume is None or self._two_d_reason(volume.kind) is not None:
+            return
+        previous = self._state.replaced_transfer_function(2)
+        if previous is not None:
+            self._state.set_transfer_function(previous)
             return
         lo, hi = volume.value_range
         if not hi > lo:
@@ -313,8 +329,11 @@ class TransferFunction2DEditor(QWidget):
         try:
             gmax = suggested_gradient_max(volume)
             old = self._state.transfer_function
-            unit = old.opacity_unit_distance if old is not None else 1.0
-            tf = TransferFunction2D((lo, hi), (0.0, gmax), [geometry.boundary_triangle((lo, hi), gmax)], unit)
+            if isinstance(old, TransferFunction1D):
+                tf = seeded_2d(old, (lo, hi), gmax)
+            else:
+                unit = old.opacity_unit_distance if old is not None else 1.0
+                tf = TransferFunction2D((lo, hi), (0.0, gmax), [geometry.boundary_triangle((lo, hi), gmax)], unit)
         except VolrenError as exc:
             self.errorOccurred.emit("Cannot create a 2D transfer function", str(exc))
             return
