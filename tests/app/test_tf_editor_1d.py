@@ -35,6 +35,7 @@ from volren.errors import VolrenError
 from volren.io import load_transfer_function
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
+from volren.model.volume import UniformVolume
 from volren.samples import marschner_lobb, sample_transfer_functions
 
 SIZE = (320, 300)
@@ -213,10 +214,23 @@ def test_edits_from_code_and_replaced_tfs_show_up(qtbot, editor, state):
 
 def test_histogram_is_the_volumes_and_log_is_a_toggle(editor, state):
     assert editor.curve.histogram is value_histogram(state.volume)
-    assert not editor.curve.log_counts
-    editor.log_check.setChecked(True)
-    assert editor.curve.log_counts
+    assert editor.curve.log_counts and editor.log_check.isChecked()  # log by default (issue 23)
     editor.grab()  # paints with log heights
+    editor.log_check.setChecked(False)
+    assert not editor.curve.log_counts
+    editor.grab()
+
+
+def test_log_counts_by_default_show_the_values_beside_a_dominant_background(editor, state):
+    """Issue 23: CT-like data, 95 % of the voxels at one value, drew an empty box in linear counts."""
+    values = np.zeros((20, 20, 20), np.float32)
+    values.flat[::20] = np.linspace(0.1, 1.0, values.size // 20)  # 5 % of the voxels spread out
+    volume = UniformVolume(values)
+    state.load(volume, default_transfer_function(volume), default_camera(volume))
+    histogram = editor.curve.histogram
+    visible_log = np.count_nonzero(histogram.heights(editor.curve.log_counts) > 0.05)
+    visible_linear = np.count_nonzero(histogram.heights(False) > 0.05)
+    assert visible_linear <= 1 < 10 <= visible_log
 
 
 def test_a_new_volume_brings_its_histogram(editor, state):

@@ -28,7 +28,7 @@ from volren.model.settings import RenderSettings
 from volren.quality import AUTO, at_level, level_of
 
 OPEN_FILTER = (
-    "Volumes and scenes (*.vti *.vtk *.vtu *.vtr *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw *.json);;"
+    "Volumes and scenes (*.vti *.vtk *.vtu *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw *.json);;"
     "All files (*)"
 )
 

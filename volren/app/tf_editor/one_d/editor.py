@@ -122,6 +122,7 @@ class TransferFunction1DEditor(QWidget):
         self.preset_box.currentIndexChanged.connect(self._on_preset_chosen)
         self.log_check = QCheckBox("Log counts", self)
         self.log_check.setToolTip("Histogram heights as log(1 + count): rare values stay visible")
+        self.log_check.setChecked(self.curve.log_counts)
         self.log_check.toggled.connect(self.curve.set_log_counts)
 
         self.min_spin = self._spin_box("Lowest value of the transfer function (its points are rescaled)")

@@ -45,7 +45,9 @@ class OpacityCurve(PointCanvas):
         super().__init__(state, parent)
         self._histogram: Histogram | None = None
         self._histogram_layer: tuple[tuple, QPixmap] | None = None  # (what it shows, the bars drawn)
-        self._log_counts = False
+        # log by default: on CT and MR one value (air, background) holds 80-97 % of the voxels,
+        # and linear counts drew an empty box (issue 23)
+        self._log_counts = True
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(2 * MARGIN + 40, TOP + BOTTOM + 40)
         self.setToolTip("Opacity: click to add a point, drag to move it, right-click or Delete to remove it")
