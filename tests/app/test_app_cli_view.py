@@ -86,3 +86,15 @@ def test_view_screenshot_of_a_missing_file_fails_in_one_line(tmp_path):
     lines = [line for line in result.stderr.splitlines() if line.startswith("volren:")]
     assert len(lines) == 1 and "missing.vti" in lines[0], result.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_view_screenshot_of_a_raw_file_says_how_to_give_its_layout(tmp_path):
+    """No dialog where nobody can answer it: a one-line error naming the file and the flags."""
+    raw = tmp_path / "scan.raw"
+    raw.write_bytes(bytes(4096))
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen")
+    result = view([str(raw), "--screenshot", str(tmp_path / "x.png")], env)
+    assert result.returncode == 1
+    lines = [line for line in result.stderr.splitlines() if line.startswith("volren:")]
+    assert len(lines) == 1 and "scan.raw" in lines[0] and "--raw-shape" in lines[0], result.stderr
+    assert not (tmp_path / "x.png").exists()

@@ -123,9 +123,12 @@ def load_input(
     path: PathArg | None = None,
     tf: PathArg | None = None,
     scalars: str | None = None,
+    raw: Mapping[str, Any] | None = None,
     progress: Progress = _quiet,
 ) -> LoadedInput:
-    """Read `path` (default: the bundled sample) and optionally a TF file that overrides its TF."""
+    """Read `path` (default: the bundled sample) and optionally a TF file that overrides its TF;
+    `raw`: the layout of a headerless raw file (`load_volume`'s shape, dtype, byte_order, spacing,
+    header_bytes)."""
     io = _io()
     override = None
     if tf is not None:
@@ -151,7 +154,7 @@ def load_input(
         if _is_scene_json(p):
             return _load_scene(p, override, progress)
         return LoadedInput(None, io.load_transfer_function(p), source=p.name)
-    volume = io.load_volume(p, scalars=scalars)
+    volume = io.load_volume(p, scalars=scalars, **dict(raw or {}))
     prepare_for_rendering(volume, progress)
     if override is None:
         from volren.api import default_transfer_function

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import inspect
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from PyQt5.QtCore import QObject, QRunnable, QThreadPool, pyqtSignal, pyqtSlot
@@ -128,6 +128,7 @@ class Loader(QObject):
         tf: PathArg | None = None,
         scalars: str | None = None,
         context: Any = None,
+        raw: Mapping[str, Any] | None = None,
     ) -> int:
         """Load in the background (abandoning any load still running); returns the load's serial."""
         self._abandon()
@@ -139,7 +140,7 @@ class Loader(QObject):
             self._serial,
             self._signals,
             self._load,
-            (path, tf, scalars),
+            (path, tf, scalars) if raw is None else (path, tf, scalars, raw),
             self._pass_progress,
             self._cancel_running,
         )

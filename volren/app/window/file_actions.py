@@ -19,6 +19,7 @@ from PyQt5.QtWidgets import QAction, QFileDialog, QLabel, QMainWindow, QProgress
 from volren.app.core.loading import LoadedInput, PathArg
 from volren.app.core.state import ViewState, default_camera
 from volren.app.files.load_task import Loader, LoadFunction
+from volren.app.files.raw_dialog import RawDialog
 from volren.app.files.recent_files import RecentFiles, RecentFilesMenu
 from volren.app.rendering.viewport import Viewport
 from volren.app.window.renderer_control import RendererControl
@@ -117,12 +118,27 @@ class FileActions(QObject):
         `renderer` is an explicit request (the command line): if it cannot draw the volume that is
         an error; a scene's renderer that cannot is replaced quietly.
         """
+        raw = None
+        if path is not None and Path(path).suffix.lower() == ".raw" and Path(path).is_file():
+            raw = self.ask_raw_layout(path)  # a headerless file: the user says what it holds
+            if raw is None:
+                return
         label = Path(path).name if path is not None else "sample"
         self._window.statusBar().showMessage(f"Opening {label}…")
         if self._state.volume is None:
             self._viewport.placeholder = f"Opening {label}…"
             self._viewport.update()
-        self.loader.start(path, tf, scalars, context={"path": path, "renderer": renderer})
+        self.loader.start(path, tf, scalars, context={"path": path, "renderer": renderer}, raw=raw)
+
+    def ask_raw_layout(self, path: PathArg) -> dict[str, Any] | None:
+        """The layout of a headerless raw file from `RawDialog` (None: cancelled). Without dialogs
+        (a scripted screenshot) there is nobody to ask: a one-line error says what to do."""
+        if not getattr(self._window, "show_error_dialogs", True):
+            self._window.report_error("Cannot open", f"{path}: headerless raw data needs its shape and sample type: "
+                                      "open it in the window, or use volren render --raw-shape NX,NY,NZ --raw-dtype T")  # fmt: skip
+            return None
+        dialog = RawDialog(path, self._window)
+        return dialog.parameters() if dialog.exec() == RawDialog.Accepted else None
 
     def cancel(self) -> bool:
         """Abandon the running load (Esc, the status bar's Cancel): what is shown stays."""
