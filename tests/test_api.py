@@ -66,3 +66,17 @@ def test_default_transfer_function_of_values_near_the_float64_limits_is_finite()
     assert tf.value_range == (-1.7e308, 1.7e308)
     assert np.isfinite(tf.color_points).all() and np.isfinite(tf.opacity_points).all()
     assert tf.sample([1.7e308])[1][0] == pytest.approx(0.3)
+
+
+def test_a_constant_fields_default_tf_draws_the_same_box_with_every_renderer():
+    """Issue 23: the default TF of a constant field was a step at its value, which `reference`
+    resolved as transparent and the others as opaque; now it is 0.3 there, unambiguously."""
+    volume = UniformVolume(np.full((8, 8, 8), 5.0, np.float32))
+    tf = default_transfer_function(volume)
+    xs = tf.opacity_points[:, 0]
+    assert np.all(np.diff(xs) > 0) and tf.sample([5.0])[1][0] == pytest.approx(0.3)
+    kwargs = dict(size=(24, 24), azimuth=0, elevation=0, parallel=True, quality=None)
+    alphas = {name: volren.render(volume, tf, renderer=name, **kwargs)[12, 12, 3] for name in ("reference", "vtk", "slicer")}
+    expected = 1.0 - (1.0 - 0.3) ** 7  # 7 voxel spacings of 0.3 per spacing, through the middle
+    for name, alpha in alphas.items():
+        assert alpha == pytest.approx(expected, abs=0.03), (name, alphas)

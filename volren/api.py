@@ -29,11 +29,15 @@ from volren.renderers.base import ProgressCallback, Renderer, render_frame
 
 def default_transfer_function(volume: Volume) -> TransferFunction1D:
     """What a volume looks like before anyone edits its TF: viridis colours over the value range,
-    opacity ramping from 0 at the bottom tenth to 0.3 at the top, per voxel (or tet edge) thickness."""
+    opacity ramping from 0 at the bottom tenth to 0.3 at the top, per voxel (or tet edge) thickness
+    (a constant field: 0.3, so that every renderer draws it as the same translucent box)."""
     lo, hi = volume.value_range
     top = hi if hi > lo else lo + 1.0
     color = color_stops(VIRIDIS, lo, top)
-    opacity = [[lo, 0.0], [lerp(lo, top, 0.1), 0.0], [hi, 0.3]]
+    if hi > lo:
+        opacity = [[lo, 0.0], [lerp(lo, top, 0.1), 0.0], [hi, 0.3]]
+    else:  # a constant field: 0.3 at its value, not a step there that renderers resolved differently
+        opacity = [[lo, 0.3], [top, 0.3]]
     return TransferFunction1D(color, opacity, volume.characteristic_length)
 
 
