@@ -22,11 +22,24 @@ def frame_after(qtbot, window, act) -> object:
 def test_the_window_has_the_editors_and_panels_docked(loaded_window):
     w = loaded_window
     docks = w.docks
-    assert docks.tf_dock.widget() is docks.tf_panel and not docks.tf_dock.isHidden()
+    assert docks.tf_dock.widget().widget() is docks.tf_panel and not docks.tf_dock.isHidden()  # in a scroll area
     assert docks.tf_panel.tabs.currentWidget() is docks.tf_panel.editor_1d
     assert docks.dataset.facts()["Dimensions"] == " × ".join(str(n) for n in w.state.volume.dimensions)
     width, height = w.viewport.pixel_size()
     assert width >= 400 and height >= 400, "the docks squeeze the viewport"
+
+
+@pytest.mark.parametrize("size", [(1300, 760), (900, 600), (640, 480)])
+def test_the_viewport_keeps_half_the_window_as_it_shrinks(loaded_window, qtbot, size):
+    """Issue 23: the docks kept their width (at 900x600 the viewport was 169 px wide); they give
+    way down to a minimum, their controls scrolling, and stay visible."""
+    w = loaded_window
+    w.resize(*size)
+    qtbot.waitUntil(lambda: w.width() == size[0], timeout=2000)
+    qtbot.wait(50)
+    assert w.viewport.width() >= 0.47 * w.width(), (w.viewport.width(), w.width())
+    for dock in (w.docks.tf_dock, w.docks.settings_dock):
+        assert dock.isVisible() and dock.width() >= 150
 
 
 def test_a_click_in_the_1d_editor_renders_a_new_frame_and_undo_restores_it(loaded_window, qtbot):

@@ -40,14 +40,20 @@ def _titled(title: str, panel: QWidget) -> QWidget:
     return box
 
 
+#: The narrowest a dock gets when the window is small (its content scrolls sideways below its own width).
+DOCK_MIN_WIDTH = 160
+#: Above this share of the window's width, the docks give way to the viewport on a resize.
+DOCKS_MAX_SHARE = 0.5
+
+
 def _scrolled(widget: QWidget) -> QScrollArea:
     """In a scroll area, so that longer text after a load (bounds, notes) never widens the dock
-    and squeezes the viewport under the person's mouse."""
+    and squeezes the viewport under the person's mouse, and a small window can make the dock
+    narrower than its controls (they scroll) instead of leaving the viewport a sliver."""
     scroll = QScrollArea()
     scroll.setWidgetResizable(True)
     scroll.setWidget(widget)
-    # Wide enough for the controls as built (no horizontal scrolling), plus a vertical scroll bar.
-    scroll.setMinimumWidth(widget.sizeHint().width() + scroll.verticalScrollBar().sizeHint().width() + 4)
+    scroll.setMinimumWidth(DOCK_MIN_WIDTH)
     return scroll
 
 
@@ -66,7 +72,7 @@ class Docks:
         self.background = BackgroundPanel(state)
         self.dataset = DatasetInfoPanel(state)
 
-        self.tf_dock = self._dock("Transfer function", "tf-dock", self.tf_panel, Qt.RightDockWidgetArea)
+        self.tf_dock = self._dock("Transfer function", "tf-dock", _scrolled(self.tf_panel), Qt.RightDockWidgetArea)
         settings = QWidget()
         layout = QVBoxLayout(settings)
         layout.setContentsMargins(2, 2, 2, 2)
@@ -108,6 +114,21 @@ class Docks:
         dock.setWidget(widget)
         self.window.addDockWidget(area, dock)
         return dock
+
+    def keep_viewport_share(self) -> None:
+        """After a resize, narrow the side docks so that together they take at most
+        DOCKS_MAX_SHARE of the window's width (docks kept their width while the window shrank:
+        at 900x600 the viewport was 169 px wide, issue 23)."""
+        window = self.window
+        docks = [d for d in (self.tf_dock, self.settings_dock) if d.isVisible() and not d.isFloating()]
+        if not docks:
+            return
+        budget = DOCKS_MAX_SHARE * window.width()
+        used = sum(d.width() for d in docks)
+        if used <= budget:
+            return
+        widths = [max(DOCK_MIN_WIDTH, int(d.width() * budget / used)) for d in docks]
+        window.resizeDocks(docks, widths, Qt.Horizontal)
 
     # ------------------------------------------------------------------ capabilities
     def two_d_reason(self, kind: str) -> str | None:

@@ -20,7 +20,7 @@ bar and a message box) and goes on with what it had.
 from __future__ import annotations
 
 from PyQt5.QtCore import QSettings, pyqtSignal
-from PyQt5.QtGui import QCloseEvent, QKeySequence
+from PyQt5.QtGui import QCloseEvent, QKeySequence, QResizeEvent
 from PyQt5.QtWidgets import QAction, QLabel, QMainWindow, QMessageBox, QToolBar, QWidget
 
 from volren.app.core.loading import load_input
@@ -177,6 +177,11 @@ class MainWindow(QMainWindow):
         self.service.shutdown()
         self.screenshots.shutdown()
         self.files.shutdown(5000)
+
+    def resizeEvent(self, event: QResizeEvent) -> None:
+        super().resizeEvent(event)
+        if hasattr(self, "docks"):
+            self.docks.keep_viewport_share()
 
     def closeEvent(self, event: QCloseEvent) -> None:
         self.shutdown()

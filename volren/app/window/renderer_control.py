@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from PyQt5 import sip
 from PyQt5.QtCore import QTimer
 from PyQt5.QtWidgets import QLabel, QStatusBar, QWidget
 
@@ -174,6 +175,8 @@ class RendererControl:
         QTimer.singleShot(int(PREPARING_AFTER_S * 1000), lambda: self._show_preparing(serial))
 
     def _show_preparing(self, serial: int) -> None:
+        if sip.isdeleted(self.frame_label):  # the window closed before the timer fired
+            return
         if self._preparing is not None and self._preparing[0] == serial:
             self.frame_label.setText(f"{self._preparing[1]}  |  preparing the renderer…")
 
