@@ -489,3 +489,40 @@ def test_vtk_screenshot_renders_beside_the_viewport_renderer(
     background = np.round(np.asarray(w.state.background) * 255)
     assert np.count_nonzero(np.abs(pixels - background).max(axis=-1) > 30) > 0.05 * width * height
     assert error_boxes == []
+
+
+def test_dialogs_start_where_the_person_last_opened_or_saved(make_window, ini, qtbot, tmp_path, monkeypatch):
+    """Issue 23: the Open dialog starts in the folder last used (kept across sessions), Save
+    Scene proposes that folder (not the data's), and so does the first screenshot."""
+    from PyQt5.QtWidgets import QFileDialog
+
+    from volren.app.files import screenshot_dialog
+
+    work, data = tmp_path / "work", tmp_path / "data"
+    work.mkdir()
+    data.mkdir()
+    w = make_window(settings=ini)
+    assert w.files.recent.folder() == ""  # nothing yet: the working folder
+    w.files.recent.remember_folder(work / "earlier.json")
+    asked = {}
+
+    def open_dialog(parent, title, start, filters):
+        asked["open"] = start
+        return "", ""
+
+    monkeypatch.setattr(QFileDialog, "getOpenFileName", staticmethod(open_dialog))
+    w.files._open_dialog()
+    assert asked["open"] == str(work)
+    assert RecentFiles(QSettings(ini.fileName(), QSettings.IniFormat)).folder() == str(work)  # kept
+    w.scenes._volume_path = str(data / "head.vti")
+    assert w.scenes.suggested_path() == str(work / "head.json")
+
+    def ask(parent, path, size):
+        asked["screenshot"] = path
+        return None
+
+    monkeypatch.setattr(screenshot_dialog, "ask_screenshot", ask)
+    w.screenshots._dialog()
+    assert asked["screenshot"] == str(work / "volren.png")
+    w.files.recent.add(data / "head.vti")  # opening a file moves the work there
+    assert w.files.recent.folder() == str(data)

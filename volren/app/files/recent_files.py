@@ -22,6 +22,8 @@ from volren.app.core.loading import PathArg
 ORGANISATION = "volren"
 APPLICATION = "volren"
 KEY = "recent/files"
+#: The folder the person last opened or saved something in: where file dialogs start.
+FOLDER_KEY = "dialogs/folder"
 LIMIT = 10
 
 
@@ -52,9 +54,22 @@ class RecentFiles(QObject):
         return [str(v) for v in value if isinstance(v, str) and v][: self.limit]
 
     def add(self, path: PathArg) -> None:
-        """Put `path` first (moving it up when it is already listed)."""
+        """Put `path` first (moving it up when it is already listed); its folder is where the
+        next file dialog starts."""
         entry = os.path.abspath(os.fspath(path))
         self._store([entry, *(p for p in self.paths() if p != entry)])
+        self.remember_folder(entry)
+
+    def folder(self) -> str:
+        """Where file dialogs start: the folder last opened or saved in, "" (the working folder)
+        when none is known or it is gone."""
+        value = self._settings.value(FOLDER_KEY, "")
+        return value if isinstance(value, str) and value and os.path.isdir(value) else ""
+
+    def remember_folder(self, path: PathArg) -> None:
+        """`path`'s folder (or `path`, a folder) is where the person works now."""
+        entry = os.path.abspath(os.fspath(path))
+        self._settings.setValue(FOLDER_KEY, entry if os.path.isdir(entry) else os.path.dirname(entry))
 
     def remove(self, path: PathArg) -> None:
         entry = os.path.abspath(os.fspath(path))

@@ -234,12 +234,13 @@ class FileActions(QObject):
 
     # ------------------------------------------------------------------ dialogs
     def _open_dialog(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self._window, "Open volume, scene or transfer function", "", OPEN_FILTER)
+        path, _ = QFileDialog.getOpenFileName(self._window, "Open volume, scene or transfer function",
+                                              self.recent.folder(), OPEN_FILTER)  # fmt: skip
         if path:
             self.open_input(path)
 
     def _open_folder_dialog(self) -> None:
-        path = QFileDialog.getExistingDirectory(self._window, "Open DICOM folder")
+        path = QFileDialog.getExistingDirectory(self._window, "Open DICOM folder", self.recent.folder())
         if path:
             self.open_input(path)
 

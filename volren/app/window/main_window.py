@@ -80,7 +80,8 @@ class MainWindow(QMainWindow):
         )
         self.quality = QualityControl(self.state, self)
         self.scenes = SceneActions(self, self.state, self.viewport, recent, self.report_error)
-        self.screenshots = ScreenshotActions(self, self.state, self.viewport, renderer_factory, self.report_error)
+        self.screenshots = ScreenshotActions(self, self.state, self.viewport, renderer_factory, self.report_error,
+                                             recent.folder)  # fmt: skip
         self.files = FileActions(
             self, self.state, self.viewport, self.renderers, self.scenes, recent, load, self.report_error
         )

@@ -96,11 +96,17 @@ class SceneActions:
         self._volume_path, self._volume_scalars = str(target.absolute()), None
         return self._volume_path
 
+    def suggested_path(self) -> str:
+        """Where Save Scene proposes to write: named after the volume, in the folder the person
+        last opened or saved in (issue 23: not next to the data, which may be read-only or shared)."""
+        name = Path(self._volume_path).with_suffix(".json").name if self._volume_path else "scene.json"
+        folder = self._recent.folder() or (str(Path(self._volume_path).parent) if self._volume_path else "")
+        return str(Path(folder) / name) if folder else name
+
     def _save_dialog(self) -> None:
         if self._state.volume is None:
             self._report_error("Cannot save the scene", "nothing to save: open a volume first")
             return
-        start = str(Path(self._volume_path).with_suffix(".json")) if self._volume_path else "scene.json"
-        path, _ = QFileDialog.getSaveFileName(self._window, "Save scene", start, SCENE_FILTER)
+        path, _ = QFileDialog.getSaveFileName(self._window, "Save scene", self.suggested_path(), SCENE_FILTER)
         if path:
             self.save(path if Path(path).suffix else path + ".json")

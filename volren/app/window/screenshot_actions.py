@@ -3,6 +3,7 @@ dialog that can cancel it), or the viewport or the whole window grabbed as shown
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 
 from PyQt5.QtCore import QObject, pyqtSignal
@@ -30,12 +31,15 @@ class ScreenshotActions(QObject):
         viewport: Viewport,
         renderer_factory: RendererFactory,
         report_error: Callable[[str, str], None],
+        folder: Callable[[], str] | None = None,
     ) -> None:
+        """`folder()`: where the person works now (the first screenshot is proposed there)."""
         super().__init__(window)
         self._window = window
         self._state = state
         self._viewport = viewport
         self._report_error = report_error
+        self._folder = folder
         self._path = "volren.png"  # the dialog offers the last one again
         self._progress: QProgressDialog | None = None
         self.screenshotter = Screenshotter(renderer_factory, self)
@@ -82,7 +86,8 @@ class ScreenshotActions(QObject):
         return True
 
     def _dialog(self) -> None:
-        choice = screenshot_dialog.ask_screenshot(self._window, self._path, self._viewport.pixel_size())
+        path = self._path if self._folder is None or os.path.isabs(self._path) else os.path.join(self._folder(), self._path)
+        choice = screenshot_dialog.ask_screenshot(self._window, path, self._viewport.pixel_size())
         if choice is None:
             return
         self._path = choice.path
