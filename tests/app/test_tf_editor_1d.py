@@ -479,3 +479,32 @@ def test_without_a_volume_the_1d_button_is_disabled(make_editor):
     state.set_transfer_function(TransferFunction2D((0.0, 1.0), (0.0, 2.0)))
     assert editor.pages.currentWidget() is editor.page_2d
     assert not editor.use_1d_button.isEnabled()
+
+
+def test_the_selected_points_value_and_opacity_are_typed(qtbot, editor, state):
+    """Issue 23: numeric entry of the selected point; it follows the selection and the TF's edits,
+    and a typed value stays between the neighbours."""
+    entry = editor.point_entry
+    curve = editor.curve
+    tf = state.transfer_function
+    assert not entry.isEnabled()  # nothing selected
+    points = tf.opacity_points
+    index = len(points) // 2
+    qtbot.mouseClick(curve, Qt.LeftButton, pos=curve.point_positions()[index])
+    assert curve.selected == index and entry.isEnabled()
+    assert entry.value.value() == pytest.approx(points[index, 0]) and entry.opacity.value() == pytest.approx(points[index, 1], abs=1e-3)
+    left, right = points[index - 1, 0], points[index + 1, 0]
+    target = left + 0.25 * (right - left)
+    entry.value.setValue(target)
+    entry.opacity.setValue(0.42)
+    entry.opacity.editingFinished.emit()
+    np.testing.assert_allclose(tf.opacity_points[index], [target, 0.42])
+    entry.value.setValue(right + 10.0)  # beyond the right neighbour: stops there
+    entry.value.editingFinished.emit()
+    assert tf.opacity_points[index, 0] == pytest.approx(right)
+    moved = tf.opacity_points.copy()
+    moved[index, 1] = 0.1
+    tf.set_opacity_points(moved)  # an edit elsewhere shows in the fields
+    assert entry.opacity.value() == pytest.approx(0.1)
+    curve.selected = None
+    assert not entry.isEnabled()

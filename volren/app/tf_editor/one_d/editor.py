@@ -43,6 +43,7 @@ from volren.app.qt_subscription import subscribe_while_alive
 from volren.app.tf_editor.one_d.color_bar import ColorBar
 from volren.app.tf_editor.one_d.opacity_curve import OpacityCurve
 from volren.app.tf_editor.one_d.point_canvas import ValueAxis
+from volren.app.tf_editor.one_d.point_entry import PointEntry
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction
@@ -162,6 +163,7 @@ class TransferFunction1DEditor(QWidget):
         self.use_1d_button = QPushButton("Use a 1D transfer function", self)
         self.use_1d_button.clicked.connect(self.use_1d_transfer_function)
 
+        self.point_entry = PointEntry(self.curve, self)
         self.pages = QStackedWidget(self)
         self.page_1d = QWidget(self.pages)
         one = QVBoxLayout(self.page_1d)
@@ -173,6 +175,7 @@ class TransferFunction1DEditor(QWidget):
         one.addLayout(top)
         one.addWidget(self.curve, 1)
         one.addWidget(self.color_bar)
+        one.addWidget(self.point_entry)
         value_range = QHBoxLayout()
         value_range.addWidget(QLabel("Range", self.page_1d))
         value_range.addWidget(self.min_spin, 1)
@@ -251,6 +254,7 @@ class TransferFunction1DEditor(QWidget):
             self._show_numbers(tf1)
         self.curve.model_changed()
         self.color_bar.model_changed()
+        self.point_entry.refresh()
 
     def _forget_numbers(self) -> None:
         self._numbers_shown = None

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from PyQt5.QtCore import QPointF, Qt
+from PyQt5.QtCore import QPointF, Qt, pyqtSignal
 from PyQt5.QtGui import QHideEvent, QKeyEvent, QMouseEvent
 from PyQt5.QtWidgets import QWidget
 
@@ -75,14 +75,27 @@ def neighbours(xs: np.ndarray, index: int) -> tuple[float | None, float | None]:
 class PointCanvas(QWidget):
     """A widget editing one list of the state's 1D TF points; see the module docstring."""
 
+    #: The selected point changed (its index, or None): numeric entry follows it.
+    selectionChanged = pyqtSignal(object)
+
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._state = state
         self._axis = ValueAxis(0.0, 1.0)
         self._drag: int | None = None
-        #: Index of the selected point (Delete removes it), or None.
-        self.selected: int | None = None
+        self._selected: int | None = None
         self.setFocusPolicy(Qt.StrongFocus)
+
+    @property
+    def selected(self) -> int | None:
+        """Index of the selected point (Delete removes it), or None."""
+        return self._selected
+
+    @selected.setter
+    def selected(self, index: int | None) -> None:
+        if index != self._selected:
+            self._selected = index
+            self.selectionChanged.emit(index)
 
     # ------------------------------------------------------------------ what subclasses supply
     def _points(self, tf: TransferFunction1D) -> NDArray[np.float64]:
