@@ -127,8 +127,11 @@ class Docks:
         used = sum(d.width() for d in docks)
         if used <= budget:
             return
-        widths = [max(DOCK_MIN_WIDTH, int(d.width() * budget / used)) for d in docks]
-        window.resizeDocks(docks, widths, Qt.Horizontal)
+        widths = [d.width() * budget / used for d in docks]
+        short = sum(max(DOCK_MIN_WIDTH - w, 0.0) for w in widths)  # what the minimums add back,
+        room = sum(w - DOCK_MIN_WIDTH for w in widths if w > DOCK_MIN_WIDTH)  # taken from the wider ones
+        widths = [DOCK_MIN_WIDTH if w <= DOCK_MIN_WIDTH else w - short * (w - DOCK_MIN_WIDTH) / room for w in widths]
+        window.resizeDocks(docks, [max(DOCK_MIN_WIDTH, int(w)) for w in widths], Qt.Horizontal)
 
     # ------------------------------------------------------------------ capabilities
     def two_d_reason(self, kind: str) -> str | None:

@@ -24,7 +24,6 @@ class PointEntry(QWidget):
         self._curve = curve
         self.value = QDoubleSpinBox(self)
         self.value.setDecimals(6)
-        self.value.setRange(-1e300, 1e300)
         self.value.setToolTip("Data value of the selected opacity point (between its neighbours)")
         self.opacity = QDoubleSpinBox(self)
         self.opacity.setDecimals(3)
@@ -56,12 +55,21 @@ class PointEntry(QWidget):
         if found is None:
             return
         tf, index = found
-        x, a = tf.opacity_points[index]
+        points = tf.opacity_points
+        x, a = points[index]
+        left, right = neighbours(points[:, 0], index)
+        axis = self._curve.axis
+        # the range is where the point may go (between its neighbours): typing beyond stops there,
+        # and the box is as wide as those numbers, not as the largest float
+        self.value.blockSignals(True)
+        self.value.setRange(left if left is not None else min(float(x), axis.lo),
+                            right if right is not None else max(float(x), axis.hi))  # fmt: skip
+        self.value.blockSignals(False)
         for box, v in ((self.value, x), (self.opacity, a)):
             box.blockSignals(True)
             box.setValue(float(v))
             box.blockSignals(False)
-        span = float(np.ptp(tf.opacity_points[:, 0])) or 1.0
+        span = float(np.ptp(points[:, 0])) or 1.0
         self.value.setSingleStep(span / 100)
 
     def _commit(self) -> None:
