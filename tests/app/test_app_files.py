@@ -526,3 +526,35 @@ def test_dialogs_start_where_the_person_last_opened_or_saved(make_window, ini, q
     assert asked["screenshot"] == str(work / "volren.png")
     w.files.recent.add(data / "head.vti")  # opening a file moves the work there
     assert w.files.recent.folder() == str(data)
+
+
+def test_a_slow_screenshot_without_progress_reports_shows_a_busy_dialog_with_the_time(
+    files_window, fakes, qtbot, tmp_path, monkeypatch
+):
+    """Issue 23: a renderer that reports no progress gave no feedback for the whole screenshot
+    (a QProgressDialog shows itself only from setValue); now it shows, busy, counting seconds."""
+    import time as clock
+
+    from volren.renderers.registry import registry
+
+    class SlowFrame(fakes["fake"]):
+        name: ClassVar[str] = "fake_slow_frame"
+
+        def _render(self, camera, width, height, progress):
+            clock.sleep(1.5)
+            return super()._render(camera, width, height, progress)
+
+    registry.register("fake_slow_frame", SlowFrame, replace=True)
+    try:
+        w = files_window()
+        show(w, qtbot, good_volume())
+        w.state.set_renderer("fake_slow_frame")
+        with qtbot.waitSignal(w.screenshots.saved, timeout=TIMEOUT_MS):
+            assert w.screenshots.render(tmp_path / "slow.png", 32, 32)
+            progress = w.screenshots._progress
+            qtbot.waitUntil(lambda: progress.isVisible() and progress.labelText().endswith(" s"), timeout=1500)
+            assert progress.maximum() == 0  # busy: no percentage to show
+            assert "fake_slow_frame" in progress.labelText()
+        assert (tmp_path / "slow.png").exists() and w.screenshots._progress is None
+    finally:
+        registry.unregister("fake_slow_frame")

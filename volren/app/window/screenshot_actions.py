@@ -4,9 +4,10 @@ dialog that can cancel it), or the viewport or the whole window grabbed as shown
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Callable
 
-from PyQt5.QtCore import QObject, pyqtSignal
+from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QAction, QMainWindow, QProgressDialog
 
@@ -17,6 +18,9 @@ from volren.app.files.screenshot import ScreenshotJob, Screenshotter, check_writ
 from volren.app.rendering.render_service import RendererFactory
 from volren.app.rendering.viewport import Viewport
 from volren.errors import VolrenError
+
+#: A screenshot still rendering after this (ms) shows its progress dialog, updated this often.
+SHOW_PROGRESS_AFTER_MS = 400
 
 
 class ScreenshotActions(QObject):
@@ -73,15 +77,28 @@ class ScreenshotActions(QObject):
             self._report_error("Cannot save the screenshot", str(exc))
             return False
         self._close_progress()
-        progress = QProgressDialog(
-            f"Rendering {job.width} x {job.height} with {job.renderer}…", "Cancel", 0, 0, self._window
-        )
+        text = f"Rendering {job.width} x {job.height} with {job.renderer}…"
+        progress = QProgressDialog(text, "Cancel", 0, 0, self._window)
         progress.setWindowTitle("Save screenshot")
-        progress.setMinimumDuration(400)
+        progress.setMinimumDuration(SHOW_PROGRESS_AFTER_MS)
         progress.setAutoClose(False)
         progress.setAutoReset(False)
         progress.canceled.connect(self.screenshotter.cancel)
         self._progress = progress
+        # a renderer that reports no progress never calls setValue, and a QProgressDialog shows
+        # itself only from setValue: 20 s of no feedback (issue 23). A clock shows it, busy, with
+        # the time so far, until the first report (if any) gives it a percentage.
+        started = time.monotonic()
+
+        def tick() -> None:
+            if self._progress is progress:
+                progress.setLabelText(f"{text} {time.monotonic() - started:.0f} s")
+                if not progress.isVisible():
+                    progress.show()
+
+        clock = QTimer(progress)  # goes with the dialog
+        clock.timeout.connect(tick)
+        clock.start(SHOW_PROGRESS_AFTER_MS)
         self.screenshotter.start(job)
         return True
 
