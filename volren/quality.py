@@ -180,7 +180,7 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
         level_settings = settings_for(name, kind, level, settings, quality)
         return capabilities.unsupported_reason(kind, tf_dim, level_settings) is None
 
-    choices = {n: c for n in quality.measured(kind) if n in names and (c := quality.choice(n, kind, level))}
+    choices = _measured_choices(quality, kind, level, names)
     cost = _costs(choices)
     for name in sorted(choices, key=lambda n: (not choices[n].meets, cost[n])):
         if drawable(name):
@@ -189,6 +189,12 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
         if name not in choices and drawable(name):
             return name, f"no measured renderer draws this scene; {name} can"
     raise VolrenError(f"no registered renderer can draw this {kind} scene (see `volren renderers`)")
+
+
+def _measured_choices(quality: QualityTable, kind: str, level: str, names: Iterable[str]) -> dict[str, LevelChoice]:
+    """The level's choices of the renderers among `names` that have one, by name."""
+    names = set(names)
+    return {n: c for n in quality.measured(kind) if n in names and (c := quality.choice(n, kind, level))}
 
 
 def _costs(choices: Mapping[str, LevelChoice]) -> dict[str, float]:
@@ -205,8 +211,7 @@ def fastest_measured(kind: str, level: str, names: Iterable[str], can_draw: Call
     """The renderer among `names` measured fastest at `level` on `kind` volumes that `can_draw`,
     whatever its error (the app's previews: speed first); None when none is measured."""
     quality = quality or table()
-    names = [n for n in names if n not in NOT_AUTO]
-    choices = {n: c for n in quality.measured(kind) if n in names and (c := quality.choice(n, kind, level))}
+    choices = _measured_choices(quality, kind, level, (n for n in names if n not in NOT_AUTO))
     cost = _costs(choices)
     return next((name for name in sorted(choices, key=cost.__getitem__) if can_draw(name)), None)
 

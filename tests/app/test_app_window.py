@@ -13,12 +13,28 @@ from volren.app.core.loading import LoadedInput
 from volren.app.core.state import default_camera
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
+from volren.quality import LevelChoice, QualityTable
 from volren.samples import sample_transfer_functions
 
 pytestmark = [pytest.mark.qt, pytest.mark.vtk]
 
 #: Generous: the first VTK frame creates an EGL context; later frames take tens of ms.
 FRAME_TIMEOUT_MS = 20000
+
+
+
+def use_levels(monkeypatch, levels: dict) -> QualityTable:
+    """Replace the measured quality table by `levels` (renderer -> level -> LevelChoice) of uniform volumes."""
+    from volren import quality
+
+    table = QualityTable({"uniform": levels}, "test")
+    monkeypatch.setattr(quality, "table", lambda: table)
+    return table
+
+
+def level(step: float, pre: bool = False, options: dict | None = None, ms: float = 10.0) -> LevelChoice:
+    """A measured level: `step`, pre-integration, `options`, `ms` on one scene, VTK's error."""
+    return LevelChoice(f"step {step}", step, pre, options or {}, {"a/smooth": ms}, 1.0)
 
 
 
@@ -396,13 +412,8 @@ def test_resting_before_release_draws_one_full_frame_not_two(loaded_window, qtbo
 def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_foreign_options(
     make_window, sample, qtbot, monkeypatch
 ):
-    from volren import quality
-    from volren.quality import LevelChoice, QualityTable
-
     draft = LevelChoice("step 2, table 64", 2.0, True, {"table_size": 64}, {"a/smooth": 10.0}, 3.0)
-    table = QualityTable({"uniform": {"slicer": {"draft": draft}}}, "test")
-    monkeypatch.setattr(quality, "table", lambda: table)
-    monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
+    use_levels(monkeypatch, {"slicer": {"draft": draft}})
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "slicer")
@@ -431,17 +442,9 @@ def test_the_first_volume_opens_at_the_app_level_and_a_switch_keeps_the_level(ma
     """Issue 22: what the app shows with no options is the `interactive` level's measured settings
     (the CLI's is `default`: the app draws a still frame after every gesture); switching renderer
     gives the new renderer's settings at the same level, and custom settings stay custom."""
-    from volren import quality
-    from volren.quality import LevelChoice, QualityTable
-
-    def level(step, pre, options):
-        return LevelChoice(f"step {step}", step, pre, options, {"a/smooth": 10.0}, 1.0)
-
-    table = QualityTable({"uniform": {"slicer": {"interactive": level(0.5, True, {"table_size": 128}),
-                                                 "draft": level(2.0, False, {"table_size": 64})},
-                                      "vtk": {"interactive": level(0.75, False, {})}}}, "test")  # fmt: skip
-    monkeypatch.setattr(quality, "table", lambda: table)
-    monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
+    use_levels(monkeypatch, {"slicer": {"interactive": level(0.5, True, {"table_size": 128}),
+                                        "draft": level(2.0, False, {"table_size": 64})},
+                             "vtk": {"interactive": level(0.75)}})  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "slicer")
@@ -473,15 +476,9 @@ def test_previews_use_the_interactive_level_and_a_tf_drag_the_renderers_drag_opt
     """Issue 22: previews draw with cheaper measured settings (the `interactive` level), and while
     a TF point is dragged with the renderer's `tf_drag_options` too; the still frame after the
     gesture has the user's level, and the frame label says the preview was cheaper."""
-    from volren import quality
-    from volren.quality import LevelChoice, QualityTable
-
-    def level(step):
-        return LevelChoice(f"step {step}", step, False, {"table_size": 256}, {"a/smooth": 10.0}, 1.0)
-
-    table = QualityTable({"uniform": {"fake_drag": {"default": level(0.25), "interactive": level(0.5)}}}, "test")
-    monkeypatch.setattr(quality, "table", lambda: table)
-    monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
+    table_256 = {"table_size": 256}
+    use_levels(monkeypatch, {"fake_drag": {"default": level(0.25, options=table_256),
+                                           "interactive": level(0.5, options=table_256)}})  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "fake_drag")
@@ -526,16 +523,11 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
     """Issue 22, progressive refinement: when the still frame is measured slow and the preview
     settings are at most half its cost, the whole view comes first at the preview settings, then
     the still frame; one that is cheap comes alone."""
-    from volren import quality
     from volren.app.rendering.render_service import Frame
-    from volren.quality import LevelChoice, QualityTable
 
-    def level(step):
-        return LevelChoice(f"step {step}", step, False, {"table_size": 256}, {"a/smooth": 10.0}, 1.0)
-
-    table = QualityTable({"uniform": {"fake_drag": {"default": level(0.25), "interactive": level(0.5)}}}, "test")
-    monkeypatch.setattr(quality, "table", lambda: table)
-    monkeypatch.setattr("volren.app.window.quality_control.table", lambda: table)
+    table_256 = {"table_size": 256}
+    use_levels(monkeypatch, {"fake_drag": {"default": level(0.25, options=table_256),
+                                           "interactive": level(0.5, options=table_256)}})  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "fake_drag")
@@ -568,15 +560,8 @@ def test_previews_are_drawn_by_the_fastest_measured_renderer_and_the_label_says_
     """Issue 22: "the fastest renderer for previews and the chosen one for the still frame, saying
     so": with `fake` measured faster at `interactive`, a rotation of a `fake_drag` scene at a level
     previews with `fake` (named in the frame label) and ends with `fake_drag`'s still frame."""
-    from volren import quality
-    from volren.quality import LevelChoice, QualityTable
-
-    def level(step, ms):
-        return LevelChoice(f"step {step}", step, False, {}, {"a/smooth": ms}, 1.0)
-
-    table = QualityTable({"uniform": {"fake_drag": {"interactive": level(0.5, 50.0)},
-                                      "fake": {"interactive": level(1.0, 5.0)}}}, "test")  # fmt: skip
-    monkeypatch.setattr(quality, "table", lambda: table)
+    use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
+                             "fake": {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "fake_drag")
@@ -596,15 +581,8 @@ def test_previews_are_drawn_by_the_fastest_measured_renderer_and_the_label_says_
 def test_a_preview_renderer_that_fails_previews_no_more_and_the_still_frame_comes(
     make_window, fake_renderers, sample, qtbot, monkeypatch, error_boxes
 ):
-    from volren import quality
-    from volren.quality import LevelChoice, QualityTable
-
-    def level(step, ms):
-        return LevelChoice(f"step {step}", step, False, {}, {"a/smooth": ms}, 1.0)
-
-    table = QualityTable({"uniform": {"fake_drag": {"interactive": level(0.5, 50.0)},
-                                      "fake_broken": {"interactive": level(1.0, 5.0)}}}, "test")  # fmt: skip
-    monkeypatch.setattr(quality, "table", lambda: table)
+    use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
+                             "fake_broken": {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "fake_drag")

@@ -170,7 +170,7 @@ class RenderWorker(QObject):
         renderer or volume: that frame's time says little about the next ones')."""
         slot = self._slots.get(request.renderer)
         setup = slot is None or slot.volume is not request.volume
-        if slot is None or slot.volume is not request.volume:
+        if setup:
             # set-up ahead (the renderer's imports, its per-volume structures, its first frame's tables):
             # the GUI says so when no frame follows within PREPARING_AFTER_S
             self.preparing.emit(request.serial, request.renderer)

@@ -100,7 +100,8 @@ class FrameScheduler(QObject):
         paid a set-up: a preview renderer's first frame of bonsai took 0.7 s, ten times the next,
         and kept the previews at a tenth of the pixels)."""
         if not frame.setup:
-            self._costs.setdefault((frame.renderer, repr(frame.settings)), FrameCost()).note(frame.width * frame.height, frame.ms)
+            self._costs.setdefault(self._cost_key(frame.renderer, frame.settings), FrameCost()).note(
+                frame.width * frame.height, frame.ms)  # fmt: skip
         self._refine(frame)
 
     def preview(self, tf_dragged: bool | None = None) -> tuple[str, RenderSettings]:
@@ -194,14 +195,17 @@ class FrameScheduler(QObject):
                         coarse_frame: tuple[str, RenderSettings]) -> bool:  # fmt: skip
         """Whether a still frame is slow enough (REFINE_AFTER_MS, as measured for its settings) and
         the coarse one cheap enough (at most half of it) to show the coarse one first."""
-        still, cheap = (self._costs.get(self._cost_key(*x)) for x in (still_frame, coarse_frame))
-        still_model = still.model() if still is not None else None
-        if still_model is None:
+        still_ms = self._predicted_ms(still_frame, pixels)
+        if still_ms is None:
             return False
-        still_ms = still_model[0] + still_model[1] * pixels
-        cheap_model = cheap.model() if cheap is not None else None
-        cheap_ms = cheap_model[0] + cheap_model[1] * pixels if cheap_model is not None else 0.0
+        cheap_ms = self._predicted_ms(coarse_frame, pixels) or 0.0
         return still_ms > REFINE_AFTER_MS and cheap_ms <= 0.5 * still_ms
+
+    def _predicted_ms(self, frame: tuple[str, RenderSettings], pixels: int) -> float | None:
+        """What a frame of `pixels` by (renderer, settings) costs, from that pair's frames (None: none yet)."""
+        cost = self._costs.get(self._cost_key(*frame))
+        model = cost.model() if cost is not None else None
+        return model[0] + model[1] * pixels if model is not None else None
 
     def _refine(self, frame: Frame) -> None:
         """The coarse frame of a refinement is shown: ask for the still frame it stands in for."""

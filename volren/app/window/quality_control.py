@@ -12,8 +12,9 @@ from __future__ import annotations
 
 from PyQt5.QtWidgets import QComboBox, QWidget
 
+from volren import quality
 from volren.app.core.state import Change, ViewState
-from volren.quality import LEVELS, LevelChoice, table
+from volren.quality import LEVELS, LevelChoice
 
 #: The chooser's first entry: settings that are not exactly one level's.
 CUSTOM = "custom"
@@ -42,7 +43,7 @@ class QualityControl:
         volume = self._state.volume
         if volume is None:
             return None
-        return table().choice(self._state.renderer, volume.kind, level)
+        return quality.table().choice(self._state.renderer, volume.kind, level)  # looked up now: tests swap the table
 
     def refresh(self) -> None:
         """Enable the levels measured for the renderer and volume shown; show which one the settings are."""

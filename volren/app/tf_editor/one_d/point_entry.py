@@ -79,9 +79,7 @@ class PointEntry(QWidget):
         tf, index = found
         points = tf.opacity_points
         left, right = neighbours(points[:, 0], index)
-        value = self.value.value()
-        value = min(max(value, left if left is not None else value), right if right is not None else value)
-        moved = (value, min(max(self.opacity.value(), 0.0), 1.0))
+        moved = (self._curve.axis.clamp(self.value.value(), left, right), min(max(self.opacity.value(), 0.0), 1.0))
         if moved != tuple(points[index]):
             points[index] = moved
             tf.set_opacity_points(points)  # one edit: one undo step and one full frame
