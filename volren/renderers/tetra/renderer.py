@@ -127,7 +127,7 @@ class TetraRenderer(RendererBase):
         self._corner: NDArray | None = None
         self._table_key: tuple | None = None
         self._table: tuple | None = None
-        self._cell_ranges: tuple[NDArray, NDArray, NDArray] | None = None  # (the planes' values, lo, hi)
+        self._cell_ranges: tuple[NDArray, NDArray, NDArray] | None = None  # (the cells' corner values, lo, hi)
         self._visible_walk: tuple[Any, WalkedCells] | None = None  # (table key, the visible cells' walk set)
         self._gl: GLWalk | None = None
         self._generation = 0  # which volume the GL walk's buffers hold
@@ -149,8 +149,8 @@ class TetraRenderer(RendererBase):
 
     # ------------------------------------------------------------------------ preparation
     def _prepare(self) -> tuple[PreparedMesh, tuple]:
-        """The mesh and, in Morton order, (tets, neighbours, reference planes, packed planes, the
-        usable cells as a `WalkedCells`)."""
+        """The mesh and, in Morton order, (tets, neighbours, the linear fields as (corner values
+        (m, 4), gradients (m, 3)), packed planes, the usable cells as a `WalkedCells`)."""
         if self._mesh is None:
             volume = self._volume
             assert isinstance(volume, TetVolume)
@@ -168,12 +168,11 @@ class TetraRenderer(RendererBase):
             # numpy, then reordered, took 1.5 s of a one-shot render of oxygen)
             packed = packed_face_planes(mesh.points, tets)
             usable_cells = np.ascontiguousarray(~(mesh.flat | mesh.nonfinite)[order])
-            planes = (None, None, None, np.ascontiguousarray(mesh.values[tets]),
-                      np.ascontiguousarray(mesh.gradients[order]), usable_cells)  # fmt: skip
+            fields = (np.ascontiguousarray(mesh.values[tets]), np.ascontiguousarray(mesh.gradients[order]))
             # flat and non-finite cells are holes the rays step over to the next entry
             usable = walked_cells(usable_cells, tets, neighbors, packed)
             self._mesh = mesh
-            self._planes = (tets, neighbors, planes, packed, usable)
+            self._planes = (tets, neighbors, fields, packed, usable)
             self._corner = np.ascontiguousarray(mesh.points[tets[:, 0]])  # where each cell's linear field is anchored
         assert self._planes is not None
         return self._mesh, self._planes
@@ -250,7 +249,7 @@ class TetraRenderer(RendererBase):
     def _cell_value_ranges(self) -> tuple[NDArray, NDArray]:
         """Each cell's lowest and highest corner value (NaN for a cell with no finite corner), kept
         for the mesh: TF edits reclassify with them (recomputing them cost each edit ~30 ms on oxygen)."""
-        tvals = self._planes[2][3]  # type: ignore[index]
+        tvals = self._planes[2][0]  # type: ignore[index]
         if self._cell_ranges is None or self._cell_ranges[0] is not tvals:
             with warnings.catch_warnings():  # cells with no finite corner give NaN bounds, on purpose
                 warnings.simplefilter("ignore", RuntimeWarning)
@@ -291,9 +290,9 @@ class TetraRenderer(RendererBase):
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         opts = self._options()
         start = time.perf_counter()
-        mesh, (tets, neighbors, planes, packed, usable) = self._prepare()
+        mesh, (tets, neighbors, fields, packed, usable) = self._prepare()
         prepared = time.perf_counter()
-        tvals, grads = planes[3], planes[4]
+        tvals, grads = fields
         depth, ratio, lo, scale, lmax, visible = self._tables(mesh, opts["table_size"], opts["table_lengths"])
         tabled = time.perf_counter()
         if not opts["skip_transparent"]:
@@ -322,7 +321,7 @@ class TetraRenderer(RendererBase):
                 progress(1.0)
         else:
             rgba, counters = self._render_cpu(camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors,
-                                              planes, packed, usable.cells, walked, visible, depth, ratio, lo,
+                                              fields, packed, usable.cells, walked, visible, depth, ratio, lo,
                                               scale, lmax)
         counters["cells_transparent"] = transparent
         # what this frame paid for its mesh and TF (0 when they were ready): `volren render --timings`
@@ -351,11 +350,11 @@ class TetraRenderer(RendererBase):
                                                         tvals, grads, usable.cells))
         return self._gl
 
-    def _render_cpu(self, camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors, planes, packed,
+    def _render_cpu(self, camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors, fields, packed,
                     usable, walked, visible, depth, ratio, lo, scale, lmax) -> tuple[NDArray, dict[str, float]]:
         """The numba walk: (H * W, 4) premultiplied RGBA and the counters. A ray per pixel over
         blocks of rows, or with image_stride > 1 adaptive refinement (`image_refinement`)."""
-        tvals, grads = planes[3], planes[4]
+        tvals, grads = fields
         corner = self._corner
         faces, near_cells = self._entry_candidates(camera, width, height, mesh, tets, walked)
         totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
