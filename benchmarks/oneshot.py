@@ -26,7 +26,7 @@ from volren.bench.datasets import SCENES, shared_folder
 from volren.errors import VolrenError
 from volren.samples import sample_paths
 
-#: (label, volume path relative to data_samples/ or the shared data folder, scalars, renderer)
+#: (label, bundled sample, renderer); the shared cases are (dataset in SCENES, renderer)
 SAMPLE_CASES = (("hollow_cylinder (sample)", "hollow_cylinder", "tetra"), ("hollow_cylinder (sample)", "hollow_cylinder", "reference"),
                 ("phantom_ct (sample)", "phantom_ct", "auto"))  # fmt: skip
 SHARED_CASES = (("oxygen", "tetra"), ("bonsai", "auto"))
