@@ -24,7 +24,7 @@ PROJECT = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
 SAMPLE = REPO / "data_samples" / "marschner_lobb.vti"
 SAMPLE_TF = REPO / "data_samples" / "marschner_lobb.tf.json"
 #: Optional packages and the extra that brings each.
-OPTIONAL = {"pyqt5": "app", "matplotlib": "bench"}
+OPTIONAL = {"pyqt5": "app", "matplotlib": "bench", "imageio": "movie", "imageio-ffmpeg": "movie"}
 
 
 def names(requirements: list[str]) -> set[str]:
@@ -135,6 +135,16 @@ def test_a_missing_extra_is_one_line_naming_it(args, blocked, extra):
     assert result.returncode == 1
     (line,) = result.stderr.strip().splitlines()
     assert line.startswith("volren: error: ") and blocked in line and f"pip install 'volren[{extra}]'" in line
+
+
+def test_a_movie_without_its_extra_is_one_line_naming_it(tmp_path):
+    for movie, blocked in (("m.gif", "imageio"), ("m.mp4", "imageio_ffmpeg")):
+        result = run_volren("movie", str(SAMPLE), "-o", str(tmp_path / movie), block=(blocked,))
+        assert result.returncode == 1
+        (line,) = result.stderr.strip().splitlines()
+        assert line.startswith("volren: error: ") and blocked.replace("_", "-") in line, line
+        assert "pip install 'volren[movie]'" in line
+    assert not list(tmp_path.iterdir())
 
 
 def test_one_version_string():

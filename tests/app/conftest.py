@@ -66,8 +66,18 @@ def sample(ml_volume) -> LoadedInput:
 
 
 @pytest.fixture
+def ini(tmp_path):
+    """Settings in a temporary INI file (the app's own store is never touched)."""
+    from PyQt5.QtCore import QSettings
+
+    return QSettings(str(tmp_path / "volren-test.ini"), QSettings.IniFormat)
+
+
+@pytest.fixture
 def error_boxes(monkeypatch) -> list[tuple[str, str]]:
-    """Record QMessageBox.critical calls instead of opening a modal box."""
+    """Record QMessageBox.critical calls instead of opening a modal box; questions (closing with a
+    job still running, when pytest-qt closes the test's windows) are answered Yes unless a test
+    patches them itself."""
     from PyQt5.QtWidgets import QMessageBox
 
     calls: list[tuple[str, str]] = []
@@ -75,6 +85,8 @@ def error_boxes(monkeypatch) -> list[tuple[str, str]]:
     def critical(parent, title, text, *args, **kwargs):
         calls.append((title, text))
         return QMessageBox.Ok
+
+    monkeypatch.setattr(QMessageBox, "question", lambda *args, **kwargs: QMessageBox.Yes)
 
     monkeypatch.setattr(QMessageBox, "critical", critical)
     return calls

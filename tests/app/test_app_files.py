@@ -34,12 +34,6 @@ TIMEOUT_MS = 20000
 
 
 @pytest.fixture
-def ini(tmp_path) -> QSettings:
-    """Settings in a temporary INI file (the app's own store is never touched)."""
-    return QSettings(str(tmp_path / "volren-test.ini"), QSettings.IniFormat)
-
-
-@pytest.fixture
 def fakes(fake_renderers):
     """conftest's fake renderers and `fake_2d`, the constant-colour one drawing 2D TFs too."""
 
@@ -551,7 +545,7 @@ def test_a_slow_screenshot_without_progress_reports_shows_a_busy_dialog_with_the
         w.state.set_renderer("fake_slow_frame")
         with qtbot.waitSignal(w.screenshots.saved, timeout=TIMEOUT_MS):
             assert w.screenshots.render(tmp_path / "slow.png", 32, 32)
-            progress = w.screenshots._progress
+            progress = w.screenshots._progress.dialog
             qtbot.waitUntil(lambda: progress.isVisible() and progress.labelText().endswith(" s"), timeout=1500)
             assert progress.maximum() == 0  # busy: no percentage to show
             assert "fake_slow_frame" in progress.labelText()

@@ -17,6 +17,8 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `joint_histogram`: the value x gradient-magnitude histogram behind the 2D TF editor.
   - `colormap_presets`: the 1D editor's colour maps, read from `colormap_presets.json`.
   - `tf_widget_geometry`: outlines, handles, moves and resizes of the 2D editor's widgets.
+  - `tf_seeding`: the 2D TF a 1D TF becomes when the 2D editor is switched on.
+  - `preview_settings`: which renderer and settings draw the previews while dragging.
 - `rendering/` (Qt):
   - `render_service`: the render worker thread that owns the renderer, newest request only.
   - `scheduling`: state changes -> reduced-size and full-quality frame requests.
@@ -27,6 +29,11 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `screenshot`: renders a screenshot at a chosen size off the GUI thread and writes the PNG.
   - `recent_files`: File > Open Recent, kept in QSettings.
   - `screenshot_dialog`: the Save Screenshot dialog.
+  - `background_job`: runs a job that writes a file (screenshot, movie) in a pool thread, with
+    progress and cancel.
+  - `movie_export`: records an orbit of the view into MP4 or GIF off the GUI thread.
+  - `movie_dialog`: the Export Movie dialog.
+  - `raw_dialog`: the layout of a headerless raw file (shape, type, byte order, spacing).
 - `tf_editor/` (Qt):
   - `panel`: the TF dock, the 1D and 2D editors in tabs.
   - `history`: undo and redo of TF edits, recorded from the state.
@@ -34,6 +41,7 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `one_d/point_canvas`: the base of the two canvases below: control points on a value axis.
   - `one_d/opacity_curve`: the opacity curve over the value histogram.
   - `one_d/color_bar`: the colour bar with its colour stops.
+  - `one_d/point_entry`: typed value and opacity of the selected point.
   - `two_d/editor`: the 2D editor panel (add and delete widgets, colour, opacity, gradient axis).
   - `two_d/widget_canvas`: the widgets drawn and dragged over the joint histogram.
 - `panels/` (Qt): the settings panels (lighting, sampling, blend mode, crop box, background,
@@ -44,7 +52,10 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `file_actions`: File > Open, Open DICOM folder, Open Recent, loading in the background.
   - `scene_actions`: File > Save Scene.
   - `screenshot_actions`: File > Save Screenshot.
+  - `movie_actions`: File > Export Movie.
+  - `job_progress`: the progress dialog of a screenshot or movie, with Cancel.
   - `renderer_control`: the renderer in use: chooser, fallbacks, the frame label.
   - `file_drops`: files dropped on the window open like File > Open.
   - `docks`: places the TF editors and settings panels, and Ctrl+click picking.
+  - `quality_control`: the Quality box (the measured settings of each level).
 """

@@ -14,11 +14,20 @@ from collections.abc import Sequence
 from typing import NoReturn
 
 import volren
-from volren.cli import bench_cmd, check_cmd, demo_cmd, prepare_cmd, render_cmd, renderers_cmd, view_cmd
+from volren.cli import (
+    bench_cmd,
+    check_cmd,
+    demo_cmd,
+    movie_cmd,
+    prepare_cmd,
+    render_cmd,
+    renderers_cmd,
+    view_cmd,
+)
 from volren.cli.messages import one_line_messages
 from volren.errors import VolrenError
 
-COMMANDS = (renderers_cmd, render_cmd, view_cmd, demo_cmd, bench_cmd, check_cmd, prepare_cmd)
+COMMANDS = (renderers_cmd, render_cmd, movie_cmd, view_cmd, demo_cmd, bench_cmd, check_cmd, prepare_cmd)
 
 
 class OneLineParser(argparse.ArgumentParser):

@@ -70,8 +70,19 @@ def image_size(text: str) -> tuple[int, int]:
 
 def add_parser(sub) -> None:
     p = sub.add_parser("render", help="render a volume offscreen to a PNG")
-    p.add_argument("input", nargs="?", help="volume file or DICOM folder (optional with --scene)")
     p.add_argument("-o", "--output", help="PNG file to write")
+    add_scene_arguments(p)
+    p.add_argument("--save-array", metavar="OUT.npy", help="also save float32 (H, W, 4) RGBA, row 0 on top")
+    p.add_argument("--transparent", action="store_true", help="PNG with alpha instead of over black")
+    p.add_argument("--force", action="store_true", help="write -o / --save-array even over an input file")
+    p.add_argument("--timings", action="store_true",
+                   help="print the wall time of each stage (start-up, load, set-up, frame, write) on stderr")
+    p.set_defaults(run=run)
+
+
+def add_scene_arguments(p: argparse.ArgumentParser) -> None:
+    """What to render and how: the flags `volren render` and `volren movie` share (`build_scene`)."""
+    p.add_argument("input", nargs="?", help="volume file or DICOM folder (optional with --scene)")
     p.add_argument("--scene", help="scene JSON with volume, TF, camera and settings")
     p.add_argument("--renderer", help="renderer name (see `volren renderers`), or auto (the default: the fastest "
                    "measured renderer that draws the scene at the quality asked for)")
@@ -95,17 +106,11 @@ def add_parser(sub) -> None:
     p.add_argument(
         "--option", action="append", default=[], metavar="KEY=VALUE", help="renderer-specific option"
     )
-    p.add_argument("--save-array", metavar="OUT.npy", help="also save float32 (H, W, 4) RGBA, row 0 on top")
-    p.add_argument("--transparent", action="store_true", help="PNG with alpha instead of over black")
-    p.add_argument("--force", action="store_true", help="write -o / --save-array even over an input file")
-    p.add_argument("--timings", action="store_true",
-                   help="print the wall time of each stage (start-up, load, set-up, frame, write) on stderr")
     raw = p.add_argument_group("headerless raw input")
     raw.add_argument("--raw-shape", help="NX,NY,NZ (needed for headerless raw data, and only for it)")
     raw.add_argument("--raw-dtype", help="numpy dtype, e.g. uint8, int16, float32 (default uint8)")
     raw.add_argument("--raw-byte-order", choices=["little", "big"], help="default little")
     raw.add_argument("--raw-spacing", help="SX,SY,SZ (default 1,1,1)")
-    p.set_defaults(run=run)
 
 
 def _triple(text: str, what: str, kind=float) -> tuple:
@@ -249,14 +254,14 @@ def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | No
     return replace(scene, renderer=renderer, settings=settings), why
 
 
-def _check_outputs(outputs, inputs, force: bool) -> None:
+def check_outputs(outputs, inputs, force: bool) -> None:
     """Outputs never name the same file; without --force, none is an input either."""
     from volren.io.safe_write import refuse_overwriting_inputs
 
     refuse_overwriting_inputs(outputs, [] if force else inputs, hint=" (or add --force)")
 
 
-def _check_scene(args: argparse.Namespace, scene: Scene) -> None:
+def check_scene_input(args: argparse.Namespace, scene: Scene) -> None:
     """`volren.api.check_scene`, naming what the user gave: the flag or the scene file."""
     from volren.api import check_scene
 
@@ -279,6 +284,15 @@ def _naming_the_input(exc: VolrenError, source: str | None, chosen_renderer: str
     return VolrenError(f"{source}: {text}")
 
 
+def explained(exc: VolrenError, args: argparse.Namespace, scene: Scene, why: str | None) -> VolrenError:
+    """A rendering error as the command line reports it: saying that `auto` chose the renderer
+    when the user did not name it, and naming the input file where the message names nothing."""
+    chosen = scene.renderer if args.renderer or not args.scene else None
+    if why and f"renderer {scene.renderer} " in f"{exc} ":  # the user did not name it: say who did
+        exc = VolrenError(f"{exc} ".replace(f"renderer {scene.renderer} ", f"renderer {scene.renderer} {CHOSEN_BY_AUTO} ", 1).rstrip())
+    return _naming_the_input(exc, args.scene or scene.volume_path, chosen)
+
+
 def run(args: argparse.Namespace) -> int:
     from volren import io
     from volren.api import prepared_renderer
@@ -294,12 +308,12 @@ def run(args: argparse.Namespace) -> int:
             raise VolrenError(f"{target}: the folder {Path(target).parent} does not exist")
     outputs = (("-o", args.output), ("--save-array", args.save_array))
     inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
-    _check_outputs(outputs, inputs, args.force)  # before the (maybe long) load
+    check_outputs(outputs, inputs, args.force)  # before the (maybe long) load
     clock = StageClock()
     with clock.stage("load"):
         scene, why = build_scene(args)
-        _check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
-        _check_scene(args, scene)
+        check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
+        check_scene_input(args, scene)
     width, height = scene.size
     try:
         camera = scene.resolved_camera()
@@ -311,10 +325,7 @@ def run(args: argparse.Namespace) -> int:
                 image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
         clock.note_counters(stats.counters)
     except VolrenError as exc:
-        chosen = scene.renderer if args.renderer or not args.scene else None
-        if why and f"renderer {scene.renderer} " in f"{exc} ":  # the user did not name it: say who did
-            exc = VolrenError(f"{exc} ".replace(f"renderer {scene.renderer} ", f"renderer {scene.renderer} {CHOSEN_BY_AUTO} ", 1).rstrip())
-        raise _naming_the_input(exc, args.scene or scene.volume_path, chosen) from None
+        raise explained(exc, args, scene, why) from None
     with clock.stage("write"):
         if args.output:
             io.save_image(image, args.output, transparent=args.transparent)

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from volren.errors import VolrenError
@@ -25,21 +26,29 @@ def _suffix(path: Path) -> str:
     return "".join(path.suffixes[-2:]) if path.suffix == ".gz" else path.suffix
 
 
-def write_atomically(path: str | os.PathLike, write: Callable[[Path], None]) -> None:
-    """Call write(temporary path) and rename the result over `path`; when `write` raises, the
-    temporary file is removed, `path` is left as it was and the error propagates."""
+@contextmanager
+def atomic_target(path: str | os.PathLike) -> Iterator[Path]:
+    """A temporary path beside `path` to write to, renamed over `path` when the block ends
+    normally; when it raises, the temporary file is removed and `path` is left as it was."""
     path = Path(path)
     fd, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{_suffix(path)}", dir=path.parent)
     os.close(fd)
     tmp = Path(name)
     try:
-        write(tmp)
+        yield tmp
         mode = path.stat().st_mode & 0o7777 if path.exists() else 0o666 & ~_UMASK
         os.chmod(tmp, mode)  # mkstemp makes it private; the result gets the usual permissions
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+def write_atomically(path: str | os.PathLike, write: Callable[[Path], None]) -> None:
+    """Call write(temporary path) and rename the result over `path`; when `write` raises, the
+    temporary file is removed, `path` is left as it was and the error propagates."""
+    with atomic_target(path) as tmp:
+        write(tmp)
 
 
 def _same(a: Path, b: Path) -> bool:

@@ -38,6 +38,7 @@ def load_scene(path: str | Path, load_volume: bool = True) -> Scene:
             data["transfer_function"] = load_transfer_function(_resolve(folder, tf)).to_dict()
         except VolrenError as exc:
             raise file_error(path, f"transfer function: {exc}") from None
+    _inline_keyframe_tfs(data, folder, path)
     volume = data.get("volume")
     if isinstance(volume, Mapping) and isinstance(volume.get("path"), str):
         data["volume"] = {**volume, "path": _resolve(folder, volume["path"])}
@@ -51,6 +52,24 @@ def load_scene(path: str | Path, load_volume: bool = True) -> Scene:
         except VolrenError as exc:
             raise file_error(path, f"volume: {exc}") from None
     return scene
+
+
+def _inline_keyframe_tfs(data: dict, folder: Path, path: Path) -> None:
+    """The movie's TF keyframes given by path, read and held inline as the scene's own TF is."""
+    movie = data.get("movie")
+    keyframes = movie.get("keyframes") if isinstance(movie, Mapping) else None
+    if not isinstance(keyframes, list):
+        return  # a malformed movie is `Animation.from_dict`'s to report
+    inlined = []
+    for index, key in enumerate(keyframes):
+        if isinstance(key, Mapping) and isinstance(key.get("transfer_function"), str):
+            try:
+                tf = load_transfer_function(_resolve(folder, key["transfer_function"]))
+            except VolrenError as exc:
+                raise file_error(path, f"movie: keyframe {index}: transfer function: {exc}") from None
+            key = {**key, "transfer_function": tf.to_dict()}
+        inlined.append(key)
+    data["movie"] = {**movie, "keyframes": inlined}
 
 
 def save_scene(scene: Scene, path: str | Path) -> None:

@@ -13,23 +13,25 @@ The PNG holds what the viewport shows: the premultiplied frame over the view's b
 from __future__ import annotations
 
 import os
-import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from PyQt5.QtCore import QObject, QRunnable, QThreadPool, pyqtSignal, pyqtSlot
+from PyQt5.QtCore import QObject
 
-from volren.app.core.loading import PathArg, one_line_error
+from volren.app.core.loading import PathArg
 from volren.app.core.state import ViewState
+from volren.app.files.background_job import BackgroundJobs
 from volren.app.rendering.render_service import RendererFactory, _registry_factory
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
-from volren.renderers.base import ProgressCallback
+from volren.renderers.base import ProgressCallback, Renderer
 
 
 @dataclass(frozen=True, eq=False)
@@ -76,18 +78,25 @@ def check_writable(path: PathArg) -> None:
         raise VolrenError(f"{path}: cannot write in {folder}")
 
 
-def render_job(
-    job: ScreenshotJob, factory: RendererFactory = _registry_factory, progress: ProgressCallback | None = None
-) -> NDArray[np.float32]:
-    """The premultiplied RGBA frame of `job`, from a renderer made for it and released after."""
+@contextmanager
+def job_renderer(job: ScreenshotJob, factory: RendererFactory = _registry_factory) -> Iterator[Renderer]:
+    """A renderer made for `job` (its settings, volume and TF), released at the end of the block."""
     renderer = factory(job.renderer)
     try:
         renderer.set_settings(job.settings)
         renderer.set_volume(job.volume)
         renderer.set_transfer_function(job.tf)
-        return np.asarray(renderer.render(job.camera, job.width, job.height, progress))
+        yield renderer
     finally:
         renderer.release()
+
+
+def render_job(
+    job: ScreenshotJob, factory: RendererFactory = _registry_factory, progress: ProgressCallback | None = None
+) -> NDArray[np.float32]:
+    """The premultiplied RGBA frame of `job`, from a renderer made for it and released after."""
+    with job_renderer(job, factory) as renderer:
+        return np.asarray(renderer.render(job.camera, job.width, job.height, progress))
 
 
 def write_job(job: ScreenshotJob, image: NDArray[np.float32]) -> None:
@@ -97,131 +106,20 @@ def write_job(job: ScreenshotJob, image: NDArray[np.float32]) -> None:
     save_image(image, job.path, job.background)
 
 
-class _Cancelled(Exception):
-    """Raised from the renderer's progress callback when the screenshot is no longer wanted."""
-
-
-class _Signals(QObject):
-    """Lives in the GUI thread; emitting from the pool thread queues the call."""
-
-    progressed = pyqtSignal(int, float)
-    saved = pyqtSignal(int, str)
-    failed = pyqtSignal(int, str)
-
-
-class _ScreenshotTask(QRunnable):
-    def __init__(
-        self,
-        serial: int,
-        job: ScreenshotJob,
-        factory: RendererFactory,
-        signals: _Signals,
-        stop: threading.Event,
-    ) -> None:
-        super().__init__()
-        self._serial, self._job, self._factory, self._signals, self._stop = (
-            serial,
-            job,
-            factory,
-            signals,
-            stop,
-        )
-
-    def _progress(self, fraction: float) -> None:
-        if self._stop.is_set():
-            raise _Cancelled()
-        self._emit("progressed", float(fraction))
-
-    def run(self) -> None:
-        try:
-            image = render_job(self._job, self._factory, self._progress)
-            if self._stop.is_set():
-                return
-            write_job(self._job, image)
-        except _Cancelled:
-            return
-        except BaseException as exc:  # noqa: BLE001 - every failure becomes a one-line message
-            if not self._stop.is_set():
-                self._emit("failed", one_line_error(exc))
-            return
-        self._emit("saved", str(self._job.path))
-
-    def _emit(self, signal: str, payload: object) -> None:
-        try:
-            getattr(self._signals, signal).emit(self._serial, payload)
-        except RuntimeError:  # the window closed while we rendered
-            pass
-
-
-class Screenshotter(QObject):
-    """Runs `ScreenshotJob`s one at a time; `saved(path)`, `failed(message)` or, after `cancel()`,
-    nothing. A new job abandons the one still running."""
-
-    progressed = pyqtSignal(float)  # fraction done, from renderers that report it
-    saved = pyqtSignal(str)
-    failed = pyqtSignal(str)
-    busyChanged = pyqtSignal(bool)
+class Screenshotter(BackgroundJobs):
+    """Renders and writes `ScreenshotJob`s one at a time in the background (see `BackgroundJobs`)."""
 
     def __init__(self, factory: RendererFactory = _registry_factory, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self._factory = factory
-        self._pool = QThreadPool(self)
-        self._pool.setMaxThreadCount(1)
-        self._signals = _Signals(self)
-        self._signals.progressed.connect(self._on_progress)
-        self._signals.saved.connect(self._on_saved)
-        self._signals.failed.connect(self._on_failed)
-        self._serial = 0
-        self._stop: threading.Event | None = None
-
-    @property
-    def busy(self) -> bool:
-        return self._stop is not None
 
     def start(self, job: ScreenshotJob) -> int:
         """Render and write `job` in the background; returns its serial."""
-        self._abandon()
-        self._serial += 1
-        self._stop = threading.Event()
-        self._pool.start(_ScreenshotTask(self._serial, job, self._factory, self._signals, self._stop))
-        self.busyChanged.emit(True)
-        return self._serial
 
-    def cancel(self) -> bool:
-        """Stop the running job (at its next progress report, or before writing)."""
-        if not self.busy:
-            return False
-        self._abandon()
-        self._serial += 1
-        self.busyChanged.emit(False)
-        return True
+        def work(progress: ProgressCallback) -> str:
+            image = render_job(job, self._factory, progress)
+            progress(1.0)  # the last chance to cancel before the file is written
+            write_job(job, image)
+            return str(job.path)
 
-    def _abandon(self) -> None:
-        if self._stop is not None:
-            self._stop.set()
-            self._stop = None
-
-    @pyqtSlot(int, float)
-    def _on_progress(self, serial: int, fraction: float) -> None:
-        if serial == self._serial and self.busy:
-            self.progressed.emit(fraction)
-
-    @pyqtSlot(int, str)
-    def _on_saved(self, serial: int, path: str) -> None:
-        if serial == self._serial and self.busy:
-            self._stop = None
-            self.busyChanged.emit(False)
-            self.saved.emit(path)
-
-    @pyqtSlot(int, str)
-    def _on_failed(self, serial: int, message: str) -> None:
-        if serial == self._serial and self.busy:
-            self._stop = None
-            self.busyChanged.emit(False)
-            self.failed.emit(message)
-
-    def shutdown(self, timeout_ms: int = 30000) -> bool:
-        """Stop the running job and wait for its thread (the renderer is released there)."""
-        self._abandon()
-        self._serial += 1
-        return self._pool.waitForDone(timeout_ms)
+        return self.start_work(work)

@@ -9,6 +9,7 @@ here with what it needs and placed in the menus, toolbar and status bar here:
 - `files` (`FileActions`): opening files in the background, Open Recent, cancelling a load;
 - `scenes` (`SceneActions`): Save Scene;
 - `screenshots` (`ScreenshotActions`): Save Screenshot;
+- `movies` (`MovieActions`): Export Movie;
 - `renderers` (`RendererControl`): the chooser, keeping a usable renderer, the frame label;
 - `docks` (`Docks`): the TF editors and settings panels;
 - `drops` (`FileDrops`): files dropped on the window open like File > Open.
@@ -33,6 +34,7 @@ from volren.app.rendering.viewport import Viewport
 from volren.app.window.docks import Docks
 from volren.app.window.file_actions import FileActions
 from volren.app.window.file_drops import FileDrops
+from volren.app.window.movie_actions import MovieActions
 from volren.app.window.quality_control import QualityControl
 from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
@@ -82,6 +84,7 @@ class MainWindow(QMainWindow):
         self.scenes = SceneActions(self, self.state, self.viewport, recent, self.report_error)
         self.screenshots = ScreenshotActions(self, self.state, self.viewport, renderer_factory, self.report_error,
                                              recent.folder)  # fmt: skip
+        self.movies = MovieActions(self, self.state, self.viewport, renderer_factory, self.report_error, recent.folder)
         self.files = FileActions(
             self, self.state, self.viewport, self.renderers, self.scenes, recent, load, self.report_error
         )
@@ -122,6 +125,7 @@ class MainWindow(QMainWindow):
         file_menu.addSeparator()
         file_menu.addAction(self.scenes.save_action)
         file_menu.addAction(self.screenshots.action)
+        file_menu.addAction(self.movies.action)
         file_menu.addSeparator()
         file_menu.addAction(self.quit_action)
         self.view_menu = self.menuBar().addMenu("&View")
@@ -177,6 +181,7 @@ class MainWindow(QMainWindow):
         self.scheduler.detach()
         self.service.shutdown()
         self.screenshots.shutdown()
+        self.movies.shutdown()
         self.files.shutdown(5000)
 
     def resizeEvent(self, event: QResizeEvent) -> None:
@@ -185,5 +190,19 @@ class MainWindow(QMainWindow):
             self.docks.keep_viewport_share()
 
     def closeEvent(self, event: QCloseEvent) -> None:
+        if not self._may_discard_running_jobs():
+            event.ignore()
+            return
         self.shutdown()
         super().closeEvent(event)
+
+    def _may_discard_running_jobs(self) -> bool:
+        """Closing stops a movie or screenshot still rendering, and it is not written: ask first
+        (a headless run has nobody to ask, and closes)."""
+        running = [what for what, jobs in (("a movie", self.movies.exporter), ("a screenshot", self.screenshots.screenshotter))
+                   if jobs.busy]  # fmt: skip
+        if not running or not self.show_error_dialogs or self._closed:
+            return True
+        answer = QMessageBox.question(self, "volren", f"{running[0].capitalize()} is still being rendered. Quit anyway "
+                                      "and discard it?", QMessageBox.Yes | QMessageBox.No, QMessageBox.No)  # fmt: skip
+        return answer == QMessageBox.Yes

@@ -4,12 +4,11 @@ dialog that can cancel it), or the viewport or the whole window grabbed as shown
 from __future__ import annotations
 
 import os
-import time
 from collections.abc import Callable
 
-from PyQt5.QtCore import QObject, QTimer, pyqtSignal
+from PyQt5.QtCore import QObject, pyqtSignal
 from PyQt5.QtGui import QKeySequence
-from PyQt5.QtWidgets import QAction, QMainWindow, QProgressDialog
+from PyQt5.QtWidgets import QAction, QMainWindow
 
 from volren.app.core.loading import PathArg
 from volren.app.core.state import ViewState
@@ -17,10 +16,8 @@ from volren.app.files import screenshot_dialog
 from volren.app.files.screenshot import ScreenshotJob, Screenshotter, check_writable
 from volren.app.rendering.render_service import RendererFactory
 from volren.app.rendering.viewport import Viewport
+from volren.app.window.job_progress import JobProgress
 from volren.errors import VolrenError
-
-#: A screenshot still rendering after this (ms) shows its progress dialog, updated this often.
-SHOW_PROGRESS_AFTER_MS = 400
 
 
 class ScreenshotActions(QObject):
@@ -45,7 +42,7 @@ class ScreenshotActions(QObject):
         self._report_error = report_error
         self._folder = folder
         self._path = "volren.png"  # the dialog offers the last one again
-        self._progress: QProgressDialog | None = None
+        self._progress: JobProgress | None = None
         self.screenshotter = Screenshotter(renderer_factory, self)
         self.screenshotter.busyChanged.connect(self._on_busy)
         self.screenshotter.progressed.connect(self._on_progress)
@@ -78,27 +75,7 @@ class ScreenshotActions(QObject):
             return False
         self._close_progress()
         text = f"Rendering {job.width} x {job.height} with {job.renderer}…"
-        progress = QProgressDialog(text, "Cancel", 0, 0, self._window)
-        progress.setWindowTitle("Save screenshot")
-        progress.setMinimumDuration(SHOW_PROGRESS_AFTER_MS)
-        progress.setAutoClose(False)
-        progress.setAutoReset(False)
-        progress.canceled.connect(self.screenshotter.cancel)
-        self._progress = progress
-        # a renderer that reports no progress never calls setValue, and a QProgressDialog shows
-        # itself only from setValue: 20 s of no feedback (issue 23). A clock shows it, busy, with
-        # the time so far, until the first report (if any) gives it a percentage.
-        started = time.monotonic()
-
-        def tick() -> None:
-            if self._progress is progress:
-                progress.setLabelText(f"{text} {time.monotonic() - started:.0f} s")
-                if not progress.isVisible():
-                    progress.show()
-
-        clock = QTimer(progress)  # goes with the dialog
-        clock.timeout.connect(tick)
-        clock.start(SHOW_PROGRESS_AFTER_MS)
+        self._progress = JobProgress(self._window, "Save screenshot", text, self.screenshotter.cancel)
         self.screenshotter.start(job)
         return True
 
@@ -115,8 +92,7 @@ class ScreenshotActions(QObject):
 
     def _on_progress(self, fraction: float) -> None:
         if self._progress is not None:
-            self._progress.setRange(0, 100)
-            self._progress.setValue(round(100 * min(max(fraction, 0.0), 1.0)))
+            self._progress.report(fraction)
 
     def _on_busy(self, busy: bool) -> None:
         if not busy:
@@ -125,9 +101,7 @@ class ScreenshotActions(QObject):
     def _close_progress(self) -> None:
         progress, self._progress = self._progress, None
         if progress is not None:
-            progress.canceled.disconnect()  # closing it would say "canceled"
             progress.close()
-            progress.deleteLater()
 
     def _on_saved(self, path: str) -> None:
         self._window.statusBar().showMessage(f"Saved {path}", 5000)

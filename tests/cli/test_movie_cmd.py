@@ -1,0 +1,154 @@
+"""`volren movie`: decoded movies hold the frames `volren render` writes for the same cameras."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from volren.cli.main import main
+from volren.model.tf_blend import blend_transfer_functions
+from volren.model.transfer_function import TransferFunction1D
+from volren.samples import sample_paths
+
+imageio = pytest.importorskip("imageio.v2", reason="volren[movie] is part of the test set-up")
+pytestmark = pytest.mark.usefixtures("opengl")
+RENDERER = "vtk"  # quick at small sizes, and any renderer makes the same frames through the same code
+
+
+@pytest.fixture(scope="module")
+def ml_sample():
+    return sample_paths("marschner_lobb")
+
+
+def decoded(path: Path) -> list[np.ndarray]:
+    return [np.asarray(frame)[..., :3] for frame in imageio.mimread(path, memtest=False)]
+
+
+def rendered(tmp_path: Path, *args: str) -> np.ndarray:
+    png = tmp_path / "frame.png"
+    assert main(["render", *args, "-o", str(png), "--force"]) == 0
+    return np.asarray(Image.open(png).convert("RGB"))
+
+
+def test_lossless_mp4_holds_exactly_the_rendered_orbit(tmp_path, capsys, ml_sample):
+    volume, tf = map(str, ml_sample)
+    movie = tmp_path / "orbit.mp4"
+    flags = [volume, "--tf", tf, "--renderer", RENDERER, "--size", "40x30", "--elevation", "20"]
+    assert main(["movie", *flags, "-o", str(movie), "--frames", "3", "--lossless"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert line.startswith(f"{RENDERER}: 3 frames of 40x30 at 30 fps") and line.endswith(f"-> {movie}")
+    frames = decoded(movie)
+    assert len(frames) == 3
+    for index, azimuth in enumerate((0, 120, 240)):  # a whole turn loops: the last frame is not the first again
+        assert np.array_equal(frames[index], rendered(tmp_path, *flags, "--azimuth", str(azimuth))), index
+    assert not frames[0].tobytes() == frames[1].tobytes()
+
+
+def test_default_mp4_and_gif_decode_to_the_frames_within_their_codecs_loss(tmp_path, ml_sample):
+    volume, tf = map(str, ml_sample)
+    flags = [volume, "--tf", tf, "--renderer", RENDERER, "--size", "41x31", "--orbit", "90"]
+    first = rendered(tmp_path, *flags[:-2]).astype(float)
+    last = rendered(tmp_path, *flags[:-2], "--azimuth", "90").astype(float)
+    for name, mean_error in (("movie.mp4", 3.0), ("movie.gif", 6.0)):
+        assert main(["movie", *flags, "-o", str(tmp_path / name), "--frames", "4", "--fps", "10"]) == 0
+        frames = decoded(tmp_path / name)
+        assert len(frames) == 4, name
+        # yuv420p needs even sides: the odd side is padded by its last row and column, never scaled
+        height, width = frames[0].shape[:2]
+        assert (width, height) == ((42, 32) if name.endswith(".mp4") else (41, 31))
+        assert np.abs(frames[0][:31, :41] - first).mean() < mean_error, name
+        assert np.abs(frames[-1][:31, :41] - last).mean() < mean_error, name  # a part turn ends on its angle
+        assert np.abs(frames[-1][:31, :41] - first).mean() > 2 * mean_error, name
+
+
+def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
+    volume, tf_path = ml_sample
+    tf = TransferFunction1D.from_dict(json.loads(Path(tf_path).read_text()))
+    bright = tf.copy()
+    bright.set_opacity_points(np.clip(tf.opacity_points * [1, 3], 0, 1))
+    (tmp_path / "bright.json").write_text(json.dumps(bright.to_dict()))
+    scene = {"version": 1, "volume": {"path": str(volume)}, "transfer_function": tf.to_dict(), "renderer": RENDERER,
+             "quality": "default", "size": [32, 32], "movie": {"frames": 3, "fps": 5, "keyframes": [
+                 {"time": 0, "camera": {"azimuth": 0, "elevation": 10}},
+                 {"time": 1, "camera": {"azimuth": 60, "elevation": 30}, "transfer_function": "bright.json"},
+                 {"time": 0, "transfer_function": tf.to_dict()}]}}
+    (tmp_path / "scene.json").write_text(json.dumps(scene))
+    movie = tmp_path / "keys.mp4"
+    assert main(["movie", "--scene", str(tmp_path / "scene.json"), "-o", str(movie), "--lossless"]) == 0
+    frames = decoded(movie)
+    assert len(frames) == 3
+    middle_tf = tmp_path / "middle.json"
+    middle_tf.write_text(json.dumps(blend_transfer_functions(tf, bright, 0.5).to_dict()))
+    flags = [str(volume), "--renderer", RENDERER, "--size", "32"]
+    expected = [
+        rendered(tmp_path, *flags, "--tf", str(tf_path), "--azimuth", "0", "--elevation", "10"),
+        rendered(tmp_path, *flags, "--tf", str(middle_tf), "--azimuth", "30", "--elevation", "20"),
+        rendered(tmp_path, *flags, "--tf", str(tmp_path / "bright.json"), "--azimuth", "60", "--elevation", "30"),
+    ]
+    for index, image in enumerate(expected):
+        assert np.array_equal(frames[index], image), index
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["-o", "{tmp}/m.avi"], "a movie is written as .mp4 or .gif"),
+        (["-o", "{tmp}/m.gif", "--lossless"], "--lossless applies to MP4 movies only"),
+        (["-o", "{tmp}/no/such/m.mp4"], "does not exist"),
+        ([], "give -o OUT.mp4"),
+        (["-o", "{volume}"], "a movie is written as"),
+        (["-o", "{tmp}/m.mp4", "--scene", "{scene}"], "movie: keyframe 0: 'time' must be a number in [0, 1]"),
+        (["-o", "{tmp}/m.mp4", "--scene", "{scene}", "--orbit", "90"], "movie: keyframe 0"),
+    ],
+)
+def test_bad_movie_requests_are_one_line_errors(tmp_path, capsys, ml_sample, args, message):
+    volume, tf = map(str, ml_sample)
+    scene = tmp_path / "bad_scene.json"
+    scene.write_text(json.dumps({"version": 1, "volume": {"path": volume}, "transfer_function": json.loads(
+        Path(tf).read_text()), "movie": {"keyframes": [{"time": 3, "camera": {}}]}}))
+    fill = {"tmp": str(tmp_path), "volume": volume, "scene": str(scene)}
+    argv = ["movie", *([] if "--scene" in args else [volume]), *(a.format(**fill) for a in args)]
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("volren: error: ") and message in err[0], err
+    if "--scene" in args:
+        assert str(scene) in err[0]
+    assert not list(tmp_path.glob("*.mp4")) and not list(tmp_path.glob(".*partial*"))
+
+
+def test_orbit_flag_and_camera_keyframes_conflict(tmp_path, capsys, ml_sample):
+    volume, tf = map(str, ml_sample)
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps({"version": 1, "volume": {"path": volume}, "transfer_function": json.loads(
+        Path(tf).read_text()), "movie": {"keyframes": [{"time": 0, "camera": {}}]}}))
+    assert main(["movie", "--scene", str(scene), "-o", str(tmp_path / "m.mp4"), "--orbit", "90"]) == 1
+    assert "--orbit turns the camera, but the scene's movie has camera keyframes" in capsys.readouterr().err
+
+
+def test_a_failed_movie_leaves_no_file_and_keeps_an_older_one(tmp_path, ml_sample):
+    from volren.io import load_volume
+    from volren.model.animation import Animation
+    from volren.model.scene import Scene
+    from volren.movie import render_movie
+
+    volume = load_volume(ml_sample[0])
+    scene = Scene(str(ml_sample[0]), TransferFunction1D.ramp(0, 1), volume=volume, renderer=RENDERER, size=(16, 16))
+    target = tmp_path / "kept.gif"
+    target.write_bytes(b"an older movie")
+
+    def stop_after_two(fraction: float) -> None:
+        if fraction >= 2 / 5:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        render_movie(scene, Animation(frames=5), target, progress=stop_after_two)
+    assert target.read_bytes() == b"an older movie"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.gif"]
+    result = render_movie(replace(scene, renderer="auto"), Animation(frames=2, fps=4), target)
+    assert (result.frames, result.width, result.height, result.fps) == (2, 16, 16, 4.0)
+    assert len(decoded(target)) == 2

@@ -1,0 +1,137 @@
+"""The Export Movie dialog: where to (MP4 or GIF), frame size, frames, speed and how far to orbit.
+
+`ask_movie` is looked up on this module at call time, so tests (and headless runs) can replace
+the modal dialog.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from PyQt5.QtWidgets import (
+    QCheckBox,
+    QDialog,
+    QDialogButtonBox,
+    QDoubleSpinBox,
+    QFileDialog,
+    QFormLayout,
+    QHBoxLayout,
+    QLabel,
+    QLineEdit,
+    QPushButton,
+    QSpinBox,
+    QWidget,
+)
+
+from volren.io.movie_io import MOVIE_SUFFIXES
+from volren.model.animation import DEFAULT_FPS, DEFAULT_FRAMES, MAX_FPS, MAX_FRAMES, Animation
+from volren.renderers.base import MAX_IMAGE_SIDE
+
+MOVIE_FILTER = "Movies (*.mp4 *.gif);;MP4 video (*.mp4);;GIF animation (*.gif)"
+
+
+@dataclass(frozen=True)
+class MovieChoice:
+    """What the movie dialog asked for."""
+
+    path: str
+    width: int
+    height: int
+    animation: Animation
+    lossless: bool = False
+
+
+def movie_path(path: str) -> str:
+    """`path`, with ".mp4" added when its suffix is not a movie's (what the file will hold)."""
+    return path if Path(path).suffix.lower() in MOVIE_SUFFIXES else path + ".mp4"
+
+
+class MovieDialog(QDialog):
+    """File, frame size (default: the viewport's pixels), number of frames, frames per second and
+    the orbit's angle, with the movie's length shown as they change."""
+
+    def __init__(self, parent: QWidget | None, path: str, size: tuple[int, int]) -> None:
+        super().__init__(parent)
+        self.setWindowTitle("Export movie")
+        self.path_edit = QLineEdit(path, self)
+        browse = QPushButton("Browse…", self)
+        browse.clicked.connect(self._browse)
+        path_row = QHBoxLayout()
+        path_row.addWidget(self.path_edit, 1)
+        path_row.addWidget(browse)
+
+        self.width_box, self.height_box = (self._spin(1, MAX_IMAGE_SIDE, v) for v in size)
+        size_row = QHBoxLayout()
+        size_row.addWidget(self.width_box)
+        size_row.addWidget(QLabel("x", self))
+        size_row.addWidget(self.height_box)
+        size_row.addWidget(QLabel("pixels", self), 1)
+        self.frames_box = self._spin(1, MAX_FRAMES, DEFAULT_FRAMES)
+        self.fps_box = QDoubleSpinBox(self)
+        self.fps_box.setRange(1.0, MAX_FPS)
+        self.fps_box.setDecimals(1)
+        self.fps_box.setValue(DEFAULT_FPS)
+        self.orbit_box = QDoubleSpinBox(self)
+        self.orbit_box.setRange(-3600.0, 3600.0)
+        self.orbit_box.setDecimals(1)
+        self.orbit_box.setSuffix("°")
+        self.orbit_box.setValue(360.0)
+        self.orbit_box.setToolTip("How far the camera turns about the view's up axis; whole turns loop")
+        self.lossless = QCheckBox("Lossless (exact frames; larger, and not every player takes it)", self)
+        self.length_label = QLabel(self)
+        for box in (self.frames_box, self.fps_box):
+            box.valueChanged.connect(self._update_length)
+        self.path_edit.textChanged.connect(self._path_changed)
+
+        self.buttons = QDialogButtonBox(QDialogButtonBox.Save | QDialogButtonBox.Cancel, self)
+        self.buttons.accepted.connect(self.accept)
+        self.buttons.rejected.connect(self.reject)
+
+        form = QFormLayout(self)
+        form.addRow("File:", path_row)
+        form.addRow("Frame size:", size_row)
+        form.addRow("Frames:", self.frames_box)
+        form.addRow("Frames per second:", self.fps_box)
+        form.addRow("Orbit:", self.orbit_box)
+        form.addRow("", self.lossless)
+        form.addRow("Length:", self.length_label)
+        form.addRow(self.buttons)
+        self._path_changed(path)
+        self._update_length()
+
+    def _spin(self, lo: int, hi: int, value: int) -> QSpinBox:
+        box = QSpinBox(self)
+        box.setRange(lo, hi)
+        box.setValue(max(lo, min(hi, int(value))))
+        return box
+
+    def _update_length(self) -> None:
+        self.length_label.setText(f"{self.frames_box.value() / self.fps_box.value():.1f} s")
+
+    def _path_changed(self, text: str) -> None:
+        self.buttons.button(QDialogButtonBox.Save).setEnabled(bool(text.strip()))
+        is_mp4 = movie_path(text.strip()).lower().endswith(".mp4")
+        self.lossless.setEnabled(is_mp4)
+        self.lossless.setToolTip("" if is_mp4 else "A GIF has 256 colours a frame: it cannot be lossless")
+
+    def _browse(self) -> None:
+        path, _ = QFileDialog.getSaveFileName(self, "Export movie", self.path_edit.text(), MOVIE_FILTER)
+        if path:
+            self.path_edit.setText(movie_path(path))
+
+    def choice(self) -> MovieChoice:
+        path = movie_path(self.path_edit.text().strip())
+        animation = Animation(frames=self.frames_box.value(), fps=self.fps_box.value(),
+                              orbit_degrees=self.orbit_box.value())  # fmt: skip
+        lossless = self.lossless.isChecked() and path.lower().endswith(".mp4")
+        return MovieChoice(path, self.width_box.value(), self.height_box.value(), animation, lossless)
+
+
+def ask_movie(parent: QWidget | None, path: str, size: tuple[int, int]) -> MovieChoice | None:
+    """Run the movie dialog; None when cancelled. Looked up at call time so tests can patch it."""
+    dialog = MovieDialog(parent, path, size)
+    try:
+        return dialog.choice() if dialog.exec_() == QDialog.Accepted else None
+    finally:
+        dialog.deleteLater()

@@ -1,0 +1,95 @@
+"""`volren movie`: a scene rendered along a camera path (an orbit by default) into MP4 or GIF.
+
+It takes every flag of `volren render` (the same scene, renderer, quality and camera: frame i
+of the default orbit is `volren render --azimuth A + 360 i / N`); a scene file's "movie" object
+adds keyframed cameras and TFs (`volren.model.animation`). --frames, --fps and --orbit override it.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import replace
+
+from volren.cli.render_cmd import (
+    add_scene_arguments,
+    build_scene,
+    check_outputs,
+    check_scene_input,
+    explained,
+    finite_float,
+)
+from volren.errors import VolrenError
+from volren.model.animation import MAX_FPS, MAX_FRAMES, Animation, check_fps, check_frames
+
+
+def _frames(text: str) -> int:
+    try:
+        return check_frames(int(text), "--frames")
+    except (ValueError, VolrenError):
+        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to {MAX_FRAMES:,}, got {text!r}") from None
+
+
+def _fps(text: str) -> float:
+    try:
+        return check_fps(finite_float(text), "--fps")
+    except (argparse.ArgumentTypeError, VolrenError):
+        raise argparse.ArgumentTypeError(f"expected a number above 0 and at most {MAX_FPS:g}, got {text!r}") from None
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("movie", help="render an orbit (or a scene's keyframes) offscreen to MP4 or GIF")
+    p.add_argument("-o", "--output", help="movie file to write: .mp4 (H.264) or .gif")
+    add_scene_arguments(p)
+    p.add_argument("--frames", type=_frames, help="number of frames (default 120, or the scene's movie.frames)")
+    p.add_argument("--fps", type=_fps, help="frames per second (default 30, or the scene's movie.fps)")
+    p.add_argument("--orbit", type=finite_float, metavar="DEGREES",
+                   help="turn the camera this far about the view-up axis (default 360; a scene's camera keyframes "
+                        "replace the orbit)")  # fmt: skip
+    p.add_argument("--lossless", action="store_true",
+                   help="MP4 as lossless RGB H.264: decodes to exactly the frames `volren render` writes "
+                        "(larger; not every player takes it)")  # fmt: skip
+    p.add_argument("--force", action="store_true", help="write -o even over an input file")
+    p.set_defaults(run=run)
+
+
+def animation_of(args: argparse.Namespace, scene_movie: object) -> Animation:
+    """The scene file's movie (if any) with --frames, --fps and --orbit applied on top."""
+    animation = Animation() if scene_movie is None else Animation.from_dict(scene_movie)  # type: ignore[arg-type]
+    given = {key: value for key, value in (("frames", args.frames), ("fps", args.fps), ("orbit_degrees", args.orbit))
+             if value is not None}  # fmt: skip
+    if args.orbit is not None and animation.camera_keys:
+        raise VolrenError(f"{args.scene}: --orbit turns the camera, but the scene's movie has camera keyframes")
+    return replace(animation, **given)
+
+
+def run(args: argparse.Namespace) -> int:
+    from volren.cli.progress import frame_bar
+    from volren.io.movie_io import check_movie_path
+    from volren.movie import render_movie
+
+    if not args.output:
+        raise VolrenError("give -o OUT.mp4 or -o OUT.gif")
+    check_movie_path(args.output)
+    if args.lossless and not args.output.lower().endswith(".mp4"):
+        raise VolrenError(f"{args.output}: --lossless applies to MP4 movies only (a GIF has 256 colours a frame)")
+    inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
+    check_outputs((("-o", args.output),), inputs, args.force)
+    scene, why = build_scene(args)
+    check_outputs((("-o", args.output),), [*inputs, ("scene's volume", scene.volume_path)], args.force)
+    check_scene_input(args, scene)
+    try:
+        animation = animation_of(args, scene.extra.get("movie"))
+    except VolrenError as exc:
+        raise VolrenError(f"{args.scene}: {exc}" if args.scene else str(exc)) from None
+    width, height = scene.size
+    try:
+        with frame_bar(f"{scene.renderer} {width}x{height}", animation.frames) as progress:
+            result = render_movie(scene, animation, args.output, lossless=args.lossless, progress=progress)
+    except VolrenError as exc:
+        raise explained(exc, args, scene, why) from None
+    chosen_by = f" (auto: {why})" if why else ""
+    seconds = result.total_ms / 1000
+    print(f"{scene.renderer}{chosen_by}: {result.frames} frames of {width}x{height} at {result.fps:g} fps "
+          f"({result.frames / result.fps:.1f} s of movie) in {seconds:.1f} s, median {result.median_frame_ms:.0f} ms "
+          f"a frame -> {args.output}")  # fmt: skip
+    return 0

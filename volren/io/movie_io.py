@@ -1,0 +1,129 @@
+"""Movies to files: MP4 (H.264, through the ffmpeg that imageio-ffmpeg's wheel ships) and GIF
+(Pillow, through imageio).
+
+MP4 is H.264 in yuv420p at CRF 18 (visually lossless, and what every player and browser plays);
+`lossless` makes it RGB H.264 at QP 0, which decodes to exactly the frames given (for comparison
+and further editing; fewer players take it). yuv420p needs even sides, so an odd side is padded
+by repeating the last row or column. GIF is 256 colours per frame, at the centisecond frame
+delays GIF allows.
+
+The movie is written beside the target and renamed over it when complete, so a failed or
+cancelled movie leaves no half-written file and an old movie of that name intact.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.errors import VolrenError, file_error
+from volren.io.safe_write import atomic_target
+
+#: The movie formats, by file suffix.
+MOVIE_SUFFIXES = (".mp4", ".gif")
+#: H.264's constant rate factor for the default MP4: 18 is "visually lossless".
+MP4_CRF = 18
+INSTALL_HINT = "pip install 'volren[movie]'"
+
+
+def check_movie_path(path: str | Path) -> Path:
+    """The movie's path, or a one-line error: a known suffix, in a folder that exists, with its
+    encoder installed (checked before anything is rendered)."""
+    path = Path(path)
+    if path.suffix.lower() not in MOVIE_SUFFIXES:
+        raise VolrenError(f"{path}: a movie is written as {' or '.join(MOVIE_SUFFIXES)} (by its suffix), "
+                          f"not {path.suffix or 'a file without a suffix'}")  # fmt: skip
+    if not path.absolute().parent.is_dir():
+        raise VolrenError(f"{path}: the folder {path.absolute().parent} does not exist")
+    _imageio()
+    if path.suffix.lower() == ".mp4":
+        try:
+            import imageio_ffmpeg  # noqa: F401 - the encoder itself
+        except ImportError:
+            raise VolrenError(f"{path}: MP4 movies need imageio-ffmpeg, which is not installed: "
+                              f"{INSTALL_HINT}") from None  # fmt: skip
+    return path
+
+
+def _imageio() -> Any:
+    try:
+        import imageio.v2 as imageio
+    except ImportError:
+        raise VolrenError(f"movies need imageio, which is not installed: {INSTALL_HINT}") from None
+    return imageio
+
+
+def _even(frame: NDArray[np.uint8]) -> NDArray[np.uint8]:
+    """yuv420p halves the chroma resolution: pad an odd side with its last row or column."""
+    pad = ((0, frame.shape[0] % 2), (0, frame.shape[1] % 2), (0, 0))
+    return np.pad(frame, pad, mode="edge") if any(p[1] for p in pad) else frame
+
+
+class MovieWriter:
+    """Appends 8-bit RGB frames, all of one size, to an open movie file (see `movie_writer`)."""
+
+    def __init__(self, path: Path, tmp: Path, fps: float, lossless: bool) -> None:
+        self.path, self.fps, self.lossless = path, float(fps), lossless
+        self.frames = 0
+        self._shape: tuple[int, ...] | None = None
+        self._writer = self._open(_imageio(), tmp)
+
+    def _open(self, imageio: Any, tmp: Path) -> Any:
+        if self.path.suffix.lower() == ".gif":
+            return imageio.get_writer(tmp, format="GIF", mode="I", duration=1000.0 / self.fps, loop=0)
+        if self.lossless:
+            codec, pixels, params = "libx264rgb", "rgb24", ["-qp", "0"]
+        else:
+            codec, pixels, params = "libx264", "yuv420p", ["-crf", str(MP4_CRF)]
+        return imageio.get_writer(tmp, format="FFMPEG", mode="I", fps=self.fps, codec=codec, quality=None,
+                                  pixelformat=pixels, macro_block_size=1, output_params=params,
+                                  ffmpeg_log_level="error")  # fmt: skip
+
+    def append(self, frame: NDArray[np.uint8]) -> None:
+        """Add one (H, W, 3) uint8 frame; every frame must have the first one's size."""
+        if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
+            raise VolrenError(f"{self.path}: a movie frame must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
+        if self._shape is not None and frame.shape != self._shape:
+            raise VolrenError(f"{self.path}: frame {self.frames} is {frame.shape[1]}x{frame.shape[0]}, the movie "
+                              f"{self._shape[1]}x{self._shape[0]}")  # fmt: skip
+        self._shape = frame.shape
+        if self.path.suffix.lower() == ".mp4" and not self.lossless:
+            frame = _even(frame)
+        try:
+            self._writer.append_data(np.ascontiguousarray(frame))
+        except (OSError, RuntimeError, ValueError) as exc:
+            raise file_error(self.path, f"cannot write the movie: {_one_line(exc)}") from None
+        self.frames += 1
+
+    def close(self) -> None:
+        try:
+            self._writer.close()
+        except (OSError, RuntimeError, ValueError) as exc:
+            raise file_error(self.path, f"cannot finish the movie: {_one_line(exc)}") from None
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())[:300]
+
+
+@contextmanager
+def movie_writer(path: str | Path, fps: float, lossless: bool = False) -> Iterator[MovieWriter]:
+    """An open movie at `path` (MP4 or GIF, by suffix) at `fps`; complete when the block ends
+    normally, and not there at all (an older file of that name kept) when it raises."""
+    path = check_movie_path(path)
+    with atomic_target(path) as tmp:
+        writer = MovieWriter(path, tmp, fps, lossless)
+        try:
+            yield writer
+        except BaseException:
+            with suppress(VolrenError):  # the block's error is the one to report
+                writer.close()
+            raise
+        writer.close()
+        if writer.frames == 0:
+            raise VolrenError(f"{path}: a movie needs at least one frame")

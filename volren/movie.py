@@ -1,0 +1,97 @@
+"""Movies: a scene rendered frame by frame along an `Animation` and written as MP4 or GIF.
+
+One renderer is prepared once and kept for every frame; it is given a new TF only on frames
+whose TF differs (so a movie without TF keyframes builds its tables once). Each frame is what
+`volren render` gives for the same camera, converted to 8 bits exactly as its PNG is
+(`volren.io.image_io.to_png_pixels`), so a lossless movie decodes to those PNGs' pixels.
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from volren.api import prepared_renderer
+from volren.errors import VolrenError
+from volren.io.image_io import to_png_pixels
+from volren.io.movie_io import movie_writer
+from volren.model.animation import Animation, View
+from volren.model.scene import Scene
+from volren.model.transfer_function_2d import TransferFunction
+from volren.quality import AUTO, resolve
+from volren.renderers.base import ProgressCallback, Renderer, render_frame
+
+
+@dataclass(frozen=True)
+class MovieResult:
+    path: Path
+    frames: int
+    width: int
+    height: int
+    fps: float
+    median_frame_ms: float
+    total_ms: float
+
+
+def render_movie(
+    scene: Scene,
+    animation: Animation,
+    path: str | Path,
+    background: Sequence[float] = (0.0, 0.0, 0.0),
+    lossless: bool = False,
+    progress: ProgressCallback | None = None,
+) -> MovieResult:
+    """Render `scene` (with its volume loaded) along `animation` into `path` (.mp4 or .gif), the
+    frames over `background`. A scene's renderer `auto` becomes the fastest measured one at
+    quality `default`, with the scene's settings as they are. `progress(fraction of the movie)`
+    may raise to stop: then no file is left (and an older one of that name is kept)."""
+    if scene.volume is None:
+        raise VolrenError("the scene has no volume to make a movie of")
+    if scene.renderer == AUTO:
+        renderer, settings, _ = resolve(scene.volume.kind, scene.transfer_function.dims, AUTO, None, scene.settings)
+        scene = replace(scene, renderer=renderer, settings=settings)
+    with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
+        return record_movie(renderer, animation, scene.camera, scene.transfer_function, scene.volume.bounds,
+                            scene.size, path, background, lossless, progress, scene.renderer)  # fmt: skip
+
+
+def record_movie(
+    renderer: Renderer,
+    animation: Animation,
+    start_view: View,
+    start_tf: TransferFunction,
+    bounds: Sequence[float],
+    size: tuple[int, int],
+    path: str | Path,
+    background: Sequence[float] = (0.0, 0.0, 0.0),
+    lossless: bool = False,
+    progress: ProgressCallback | None = None,
+    label: str | None = None,
+) -> MovieResult:
+    """The movie from a renderer that holds the volume, settings and `start_tf` (the app brings its
+    own): the orbit starts at `start_view`; TF keyframes replace `start_tf` where they are."""
+    width, height = size
+    frames = animation.frames
+    times: list[float] = []
+    tf = start_tf
+    with movie_writer(path, animation.fps, lossless) as writer:
+        for index in range(frames):
+            frame_tf = animation.transfer_function(index, start_tf)
+            if frame_tf is not tf:
+                renderer.set_transfer_function(frame_tf)
+                tf = frame_tf
+            camera = animation.camera(index, start_view, bounds, width / height)
+            within = None if progress is None else _within_frame(progress, index, frames)
+            image, stats = render_frame(renderer, camera, width, height, within, label=label)
+            times.append(stats.ms)
+            writer.append(to_png_pixels(image, background))
+            if progress is not None:
+                progress((index + 1) / frames)
+    return MovieResult(Path(path), frames, width, height, animation.fps, statistics.median(times), sum(times))
+
+
+def _within_frame(progress: ProgressCallback, index: int, frames: int) -> ProgressCallback:
+    """A renderer's progress through frame `index` as progress through the movie."""
+    return lambda fraction: progress((index + min(max(fraction, 0.0), 1.0)) / frames)
