@@ -552,3 +552,59 @@ def test_a_slow_screenshot_without_progress_reports_shows_a_busy_dialog_with_the
         assert (tmp_path / "slow.png").exists() and w.screenshots._progress is None
     finally:
         registry.unregister("fake_slow_frame")
+
+
+# ---------------------------------------------------------------------------- choosing the array
+def test_the_dataset_panel_switches_fields_keeping_the_view_and_each_fields_tf(files_window, fakes, qtbot, tmp_path):
+    """Issue 23: choose the scalar array (and a vector's component or magnitude) in the app; the
+    Dataset panel names the array shown."""
+    import pyvista as pv
+
+    rng = np.random.default_rng(5)
+    grid = pv.ImageData(dimensions=(6, 5, 4), spacing=(1.0, 0.5, 2.0))
+    density = rng.uniform(0, 10, grid.n_points).astype(np.float32)
+    velocity = rng.normal(size=(grid.n_points, 3)).astype(np.float32)
+    grid.point_data["density"] = density
+    grid.point_data["velocity"] = velocity
+    path = tmp_path / "flow.vti"
+    grid.save(path)
+    w = files_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
+        w.files.open_input(path, renderer="fake")
+    panel, box = w.docks.dataset, w.docks.dataset.array_box
+    labels = [box.itemText(i) for i in range(box.count())]
+    assert labels == ["density", "velocity (magnitude)", "velocity (x)", "velocity (y)", "velocity (z)"]
+    assert box.isEnabled() and box.currentText() == "density" and panel.facts()["Array"] == "density"
+    edited = TransferFunction1D.ramp(2, 8, 0.7)
+    w.state.set_transfer_function(edited)
+    w.state.set_camera(w.state.camera.azimuth(40).elevation(10))
+    camera, renderer = w.state.camera, w.state.renderer
+
+    def choose(label: str) -> None:
+        index = labels.index(label)
+        with qtbot.waitSignal(w.files.loadFinished, timeout=TIMEOUT_MS):
+            box.setCurrentIndex(index)
+            box.activated.emit(index)
+
+    choose("velocity (y)")
+    volume = w.state.volume
+    assert volume.scalars == "velocity:y" and panel.facts()["Array"] == "velocity (y)"
+    np.testing.assert_array_equal(volume.values.reshape(-1), velocity[:, 1])
+    assert w.state.camera == camera and w.state.renderer == renderer
+    low, high = volume.value_range
+    assert w.state.transfer_function is not edited
+    assert w.state.transfer_function.value_range == pytest.approx((low, high))  # the default TF over this field
+    choose("velocity (magnitude)")
+    np.testing.assert_allclose(w.state.volume.values.reshape(-1), np.linalg.norm(velocity, axis=1), rtol=1e-6)
+    choose("density")
+    assert w.state.transfer_function is edited  # each field keeps the TF edited for it
+    assert box.currentText() == "density" and w.state.camera == camera
+
+
+def test_the_array_chooser_is_disabled_with_why_where_there_is_no_choice(files_window, fakes, qtbot):
+    w = files_window()
+    box = w.docks.dataset.array_box
+    assert not box.isEnabled() and box.toolTip() == "Open a volume first"
+    show(w, qtbot, good_volume())  # made in memory
+    assert not box.isEnabled() and "not read from a file" in box.toolTip()
+    assert not w.files.show_array("anything")

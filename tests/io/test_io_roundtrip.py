@@ -271,12 +271,42 @@ def test_named_and_default_arrays(tmp_path, values_int16):
     img.save(tmp_path / "many.vti")
     np.testing.assert_array_equal(load_volume(tmp_path / "many.vti").values, values_int16 * 2)  # active
     np.testing.assert_array_equal(load_volume(tmp_path / "many.vti", "first").values, values_int16)
-    with pytest.raises(VolrenError, match=r"many.vti: array 'vectors' has 3 components"):
-        load_volume(tmp_path / "many.vti", "vectors")
     with pytest.raises(
-        VolrenError, match=r"many.vti: no array named 'nope'; available: 'first', 'second', 'vectors'"
+        VolrenError, match=r"many.vti: no array named 'nope'; available: 'first', 'second', 'vectors:magnitude', "
+        "'vectors:x', 'vectors:y', 'vectors:z'"
     ):
         load_volume(tmp_path / "many.vti", "nope")
+
+
+def test_a_vector_array_gives_its_magnitude_or_a_component(tmp_path, values_int16):
+    """Issue 23: choosing a vector's component or magnitude, as in ParaView (magnitude by default)."""
+    img = image(values_int16, name="first")
+    rng = np.random.default_rng(3)
+    vectors = rng.normal(size=(img.n_points, 3)).astype(np.float32)
+    img.point_data["velocity"] = vectors
+    img.cell_data["flux"] = rng.normal(size=(img.n_cells, 2))
+    img.save(tmp_path / "vec.vti")
+    path = tmp_path / "vec.vti"
+    shape = values_int16.shape
+    magnitude = load_volume(path, "velocity")
+    np.testing.assert_allclose(magnitude.values, np.linalg.norm(vectors, axis=1).reshape(shape), rtol=1e-6)
+    assert magnitude.values.dtype == np.float32 and magnitude.scalars == "velocity:magnitude"
+    assert any("'velocity' has 3 components; showing its magnitude" in note for note in magnitude.notes)
+    assert load_volume(path, "velocity:magnitude").scalars == "velocity:magnitude"
+    for component, index in (("x", 0), ("y", 1), ("Z", 2), ("1", 1)):
+        part = load_volume(path, f"velocity:{component}")
+        np.testing.assert_array_equal(part.values, vectors[:, index].reshape(shape))
+        assert part.scalars == f"velocity:{'xyz'[index]}" and part.notes == ()
+    assert magnitude.arrays == ("first", "velocity:magnitude", "velocity:x", "velocity:y", "velocity:z",
+                                "flux:magnitude", "flux:x", "flux:y")  # fmt: skip
+    assert load_volume(path).scalars == "first" and load_volume(path, "first:0").scalars == "first"
+    with pytest.warns(VolrenWarning, match="array 'flux' is cell data"):
+        assert load_volume(path, "flux:y").scalars == "flux:y"
+    with pytest.raises(VolrenError, match=r"vec.vti: array 'velocity' has 3 components; no component 'w' \(choose "
+                       r"velocity:magnitude, velocity:x, velocity:y, velocity:z\)"):  # fmt: skip
+        load_volume(path, "velocity:w")
+    with pytest.raises(VolrenError, match="array 'first' has one component; there is no component 'y'"):
+        load_volume(path, "first:y")
 
 
 def test_nan_values_load_with_one_warning(tmp_path, values_float32):

@@ -89,7 +89,8 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quality", choices=LEVELS, help="settings measured for this level (volren renderers lists them; "
                    "default: default, or the scene file's settings as they are); explicit flags win")
     p.add_argument("--tf", help="transfer function JSON (DESIGN.md format or a ParaView preset)")
-    p.add_argument("--scalars", help="name of the point array to render")
+    p.add_argument("--scalars", help="the array to render: NAME, or NAME:magnitude / NAME:x (y, z, 0, 1, ...) for a "
+                   "vector's length or one component (a vector shows its magnitude by default)")
     p.add_argument("--size", type=image_size, help="image size W or WxH (default 512)")
     p.add_argument("--azimuth", type=finite_float, help="degrees, after the camera reset")
     p.add_argument("--elevation", type=finite_float, help="degrees, after the azimuth")

@@ -51,64 +51,126 @@ def warn(notes: list[str]) -> None:
 # --------------------------------------------------------------------------- choosing the array
 
 
-def _usable(arrays: dict[str, NDArray], name: str | None) -> bool:
-    return name is not None and name in arrays and arrays[name].dtype.kind in "biuf"
+#: What follows "NAME:" in an array choice: one component of a vector array, or its length.
+MAGNITUDE = "magnitude"
+_XYZ = ("x", "y", "z")
+
+
+def _components(values: NDArray) -> int:
+    return 1 if values.ndim == 1 else int(values.shape[1])
+
+
+def _component_names(count: int) -> list[str]:
+    """How the components of a `count`-component array are named in a choice: x, y, z for
+    vectors of 2 or 3 (as ParaView shows them), else their indices."""
+    return list(_XYZ[:count]) if count <= 3 else [str(i) for i in range(count)]
+
+
+def _numeric(name: str, values: NDArray) -> bool:
+    return values.dtype.kind in "biuf" and not name.startswith("vtk")
+
+
+def array_choices(view: _pv.DatasetView) -> tuple[str, ...]:
+    """Every scalar field this dataset offers, as `scalars` names: a 1-component array by its
+    name; a vector as NAME:magnitude and NAME:x (y, z, or 0, 1, ...); point arrays first."""
+    choices: list[str] = []
+    for arrays in (view.point_arrays, view.cell_arrays):
+        for name, values in arrays.items():
+            if not _numeric(name, values) or values.ndim > 2:
+                continue
+            count = _components(values)
+            named = [name] if count == 1 else [f"{name}:{MAGNITUDE}"] + [f"{name}:{c}" for c in _component_names(count)]
+            choices += [choice for choice in named if choice not in choices]
+    return tuple(choices)
 
 
 def _first(arrays: dict[str, NDArray], active: str | None) -> str | None:
-    if _usable(arrays, active):
+    if active is not None and active in arrays and arrays[active].dtype.kind in "biuf":
         return active
     for name, arr in arrays.items():
-        if arr.dtype.kind in "biuf" and not name.startswith("vtk"):
+        if _numeric(name, arr):
             return name
     return None
 
 
-def choose_array(view: _pv.DatasetView, scalars: str | None, source: str) -> tuple[str, str]:
-    """(array name, 'point' or 'cell'): the named array, else the active or first point array."""
+def _split_choice(scalars: str, points: dict, cells: dict) -> tuple[str, str | None]:
+    """(array name, component or None): an existing array's own name wins over NAME:COMPONENT."""
+    if scalars in points or scalars in cells:
+        return scalars, None
+    name, sep, component = scalars.rpartition(":")
+    if sep and (name in points or name in cells):
+        return name, component.strip().lower()
+    return scalars, None
+
+
+def choose_array(view: _pv.DatasetView, scalars: str | None, source: str) -> tuple[str, str, str | None]:
+    """(array name, 'point' or 'cell', component): the named array (NAME, or NAME:COMPONENT for a
+    vector's component or magnitude), else the active or first point array."""
     points, cells = dict(view.point_arrays), dict(view.cell_arrays)
     if scalars is None:
         name = _first(points, view.active_point)
         if name is not None:
-            return name, "point"
+            return name, "point", None
         name = _first(cells, view.active_cell)
         if name is not None:
-            return name, "cell"
+            return name, "cell", None
         raise VolrenError(f"{source}: no scalar arrays (neither point nor cell data)")
-    if scalars in points:
-        return scalars, "point"
-    if scalars in cells:
-        return scalars, "cell"
-    available = [f"'{n}'" for n in points] + [f"'{n}' (cell data)" for n in cells]
+    name, component = _split_choice(scalars, points, cells)
+    if name in points:
+        return name, "point", component
+    if name in cells:
+        return name, "cell", component
+    available = [f"'{n}'" for n in array_choices(view)]
     raise VolrenError(
         f"{source}: no array named {scalars!r}; available: {', '.join(available) if available else 'none'}"
     )
 
 
-def _one_component(values: NDArray, name: str, source: str) -> NDArray:
-    if values.ndim == 2 and values.shape[1] == 1:
-        values = values[:, 0]
-    if values.ndim != 1:
-        raise VolrenError(
-            f"{source}: array '{name}' has {values.shape[1]} components; volren renders a scalar "
-            f"field: choose a 1-component array with scalars=..."
-        )
+def _scalar_field(values: NDArray, name: str, component: str | None, source: str) -> tuple[NDArray, str]:
+    """The 1-component field an array gives, and its choice name: the array itself, one
+    component, or the magnitude (the default for a vector, as in ParaView)."""
     if values.dtype.kind not in "biuf":
         raise VolrenError(f"{source}: array '{name}' is not numeric ({values.dtype})")
-    return values
+    count = _components(values)
+    if values.ndim > 2:
+        raise VolrenError(f"{source}: array '{name}' has shape {values.shape}; volren renders a scalar field")
+    if count == 1:
+        if component is not None and component not in ("0", "x", MAGNITUDE):
+            raise VolrenError(f"{source}: array '{name}' has one component; there is no component {component!r}")
+        return values.reshape(-1), name
+    names = _component_names(count)
+    if component is None or component == MAGNITUDE:
+        wide = values.astype(np.float64)
+        magnitude = np.sqrt(np.einsum("ij,ij->i", wide, wide))
+        keep = values.dtype if values.dtype.kind == "f" and values.dtype.itemsize >= 4 else np.float64
+        return magnitude.astype(keep, copy=False), f"{name}:{MAGNITUDE}"
+    if component in names:
+        index = names.index(component)
+    elif component.isdigit() and int(component) < count:
+        index = int(component)
+    else:
+        options = ", ".join(f"{name}:{c}" for c in [MAGNITUDE, *names])
+        raise VolrenError(f"{source}: array '{name}' has {count} components; no component {component!r} "
+                          f"(choose {options})")  # fmt: skip
+    return np.ascontiguousarray(values[:, index]), f"{name}:{names[index]}"
 
 
 def point_values(
     view: _pv.DatasetView, scalars: str | None, source: str, name: str
-) -> tuple[_pv.DatasetView, NDArray, list[str]]:
-    """The dataset (cell data moved to points if needed), its point scalars, and notes."""
-    array, where = choose_array(view, scalars, source)
-    notes = []
+) -> tuple[_pv.DatasetView, NDArray, list[str], list[str], str]:
+    """The dataset (cell data moved to points if needed), its point scalars, notes (warned),
+    info (only recorded), and the choice name of the field (NAME, or NAME:COMPONENT)."""
+    array, where, component = choose_array(view, scalars, source)
+    notes, info = [], []
     if where == "cell":
-        _one_component(view.cell_arrays[array], array, source)
+        _scalar_field(view.cell_arrays[array], array, component, source)  # refuse before averaging
         view = _pv.cell_to_point(view)
         notes.append(f"{name}: array '{array}' is cell data; averaged it onto the points")
-    return view, _one_component(view.point_arrays[array], array, source), notes
+    values, chosen = _scalar_field(view.point_arrays[array], array, component, source)
+    if component is None and chosen != array:  # ParaView's default too: a choice, not a repair
+        info.append(f"{name}: array '{array}' has {_components(view.point_arrays[array])} components; showing its "
+                    f"magnitude (or choose {array}:x, ...)")  # fmt: skip
+    return view, values, notes, info, chosen
 
 
 # ------------------------------------------------------------------------------- uniform grids
@@ -118,13 +180,15 @@ def grid_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name
     """values[k, j, i] and geometry of image data (VTK's point order is x fastest)."""
     if view.n_points == 0:
         raise VolrenError(f"{source}: the grid is empty (0 points)")
-    view, values, notes = point_values(view, scalars, source, name)
+    choices = array_choices(view)
+    view, values, notes, info, chosen = point_values(view, scalars, source, name)
     nx, ny, nz = view.dimensions
     if values.size != nx * ny * nz:
         raise VolrenError(
             f"{source}: dimensions do not match the data: {nx}x{ny}x{nz} points but {values.size} values"
         )
-    return Grid(values.reshape(nz, ny, nx), view.spacing, view.origin, view.direction, notes)
+    return Grid(values.reshape(nz, ny, nx), view.spacing, view.origin, view.direction, notes, info, scalars=chosen,
+                arrays=choices)  # fmt: skip
 
 
 def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
@@ -142,7 +206,8 @@ def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
             spacing[axis] = -spacing[axis]
             values = np.flip(values, axis=2 - axis)
     volume = UniformVolume(
-        np.ascontiguousarray(values), tuple(spacing), tuple(origin), name=name, notes=tuple(notes + grid.info)
+        np.ascontiguousarray(values), tuple(spacing), tuple(origin), name=name, notes=tuple(notes + grid.info),
+        scalars=grid.scalars, arrays=grid.arrays,
     )
     _report(volume, notes)
     return volume
@@ -163,7 +228,8 @@ def tets_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name
     """Point scalars on tetrahedra: other 3D cells split, lower-dimensional cells dropped, tets repaired."""
     if view.n_points == 0 or view.n_cells == 0:
         raise VolrenError(f"{source}: the grid is empty ({view.n_points} points, {view.n_cells} cells)")
-    view, values, notes = point_values(view, scalars, source, name)
+    choices = array_choices(view)
+    view, values, notes, info, chosen = point_values(view, scalars, source, name)
     cells = _pv.tetrahedralize(view)
     broken = ", ".join(f"{n:,} {why}" for why, n in cells.broken.items())
     if len(cells.tets) == 0:
@@ -189,7 +255,8 @@ def tets_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name
         done.append(f"reoriented {n:,} inverted {'one' if n == 1 else 'ones'}")
     repairs = [f"{name}: {', '.join(done)}"] if done else []
     notes = notes + repairs
-    volume = TetVolume(cells.points, repaired.tets, values, name=name, notes=tuple(notes))
+    volume = TetVolume(cells.points, repaired.tets, values, name=name, notes=tuple(notes + info), scalars=chosen,
+                       arrays=choices)  # fmt: skip
     _report(volume, notes)
     return volume
 

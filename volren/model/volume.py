@@ -93,6 +93,10 @@ class UniformVolume:
     origin: tuple[float, float, float] = (0.0, 0.0, 0.0)
     name: str = "volume"
     notes: tuple[str, ...] = ()
+    #: The field the values are (an array name, or NAME:COMPONENT), and every field the source
+    #: offers ("" and () for volumes made in memory): what the app's array chooser lists.
+    scalars: str = ""
+    arrays: tuple[str, ...] = ()
     value_range: tuple[float, float] = field(init=False)
     nonfinite_count: int = field(init=False)
 
@@ -178,6 +182,8 @@ class TetVolume:
     values: NDArray
     name: str = "mesh"
     notes: tuple[str, ...] = ()
+    scalars: str = ""  #: as in `UniformVolume`
+    arrays: tuple[str, ...] = ()
     value_range: tuple[float, float] = field(init=False)
     nonfinite_count: int = field(init=False)
     merged_tet_count: int = field(init=False)  # repeated tetrahedra dropped (module docstring)

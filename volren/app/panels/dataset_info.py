@@ -1,4 +1,5 @@
-"""The dataset panel: read-only facts about the loaded volume, and what loading changed.
+"""The dataset panel: which of the file's fields is shown (a chooser, as ParaView's colour-by
+box), read-only facts about the loaded volume, and what loading changed.
 
 The notes a load leaves on the volume (cells dropped or split into tetrahedra, tetrahedra
 repaired, values converted, NaNs found; see `volren.io.dataset`) are listed one per line: they
@@ -10,8 +11,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from PyQt5.QtCore import Qt
-from PyQt5.QtWidgets import QFormLayout, QLabel, QListWidget, QVBoxLayout, QWidget
+from PyQt5.QtCore import Qt, pyqtSignal
+from PyQt5.QtWidgets import QComboBox, QFormLayout, QLabel, QListWidget, QVBoxLayout, QWidget
 
 from volren.app.core.state import ViewState
 from volren.app.panels.base import StatePanel
@@ -38,9 +39,17 @@ def _size(volume: Volume) -> str:
     return f"{len(volume.tets):,} tetrahedra"
 
 
+def array_label(choice: str) -> str:
+    """How a field is named to people: "velocity (magnitude)", "velocity (x)", or the array's name."""
+    name, sep, component = choice.rpartition(":")
+    return f"{name} ({component})" if sep and name else choice
+
+
 def volume_facts(volume: Volume, shown: Volume | None = None) -> list[tuple[str, str]]:
     """(label, text) rows describing `volume`; `shown` is what cropping leaves of it, if cropped."""
     rows = [("Name", volume.name)]
+    if volume.scalars:
+        rows.append(("Array", array_label(volume.scalars)))
     if isinstance(volume, UniformVolume):
         nx, ny, nz = volume.dimensions
         rows += [
@@ -71,12 +80,18 @@ def volume_facts(volume: Volume, shown: Volume | None = None) -> list[tuple[str,
 
 
 class DatasetInfoPanel(StatePanel):
-    """A read-only form of `volume_facts` and the list of the volume's notes."""
+    """The field chooser, a read-only form of `volume_facts` and the list of the volume's notes.
+    Choosing a field emits `arrayChosen(choice)`: the window reloads the file with it."""
 
     watches = frozenset({"volume", "crop"})
+    arrayChosen = pyqtSignal(str)
 
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(state, parent)
+        self.array_box = QComboBox(self)
+        self.array_box.activated.connect(self._array_activated)
+        array_row = QFormLayout()
+        array_row.addRow("Show array", self.array_box)
         self.empty = QLabel(NO_VOLUME, self)
         self.form = QFormLayout()
         self.notes_label = QLabel("Notes", self)
@@ -84,6 +99,7 @@ class DatasetInfoPanel(StatePanel):
         self.notes_list.setToolTip("What loading changed or ignored (also reported as warnings)")
         self.notes_list.setWordWrap(True)
         layout = QVBoxLayout(self)
+        layout.addLayout(array_row)
         layout.addWidget(self.empty)
         layout.addLayout(self.form)
         layout.addWidget(self.notes_label)
@@ -99,8 +115,39 @@ class DatasetInfoPanel(StatePanel):
         """The notes as shown."""
         return [self.notes_list.item(i).text() for i in range(self.notes_list.count())]
 
+    def _array_activated(self, index: int) -> None:
+        choice = self.array_box.itemData(index)
+        volume = self.state.volume
+        if volume is not None and choice and choice != volume.scalars:
+            self.arrayChosen.emit(choice)
+
+    def _refresh_arrays(self, volume: Volume | None) -> None:
+        """The file's fields, the shown one selected; disabled (saying why) with nothing to choose."""
+        box = self.array_box
+        box.blockSignals(True)
+        box.clear()
+        choices = list(volume.arrays) if volume is not None else []
+        if volume is not None and volume.scalars and volume.scalars not in choices:
+            choices.insert(0, volume.scalars)
+        for choice in choices:
+            box.addItem(array_label(choice), choice)
+        if volume is not None and volume.scalars in choices:
+            box.setCurrentIndex(choices.index(volume.scalars))
+        box.blockSignals(False)
+        box.setEnabled(len(choices) > 1)
+        if volume is None:
+            why = "Open a volume first"
+        elif len(choices) > 1:
+            why = "The scalar field to render: another array of the file, or a vector's magnitude or component"
+        elif volume.arrays:
+            why = "The file holds this one scalar field"
+        else:
+            why = "This volume was not read from a file with named arrays"
+        box.setToolTip(why)
+
     def refresh(self) -> None:
         volume = self.state.volume
+        self._refresh_arrays(volume)
         while self.form.rowCount():
             self.form.removeRow(0)
         self._values = {}

@@ -71,6 +71,7 @@ class Docks:
         self.crop = CropPanel(state)
         self.background = BackgroundPanel(state)
         self.dataset = DatasetInfoPanel(state)
+        self.dataset.arrayChosen.connect(window.files.show_array)
 
         self.tf_dock = self._dock("Transfer function", "tf-dock", _scrolled(self.tf_panel), Qt.RightDockWidgetArea)
         settings = QWidget()

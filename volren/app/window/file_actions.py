@@ -9,6 +9,7 @@ or a scene replaces the scene, with a renderer that can draw it.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +27,7 @@ from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
+from volren.model.transfer_function_2d import TransferFunction
 from volren.quality import AUTO, at_level, level_of
 
 OPEN_FILTER = (
@@ -66,6 +68,8 @@ class FileActions(QObject):
         self._renderers = renderers
         self._scenes = scenes
         self._report_error = report_error
+        #: The TF each field of a file had when another was chosen (`show_array`), for the session.
+        self._tf_by_field: dict[tuple[str, str], TransferFunction] = {}
         self.recent = recent
         self.loader = Loader(window, load)
         self.loader.loaded.connect(self._on_loaded)
@@ -129,6 +133,29 @@ class FileActions(QObject):
             self._viewport.placeholder = f"Opening {label}…"
             self._viewport.update()
         self.loader.start(path, tf, scalars, context={"path": path, "renderer": renderer}, raw=raw)
+
+    def show_array(self, choice: str) -> bool:
+        """Show another field of the file on screen (the Dataset panel's chooser): the file is read
+        again in the background with `choice` as its scalars, and the camera, crop, settings and
+        renderer stay. Each field keeps its own TF for the session (as ParaView keeps a colour map
+        per array): switching back brings back the TF edited for it. False when nothing can be
+        reloaded (a volume made in memory)."""
+        path, volume, tf = self._scenes.volume_path, self._state.volume, self._state.transfer_function
+        if path is None or volume is None or tf is None:
+            self._report_error("Cannot show another array", "only a volume read from a file has other arrays")
+            return False
+        self._tf_by_field[(path, volume.scalars)] = tf
+        self._window.statusBar().showMessage(f"Reading {choice} from {Path(path).name}…")
+        self.loader.start(path, None, choice, context={"path": path, "keep_view": True})
+        return True
+
+    def _keeping_the_view(self, loaded: LoadedInput) -> LoadedInput:
+        """Another field of the shown file: the view as it is, the TF this field had, if any."""
+        state, volume = self._state, loaded.volume
+        assert volume is not None
+        tf = self._tf_by_field.get((loaded.volume_path, volume.scalars)) or loaded.transfer_function
+        return replace(loaded, camera=state.camera, settings=state.settings, renderer=state.renderer,
+                       transfer_function=tf, crop=state.crop, background=state.background)  # fmt: skip
 
     def ask_raw_layout(self, path: PathArg) -> dict[str, Any] | None:
         """The layout of a headerless raw file from `RawDialog` (None: cancelled). Without dialogs
@@ -222,6 +249,8 @@ class FileActions(QObject):
             self._state.set_transfer_function(loaded.transfer_function)
             self._window.statusBar().showMessage(f"Transfer function from {loaded.source}", 5000)
         else:
+            if context and context.get("keep_view") and self._state.volume is not None:
+                loaded = self._keeping_the_view(loaded)
             self.apply_loaded(loaded, context.get("renderer") if context else None)
         if opened is not None:
             self.recent.add(opened)

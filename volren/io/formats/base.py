@@ -30,7 +30,8 @@ class Grid:
     """A uniform grid between the reader and the model: values[k, j, i], geometry in xyz.
 
     `notes` are repairs and things ignored (each also becomes a VolrenWarning); `info` notes only
-    record what loading did.
+    record what loading did. `scalars` names the field the values are and `arrays` every field the
+    file offers (`volren.io.dataset.array_choices`; empty for formats with one field).
     """
 
     values: NDArray
@@ -39,6 +40,8 @@ class Grid:
     direction: NDArray | None = None
     notes: list[str] = field(default_factory=list)
     info: list[str] = field(default_factory=list)
+    scalars: str = ""
+    arrays: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
