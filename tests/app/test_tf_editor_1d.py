@@ -508,3 +508,74 @@ def test_the_selected_points_value_and_opacity_are_typed(qtbot, editor, state):
     assert entry.opacity.value() == pytest.approx(0.1)
     curve.selected = None
     assert not entry.isEnabled()
+
+
+# ---------------------------------------------------------------------------- tissue presets and shift
+def _ct_state() -> ViewState:
+    from volren.samples import shepp_logan_ct
+
+    s = ViewState()
+    volume = shepp_logan_ct(24)
+    s.load(volume, default_transfer_function(volume), default_camera(volume))
+    return s
+
+
+def test_tissue_presets_fit_the_data_ct_ones_only_on_hounsfield_units(make_editor, state, qtbot):
+    """Issue 23: opacity presets for CT (in HU) and MR, offered only where they fit, saying why."""
+    from volren.app.core.opacity_presets import OPACITY_PRESET_NAMES, robust_range
+
+    editor = make_editor(state)  # Marschner-Lobb, values 0..1: not HU
+    model = editor.tissue_box.model()
+    ct_items = [i for i, n in enumerate(OPACITY_PRESET_NAMES, 1) if n.startswith("CT")]
+    assert ct_items and all(not model.item(i).isEnabled() for i in ct_items)
+    assert "Hounsfield" in model.item(ct_items[0]).toolTip()
+    mr = OPACITY_PRESET_NAMES.index("MR default") + 1
+    assert model.item(mr).isEnabled()
+    editor.tissue_box.setCurrentIndex(mr)
+    tf = state.transfer_function
+    lo, hi = robust_range(state.volume)
+    assert editor.tissue_box.currentIndex() == 0  # an action: the box goes back to its placeholder
+    np.testing.assert_allclose(tf.opacity_points[:, 0], lo + np.array([0, 0.15, 0.4, 1]) * (hi - lo))
+    assert tf.opacity_unit_distance == state.volume.characteristic_length
+    ct = _ct_state()
+    ct_editor = make_editor(ct)
+    assert all(ct_editor.tissue_box.model().item(i).isEnabled() for i in ct_items)
+    assert ct_editor.apply_tissue_preset("CT bone")
+    bone = ct.transfer_function
+    assert float(bone.sample(-1000.0)[1]) == 0.0 and float(bone.sample(150.0)[1]) == 0.0
+    assert float(bone.sample(700.0)[1]) == pytest.approx(0.8)  # HU used as they are
+    errors = []
+    editor.errorOccurred.connect(lambda title, text: errors.append(text))
+    assert not editor.apply_tissue_preset("CT lung")
+    assert "CT lung: CT presets are in Hounsfield units" in errors[0]
+
+
+def test_the_shift_slider_slides_the_whole_tf_and_a_drag_is_one_undo_step(make_editor, qtbot):
+    state = _ct_state()
+    history = TFHistory(state)
+    try:
+        editor = make_editor(state)
+        editor.apply_tissue_preset("CT soft tissue")
+        preset = state.transfer_function.copy()
+        step = editor.shift_step()
+        assert step == pytest.approx(2000 / 200)  # the phantom spans -1000..1000 HU
+        slider = editor.shift_slider
+        recorded = history.stack.count()
+        slider.sliderPressed.emit()
+        for value in (3, 9, 15):
+            slider.setValue(value)
+        slider.sliderReleased.emit()
+        tf = state.transfer_function
+        np.testing.assert_allclose(tf.opacity_points[:, 0], preset.opacity_points[:, 0] + 15 * step)
+        np.testing.assert_allclose(tf.color_points[:, 0], preset.color_points[:, 0] + 15 * step)
+        np.testing.assert_array_equal(tf.opacity_points[:, 1], preset.opacity_points[:, 1])
+        assert history.stack.count() == recorded + 1  # the drag is one step
+        assert slider.value() == 15 and editor.shift_label.text() == "+150"  # kept after the release
+        slider.setValue(-5)  # a keyboard step: from the same base
+        np.testing.assert_allclose(state.transfer_function.opacity_points[:, 0], preset.opacity_points[:, 0] - 5 * step)
+        state.transfer_function.set_opacity_unit_distance(2.0)  # another edit: the slider starts from here
+        assert slider.value() == 0 and editor.shift_label.text() == "0"
+        history.undo()
+        assert slider.value() == 0
+    finally:
+        history.detach()

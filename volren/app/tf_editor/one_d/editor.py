@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from PyQt5.QtCore import QPoint, pyqtSignal
+from PyQt5.QtCore import QPoint, Qt, pyqtSignal
 from PyQt5.QtGui import QIcon, QImage, QPixmap
 from PyQt5.QtWidgets import (
     QAbstractSpinBox,
@@ -29,6 +29,7 @@ from PyQt5.QtWidgets import (
     QHBoxLayout,
     QLabel,
     QPushButton,
+    QSlider,
     QStackedWidget,
     QStyle,
     QToolButton,
@@ -37,6 +38,7 @@ from PyQt5.QtWidgets import (
 )
 
 from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset, unit_stops
+from volren.app.core.opacity_presets import OPACITY_PRESET_NAMES, preset_problem, preset_transfer_function
 from volren.app.core.state import Change, ViewState
 from volren.app.core.value_histogram import value_histogram
 from volren.app.qt_subscription import subscribe_while_alive
@@ -50,6 +52,9 @@ from volren.model.transfer_function_2d import TransferFunction
 
 TF_FILTER = "Transfer functions: volren or ParaView preset JSON (*.json);;All files (*)"
 PRESET_PLACEHOLDER = "Colour map…"
+TISSUE_PLACEHOLDER = "Tissue preset…"
+#: The shift slider's steps on each side of 0; it reaches one data range either way.
+SHIFT_STEPS = 200
 
 
 def _decimals(scale: float) -> int:
@@ -121,6 +126,24 @@ class TransferFunction1DEditor(QWidget):
         self.preset_box = PresetBox(self)
         self.preset_box.setToolTip("Replace the colours with a colour map over the current value range")
         self.preset_box.currentIndexChanged.connect(self._on_preset_chosen)
+        self.tissue_box = QComboBox(self)
+        self.tissue_box.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLength)  # names are long; the dock is narrow
+        self.tissue_box.setMinimumContentsLength(10)
+        self.tissue_box.addItem(TISSUE_PLACEHOLDER)
+        self.tissue_box.addItems(OPACITY_PRESET_NAMES)
+        self.tissue_box.setToolTip("Replace the transfer function with a CT (Hounsfield units) or MR preset")
+        self.tissue_box.currentIndexChanged.connect(self._on_tissue_chosen)
+        self.shift_slider = QSlider(Qt.Horizontal, self)
+        self.shift_slider.setRange(-SHIFT_STEPS, SHIFT_STEPS)
+        self.shift_slider.setToolTip("Slide the whole transfer function (colours and opacity) along the value axis")
+        self.shift_slider.valueChanged.connect(self._on_shift_moved)
+        self.shift_slider.sliderPressed.connect(self._state.begin_interaction)
+        self.shift_slider.sliderReleased.connect(self._state.end_interaction)
+        self.shift_label = QLabel("0", self)
+        self.shift_label.setMinimumWidth(48)
+        self._shift_applied = 0.0  # the offset the slider has applied to the TF shown
+        self._shifted: tuple[TransferFunction, int] | None = None  # (TF, version) as the slider left it
+        self._shifting = False
         self.log_check = QCheckBox("Log counts", self)
         self.log_check.setToolTip("Histogram heights as log(1 + count): rare values stay visible")
         self.log_check.setChecked(self.curve.log_counts)
@@ -171,8 +194,14 @@ class TransferFunction1DEditor(QWidget):
         one.setSpacing(2)
         top = QHBoxLayout()
         top.addWidget(self.preset_box, 1)
+        top.addWidget(self.tissue_box, 1)
         top.addWidget(self.log_check)
         one.addLayout(top)
+        shift = QHBoxLayout()
+        shift.addWidget(QLabel("Shift", self.page_1d))
+        shift.addWidget(self.shift_slider, 1)
+        shift.addWidget(self.shift_label)
+        one.addLayout(shift)
         one.addWidget(self.curve, 1)
         one.addWidget(self.color_bar)
         one.addWidget(self.point_entry)
@@ -222,6 +251,16 @@ class TransferFunction1DEditor(QWidget):
     def _set_volume(self) -> None:
         volume = self._state.volume
         self.curve.set_histogram(None if volume is None else value_histogram(volume))
+        self._refresh_tissue_presets(volume)
+
+    def _refresh_tissue_presets(self, volume) -> None:
+        """Presets that do not fit the data (CT ones on non-CT values) disabled, saying why."""
+        model = self.tissue_box.model()
+        for index, name in enumerate(OPACITY_PRESET_NAMES, start=1):
+            problem = "Open a volume first" if volume is None else preset_problem(name, volume)
+            item = model.item(index)
+            item.setEnabled(problem is None)
+            item.setToolTip(problem or "")
 
     def transfer_function(self) -> TransferFunction1D | None:
         """The state's TF when it is 1D (what this panel edits), else None."""
@@ -234,6 +273,9 @@ class TransferFunction1DEditor(QWidget):
         volume = self._state.volume
         replaced = tf is not self._shown_tf
         self._shown_tf = tf
+        if not self._shifting and not self._left_by_slider(tf):  # edited otherwise: the slider starts again
+            self._show_shift(0.0)
+        self.shift_slider.setEnabled(volume is not None and volume.value_range[1] > volume.value_range[0])
         if replaced:
             self.curve.selected = self.color_bar.selected = None
         is_2d = tf is not None and tf.dims == 2
@@ -300,6 +342,57 @@ class TransferFunction1DEditor(QWidget):
         tf = self.transfer_function()
         if tf is not None:
             apply_preset(tf, name)
+
+    def apply_tissue_preset(self, name: str) -> bool:
+        """Replace the TF with the tissue preset `name` for this volume; False (and errorOccurred)
+        when it does not fit the data."""
+        volume = self._state.volume
+        if volume is None:
+            return False
+        try:
+            tf = preset_transfer_function(name, volume)
+        except VolrenError as exc:
+            self.errorOccurred.emit("Cannot apply the preset", str(exc))
+            return False
+        self._state.set_transfer_function(tf)
+        return True
+
+    def shift_step(self) -> float:
+        """The value one step of the shift slider moves the TF: a 200th of the data range."""
+        volume = self._state.volume
+        if volume is None:
+            return 0.0
+        lo, hi = volume.value_range
+        return (hi - lo) / SHIFT_STEPS
+
+    def shift_to(self, offset: float) -> None:
+        """Slide the TF so that it lies `offset` from where it was when the slider was last at 0
+        (the preset, or the TF as last edited otherwise): colours and opacity together."""
+        tf = self.transfer_function()
+        if tf is None or not math.isfinite(offset):
+            return
+        move = offset - self._shift_applied
+        if move:
+            lo, hi = tf.value_range
+            self._shifting = True
+            try:
+                tf.rescale(lo + move, hi + move)  # a translation: the same span
+            finally:
+                self._shifting = False
+        self._shifted = (tf, tf.version)
+        self._show_shift(offset)
+
+    def _left_by_slider(self, tf: TransferFunction | None) -> bool:
+        """Whether `tf` is as the shift slider last left it (no edit since)."""
+        return tf is not None and self._shifted is not None and self._shifted[0] is tf and self._shifted[1] == tf.version
+
+    def _show_shift(self, offset: float) -> None:
+        self._shift_applied = offset
+        step = self.shift_step()
+        self.shift_slider.blockSignals(True)
+        self.shift_slider.setValue(round(offset / step) if step > 0 else 0)
+        self.shift_slider.blockSignals(False)
+        self.shift_label.setText(f"{offset:+.4g}" if offset else "0")
 
     def set_value_range(self, lo: float, hi: float) -> bool:
         """Rescale the TF's points onto [lo, hi]; refused (False) unless lo < hi."""
@@ -421,6 +514,17 @@ class TransferFunction1DEditor(QWidget):
         self.preset_box.blockSignals(True)
         self.preset_box.setCurrentIndex(0)  # a menu of actions: choosing the same map again works
         self.preset_box.blockSignals(False)
+
+    def _on_tissue_chosen(self, index: int) -> None:
+        if index <= 0:
+            return
+        self.apply_tissue_preset(self.tissue_box.itemText(index))
+        self.tissue_box.blockSignals(True)
+        self.tissue_box.setCurrentIndex(0)  # a menu of actions, as the colour maps
+        self.tissue_box.blockSignals(False)
+
+    def _on_shift_moved(self, steps: int) -> None:
+        self.shift_to(steps * self.shift_step())
 
     def _on_min_changed(self, value: float) -> None:
         tf = self.transfer_function()
