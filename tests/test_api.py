@@ -35,7 +35,7 @@ def test_default_transfer_function_spans_the_data():
     volume = UniformVolume(np.linspace(-5, 7, 27, dtype=np.float32).reshape(3, 3, 3), spacing=(2, 2, 2))
     tf = default_transfer_function(volume)
     assert tf.value_range == (-5.0, 7.0) and tf.opacity_unit_distance == 2.0
-    assert tf.sample([-5.0])[1][0] == 0.0 and tf.sample([7.0])[1][0] == pytest.approx(0.3)
+    assert tf.sample([-5.0])[1][0] == 0.0 and tf.sample([7.0])[1][0] > 0.0  # how much: tests/model/test_default_tf.py
 
 
 @pytest.mark.parametrize("size, expected", [(64, (64, 64)), ("640x480", (640, 480)), ((3, 5), (3, 5)), ("32", (32, 32))])
@@ -65,7 +65,7 @@ def test_default_transfer_function_of_values_near_the_float64_limits_is_finite()
     tf = default_transfer_function(volume)
     assert tf.value_range == (-1.7e308, 1.7e308)
     assert np.isfinite(tf.color_points).all() and np.isfinite(tf.opacity_points).all()
-    assert tf.sample([1.7e308])[1][0] == pytest.approx(0.3)
+    assert tf.sample([1.7e308])[1][0] > 0.0
 
 
 def test_a_constant_fields_default_tf_draws_the_same_box_with_every_renderer():

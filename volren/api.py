@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError, VolrenWarning
 from volren.model.camera import Camera
-from volren.model.colormaps import VIRIDIS, color_stops, lerp
+from volren.model.default_tf import default_transfer_function
 from volren.model.settings import RenderSettings, check_step
 from volren.model.tf_coverage import coverage_problem
 from volren.model.transfer_function import TransferFunction1D
@@ -25,20 +25,6 @@ from volren.model.transfer_function_2d import (
 )
 from volren.model.volume import TetVolume, UniformVolume, Volume
 from volren.renderers.base import ProgressCallback, Renderer, render_frame
-
-
-def default_transfer_function(volume: Volume) -> TransferFunction1D:
-    """What a volume looks like before anyone edits its TF: viridis colours over the value range,
-    opacity ramping from 0 at the bottom tenth to 0.3 at the top, per voxel (or tet edge) thickness
-    (a constant field: 0.3, so that every renderer draws it as the same translucent box)."""
-    lo, hi = volume.value_range
-    top = hi if hi > lo else lo + 1.0
-    color = color_stops(VIRIDIS, lo, top)
-    if hi > lo:
-        opacity = [[lo, 0.0], [lerp(lo, top, 0.1), 0.0], [hi, 0.3]]
-    else:  # a constant field: 0.3 at its value, not a step there that renderers resolved differently
-        opacity = [[lo, 0.3], [top, 0.3]]
-    return TransferFunction1D(color, opacity, volume.characteristic_length)
 
 
 def as_volume(volume: Any, scalars: str | None = None) -> Volume:

@@ -48,6 +48,8 @@ def main() -> int:
             app.processEvents()
             time.sleep(0.01)
 
+    for action in window.overlay_actions.values():  # the frame alone is compared with the screen
+        action.setChecked(False)
     window.files.apply_loaded(load_input(None), "vtk")
     wait_full(1)
     before = screen_pixels(window.viewport)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from volren.app.core.value_histogram import Histogram, compute_histogram, value_histogram
+from volren.model.value_histogram import Histogram, compute_histogram, value_histogram
 from volren.model.volume import TetVolume, UniformVolume
 
 
@@ -38,7 +38,7 @@ def test_integer_volumes_match_np_histogram(dtype, bins):
 
 
 def test_integer_path_is_chunked_without_changing_counts(monkeypatch):
-    import volren.app.core.value_histogram as histograms
+    import volren.model.value_histogram as histograms
 
     monkeypatch.setattr(histograms, "_CHUNK", 100)  # many chunks for 990 values
     values = np.arange(990, dtype=np.int16).reshape(9, 10, 11) - 400

@@ -26,7 +26,6 @@ from volren.app.core.colormap_presets import (
     unit_stops,
 )
 from volren.app.core.state import Change, ViewState, default_camera
-from volren.app.core.value_histogram import value_histogram
 from volren.app.tf_editor.history import TFHistory
 from volren.app.tf_editor.one_d.editor import PRESET_PLACEHOLDER, TransferFunction1DEditor
 from volren.app.tf_editor.one_d.opacity_curve import BOTTOM, TOP
@@ -35,6 +34,7 @@ from volren.errors import VolrenError
 from volren.io import load_transfer_function
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
+from volren.model.value_histogram import value_histogram
 from volren.model.volume import UniformVolume
 from volren.samples import marschner_lobb, sample_transfer_functions
 

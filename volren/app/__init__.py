@@ -13,16 +13,18 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `loading`: files -> a `LoadedInput` (volume, TF, camera, settings) and back to a `Scene`.
   - `renderer_choice`: which renderers can draw the loaded volume, and fallbacks.
   - `picking`: the point a pixel shows, with its value and gradient magnitude.
-  - `value_histogram`: the value histogram behind the 1D TF editor.
   - `joint_histogram`: the value x gradient-magnitude histogram behind the 2D TF editor.
   - `colormap_presets`: the 1D editor's colour maps, read from `colormap_presets.json`.
   - `tf_widget_geometry`: outlines, handles, moves and resizes of the 2D editor's widgets.
   - `tf_seeding`: the 2D TF a 1D TF becomes when the 2D editor is switched on.
   - `preview_settings`: which renderer and settings draw the previews while dragging.
+  - `view_directions`: the cameras of the view-direction buttons (+X ... -Z, as ParaView's).
+  - `overlay_geometry`: where the viewport's outline and orientation axes fall on screen.
 - `rendering/` (Qt):
   - `render_service`: the render worker thread that owns the renderer, newest request only.
   - `scheduling`: state changes -> reduced-size and full-quality frame requests.
   - `viewport`: the widget that shows frames and turns mouse input into camera changes.
+  - `overlays`: the outline, orientation axes and colour legend painted over the frames.
   - `renderer_chooser`: the renderer combo box, with why a renderer is disabled.
 - `files/` (Qt):
   - `load_task`: runs `core.loading` off the GUI thread, cancellable.

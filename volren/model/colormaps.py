@@ -17,6 +17,8 @@ VIRIDIS = (
 def lerp(lo: float, hi: float, x: float) -> float:
     """lo + x (hi - lo), finite even where hi - lo overflows (data near the float64 limits, whose
     default TF would otherwise get infinite control points)."""
+    if x == 1.0:  # exactly the end, as lo + 1 * (hi - lo) need not be
+        return hi
     span = hi - lo
     if math.isfinite(span):
         return lo + x * span

@@ -112,7 +112,7 @@ def prepare_for_rendering(volume: Volume, progress: Progress = _quiet) -> None:
         prepare_mesh(volume)
         volume.mean_edge_length  # noqa: B018 - a cached property: computed here, once
     from volren.app.core.joint_histogram import gradient_stats
-    from volren.app.core.value_histogram import value_histogram
+    from volren.model.value_histogram import value_histogram
 
     progress("Histograms…", None)
     value_histogram(volume)  # what the 1D editor draws first (cached per volume)

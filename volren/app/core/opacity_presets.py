@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from volren.app.core.value_histogram import value_histogram
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
+from volren.model.value_histogram import value_histogram
 from volren.model.volume import Volume
 
 DATA_FILE = Path(__file__).with_name("opacity_presets.json")

@@ -9,6 +9,10 @@ Gestures follow VTK's trackball camera (see `core.interaction`): left-drag rotat
 wheel dollies, middle-drag (or shift + left-drag) pans, 'r' resets the view; ctrl + left-click
 emits `pointPicked` with the pixel under the mouse (for picking). The viewport only
 changes the `ViewState`; the frame scheduler decides what to render.
+
+Over the frame it paints the overlays of `rendering.overlays` (outline, orientation axes, colour
+legend), each paint, with the camera the frame was rendered with; `set_overlay` toggles one and
+only repaints.
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 from volren.app.core import interaction
 from volren.app.core.state import ViewState
+from volren.app.rendering.overlays import OverlaySettings, draw_axes, draw_legend, draw_outline
 from volren.app.rendering.render_service import Frame
 
 _GESTURES = {Qt.LeftButton: "rotate", Qt.RightButton: "dolly", Qt.MiddleButton: "pan"}
@@ -53,6 +58,8 @@ class Viewport(QWidget):
         self._drag_gesture: str | None = None
         self._last_pos = QPoint()
         self.placeholder = "No volume"
+        #: The overlays drawn over frames; change them through `set_overlay`.
+        self.overlays = OverlaySettings()
         self.setFocusPolicy(Qt.StrongFocus)
         self.setAttribute(Qt.WA_OpaquePaintEvent)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
@@ -99,7 +106,28 @@ class Viewport(QWidget):
             painter.drawText(self.rect(), Qt.AlignCenter, self.placeholder)
             return
         painter.setRenderHint(QPainter.SmoothPixmapTransform, True)
-        painter.drawImage(self._target_rect(), self._image)
+        target = self._target_rect()
+        painter.drawImage(target, self._image)
+        self._paint_overlays(painter, target)
+
+    def set_overlay(self, name: str, visible: bool) -> None:
+        """Show or hide the overlay `name` (an `OverlaySettings` field): a repaint, never a new frame."""
+        if name not in OverlaySettings.names():
+            raise ValueError(f"unknown overlay {name!r}; expected one of {OverlaySettings.names()}")
+        setattr(self.overlays, name, bool(visible))
+        self.update()
+
+    def _paint_overlays(self, painter: QPainter, target: QRectF) -> None:
+        """The overlays that are on, over the frame drawn in `target` (the frame's camera and aspect)."""
+        assert self._frame is not None
+        camera, volume, tf = self._frame.camera, self._state.render_volume, self._state.transfer_function
+        if self.overlays.outline and volume is not None:
+            rect = (target.x(), target.y(), target.width(), target.height())
+            draw_outline(painter, camera, self._frame.width / self._frame.height, rect, volume.bounds)
+        if self.overlays.axes:
+            draw_axes(painter, camera, self.height())
+        if self.overlays.legend and tf is not None:
+            draw_legend(painter, tf, self.width(), self.height())
 
     def _target_rect(self) -> QRectF:
         """The largest rectangle with the frame's aspect, centred in the widget."""

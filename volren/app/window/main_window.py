@@ -26,6 +26,7 @@ from PyQt5.QtWidgets import QAction, QLabel, QMainWindow, QMessageBox, QToolBar,
 
 from volren.app.core.loading import load_input
 from volren.app.core.state import Change, ViewState
+from volren.app.core.view_directions import VIEW_DIRECTIONS, ViewDirection, look_along
 from volren.app.files.load_task import LoadFunction
 from volren.app.files.recent_files import RecentFiles
 from volren.app.rendering.render_service import Frame, RendererFactory, RenderService, _registry_factory
@@ -116,6 +117,23 @@ class MainWindow(QMainWindow):
         self.quit_action = QAction("&Quit", self, shortcut=QKeySequence.Quit, triggered=self.close)
         self.reset_action = QAction("&Reset view", self, shortcut=QKeySequence("R"), triggered=self.reset_view)
         self.reset_action.setToolTip("Reset the camera (azimuth 30, elevation 20, zoom 1)  [R]")
+        #: View > View direction and the toolbar's "+X" ... "-Z": ParaView's view-direction buttons.
+        self.view_direction_actions = {view.name: self._view_direction_action(view) for view in VIEW_DIRECTIONS}
+        #: View > Outline, Orientation axes, Colour legend: the viewport's overlays, by `OverlaySettings` name.
+        overlays = (("outline", "Outline"), ("axes", "Orientation axes"), ("legend", "Colour legend"))
+        self.overlay_actions = {name: self._overlay_action(name, text) for name, text in overlays}
+
+    def _view_direction_action(self, view: ViewDirection) -> QAction:
+        action = QAction(view.name, self, triggered=lambda _checked=False, v=view: self.look_along(v))
+        action.setToolTip(view.description)
+        action.setEnabled(False)  # until a volume is loaded
+        return action
+
+    def _overlay_action(self, name: str, text: str) -> QAction:
+        action = QAction(text, self, checkable=True)
+        action.setChecked(getattr(self.viewport.overlays, name))
+        action.toggled.connect(lambda on, n=name: self.viewport.set_overlay(n, on))
+        return action
 
     def _build_menus_and_toolbar(self) -> None:
         file_menu = self.menuBar().addMenu("&File")
@@ -130,12 +148,18 @@ class MainWindow(QMainWindow):
         file_menu.addAction(self.quit_action)
         self.view_menu = self.menuBar().addMenu("&View")
         self.view_menu.addAction(self.reset_action)
+        self.view_direction_menu = self.view_menu.addMenu("View &direction")
+        self.view_direction_menu.addActions(list(self.view_direction_actions.values()))
+        self.view_menu.addSeparator()
+        self.view_menu.addActions(list(self.overlay_actions.values()))
 
         self.toolbar = QToolBar("Main", self)
         self.toolbar.setObjectName("main-toolbar")
         self.toolbar.setMovable(False)
         self.toolbar.addAction(self.files.open_action)
         self.toolbar.addAction(self.reset_action)
+        self.toolbar.addSeparator()
+        self.toolbar.addActions(list(self.view_direction_actions.values()))
         self.toolbar.addSeparator()
         self.toolbar.addWidget(QLabel(" Renderer: ", self.toolbar))
         self.toolbar.addWidget(self.renderers.chooser)
@@ -156,11 +180,19 @@ class MainWindow(QMainWindow):
     def _on_state_change(self, change: Change) -> None:
         if change.what == "volume":
             self.setWindowTitle(f"volren - {self.state.source}" if self.state.source else "volren")
+            for action in self.view_direction_actions.values():
+                action.setEnabled(self.state.volume is not None)
         self.renderers.on_state_change(change)
         self.quality.on_state_change(change)
 
     def reset_view(self) -> None:
         self.state.reset_camera(self.viewport.aspect())
+
+    def look_along(self, view: ViewDirection) -> None:
+        """Turn the camera to look along `view` at the drawn (cropped) volume's centre, same distance."""
+        volume, camera = self.state.render_volume, self.state.camera
+        if volume is not None and camera is not None:
+            self.state.set_camera(look_along(camera, view, volume.bounds))
 
     def _on_frame(self, frame: Frame) -> None:
         self.viewport.show_frame(frame)

@@ -40,7 +40,6 @@ from PyQt5.QtWidgets import (
 from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset, unit_stops
 from volren.app.core.opacity_presets import OPACITY_PRESET_NAMES, preset_problem, preset_transfer_function
 from volren.app.core.state import Change, ViewState
-from volren.app.core.value_histogram import value_histogram
 from volren.app.qt_subscription import subscribe_while_alive
 from volren.app.tf_editor.one_d.color_bar import ColorBar
 from volren.app.tf_editor.one_d.opacity_curve import OpacityCurve
@@ -49,6 +48,7 @@ from volren.app.tf_editor.one_d.point_entry import PointEntry
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction
+from volren.model.value_histogram import value_histogram
 
 TF_FILTER = "Transfer functions: volren or ParaView preset JSON (*.json);;All files (*)"
 PRESET_PLACEHOLDER = "Colour map…"

@@ -27,10 +27,10 @@ from PyQt5.QtGui import (
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 from volren.app.core.state import ViewState
-from volren.app.core.value_histogram import Histogram
 from volren.app.tf_editor.one_d.color_bar import color_strip
 from volren.app.tf_editor.one_d.point_canvas import MARGIN, PICK_RADIUS, PointCanvas, neighbours
 from volren.model.transfer_function import TransferFunction1D
+from volren.model.value_histogram import Histogram
 
 #: Vertical room above opacity 1 and below 0 (px), for the point markers and the readout.
 TOP, BOTTOM = 8, 6

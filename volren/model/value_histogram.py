@@ -1,4 +1,4 @@
-"""The value histogram drawn behind the 1D transfer-function editor (pure numpy, no Qt).
+"""The value histogram: drawn behind the app's 1D TF editor, and what the default TF is made from.
 
 Counts cover the volume's finite values over its value range: every voxel of a uniform grid, the
 point values of a tetrahedral mesh. A histogram is computed once per volume object (and bin count)
@@ -26,7 +26,8 @@ _cache: weakref.WeakKeyDictionary[Volume, dict[int, Histogram]] = weakref.WeakKe
 
 @dataclass(frozen=True, eq=False)
 class Histogram:
-    """Counts of values in equal-width bins: `edges` (bins + 1,), `counts` (bins,) int64."""
+    """Counts of values in equal-width bins: `edges` (bins + 1,), `counts` (bins,) int64 (or
+    float volumes, `volren.model.default_tf.volume_histogram`)."""
 
     edges: NDArray[np.float64]
     counts: NDArray[np.int64]
