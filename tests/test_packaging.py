@@ -24,7 +24,8 @@ PROJECT = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
 SAMPLE = REPO / "data_samples" / "marschner_lobb.vti"
 SAMPLE_TF = REPO / "data_samples" / "marschner_lobb.tf.json"
 #: Optional packages and the extra that brings each.
-OPTIONAL = {"pyqt5": "app", "matplotlib": "bench", "imageio": "movie", "imageio-ffmpeg": "movie"}
+OPTIONAL = {"pyqt5": "app", "matplotlib": "bench", "imageio": "movie", "imageio-ffmpeg": "movie",
+            "zarr": "zarr"}
 
 
 def names(requirements: list[str]) -> set[str]:
@@ -144,6 +145,14 @@ def test_a_movie_without_its_extra_is_one_line_naming_it(tmp_path):
         (line,) = result.stderr.strip().splitlines()
         assert line.startswith("volren: error: ") and blocked.replace("_", "-") in line, line
         assert "pip install 'volren[movie]'" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_ome_zarr_without_its_extra_is_one_line_naming_it(tmp_path):
+    result = run_volren("convert", str(SAMPLE), str(tmp_path / "x.zarr"), block=("zarr",))
+    assert result.returncode == 1
+    (line,) = result.stderr.strip().splitlines()
+    assert line.startswith("volren: error: ") and "zarr" in line and "pip install 'volren[zarr]'" in line
     assert not list(tmp_path.iterdir())
 
 

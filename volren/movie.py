@@ -9,7 +9,7 @@ whose TF differs (so a movie without TF keyframes builds its tables once). Each 
 from __future__ import annotations
 
 import statistics
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -20,6 +20,7 @@ from volren.io.movie_io import movie_writer
 from volren.model.animation import Animation, View
 from volren.model.scene import Scene
 from volren.model.transfer_function_2d import TransferFunction
+from volren.model.volume import Volume
 from volren.quality import AUTO, resolve
 from volren.renderers.base import ProgressCallback, Renderer, render_frame
 
@@ -42,19 +43,41 @@ def render_movie(
     background: Sequence[float] = (0.0, 0.0, 0.0),
     lossless: bool = False,
     progress: ProgressCallback | None = None,
+    steps: Sequence[str | Path] | None = None,
 ) -> MovieResult:
     """Render `scene` (with its volume loaded) along `animation` into `path` (.mp4 or .gif), the
     frames over `background`. A scene's renderer `auto` becomes the fastest measured one at
     quality `default`, with the scene's settings as they are. `progress(fraction of the movie)`
-    may raise to stop: then no file is left (and an older one of that name is kept)."""
+    may raise to stop: then no file is left (and an older one of that name is kept).
+
+    `steps`: the files of a time series (the scene's volume is the first): the movie runs through
+    them in order, spread evenly over its frames, each read when its first frame comes, with the
+    camera placed on the first step's bounds throughout."""
     if scene.volume is None:
         raise VolrenError("the scene has no volume to make a movie of")
     if scene.renderer == AUTO:
         renderer, settings, _ = resolve(scene.volume.kind, scene.transfer_function.dims, AUTO, None, scene.settings)
         scene = replace(scene, renderer=renderer, settings=settings)
+    volumes = None if not steps else _step_volumes(steps, animation.frames, scene.scalars)
     with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
         return record_movie(renderer, animation, scene.camera, scene.transfer_function, scene.volume.bounds,
-                            scene.size, path, background, lossless, progress, scene.renderer)  # fmt: skip
+                            scene.size, path, background, lossless, progress, scene.renderer, volumes)  # fmt: skip
+
+
+def _step_volumes(steps: Sequence[str | Path], frames: int, scalars: str | None) -> Callable[[int], Volume | None]:
+    """Frame i's time step, read when it first comes (None: the frame before's step still)."""
+    from volren.io import load_volume
+
+    shown: list[int] = [0]  # the scene's volume is step 0
+
+    def volume_at(index: int) -> Volume | None:
+        step = min(index * len(steps) // frames, len(steps) - 1)
+        if step == shown[0]:
+            return None
+        shown[0] = step
+        return load_volume(steps[step], scalars=scalars)
+
+    return volume_at
 
 
 def record_movie(
@@ -69,15 +92,21 @@ def record_movie(
     lossless: bool = False,
     progress: ProgressCallback | None = None,
     label: str | None = None,
+    volumes: Callable[[int], Volume | None] | None = None,
 ) -> MovieResult:
     """The movie from a renderer that holds the volume, settings and `start_tf` (the app brings its
-    own): the orbit starts at `start_view`; TF keyframes replace `start_tf` where they are."""
+    own): the orbit starts at `start_view`; TF keyframes replace `start_tf` where they are;
+    `volumes(i)`, where given, is the volume frame i shows when it is another than the frame
+    before's (a time series)."""
     width, height = size
     frames = animation.frames
     times: list[float] = []
     tf = start_tf
     with movie_writer(path, animation.fps, lossless) as writer:
         for index in range(frames):
+            volume = volumes(index) if volumes is not None else None
+            if volume is not None:
+                renderer.set_volume(volume)
             frame_tf = animation.transfer_function(index, start_tf)
             if frame_tf is not tf:
                 renderer.set_transfer_function(frame_tf)

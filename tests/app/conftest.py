@@ -122,9 +122,12 @@ def window(make_window):
 
 @pytest.fixture
 def loaded_window(window, sample, qtbot):
-    """A window showing the sample with the vtk renderer, first full frame already on screen."""
+    """A window showing the sample with the vtk renderer, first full frame already on screen and
+    the previews' renderer set up."""
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         window.files.apply_loaded(sample, "vtk")
+    # the previews' renderer is set up next, while the view is still: gestures start after it
+    qtbot.waitUntil(lambda: not window.service.warming, timeout=FRAME_TIMEOUT_MS)
     return window
 
 

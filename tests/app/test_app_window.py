@@ -578,6 +578,31 @@ def test_previews_are_drawn_by_the_fastest_measured_renderer_and_the_label_says_
     assert w.state.renderer == "fake_drag"
 
 
+def test_the_preview_renderer_is_set_up_while_the_view_is_still(make_window, fake_renderers, sample, qtbot,
+                                                                 monkeypatch):  # fmt: skip
+    """The first preview of a drag paid the preview renderer's set-up (shearwarp: 0.7 s on bonsai,
+    the first drag showed nothing for that long): after a still frame the previews' renderer is
+    set up with a tiny frame nobody sees, so the first preview pays nothing."""
+    use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
+                             "fake": {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
+    calls = fake_renderers["fake"].calls
+    w = make_window()
+    shown = []
+    w.frameShown.connect(shown.append)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as still:
+        w.files.apply_loaded(sample, "fake_drag")
+    qtbot.waitUntil(lambda: any(c["size"] == (8, 8) for c in calls), timeout=FRAME_TIMEOUT_MS)
+    qtbot.waitUntil(lambda: not w.service.warming, timeout=FRAME_TIMEOUT_MS)
+    assert [f.renderer for f in shown] == ["fake_drag"]  # the warm-up is not shown
+    assert w.service.latest_serial == still.args[0].serial  # nor does it stand for the newest frame
+    w.state.begin_interaction()
+    w.state.set_camera(w.state.camera.azimuth(5.0))
+    qtbot.waitUntil(lambda: len(shown) > 1, timeout=FRAME_TIMEOUT_MS)
+    w.state.end_interaction()
+    assert shown[1].renderer == "fake" and not shown[1].setup  # set up already
+    assert sum(c["size"] == (8, 8) for c in calls) == 1
+
+
 def test_a_preview_renderer_that_fails_previews_no_more_and_the_still_frame_comes(
     make_window, fake_renderers, sample, qtbot, monkeypatch, error_boxes
 ):

@@ -152,3 +152,28 @@ def test_a_failed_movie_leaves_no_file_and_keeps_an_older_one(tmp_path, ml_sampl
     result = render_movie(replace(scene, renderer="auto"), Animation(frames=2, fps=4), target)
     assert (result.frames, result.width, result.height, result.fps) == (2, 16, 16, 4.0)
     assert len(decoded(target)) == 2
+
+
+def test_a_time_series_renders_a_step_and_moves_through_all_steps(tmp_path, capsys):
+    """Issue 23: time series on the command line: --time-step N renders that step; a movie of a
+    series runs through its steps, one frame each, camera still."""
+    from tests.app.test_time_series import write_pvd, write_steps
+
+    steps = write_steps(tmp_path, 3)
+    pvd = write_pvd(tmp_path / "run.pvd", [(k, p.name) for k, p in enumerate(steps)])
+    tf = tmp_path / "tf.json"
+    tf.write_text(json.dumps(TransferFunction1D.ramp(0, 3, 0.8).to_dict()))
+    flags = ["--tf", str(tf), "--renderer", RENDERER, "--size", "24"]
+    np.testing.assert_array_equal(rendered(tmp_path, str(pvd), *flags, "--time-step", "2"),
+                                  rendered(tmp_path, str(steps[2]), *flags))  # fmt: skip
+    movie = tmp_path / "series.mp4"
+    assert main(["movie", str(pvd), *flags, "-o", str(movie), "--lossless"]) == 0
+    assert "3 frames of 24x24 at 10 fps" in capsys.readouterr().out
+    frames = decoded(movie)
+    assert len(frames) == 3
+    for index, step in enumerate(steps):
+        np.testing.assert_array_equal(frames[index], rendered(tmp_path, str(step), *flags), err_msg=str(index))
+    assert main(["movie", str(pvd), *flags, "-o", str(movie), "--time-step", "1"]) == 1
+    assert "--time-step picks one step" in capsys.readouterr().err
+    assert main(["render", str(pvd), *flags, "-o", str(tmp_path / "x.png"), "--time-step", "3"]) == 1
+    assert "--time-step 3: " in capsys.readouterr().err

@@ -14,12 +14,15 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `renderer_choice`: which renderers can draw the loaded volume, and fallbacks.
   - `picking`: the point a pixel shows, with its value and gradient magnitude.
   - `joint_histogram`: the value x gradient-magnitude histogram behind the 2D TF editor.
-  - `colormap_presets`: the 1D editor's colour maps, read from `colormap_presets.json`.
+  - `colormap_presets`: the 1D editor's colour maps, read from `colormap_presets.json` (curated)
+    and `paraview_colormaps.json` (ParaView's, for the colour-map browser).
   - `tf_widget_geometry`: outlines, handles, moves and resizes of the 2D editor's widgets.
   - `tf_seeding`: the 2D TF a 1D TF becomes when the 2D editor is switched on.
   - `preview_settings`: which renderer and settings draw the previews while dragging.
   - `view_directions`: the cameras of the view-direction buttons (+X ... -Z, as ParaView's).
   - `overlay_geometry`: where the viewport's outline and orientation axes fall on screen.
+  - `crop_handles`: the crop box's face handles on screen, which one a pixel hits, the box a
+    drag makes.
 - `rendering/` (Qt):
   - `render_service`: the render worker thread that owns the renderer, newest request only.
   - `scheduling`: state changes -> reduced-size and full-quality frame requests.
@@ -35,6 +38,7 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
     progress and cancel.
   - `movie_export`: records an orbit of the view into MP4 or GIF off the GUI thread.
   - `movie_dialog`: the Export Movie dialog.
+  - `series_steps`: a time series' steps read off the GUI thread, neighbours ahead, a few kept.
   - `raw_dialog`: the layout of a headerless raw file (shape, type, byte order, spacing).
 - `tf_editor/` (Qt):
   - `panel`: the TF dock, the 1D and 2D editors in tabs.
@@ -44,6 +48,8 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `one_d/opacity_curve`: the opacity curve over the value histogram.
   - `one_d/color_bar`: the colour bar with its colour stops.
   - `one_d/point_entry`: typed value and opacity of the selected point.
+  - `one_d/color_entry`: typed value and picked colour of the selected colour stop.
+  - `one_d/preset_browser`: the searchable colour-map browser, a swatch per map.
   - `two_d/editor`: the 2D editor panel (add and delete widgets, colour, opacity, gradient axis).
   - `two_d/widget_canvas`: the widgets drawn and dragged over the joint histogram.
 - `panels/` (Qt): the settings panels (lighting, sampling, blend mode, crop box, background,
@@ -55,6 +61,7 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `scene_actions`: File > Save Scene.
   - `screenshot_actions`: File > Save Screenshot.
   - `movie_actions`: File > Export Movie.
+  - `time_control`: the time bar of a time series (slider, step label, Play).
   - `job_progress`: the progress dialog of a screenshot or movie, with Cancel.
   - `renderer_control`: the renderer in use: chooser, fallbacks, the frame label.
   - `file_drops`: files dropped on the window open like File > Open.

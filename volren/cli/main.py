@@ -17,6 +17,7 @@ import volren
 from volren.cli import (
     bench_cmd,
     check_cmd,
+    convert_cmd,
     demo_cmd,
     movie_cmd,
     prepare_cmd,
@@ -27,7 +28,7 @@ from volren.cli import (
 from volren.cli.messages import one_line_messages
 from volren.errors import VolrenError
 
-COMMANDS = (renderers_cmd, render_cmd, movie_cmd, view_cmd, demo_cmd, bench_cmd, check_cmd, prepare_cmd)
+COMMANDS = (renderers_cmd, render_cmd, movie_cmd, view_cmd, convert_cmd, demo_cmd, bench_cmd, check_cmd, prepare_cmd)
 
 
 class OneLineParser(argparse.ArgumentParser):

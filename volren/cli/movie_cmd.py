@@ -3,6 +3,8 @@
 It takes every flag of `volren render` (the same scene, renderer, quality and camera: frame i
 of the default orbit is `volren render --azimuth A + 360 i / N`); a scene file's "movie" object
 adds keyframed cameras and TFs (`volren.model.animation`). --frames, --fps and --orbit override it.
+A time series INPUT (a .pvd, or a folder of volume files) runs through its steps instead: one
+frame a step at 10 a second, the camera still (--orbit turns it meanwhile).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from volren.cli.render_cmd import (
     check_scene_input,
     explained,
     finite_float,
+    input_series,
 )
 from volren.errors import VolrenError
 from volren.model.animation import MAX_FPS, MAX_FRAMES, Animation, check_fps, check_frames
@@ -52,9 +55,20 @@ def add_parser(sub) -> None:
     p.set_defaults(run=run)
 
 
-def animation_of(args: argparse.Namespace, scene_movie: object) -> Animation:
-    """The scene file's movie (if any) with --frames, --fps and --orbit applied on top."""
-    animation = Animation() if scene_movie is None else Animation.from_dict(scene_movie)  # type: ignore[arg-type]
+#: A time series' movie: one frame a step, this many steps a second, the camera still.
+SERIES_FPS = 10.0
+
+
+def animation_of(args: argparse.Namespace, scene_movie: object, steps: int | None = None) -> Animation:
+    """The scene file's movie (if any) with --frames, --fps and --orbit applied on top; for a
+    time series of `steps` steps, one frame a step at SERIES_FPS with the camera still, unless
+    those flags say otherwise."""
+    if scene_movie is not None:
+        animation = Animation.from_dict(scene_movie)  # type: ignore[arg-type]
+    elif steps is not None:
+        animation = Animation(frames=steps, fps=SERIES_FPS, orbit_degrees=0.0)
+    else:
+        animation = Animation()
     given = {key: value for key, value in (("frames", args.frames), ("fps", args.fps), ("orbit_degrees", args.orbit))
              if value is not None}  # fmt: skip
     if args.orbit is not None and animation.camera_keys:
@@ -74,17 +88,21 @@ def run(args: argparse.Namespace) -> int:
         raise VolrenError(f"{args.output}: --lossless applies to MP4 movies only (a GIF has 256 colours a frame)")
     inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
     check_outputs((("-o", args.output),), inputs, args.force)
+    series = input_series(args)
+    if series is not None and args.time_step is not None:
+        raise VolrenError(f"--time-step picks one step; a movie of {args.input} runs through all {len(series)}")
     scene, why = build_scene(args)
     check_outputs((("-o", args.output),), [*inputs, ("scene's volume", scene.volume_path)], args.force)
     check_scene_input(args, scene)
     try:
-        animation = animation_of(args, scene.extra.get("movie"))
+        animation = animation_of(args, scene.extra.get("movie"), len(series) if series is not None else None)
     except VolrenError as exc:
         raise VolrenError(f"{args.scene}: {exc}" if args.scene else str(exc)) from None
     width, height = scene.size
     try:
         with frame_bar(f"{scene.renderer} {width}x{height}", animation.frames) as progress:
-            result = render_movie(scene, animation, args.output, lossless=args.lossless, progress=progress)
+            result = render_movie(scene, animation, args.output, lossless=args.lossless, progress=progress,
+                                  steps=series.steps if series is not None else None)  # fmt: skip
     except VolrenError as exc:
         raise explained(exc, args, scene, why) from None
     chosen_by = f" (auto: {why})" if why else ""

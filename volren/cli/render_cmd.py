@@ -89,6 +89,9 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quality", choices=LEVELS, help="settings measured for this level (volren renderers lists them; "
                    "default: default, or the scene file's settings as they are); explicit flags win")
     p.add_argument("--tf", help="transfer function JSON (DESIGN.md format or a ParaView preset)")
+    p.add_argument("--time-step", type=int, metavar="N",
+                   help="for a time series INPUT (a .pvd, or a folder of volume files): the step to render, from 0 "
+                        "(default 0)")  # fmt: skip
     p.add_argument("--scalars", help="the array to render: NAME, or NAME:magnitude / NAME:x (y, z, 0, 1, ...) for a "
                    "vector's length or one component (a vector shows its magnitude by default)")
     p.add_argument("--size", type=image_size, help="image size W or WxH (default 512)")
@@ -152,12 +155,41 @@ def _check_raw_flags(args: argparse.Namespace) -> None:
             raise VolrenError(f"{given[0]} describes a headerless raw INPUT; this render has none")
         return
     path = Path(args.input)
+    from volren.io.series_io import is_series
+
+    if is_series(path):
+        if given:
+            raise VolrenError(f"{path}: {given[0]} describes headerless raw data; a time series' steps have headers")
+        return
     if path.is_file() and find_format(path) is None:
         raise VolrenError(f"{path}: headerless raw data: give --raw-shape NX,NY,NZ (and --raw-dtype if it is "
                           "not uint8, --raw-spacing, --raw-byte-order)")
     if given:
         raise VolrenError(f"{path}: {given[0]} describes headerless raw data only (it needs --raw-shape); "
                           f"this file's header says how it is laid out")
+
+
+def input_series(args: argparse.Namespace):
+    """The time series INPUT names (None: INPUT is one volume); --time-step refused without one."""
+    from volren.io.series_io import is_series, load_series
+
+    if args.input is not None and not args.raw_shape and is_series(args.input):
+        return load_series(args.input)
+    if args.time_step is not None:
+        raise VolrenError(f"--time-step applies to a time series INPUT (a .pvd, or a folder of volume files); "
+                          f"{args.input or 'the scene'} is one volume")  # fmt: skip
+    return None
+
+
+def _step_path(args: argparse.Namespace) -> str:
+    """INPUT itself, or the file of the time step asked for when INPUT is a series."""
+    series = input_series(args)
+    if series is None:
+        return args.input
+    step = 0 if args.time_step is None else args.time_step
+    if not 0 <= step < len(series):
+        raise VolrenError(f"--time-step {step}: {args.input} has steps 0 to {len(series) - 1}")
+    return str(series.steps[step])
 
 
 def _load_input(args: argparse.Namespace):
@@ -171,7 +203,7 @@ def _load_input(args: argparse.Namespace):
             byte_order=args.raw_byte_order or "little",
             spacing=_triple(args.raw_spacing or "1,1,1", "--raw-spacing"),
         )
-    return io.load_volume(args.input, **kwargs)
+    return io.load_volume(_step_path(args), **kwargs)
 
 
 def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:

@@ -5,7 +5,7 @@ MP4 is H.264 in yuv420p at CRF 18 (visually lossless, and what every player and 
 `lossless` makes it RGB H.264 at QP 0, which decodes to exactly the frames given (for comparison
 and further editing; fewer players take it). yuv420p needs even sides, so an odd side is padded
 by repeating the last row or column. GIF is 256 colours per frame, at the centisecond frame
-delays GIF allows.
+delays GIF allows; Pillow merges identical consecutive frames into one that lasts as long.
 
 The movie is written beside the target and renamed over it when complete, so a failed or
 cancelled movie leaves no half-written file and an old movie of that name intact.

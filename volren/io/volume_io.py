@@ -61,9 +61,19 @@ def load_volume(
     `byte_order` ('little', 'big'), `spacing`, `origin` and `header_bytes` describing it.
     `scalars` names the array to render; None takes the active (else first) point array.
 
+    An OME-Zarr image (a folder, or an fsspec URL ending in .zarr) gives its full-resolution level
+    (`volren.io.ome_zarr_io`).
+
     Files with a header are read in a child process (`volren.io.isolation`): a reader that
     crashes on a corrupt file is a one-line error here, not the end of this process.
     """
+    from volren.io.ome_zarr_io import is_ome_zarr, is_url, load_level
+
+    if is_ome_zarr(path) and shape is None:
+        if scalars is not None:
+            raise file_error(path, f"an OME-Zarr image holds one field; there is no array {scalars!r} to choose")
+        name = str(path).rstrip("/").rsplit("/", 1)[-1] if is_url(path) else Path(path).name
+        return load_level(path, 0, name=name)
     path = Path(path)
     _existing(path)
     if shape is not None:  # headerless raw: numpy reads it, nothing native to isolate

@@ -17,6 +17,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Literal
 
+from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.crop import Box, check_box, covers, crop_volume
 from volren.model.settings import RenderSettings
@@ -36,11 +37,14 @@ DEFAULT_BACKGROUND = (0.1, 0.1, 0.12)
 class Change:
     """One announcement: which part changed, and whether it came from an ongoing interaction.
 
-    `what == "interaction"` with `interactive == False` says an interaction just ended.
+    `what == "interaction"` with `interactive == False` says an interaction just ended;
+    `what == "volume"` with `same_scene` says another time step of the same data came (TF,
+    camera, settings, renderer and crop kept): the data changed, the user's work did not.
     """
 
     what: What
     interactive: bool = False
+    same_scene: bool = False
 
 
 Listener = Callable[[Change], None]
@@ -86,8 +90,8 @@ class ViewState:
 
         return unsubscribe
 
-    def _emit(self, what: What, interactive: bool | None = None) -> None:
-        change = Change(what, self.interacting if interactive is None else interactive)
+    def _emit(self, what: What, interactive: bool | None = None, same_scene: bool = False) -> None:
+        change = Change(what, self.interacting if interactive is None else interactive, same_scene)
         for listener in list(self._listeners):
             listener(change)
 
@@ -186,6 +190,20 @@ class ViewState:
             self._renderer = renderer
         self.source = source
         self._emit("volume", interactive=False)
+
+    def show_step(self, volume: Volume, source: str = "") -> None:
+        """Another time step of the data shown: the volume is replaced and everything else (TF,
+        camera, settings, renderer, the crop box where it still cuts the new volume) stays."""
+        self._volume = volume
+        self._cropped = None
+        if self._crop is not None:
+            try:
+                self._cropped = (volume, self._crop, crop_volume(volume, self._crop))
+            except VolrenError:  # the step's bounds moved away from the box: show it whole
+                self._crop = None
+        if source:
+            self.source = source
+        self._emit("volume", interactive=False, same_scene=True)
 
     def set_transfer_function(self, tf: TransferFunction) -> None:
         """Use another TF object; in-place edits of the current one are announced as well. The

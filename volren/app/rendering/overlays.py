@@ -1,4 +1,5 @@
-"""The viewport's overlays: the volume's outline, the orientation axes and the colour legend.
+"""The viewport's overlays: the volume's outline, the orientation axes, the colour legend, and
+the crop box's edges and face handles while the box is edited in the view.
 
 Why painted by the viewport rather than rendered: they must never cost a frame. Each paint draws
 them with QPainter over the frame image (a dozen lines, three arms, and a strip and a curve of a
@@ -18,6 +19,7 @@ import numpy as np
 from PyQt5.QtCore import QLineF, QPointF, QRectF, Qt
 from PyQt5.QtGui import QColor, QFont, QImage, QPainter, QPen, QPolygonF
 
+from volren.app.core.crop_handles import face_axis, handle_depths, handle_pixels
 from volren.app.core.overlay_geometry import Rect, outline_segments, triad_arms
 from volren.model.camera import Camera
 from volren.model.transfer_function import TransferFunction1D
@@ -42,6 +44,14 @@ LEGEND_MARGIN = 14.0
 OPACITY_WIDTH = 24.0
 LEGEND_TEXT_COLOR = QColor(225, 225, 225)
 OPACITY_COLOR = QColor(240, 240, 160)
+#: The crop box's edges while its handles are shown: amber, apart from the white outline.
+CROP_BOX_COLOR = QColor(255, 190, 40)
+#: The handles: discs in their axis's colour with a dark rim; the one under the mouse (or being
+#: dragged) larger and lighter.
+HANDLE_RADIUS = 5.0
+HOT_HANDLE_RADIUS = 7.0
+HANDLE_RIM_COLOR = QColor(20, 20, 20)
+HOT_HANDLE_LIGHTER = 160
 
 
 @dataclass
@@ -64,6 +74,35 @@ def draw_outline(painter: QPainter, camera: Camera, aspect: float, rect: Rect, b
     painter.setRenderHint(QPainter.Antialiasing, False)
     painter.setPen(QPen(OUTLINE_COLOR, 1.0))
     painter.drawLines([QLineF(a[0], a[1], b[0], b[1]) for a, b in segments])
+    painter.restore()
+
+
+def handle_color(face: int, hot: bool) -> QColor:
+    """A face handle's fill: its axis's colour, lighter while under the mouse or dragged."""
+    color = AXIS_COLORS[face_axis(face)]
+    return color.lighter(HOT_HANDLE_LIGHTER) if hot else QColor(color)
+
+
+def draw_crop_handles(painter: QPainter, camera: Camera, aspect: float, rect: Rect, box: Sequence[float],
+                      hot: int | None = None) -> None:  # fmt: skip
+    """The crop box's 12 edges and a disc at the centre of each face, far handles first so that
+    nearer ones cover them; `hot` (a face, `Box` order) is drawn larger and lighter."""
+    segments = outline_segments(camera, aspect, rect, box)
+    pixels = handle_pixels(camera, aspect, rect, box)
+    order = np.argsort(-handle_depths(camera, box), kind="stable")
+    painter.save()
+    painter.setRenderHint(QPainter.Antialiasing, False)
+    painter.setPen(QPen(CROP_BOX_COLOR, 1.0))
+    painter.drawLines([QLineF(a[0], a[1], b[0], b[1]) for a, b in segments])
+    painter.setRenderHint(QPainter.Antialiasing, True)
+    painter.setPen(QPen(HANDLE_RIM_COLOR, 1.0))
+    for face in (int(f) for f in order):
+        x, y = pixels[face]
+        if not (np.isfinite(x) and np.isfinite(y)):
+            continue
+        radius = HOT_HANDLE_RADIUS if face == hot else HANDLE_RADIUS
+        painter.setBrush(handle_color(face, face == hot))
+        painter.drawEllipse(QPointF(float(x), float(y)), radius, radius)
     painter.restore()
 
 

@@ -50,6 +50,8 @@ class RenderRequest:
     height: int
     full: bool
     background: tuple[float, float, float]
+    #: a warm-up: the renderer is set up and draws a tiny frame that nobody sees (`RenderService.warm`)
+    warm: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +70,8 @@ class Frame:
     setup: bool = False  #: its time includes a renderer set-up (a new renderer or volume)
 
 
+#: The side of a warm-up's frame (`RenderService.warm`): enough to build tables and compile nothing.
+WARM_SIZE = 8
 #: Frames slower than this report their progress, at most this often.
 PROGRESS_INTERVAL_S = 0.25
 #: A frame is abandoned for a newer request only after it ran this long since its first progress
@@ -141,6 +145,7 @@ class RenderWorker(QObject):
     failed = pyqtSignal(object, str)  # RenderRequest, one-line reason
     progressed = pyqtSignal(int, str, float)  # serial, renderer, fraction done (slow frames only)
     preparing = pyqtSignal(int, str)  # serial, renderer: a new renderer or volume is being set up
+    warmed = pyqtSignal(str)  # renderer: a warm-up is done (or failed: its first real frame will say why)
 
     def __init__(self, mailbox: _Mailbox, factory: RendererFactory = _registry_factory) -> None:
         super().__init__()
@@ -158,19 +163,25 @@ class RenderWorker(QObject):
             try:
                 frame = self._render(request)
             except Exception as exc:  # noqa: BLE001 - a renderer must not take the app down
+                if request.warm:
+                    self.warmed.emit(request.renderer)
+                    continue
                 if isinstance(exc, _Superseded) or self._mailbox.waiting():
                     continue  # interrupted (or failing) on the way to a newer frame
                 self._release(request.renderer)  # a renderer that raised may be in any state: start afresh
                 self.failed.emit(request, _one_line(exc))
                 continue
-            self.frameReady.emit(frame)
+            if request.warm:
+                self.warmed.emit(request.renderer)
+            else:
+                self.frameReady.emit(frame)
 
     def _sync(self, request: RenderRequest) -> tuple[Renderer, bool]:
         """The request's renderer, given what it needs; and whether that meant a set-up (a new
         renderer or volume: that frame's time says little about the next ones')."""
         slot = self._slots.get(request.renderer)
         setup = slot is None or slot.volume is not request.volume
-        if setup:
+        if setup and not request.warm:
             # set-up ahead (the renderer's imports, its per-volume structures, its first frame's tables):
             # the GUI says so when no frame follows within PREPARING_AFTER_S
             self.preparing.emit(request.serial, request.renderer)
@@ -274,7 +285,14 @@ class RenderService(QObject):
         self._worker.failed.connect(self._on_failed)
         self._worker.progressed.connect(self._on_progress)
         self._worker.preparing.connect(self._on_preparing)
+        self._worker.warmed.connect(self._on_warmed)
+        self._warming = False
         self._thread.start()
+
+    @property
+    def warming(self) -> bool:
+        """Whether a warm-up was asked for and neither it nor a later frame has finished."""
+        return self._warming
 
     @property
     def latest_serial(self) -> int:
@@ -314,8 +332,27 @@ class RenderService(QObject):
         self._wake.emit()
         return self._serial
 
+    def warm(self, renderer: str, volume: Volume, tf: TransferFunction, settings: RenderSettings) -> None:
+        """Set `renderer` up for `volume`, `tf` and `settings` now, while nothing else waits: it
+        draws a WARM_SIZE frame that is not shown, so that its first real frame (the first preview
+        of a drag, by another renderer than the still frames') does not pay the set-up (0.7 s for
+        shearwarp's first bonsai preview). Any request replaces a warm-up that has not started; a
+        warm-up takes no serial, so `latest_serial` still names the newest frame to show."""
+        if not self._running:
+            return
+        request = RenderRequest(0, renderer, volume, tf.copy(), (id(tf), tf.version), settings,
+                                Camera.orbit(volume.bounds), WARM_SIZE, WARM_SIZE, False, (0.0, 0.0, 0.0), warm=True)  # fmt: skip
+        self._warming = True
+        self._mailbox.put(request)
+        self._wake.emit()
+
+    @pyqtSlot(str)
+    def _on_warmed(self, _renderer: str) -> None:
+        self._warming = False
+
     @pyqtSlot(object)
     def _on_frame(self, frame: Frame) -> None:
+        self._warming = False  # a warm-up replaced before it started ends here too
         if self._running:
             self.frameReady.emit(frame)
 

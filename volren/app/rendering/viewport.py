@@ -13,15 +13,22 @@ changes the `ViewState`; the frame scheduler decides what to render.
 Over the frame it paints the overlays of `rendering.overlays` (outline, orientation axes, colour
 legend), each paint, with the camera the frame was rendered with; `set_overlay` toggles one and
 only repaints.
+
+`set_crop_handles(True)` (View > Edit crop box) also paints the crop box (the whole volume when
+nothing is cropped) with a handle on each face (`core.crop_handles`). A plain left-press on a
+handle then drags that face along its axis instead of rotating, as one interaction: the state's
+crop box changes with each move (previews) and one full frame follows the release. Hovering a
+handle lights it and shows a size cursor along the face's axis on screen.
 """
 
 from __future__ import annotations
 
 import math
 
-from PyQt5.QtCore import QPoint, QRectF, QSize, Qt, pyqtSignal
+from PyQt5.QtCore import QEvent, QPoint, QRectF, QSize, Qt, pyqtSignal
 from PyQt5.QtGui import (
     QColor,
+    QCursor,
     QImage,
     QKeyEvent,
     QMouseEvent,
@@ -33,11 +40,25 @@ from PyQt5.QtGui import (
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 from volren.app.core import interaction
+from volren.app.core.crop_handles import FaceDrag, handle_at, minimum_thickness, shown_box
+from volren.app.core.overlay_geometry import Rect
 from volren.app.core.state import ViewState
-from volren.app.rendering.overlays import OverlaySettings, draw_axes, draw_legend, draw_outline
+from volren.app.rendering.overlays import (
+    OverlaySettings,
+    draw_axes,
+    draw_crop_handles,
+    draw_legend,
+    draw_outline,
+)
 from volren.app.rendering.render_service import Frame
+from volren.errors import VolrenError
+from volren.model.camera import Camera
+from volren.model.crop import Box
 
 _GESTURES = {Qt.LeftButton: "rotate", Qt.RightButton: "dolly", Qt.MiddleButton: "pan"}
+#: The size cursor of each `core.crop_handles.cursor_kind`.
+_SIZE_CURSORS = {"horizontal": Qt.SizeHorCursor, "vertical": Qt.SizeVerCursor,
+                 "rising": Qt.SizeBDiagCursor, "falling": Qt.SizeFDiagCursor}  # fmt: skip
 
 
 class Viewport(QWidget):
@@ -57,6 +78,11 @@ class Viewport(QWidget):
         self._drag_button: int | None = None
         self._drag_gesture: str | None = None
         self._last_pos = QPoint()
+        self._face_drag: FaceDrag | None = None
+        self._face_drag_from = QPoint()
+        self._hot_face: int | None = None
+        #: Whether the crop box and its face handles are shown (and draggable); see `set_crop_handles`.
+        self.crop_handles = False
         self.placeholder = "No volume"
         #: The overlays drawn over frames; change them through `set_overlay`.
         self.overlays = OverlaySettings()
@@ -66,7 +92,8 @@ class Viewport(QWidget):
         self.setMinimumSize(64, 64)
         self.setToolTip(
             "Left-drag: rotate; right-drag or wheel: zoom; middle-drag: pan; R: reset view; "
-            "Ctrl+click: place a 2D transfer-function widget at that point"
+            "Ctrl+click: place a 2D transfer-function widget at that point; with View > Edit crop box, "
+            "drag a face's handle to crop"
         )
 
     # ------------------------------------------------------------------ frames
@@ -124,6 +151,9 @@ class Viewport(QWidget):
         if self.overlays.outline and volume is not None:
             rect = (target.x(), target.y(), target.width(), target.height())
             draw_outline(painter, camera, self._frame.width / self._frame.height, rect, volume.bounds)
+        view = self._handle_view()
+        if view is not None:
+            draw_crop_handles(painter, *view, hot=self._hot_face)
         if self.overlays.axes:
             draw_axes(painter, camera, self.height())
         if self.overlays.legend and tf is not None:
@@ -137,6 +167,84 @@ class Viewport(QWidget):
         w, h = fw * scale, fh * scale
         return QRectF((self.width() - w) / 2.0, (self.height() - h) / 2.0, w, h)
 
+    # ------------------------------------------------------------------ crop handles
+    def set_crop_handles(self, visible: bool) -> None:
+        """Show the crop box with its face handles and let them be dragged, or hide them (a repaint)."""
+        self.crop_handles = bool(visible)
+        self.setMouseTracking(self.crop_handles)  # hovering lights a handle
+        if not self.crop_handles:
+            self._set_hot_face(None, None)
+        self.update()
+
+    @property
+    def hot_face(self) -> int | None:
+        """The face (`Box` order) whose handle is under the mouse or being dragged, or None."""
+        return self._hot_face
+
+    def _handle_view(self) -> tuple[Camera, float, Rect, Box] | None:
+        """The camera, aspect, frame rectangle and box the handles are drawn with: the frame's
+        camera, as the outline; None while the handles are off or nothing is shown."""
+        volume = self._state.volume
+        if not self.crop_handles or self._frame is None or volume is None:
+            return None
+        target = self._target_rect()
+        rect = (target.x(), target.y(), target.width(), target.height())
+        aspect = self._frame.width / self._frame.height
+        return self._frame.camera, aspect, rect, shown_box(self._state.crop, volume.bounds)
+
+    def _face_drag_at(self, pos: QPoint) -> FaceDrag | None:
+        """The drag a press at `pos` would start: a handle there that is not seen end-on."""
+        view, volume = self._handle_view(), self._state.volume
+        if view is None or volume is None:
+            return None
+        face = handle_at(*view, pos.x() + 0.5, pos.y() + 0.5)  # the pixel's centre, as the overlays
+        if face is None:
+            return None
+        return FaceDrag.start(*view, face, volume.bounds, minimum_thickness(volume))
+
+    def _set_hot_face(self, face: int | None, drag: FaceDrag | None) -> None:
+        """Light `face`'s handle (None: none) with a size cursor along `drag`'s axis."""
+        if drag is not None:
+            self.setCursor(QCursor(_SIZE_CURSORS[drag.cursor_kind()]))
+        else:
+            self.unsetCursor()
+        if face != self._hot_face:
+            self._hot_face = face
+            self.update()
+
+    def _hover(self, pos: QPoint) -> None:
+        drag = self._face_drag_at(pos)
+        self._set_hot_face(None if drag is None else drag.face, drag)
+
+    def _start_face_drag(self, pos: QPoint) -> bool:
+        drag = self._face_drag_at(pos)
+        if drag is None:
+            return False
+        self._face_drag = drag
+        self._face_drag_from = pos
+        self._drag_button = Qt.LeftButton
+        self._set_hot_face(drag.face, drag)
+        self._state.begin_interaction()
+        return True
+
+    def _drag_face(self, pos: QPoint) -> None:
+        """Move the dragged face for the mouse's motion since the press."""
+        drag = self._face_drag
+        assert drag is not None
+        if self._state.volume is None or tuple(self._state.volume.bounds) != drag.limits:
+            return  # another volume came in mid-drag: the box belongs to the old one
+        box = drag.box_for(pos.x() - self._face_drag_from.x(), pos.y() - self._face_drag_from.y())
+        try:
+            self._state.set_crop(box)
+        except VolrenError:
+            return  # a box with nothing in it (no whole tetrahedron of a mesh): keep the last one
+        self.update()  # the handles follow now; the frame follows when it is rendered
+
+    def leaveEvent(self, event: QEvent) -> None:
+        if self._face_drag is None:
+            self._set_hot_face(None, None)
+        super().leaveEvent(event)
+
     def resizeEvent(self, event: QResizeEvent) -> None:
         super().resizeEvent(event)
         self.resized.emit()
@@ -145,6 +253,10 @@ class Viewport(QWidget):
     def mousePressEvent(self, event: QMouseEvent) -> None:
         if event.button() == Qt.LeftButton and event.modifiers() & Qt.ControlModifier:
             self._pick(event.pos())
+            event.accept()
+            return
+        plain_left = event.button() == Qt.LeftButton and not event.modifiers() & Qt.ShiftModifier
+        if self._drag_button is None and plain_left and self._start_face_drag(event.pos()):
             event.accept()
             return
         gesture = _GESTURES.get(event.button())
@@ -159,7 +271,13 @@ class Viewport(QWidget):
         event.accept()
 
     def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        if self._face_drag is not None:
+            self._drag_face(event.pos())
+            event.accept()
+            return
         if self._drag_gesture is None:
+            if self.crop_handles and self._drag_button is None:
+                self._hover(event.pos())
             return super().mouseMoveEvent(event)
         pos = event.pos()
         dx, dy = pos.x() - self._last_pos.x(), pos.y() - self._last_pos.y()
@@ -173,7 +291,11 @@ class Viewport(QWidget):
             return super().mouseReleaseEvent(event)
         self._drag_button = None
         self._drag_gesture = None
+        dragged_face = self._face_drag is not None
+        self._face_drag = None
         self._state.end_interaction()
+        if dragged_face or self.crop_handles:
+            self._hover(event.pos())
         event.accept()
 
     def wheelEvent(self, event: QWheelEvent) -> None:

@@ -62,7 +62,7 @@ class TFHistory(QObject):
         self._unsubscribe = state.subscribe(self._on_change)
 
     def _on_change(self, change: Change) -> None:
-        if change.what == "volume":
+        if change.what == "volume" and not change.same_scene:  # a time step keeps the TF and its history
             self.stack.clear()
             self._recorded = _snapshot(self.state)
         elif change.what in ("tf", "interaction") and not change.interactive and not self._applying:

@@ -25,13 +25,16 @@ from volren.app.files.recent_files import RecentFiles, RecentFilesMenu
 from volren.app.rendering.viewport import Viewport
 from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
+from volren.app.window.time_control import TimeControl
 from volren.errors import VolrenError
+from volren.io.series_io import is_series, load_series
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.quality import AUTO, at_level, level_of
 
 OPEN_FILTER = (
-    "Volumes and scenes (*.vti *.vtk *.vtu *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw *.json);;"
+    "Volumes, time series and scenes (*.vti *.vtk *.vtu *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw "
+    "*.pvd *.json);;"
     "All files (*)"
 )
 
@@ -60,7 +63,9 @@ class FileActions(QObject):
         recent: RecentFiles,
         load: LoadFunction,
         report_error: Callable[[str, str], None],
+        time: TimeControl | None = None,
     ) -> None:
+        """`time`: the time toolbar, given a series when one is opened (a .pvd, a folder of volumes)."""
         super().__init__(window)
         self._window = window
         self._state = state
@@ -71,6 +76,10 @@ class FileActions(QObject):
         #: The TF each field of a file had when another was chosen (`show_array`), for the session.
         self._tf_by_field: dict[tuple[str, str], TransferFunction] = {}
         self.recent = recent
+        self._time = time
+        self._scalars: str | None = None  # what the shown volume was opened with
+        if time is not None:
+            time.stepShown.connect(lambda _index, path: scenes.remember_volume_file(path, self._scalars))
         self.loader = Loader(window, load)
         self.loader.loaded.connect(self._on_loaded)
         self.loader.failed.connect(self._on_load_failed)
@@ -84,7 +93,8 @@ class FileActions(QObject):
         window = self._window
         self.open_action = QAction("&Open…", window, shortcut=QKeySequence.Open, triggered=self._open_dialog)
         self.open_action.setToolTip("Open a volume, a scene or a transfer function (or drop a file on the window)")
-        self.open_folder_action = QAction("Open &DICOM folder…", window, triggered=self._open_folder_dialog)
+        self.open_folder_action = QAction("Open &Folder…", window, triggered=self._open_folder_dialog)
+        self.open_folder_action.setToolTip("Open a DICOM series, or a folder of volume files as a time series")
         self.recent_menu = RecentFilesMenu(self.recent, window)
         self.recent_menu.fileChosen.connect(self.open_input)
         self.cancel_action = QAction("Cancel", window, shortcut=QKeySequence(Qt.Key_Escape), triggered=self.cancel)
@@ -122,6 +132,13 @@ class FileActions(QObject):
         `renderer` is an explicit request (the command line): if it cannot draw the volume that is
         an error; a scene's renderer that cannot is replaced quietly.
         """
+        series = None
+        if path is not None and is_series(path):
+            try:
+                series = load_series(path)
+            except VolrenError as exc:
+                self._report_error("Cannot open", str(exc))
+                return
         raw = None
         if path is not None and Path(path).suffix.lower() == ".raw" and Path(path).is_file():
             raw = self.ask_raw_layout(path)  # a headerless file: the user says what it holds
@@ -132,7 +149,8 @@ class FileActions(QObject):
         if self._state.volume is None:
             self._viewport.placeholder = f"Opening {label}…"
             self._viewport.update()
-        self.loader.start(path, tf, scalars, context={"path": path, "renderer": renderer}, raw=raw)
+        context = {"path": path, "renderer": renderer, "series": series, "step": 0}
+        self.loader.start(series.steps[0] if series else path, tf, scalars, context=context, raw=raw)
 
     def show_array(self, choice: str) -> bool:
         """Show another field of the file on screen (the Dataset panel's chooser): the file is read
@@ -146,7 +164,10 @@ class FileActions(QObject):
             return False
         self._tf_by_field[(path, volume.scalars)] = tf
         self._window.statusBar().showMessage(f"Reading {choice} from {Path(path).name}…")
-        self.loader.start(path, None, choice, context={"path": path, "keep_view": True})
+        series = self._time.series if self._time is not None else None
+        step = self._time.shown_step if self._time is not None else None
+        context = {"path": path, "keep_view": True, "series": series, "step": step or 0}
+        self.loader.start(path, None, choice, context=context)
         return True
 
     def _keeping_the_view(self, loaded: LoadedInput) -> LoadedInput:
@@ -249,10 +270,14 @@ class FileActions(QObject):
             self._state.set_transfer_function(loaded.transfer_function)
             self._window.statusBar().showMessage(f"Transfer function from {loaded.source}", 5000)
         else:
-            if context and context.get("keep_view") and self._state.volume is not None:
+            context = context or {}
+            if context.get("keep_view") and self._state.volume is not None:
                 loaded = self._keeping_the_view(loaded)
-            self.apply_loaded(loaded, context.get("renderer") if context else None)
-        if opened is not None:
+            self.apply_loaded(loaded, context.get("renderer"))
+            self._scalars = loaded.scalars
+            if self._time is not None:
+                self._time.set_series(context.get("series"), loaded.volume, loaded.scalars, context.get("step", 0))
+        if opened is not None and not (context or {}).get("keep_view"):
             self.recent.add(opened)
         self.loadFinished.emit(True)
 
@@ -269,7 +294,8 @@ class FileActions(QObject):
             self.open_input(path)
 
     def _open_folder_dialog(self) -> None:
-        path = QFileDialog.getExistingDirectory(self._window, "Open DICOM folder", self.recent.folder())
+        path = QFileDialog.getExistingDirectory(self._window, "Open a DICOM folder or a time series folder",
+                                                self.recent.folder())  # fmt: skip
         if path:
             self.open_input(path)
 

@@ -20,7 +20,7 @@ bar and a message box) and goes on with what it had.
 
 from __future__ import annotations
 
-from PyQt5.QtCore import QSettings, pyqtSignal
+from PyQt5.QtCore import QSettings, Qt, pyqtSignal
 from PyQt5.QtGui import QCloseEvent, QKeySequence, QResizeEvent
 from PyQt5.QtWidgets import QAction, QLabel, QMainWindow, QMessageBox, QToolBar, QWidget
 
@@ -40,6 +40,7 @@ from volren.app.window.quality_control import QualityControl
 from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
 from volren.app.window.screenshot_actions import ScreenshotActions
+from volren.app.window.time_control import TimeControl
 from volren.renderers.registry import RendererRegistry
 from volren.renderers.registry import registry as default_registry
 
@@ -86,8 +87,10 @@ class MainWindow(QMainWindow):
         self.screenshots = ScreenshotActions(self, self.state, self.viewport, renderer_factory, self.report_error,
                                              recent.folder)  # fmt: skip
         self.movies = MovieActions(self, self.state, self.viewport, renderer_factory, self.report_error, recent.folder)
+        self.time = TimeControl(self, self.state, self.report_error)
+        self.addToolBar(Qt.BottomToolBarArea, self.time)
         self.files = FileActions(
-            self, self.state, self.viewport, self.renderers, self.scenes, recent, load, self.report_error
+            self, self.state, self.viewport, self.renderers, self.scenes, recent, load, self.report_error, self.time
         )
         self.addAction(self.files.cancel_action)  # its Esc shortcut works without a menu entry
 
@@ -152,6 +155,12 @@ class MainWindow(QMainWindow):
         self.view_direction_menu.addActions(list(self.view_direction_actions.values()))
         self.view_menu.addSeparator()
         self.view_menu.addActions(list(self.overlay_actions.values()))
+        #: View > Edit crop box: the crop box's face handles over the frame, dragged to crop.
+        self.crop_handles_action = self.view_menu.addAction("Edit crop box")
+        self.crop_handles_action.setCheckable(True)
+        self.crop_handles_action.setChecked(self.viewport.crop_handles)
+        self.crop_handles_action.setToolTip("Show the crop box with a handle on each face; drag a handle to crop")
+        self.crop_handles_action.toggled.connect(self.viewport.set_crop_handles)
 
         self.toolbar = QToolBar("Main", self)
         self.toolbar.setObjectName("main-toolbar")
@@ -214,6 +223,7 @@ class MainWindow(QMainWindow):
         self.service.shutdown()
         self.screenshots.shutdown()
         self.movies.shutdown()
+        self.time.shutdown()
         self.files.shutdown(5000)
 
     def resizeEvent(self, event: QResizeEvent) -> None:

@@ -77,7 +77,8 @@ class ColorBar(PointCanvas):
         self.setFixedHeight(2 + self.STRIP_HEIGHT + self.MARKER_HEIGHT + 3)
         self.setMinimumWidth(2 * MARGIN + 40)
         self.setToolTip(
-            "Colour stops: click to add, drag to move, double-click to pick a colour, right-click or Delete to remove"
+            "Colour stops: click to add, drag to move, double-click to pick a colour, right-click or Delete to remove; "
+            "wheel: zoom"
         )
 
     def sizeHint(self) -> QSize:
@@ -126,7 +127,7 @@ class ColorBar(PointCanvas):
         tf = self.transfer_function()
         assert tf is not None
         points = tf.color_points
-        value = self._axis.clamp(value)
+        value = self._limits.clamp(value)
         color = tf_color(tf, value)
         index = int(np.searchsorted(points[:, 0], value, side="right"))
         row = [value, color.redF(), color.greenF(), color.blueF()]
@@ -149,7 +150,7 @@ class ColorBar(PointCanvas):
             return
         points = tf.color_points
         left, right = neighbours(points[:, 0], index)
-        value = self._axis.clamp(self.value_at(pos.x()), left, right)
+        value = self._limits.clamp(self.value_at(pos.x()), left, right)
         if value != points[index, 0]:
             points[index, 0] = value
             tf.set_color_points(points)

@@ -8,7 +8,16 @@ begin/end_interaction). A 2D TF is not edited here: the panel says so and offers
 one. Errors (a bad file) leave as `errorOccurred(title, one_line)` for the window to show.
 
 The value axis spans the TF's range and the data's, so both the histogram and every control
-point are in view; it stays put during a drag so the point under the mouse does not slide.
+point are in view; it stays put during a drag so the point under the mouse does not slide. That
+span is also where points may go (the canvases' `limits`). The view can zoom in on a part of it
+(issue 23: a TF's detail is often a few per cent of a CT's range): the mouse wheel over the curve
+or the colour bar zooms about the value under the cursor, "TF range" shows just the TF's range and
+"Whole range" all of it again. Zoomed, the histogram is binned afresh over the view (after the
+wheel rests: binning a big volume takes a moment), the points outside stay where they are, and a
+drag or a typed number may still take a point anywhere in the limits.
+
+The colour-map combo box ends with "Browse colour maps…", the searchable `PresetBrowser` of the
+curated and ParaView's maps.
 """
 
 from __future__ import annotations
@@ -18,8 +27,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from PyQt5.QtCore import QPoint, Qt, pyqtSignal
-from PyQt5.QtGui import QIcon, QImage, QPixmap
+from PyQt5.QtCore import QPoint, Qt, QTimer, pyqtSignal
+from PyQt5.QtGui import QIcon, QPixmap
 from PyQt5.QtWidgets import (
     QAbstractSpinBox,
     QCheckBox,
@@ -37,24 +46,30 @@ from PyQt5.QtWidgets import (
     QWidget,
 )
 
-from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset, unit_stops
+from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset
 from volren.app.core.opacity_presets import OPACITY_PRESET_NAMES, preset_problem, preset_transfer_function
 from volren.app.core.state import Change, ViewState
 from volren.app.qt_subscription import subscribe_while_alive
 from volren.app.tf_editor.one_d.color_bar import ColorBar
+from volren.app.tf_editor.one_d.color_entry import ColorEntry
 from volren.app.tf_editor.one_d.opacity_curve import OpacityCurve
 from volren.app.tf_editor.one_d.point_canvas import ValueAxis
 from volren.app.tf_editor.one_d.point_entry import PointEntry
+from volren.app.tf_editor.one_d.preset_browser import PresetBrowser, swatch_image
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction
-from volren.model.value_histogram import value_histogram
+from volren.model.value_histogram import DEFAULT_BINS, Histogram, compute_histogram, value_histogram
 
 TF_FILTER = "Transfer functions: volren or ParaView preset JSON (*.json);;All files (*)"
 PRESET_PLACEHOLDER = "Colour map…"
+#: The colour-map box's last entry: opens the preset browser.
+BROWSE_ITEM = "Browse colour maps…"
 TISSUE_PLACEHOLDER = "Tissue preset…"
 #: The shift slider's steps on each side of 0; it reaches one data range either way.
 SHIFT_STEPS = 200
+#: How long the view must rest (ms) before the histogram is binned afresh over a zoomed view.
+REBIN_DELAY_MS = 150
 
 
 def _decimals(scale: float) -> int:
@@ -65,17 +80,11 @@ def _decimals(scale: float) -> int:
 
 
 def _preset_icon(name: str) -> QIcon:
-    x = np.linspace(0.0, 1.0, 48)
-    stops = unit_stops(name)
-    rgb = np.stack([np.interp(x, stops[:, 0], stops[:, c]) for c in (1, 2, 3)], axis=-1)
-    row = np.round(rgb * 255).astype(np.uint8)
-    pixels = np.ascontiguousarray(np.repeat(row[None], 12, axis=0))
-    image = QImage(pixels.data, 48, 12, 3 * 48, QImage.Format_RGB888).copy()
-    return QIcon(QPixmap.fromImage(image))
+    return QIcon(QPixmap.fromImage(swatch_image(name, 48, 12)))
 
 
 class PresetBox(QComboBox):
-    """The colour-map chooser: a placeholder, then the preset names.
+    """The colour-map chooser: a placeholder, the curated preset names, then "Browse colour maps…".
 
     The swatches are drawn when the list first opens, not while the app starts.
     """
@@ -86,6 +95,8 @@ class PresetBox(QComboBox):
         self.setMinimumContentsLength(10)
         self.addItem(PRESET_PLACEHOLDER)
         self.addItems(PRESET_NAMES)
+        self.addItem(BROWSE_ITEM)
+        self.setItemData(self.count() - 1, "Search every colour map, ParaView's included", Qt.ToolTipRole)
         self._have_icons = False
 
     def showPopup(self) -> None:
@@ -144,6 +155,26 @@ class TransferFunction1DEditor(QWidget):
         self._shift_applied = 0.0  # the offset the slider has applied to the TF shown
         self._shifted: tuple[TransferFunction, int] | None = None  # (TF, version) as the slider left it
         self._shifting = False
+        self.zoom_tf_button = QToolButton(self)
+        self.zoom_tf_button.setText("TF range")
+        self.zoom_tf_button.setToolTip("Zoom the histogram and curve to the transfer function's range "
+                                       "(the mouse wheel over them zooms about the cursor)")  # fmt: skip
+        self.zoom_tf_button.clicked.connect(self.zoom_to_tf_range)
+        self.zoom_all_button = QToolButton(self)
+        self.zoom_all_button.setText("Whole range")
+        self.zoom_all_button.setToolTip("Show the whole range again: the data's and the transfer function's")
+        self.zoom_all_button.clicked.connect(self.reset_zoom)
+        self._limits = ValueAxis(0.0, 1.0)  # where points may go: the TF's and the data's ranges
+        self._zoom: ValueAxis | None = None  # the part of the limits shown, None: all of them
+        self._zoom_histogram: tuple[object, ValueAxis, Histogram] | None = None  # (volume, view, bins)
+        self._rebin_timer = QTimer(self)
+        self._rebin_timer.setSingleShot(True)
+        self._rebin_timer.setInterval(REBIN_DELAY_MS)
+        self._rebin_timer.timeout.connect(self.update_histogram)
+        for canvas in (self.curve, self.color_bar):
+            canvas.zoomRequested.connect(self.zoom_about)
+        self.preset_browser: PresetBrowser | None = None  # made when first opened
+
         self.log_check = QCheckBox("Log counts", self)
         self.log_check.setToolTip("Histogram heights as log(1 + count): rare values stay visible")
         self.log_check.setChecked(self.curve.log_counts)
@@ -187,6 +218,7 @@ class TransferFunction1DEditor(QWidget):
         self.use_1d_button.clicked.connect(self.use_1d_transfer_function)
 
         self.point_entry = PointEntry(self.curve, self)
+        self.color_entry = ColorEntry(self.color_bar, self)
         self.pages = QStackedWidget(self)
         self.page_1d = QWidget(self.pages)
         one = QVBoxLayout(self.page_1d)
@@ -195,15 +227,22 @@ class TransferFunction1DEditor(QWidget):
         top = QHBoxLayout()
         top.addWidget(self.preset_box, 1)
         top.addWidget(self.tissue_box, 1)
-        top.addWidget(self.log_check)
         one.addLayout(top)
         shift = QHBoxLayout()
         shift.addWidget(QLabel("Shift", self.page_1d))
         shift.addWidget(self.shift_slider, 1)
         shift.addWidget(self.shift_label)
         one.addLayout(shift)
+        view = QHBoxLayout()
+        view.addWidget(QLabel("View", self.page_1d))
+        view.addWidget(self.zoom_tf_button)
+        view.addWidget(self.zoom_all_button)
+        view.addStretch(1)
+        view.addWidget(self.log_check)
+        one.addLayout(view)
         one.addWidget(self.curve, 1)
         one.addWidget(self.color_bar)
+        one.addWidget(self.color_entry)
         one.addWidget(self.point_entry)
         value_range = QHBoxLayout()
         value_range.addWidget(QLabel("Range", self.page_1d))
@@ -250,6 +289,9 @@ class TransferFunction1DEditor(QWidget):
 
     def _set_volume(self) -> None:
         volume = self._state.volume
+        self._zoom = None  # another data range: start from all of it
+        self._zoom_histogram = None
+        self._rebin_timer.stop()
         self.curve.set_histogram(None if volume is None else value_histogram(volume))
         self._refresh_tissue_presets(volume)
 
@@ -290,13 +332,14 @@ class TransferFunction1DEditor(QWidget):
         if tf1 is not None:
             if replaced or not self._state.interacting:
                 ranges = [tf1.value_range] + ([volume.value_range] if volume is not None else [])
-                axis = ValueAxis.spanning(*ranges)
-                self.curve.set_axis(axis)
-                self.color_bar.set_axis(axis)
+                self._limits = ValueAxis.spanning(*ranges)
+                self._set_view(None if self._zoom is None else self._zoom.within(self._limits))
             self._show_numbers(tf1)
+        self.zoom_tf_button.setEnabled(tf1 is not None)
         self.curve.model_changed()
         self.color_bar.model_changed()
         self.point_entry.refresh()
+        self.color_entry.refresh()
 
     def _forget_numbers(self) -> None:
         self._numbers_shown = None
@@ -342,6 +385,89 @@ class TransferFunction1DEditor(QWidget):
         tf = self.transfer_function()
         if tf is not None:
             apply_preset(tf, name)
+
+    # ------------------------------------------------------------------ the view (zoom)
+    @property
+    def view(self) -> ValueAxis:
+        """The values the histogram, curve and colour bar show now."""
+        return self.curve.axis
+
+    def zoom_to(self, lo: float, hi: float) -> None:
+        """Show [lo, hi] (the part inside the limits); all of the limits when that is all of them."""
+        if math.isfinite(lo) and math.isfinite(hi) and hi > lo:
+            self._set_view(ValueAxis(float(lo), float(hi)).within(self._limits))
+
+    def zoom_to_tf_range(self) -> None:
+        """Show just the TF's value range."""
+        tf = self.transfer_function()
+        if tf is not None:
+            self.zoom_to(*tf.value_range)
+
+    def zoom_about(self, center: float, factor: float) -> None:
+        """Scale the view's span by `factor` about `center` (a wheel notch: `ZOOM_STEP`)."""
+        if self.transfer_function() is not None and math.isfinite(center) and factor > 0:
+            self._set_view(self.view.zoomed(center, factor, self._limits))
+
+    def reset_zoom(self) -> None:
+        """Show all of the limits again (the TF's and the data's ranges)."""
+        self._set_view(None)
+
+    def _set_view(self, zoom: ValueAxis | None) -> None:
+        changed = zoom != self._zoom or self.curve.limits != self._limits
+        self._zoom = zoom
+        view = self._limits if zoom is None else zoom
+        self.curve.set_axis(view, self._limits)
+        self.color_bar.set_axis(view, self._limits)
+        self.zoom_all_button.setEnabled(zoom is not None)
+        if changed:
+            self._show_histogram_for(view)
+
+    def _show_histogram_for(self, view: ValueAxis) -> None:
+        """The histogram for a new view: one that covers it at once, finer bins once it rests."""
+        volume = self._state.volume
+        if volume is None:
+            return
+        if self._zoom is None:
+            self._rebin_timer.stop()
+            self.curve.set_histogram(value_histogram(volume))
+            return
+        shown = self.curve.histogram
+        if shown is None or not shown.edges[0] <= view.lo or not view.hi <= shown.edges[-1]:
+            self.curve.set_histogram(value_histogram(volume))  # coarse, but all there meanwhile
+        self._rebin_timer.start()
+
+    def update_histogram(self) -> None:
+        """The histogram over the view: the volume's (cached) unzoomed, else binned over the view."""
+        self._rebin_timer.stop()
+        volume = self._state.volume
+        if volume is None:
+            self.curve.set_histogram(None)
+            return
+        view = self._zoom
+        if view is None:
+            self.curve.set_histogram(value_histogram(volume))
+            return
+        cached = self._zoom_histogram
+        if cached is None or cached[0] is not volume or cached[1] != view:
+            histogram = compute_histogram(volume.values, DEFAULT_BINS, (view.lo, view.hi))
+            cached = self._zoom_histogram = (volume, view, histogram)
+        self.curve.set_histogram(cached[2])
+
+    def open_preset_browser(self) -> PresetBrowser:
+        """Show the colour-map browser (window-modal, not blocking); OK or a double-click applies
+        the chosen map to the TF's colours over its range, Cancel changes nothing."""
+        if self.preset_browser is None:
+            self.preset_browser = PresetBrowser(self)
+            self.preset_browser.accepted.connect(self._on_browser_accepted)
+        self.preset_browser.reset()
+        self.preset_browser.open()
+        self.preset_browser.search.setFocus()
+        return self.preset_browser
+
+    def _on_browser_accepted(self) -> None:
+        name = self.preset_browser.chosen() if self.preset_browser is not None else None
+        if name is not None:
+            self.apply_preset(name)
 
     def apply_tissue_preset(self, name: str) -> bool:
         """Replace the TF with the tissue preset `name` for this volume; False (and errorOccurred)
@@ -510,7 +636,10 @@ class TransferFunction1DEditor(QWidget):
     def _on_preset_chosen(self, index: int) -> None:
         if index <= 0:
             return
-        self.apply_preset(self.preset_box.itemText(index))
+        if index == self.preset_box.count() - 1:
+            self.open_preset_browser()
+        else:
+            self.apply_preset(self.preset_box.itemText(index))
         self.preset_box.blockSignals(True)
         self.preset_box.setCurrentIndex(0)  # a menu of actions: choosing the same map again works
         self.preset_box.blockSignals(False)

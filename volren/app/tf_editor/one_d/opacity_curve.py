@@ -50,7 +50,7 @@ class OpacityCurve(PointCanvas):
         self._log_counts = True
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(2 * MARGIN + 40, TOP + BOTTOM + 40)
-        self.setToolTip("Opacity: click to add a point, drag to move it, right-click or Delete to remove it")
+        self.setToolTip("Opacity: click to add a point, drag to move it, right-click or Delete to remove it; wheel: zoom")
 
     def sizeHint(self) -> QSize:
         return QSize(300, 150)
@@ -79,6 +79,13 @@ class OpacityCurve(PointCanvas):
         self.update()
 
     # ------------------------------------------------------------------ geometry
+    def view_labels(self) -> tuple[str, str] | None:
+        """The values at the plot's two ends while the view is zoomed in (else None): without
+        them a zoomed curve does not say where it is."""
+        if self._axis == self._limits:
+            return None
+        return f"{self._axis.lo:.5g}", f"{self._axis.hi:.5g}"
+
     def _plot_height(self) -> float:
         return float(max(self.height() - TOP - BOTTOM, 1))
 
@@ -111,11 +118,11 @@ class OpacityCurve(PointCanvas):
 
     # ------------------------------------------------------------------ edits
     def add_point(self, value: float, opacity: float) -> int:
-        """Add an opacity point (value clamped to the axis); returns its index."""
+        """Add an opacity point (value clamped to the limits); returns its index."""
         tf = self.transfer_function()
         assert tf is not None
         points = tf.opacity_points
-        value = self._axis.clamp(value)
+        value = self._limits.clamp(value)
         index = int(np.searchsorted(points[:, 0], value, side="right"))
         tf.set_opacity_points(np.insert(points, index, [value, min(max(opacity, 0.0), 1.0)], axis=0))
         return index
@@ -129,7 +136,7 @@ class OpacityCurve(PointCanvas):
             return
         points = tf.opacity_points
         left, right = neighbours(points[:, 0], index)
-        moved = (self._axis.clamp(self.value_at(pos.x()), left, right), self.opacity_at(pos.y()))
+        moved = (self._limits.clamp(self.value_at(pos.x()), left, right), self.opacity_at(pos.y()))
         if moved != tuple(points[index]):
             points[index] = moved
             tf.set_opacity_points(points)
@@ -149,11 +156,16 @@ class OpacityCurve(PointCanvas):
         if tf is None:
             return
         painter.setRenderHint(QPainter.Antialiasing)
-        curve = [QPointF(left, self._y(tf.opacity_points[0, 1]))]
-        curve += [QPointF(self._axis.to_x(x, self.width()), self._y(a)) for x, a in tf.opacity_points]
-        curve.append(QPointF(right, self._y(tf.opacity_points[-1, 1])))
+        points = tf.opacity_points
+        xs = self._axis.to_x(points[:, 0], self.width())
+        # constant beyond the end points; zoomed in, those may lie outside the plot: the curve
+        # then runs from them, so the area under it never folds back on itself
+        start, end = min(left, float(xs[0])), max(right, float(xs[-1]))
+        curve = [QPointF(start, self._y(points[0, 1]))]
+        curve += [QPointF(x, self._y(a)) for x, a in zip(xs, points[:, 1])]
+        curve.append(QPointF(end, self._y(points[-1, 1])))
         under = QPainterPath()
-        under.addPolygon(QPolygonF([QPointF(left, plot.bottom()), *curve, QPointF(right, plot.bottom())]))
+        under.addPolygon(QPolygonF([QPointF(start, plot.bottom()), *curve, QPointF(end, plot.bottom())]))
         painter.save()
         painter.setClipPath(under)
         painter.setOpacity(FILL_OPACITY)
@@ -162,6 +174,12 @@ class OpacityCurve(PointCanvas):
         painter.setPen(QPen(palette.color(QPalette.Text), 1.5))
         painter.drawPolyline(QPolygonF(curve))
         self._paint_points(painter, tf, palette)
+        labels = self.view_labels()
+        if labels is not None:
+            painter.setPen(palette.color(QPalette.Text))
+            inside = plot.adjusted(3, 0, -3, -2)
+            painter.drawText(inside, int(Qt.AlignLeft | Qt.AlignBottom), labels[0])
+            painter.drawText(inside, int(Qt.AlignRight | Qt.AlignBottom), labels[1])
 
     def _paint_histogram(self, painter: QPainter, palette: QPalette) -> None:
         """The histogram's bars, drawn once into a pixmap kept until the histogram, the scale, the
@@ -182,8 +200,10 @@ class OpacityCurve(PointCanvas):
             bar = QColor(text)
             bar.setAlphaF(0.22)
             bottom = self.height() - BOTTOM
+            # zoomed in, most bars may lie outside: draw only the visible part of each
+            xs = np.clip(xs, -1.0, self.width() + 1.0)
             for x0, x1, h in zip(xs[:-1], xs[1:], heights):
-                if h > 0:
+                if h > 0 and x1 > x0:
                     top = bottom - h * self._plot_height()
                     bars.fillRect(QRectF(x0, top, max(x1 - x0, 1.0), bottom - top), bar)
             bars.end()

@@ -5,6 +5,11 @@ The opacity curve and the colour bar both edit a sorted list of TF control point
 between its neighbours, right-click or Delete removes it (never the first or last: they span the
 TF's range), and a drag is one `begin_interaction`/`end_interaction` (cheap previews, one undo
 step). Subclasses say which points they edit and how pixels map to them.
+
+Two axes: `axis` is the value range shown (pixels <-> values), `limits` the range points may be
+moved or typed into (the TF's and the data's). They differ while the view is zoomed in: the mouse
+wheel asks for a zoom about the value under the cursor (`zoomRequested`, which the editor applies
+to both canvases), and a point outside the view is neither lost nor pulled into it.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 from PyQt5.QtCore import QPointF, Qt, pyqtSignal
-from PyQt5.QtGui import QHideEvent, QKeyEvent, QMouseEvent
+from PyQt5.QtGui import QHideEvent, QKeyEvent, QMouseEvent, QWheelEvent
 from PyQt5.QtWidgets import QWidget
 
 from volren.app.core.state import ViewState
@@ -25,6 +30,10 @@ from volren.model.transfer_function import TransferFunction1D
 MARGIN = 8
 #: How close (px) a click must be to a stop or point to pick it rather than add a new one.
 PICK_RADIUS = 6
+#: The view's span is multiplied by this per wheel notch (120 eighths of a degree) towards you.
+ZOOM_STEP = 0.8
+#: The narrowest view, as a fraction of the limits' span (further zoom does nothing).
+MIN_ZOOM = 1e-4
 
 
 @dataclass(frozen=True)
@@ -58,6 +67,28 @@ class ValueAxis:
         high = self.hi if hi is None else min(hi, self.hi)
         return float(min(max(value, low), max(low, high)))
 
+    def zoomed(self, center: float, factor: float, limits: ValueAxis) -> ValueAxis | None:
+        """This view scaled by `factor` about `center` (which stays where it is on screen), kept
+        inside `limits` (slid back in at an edge); None when it would cover the limits whole
+        (the unzoomed view). Never narrower than MIN_ZOOM of the limits."""
+        span = (self.hi - self.lo) * factor
+        full = limits.hi - limits.lo
+        if span >= full:
+            return None
+        span = max(span, MIN_ZOOM * full)
+        t = (center - self.lo) / (self.hi - self.lo)
+        lo = center - t * span
+        lo = min(max(lo, limits.lo), limits.hi - span)
+        return ValueAxis(float(lo), float(lo + span))
+
+    def within(self, limits: ValueAxis) -> ValueAxis | None:
+        """The part of this view inside `limits`; None if that is all of the limits or too thin
+        to be a view (the limits changed under a zoom)."""
+        lo, hi = max(self.lo, limits.lo), min(self.hi, limits.hi)
+        if hi - lo < MIN_ZOOM * (limits.hi - limits.lo) or (lo, hi) == (limits.lo, limits.hi):
+            return None
+        return ValueAxis(lo, hi)
+
 
 def axis_span(width: int) -> float:
     """Pixels between the two margins: the length of the value axis on screen."""
@@ -77,11 +108,14 @@ class PointCanvas(QWidget):
 
     #: The selected point changed (its index, or None): numeric entry follows it.
     selectionChanged = pyqtSignal(object)
+    #: The wheel asks to zoom the view: (the value under the cursor, the span's factor).
+    zoomRequested = pyqtSignal(float, float)
 
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._state = state
         self._axis = ValueAxis(0.0, 1.0)
+        self._limits = self._axis
         self._drag: int | None = None
         self._selected: int | None = None
         self.setFocusPolicy(Qt.StrongFocus)
@@ -124,10 +158,17 @@ class PointCanvas(QWidget):
 
     @property
     def axis(self) -> ValueAxis:
+        """The values shown, left margin to right margin."""
         return self._axis
 
-    def set_axis(self, axis: ValueAxis) -> None:
+    @property
+    def limits(self) -> ValueAxis:
+        """Where points may go: the axis unless the view is zoomed in."""
+        return self._limits
+
+    def set_axis(self, axis: ValueAxis, limits: ValueAxis | None = None) -> None:
         self._axis = axis
+        self._limits = axis if limits is None else limits
         self.update()
 
     def value_at(self, x: float) -> float:
@@ -182,6 +223,13 @@ class PointCanvas(QWidget):
         if self._drag is not None:
             self._drag = None
             self._state.end_interaction()
+
+    def wheelEvent(self, event: QWheelEvent) -> None:
+        notches = event.angleDelta().y() / 120
+        if not notches or self.transfer_function() is None or self._drag is not None:
+            return super().wheelEvent(event)
+        self.zoomRequested.emit(self.value_at(event.position().x()), ZOOM_STEP**notches)
+        event.accept()
 
     def keyPressEvent(self, event: QKeyEvent) -> None:
         if event.key() in (Qt.Key_Delete, Qt.Key_Backspace) and self.delete_selected():

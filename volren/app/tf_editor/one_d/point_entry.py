@@ -22,6 +22,7 @@ class PointEntry(QWidget):
     def __init__(self, curve: OpacityCurve, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._curve = curve
+        self._shown = (0.0, 0.0)  # (value, opacity) boxes as refresh() left them
         self.value = QDoubleSpinBox(self)
         self.value.setDecimals(6)
         self.value.setToolTip("Data value of the selected opacity point (between its neighbours)")
@@ -58,17 +59,19 @@ class PointEntry(QWidget):
         points = tf.opacity_points
         x, a = points[index]
         left, right = neighbours(points[:, 0], index)
-        axis = self._curve.axis
+        limits = self._curve.limits
         # the range is where the point may go (between its neighbours): typing beyond stops there,
         # and the box is as wide as those numbers, not as the largest float
         self.value.blockSignals(True)
-        self.value.setRange(left if left is not None else min(float(x), axis.lo),
-                            right if right is not None else max(float(x), axis.hi))  # fmt: skip
+        self.value.setRange(left if left is not None else min(float(x), limits.lo),
+                            right if right is not None else max(float(x), limits.hi))  # fmt: skip
         self.value.blockSignals(False)
         for box, v in ((self.value, x), (self.opacity, a)):
             box.blockSignals(True)
             box.setValue(float(v))
             box.blockSignals(False)
+        # the numbers to the boxes' decimals: a box left as shown keeps the point's exact number
+        self._shown = (self.value.value(), self.opacity.value())
         span = float(np.ptp(points[:, 0])) or 1.0
         self.value.setSingleStep(span / 100)
 
@@ -79,7 +82,12 @@ class PointEntry(QWidget):
         tf, index = found
         points = tf.opacity_points
         left, right = neighbours(points[:, 0], index)
-        moved = (self._curve.axis.clamp(self.value.value(), left, right), min(max(self.opacity.value(), 0.0), 1.0))
+        x, a = points[index]
+        if self.value.value() != self._shown[0]:
+            x = self._curve.limits.clamp(self.value.value(), left, right)
+        if self.opacity.value() != self._shown[1]:
+            a = min(max(self.opacity.value(), 0.0), 1.0)
+        moved = (x, a)
         if moved != tuple(points[index]):
             points[index] = moved
             tf.set_opacity_points(points)  # one edit: one undo step and one full frame

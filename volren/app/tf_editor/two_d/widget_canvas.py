@@ -11,14 +11,19 @@ widget. A drag is wrapped in `state.begin_interaction()` / `end_interaction()` (
 first movement, so a plain click is no interaction), which makes it cheap previews while it lasts
 and one undo step. Every drag position is computed from the widget as it was at the press, so
 rounding never accumulates.
+
+While the mouse is over the plot, a readout in its top-right corner says what is under it
+(issue 23, as ParaView and Slicer show it): the value and gradient magnitude of that pixel, the
+joint histogram's count in that bin and the TF's opacity there. It goes when the mouse leaves.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
-from PyQt5.QtCore import QPoint, QPointF, QRectF, QSize, Qt, pyqtSignal
+from PyQt5.QtCore import QEvent, QPoint, QPointF, QRectF, QSize, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QImage, QKeyEvent, QMouseEvent, QPainter, QPaintEvent, QPen, QPolygonF
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
@@ -40,6 +45,38 @@ _EMPTY_PLOT = QColor(12, 12, 14)
 _OUTLINE = QColor(230, 230, 230)
 _SELECTED = QColor(255, 210, 60)
 _LABEL = QColor(190, 190, 190)
+_READOUT_BACK = QColor(0, 0, 0, 170)
+
+
+@dataclass(frozen=True)
+class HoverReadout:
+    """What is under the mouse: a point of the plot, its histogram bin and the TF there."""
+
+    value: float
+    gradient: float
+    #: The joint histogram's count in the bin holding (value, gradient); None without a histogram.
+    count: float | None
+    opacity: float
+
+    def lines(self) -> tuple[str, str]:
+        count = "-" if self.count is None else f"{self.count:.6g}"
+        return (
+            f"value {self.value:.5g}  |grad| {self.gradient:.4g}",
+            f"count {count}  opacity {self.opacity:.3f}",
+        )
+
+
+def histogram_count(histogram: JointHistogram, value: float, gradient: float) -> float | None:
+    """The count of the bin holding (value, gradient) (`JointHistogram`'s bins: half-open, the
+    top edges closed); None outside the histogram."""
+    lo, hi = histogram.value_range
+    gmax = histogram.gradient_max
+    if not (lo <= value <= hi and 0.0 <= gradient <= gmax):
+        return None
+    n_gradients, n_values = histogram.shape
+    i = min(int((value - lo) * (n_values / (hi - lo))), n_values - 1)
+    j = min(int(gradient * (n_gradients / gmax)), n_gradients - 1)
+    return float(histogram.counts[j, i])
 
 
 class _Drag:
@@ -72,6 +109,7 @@ class TFWidgetCanvas(QWidget):
         self._image: QImage | None = None
         self._selected: int | None = None
         self._drag: _Drag | None = None
+        self._hover: QPointF | None = None  # the mouse over the plot, for the readout
         self.setFocusPolicy(Qt.StrongFocus)
         self.setMouseTracking(True)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
@@ -203,6 +241,27 @@ class TFWidgetCanvas(QWidget):
                 best, best_d = name, d
         return best
 
+    # ------------------------------------------------------------------ hover readout
+    def hover_readout(self) -> HoverReadout | None:
+        """What the readout shows now: None unless the mouse is over the plot of a TF."""
+        if self._hover is None or self._tf is None:
+            return None
+        s, g = self.to_data(self._hover)
+        count = None if self._histogram is None else histogram_count(self._histogram, s, g)
+        _, opacity = self._tf.sample(s, g)
+        return HoverReadout(s, g, count, float(opacity))
+
+    def _set_hover(self, point: QPointF | None) -> None:
+        if point is not None and not self.plot_rect().contains(point):
+            point = None
+        if point != self._hover:
+            self._hover = point
+            self.update()
+
+    def leaveEvent(self, event: QEvent) -> None:
+        self._set_hover(None)
+        super().leaveEvent(event)
+
     # ------------------------------------------------------------------ mouse and keys
     def mousePressEvent(self, event: QMouseEvent) -> None:
         if event.button() != Qt.LeftButton or self._tf is None or self._drag is not None:
@@ -220,6 +279,7 @@ class TFWidgetCanvas(QWidget):
         event.accept()
 
     def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        self._set_hover(event.localPos())
         drag = self._drag
         if drag is None:
             self._update_cursor(event.pos())
@@ -287,6 +347,7 @@ class TFWidgetCanvas(QWidget):
             self._paint_widget(painter, widget, index == self._selected)
         painter.restore()
         self._paint_labels(painter, plot)
+        self._paint_readout(painter, plot)
 
     def _paint_widget(self, painter: QPainter, widget: TFWidget, selected: bool) -> None:
         r, g, b = widget.color
@@ -311,3 +372,16 @@ class TFWidgetCanvas(QWidget):
         inside = plot.adjusted(4.0, 2.0, -4.0, -2.0)
         painter.drawText(inside, int(Qt.AlignLeft | Qt.AlignTop), f"|grad| {gmax:.4g}")
         painter.drawText(inside, int(Qt.AlignLeft | Qt.AlignBottom), "0")
+
+    def _paint_readout(self, painter: QPainter, plot: QRectF) -> None:
+        readout = self.hover_readout()
+        if readout is None:
+            return
+        lines = readout.lines()
+        metrics = painter.fontMetrics()
+        width = max(metrics.horizontalAdvance(line) for line in lines) + 8
+        height = metrics.height() * len(lines) + 4
+        box = QRectF(plot.right() - width - 2, plot.top() + 2, width, height)
+        painter.fillRect(box, _READOUT_BACK)
+        painter.setPen(_OUTLINE)
+        painter.drawText(box.adjusted(4, 2, -4, -2), int(Qt.AlignLeft | Qt.AlignTop), "\n".join(lines))

@@ -1,0 +1,269 @@
+"""OME-Zarr multiscale images (NGFF 0.4 on Zarr v2, written and read; NGFF 0.5 on Zarr v3, read):
+the bricked, multiresolution format of volumes larger than memory.
+
+Writing (`save_ome_zarr`): the pyramid of `volren.model.pyramid` (2x2x2 block means), each level
+an array of bricks ("chunks"), voxel placement as NGFF's scale and translation per level (z, y, x
+order, as NGFF lists axes), and under the group's "volren" key every brick's value range, so that
+a renderer can skip bricks a TF makes transparent without reading them.
+
+Reading (`open_multiscale`, `load_level`): the metadata alone first; a level's values brick by
+brick, so that a corrupt brick is a one-line error naming it. Images with time or channel axes are
+read when those axes have one entry. Local folders and fsspec URLs (http://, s3://, ...) both work:
+zarr opens either.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from volren.errors import VolrenError
+from volren.model.pyramid import DEFAULT_CHUNK, brick_slices, default_levels, pyramid, value_range
+from volren.model.volume import UniformVolume
+
+#: The install hint of the optional packages this format needs.
+INSTALL_HINT = "pip install 'volren[zarr]'"
+#: Under this key of the group's attributes: what volren adds to NGFF (brick value ranges).
+VOLREN_KEY = "volren"
+NGFF_WRITTEN = "0.4"
+#: A level read into memory whole is refused above this many bytes (ask for a coarser level).
+MAX_IN_MEMORY_BYTES = 8 << 30
+
+#: progress(fraction done) while writing.
+Progress = Callable[[float], None]
+
+
+def require_zarr() -> Any:
+    try:
+        import zarr
+    except ImportError:
+        raise VolrenError(f"OME-Zarr needs zarr, which is not installed: {INSTALL_HINT}") from None
+    return zarr
+
+
+def is_url(path: str | Path) -> bool:
+    return "://" in str(path)
+
+
+def is_ome_zarr(path: str | Path) -> bool:
+    """A folder (or URL) holding a Zarr group, taken as an OME-Zarr image: Zarr v2 (.zgroup or
+    .zattrs) or v3 (zarr.json), or a URL naming a .zarr. One without OME metadata is then an error
+    that says so, not a DICOM folder that is not one."""
+    if is_url(path):
+        return str(path).rstrip("/").lower().endswith(".zarr")
+    path = Path(path)
+    return path.is_dir() and any((path / name).is_file() for name in (".zgroup", ".zattrs", "zarr.json"))
+
+
+# ------------------------------------------------------------------------------------ reading
+@dataclass(frozen=True)
+class LevelInfo:
+    """One level's array key, shape (z, y, x), brick shape, and voxel placement (x, y, z)."""
+
+    key: str
+    shape: tuple[int, int, int]
+    chunks: tuple[int, int, int]
+    spacing: tuple[float, float, float]
+    origin: tuple[float, float, float]
+    dtype: np.dtype
+
+
+@dataclass(frozen=True)
+class Multiscale:
+    """An opened OME-Zarr image: its levels (finest first) and, if volren wrote it, the value
+    range of every brick of every level (None for a brick with no finite value)."""
+
+    path: str
+    name: str
+    levels: tuple[LevelInfo, ...]
+    brick_ranges: tuple[tuple[tuple[float, float] | None, ...], ...] | None
+    #: leading singleton axes (time, channel) to drop from each array's index
+    leading: int = 0
+
+    def array(self, level: int) -> Any:
+        """The zarr array of `level` (lazy: nothing is read until it is indexed)."""
+        zarr = require_zarr()
+        return zarr.open_array(f"{self.path.rstrip('/')}/{self.levels[level].key}", mode="r")
+
+
+def _multiscales(attrs: Mapping[str, Any]) -> tuple[Mapping[str, Any], str]:
+    ome = attrs.get("ome")
+    if isinstance(ome, Mapping) and isinstance(ome.get("multiscales"), list):
+        return ome["multiscales"][0], str(ome.get("version", "0.5"))
+    found = attrs.get("multiscales")
+    if isinstance(found, list) and found and isinstance(found[0], Mapping):
+        return found[0], str(found[0].get("version", ""))
+    raise VolrenError("not an OME-Zarr image: no 'multiscales' in the group's attributes")
+
+
+def _transforms(dataset: Mapping[str, Any], axes: int) -> tuple[list[float], list[float]]:
+    scale, translation = [1.0] * axes, [0.0] * axes
+    for transform in dataset.get("coordinateTransformations", []):
+        kind = transform.get("type")
+        if kind == "scale":
+            scale = [float(v) for v in transform["scale"]]
+        elif kind == "translation":
+            translation = [float(v) for v in transform["translation"]]
+    if len(scale) != axes or len(translation) != axes or not all(math.isfinite(v) for v in scale + translation):
+        raise VolrenError(f"level {dataset.get('path')!r}: its scale and translation must have {axes} finite numbers")
+    if any(v <= 0 for v in scale):
+        raise VolrenError(f"level {dataset.get('path')!r}: scale must be positive, got {scale}")
+    return scale, translation
+
+
+def open_multiscale(path: str | Path) -> Multiscale:
+    """The metadata of the OME-Zarr image at `path`; one-line errors name the path and the problem."""
+    zarr = require_zarr()
+    where = str(path)
+    try:
+        group = zarr.open_group(where, mode="r")
+        meta, _version = _multiscales(dict(group.attrs))
+        axes = [a["name"] if isinstance(a, Mapping) else str(a) for a in meta.get("axes", ["z", "y", "x"])]
+        if axes[-3:] != ["z", "y", "x"]:
+            raise VolrenError(f"axes {axes}: volren reads volumes whose last three axes are z, y, x")
+        leading = len(axes) - 3
+        levels = []
+        for dataset in meta.get("datasets", []):
+            key = str(dataset["path"])
+            try:
+                array = zarr.open_array(f"{where.rstrip('/')}/{key}", mode="r")
+            except (FileNotFoundError, KeyError, ValueError) as exc:
+                raise VolrenError(f"level {key!r} is listed but missing ({type(exc).__name__})") from None
+            if array.ndim != len(axes):
+                raise VolrenError(f"level {key!r} has {array.ndim} axes, the metadata {len(axes)}")
+            extra = [n for n, ax in zip(array.shape[:leading], axes, strict=False) if n != 1]
+            if extra:
+                raise VolrenError(f"axes {axes[:leading]} hold {array.shape[:leading]} entries; volren reads one "
+                                  "volume (one time point, one channel)")  # fmt: skip
+            scale, translation = _transforms(dataset, len(axes))
+            levels.append(LevelInfo(key, tuple(array.shape[leading:]), tuple(array.chunks[leading:]),
+                                    tuple(reversed(scale[leading:])), tuple(reversed(translation[leading:])),
+                                    np.dtype(array.dtype)))  # fmt: skip
+        if not levels:
+            raise VolrenError("the multiscale image lists no levels")
+        ranges = _brick_ranges(dict(group.attrs).get(VOLREN_KEY), levels)
+    except VolrenError as exc:
+        raise VolrenError(f"{where}: {exc}") from None
+    except (OSError, KeyError, TypeError, ValueError, json.JSONDecodeError) as exc:
+        raise VolrenError(f"{where}: not a readable OME-Zarr image ({type(exc).__name__}: "
+                          f"{' '.join(str(exc).split())[:200]})") from None  # fmt: skip
+    return Multiscale(where, str(meta.get("name") or Path(where.rstrip("/")).name), tuple(levels), ranges, leading)
+
+
+def _brick_ranges(extra: Any, levels: Sequence[LevelInfo]) -> tuple | None:
+    """volren's stored brick ranges, checked against each level's brick grid."""
+    if not isinstance(extra, Mapping) or "brick_ranges" not in extra:
+        return None
+    stored = extra["brick_ranges"]
+    if not isinstance(stored, list) or len(stored) != len(levels):
+        raise VolrenError(f"'{VOLREN_KEY}.brick_ranges' lists {len(stored) if isinstance(stored, list) else 'no'} "
+                          f"levels, the image {len(levels)}")  # fmt: skip
+    out = []
+    for level, ranges in zip(levels, stored, strict=True):
+        bricks = math.prod(math.ceil(n / c) for n, c in zip(level.shape, level.chunks, strict=True))
+        if not isinstance(ranges, list) or len(ranges) != bricks:
+            raise VolrenError(f"level {level.key!r}: its chunk shape {level.chunks} makes {bricks} bricks, the stored "
+                              f"ranges are for {len(ranges) if isinstance(ranges, list) else 'no'}")  # fmt: skip
+        out.append(tuple(None if r is None else (float(r[0]), float(r[1])) for r in ranges))
+    return tuple(out)
+
+
+def load_level(path: str | Path, level: int = 0, name: str | None = None) -> UniformVolume:
+    """Level `level` (0: full resolution) of the image at `path`, read brick by brick into memory."""
+    image = open_multiscale(path)
+    if not 0 <= level < len(image.levels):
+        raise VolrenError(f"{path}: no level {level}; the image has levels 0 to {len(image.levels) - 1}")
+    info = image.levels[level]
+    size = math.prod(info.shape) * info.dtype.itemsize
+    if size > MAX_IN_MEMORY_BYTES:
+        coarse = next((k for k, lv in enumerate(image.levels) if math.prod(lv.shape) * lv.dtype.itemsize
+                       <= MAX_IN_MEMORY_BYTES), None)  # fmt: skip
+        hint = f"; level {coarse} fits" if coarse is not None else ""
+        raise VolrenError(f"{path}: level {level} is {size / 2**30:.1f} GiB, more than {MAX_IN_MEMORY_BYTES >> 30} GiB "
+                          f"read whole{hint}")  # fmt: skip
+    array = image.array(level)
+    values = np.empty(info.shape, info.dtype)
+    lead = (0,) * image.leading
+    for index, where in _level_bricks(info):
+        try:
+            values[where] = array[lead + where]
+        except Exception as exc:  # noqa: BLE001 - a codec's error, whatever its type, names the brick
+            key = ".".join(str(k) for k in index)
+            raise VolrenError(f"{path}: level {info.key!r}, brick {key}: cannot be read ({type(exc).__name__}: "
+                              f"{' '.join(str(exc).split())[:160]})") from None  # fmt: skip
+    return UniformVolume(values, info.spacing, info.origin, name=name or image.name)
+
+
+def _level_bricks(info: LevelInfo) -> Iterator[tuple[tuple[int, ...], tuple[slice, ...]]]:
+    """(brick index, its slices) over a level, for any brick shape."""
+    counts = [math.ceil(n / c) for n, c in zip(info.shape, info.chunks, strict=True)]
+    for index in np.ndindex(*counts):
+        yield index, tuple(slice(k * c, min((k + 1) * c, n)) for k, c, n in zip(index, info.chunks, info.shape,
+                                                                                   strict=True))  # fmt: skip
+
+
+# ------------------------------------------------------------------------------------ writing
+def save_ome_zarr(volume: UniformVolume, path: str | Path, chunk: int = DEFAULT_CHUNK, levels: int | None = None,
+                  progress: Progress | None = None) -> int:  # fmt: skip
+    """Write `volume` as an OME-Zarr pyramid at `path` (a new folder; an old one is replaced only
+    once the new one is complete); returns the number of levels written."""
+    zarr = require_zarr()
+    path = Path(path)
+    if not (isinstance(chunk, int) and 2 <= chunk <= 1024):
+        raise VolrenError(f"{path}: bricks must be 2 to 1024 samples a side, got {chunk!r}")
+    count = levels if levels is not None else default_levels(volume.values.shape, chunk)
+    if not path.absolute().parent.is_dir():
+        raise VolrenError(f"{path}: the folder {path.absolute().parent} does not exist")
+    partial = path.with_name(f".{path.name}.partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    total = sum(_bricks((max(1, n >> k) for n in volume.values.shape), chunk) for k in range(count))
+    done = 0
+    try:
+        group = zarr.open_group(str(partial), mode="w", zarr_format=2)
+        datasets, ranges = [], []
+        for index, level in enumerate(pyramid(volume.values, volume.spacing, volume.origin, count)):
+            array = group.create_array(str(index), shape=level.values.shape, chunks=(chunk,) * 3,
+                                       dtype=level.values.dtype, fill_value=0)  # fmt: skip
+            level_ranges = []
+            for _, where in brick_slices(level.values.shape, chunk):
+                brick = level.values[where]
+                array[where] = brick
+                level_ranges.append(value_range(brick))
+                done += 1
+                if progress is not None:
+                    progress(min(done / total, 1.0))
+            ranges.append(level_ranges)
+            datasets.append({"path": str(index), "coordinateTransformations": [
+                {"type": "scale", "scale": list(level.spacing[::-1])},
+                {"type": "translation", "translation": list(level.origin[::-1])}]})
+        group.attrs["multiscales"] = [{
+            "version": NGFF_WRITTEN, "name": volume.name, "type": "2x2x2 block mean",
+            "axes": [{"name": a, "type": "space"} for a in "zyx"], "datasets": datasets}]
+        group.attrs[VOLREN_KEY] = {"version": 1, "brick_ranges": [[None if r is None else list(r) for r in level]
+                                                                    for level in ranges]}  # fmt: skip
+    except VolrenError:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
+    except (OSError, ValueError) as exc:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise VolrenError(f"{path}: cannot write the OME-Zarr image: {' '.join(str(exc).split())[:200]}") from None
+    except BaseException:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
+    if path.is_dir():
+        shutil.rmtree(path)
+    elif path.exists():
+        path.unlink()
+    partial.rename(path)
+    return count
+
+
+def _bricks(shape, chunk: int) -> int:
+    return math.prod(math.ceil(n / chunk) for n in shape)

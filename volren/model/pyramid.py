@@ -1,0 +1,90 @@
+"""A multiresolution pyramid of a uniform volume, as OME-Zarr stores it: each level the 2x2x2
+block means of the one below, and the value range of every brick (chunk) of every level.
+
+Why block means (not `model.downsample`'s vertex-centred filter): OME-Zarr places voxels by a
+scale and a translation per level, with voxel centres; a 2x2x2 mean sits at the centre of its
+block, half a fine voxel in from the block's first sample, which the translation says exactly.
+An odd last sample along an axis has no partner and is left out of the coarser level (as
+dask's `coarsen(trim_excess=True)`), so the coarser bounds lie inside the finer ones.
+
+The brick ranges let a renderer skip a brick that the TF makes transparent without reading it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.errors import VolrenError
+
+#: Bricks of 64^3 samples: 512 KiB of uint16, small enough to stream, large enough to render.
+DEFAULT_CHUNK = 64
+
+
+@dataclass(frozen=True)
+class Level:
+    """One level: values[k, j, i] with spacing and origin in (x, y, z), as a `UniformVolume`."""
+
+    values: NDArray
+    spacing: tuple[float, float, float]
+    origin: tuple[float, float, float]
+
+
+def block_mean(values: NDArray) -> NDArray:
+    """The 2x2x2 block means (odd last samples left out), in the input's type: rounded to the
+    nearest integer for integer data (so uint16 stays uint16), NaN where a block holds one."""
+    nz, ny, nx = (n - n % 2 for n in values.shape)
+    blocks = values[:nz, :ny, :nx].astype(np.float64).reshape(nz // 2, 2, ny // 2, 2, nx // 2, 2)
+    means = blocks.mean(axis=(1, 3, 5))
+    if np.issubdtype(values.dtype, np.integer):
+        info = np.iinfo(values.dtype)
+        return np.clip(np.rint(means), info.min, info.max).astype(values.dtype)
+    return means.astype(values.dtype)
+
+
+def default_levels(shape: tuple[int, ...], chunk: int) -> int:
+    """Levels until the coarsest fits in one brick (or an axis would drop below 2 samples)."""
+    levels, dims = 1, list(shape)
+    while max(dims) > chunk and min(dims) >= 4:
+        dims = [n // 2 for n in dims]
+        levels += 1
+    return levels
+
+
+def pyramid(values: NDArray, spacing: tuple[float, float, float], origin: tuple[float, float, float],
+            levels: int) -> Iterator[Level]:  # fmt: skip
+    """The `levels` levels from the full resolution down, each made from the one before."""
+    if levels < 1:
+        raise VolrenError(f"a pyramid needs at least one level, got {levels}")
+    level = Level(values, spacing, origin)
+    yield level
+    for index in range(1, levels):
+        if min(level.values.shape) < 4:
+            raise VolrenError(f"level {index} would have fewer than 2 samples along an axis (level {index - 1} is "
+                              f"{'x'.join(map(str, level.values.shape[::-1]))}); ask for fewer levels")  # fmt: skip
+        coarse_spacing = tuple(2 * s for s in level.spacing)
+        coarse_origin = tuple(o + 0.5 * s for o, s in zip(level.origin, level.spacing, strict=True))
+        level = Level(block_mean(level.values), coarse_spacing, coarse_origin)  # type: ignore[arg-type]
+        yield level
+
+
+def brick_slices(shape: tuple[int, ...], chunk: int) -> Iterator[tuple[tuple[int, int, int], tuple[slice, ...]]]:
+    """(brick index (kz, ky, kx), the brick's slices) over a level, in C order of the brick grid."""
+    counts = [math.ceil(n / chunk) for n in shape]
+    for kz in range(counts[0]):
+        for ky in range(counts[1]):
+            for kx in range(counts[2]):
+                index = (kz, ky, kx)
+                yield index, tuple(slice(k * chunk, min((k + 1) * chunk, n)) for k, n in zip(index, shape, strict=True))
+
+
+def value_range(brick: NDArray) -> tuple[float, float] | None:
+    """(min, max) of a brick's finite values; None when it has none."""
+    if np.issubdtype(brick.dtype, np.integer):
+        return float(brick.min()), float(brick.max())
+    finite = brick[np.isfinite(brick)]
+    return (float(finite.min()), float(finite.max())) if finite.size else None
