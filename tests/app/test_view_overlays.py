@@ -251,7 +251,7 @@ def test_view_direction_actions_sit_in_the_view_menu_and_toolbar_disabled_withou
     assert [a.text() for a in actions.values()] == list(EXPECTED)
     assert window.view_direction_menu.title().replace("&", "") == "View direction"
     assert window.view_direction_menu.menuAction() in window.view_menu.actions()
-    assert window.view_direction_menu.actions() == list(actions.values())
+    assert window.view_direction_menu.actions()[:6] == list(actions.values())
     assert all(a in window.toolbar.actions() for a in actions.values())
     assert not any(a.isEnabled() for a in actions.values()), "no volume: nothing to look at"
     before = window.state.camera
@@ -260,6 +260,29 @@ def test_view_direction_actions_sit_in_the_view_menu_and_toolbar_disabled_withou
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         window.files.apply_loaded(LoadedInput(box_volume(), TransferFunction1D.ramp(0, 2), source="box"), "fake_2d")
     assert all(a.isEnabled() for a in actions.values())
+
+
+def test_anatomical_views_are_offered_where_the_data_says_how_the_patient_lies(window, fake_2d, qtbot):
+    """Issue 23: A/P/L/R/S/I where the data has a patient orientation (here LPS, as DICOM)."""
+    actions = window.anatomical_actions
+    assert list(actions) == ["A", "P", "L", "R", "S", "I"]
+    assert all(a in window.view_direction_menu.actions() for a in actions.values())
+    with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        window.files.apply_loaded(LoadedInput(box_volume(), TransferFunction1D.ramp(0, 2), source="box"), "fake_2d")
+    assert not any(a.isEnabled() for a in actions.values()) and "nothing of how the patient lies" in actions["A"].toolTip()
+    values = box_volume().values
+    patient = UniformVolume(values, spacing=(0.4, 0.2, 0.3), patient_axes=("L", "P", "S"), name="ct")
+    with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        window.files.apply_loaded(LoadedInput(patient, TransferFunction1D.ramp(0, 2), source="ct"), "fake_2d")
+    assert all(a.isEnabled() for a in actions.values())
+    assert actions["S"].toolTip() == "View from the patient's superior side (A up)"
+    distance = window.state.camera.distance
+    for letter, direction, up in (("A", (0, 1, 0), (0, 0, 1)), ("L", (-1, 0, 0), (0, 0, 1)), ("I", (0, 0, 1), (0, -1, 0))):
+        with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+            actions[letter].trigger()
+        camera = window.state.camera
+        assert np.allclose(camera.direction, direction, atol=1e-12) and camera.view_up == tuple(map(float, up)), letter
+        assert np.allclose(camera.focal_point, centre(patient.bounds)) and camera.distance == pytest.approx(distance)
 
 
 def test_view_direction_actions_turn_the_camera_to_the_cropped_volumes_centre(shown, qtbot):

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from volren.errors import VolrenError, VolrenWarning
 from volren.io import _pv
 from volren.io.formats.base import Grid, is_identity
+from volren.model.anatomy import patient_axes
 from volren.model.tet_repair import repair_tets
 from volren.model.volume import TetVolume, UniformVolume, Volume, merged_tets_note
 
@@ -194,6 +195,8 @@ def grid_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name
 def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
     """The model volume; a rotated grid is drawn axis-aligned, negative spacing flips the axis."""
     notes = list(grid.notes)
+    flips = tuple(s < 0 for s in grid.spacing)
+    anatomy = patient_axes(grid.direction, grid.space, flips)
     if not is_identity(grid.direction):
         matrix = np.round(np.asarray(grid.direction), 4).tolist()
         notes.append(f"{name}: ignored the direction matrix {matrix}; the volume is drawn axis-aligned")
@@ -207,7 +210,7 @@ def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
             values = np.flip(values, axis=2 - axis)
     volume = UniformVolume(
         np.ascontiguousarray(values), tuple(spacing), tuple(origin), name=name, notes=tuple(notes + grid.info),
-        scalars=grid.scalars, arrays=grid.arrays,
+        scalars=grid.scalars, arrays=grid.arrays, patient_axes=anatomy,
     )
     _report(volume, notes)
     return volume

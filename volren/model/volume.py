@@ -97,6 +97,8 @@ class UniformVolume:
     #: offers ("" and () for volumes made in memory): what the app's array chooser lists.
     scalars: str = ""
     arrays: tuple[str, ...] = ()
+    #: the anatomical letter +x, +y, +z point toward ("L", "P", "S"), where the file says (`model.anatomy`)
+    patient_axes: tuple[str, str, str] | None = None
     value_range: tuple[float, float] = field(init=False)
     nonfinite_count: int = field(init=False)
 

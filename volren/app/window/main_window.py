@@ -26,7 +26,13 @@ from PyQt5.QtWidgets import QAction, QLabel, QMainWindow, QMessageBox, QToolBar,
 
 from volren.app.core.loading import load_input
 from volren.app.core.state import Change, ViewState
-from volren.app.core.view_directions import VIEW_DIRECTIONS, ViewDirection, look_along
+from volren.app.core.view_directions import (
+    ANATOMICAL_SIDES,
+    VIEW_DIRECTIONS,
+    ViewDirection,
+    anatomical_view,
+    look_along,
+)
 from volren.app.files.load_task import LoadFunction
 from volren.app.files.recent_files import RecentFiles
 from volren.app.rendering.render_service import Frame, RendererFactory, RenderService, _registry_factory
@@ -43,6 +49,10 @@ from volren.app.window.screenshot_actions import ScreenshotActions
 from volren.app.window.time_control import TimeControl
 from volren.renderers.registry import RendererRegistry
 from volren.renderers.registry import registry as default_registry
+
+#: Why the A/P/L/R/S/I views are disabled.
+NO_PATIENT_ORIENTATION = ("The data says nothing of how the patient lies (DICOM, or NRRD in an LPS or RAS space, "
+                          "axial, coronal or sagittal)")  # fmt: skip
 
 
 class MainWindow(QMainWindow):
@@ -122,6 +132,8 @@ class MainWindow(QMainWindow):
         self.reset_action.setToolTip("Reset the camera (azimuth 30, elevation 20, zoom 1)  [R]")
         #: View > View direction and the toolbar's "+X" ... "-Z": ParaView's view-direction buttons.
         self.view_direction_actions = {view.name: self._view_direction_action(view) for view in VIEW_DIRECTIONS}
+        #: View > View direction > A, P, L, R, S, I: where the data says how the patient lies.
+        self.anatomical_actions = {letter: self._anatomical_action(letter) for letter in ANATOMICAL_SIDES}
         #: View > Outline, Orientation axes, Colour legend: the viewport's overlays, by `OverlaySettings` name.
         overlays = (("outline", "Outline"), ("axes", "Orientation axes"), ("legend", "Colour legend"))
         self.overlay_actions = {name: self._overlay_action(name, text) for name, text in overlays}
@@ -131,6 +143,19 @@ class MainWindow(QMainWindow):
         action.setToolTip(view.description)
         action.setEnabled(False)  # until a volume is loaded
         return action
+
+    def _anatomical_action(self, letter: str) -> QAction:
+        action = QAction(f"{letter} ({ANATOMICAL_SIDES[letter]})", self,
+                         triggered=lambda _checked=False, x=letter: self.look_from_patient_side(x))  # fmt: skip
+        action.setEnabled(False)  # until a volume with a patient orientation is loaded
+        action.setToolTip(NO_PATIENT_ORIENTATION)
+        return action
+
+    def look_from_patient_side(self, letter: str) -> None:
+        """Turn the camera to look from the patient's `letter` side (A, P, L, R, S or I)."""
+        volume = self.state.volume
+        if volume is not None and getattr(volume, "patient_axes", None) is not None:
+            self.look_along(anatomical_view(letter, volume.patient_axes))
 
     def _overlay_action(self, name: str, text: str) -> QAction:
         action = QAction(text, self, checkable=True)
@@ -153,6 +178,8 @@ class MainWindow(QMainWindow):
         self.view_menu.addAction(self.reset_action)
         self.view_direction_menu = self.view_menu.addMenu("View &direction")
         self.view_direction_menu.addActions(list(self.view_direction_actions.values()))
+        self.view_direction_menu.addSeparator()
+        self.view_direction_menu.addActions(list(self.anatomical_actions.values()))
         self.view_menu.addSeparator()
         self.view_menu.addActions(list(self.overlay_actions.values()))
         #: View > Edit crop box: the crop box's face handles over the frame, dragged to crop.
@@ -191,6 +218,10 @@ class MainWindow(QMainWindow):
             self.setWindowTitle(f"volren - {self.state.source}" if self.state.source else "volren")
             for action in self.view_direction_actions.values():
                 action.setEnabled(self.state.volume is not None)
+            axes = getattr(self.state.volume, "patient_axes", None)
+            for letter, action in self.anatomical_actions.items():
+                action.setEnabled(axes is not None)
+                action.setToolTip(anatomical_view(letter, axes).description if axes else NO_PATIENT_ORIENTATION)
         self.renderers.on_state_change(change)
         self.quality.on_state_change(change)
 

@@ -42,6 +42,8 @@ class Grid:
     info: list[str] = field(default_factory=list)
     scalars: str = ""
     arrays: tuple[str, ...] = ()
+    #: the patient coordinate system `direction` is given in ("LPS" for DICOM), if the format has one
+    space: str | None = None
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,7 @@ from volren.io._pv import DatasetView, ReadResult
 from volren.io.formats.base import FileFormat, Grid, Inspection, quote, read_head
 from volren.io.formats.geometry import check_declared, parse_numbers
 from volren.io.limits import DataLayout, product
+from volren.model.anatomy import NRRD_SPACES
 
 _TYPES = {
     1: ("signed char", "int8", "int8_t", "uchar", "unsigned char", "uint8", "uint8_t"),
@@ -125,6 +126,7 @@ def _geometry(fields: dict[str, str], dims: tuple[int, ...]) -> dict:
     vtk_splits_first = len(dims) > 3 or (bool(dims) and dims[0] <= 9)
     return {
         "direction": direction,
+        "space": NRRD_SPACES.get(fields.get("space", "").strip().lower()),  # a patient system, if named
         # three spatial axes: as declared (checked in `inspect`; negative mirrors the axis); else
         # the first three, NaN for non-spatial ones (vector components) made 1
         "spacing": tuple(float(s) for s in spacing[:3]) if len(dims) == 3 and first_is_spatial
@@ -271,7 +273,7 @@ def read(path: Path, inspection: Inspection) -> Grid | None:
     values = numbers.astype(dtype).reshape(nz, ny, nx)
     origin = inspection.facts.get("origin") or (0.0, 0.0, 0.0)
     spacing = inspection.facts["spacing"] if len(sizes) == 3 else (*inspection.facts["spacing"][:2], 1.0)
-    return Grid(values, spacing, origin, inspection.facts.get("direction"))
+    return Grid(values, spacing, origin, inspection.facts.get("direction"), space=inspection.facts.get("space"))
 
 
 def check_output(path: Path, view: DatasetView, result: ReadResult, inspection: Inspection) -> DatasetView:
@@ -293,6 +295,7 @@ def adjust(grid: Grid, result: ReadResult, inspection: Inspection) -> Grid:
     if inspection.facts.get("swap_bytes"):
         grid.values = grid.values.byteswap()
     grid.direction = inspection.facts.get("direction")
+    grid.space = inspection.facts.get("space")
     return grid
 
 
