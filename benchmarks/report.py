@@ -30,6 +30,8 @@ SECTIONS = (
     ("plugins.md", "The plugin renderers (shear-warp, object order)",
      "How do the seeds' CPU algorithms compare with VTK and the slicer at equal error, and with their papers' tables?"),
     ("app.md", "Desktop app responsiveness", "How long from a TF edit to the new frame; frames per second."),
+    ("first_preview.md", "The first gesture after opening", "How long does the first preview of a gesture wait "
+     "when it is drawn by another renderer than the still frames? (`python -m benchmarks.first_preview`)"),
     ("oneshot.md", "One-shot renders", "Where does a `volren render`'s wall time go, and how much slower is the "
      "first run than the next? (`python -m benchmarks.oneshot`)"),
     ("gpu.md", "On a GPU", "How fast are the OpenGL renderers on a real GPU, at what error? "
