@@ -181,3 +181,28 @@ def test_a_series_with_a_broken_step_reports_it_and_keeps_what_is_shown(make_win
     title, text = error_boxes[0]
     assert title == "Cannot show the time step" and "step_2.vti" in text and "\n" not in text
     assert w.state.volume is shown and w.time.shown_step == 0
+
+
+# ------------------------------------------------------------------------------- OME-Zarr levels
+def test_an_ome_zarr_image_opens_coarse_at_once_and_refines_to_full_resolution(make_window, ini, fake_renderers,
+                                                                               qtbot, tmp_path):  # fmt: skip
+    """Issue 24: the app opens at the coarsest level at once and refines (here in the background,
+    level after level, the view kept)."""
+    pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
+    from volren.io.ome_zarr_io import save_ome_zarr
+
+    rng = np.random.default_rng(3)
+    full = UniformVolume(rng.integers(0, 1000, (20, 24, 28)).astype(np.uint16), spacing=(1.0, 1.0, 2.0), name="c")
+    path = tmp_path / "cells.zarr"
+    save_ome_zarr(full, path, chunk=8, levels=3)
+    w = make_window(settings=ini)
+    shown = []
+    w.state.subscribe(lambda change: shown.append(w.state.volume.dimensions) if change.what == "volume" else None)
+    with qtbot.waitSignal(w.files.loadFinished, timeout=TIMEOUT_MS):
+        w.files.open_input(path, renderer="fake")
+    tf, camera = w.state.transfer_function, w.state.camera
+    qtbot.waitUntil(lambda: w.state.volume.dimensions == (28, 24, 20), timeout=TIMEOUT_MS)
+    assert shown == [(7, 6, 5), (14, 12, 10), (28, 24, 20)]  # coarsest first, then each finer level
+    np.testing.assert_array_equal(w.state.volume.values, full.values)
+    assert w.state.transfer_function is tf and w.state.camera == camera
+    assert w.state.source == "cells.zarr (level 0)" and not w.files.refiner.pending

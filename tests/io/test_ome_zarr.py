@@ -10,7 +10,7 @@ import shutil
 import numpy as np
 import pytest
 
-from volren.errors import VolrenError
+from volren.errors import VolrenError, VolrenWarning
 from volren.io import load_volume
 from volren.model.volume import UniformVolume
 
@@ -151,7 +151,7 @@ def test_a_level_too_large_for_memory_is_refused_naming_one_that_fits(tmp_path, 
     path = tmp_path / "cells.zarr"
     save_ome_zarr(volume, path, chunk=8, levels=3)
     monkeypatch.setattr(ome_zarr_io, "MAX_IN_MEMORY_BYTES", 2 * 15 * 10 * 18)
-    with pytest.raises(VolrenError, match="level 0 is 0.0 GiB, more than 0 GiB read whole; level 1 fits"):
+    with pytest.raises(VolrenError, match="level 0 is 45.5 KiB, more than the 5.3 KiB allowed read whole; level 1 fits"):
         load_level(path, 0)
 
 
@@ -173,3 +173,29 @@ def test_volren_convert_writes_the_pyramid_and_refuses_what_it_cannot(tmp_path, 
         assert main(["convert", *argv]) == 1
         assert message in capsys.readouterr().err
     np.testing.assert_array_equal(load_volume(out).values, volume.values)  # a failed --force kept the old one
+
+
+@pytest.mark.filterwarnings("default::volren.errors.VolrenWarning")  # the CLI prints it as one line
+def test_the_level_drawn_is_the_finest_within_the_memory_allowed(tmp_path, volume, capsys):
+    """Issue 24, out of core on one machine (its first step): --memory bounds what is read, and the
+    finest level within it is drawn, saying so in one line; --level names one."""
+    from volren.cli.main import main
+    from volren.io.volume_io import load_ome_zarr
+
+    path = tmp_path / "cells.zarr"
+    save_ome_zarr(volume, path, chunk=8, levels=3)
+    level_1 = load_level(path, 1)
+    with pytest.warns(VolrenWarning, match="cells.zarr: its full resolution is 45.5 KiB, more than the 20.0 KiB "
+                      "allowed; rendering level 1, the finest that fits"):  # fmt: skip
+        chosen = load_ome_zarr(path, memory=20 * 1024)
+    np.testing.assert_array_equal(chosen.values, level_1.values)
+    flags = ["--renderer", "vtk", "--size", "16", "--quality", "default"]
+    assert main(["render", str(path), "--level", "1", *flags, "--save-array", str(tmp_path / "a.npy")]) == 0
+    capsys.readouterr()
+    assert main(["render", str(path), "--memory", "20KiB", *flags, "--save-array", str(tmp_path / "b.npy")]) == 0
+    assert "volren: warning: cells.zarr: its full resolution is 45.5 KiB" in capsys.readouterr().err
+    np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+    assert main(["render", str(path), *flags, "--memory", "500", "-o", str(tmp_path / "x.png")]) == 1
+    assert "even the coarsest level (630 bytes) is more than the memory allowed (500 bytes)" in capsys.readouterr().err
+    assert main(["render", str(path), *flags, "--level", "7", "-o", str(tmp_path / "x.png")]) == 1
+    assert "no level 7; the image has levels 0 to 2" in capsys.readouterr().err

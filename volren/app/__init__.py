@@ -39,6 +39,7 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `movie_export`: records an orbit of the view into MP4 or GIF off the GUI thread.
   - `movie_dialog`: the Export Movie dialog.
   - `series_steps`: a time series' steps read off the GUI thread, neighbours ahead, a few kept.
+  - `level_refiner`: an OME-Zarr image's finer levels read in the background after the coarsest.
   - `raw_dialog`: the layout of a headerless raw file (shape, type, byte order, spacing).
 - `tf_editor/` (Qt):
   - `panel`: the TF dock, the 1D and 2D editors in tabs.

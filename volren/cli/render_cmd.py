@@ -92,6 +92,11 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--time-step", type=int, metavar="N",
                    help="for a time series INPUT (a .pvd, or a folder of volume files): the step to render, from 0 "
                         "(default 0)")  # fmt: skip
+    p.add_argument("--level", type=int, metavar="N",
+                   help="for an OME-Zarr INPUT: the pyramid level to render, 0 the full resolution (default: the "
+                        "finest that fits in --memory)")  # fmt: skip
+    p.add_argument("--memory", metavar="SIZE",
+                   help="for an OME-Zarr INPUT: the most its level may take in memory, e.g. 2GB (default 8GB)")
     p.add_argument("--scalars", help="the array to render: NAME, or NAME:magnitude / NAME:x (y, z, 0, 1, ...) for a "
                    "vector's length or one component (a vector shows its magnitude by default)")
     p.add_argument("--size", type=image_size, help="image size W or WxH (default 512)")
@@ -192,6 +197,23 @@ def _step_path(args: argparse.Namespace) -> str:
     return str(series.steps[step])
 
 
+def _zarr_level(args: argparse.Namespace, path: str):
+    """The OME-Zarr level --level names, or the finest within --memory; the flags refused for
+    other inputs (None then: load INPUT as any volume)."""
+    from volren.io.ome_zarr_io import is_ome_zarr, parse_memory
+    from volren.io.volume_io import load_ome_zarr
+
+    if not is_ome_zarr(path):
+        flag = "--level" if args.level is not None else "--memory" if args.memory is not None else None
+        if flag:
+            raise VolrenError(f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL); {path} is not one")
+        return None
+    if args.scalars is not None:
+        raise VolrenError(f"{path}: an OME-Zarr image holds one field; --scalars does not apply")
+    memory = parse_memory(args.memory) if args.memory is not None else None
+    return load_ome_zarr(path, args.level, memory)
+
+
 def _load_input(args: argparse.Namespace):
     from volren import io
 
@@ -203,7 +225,9 @@ def _load_input(args: argparse.Namespace):
             byte_order=args.raw_byte_order or "little",
             spacing=_triple(args.raw_spacing or "1,1,1", "--raw-spacing"),
         )
-    return io.load_volume(_step_path(args), **kwargs)
+    path = _step_path(args)
+    zarr_level = None if args.raw_shape else _zarr_level(args, path)
+    return zarr_level if zarr_level is not None else io.load_volume(path, **kwargs)
 
 
 def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:

@@ -175,18 +175,57 @@ def _brick_ranges(extra: Any, levels: Sequence[LevelInfo]) -> tuple | None:
     return tuple(out)
 
 
-def load_level(path: str | Path, level: int = 0, name: str | None = None) -> UniformVolume:
-    """Level `level` (0: full resolution) of the image at `path`, read brick by brick into memory."""
+def level_bytes(level: LevelInfo) -> int:
+    return math.prod(level.shape) * level.dtype.itemsize
+
+
+def finest_level_within(image: Multiscale, budget: int) -> int | None:
+    """The finest level whose values take at most `budget` bytes (None: not even the coarsest)."""
+    return next((k for k, level in enumerate(image.levels) if level_bytes(level) <= budget), None)
+
+
+def human_size(size: float) -> str:
+    """Bytes as people read them: 512 KiB, 16.0 MiB, 1.5 GiB."""
+    for unit, scale in (("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)):
+        if size >= scale:
+            return f"{size / scale:.1f} {unit}"
+    return f"{int(size)} bytes"
+
+
+def parse_memory(text: str) -> int:
+    """Bytes from "2GB", "512MB", "1.5GiB", "800k" or a plain number of bytes."""
+    units = {"": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
+    cleaned = text.strip().lower().removesuffix("ib").removesuffix("b")
+    number, unit = (cleaned[:-1], cleaned[-1]) if cleaned and cleaned[-1] in "kmgt" else (cleaned, "")
+    try:
+        value = float(number) * units[unit]
+    except ValueError:
+        raise VolrenError(f"a memory size must look like 2GB, 512MB or 1.5GiB, got {text!r}") from None
+    if not math.isfinite(value) or value < 1:
+        raise VolrenError(f"a memory size must be positive, got {text!r}")
+    return int(value)
+
+
+def load_level(path: str | Path, level: int | None = 0, name: str | None = None,
+               memory: int = MAX_IN_MEMORY_BYTES) -> UniformVolume:  # fmt: skip
+    """Level `level` of the image at `path` (0: full resolution; None: the finest that fits in
+    `memory` bytes), read brick by brick into memory."""
     image = open_multiscale(path)
+    if level is None:
+        level = finest_level_within(image, memory)
+        if level is None:
+            coarsest = image.levels[-1]
+            raise VolrenError(f"{path}: even the coarsest level ({human_size(level_bytes(coarsest))}) is more than "
+                              f"the memory allowed ({human_size(memory)})")  # fmt: skip
     if not 0 <= level < len(image.levels):
         raise VolrenError(f"{path}: no level {level}; the image has levels 0 to {len(image.levels) - 1}")
     info = image.levels[level]
-    size = math.prod(info.shape) * info.dtype.itemsize
-    if size > MAX_IN_MEMORY_BYTES:
-        coarse = next((k for k, lv in enumerate(image.levels) if math.prod(lv.shape) * lv.dtype.itemsize
-                       <= MAX_IN_MEMORY_BYTES), None)  # fmt: skip
+    size = level_bytes(info)
+    limit = min(memory, MAX_IN_MEMORY_BYTES)
+    if size > limit:
+        coarse = finest_level_within(image, limit)
         hint = f"; level {coarse} fits" if coarse is not None else ""
-        raise VolrenError(f"{path}: level {level} is {size / 2**30:.1f} GiB, more than {MAX_IN_MEMORY_BYTES >> 30} GiB "
+        raise VolrenError(f"{path}: level {level} is {human_size(size)}, more than the {human_size(limit)} allowed "
                           f"read whole{hint}")  # fmt: skip
     array = image.array(level)
     values = np.empty(info.shape, info.dtype)

@@ -9,12 +9,13 @@ instead); what the reader returned is checked again; then the dataset becomes a 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
 from numpy.typing import DTypeLike
 
-from volren.errors import VolrenError, file_error
+from volren.errors import VolrenError, VolrenWarning, file_error
 from volren.io import _pv, reader_messages
 from volren.io.dataset import grid_from_view, tets_from_view, volume_from_grid
 from volren.io.formats import SUPPORTED, find_format
@@ -42,6 +43,23 @@ def _existing(path: Path) -> None:
         raise file_error(path, "not a regular file or folder")
 
 
+def load_ome_zarr(path: str | Path, level: int | None = None, memory: int | None = None) -> UniformVolume:
+    """An OME-Zarr image's level `level`, or (None) the finest that fits in `memory` bytes (default
+    `ome_zarr_io.MAX_IN_MEMORY_BYTES`), with a one-line warning when that is not the finest."""
+    from volren.io import ome_zarr_io
+
+    budget = memory if memory is not None else ome_zarr_io.MAX_IN_MEMORY_BYTES
+    name = str(path).rstrip("/").rsplit("/", 1)[-1] if ome_zarr_io.is_url(path) else Path(path).name
+    if level is None:
+        image = ome_zarr_io.open_multiscale(path)
+        level = ome_zarr_io.finest_level_within(image, budget)
+        if level:
+            whole = ome_zarr_io.human_size(ome_zarr_io.level_bytes(image.levels[0]))
+            warnings.warn(f"{name}: its full resolution is {whole}, more than the {ome_zarr_io.human_size(budget)} "
+                          f"allowed; rendering level {level}, the finest that fits", VolrenWarning, stacklevel=2)  # fmt: skip
+    return ome_zarr_io.load_level(path, level, name=name, memory=budget)
+
+
 def load_volume(
     path: str | Path,
     scalars: str | None = None,
@@ -52,6 +70,7 @@ def load_volume(
     spacing: Sequence[float] = (1.0, 1.0, 1.0),
     origin: Sequence[float] = (0.0, 0.0, 0.0),
     header_bytes: int = 0,
+    level: int | None = None,
 ) -> UniformVolume | TetVolume:
     """Load a volume file; the volume's `name` is the file name (the folder's, for DICOM).
 
@@ -61,19 +80,20 @@ def load_volume(
     `byte_order` ('little', 'big'), `spacing`, `origin` and `header_bytes` describing it.
     `scalars` names the array to render; None takes the active (else first) point array.
 
-    An OME-Zarr image (a folder, or an fsspec URL ending in .zarr) gives its full-resolution level
-    (`volren.io.ome_zarr_io`).
+    An OME-Zarr image (a folder, or an fsspec URL ending in .zarr) gives its level `level`, or (None)
+    its finest level that fits in memory (`load_ome_zarr`); `level` applies to nothing else.
 
     Files with a header are read in a child process (`volren.io.isolation`): a reader that
     crashes on a corrupt file is a one-line error here, not the end of this process.
     """
-    from volren.io.ome_zarr_io import is_ome_zarr, is_url, load_level
+    from volren.io.ome_zarr_io import is_ome_zarr
 
     if is_ome_zarr(path) and shape is None:
         if scalars is not None:
             raise file_error(path, f"an OME-Zarr image holds one field; there is no array {scalars!r} to choose")
-        name = str(path).rstrip("/").rsplit("/", 1)[-1] if is_url(path) else Path(path).name
-        return load_level(path, 0, name=name)
+        return load_ome_zarr(path, level)
+    if level is not None:
+        raise file_error(path, f"level={level} applies to OME-Zarr images (a .zarr folder or URL) only")
     path = Path(path)
     _existing(path)
     if shape is not None:  # headerless raw: numpy reads it, nothing native to isolate

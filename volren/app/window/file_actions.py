@@ -19,6 +19,7 @@ from PyQt5.QtWidgets import QAction, QFileDialog, QLabel, QMainWindow, QProgress
 
 from volren.app.core.loading import LoadedInput, PathArg
 from volren.app.core.state import ViewState, default_camera
+from volren.app.files.level_refiner import LevelRefiner
 from volren.app.files.load_task import Loader, LoadFunction
 from volren.app.files.raw_dialog import RawDialog
 from volren.app.files.recent_files import RecentFiles, RecentFilesMenu
@@ -27,6 +28,7 @@ from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
 from volren.app.window.time_control import TimeControl
 from volren.errors import VolrenError
+from volren.io.ome_zarr_io import is_ome_zarr
 from volren.io.series_io import is_series, load_series
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
@@ -80,6 +82,9 @@ class FileActions(QObject):
         self._scalars: str | None = None  # what the shown volume was opened with
         if time is not None:
             time.stepShown.connect(lambda _index, path: scenes.remember_volume_file(path, self._scalars))
+        self.refiner = LevelRefiner(parent=self)
+        self.refiner.levelReady.connect(self._on_level_ready)
+        self.refiner.failed.connect(lambda message: report_error("Cannot refine the image", message))
         self.loader = Loader(window, load)
         self.loader.loaded.connect(self._on_loaded)
         self.loader.failed.connect(self._on_load_failed)
@@ -139,7 +144,13 @@ class FileActions(QObject):
             except VolrenError as exc:
                 self._report_error("Cannot open", str(exc))
                 return
-        raw = None
+        raw, refine = None, None
+        if path is not None and series is None and is_ome_zarr(path):
+            try:
+                raw, refine = self._coarse_first(path)
+            except VolrenError as exc:
+                self._report_error("Cannot open", str(exc))
+                return
         if path is not None and Path(path).suffix.lower() == ".raw" and Path(path).is_file():
             raw = self.ask_raw_layout(path)  # a headerless file: the user says what it holds
             if raw is None:
@@ -149,8 +160,29 @@ class FileActions(QObject):
         if self._state.volume is None:
             self._viewport.placeholder = f"Opening {label}…"
             self._viewport.update()
-        context = {"path": path, "renderer": renderer, "series": series, "step": 0}
+        context = {"path": path, "renderer": renderer, "series": series, "step": 0, "refine": refine}
         self.loader.start(series.steps[0] if series else path, tf, scalars, context=context, raw=raw)
+
+    def _coarse_first(self, path: PathArg) -> tuple[dict[str, int] | None, tuple[str, list[int]] | None]:
+        """For an OME-Zarr image with levels finer than its coarsest within memory: read the
+        coarsest now and the finer ones after (`LevelRefiner`); (reader options, refinement)."""
+        from volren.io.ome_zarr_io import MAX_IN_MEMORY_BYTES, finest_level_within, open_multiscale
+
+        image = open_multiscale(path)
+        finest = finest_level_within(image, MAX_IN_MEMORY_BYTES)
+        coarsest = len(image.levels) - 1
+        if finest is None or finest >= coarsest:
+            return None, None  # one level to read (or none that fits: the load says so)
+        return {"level": coarsest}, (str(path), list(range(coarsest - 1, finest - 1, -1)))
+
+    def _on_level_ready(self, level: int, volume: object) -> None:
+        """A finer level of the OME-Zarr image shown: put it on screen with the view as it is."""
+        if self._state.volume is None:
+            return
+        left = len(self.refiner.pending)
+        self._state.show_step(volume, source=f"{self._state.source.split(' (level')[0]} (level {level})")  # type: ignore[arg-type]
+        more = f"; {left} finer level{'s' if left != 1 else ''} coming" if left else ""
+        self._window.statusBar().showMessage(f"Showing level {level} of the image{more}", 5000)
 
     def show_array(self, choice: str) -> bool:
         """Show another field of the file on screen (the Dataset panel's chooser): the file is read
@@ -275,6 +307,11 @@ class FileActions(QObject):
                 loaded = self._keeping_the_view(loaded)
             self.apply_loaded(loaded, context.get("renderer"))
             self._scalars = loaded.scalars
+            refine = context.get("refine")
+            if refine:
+                self.refiner.start(*refine)
+            elif not context.get("keep_view"):
+                self.refiner.cancel()
             if self._time is not None:
                 self._time.set_series(context.get("series"), loaded.volume, loaded.scalars, context.get("step", 0))
         if opened is not None and not (context or {}).get("keep_view"):
@@ -300,5 +337,6 @@ class FileActions(QObject):
             self.open_input(path)
 
     def shutdown(self, timeout_ms: int = 5000) -> None:
-        """Stop the running load at its next stage and wait for it."""
+        """Stop the running load at its next stage and wait for it (and for a level being read)."""
+        self.refiner.shutdown(timeout_ms)
         self.loader.shutdown(timeout_ms)

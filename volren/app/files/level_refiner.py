@@ -1,0 +1,105 @@
+"""An OME-Zarr image opens at its coarsest level at once and is refined level by level in the
+background, each finer level shown as it arrives (TF, camera and settings kept), up to the finest
+that fits in memory: the person sees the data in a moment instead of after the whole read.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from PyQt5.QtCore import QObject, QRunnable, QThreadPool, pyqtSignal, pyqtSlot
+
+from volren.app.core.loading import one_line_error, prepare_for_rendering
+from volren.model.volume import Volume
+
+#: read(path, level) -> that level, prepared for rendering.
+LevelReader = Callable[[str, int], Volume]
+
+
+def read_level(path: str, level: int) -> Volume:
+    from volren.io import load_volume
+
+    volume = load_volume(path, level=level)
+    prepare_for_rendering(volume)
+    return volume
+
+
+class _Signals(QObject):
+    done = pyqtSignal(int, int, object)  # serial, level, volume
+    failed = pyqtSignal(int, str)
+
+
+class _ReadTask(QRunnable):
+    def __init__(self, serial: int, path: str, level: int, read: LevelReader, signals: _Signals) -> None:
+        super().__init__()
+        self._serial, self._path, self._level, self._read, self._signals = serial, path, level, read, signals
+
+    def run(self) -> None:
+        try:
+            volume = self._read(self._path, self._level)
+        except BaseException as exc:  # noqa: BLE001 - every failure becomes a one-line message
+            self._emit("failed", one_line_error(exc, self._path))
+            return
+        self._emit("done", self._level, volume)
+
+    def _emit(self, signal: str, *payload: object) -> None:
+        try:
+            getattr(self._signals, signal).emit(self._serial, *payload)
+        except RuntimeError:  # the window closed while we read
+            pass
+
+
+class LevelRefiner(QObject):
+    """`start(path, levels)` reads `levels` (coarse to fine) one after the other and emits
+    `levelReady(level, volume)` for each; `cancel()` (or a new start) drops what is under way."""
+
+    levelReady = pyqtSignal(int, object)
+    failed = pyqtSignal(str)
+
+    def __init__(self, read: LevelReader = read_level, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._read = read
+        self._serial = 0
+        self._path = ""
+        self._levels: list[int] = []
+        self._pool = QThreadPool(self)
+        self._pool.setMaxThreadCount(1)
+        self._signals = _Signals(self)
+        self._signals.done.connect(self._on_done)
+        self._signals.failed.connect(self._on_failed)
+
+    @property
+    def pending(self) -> tuple[int, ...]:
+        """The levels still to come, the one being read first."""
+        return tuple(self._levels)
+
+    def start(self, path: str, levels: Sequence[int]) -> None:
+        self.cancel()
+        self._path, self._levels = str(path), list(levels)
+        self._next()
+
+    def cancel(self) -> None:
+        self._serial += 1
+        self._levels = []
+
+    def _next(self) -> None:
+        if self._levels:
+            self._pool.start(_ReadTask(self._serial, self._path, self._levels[0], self._read, self._signals))
+
+    @pyqtSlot(int, int, object)
+    def _on_done(self, serial: int, level: int, volume: object) -> None:
+        if serial != self._serial:
+            return
+        self._levels.pop(0)
+        self.levelReady.emit(level, volume)
+        self._next()
+
+    @pyqtSlot(int, str)
+    def _on_failed(self, serial: int, message: str) -> None:
+        if serial == self._serial:
+            self._levels = []
+            self.failed.emit(message)
+
+    def shutdown(self, timeout_ms: int = 30000) -> bool:
+        self.cancel()
+        return self._pool.waitForDone(timeout_ms)
