@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.io.json_text import read_json
-from volren.io.paraview_presets import _simplify, is_preset_data, preset_to_tf
+from volren.io.paraview_presets import is_preset_data, preset_to_tf, simplify_polyline
 
 OUT = Path(__file__).resolve().parents[1] / "volren" / "app" / "core" / "paraview_colormaps.json"
 #: Largest colour error (any channel) the simplified stops may have against VTK's interpolation.
@@ -50,7 +50,7 @@ def wanted(preset: Mapping[str, Any]) -> bool:
 def unit_stops(preset: Mapping[str, Any], source: Path) -> NDArray[np.float64]:
     """The preset's colours as (k, 4) [x, r, g, b] stops, x from 0 to 1, rounded to DIGITS."""
     colors = preset_to_tf(preset, source).color_points
-    colors = colors[_simplify(colors[:, 0], colors[:, 1:], TOLERANCE)]
+    colors = colors[simplify_polyline(colors[:, 0], colors[:, 1:], TOLERANCE)]
     lo, hi = colors[0, 0], colors[-1, 0]
     colors[:, 0] = (colors[:, 0] - lo) / (hi - lo) if hi > lo else np.linspace(0.0, 1.0, len(colors))
     colors = np.round(colors, DIGITS)

@@ -66,7 +66,7 @@ def _numbers(preset: Mapping[str, Any], key: str, width: int, path: Path, label:
     return arr
 
 
-def _simplify(x: NDArray, y: NDArray, tolerance: float) -> NDArray[np.int64]:
+def simplify_polyline(x: NDArray, y: NDArray, tolerance: float) -> NDArray[np.int64]:
     """Indices of the samples that keep linear interpolation within `tolerance` (Douglas-Peucker)."""
     keep = np.zeros(len(x), dtype=bool)
     keep[[0, -1]] = True
@@ -107,7 +107,7 @@ def sample(
             continue
         x = np.linspace(x0, x1, samples)
         y = table(x0, x1, samples)
-        keep = _simplify(x, y, tolerance)
+        keep = simplify_polyline(x, y, tolerance)
         xs.append(x[keep])
         ys.append(y[keep])
     if not xs:  # a single node
@@ -116,7 +116,7 @@ def sample(
     x, y = np.concatenate(xs), np.concatenate(ys)
     first = np.concatenate([[True], np.diff(x) > 0])  # intervals share their end points
     x, y = x[first], y[first]
-    keep = _simplify(x, y, 1e-12)  # drop nodes that sit on a straight line (e.g. linear midpoints)
+    keep = simplify_polyline(x, y, 1e-12)  # drop nodes that sit on a straight line (e.g. linear midpoints)
     return x[keep], y[keep]
 
 
