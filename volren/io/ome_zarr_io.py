@@ -52,6 +52,23 @@ def is_url(path: str | Path) -> bool:
     return "://" in str(path)
 
 
+#: Seconds an HTTP(S) read may wait on a server that does not answer: a one-line error, no hang.
+URL_TIMEOUT_S = 30.0
+
+
+def _store_options(where: str) -> dict[str, Any]:
+    """fsspec options for `where`: a time limit on every HTTP(S) request (aiohttp waits 5 minutes
+    by default, which looks like a hang)."""
+    if not where.lower().startswith(("http://", "https://")):
+        return {}
+    try:
+        import aiohttp
+    except ImportError:
+        raise VolrenError(f"{where}: reading over HTTP needs aiohttp, which is not installed: {INSTALL_HINT}") from None
+
+    return {"storage_options": {"client_kwargs": {"timeout": aiohttp.ClientTimeout(total=URL_TIMEOUT_S)}}}
+
+
 def is_ome_zarr(path: str | Path) -> bool:
     """A folder (or URL) holding a Zarr group, taken as an OME-Zarr image: Zarr v2 (.zgroup or
     .zattrs) or v3 (zarr.json), or a URL naming a .zarr. One without OME metadata is then an error
@@ -90,7 +107,8 @@ class Multiscale:
     def array(self, level: int) -> Any:
         """The zarr array of `level` (lazy: nothing is read until it is indexed)."""
         zarr = require_zarr()
-        return zarr.open_array(f"{self.path.rstrip('/')}/{self.levels[level].key}", mode="r")
+        return zarr.open_array(f"{self.path.rstrip('/')}/{self.levels[level].key}", mode="r",
+                               **_store_options(self.path))  # fmt: skip
 
 
 def _multiscales(attrs: Mapping[str, Any]) -> tuple[Mapping[str, Any], str]:
@@ -123,7 +141,7 @@ def open_multiscale(path: str | Path) -> Multiscale:
     zarr = require_zarr()
     where = str(path)
     try:
-        group = zarr.open_group(where, mode="r")
+        group = zarr.open_group(where, mode="r", **_store_options(where))
         meta, _version = _multiscales(dict(group.attrs))
         axes = [a["name"] if isinstance(a, Mapping) else str(a) for a in meta.get("axes", ["z", "y", "x"])]
         if axes[-3:] != ["z", "y", "x"]:
@@ -133,7 +151,7 @@ def open_multiscale(path: str | Path) -> Multiscale:
         for dataset in meta.get("datasets", []):
             key = str(dataset["path"])
             try:
-                array = zarr.open_array(f"{where.rstrip('/')}/{key}", mode="r")
+                array = zarr.open_array(f"{where.rstrip('/')}/{key}", mode="r", **_store_options(where))
             except (FileNotFoundError, KeyError, ValueError) as exc:
                 raise VolrenError(f"level {key!r} is listed but missing ({type(exc).__name__})") from None
             if array.ndim != len(axes):
@@ -151,6 +169,8 @@ def open_multiscale(path: str | Path) -> Multiscale:
         ranges = _brick_ranges(dict(group.attrs).get(VOLREN_KEY), levels)
     except VolrenError as exc:
         raise VolrenError(f"{where}: {exc}") from None
+    except TimeoutError:
+        raise VolrenError(f"{where}: the server did not answer within {URL_TIMEOUT_S:g} s") from None
     except (OSError, KeyError, TypeError, ValueError, json.JSONDecodeError) as exc:
         raise VolrenError(f"{where}: not a readable OME-Zarr image ({type(exc).__name__}: "
                           f"{' '.join(str(exc).split())[:200]})") from None  # fmt: skip
