@@ -206,3 +206,19 @@ def test_an_ome_zarr_image_opens_coarse_at_once_and_refines_to_full_resolution(m
     np.testing.assert_array_equal(w.state.volume.values, full.values)
     assert w.state.transfer_function is tf and w.state.camera == camera
     assert w.state.source == "cells.zarr (level 0)" and not w.files.refiner.pending
+
+
+def test_a_scripted_screenshot_of_an_ome_zarr_image_waits_for_its_finest_level(make_window, ini, fake_renderers,
+                                                                                tmp_path):  # fmt: skip
+    """`volren view x.zarr --screenshot` must not capture the coarse level shown first."""
+    pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
+    from volren.app.main import _screenshot
+    from volren.io.ome_zarr_io import save_ome_zarr
+
+    full = UniformVolume(np.arange(20 * 24 * 28, dtype=np.float32).reshape(20, 24, 28), name="c")
+    path = tmp_path / "cells.zarr"
+    save_ome_zarr(full, path, chunk=8, levels=3)
+    w = make_window(settings=ini)
+    shot = tmp_path / "shot.png"
+    assert _screenshot(w, path, None, None, "fake", shot, timeout_s=60, traceback=False) == 0
+    assert shot.is_file() and w.state.volume.dimensions == (28, 24, 20)

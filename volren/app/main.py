@@ -170,7 +170,7 @@ def _screenshot(window, input, tf, scalars, renderer, path: Path, timeout_s: flo
             loop.quit()
 
     def on_full_frame(_frame) -> None:
-        if outcome:
+        if outcome or window.files.refiner.pending:  # an OME-Zarr image: wait for its finest level
             return
         # Let pending layout requests run (the status bar's frame label just got new text).
         QApplication.sendPostedEvents()
