@@ -32,6 +32,8 @@ SECTIONS = (
     ("app.md", "Desktop app responsiveness", "How long from a TF edit to the new frame; frames per second."),
     ("first_preview.md", "The first gesture after opening", "How long does the first preview of a gesture wait "
      "when it is drawn by another renderer than the still frames? (`python -m benchmarks.first_preview`)"),
+    ("zarr_levels.md", "OME-Zarr levels", "What does writing and reading a pyramid cost, and what does a coarser "
+     "level save per frame, at what error? (`python -m benchmarks.zarr_levels`)"),
     ("oneshot.md", "One-shot renders", "Where does a `volren render`'s wall time go, and how much slower is the "
      "first run than the next? (`python -m benchmarks.oneshot`)"),
     ("gpu.md", "On a GPU", "How fast are the OpenGL renderers on a real GPU, at what error? "
