@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.region import Region
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction, TransferFunction2D
@@ -97,6 +98,9 @@ class KindSupport:
     preintegration_2d: bool = False
     #: What the renderer promises on this kind at default settings (checked by the kit).
     accuracy: Accuracy = field(default_factory=Accuracy)
+    #: Draws a brick's share of a whole volume (`set_region`, composite blending), so that layers
+    #: composited front to back equal the whole render (the kit's `bricks` check).
+    regions: bool = False
 
 
 @dataclass(frozen=True)
@@ -156,6 +160,8 @@ class Capabilities:
                 extras.append("pre-integration")
             if s.shading:
                 extras.append("shading")
+            if s.regions:
+                extras.append("bricks")
             extras.append("blend " + "/".join(sorted(str(m) for m in s.blend_modes)))
             modes_2d = s.blend_modes_2d & s.blend_modes
             if 2 in s.tf_dims and modes_2d != s.blend_modes:
@@ -214,6 +220,7 @@ class RendererBase(ABC):
         self._volume: Volume | None = None
         self._tf: TransferFunction | None = None
         self._settings = RenderSettings()
+        self._region: Region | None = None
         self._released = False
         self.last_frame: FrameStats | None = None
 
@@ -229,6 +236,10 @@ class RendererBase(ABC):
     @property
     def settings(self) -> RenderSettings:
         return self._settings
+
+    @property
+    def region(self) -> Region | None:
+        return self._region
 
     def set_volume(self, volume: Volume) -> None:
         self._check_alive()
@@ -263,6 +274,25 @@ class RendererBase(ABC):
         self._settings = settings
         self._settings_changed()
 
+    def set_region(self, region: Region | None) -> None:
+        """Draw only `region`'s share of the whole volume (the volume is then the brick's
+        sub-volume with ghost voxels); None draws the volume whole again. Offered where the
+        capabilities say `regions`."""
+        self._check_alive()
+        if region is not None:
+            if not isinstance(region, Region):
+                raise VolrenError(f"renderer {self.name} needs a Region, got {type(region).__name__}")
+            if not any(support.regions for support in self.capabilities.kinds.values()):
+                raise VolrenError(f"renderer {self.name} does not draw bricks (regions)")
+        self._region = region
+        self._region_changed()
+
+    def ghost_voxels(self, spacing: tuple[float, float, float], camera: Camera, width: int, height: int) -> int:
+        """How many voxels beyond a region's box, per face, a frame with these settings reads from
+        a volume of this voxel `spacing`: the caller cuts sub-volumes with at least this many. One
+        covers trilinear values and central-difference gradients at points inside the box."""
+        return 1
+
     #: Renderer-specific option names and their meaning (RenderSettings.options).
     option_help: ClassVar[Mapping[str, str]] = {}
 
@@ -281,6 +311,9 @@ class RendererBase(ABC):
     def _settings_changed(self) -> None:
         """Hook: the settings were replaced."""
 
+    def _region_changed(self) -> None:
+        """Hook: the region was set or cleared."""
+
     # ------------------------------------------------------------------------ render
     def render(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None = None
@@ -297,6 +330,8 @@ class RendererBase(ABC):
         reason = self.capabilities.unsupported_reason(self._volume.kind, self._tf.dims, self._settings)
         if reason:
             raise VolrenError(f"renderer {self.name} {reason}")
+        if self._region is not None:
+            self._check_region(self._region)
         start = time.perf_counter()
         image, counters = self._render(camera, width, height, progress)
         ms = (time.perf_counter() - start) * 1000.0
@@ -306,6 +341,27 @@ class RendererBase(ABC):
             )
         self.last_frame = FrameStats(ms, width, height, dict(counters))
         return image
+
+    def _check_region(self, region: Region) -> None:
+        """A region needs a uniform sub-volume covering its owner box (within the whole box), and
+        composite blending (maximum, minimum and average layers do not composite by "over")."""
+        volume = self._volume
+        support = self.capabilities.kinds.get(volume.kind)  # type: ignore[union-attr]
+        if support is None or not support.regions:
+            raise VolrenError(f"renderer {self.name} does not draw bricks (regions) of {volume.kind} volumes")  # type: ignore[union-attr]
+        if self._settings.blend_mode != BlendMode.COMPOSITE:
+            raise VolrenError(
+                f"renderer {self.name}: bricks composite only with the composite blend mode, not {self._settings.blend_mode}"
+            )
+        bounds = np.asarray(volume.bounds, dtype=np.float64)  # type: ignore[union-attr]
+        lo = np.maximum(region.owner_min, region.whole_min)
+        hi = np.minimum(region.owner_max, region.whole_max)
+        slack = 1e-6 * max(float(np.ptp(np.asarray(region.whole_bounds).reshape(3, 2), axis=1).max()), 1.0)
+        if np.any(lo < bounds[0::2] - slack) or np.any(hi > bounds[1::2] + slack):
+            raise VolrenError(
+                f"renderer {self.name}: the region's box {tuple(lo)}..{tuple(hi)} is not inside the sub-volume's "
+                f"bounds {tuple(bounds)}"
+            )
 
     @abstractmethod
     def _render(

@@ -540,6 +540,59 @@ def check_capabilities(ctx: CheckContext) -> list[Measurement]:
     return out
 
 
+#: The composite of a bricked render equals the whole render to float rounding (DESIGN.md).
+BRICK_RMSE = 1e-5
+
+
+def check_bricks(ctx: CheckContext) -> list[Measurement]:
+    """A renderer that claims regions draws a volume cut into uneven bricks, composited front to
+    back, equal to its whole-volume render (parallel, with sample planes on brick faces, and
+    perspective; every claimed pre-integration and shading); one that does not claim them refuses
+    `set_region` with a one-line VolrenError."""
+    from volren.bricked.layout import BrickLayout
+    from volren.bricked.sort_last import render_bricked
+    from volren.bricked.source import VolumeSource
+
+    support = ctx.capabilities.kinds.get("uniform")
+    # mean spacing 1: at step 0.5 along z the sample planes fall on the brick faces (every 3 cells)
+    volume = lattice_volume("uniform", lambda x, y, z: np.sin(x) + np.cos(1.3 * y) + 0.5 * z, (8, 7, 6), (1.2, 0.8, 1.0))
+    tf = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.3]], 1.0)
+    if support is None or not support.regions:
+        layout = BrickLayout(volume.dimensions, volume.spacing, volume.origin, volume.value_range, 3)
+        renderer = ctx.renderer()
+        try:
+            set_region = renderer.set_region  # type: ignore[attr-defined]
+        except AttributeError:
+            return [Measurement("bricks", "regions not claimed, no set_region", "accepted", 0, 0)]
+        try:
+            set_region(layout.region(layout.brick_at((0, 0, 0))))
+        except VolrenError as exc:
+            return [Measurement("bricks", "regions not claimed", "refusal not one line", int("\n" in str(exc)), 0)]
+        raise ContractError("set_region accepted a region that the capabilities do not claim")
+    out = []
+    b = volume.bounds
+    cameras = [("parallel along z", axis_camera(b, 2, 1.0, 0.5 * (b[1] - b[0]))),
+               ("perspective", Camera.orbit(b, 25, 30, zoom=1.3))]  # fmt: skip
+    combinations = [(pre, shade) for pre in (False, True) for shade in (False, True)
+                    if (not pre or support.preintegration) and (not shade or support.shading)]  # fmt: skip
+    if ctx.quick:
+        combinations = combinations[:: max(1, len(combinations) - 1)]
+    n = 24
+    for pre, shade in combinations:
+        settings = RenderSettings(preintegration=pre, shade=shade)
+        renderer = ctx.renderer()
+        for name, camera in cameras:
+            whole = ctx.draw(renderer, volume, tf, camera, n, n, settings)
+            bricked, _ = render_bricked(renderer, VolumeSource(volume), tf, camera, n, n, brick=3)
+            problem = _check_values(bricked)
+            if problem:
+                raise ContractError(f"bricked {name}: {problem}")
+            ctx._inputs.pop(id(renderer), None)  # the renderer now holds the last brick
+            out.append(Measurement("bricks", f"{name}, pre-integration {pre}, shade {shade}", "RMSE to whole",
+                                   _rmse(bricked.astype(np.float64), whole), BRICK_RMSE))  # fmt: skip
+    return out
+
+
 @dataclass(frozen=True)
 class Check:
     """A named check and what it verifies (its function's docstring)."""
@@ -555,5 +608,6 @@ class Check:
 CHECKS: Sequence[Check] = tuple(
     Check(fn.__name__.removeprefix("check_"), fn)
     for fn in (check_output, check_empty, check_box, check_clip, check_ramp, check_projection, check_nan, check_point,
-               check_step, check_shading, check_progress, check_cancel, check_release, check_capabilities)
+               check_step, check_shading, check_progress, check_cancel, check_release, check_capabilities,
+               check_bricks)
 )  # fmt: skip

@@ -78,8 +78,11 @@ _SUPPORT = KindSupport(
     # rounding) and the point 0.09 px off (the blob's own asymmetry in perspective)
     accuracy=Accuracy(rmse=DEFAULT_TOLERANCE, position_px=0.15),
 )
-#: Uniform grids also take 2D TFs (composite only: `tf2d`).
-_UNIFORM_SUPPORT = replace(_SUPPORT, tf_dims=frozenset({1, 2}), blend_modes_2d=frozenset({BlendMode.COMPOSITE}))
+#: Uniform grids also take 2D TFs (composite only: `tf2d`), and draw bricks (the ray clipped to
+#: the brick's box: the integral is exact, so no sample anchoring is needed).
+_UNIFORM_SUPPORT = replace(
+    _SUPPORT, tf_dims=frozenset({1, 2}), blend_modes_2d=frozenset({BlendMode.COMPOSITE}), regions=True
+)
 
 
 class ReferenceRenderer(RendererBase):
@@ -156,7 +159,8 @@ class ReferenceRenderer(RendererBase):
         tf = pack_tf2d(self._tf) if two_d else pack_tf(self._tf)
         prepared = self._prepare()
         length = prepared[-1]
-        lo, hi = vol.value_range
+        region = self._region
+        lo, hi = region.value_range if region is not None else vol.value_range
         spar = shade_params(settings, camera, hi - lo, length)
         h0 = float(settings.step) * length
 
@@ -169,8 +173,13 @@ class ReferenceRenderer(RendererBase):
         stats = np.zeros((n, 5), np.int64)
         extra: dict[str, float] = {}
 
-        if isinstance(vol, UniformVolume) and two_d:
+        if isinstance(vol, UniformVolume):
             values, org, sp, blo, bhi, _ = prepared
+            if region is not None:  # the brick's own box: the integral is exact, so cutting it there is too
+                blo = np.maximum(region.owner_min, region.whole_min)
+                bhi = np.minimum(region.owner_max, region.whole_max)
+
+        if isinstance(vol, UniformVolume) and two_d:
 
             def kernel(a: int, b: int) -> None:
                 render_uniform_2d(
@@ -179,7 +188,6 @@ class ReferenceRenderer(RendererBase):
                 )  # fmt: skip
 
         elif isinstance(vol, UniformVolume):
-            values, org, sp, blo, bhi, _ = prepared
 
             def kernel(a: int, b: int) -> None:
                 render_uniform(

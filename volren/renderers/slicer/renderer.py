@@ -115,6 +115,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                 # kit (volren check-renderer slicer, llvmpipe): RMSE up to 0.023 (maximum projection
                 # between samples), the point 0.02 px off
                 accuracy=Accuracy(rmse=0.03, position_px=0.1),
+                regions=True,
             )
         },
         backend="opengl",
@@ -200,15 +201,36 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
 
     # ------------------------------------------------------------------------------ hooks
     def _volume_changed(self) -> None:
+        # The TF tables stay: their keys hold every volume property they depend on (value range,
+        # plane spacing), so the bricks of one bricked frame share them. The brick mask goes.
         for name in ("_volume_tex", "_gradient_tex"):
             self._drop(getattr(self, name))
             setattr(self, name, None)
-        for _key, obj in self._tables.values():
-            self._drop(obj)
-        self._tables.clear()
+        mask = self._tables.pop("brick_mask", None)
+        if mask is not None:
+            self._drop(mask[1])
         self._volume_info = None
         self._bricks = None
         self._mask_state = None
+
+    def _region_changed(self) -> None:
+        # The value range the volume is normalised to may be the whole volume's now (or no longer).
+        self._volume_changed()
+
+    def _value_range(self) -> tuple[float, float] | None:
+        """The range tables and the texture are normalised to: the whole volume's for a brick."""
+        return self._region.value_range if self._region is not None else None
+
+    def ghost_voxels(self, spacing, camera: Camera, width: int, height: int) -> int:
+        """A pre-integrated segment owned by a brick (its front is inside) ends up to one plane
+        spacing along the ray beyond the face: its end value and gradient need that many voxels
+        and one more (interpolation) and one more again (central differences). Post-classified
+        segments are read at their middle, inside the box: one voxel (gradients)."""
+        if not (self._settings.preintegration and self._settings.blend_mode == BlendMode.COMPOSITE):
+            return 1
+        spacing = tuple(float(h) for h in spacing)
+        reach = float(self._settings.step) * float(np.mean(spacing)) / (self._min_cosine(camera, width, height) * min(spacing))
+        return int(math.floor(reach)) + 2
 
     # --------------------------------------------------------------------------- volume
     def _uniform_volume(self) -> UniformVolume:
@@ -225,7 +247,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             self._volume_tex = None
         if self._volume_tex is None:
             volume = self._uniform_volume()
-            info = textures.volume_texture(volume, native)
+            info = textures.volume_texture(volume, native, self._value_range())
             nz, ny, nx = info.data.shape
             limit = self._context().info["GL_MAX_3D_TEXTURE_SIZE"]
             if max(nx, ny, nz) > limit:
@@ -244,7 +266,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     def _ensure_gradient(self) -> Any:
         if self._gradient_tex is None:
             volume = self._uniform_volume()
-            data, scale = textures.gradient_texture(volume)
+            data, scale = textures.gradient_texture(volume, self._value_range())
             nz, ny, nx = volume.values.shape
             tex = self._context().texture3d((nx, ny, nz), 3, data, dtype="f2")
             tex.repeat_x = tex.repeat_y = tex.repeat_z = False
@@ -349,6 +371,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             "BLEND": _BLEND_CODES[s.blend_mode],
             "SKIP": int(opts.empty_space_skipping and composite),
             "NONFINITE": int(self._uniform_volume().nonfinite_count > 0),
+            "REGION": int(self._region is not None),
         }
 
     def _set(self, program: Any, name: str, value: Any) -> None:
@@ -362,8 +385,10 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         tf = self._tf
         assert tf is not None
         spacing = self._spacing()
-        box_min = np.array(volume.bounds[0::2])
-        box_max = np.array(volume.bounds[1::2])
+        region = self._region
+        bounds = region.whole_bounds if region is not None else volume.bounds  # where rays enter, planes anchor
+        box_min = np.array(bounds[0::2])
+        box_max = np.array(bounds[1::2])
         dims = np.array(volume.dimensions, dtype=np.float64)
         sp = np.array(volume.spacing)
         scale = 1.0 / (sp * dims)
@@ -384,6 +409,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         self._set(program, "u_spacing", spacing)
         self._set(program, "u_jitter_seed", int(opts.jitter_seed) if s.jitter else 0)
         self._set(program, "u_light", tuple(-view_dir))
+        if region is not None:
+            self._set(program, "u_owner_min", region.owner_min)
+            self._set(program, "u_owner_max", region.owner_max)
         lo, hi = info.lo, info.hi
         mode = defines["CLASSIFY"]
         n = opts.table_size
@@ -436,7 +464,8 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             self._set(program, "u_diffuse", float(s.diffuse))
             self._set(program, "u_specular", float(s.specular))
             self._set(program, "u_specular_power", float(s.specular_power))
-            span = float(volume.value_range[1] - volume.value_range[0])
+            value_lo, value_hi = region.value_range if region is not None else volume.value_range
+            span = float(value_hi - value_lo)
             self._set(program, "u_gradient_threshold", GRADIENT_EPS * span / volume.characteristic_length)
         if defines["SKIP"]:
             grid_bricks = self._bricks
@@ -470,6 +499,8 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         if defines["SKIP"]:
             counters.update(self._brick_mask(opts, self._spacing(), self._min_cosine(camera, width, height)))
         world_to_clip = camera.projection_matrix(width / height) @ camera.view_matrix()
+        if self._region is not None and opts.path != "march":
+            raise VolrenError("slicer: drawing a brick of a bricked volume needs the option path=march")
         if opts.path == "march":
             raw = self._march(defines, camera, opts, width, height, world_to_clip, counters)
         else:
@@ -490,7 +521,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         program = self._program("march", defines)
         self._bind(program, defines, camera, opts)
         program["u_clip_to_world"].write(mat4_bytes(np.linalg.inv(world_to_clip)))
-        termination = opts.termination_alpha if opts.early_termination else 2.0
+        # A brick's layer stopping at its own opacity would leave out what the whole render keeps.
+        early = opts.early_termination and self._region is None
+        termination = opts.termination_alpha if early else 2.0
         self._set(program, "u_termination", float(termination))
         image = self._target("march", width, height)
         image.bind_to_image(0, read=False, write=True)

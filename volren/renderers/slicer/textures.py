@@ -41,9 +41,10 @@ class VolumeTexture:
         return self.lo + np.asarray(x, dtype=np.float64) * (self.hi - self.lo)
 
 
-def value_range(volume: UniformVolume) -> tuple[float, float]:
-    """The range the tables cover: the finite data range, widened when the volume is constant."""
-    lo, hi = (float(v) for v in volume.value_range)
+def value_range(volume: UniformVolume, whole: tuple[float, float] | None = None) -> tuple[float, float]:
+    """The range the tables cover: the finite data range (`whole`: the whole volume's, for a
+    brick), widened when it is a single value."""
+    lo, hi = (float(v) for v in (whole if whole is not None else volume.value_range))
     if not hi > lo:
         pad = max(abs(lo) * 1e-6, 0.5)
         lo, hi = lo - pad, hi + pad
@@ -54,7 +55,8 @@ def value_range(volume: UniformVolume) -> tuple[float, float]:
 HALF_EXACT = 2048
 
 
-def volume_texture(volume: UniformVolume, native: bool = False) -> VolumeTexture:
+def volume_texture(volume: UniformVolume, native: bool = False,
+                   whole: tuple[float, float] | None = None) -> VolumeTexture:
     """The texel data for `volume`:
     - integer data within +-2048 (all 8-bit data): its own values as half floats, exact, half the
       memory of float32 (and faster to filter on llvmpipe);
@@ -67,8 +69,9 @@ def volume_texture(volume: UniformVolume, native: bool = False) -> VolumeTexture
     pre-integration, made to follow the data between samples exactly, cannot afford; and its
     16-bit normalised 3D textures filter wrongly (values off by tens of steps). GPUs filter 8-bit
     data to float with 8-bit weights, where `native` saves half the memory again.
+    `whole` is the whole volume's value range when `volume` is one brick of it.
     """
-    lo, hi = value_range(volume)
+    lo, hi = value_range(volume, whole)
     span = hi - lo
     values = volume.values
     if native and values.dtype == np.uint8:
@@ -80,11 +83,14 @@ def volume_texture(volume: UniformVolume, native: bool = False) -> VolumeTexture
     return VolumeTexture(normalised, "f4", (1.0, 0.0), lo, hi)
 
 
-def gradient_texture(volume: UniformVolume) -> tuple[NDArray[np.float16], float]:
+def gradient_texture(volume: UniformVolume,
+                     whole: tuple[float, float] | None = None) -> tuple[NDArray[np.float16], float]:
     """Central differences in world units at the grid points, one-sided at the borders (the
-    reference's gradient), as half floats (nz, ny, nx, 3) divided by the returned scale."""
+    reference's gradient), as half floats (nz, ny, nx, 3) divided by the returned scale (from the
+    value range: `whole`, the whole volume's, for a brick, so every brick rounds alike)."""
     values = volume.values
-    span = float(volume.value_range[1] - volume.value_range[0]) or 1.0
+    lo, hi = whole if whole is not None else volume.value_range
+    span = float(hi - lo) or 1.0
     scale = span / min(volume.spacing)  # the largest |d s / d axis| one cell can give
     out = np.empty(values.shape + (3,), dtype=np.float16)
     for axis, h in ((2, volume.spacing[0]), (1, volume.spacing[1]), (0, volume.spacing[2])):

@@ -3,7 +3,8 @@
 //
 // Defines (from the renderer): CLASSIFY 0 post-classified 1D TF, 1 pre-integrated 1D TF,
 // 2 post-classified 2D TF; SHADE 0/1; BLEND 0 composite, 1 maximum, 2 minimum, 3 average;
-// SKIP 0/1 (empty-space skipping by the brick mask); NONFINITE 0/1 (the volume holds NaN or Inf).
+// SKIP 0/1 (empty-space skipping by the brick mask); NONFINITE 0/1 (the volume holds NaN or Inf);
+// REGION 0/1 (a brick of a bricked render: only the segments it owns, see plane_t and owned).
 #pragma once
 
 #define COMPOSITE (BLEND == 0)
@@ -68,6 +69,22 @@ vec2 box_interval(vec3 origin, vec3 dir, vec3 lo, vec3 hi) {
     }
     return vec2(t_enter, t_exit);
 }
+
+// Where the ray meets sample plane k (+ jitter): computed one way everywhere (`precise`: no
+// fused multiply-add in one place and not another), so that every brick of a bricked render
+// finds the same sample points as the whole render and as its neighbours.
+float plane_t(float t_anchor, float k, float jitter, float dt) {
+    precise float t = t_anchor + (k + jitter) * dt;
+    return t;
+}
+
+#if REGION
+// Sort-last bricks: this brick's own box, half-open; it draws the segments whose owner point
+// (the front of a pre-integrated segment, the middle of a post-classified one) lies inside.
+uniform vec3 u_owner_min;
+uniform vec3 u_owner_max;
+bool owned(vec3 p) { return all(greaterThanEqual(p, u_owner_min)) && all(lessThan(p, u_owner_max)); }
+#endif
 
 // 1 - exp(-x) without losing the relative precision for thin segments.
 float one_minus_exp(float x) {

@@ -54,33 +54,54 @@ void main() {
     float t_anchor = (u_plane_base - dot(u_view_dir, origin)) / cosv;
     float jitter = jitter_fraction(uvec2(pixel));
     float k = ceil((t0 - t_anchor) / dt - jitter);   // the first sample plane at or behind the entry
+    float ta = t0;            // the front of the next segment; it ends on plane k (+ jitter)
+    float t_stop = t1;        // the walk ends here (segments still end at t1 at the latest)
+#if REGION
+    // A brick draws only the segments it owns (owner point in its half-open box), which lie
+    // within one segment of the box: start at the plane just before that and stop one segment
+    // after it, on the same planes as the whole render (the planes' anchor is the whole box's).
+    vec2 own = box_interval(origin, dir, u_owner_min, u_owner_max);
+    t_stop = min(t1, own.y + dt);
+    float w0 = own.x - dt;
+    if (!(max(t0, w0) < t_stop)) {
+        imageStore(u_image, pixel, pixel_value(result));
+        return;
+    }
+    if (w0 > t0) {
+        float m = floor((w0 - t_anchor) / dt - jitter);
+        float tm = plane_t(t_anchor, m, jitter, dt);
+        if (tm > t0) {
+            ta = tm;
+            k = m + 1.0;
+        }
+    }
+#endif
     uint samples = 0u;
     uint skips = 0u;
     // Pre-integration and the projections read the segment ends (each read once and carried to the
     // next segment); post-classification reads the middle of each segment.
     bool ends = !(COMPOSITE) || PREINTEGRATED == 1;
-    float ta = t0;            // the front of the next segment; it ends on plane k (+ jitter)
-    vec3 pa = origin + ta * dir;
+    precise vec3 pa = origin + ta * dir;
     float va = 0.0;
     bool need_front = ends;   // va must be read at ta
     bool opaque = false;
     // Runs of non-empty bricks along the ray, found by a DDA over the brick grid; a segment whose
     // front lies in an empty brick adds nothing, so the samples jump from one run to the next.
     // The DDA stays out of the sample loop: llvmpipe runs every branch of a divergent loop body.
-    while (ta < t1 && !opaque) {
-        float run_end = t1;
+    while (ta < t_stop && !opaque) {
+        float run_end = t_stop;
 #if COMPOSITE && SKIP
-        float run_start = next_brick_run(origin, dir, ta, t1, false, skips);
-        if (!(run_start < t1)) break;
+        float run_start = next_brick_run(origin, dir, ta, t_stop, false, skips);
+        if (!(run_start < t_stop)) break;
         if (run_start > ta) {
             k = ceil((run_start - t_anchor) / dt - jitter);
-            ta = t_anchor + (k + jitter) * dt;
+            ta = plane_t(t_anchor, k, jitter, dt);
             k += 1.0;
-            if (!(ta < t1)) break;
+            if (!(ta < t_stop)) break;
             pa = origin + ta * dir;
             need_front = ends;
         }
-        run_end = next_brick_run(origin, dir, ta, t1, true, skips);
+        run_end = next_brick_run(origin, dir, ta, t_stop, true, skips);
 #endif
         if (need_front) {
             va = data_value(pa);
@@ -90,12 +111,12 @@ void main() {
         // At least one segment per run: the DDA and brick_of may disagree about a point on a brick
         // face, and integrating a segment is always safe where skipping one might not be.
         do {
-            float tb = min(t_anchor + (k + jitter) * dt, t1);
+            float tb = min(plane_t(t_anchor, k, jitter, dt), t1);
             k += 1.0;
             if (!(tb > ta)) continue;
-            vec3 pb = origin + tb * dir;
+            precise vec3 pb = origin + tb * dir;
 #if COMPOSITE && PREINTEGRATED == 0
-            vec3 pm = origin + (0.5 * (ta + tb)) * dir;
+            precise vec3 pm = origin + (0.5 * (ta + tb)) * dir;
             vec4 c = classify_sample(pm, data_value(pm), tb - ta, dir);
             samples += 1u;
             float vb = 0.0;
@@ -104,6 +125,13 @@ void main() {
             samples += 1u;
 #if COMPOSITE
             vec4 c = classify_segment(pa, pb, va, vb, tb - ta, dir);
+#endif
+#endif
+#if COMPOSITE && REGION
+#if PREINTEGRATED
+            if (!owned(pa)) c = vec4(0.0);
+#else
+            if (!owned(pm)) c = vec4(0.0);
 #endif
 #endif
 #if COMPOSITE

@@ -1,0 +1,66 @@
+"""The part of a whole uniform volume that one brick's render draws (sort-last compositing).
+
+Why: a volume too large for one texture, one process or one machine is cut into bricks; each
+brick is rendered into a premultiplied RGBA layer, and the layers are composited front to back.
+For the composite to equal the whole-volume render, every renderer drawing a brick must sample
+each ray exactly where the whole render would, and draw exactly the part of it that the brick
+owns. A `Region` tells it both:
+
+- `owner_min`/`owner_max`: the brick's own box, half-open ([min, max) per axis, world units). A
+  ray's piece (a sample, or a segment identified by a point of it) belongs to the brick whose box
+  holds that point, so neighbouring bricks never both draw it nor both skip it. Faces on the
+  whole volume's boundary are pushed out by a voxel, so points on them belong to a brick.
+- `whole_bounds`: the whole volume's box. Rays enter it where the whole render's rays do, and
+  samples are anchored to it (t0 + k * step along every ray, the same k for every brick).
+- `value_range`: the whole volume's finite value range: normalisation and thresholds that
+  depend on it must not change from brick to brick.
+
+The renderer's volume is then the brick's sub-volume: its voxels plus `ghost` voxels beyond every
+face that is not on the whole volume's boundary, so that interpolation and gradients near a face
+read the neighbour's true values (`volren.bricked.layout` cuts them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from volren.errors import VolrenError
+
+Triple = tuple[float, float, float]
+Bounds = tuple[float, float, float, float, float, float]
+
+
+@dataclass(frozen=True)
+class Region:
+    """A brick's share of the whole volume's render (see the module docstring)."""
+
+    owner_min: Triple
+    owner_max: Triple
+    whole_bounds: Bounds
+    value_range: tuple[float, float]
+
+    def __post_init__(self) -> None:
+        numbers = (*self.owner_min, *self.owner_max, *self.whole_bounds, *self.value_range)
+        if len(self.owner_min) != 3 or len(self.owner_max) != 3 or len(self.whole_bounds) != 6:
+            raise VolrenError("a region needs 3 owner_min, 3 owner_max and 6 whole_bounds numbers")
+        if not all(np.isfinite(v) for v in numbers):
+            raise VolrenError(f"a region's box and value range must be finite, got {self}")
+        if not all(lo < hi for lo, hi in zip(self.owner_min, self.owner_max)):
+            raise VolrenError(f"a region's owner box must have min < max per axis, got {self.owner_min}..{self.owner_max}")
+        if not self.value_range[0] <= self.value_range[1]:
+            raise VolrenError(f"a region's value range must have lo <= hi, got {self.value_range}")
+
+    @property
+    def whole_min(self) -> Triple:
+        return tuple(float(v) for v in self.whole_bounds[0::2])  # type: ignore[return-value]
+
+    @property
+    def whole_max(self) -> Triple:
+        return tuple(float(v) for v in self.whole_bounds[1::2])  # type: ignore[return-value]
+
+    def owns(self, points: np.ndarray) -> np.ndarray:
+        """Which of the (..., 3) world points belong to this region (half-open box)."""
+        points = np.asarray(points)
+        return np.all((points >= self.owner_min) & (points < self.owner_max), axis=-1)
