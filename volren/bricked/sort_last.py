@@ -12,7 +12,6 @@ neighbours (which the ghost voxels come from) bounds every value it can draw.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 
@@ -50,11 +49,11 @@ def brick_layout(source: BrickSource, brick: int) -> BrickLayout:
 
 
 def visible_bricks(source: BrickSource, layout: BrickLayout, tf, ghost: int) -> NDArray[np.bool_]:
-    """Per brick (bz, by, bx): may it draw anything under `tf`? (its range with its neighbours')"""
-    grid = source.brick_grid(layout)
+    """Per brick (bz, by, bx): may it draw anything under `tf`? (the range of its sub-volume)"""
+    grid = source.brick_grid(layout, ghost)
     if grid is None:
         return np.ones(layout.shape, dtype=bool)
-    return grid.dilated(max(1, math.ceil(ghost / layout.brick))).visible(tf)
+    return grid.visible(tf)
 
 
 def render_bricked(
@@ -94,12 +93,15 @@ def render_bricked(
                 if has_finite(values):
                     sub = UniformVolume(values, layout.spacing, layout.sub_origin(slices),
                                         name=f"{source.name} brick {index}")
+                    region = layout.region(brick_)
                     renderer.set_volume(sub)
                     renderer.set_transfer_function(tf)
-                    renderer.set_region(layout.region(brick_))  # type: ignore[attr-defined]
+                    renderer.set_region(region)  # type: ignore[attr-defined]
                     layer, _ = render_frame(renderer, camera, width, height)
                     t2 = time.perf_counter()
-                    over(image, layer, out=image)
+                    # the layer is empty outside the brick's projection: composite only there
+                    x0, y0, x1, y1 = region.pixel_rect(camera, width, height)
+                    over(image[y0:y1, x0:x1], layer[y0:y1, x0:x1], out=image[y0:y1, x0:x1])
                     t3 = time.perf_counter()
                     render_ms += (t2 - t1) * 1000.0
                     composite_ms += (t3 - t2) * 1000.0

@@ -3,6 +3,7 @@ the value range of every brick (to skip the ones a TF makes transparent without 
 
 from __future__ import annotations
 
+import math
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -27,8 +28,9 @@ class BrickSource(Protocol):
         """The values [z, y, x] of a block."""
         ...
 
-    def brick_grid(self, layout: BrickLayout) -> BrickGrid | None:
-        """Every brick's value range over its voxels (None: unknown, every brick is read)."""
+    def brick_grid(self, layout: BrickLayout, ghost: int) -> BrickGrid | None:
+        """Every brick's value range over its voxels and `ghost` more beyond each face, or a range
+        containing it (None: unknown, every brick is read)."""
         ...
 
 
@@ -46,8 +48,9 @@ class VolumeSource:
     def read(self, slices: tuple[slice, slice, slice]) -> NDArray:
         return self.volume.values[slices]
 
-    def brick_grid(self, layout: BrickLayout) -> BrickGrid:
-        return BrickGrid.from_array(self.volume.values, layout.brick, self.spacing, self.origin)
+    def brick_grid(self, layout: BrickLayout, ghost: int) -> BrickGrid:
+        grid = BrickGrid.from_array(self.volume.values, layout.brick, self.spacing, self.origin)
+        return grid.dilated(math.ceil(ghost / layout.brick))  # the neighbours hold the ghost voxels
 
 
 def has_finite(values: NDArray) -> bool:

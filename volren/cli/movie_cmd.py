@@ -99,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
     except VolrenError as exc:
         raise VolrenError(f"{args.scene}: {exc}" if args.scene else str(exc)) from None
     width, height = scene.size
+    scene = _zarr_level_for_movie(args, scene)
     try:
         with frame_bar(f"{scene.renderer} {width}x{height}", animation.frames) as progress:
             result = render_movie(scene, animation, args.output, lossless=args.lossless, progress=progress,
@@ -111,3 +112,16 @@ def run(args: argparse.Namespace) -> int:
           f"({result.frames / result.fps:.1f} s of movie) in {seconds:.1f} s, median {result.median_frame_ms:.0f} ms "
           f"a frame -> {args.output}")  # fmt: skip
     return 0
+
+
+def _zarr_level_for_movie(args: argparse.Namespace, scene):
+    """An OME-Zarr INPUT: the level its first frame needs, read whole, for every frame."""
+    zarr_input = getattr(args, "zarr_input", None)
+    if zarr_input is None:
+        return scene
+    width, height = scene.size
+    frame = zarr_input.frame(scene.renderer, scene.resolved_camera(zarr_input.bounds), width, height, args.level)
+    if frame.volume is None:
+        raise VolrenError(f"{zarr_input.name}: level {frame.level} is larger than the memory allowed, and movies are "
+                          "not streamed brick by brick; give --level with a coarser level or a larger --memory")
+    return scene.with_volume(frame.volume)

@@ -198,11 +198,14 @@ def _step_path(args: argparse.Namespace) -> str:
 
 
 def _zarr_level(args: argparse.Namespace, path: str):
-    """The OME-Zarr level --level names, or the finest within --memory; the flags refused for
-    other inputs (None then: load INPUT as any volume)."""
+    """For an OME-Zarr INPUT, the coarsest level to set the scene up on, with the opened image
+    kept in `args.zarr_input` (`run` decides the level drawn once the renderer and camera are
+    known: `volren.bricked.zarr_input`); the flags refused for other inputs (None then: load INPUT
+    as any volume)."""
+    from volren.bricked.zarr_input import ZarrInput
     from volren.io.ome_zarr_io import is_ome_zarr, parse_memory
-    from volren.io.volume_io import load_ome_zarr
 
+    args.zarr_input = None
     if not is_ome_zarr(path):
         flag = "--level" if args.level is not None else "--memory" if args.memory is not None else None
         if flag:
@@ -211,7 +214,10 @@ def _zarr_level(args: argparse.Namespace, path: str):
     if args.scalars is not None:
         raise VolrenError(f"{path}: an OME-Zarr image holds one field; --scalars does not apply")
     memory = parse_memory(args.memory) if args.memory is not None else None
-    return load_ome_zarr(path, args.level, memory)
+    args.zarr_input = ZarrInput(path, memory)
+    if args.level is not None:
+        args.zarr_input.check_level(args.level)
+    return args.zarr_input.stand_in()
 
 
 def _load_input(args: argparse.Namespace):
@@ -372,14 +378,27 @@ def run(args: argparse.Namespace) -> int:
         check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
         check_scene_input(args, scene)
     width, height = scene.size
+    zarr_input = getattr(args, "zarr_input", None)
+    drawn = ""
     try:
-        camera = scene.resolved_camera()
+        camera = scene.resolved_camera(zarr_input.bounds if zarr_input is not None else None)
+        source = None
+        if zarr_input is not None:
+            with clock.stage("load"):
+                frame = zarr_input.frame(scene.renderer, camera, width, height, args.level)
+            scene = scene.with_volume(frame.volume) if frame.volume is not None else scene
+            source = frame.source
+            drawn = f" ({zarr_input.name} {frame.describe()})"
         with ExitStack() as stack:
             with clock.stage("set-up"):
                 renderer = stack.enter_context(
                     prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings))
             with clock.stage("frame"), progress_bar(f"{scene.renderer} {width}x{height}") as progress:
-                image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
+                if source is None:
+                    image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
+                else:
+                    image, stats = streamed_frame(renderer, source, scene, camera, progress)
+                    drawn = drawn[:-1] + f": {stats.counters['bricks_drawn']:.0f} of {stats.counters['bricks']:.0f} bricks drawn)"
         clock.note_counters(stats.counters)
     except VolrenError as exc:
         raise explained(exc, args, scene, why) from None
@@ -392,5 +411,19 @@ def run(args: argparse.Namespace) -> int:
         print(f"volren: {clock.line()}", file=sys.stderr)
     written = " ".join(str(p) for p in (args.output, args.save_array) if p)
     chosen_by = f" (auto: {why})" if why else ""
-    print(f"{scene.renderer}{chosen_by}: {width}x{height} in {stats.ms:.1f} ms -> {written}")
+    print(f"{scene.renderer}{chosen_by}: {width}x{height} in {stats.ms:.1f} ms{drawn} -> {written}")
     return 0
+
+
+def streamed_frame(renderer, source, scene: Scene, camera, progress):
+    """A frame of a level streamed brick by brick, with its counters as a FrameStats."""
+    from volren.bricked.sort_last import render_bricked
+    from volren.renderers.base import FrameStats
+
+    width, height = scene.size
+    image, frame = render_bricked(renderer, source, scene.transfer_function, camera, width, height, source.brick, progress)
+    cache = source.cache.stats
+    counters = {"bricks": frame.bricks, "bricks_drawn": frame.drawn, "bricks_transparent": frame.transparent,
+                "read_ms": frame.read_ms, "composite_ms": frame.composite_ms, "cache_misses": cache.misses,
+                "cache_hits": cache.hits, "cache_peak_bytes": cache.peak_bytes}  # fmt: skip
+    return image, FrameStats(frame.total_ms, width, height, counters)

@@ -249,15 +249,22 @@ def load_level(path: str | Path, level: int | None = 0, name: str | None = None,
                           f"read whole{hint}")  # fmt: skip
     array = image.array(level)
     values = np.empty(info.shape, info.dtype)
-    lead = (0,) * image.leading
     for index, where in _level_bricks(info):
-        try:
-            values[where] = array[lead + where]
-        except Exception as exc:  # noqa: BLE001 - a codec's error, whatever its type, names the brick
-            key = ".".join(str(k) for k in index)
-            raise VolrenError(f"{path}: level {info.key!r}, brick {key}: cannot be read ({type(exc).__name__}: "
-                              f"{' '.join(str(exc).split())[:160]})") from None  # fmt: skip
+        values[where] = read_brick(image, level, array, index)
     return UniformVolume(values, info.spacing, info.origin, name=name or image.name)
+
+
+def read_brick(image: Multiscale, level: int, array: Any, index: tuple[int, ...]) -> np.ndarray:
+    """The values of brick (chunk) `index` (kz, ky, kx) of `level`, whose zarr array is `array`;
+    a brick that cannot be read is a one-line error naming it."""
+    info = image.levels[level]
+    where = tuple(slice(k * c, min((k + 1) * c, n)) for k, c, n in zip(index, info.chunks, info.shape, strict=True))
+    try:
+        return np.asarray(array[(0,) * image.leading + where])
+    except Exception as exc:  # noqa: BLE001 - a codec's error, whatever its type, names the brick
+        key = ".".join(str(k) for k in index)
+        raise VolrenError(f"{image.path}: level {info.key!r}, brick {key}: cannot be read ({type(exc).__name__}: "
+                          f"{' '.join(str(exc).split())[:160]})") from None  # fmt: skip
 
 
 def _level_bricks(info: LevelInfo) -> Iterator[tuple[tuple[int, ...], tuple[slice, ...]]]:

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from volren.errors import VolrenError
+from volren.model.camera import Camera
 
 Triple = tuple[float, float, float]
 Bounds = tuple[float, float, float, float, float, float]
@@ -64,3 +65,22 @@ class Region:
         """Which of the (..., 3) world points belong to this region (half-open box)."""
         points = np.asarray(points)
         return np.all((points >= self.owner_min) & (points < self.owner_max), axis=-1)
+
+    def pixel_rect(self, camera: Camera, width: int, height: int) -> tuple[int, int, int, int]:
+        """(x0, y0, x1, y1), row 0 at the top, end exclusive: the pixels whose rays can meet this
+        region's box (the owner box within the whole box), a pixel wider on every side. The whole
+        image when a corner lies behind the eye."""
+        lo = np.maximum(self.owner_min, self.whole_min)
+        hi = np.minimum(self.owner_max, self.whole_max)
+        corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        clip = corners @ (camera.projection_matrix(width / height) @ camera.view_matrix()).T
+        if np.any(clip[:, 3] <= 1e-9):
+            return 0, 0, width, height
+        ndc = clip[:, :2] / clip[:, 3:4]
+        px = (ndc[:, 0] + 1.0) * 0.5 * width
+        py = (1.0 - ndc[:, 1]) * 0.5 * height
+        x0 = int(np.clip(np.floor(px.min()) - 1, 0, width))
+        x1 = int(np.clip(np.ceil(px.max()) + 1, 0, width))
+        y0 = int(np.clip(np.floor(py.min()) - 1, 0, height))
+        y1 = int(np.clip(np.ceil(py.max()) + 1, 0, height))
+        return x0, y0, max(x0, x1), max(y0, y1)

@@ -312,10 +312,14 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             for obj in held[1] if isinstance(held[1], tuple) else (held[1],):
                 self._drop(obj)
         ctx = self._context()
+        if name == "march_reader":  # reads a rectangle of the march target back
+            value: Any = self._track(ctx.framebuffer(color_attachments=[self._target("march", width, height)]))
+            self._targets[name] = (key, value)
+            return value
         colour = self._track(ctx.texture((width, height), 4, dtype="f4"))
         colour.filter = (self._nearest(), self._nearest())
         if name == "march":
-            value: Any = colour
+            value = colour
         else:
             depth = self._track(ctx.depth_renderbuffer((width, height)))
             fbo = self._track(ctx.framebuffer(color_attachments=[colour], depth_attachment=depth))
@@ -527,6 +531,12 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         self._set(program, "u_termination", float(termination))
         image = self._target("march", width, height)
         image.bind_to_image(0, read=False, write=True)
+        # a brick draws only the pixels its box projects to (GL rows start at the bottom)
+        x0, y0, x1, y1 = (self._region.pixel_rect(camera, width, height) if self._region is not None
+                          else (0, 0, width, height))  # fmt: skip
+        gl_y0, gl_y1 = height - y1, height - y0
+        self._set(program, "u_pixel_offset", (x0, gl_y0))
+        self._set(program, "u_pixel_end", (x1, gl_y1))
         if self._counter_buffer is None:
             self._counter_buffer = self._track(self._context().buffer(reserve=_COUNTER_BYTES))
         buffer = self._counter_buffer
@@ -534,13 +544,20 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         buffer.bind_to_storage_buffer(1)
         query = self._ctx.query(time=True)
         with query:
-            program.run(math.ceil(width / _LOCAL_SIZE), math.ceil(height / _LOCAL_SIZE), 1)
+            if x1 > x0 and gl_y1 > gl_y0:
+                program.run(math.ceil((x1 - x0) / _LOCAL_SIZE), math.ceil((gl_y1 - gl_y0) / _LOCAL_SIZE), 1)
             self._ctx.memory_barrier()
         lanes = np.frombuffer(buffer.read(), dtype=np.uint32).reshape(_STAT_LANES, 4).astype(np.int64)
         samples, brick_steps, terminated, hit = lanes.sum(axis=0)
         counters.update(samples=int(samples), brick_steps=int(brick_steps), rays_terminated=int(terminated),
                         rays_hit=int(hit), passes=1, gpu_ms=query.elapsed / 1e6)
-        raw = np.frombuffer(image.read(), dtype=np.float32).reshape(height, width, 4)
+        if (x0, gl_y0, x1, gl_y1) == (0, 0, width, height):
+            return np.frombuffer(image.read(), dtype=np.float32).reshape(height, width, 4)
+        raw = np.zeros((height, width, 4), dtype=np.float32)
+        if x1 > x0 and gl_y1 > gl_y0:
+            reader = self._target("march_reader", width, height)
+            rect = reader.read(viewport=(x0, gl_y0, x1 - x0, gl_y1 - gl_y0), components=4, dtype="f4")
+            raw[gl_y0:gl_y1, x0:x1] = np.frombuffer(rect, dtype=np.float32).reshape(gl_y1 - gl_y0, x1 - x0, 4)
         return raw
 
     def _slices(self, defines, camera, opts, width, height, world_to_clip, counters) -> NDArray[np.float32]:

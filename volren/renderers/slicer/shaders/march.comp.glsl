@@ -26,10 +26,13 @@ vec4 pixel_value(vec4 rgba) { return rgba; }
 vec4 pixel_value(vec2 value_weight) { return vec4(value_weight, 0.0, 0.0); }
 uniform float u_termination;   // accumulated opacity at which a ray stops (> 1: never)
 
+uniform ivec2 u_pixel_offset;  // the first pixel of the dispatched rectangle (a brick's: its projection)
+uniform ivec2 u_pixel_end;     // and the end of it
+
 void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + u_pixel_offset;
     ivec2 size = imageSize(u_image);
-    if (pixel.x >= size.x || pixel.y >= size.y) return;
+    if (pixel.x >= u_pixel_end.x || pixel.y >= u_pixel_end.y) return;
     vec2 ndc = (vec2(pixel) + 0.5) / vec2(size) * 2.0 - 1.0;
     vec3 origin, dir;
     float t_far;

@@ -1,0 +1,63 @@
+"""The decompressed bricks (chunks) of a level held in memory, least recently used first out.
+
+Why: a render brick reads its own chunk and thin slabs of its neighbours' (ghost voxels), and
+bricks are visited in visibility order, so the same chunk is wanted several times within a frame
+and again in the next; reading it from disk (or a server) and decompressing it each time would
+cost more than rendering it. The cache never holds more than its budget of bytes (a chunk larger
+than the whole budget is handed out without being kept).
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+@dataclass
+class CacheStats:
+    hits: int = 0
+    misses: int = 0
+    evictions: int = 0
+    held_bytes: int = 0
+    peak_bytes: int = 0
+
+
+class ChunkCache:
+    """At most `budget` bytes of arrays, keyed by chunk, evicted least recently used first."""
+
+    def __init__(self, budget: int) -> None:
+        self.budget = int(budget)
+        self._items: OrderedDict[Hashable, NDArray] = OrderedDict()
+        self.stats = CacheStats()
+
+    def get(self, key: Hashable, load: Callable[[], NDArray]) -> NDArray:
+        """The array under `key`, loaded (and kept, evicting others as needed) on a miss."""
+        found = self._items.get(key)
+        if found is not None:
+            self._items.move_to_end(key)
+            self.stats.hits += 1
+            return found
+        self.stats.misses += 1
+        value = np.asarray(load())
+        if value.nbytes > self.budget:
+            return value
+        while self._items and self.stats.held_bytes + value.nbytes > self.budget:
+            _, old = self._items.popitem(last=False)
+            self.stats.held_bytes -= old.nbytes
+            self.stats.evictions += 1
+        value.flags.writeable = False
+        self._items[key] = value
+        self.stats.held_bytes += value.nbytes
+        self.stats.peak_bytes = max(self.stats.peak_bytes, self.stats.held_bytes)
+        return value
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def clear(self) -> None:
+        self._items.clear()
+        self.stats.held_bytes = 0

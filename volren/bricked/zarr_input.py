@@ -1,0 +1,82 @@
+"""How `volren render` and `volren.render` draw an OME-Zarr image: which level, and whether it is
+read whole into memory or streamed brick by brick within the memory allowed.
+
+- A renderer that draws bricks (regions) gets the level of detail the view needs (`--level`
+  overrides it): the coarsest level whose voxels look no larger than a pixel. A level that fits in
+  the memory allowed is read whole (one frame, fastest); a larger one is streamed: bricks in
+  visibility order through a chunk cache of that size, transparent bricks never read.
+- Any other renderer gets the finest level that fits in the memory allowed, read whole, with a
+  one-line warning when that is not the full resolution.
+
+The scene is set up (default TF, checks) on the coarsest level, which is small; the camera is
+placed on the full resolution's bounds, so it does not move with the level drawn.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+from volren.bricked.zarr_source import ZarrSource, level_bounds, level_for_view
+from volren.errors import VolrenError, VolrenWarning
+from volren.io import ome_zarr_io
+from volren.io.ome_zarr_io import Multiscale
+from volren.model.camera import Camera
+from volren.model.volume import UniformVolume
+
+
+@dataclass(frozen=True)
+class ZarrFrame:
+    """What one frame draws: a level read whole (`volume`) or streamed (`source`)."""
+
+    level: int
+    volume: UniformVolume | None = None
+    source: ZarrSource | None = None
+
+    def describe(self) -> str:
+        how = "streamed" if self.source is not None else "in memory"
+        return f"level {self.level} {how}"
+
+
+class ZarrInput:
+    """An opened OME-Zarr image and the memory allowed for it (default 8 GiB)."""
+
+    def __init__(self, path: str | Path, memory: int | None = None) -> None:
+        self.path = str(path)
+        self.name = self.path.rstrip("/").rsplit("/", 1)[-1] if ome_zarr_io.is_url(path) else Path(path).name
+        self.image: Multiscale = ome_zarr_io.open_multiscale(path)
+        self.budget = memory if memory is not None else ome_zarr_io.MAX_IN_MEMORY_BYTES
+        self.bounds = level_bounds(self.image.levels[0])
+
+    def stand_in(self) -> UniformVolume:
+        """The coarsest level, read whole: what the scene is set up on."""
+        return ome_zarr_io.load_level(self.path, len(self.image.levels) - 1, name=self.name)
+
+    def check_level(self, level: int) -> None:
+        if not 0 <= level < len(self.image.levels):
+            raise VolrenError(f"{self.path}: no level {level}; the image has levels 0 to {len(self.image.levels) - 1}")
+
+    def frame(self, renderer: str, camera: Camera, width: int, height: int, level: int | None = None) -> ZarrFrame:
+        """How `renderer` draws this image for `camera` at `width` x `height`."""
+        from volren.renderers.registry import registry
+
+        support = registry.capabilities(renderer).kinds.get("uniform")
+        if level is not None:
+            self.check_level(level)
+        if support is None or not support.regions:
+            if level is None:
+                level = ome_zarr_io.finest_level_within(self.image, self.budget)
+                if level:
+                    whole = ome_zarr_io.human_size(ome_zarr_io.level_bytes(self.image.levels[0]))
+                    warnings.warn(f"{self.name}: its full resolution is {whole}, more than the "
+                                  f"{ome_zarr_io.human_size(self.budget)} allowed; rendering level {level}, the finest "
+                                  f"that fits (renderer {renderer} does not stream bricks)", VolrenWarning, stacklevel=3)  # fmt: skip
+            return ZarrFrame(level if level is not None else 0,
+                             volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))  # fmt: skip
+        if level is None:
+            level = level_for_view(self.image.levels, camera, width, height)
+        size = ome_zarr_io.level_bytes(self.image.levels[level])
+        if size <= min(self.budget, ome_zarr_io.MAX_IN_MEMORY_BYTES):
+            return ZarrFrame(level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))
+        return ZarrFrame(level, source=ZarrSource(self.image, level, self.budget))

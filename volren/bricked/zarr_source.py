@@ -1,0 +1,145 @@
+"""One level of an OME-Zarr image as a brick source: blocks assembled from its chunks through a
+bounded `ChunkCache`, brick value ranges from the ranges volren stores (so a brick the TF makes
+transparent is never read), and the level of detail a view needs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.bricked.chunk_cache import ChunkCache
+from volren.bricked.layout import BrickLayout
+from volren.errors import VolrenError
+from volren.io import ome_zarr_io
+from volren.io.ome_zarr_io import LevelInfo, Multiscale
+from volren.model.bricks import BrickGrid
+from volren.model.camera import Camera
+
+
+class ZarrSource:
+    """Level `level` of `image`, read a block at a time; at most `budget` bytes of chunks kept."""
+
+    def __init__(self, image: Multiscale, level: int, budget: int) -> None:
+        if not 0 <= level < len(image.levels):
+            raise VolrenError(f"{image.path}: no level {level}; the image has levels 0 to {len(image.levels) - 1}")
+        self.image = image
+        self.level = level
+        self.info = info = image.levels[level]
+        self.name = image.name
+        self.dimensions = tuple(int(n) for n in info.shape[::-1])
+        if min(self.dimensions) < 2:
+            raise VolrenError(f"{image.path}: level {info.key!r} is {info.shape[::-1]}: fewer than 2 samples on an axis")
+        self.spacing = info.spacing
+        self.origin = info.origin
+        self.cache = ChunkCache(budget)
+        self._array = image.array(level)
+        self._ranges = self._stored_ranges()
+        self.value_range = self._whole_range()
+
+    @property
+    def brick(self) -> int:
+        """Render bricks as large as the smallest chunk side, so that they line up with chunks."""
+        return int(min(self.info.chunks))
+
+    # ------------------------------------------------------------------------- ranges
+    def _chunk_counts(self) -> tuple[int, int, int]:
+        return tuple(math.ceil(n / c) for n, c in zip(self.info.shape, self.info.chunks, strict=True))  # type: ignore[return-value]
+
+    def _stored_ranges(self) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        """(vmin, vmax) per chunk (kz, ky, kx) from volren's metadata (+inf/-inf: no finite value)."""
+        if self.image.brick_ranges is None:
+            return None
+        ranges = self.image.brick_ranges[self.level]
+        shape = self._chunk_counts()
+        vmin = np.array([np.inf if r is None else r[0] for r in ranges], dtype=np.float64).reshape(shape)
+        vmax = np.array([-np.inf if r is None else r[1] for r in ranges], dtype=np.float64).reshape(shape)
+        return vmin, vmax
+
+    def _whole_range(self) -> tuple[float, float]:
+        """The level's finite value range: from the stored ranges, else by reading every chunk once."""
+        if self._ranges is None:
+            self._ranges = self._scan_ranges()
+        vmin, vmax = self._ranges
+        if not np.isfinite(vmin).any():
+            raise VolrenError(f"{self.image.path}: level {self.info.key!r} holds no finite values")
+        return float(vmin[np.isfinite(vmin)].min()), float(vmax[np.isfinite(vmax)].max())
+
+    def _scan_ranges(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Every chunk's range, reading the level once, a chunk at a time (an image volren did
+        not write has none stored)."""
+        shape = self._chunk_counts()
+        vmin = np.full(shape, np.inf)
+        vmax = np.full(shape, -np.inf)
+        for index in np.ndindex(*shape):
+            values = self._chunk(index)
+            finite = values if np.issubdtype(values.dtype, np.integer) else values[np.isfinite(values)]
+            if finite.size:
+                vmin[index], vmax[index] = finite.min(), finite.max()
+        return vmin, vmax
+
+    def brick_grid(self, layout: BrickLayout, ghost: int) -> BrickGrid:
+        """Per render brick: the range of every chunk its sub-volume (voxels and ghosts) touches."""
+        assert self._ranges is not None
+        cvmin, cvmax = self._ranges
+        chunks = self.info.chunks  # (z, y, x)
+        vmin = np.empty(layout.shape)
+        vmax = np.empty(layout.shape)
+        for brick in layout.bricks():
+            sel = tuple(slice(max(brick.first[a] - ghost, 0) // chunks[2 - a], (brick.end[a] + ghost) // chunks[2 - a] + 1)
+                        for a in (2, 1, 0))  # fmt: skip
+            vmin[brick.index] = cvmin[sel].min()
+            vmax[brick.index] = cvmax[sel].max()
+        return BrickGrid(vmin, vmax, np.zeros(layout.shape, dtype=bool), layout.brick, layout.dimensions,
+                         layout.spacing, layout.origin)  # fmt: skip
+
+    # --------------------------------------------------------------------------- reading
+    def _chunk(self, index: tuple[int, ...]) -> NDArray:
+        return self.cache.get(index, lambda: ome_zarr_io.read_brick(self.image, self.level, self._array, index))
+
+    def read(self, slices: tuple[slice, slice, slice]) -> NDArray:
+        """The values [z, y, x] of a block, from the chunks it touches."""
+        chunks = self.info.chunks
+        out = np.empty(tuple(s.stop - s.start for s in slices), dtype=self.info.dtype)
+        ranges = [range(s.start // c, (s.stop - 1) // c + 1) for s, c in zip(slices, chunks, strict=True)]
+        for index in np.ndindex(*(len(r) for r in ranges)):
+            chunk_index = tuple(r[i] for r, i in zip(ranges, index, strict=True))
+            values = self._chunk(chunk_index)
+            src, dst = [], []
+            for s, c, k in zip(slices, chunks, chunk_index, strict=True):
+                lo, hi = max(s.start, k * c), min(s.stop, (k + 1) * c)
+                src.append(slice(lo - k * c, hi - k * c))
+                dst.append(slice(lo - s.start, hi - s.start))
+            out[tuple(dst)] = values[tuple(src)]
+        return out
+
+
+def level_bounds(info: LevelInfo) -> tuple[float, float, float, float, float, float]:
+    out: list[float] = []
+    for o, h, n in zip(info.origin, info.spacing, info.shape[::-1], strict=True):
+        out += [o, o + h * (n - 1)]
+    return tuple(out)  # type: ignore[return-value]
+
+
+def level_for_view(levels: Sequence[LevelInfo], camera: Camera, width: int, height: int, pixels: float = 1.0) -> int:
+    """The coarsest level whose voxels look no larger than `pixels` pixels where the volume comes
+    nearest to the camera (0 when the camera is inside it or even level 0 looks coarser).
+
+    Why the nearest point: a level fine enough there is fine enough everywhere in the view, so
+    the image shows no voxel larger than a pixel.
+    """
+    if camera.parallel:
+        world_per_pixel = 2.0 * camera.parallel_scale / height
+    else:
+        b = np.asarray(level_bounds(levels[0]))
+        eye = np.asarray(camera.position, dtype=np.float64)
+        nearest = np.clip(eye, b[0::2], b[1::2])
+        distance = max(float(np.linalg.norm(eye - nearest)), camera.clipping_range[0])
+        world_per_pixel = 2.0 * distance * math.tan(math.radians(camera.view_angle) / 2.0) / height
+    for level in range(len(levels) - 1, -1, -1):
+        if max(levels[level].spacing) <= pixels * world_per_pixel:
+            return level
+    return 0
