@@ -3,7 +3,7 @@
 #   1. system libraries for OpenGL through EGL (Mesa llvmpipe without a GPU), Qt and, for the
 #      tests, a virtual X server;
 #   2. a virtual environment in .venv with volren and the renderer plugins under plugins/ installed
-#      in editable mode: `.[app,movie,zarr]` for the main job, `.[test,app,bench,movie,zarr]` with --tests, at the
+#      in editable mode: `.[app,movie,zarr,cluster]` for the main job, `.[test,app,bench,movie,zarr,cluster]` with --tests, at the
 #      versions CI tests (`-c constraints.txt`); re-installed when a pyproject.toml or
 #      constraints.txt changes.
 # Usage: scripts/setup.sh [--tests]
@@ -93,9 +93,9 @@ fi
 # "<hash of the pyproject files, constraints.txt and the mode> <extras>"
 hash=$( { cat pyproject.toml plugins/*/pyproject.toml constraints.txt; echo "$mode"; } | sha256sum | cut -d' ' -f1)
 installed=$(cat "$stamp" 2>/dev/null || true)
-extras=$([ "$with_tests" = 1 ] && echo test,app,bench,movie,zarr || echo app,movie,zarr)
+extras=$([ "$with_tests" = 1 ] && echo test,app,bench,movie,zarr,cluster || echo app,movie,zarr,cluster)
 # the test install includes the app: the main job needs nothing more after it
-if [ "${installed%% *}" != "$hash" ] || { [ "$extras" != app,movie,zarr ] && [ "${installed#* }" != "$extras" ]; }; then
+if [ "${installed%% *}" != "$hash" ] || { [ "$extras" != app,movie,zarr,cluster ] && [ "${installed#* }" != "$extras" ]; }; then
   echo "setup: installing volren[$extras] and its dependencies into .venv ($mode versions)"
   .venv/bin/python -m pip install -q --upgrade pip
   .venv/bin/python -m pip install -q "${pins[@]}" -e ".[$extras]"

@@ -25,7 +25,7 @@ SAMPLE = REPO / "data_samples" / "marschner_lobb.vti"
 SAMPLE_TF = REPO / "data_samples" / "marschner_lobb.tf.json"
 #: Optional packages and the extra that brings each.
 OPTIONAL = {"pyqt5": "app", "matplotlib": "bench", "imageio": "movie", "imageio-ffmpeg": "movie",
-            "zarr": "zarr"}
+            "zarr": "zarr", "distributed": "cluster"}
 
 
 def names(requirements: list[str]) -> set[str]:
@@ -153,6 +153,15 @@ def test_ome_zarr_without_its_extra_is_one_line_naming_it(tmp_path):
     assert result.returncode == 1
     (line,) = result.stderr.strip().splitlines()
     assert line.startswith("volren: error: ") and "zarr" in line and "pip install 'volren[zarr]'" in line
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_cluster_without_its_extra_is_one_line_naming_it(tmp_path):
+    result = run_volren("render", str(SAMPLE), "--cluster", "local:1", "-o", str(tmp_path / "x.png"),
+                        block=("distributed",))  # fmt: skip
+    assert result.returncode == 1
+    (line,) = result.stderr.strip().splitlines()
+    assert line.startswith("volren: error: ") and "pip install 'volren[cluster]'" in line, line
     assert not list(tmp_path.iterdir())
 
 

@@ -216,18 +216,30 @@ def fastest_measured(kind: str, level: str, names: Iterable[str], can_draw: Call
     return next((name for name in sorted(choices, key=cost.__getitem__) if can_draw(name)), None)
 
 
-def resolve(kind: str, tf_dim: int, renderer: str, level: str | None,
-            settings: RenderSettings) -> tuple[str, RenderSettings, str | None]:  # fmt: skip
+def resolve(kind: str, tf_dim: int, renderer: str, level: str | None, settings: RenderSettings,
+            bricks: bool = False) -> tuple[str, RenderSettings, str | None]:  # fmt: skip
     """(renderer, settings, why): `auto` resolved at `level` (`default` when None), the level's
     measured settings applied (none when `level` is None), and why `auto` chose its renderer (None
-    when one was named). The one place the CLI and the API turn a request into what is drawn."""
+    when one was named). With `bricks`, `auto` chooses among the renderers that draw bricks (a
+    bricked volume, a cluster). The one place the CLI and the API turn a request into what is drawn."""
     from volren.renderers.registry import registry
 
     if level is not None:
         check_level(level)
     why = None
     if renderer == AUTO:
-        renderer, why = choose_renderer(kind, level or DEFAULT_LEVEL, tf_dim, settings, registry.names())
+        names = registry.names()
+        if bricks:
+            names = [n for n in names if _draws_bricks(registry, n, kind)]
+        renderer, why = choose_renderer(kind, level or DEFAULT_LEVEL, tf_dim, settings, names)
     if level is not None:
         settings = settings_for(renderer, kind, level, settings)
     return renderer, settings, why
+
+
+def _draws_bricks(registry, name: str, kind: str) -> bool:
+    try:
+        support = registry.capabilities(name).kinds.get(kind)
+    except Exception:  # noqa: BLE001 - a plugin that fails to load draws nothing
+        return False
+    return bool(support is not None and support.regions)

@@ -13,13 +13,14 @@ neighbours (which the ghost voxels come from) bounds every value it can draw.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from volren.bricked.composite import over
-from volren.bricked.layout import BrickLayout
+from volren.bricked.layout import BrickLayout, Index3
 from volren.bricked.source import BrickSource, has_finite
 from volren.bricked.visibility import front_to_back
 from volren.errors import VolrenError
@@ -56,6 +57,66 @@ def visible_bricks(source: BrickSource, layout: BrickLayout, tf, ghost: int) -> 
     return grid.visible(tf)
 
 
+@dataclass
+class RunCost:
+    """Time spent on a run of bricks, in ms, and the bricks drawn."""
+
+    read_ms: float = 0.0
+    render_ms: float = 0.0
+    composite_ms: float = 0.0
+    drawn: int = 0
+
+
+def check_draws_bricks(renderer: Renderer) -> None:
+    support = renderer.capabilities.kinds.get("uniform")
+    if support is None or not support.regions:
+        name = getattr(renderer, "name", type(renderer).__name__)
+        raise VolrenError(f"renderer {name} does not draw bricks; bricked volumes need one that does (reference, slicer)")
+
+
+def draw_run(
+    renderer: Renderer,
+    source: BrickSource,
+    layout: BrickLayout,
+    tf: TransferFunction,
+    camera: Camera,
+    image: NDArray[np.float64],
+    ghost: int,
+    run: list[Index3],
+    cost: RunCost,
+    progress: Callable[[], None] | None = None,
+) -> None:
+    """Draw the bricks of `run` (front to back, all visible) into `image` (H, W, 4, float64),
+    each composited under what is there. `progress` is called after each brick."""
+    height, width = image.shape[:2]
+    try:
+        for index in run:
+            t0 = time.perf_counter()
+            brick = layout.brick_at(index)
+            slices = layout.voxel_slices(brick, ghost)
+            values = np.asarray(source.read(slices))
+            t1 = time.perf_counter()
+            cost.read_ms += (t1 - t0) * 1000.0
+            if has_finite(values):
+                sub = UniformVolume(values, layout.spacing, layout.sub_origin(slices), name=f"{source.name} brick {index}")
+                region = layout.region(brick)
+                renderer.set_volume(sub)
+                renderer.set_transfer_function(tf)
+                renderer.set_region(region)  # type: ignore[attr-defined]
+                layer, _ = render_frame(renderer, camera, width, height)
+                t2 = time.perf_counter()
+                # the layer is empty outside the brick's projection: composite only there
+                x0, y0, x1, y1 = region.pixel_rect(camera, width, height)
+                over(image[y0:y1, x0:x1], layer[y0:y1, x0:x1], out=image[y0:y1, x0:x1])
+                cost.render_ms += (t2 - t1) * 1000.0
+                cost.composite_ms += (time.perf_counter() - t2) * 1000.0
+                cost.drawn += 1
+            if progress is not None:
+                progress()
+    finally:
+        renderer.set_region(None)  # type: ignore[attr-defined]
+
+
 def render_bricked(
     renderer: Renderer,
     source: BrickSource,
@@ -69,48 +130,25 @@ def render_bricked(
     """The frame of the whole `source` through `renderer` (its settings already set) with `tf`,
     drawn brick by brick. The renderer's volume, TF and region are replaced; the region is
     cleared afterwards."""
-    support = renderer.capabilities.kinds.get("uniform")
-    name = getattr(renderer, "name", type(renderer).__name__)
-    if support is None or not support.regions:
-        raise VolrenError(f"renderer {name} does not draw bricks; bricked volumes need one that does (reference, slicer)")
+    check_draws_bricks(renderer)
     start = time.perf_counter()
     layout = brick_layout(source, brick)
     ghost = int(renderer.ghost_voxels(layout.spacing, camera, width, height))  # type: ignore[attr-defined]
     visible = visible_bricks(source, layout, tf, ghost)
-    order = front_to_back(layout, camera)
+    run = [index for index in front_to_back(layout, camera) if visible[index]]
     image = np.zeros((height, width, 4), dtype=np.float64)
-    read_ms = render_ms = composite_ms = 0.0
-    drawn = 0
-    try:
-        for n, index in enumerate(order):
-            if visible[index]:
-                t0 = time.perf_counter()
-                brick_ = layout.brick_at(index)
-                slices = layout.voxel_slices(brick_, ghost)
-                values = np.asarray(source.read(slices))
-                t1 = time.perf_counter()
-                read_ms += (t1 - t0) * 1000.0
-                if has_finite(values):
-                    sub = UniformVolume(values, layout.spacing, layout.sub_origin(slices),
-                                        name=f"{source.name} brick {index}")
-                    region = layout.region(brick_)
-                    renderer.set_volume(sub)
-                    renderer.set_transfer_function(tf)
-                    renderer.set_region(region)  # type: ignore[attr-defined]
-                    layer, _ = render_frame(renderer, camera, width, height)
-                    t2 = time.perf_counter()
-                    # the layer is empty outside the brick's projection: composite only there
-                    x0, y0, x1, y1 = region.pixel_rect(camera, width, height)
-                    over(image[y0:y1, x0:x1], layer[y0:y1, x0:x1], out=image[y0:y1, x0:x1])
-                    t3 = time.perf_counter()
-                    render_ms += (t2 - t1) * 1000.0
-                    composite_ms += (t3 - t2) * 1000.0
-                    drawn += 1
-            if progress is not None:
-                progress((n + 1) / len(order))
-    finally:
-        renderer.set_region(None)  # type: ignore[attr-defined]
+    cost = RunCost()
+    done = [0]
+
+    def step() -> None:
+        done[0] += 1
+        if progress is not None:
+            progress(done[0] / max(len(run), 1))
+
+    draw_run(renderer, source, layout, tf, camera, image, ghost, run, cost, step)
+    if progress is not None and not run:
+        progress(1.0)
     total = (time.perf_counter() - start) * 1000.0
-    stats = BrickedFrame(layout.n_bricks, drawn, int(np.count_nonzero(~visible)), ghost, read_ms, render_ms,
-                         composite_ms, total)
+    stats = BrickedFrame(layout.n_bricks, cost.drawn, int(np.count_nonzero(~visible)), ghost, cost.read_ms,
+                         cost.render_ms, cost.composite_ms, total)  # fmt: skip
     return image.astype(np.float32), stats

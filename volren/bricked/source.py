@@ -44,13 +44,18 @@ class VolumeSource:
         self.spacing = volume.spacing
         self.origin = volume.origin
         self.value_range = volume.value_range
+        self._grids: dict[tuple[int, int], BrickGrid] = {}
 
     def read(self, slices: tuple[slice, slice, slice]) -> NDArray:
         return self.volume.values[slices]
 
     def brick_grid(self, layout: BrickLayout, ghost: int) -> BrickGrid:
-        grid = BrickGrid.from_array(self.volume.values, layout.brick, self.spacing, self.origin)
-        return grid.dilated(math.ceil(ghost / layout.brick))  # the neighbours hold the ghost voxels
+        """Built once per brick size and ghost width (a pass over the values), then reused."""
+        key = (layout.brick, ghost)
+        if key not in self._grids:
+            grid = BrickGrid.from_array(self.volume.values, layout.brick, self.spacing, self.origin)
+            self._grids[key] = grid.dilated(math.ceil(ghost / layout.brick))  # the neighbours hold the ghosts
+        return self._grids[key]
 
 
 def has_finite(values: NDArray) -> bool:

@@ -36,6 +36,7 @@ class ZarrSource:
         self.spacing = info.spacing
         self.origin = info.origin
         self.cache = ChunkCache(budget)
+        self._grids: dict[tuple[int, int], BrickGrid] = {}
         self._array = image.array(level)
         self._ranges = self._stored_ranges()
         self.value_range = self._whole_range()
@@ -82,7 +83,14 @@ class ZarrSource:
         return vmin, vmax
 
     def brick_grid(self, layout: BrickLayout, ghost: int) -> BrickGrid:
-        """Per render brick: the range of every chunk its sub-volume (voxels and ghosts) touches."""
+        """Per render brick: the range of every chunk its sub-volume (voxels and ghosts) touches
+        (made once per brick size and ghost width)."""
+        key = (layout.brick, ghost)
+        if key not in self._grids:
+            self._grids[key] = self._brick_grid(layout, ghost)
+        return self._grids[key]
+
+    def _brick_grid(self, layout: BrickLayout, ghost: int) -> BrickGrid:
         assert self._ranges is not None
         cvmin, cvmax = self._ranges
         chunks = self.info.chunks  # (z, y, x)

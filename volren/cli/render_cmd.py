@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from volren.cli.cluster_frame import add_cluster_arguments, cluster_frame, wants_cluster
 from volren.cli.stage_clock import StageClock
 from volren.errors import VolrenError
 from volren.model.camera import check_zoom
@@ -77,6 +78,7 @@ def add_parser(sub) -> None:
     p.add_argument("--force", action="store_true", help="write -o / --save-array even over an input file")
     p.add_argument("--timings", action="store_true",
                    help="print the wall time of each stage (start-up, load, set-up, frame, write) on stderr")
+    add_cluster_arguments(p)
     p.set_defaults(run=run)
 
 
@@ -93,10 +95,12 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
                    help="for a time series INPUT (a .pvd, or a folder of volume files): the step to render, from 0 "
                         "(default 0)")  # fmt: skip
     p.add_argument("--level", type=int, metavar="N",
-                   help="for an OME-Zarr INPUT: the pyramid level to render, 0 the full resolution (default: the "
-                        "finest that fits in --memory)")  # fmt: skip
+                   help="for an OME-Zarr INPUT: the pyramid level to render, 0 the full resolution (default: with a "
+                        "renderer that draws bricks, the coarsest whose voxels look no larger than a pixel; with "
+                        "another, the finest that fits in --memory)")  # fmt: skip
     p.add_argument("--memory", metavar="SIZE",
-                   help="for an OME-Zarr INPUT: the most its level may take in memory, e.g. 2GB (default 8GB)")
+                   help="for an OME-Zarr INPUT: the most it may take in memory, e.g. 2GB (default 8GB); a larger "
+                        "level streams brick by brick within it (renderers that draw bricks)")  # fmt: skip
     p.add_argument("--scalars", help="the array to render: NAME, or NAME:magnitude / NAME:x (y, z, 0, 1, ...) for a "
                    "vector's length or one component (a vector shows its magnitude by default)")
     p.add_argument("--size", type=image_size, help="image size W or WxH (default 512)")
@@ -312,8 +316,9 @@ def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | No
         return scene, None
     named = args.quality or scene.extra.get("quality")
     level = str(named) if named is not None else (None if args.scene else DEFAULT_LEVEL)
+    bricks = getattr(args, "zarr_input", None) is not None or wants_cluster(args)
     renderer, settings, why = resolve(scene.volume.kind, scene.transfer_function.dims, scene.renderer, level,
-                                      scene.settings)  # fmt: skip
+                                      scene.settings, bricks)  # fmt: skip
     return replace(scene, renderer=renderer, settings=settings), why
 
 
@@ -358,9 +363,7 @@ def explained(exc: VolrenError, args: argparse.Namespace, scene: Scene, why: str
 
 def run(args: argparse.Namespace) -> int:
     from volren import io
-    from volren.api import prepared_renderer
     from volren.cli.progress import progress_bar
-    from volren.renderers.base import render_frame
 
     if args.output == "" or args.save_array == "":
         raise VolrenError(f"{'-o' if args.output == '' else '--save-array'} needs a file name, got ''")
@@ -379,26 +382,13 @@ def run(args: argparse.Namespace) -> int:
         check_scene_input(args, scene)
     width, height = scene.size
     zarr_input = getattr(args, "zarr_input", None)
-    drawn = ""
     try:
         camera = scene.resolved_camera(zarr_input.bounds if zarr_input is not None else None)
-        source = None
-        if zarr_input is not None:
-            with clock.stage("load"):
-                frame = zarr_input.frame(scene.renderer, camera, width, height, args.level)
-            scene = scene.with_volume(frame.volume) if frame.volume is not None else scene
-            source = frame.source
-            drawn = f" ({zarr_input.name} {frame.describe()})"
-        with ExitStack() as stack:
-            with clock.stage("set-up"):
-                renderer = stack.enter_context(
-                    prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings))
-            with clock.stage("frame"), progress_bar(f"{scene.renderer} {width}x{height}") as progress:
-                if source is None:
-                    image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
-                else:
-                    image, stats = streamed_frame(renderer, source, scene, camera, progress)
-                    drawn = drawn[:-1] + f": {stats.counters['bricks_drawn']:.0f} of {stats.counters['bricks']:.0f} bricks drawn)"
+        if wants_cluster(args):
+            with clock.stage("frame"), progress_bar(f"{scene.renderer} {width}x{height} bricks") as progress:
+                image, stats, drawn = cluster_frame(args, scene, camera, progress)
+        else:
+            image, stats, drawn = _local_frame(args, scene, camera, clock)
         clock.note_counters(stats.counters)
     except VolrenError as exc:
         raise explained(exc, args, scene, why) from None
@@ -413,6 +403,35 @@ def run(args: argparse.Namespace) -> int:
     chosen_by = f" (auto: {why})" if why else ""
     print(f"{scene.renderer}{chosen_by}: {width}x{height} in {stats.ms:.1f} ms{drawn} -> {written}")
     return 0
+
+
+def _local_frame(args: argparse.Namespace, scene: Scene, camera, clock: StageClock):
+    """The frame in this process: (image, FrameStats, what was drawn for the line). An OME-Zarr
+    INPUT draws the level `ZarrInput.frame` decides, whole or streamed brick by brick."""
+    from volren.api import prepared_renderer
+    from volren.cli.progress import progress_bar
+    from volren.renderers.base import render_frame
+
+    width, height = scene.size
+    zarr_input = getattr(args, "zarr_input", None)
+    source, drawn = None, ""
+    if zarr_input is not None:
+        with clock.stage("load"):
+            frame = zarr_input.frame(scene.renderer, camera, width, height, args.level)
+        scene = scene.with_volume(frame.volume) if frame.volume is not None else scene
+        source = frame.source
+        drawn = f" ({zarr_input.name} {frame.describe()})"
+    with ExitStack() as stack:
+        with clock.stage("set-up"):
+            renderer = stack.enter_context(
+                prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings))
+        with clock.stage("frame"), progress_bar(f"{scene.renderer} {width}x{height}") as progress:
+            if source is None:
+                image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
+            else:
+                image, stats = streamed_frame(renderer, source, scene, camera, progress)
+                drawn = drawn[:-1] + f": {stats.counters['bricks_drawn']:.0f} of {stats.counters['bricks']:.0f} bricks drawn)"
+    return image, stats, drawn
 
 
 def streamed_frame(renderer, source, scene: Scene, camera, progress):
