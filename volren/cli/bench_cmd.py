@@ -25,6 +25,37 @@ def add_parser(sub) -> None:
     add_app_parsers(kinds)
     add_fuzz_parser(kinds)
     add_quality_parser(kinds)
+    add_scale_parser(kinds)
+
+
+def add_scale_parser(kinds) -> None:
+    s = kinds.add_parser("scale", help="time and peak memory against volume size, out of core and on a LocalCluster")
+    s.add_argument("--sizes", default="256,512,1024,2048", help="volume sides n (n^3 uint16; default 256,512,1024,2048)")
+    s.add_argument("--image", type=int, default=1024, help="image side in pixels (default 1024)")
+    s.add_argument("--memory", default="2GB", help="chunk cache budget of each process (default 2GB)")
+    s.add_argument("--frames", type=int, default=3, help="frames per measurement; the first is not counted (default 3)")
+    s.add_argument("--cluster-size", type=int, default=512, help="volume side for the 1- and 2-worker runs (default 512)")
+    s.add_argument("--renderer", default="slicer", help="a renderer that draws bricks (default slicer)")
+    s.add_argument("--data", default="bench-data", help="folder for the generated OME-Zarr volumes (kept; default bench-data)")
+    s.add_argument("--out", default="docs/bench", help="folder for scale.md and scale.json (default docs/bench)")
+    s.set_defaults(run=run_scale_cmd)
+
+
+def run_scale_cmd(args: argparse.Namespace) -> int:
+    from volren.bench.scale import run_scale
+    from volren.io.ome_zarr_io import parse_memory
+
+    try:
+        sizes = [int(v) for v in args.sizes.split(",") if v]
+    except ValueError:
+        raise VolrenError(f"--sizes takes numbers like 256,512, got {args.sizes!r}") from None
+    for n in [*sizes, args.cluster_size]:
+        if not 16 <= n <= 4096:
+            raise VolrenError(f"--sizes and --cluster-size take sides from 16 to 4096, got {n}")
+    if not 16 <= args.image <= 8192 or args.frames < 1:
+        raise VolrenError("--image takes 16..8192 pixels and --frames at least 1")
+    return run_scale(sizes, args.image, parse_memory(args.memory), args.frames, args.cluster_size, args.renderer,
+                     Path(args.data), Path(args.out))  # fmt: skip
 
 
 def add_quality_parser(kinds) -> None:

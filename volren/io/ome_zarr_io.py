@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from volren.errors import VolrenError
-from volren.model.pyramid import DEFAULT_CHUNK, brick_slices, default_levels, pyramid, value_range
+from volren.model.pyramid import DEFAULT_CHUNK, block_mean, brick_slices, default_levels, value_range
 from volren.model.volume import UniformVolume
 
 #: The install hint of the optional packages this format needs.
@@ -280,37 +280,64 @@ def save_ome_zarr(volume: UniformVolume, path: str | Path, chunk: int = DEFAULT_
                   progress: Progress | None = None) -> int:  # fmt: skip
     """Write `volume` as an OME-Zarr pyramid at `path` (a new folder; an old one is replaced only
     once the new one is complete); returns the number of levels written."""
+    return write_pyramid(volume.values, volume.spacing, volume.origin, volume.name, path, chunk, levels, progress)
+
+
+def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float], name: str, path: str | Path,
+                  chunk: int = DEFAULT_CHUNK, levels: int | None = None, progress: Progress | None = None) -> int:  # fmt: skip
+    """Write the pyramid of `values` (z, y, x): a numpy array, or anything with `shape`, `dtype`
+    and numpy slicing, such as a volume generated a block at a time. Memory stays bounded by a few
+    bricks: level 0 is copied brick by brick, and each coarser level is made brick by brick from
+    the level below as written (2x2x2 block means, `model.pyramid`)."""
     zarr = require_zarr()
     path = Path(path)
     if not (isinstance(chunk, int) and 2 <= chunk <= 1024):
         raise VolrenError(f"{path}: bricks must be 2 to 1024 samples a side, got {chunk!r}")
-    count = levels if levels is not None else default_levels(volume.values.shape, chunk)
+    shape = tuple(int(n) for n in values.shape)
+    count = levels if levels is not None else default_levels(shape, chunk)
+    if count < 1:
+        raise VolrenError(f"a pyramid needs at least one level, got {count}")
     if not path.absolute().parent.is_dir():
         raise VolrenError(f"{path}: the folder {path.absolute().parent} does not exist")
+    shapes = [shape]
+    for index in range(1, count):
+        if min(shapes[-1]) < 4:
+            raise VolrenError(f"level {index} would have fewer than 2 samples along an axis (level {index - 1} is "
+                              f"{'x'.join(map(str, shapes[-1][::-1]))}); ask for fewer levels")  # fmt: skip
+        shapes.append(tuple(n // 2 for n in shapes[-1]))
     partial = path.with_name(f".{path.name}.partial")
     shutil.rmtree(partial, ignore_errors=True)
-    total = sum(_bricks((max(1, n >> k) for n in volume.values.shape), chunk) for k in range(count))
+    total = sum(_bricks(level_shape, chunk) for level_shape in shapes)
     done = 0
     try:
         group = zarr.open_group(str(partial), mode="w", zarr_format=2)
         datasets, ranges = [], []
-        for index, level in enumerate(pyramid(volume.values, volume.spacing, volume.origin, count)):
-            array = group.create_array(str(index), shape=level.values.shape, chunks=(chunk,) * 3,
-                                       dtype=level.values.dtype, fill_value=0)  # fmt: skip
+        below = None
+        level_spacing, level_origin = tuple(float(v) for v in spacing), tuple(float(v) for v in origin)
+        for index, level_shape in enumerate(shapes):
+            if index:
+                level_origin = tuple(o + 0.5 * h for o, h in zip(level_origin, level_spacing, strict=True))
+                level_spacing = tuple(2 * h for h in level_spacing)
+            array = group.create_array(str(index), shape=level_shape, chunks=(chunk,) * 3, dtype=np.dtype(values.dtype),
+                                       fill_value=0)  # fmt: skip
             level_ranges = []
-            for _, where in brick_slices(level.values.shape, chunk):
-                brick = level.values[where]
+            for _, where in brick_slices(level_shape, chunk):
+                if below is None:
+                    brick = np.asarray(values[where])
+                else:  # the block means of the 2x larger block below (its odd last samples left out)
+                    brick = block_mean(np.asarray(below[tuple(slice(2 * w.start, 2 * w.stop) for w in where)]))
                 array[where] = brick
                 level_ranges.append(value_range(brick))
                 done += 1
                 if progress is not None:
                     progress(min(done / total, 1.0))
+            below = array
             ranges.append(level_ranges)
             datasets.append({"path": str(index), "coordinateTransformations": [
-                {"type": "scale", "scale": list(level.spacing[::-1])},
-                {"type": "translation", "translation": list(level.origin[::-1])}]})
+                {"type": "scale", "scale": list(level_spacing[::-1])},
+                {"type": "translation", "translation": list(level_origin[::-1])}]})
         group.attrs["multiscales"] = [{
-            "version": NGFF_WRITTEN, "name": volume.name, "type": "2x2x2 block mean",
+            "version": NGFF_WRITTEN, "name": name, "type": "2x2x2 block mean",
             "axes": [{"name": a, "type": "space"} for a in "zyx"], "datasets": datasets}]
         group.attrs[VOLREN_KEY] = {"version": 1, "brick_ranges": [[None if r is None else list(r) for r in level]
                                                                     for level in ranges]}  # fmt: skip

@@ -516,6 +516,8 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         error = self._ctx.error
         if error != "GL_NO_ERROR":
             raise VolrenError(f"slicer: OpenGL reported {error} while drawing the frame")
+        if self._region is not None:  # a brick: `_march` has put its rectangle the right way up
+            return raw, counters
         image = raw[::-1]  # GL rows start at the bottom
         if self._settings.blend_mode != BlendMode.COMPOSITE:
             image = self._project_to_rgba(image)
@@ -553,12 +555,15 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                         rays_hit=int(hit), passes=1, gpu_ms=query.elapsed / 1e6)
         if (x0, gl_y0, x1, gl_y1) == (0, 0, width, height):
             return np.frombuffer(image.read(), dtype=np.float32).reshape(height, width, 4)
-        raw = np.zeros((height, width, 4), dtype=np.float32)
+        # A brick's rectangle, flipped into a zero image with row 0 at the top (the one full-size
+        # array a brick costs); `_render_current` does not flip it again.
+        image_top_down = np.zeros((height, width, 4), dtype=np.float32)
         if x1 > x0 and gl_y1 > gl_y0:
             reader = self._target("march_reader", width, height)
             rect = reader.read(viewport=(x0, gl_y0, x1 - x0, gl_y1 - gl_y0), components=4, dtype="f4")
-            raw[gl_y0:gl_y1, x0:x1] = np.frombuffer(rect, dtype=np.float32).reshape(gl_y1 - gl_y0, x1 - x0, 4)
-        return raw
+            pixels = np.frombuffer(rect, dtype=np.float32).reshape(gl_y1 - gl_y0, x1 - x0, 4)
+            image_top_down[y0:y1, x0:x1] = pixels[::-1]
+        return image_top_down
 
     def _slices(self, defines, camera, opts, width, height, world_to_clip, counters) -> NDArray[np.float32]:
         import moderngl
