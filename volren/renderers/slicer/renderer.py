@@ -23,6 +23,7 @@ frame did (samples fetched, brick jumps, rays stopped early, fragments, passes).
 
 from __future__ import annotations
 
+import contextlib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -145,6 +146,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     def __init__(self) -> None:
         super().__init__()
         self._ctx: Any = None
+        self._in_frame = False
         self._objects: list[Any] = []  # every GL object made, for release()
         self._programs: dict[tuple, Any] = {}
         self._volume_tex: Any = None
@@ -203,12 +205,15 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     def _volume_changed(self) -> None:
         # The TF tables stay: their keys hold every volume property they depend on (value range,
         # plane spacing), so the bricks of one bricked frame share them. The brick mask goes.
-        for name in ("_volume_tex", "_gradient_tex"):
-            self._drop(getattr(self, name))
-            setattr(self, name, None)
-        mask = self._tables.pop("brick_mask", None)
-        if mask is not None:
-            self._drop(mask[1])
+        # Outside a frame our context may not be current, and a texture deleted in another
+        # context (or none) is never freed: every brick of a bricked frame would leak its volume.
+        with self._ctx if (self._ctx is not None and not self._in_frame) else contextlib.nullcontext():
+            for name in ("_volume_tex", "_gradient_tex"):
+                self._drop(getattr(self, name))
+                setattr(self, name, None)
+            mask = self._tables.pop("brick_mask", None)
+            if mask is not None:
+                self._drop(mask[1])
         self._volume_info = None
         self._bricks = None
         self._mask_state = None
@@ -489,7 +494,11 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         # Other renderers (another slicer, VTK) make their own contexts current on this thread.
         with self._context():
-            return self._render_current(camera, width, height, progress)
+            self._in_frame = True  # moderngl's `with` does not nest: nothing inside enters it again
+            try:
+                return self._render_current(camera, width, height, progress)
+            finally:
+                self._in_frame = False
 
     def _render_current(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None

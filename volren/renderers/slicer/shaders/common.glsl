@@ -73,8 +73,13 @@ vec2 box_interval(vec3 origin, vec3 dir, vec3 lo, vec3 hi) {
 // Where the ray meets sample plane k (+ jitter): computed one way everywhere (`precise`: no
 // fused multiply-add in one place and not another), so that every brick of a bricked render
 // finds the same sample points as the whole render and as its neighbours.
+#if __VERSION__ >= 400
+#define PRECISE precise
+#else
+#define PRECISE          // GLSL 3.30 (the slice path, which draws no bricks) has no `precise`
+#endif
 float plane_t(float t_anchor, float k, float jitter, float dt) {
-    precise float t = t_anchor + (k + jitter) * dt;
+    PRECISE float t = t_anchor + (k + jitter) * dt;
     return t;
 }
 
