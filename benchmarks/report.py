@@ -34,6 +34,8 @@ SECTIONS = (
      "when it is drawn by another renderer than the still frames? (`python -m benchmarks.first_preview`)"),
     ("zarr_levels.md", "OME-Zarr levels", "What does writing and reading a pyramid cost, and what does a coarser "
      "level save per frame, at what error? (`python -m benchmarks.zarr_levels`)"),
+    ("scale.md", "Scaling: out of core and on a cluster", "How do frame time and memory grow from 256^3 to 2048^3 "
+     "streamed within 2 GB, and what do 2 workers give over 1? (`volren bench scale`)"),
     ("oneshot.md", "One-shot renders", "Where does a `volren render`'s wall time go, and how much slower is the "
      "first run than the next? (`python -m benchmarks.oneshot`)"),
     ("gpu.md", "On a GPU", "How fast are the OpenGL renderers on a real GPU, at what error? "

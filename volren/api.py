@@ -124,6 +124,10 @@ def render(
     scalars: str | None = None,
     progress: ProgressCallback | None = None,
     quality: str = "default",
+    memory: int | str | None = None,
+    level: int | None = None,
+    cluster: str | None = None,
+    scheduler: str | None = None,
     **settings: Any,
 ) -> NDArray[np.float32]:
     """Render offscreen; returns float32 (H, W, 4) premultiplied RGBA over black, row 0 on top.
@@ -135,8 +139,14 @@ def render(
     `quality` (`volren.quality`: draft, interactive, default, high, exact), whose measured settings
     apply; other keyword arguments are RenderSettings fields (step, preintegration, shade,
     blend_mode, options, ...) and win over the level's.
+
+    An OME-Zarr path draws as `volren render` does (`volren.bricked.zarr_input`): the `level`
+    given or the one the view needs, read whole within `memory` (bytes or "2GB"; default 8 GB) or
+    streamed brick by brick. `cluster` ("local" or "local:N") or `scheduler` (an address) draws
+    the bricks on a dask.distributed cluster (`volren.bricked.cluster`).
     """
-    vol = as_volume(volume, scalars)
+    zarr_input = _zarr_input(volume, memory, level)
+    vol = zarr_input.stand_in() if zarr_input is not None else as_volume(volume, scalars)
     transfer = as_transfer_function(tf, vol)
     width, height = parse_size(size)
     for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
@@ -144,11 +154,49 @@ def render(
             raise VolrenError(f"{name} must be finite, got {value}")
     from volren.quality import resolve
 
+    on_cluster = bool(cluster or scheduler)
     # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
-    renderer, at_level, _ = resolve(vol.kind, transfer.dims, renderer, quality, RenderSettings().with_(**settings))
+    renderer, at_level, _ = resolve(vol.kind, transfer.dims, renderer, quality, RenderSettings().with_(**settings),
+                                    bricks=zarr_input is not None or on_cluster)  # fmt: skip
     render_settings = at_level.with_(**{k: v for k, v in settings.items() if k != "options"})
     check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
-    cam = camera or Camera.orbit(vol.bounds, azimuth, elevation, zoom, parallel, width / height)
-    with prepared_renderer(renderer, vol, transfer, render_settings) as r:
-        image, _ = render_frame(r, cam, width, height, progress, label=renderer)
+    bounds = zarr_input.bounds if zarr_input is not None else vol.bounds
+    cam = camera or Camera.orbit(bounds, azimuth, elevation, zoom, parallel, width / height)
+    if on_cluster:
+        from volren.bricked.cluster import render_on_cluster
+
+        image, _, _ = render_on_cluster(cluster, scheduler, zarr_input or vol, renderer, render_settings, transfer,
+                                        cam, width, height, level, progress)  # fmt: skip
         return image
+    source = None
+    if zarr_input is not None:
+        frame = zarr_input.frame(renderer, cam, width, height, level)
+        vol, source = frame.volume or vol, frame.source
+    with prepared_renderer(renderer, vol, transfer, render_settings) as r:
+        if source is not None:
+            from volren.bricked.sort_last import render_bricked
+
+            image, _ = render_bricked(r, source, transfer, cam, width, height, source.brick, progress)
+        else:
+            image, _ = render_frame(r, cam, width, height, progress, label=renderer)
+        return image
+
+
+def _zarr_input(volume: Any, memory: int | str | None, level: int | None) -> Any:
+    """The opened OME-Zarr image when `volume` is a path to one (None otherwise); `memory` and
+    `level` are refused for anything else."""
+    from volren.io.ome_zarr_io import is_ome_zarr, parse_memory
+
+    if not (isinstance(volume, str | PathLike) and is_ome_zarr(volume)):
+        if memory is not None or level is not None:
+            raise VolrenError("memory and level apply to an OME-Zarr image (a .zarr folder or URL)")
+        return None
+    from volren.bricked.zarr_input import ZarrInput
+
+    budget = parse_memory(memory) if isinstance(memory, str) else memory
+    if budget is not None and (isinstance(budget, bool) or budget < 1):
+        raise VolrenError(f"memory must be a positive number of bytes or a size like 2GB, got {memory!r}")
+    zarr_input = ZarrInput(volume, budget)
+    if level is not None:
+        zarr_input.check_level(level)
+    return zarr_input

@@ -208,6 +208,32 @@ def test_an_ome_zarr_image_opens_coarse_at_once_and_refines_to_full_resolution(m
     assert w.state.source == "cells.zarr (level 0)" and not w.files.refiner.pending
 
 
+def test_the_app_refines_only_up_to_the_memory_allowed(make_window, ini, fake_renderers, qtbot, tmp_path, error_boxes):
+    """`volren view x.zarr --memory SIZE`: the refinement stops at the finest level within SIZE,
+    and an image whose coarsest level is larger says so in one line."""
+    pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
+    from volren.io.ome_zarr_io import save_ome_zarr
+
+    full = UniformVolume(np.arange(20 * 24 * 28, dtype=np.uint16).reshape(20, 24, 28), name="c")
+    path = tmp_path / "cells.zarr"
+    save_ome_zarr(full, path, chunk=8, levels=3)
+    w = make_window(settings=ini)
+    w.files.zarr_memory = 14 * 12 * 10 * 2  # level 1 (uint16) fits, level 0 does not
+    shown = []
+    w.state.subscribe(lambda change: shown.append(w.state.volume.dimensions) if change.what == "volume" else None)
+    with qtbot.waitSignal(w.files.loadFinished, timeout=TIMEOUT_MS):
+        w.files.open_input(path, renderer="fake")
+    qtbot.waitUntil(lambda: w.state.volume.dimensions == (14, 12, 10), timeout=TIMEOUT_MS)
+    qtbot.wait(200)
+    assert shown == [(7, 6, 5), (14, 12, 10)] and not w.files.refiner.pending
+    w.files.zarr_memory = 100
+    w.files.open_input(path, renderer="fake")
+    qtbot.waitUntil(lambda: len(error_boxes) == 1, timeout=TIMEOUT_MS)
+    title, text = error_boxes[0]
+    assert title == "Cannot open" and "even the coarsest level (420 bytes) is more than the memory allowed" in text
+    assert w.state.volume.dimensions == (14, 12, 10)  # what was shown stays
+
+
 def test_a_scripted_screenshot_of_an_ome_zarr_image_waits_for_its_finest_level(make_window, ini, fake_renderers,
                                                                                 tmp_path):  # fmt: skip
     """`volren view x.zarr --screenshot` must not capture the coarse level shown first."""

@@ -140,6 +140,14 @@ def test_a_worker_lost_mid_frame_has_its_bricks_rerun_elsewhere(client, tmp_path
     assert frame.drawn == frame.bricks
 
 
+def test_volren_render_from_python_on_a_local_cluster():
+    import volren
+
+    volume = field_volume()
+    flags = {"renderer": "reference", "size": (16, 12), "elevation": 30}
+    assert rmse(volren.render(volume, cluster="local:2", **flags), volren.render(volume, **flags)) <= 1e-5
+
+
 def test_a_scheduler_that_cannot_be_reached_is_one_line_within_the_limit():
     start = time.monotonic()
     with pytest.raises(VolrenError, match=r"cannot reach the dask scheduler at tcp://127.0.0.1:9 within 2 s") as exc:

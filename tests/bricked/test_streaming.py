@@ -166,3 +166,16 @@ def test_volren_render_streams_a_level_larger_than_the_memory_allowed(image_path
 def test_zarr_input_refuses_a_level_it_does_not_have(image_path):
     with pytest.raises(VolrenError, match="no level 4; the image has levels 0 to 1"):
         ZarrInput(image_path).check_level(4)
+
+
+def test_volren_render_from_python_streams_too(image_path):
+    import volren
+
+    flags = {"renderer": "reference", "size": (20, 16), "level": 0, "azimuth": 20}
+    streamed = volren.render(str(image_path), memory="4KB", **flags)
+    whole = volren.render(str(image_path), **flags)
+    assert whole[..., 3].max() > 0.1 and rmse(streamed, whole) <= 1e-5
+    with pytest.raises(VolrenError, match="memory and level apply to an OME-Zarr image"):
+        volren.render(ome_zarr_io.load_level(image_path, 0), memory="1GB")
+    with pytest.raises(VolrenError, match="no level 3"):
+        volren.render(str(image_path), level=3)

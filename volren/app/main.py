@@ -109,6 +109,7 @@ def run(
     renderer: str | None = None,
     screenshot: PathArg | None = None,
     *,
+    memory: int | None = None,
     size: tuple[int, int] = DEFAULT_WINDOW_SIZE,
     timeout_s: float = SCREENSHOT_TIMEOUT_S,
     traceback: bool = False,
@@ -124,10 +125,11 @@ def run(
         os.environ["QT_QPA_PLATFORM"] = "offscreen"
 
     with _quiet_qt():
-        return _run_app(input, tf, scalars, renderer, screenshot, size, timeout_s, traceback)
+        return _run_app(input, tf, scalars, renderer, screenshot, size, timeout_s, traceback, memory)
 
 
-def _run_app(input, tf, scalars, renderer, screenshot, size, timeout_s: float, traceback: bool) -> int:
+def _run_app(input, tf, scalars, renderer, screenshot, size, timeout_s: float, traceback: bool,
+             memory: int | None = None) -> int:  # fmt: skip
     from PyQt5.QtWidgets import QApplication
 
     from volren.app.window.main_window import MainWindow
@@ -136,6 +138,8 @@ def _run_app(input, tf, scalars, renderer, screenshot, size, timeout_s: float, t
     app.setApplicationName("volren")
     window = MainWindow()
     window.resize(*size)
+    if memory is not None:
+        window.files.zarr_memory = memory
     if screenshot is not None:
         return _screenshot(window, input, tf, scalars, renderer, Path(screenshot), timeout_s, traceback)
     status = {"code": 0}

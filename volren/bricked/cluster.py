@@ -43,6 +43,8 @@ from volren.renderers.base import ProgressCallback
 
 #: Seconds the client waits for a scheduler to answer before a one-line error.
 CONNECT_TIMEOUT_S = 10.0
+#: Render bricks of this many cells per side for an in-memory volume (OME-Zarr: its chunk side).
+VOLUME_BRICK = 64
 #: k-d blocks per worker: a few, so that a lost worker's share spreads over the others, and
 #: progress comes in steps.
 BLOCKS_PER_WORKER = 4
@@ -298,3 +300,48 @@ class ClusterRenderer:
 
     def close(self) -> None:
         self._probe.release()
+
+
+def render_on_cluster(
+    cluster: str | None,
+    scheduler: str | None,
+    volume: Any,
+    renderer: str,
+    settings: RenderSettings,
+    tf: TransferFunction,
+    camera: Camera,
+    width: int,
+    height: int,
+    level: int | None = None,
+    progress: ProgressCallback | None = None,
+) -> tuple[NDArray[np.float32], ClusterFrame, str]:
+    """One frame on a new LocalCluster (`cluster`: "local" or "local:N") or the running cluster
+    at `scheduler`, of `volume`: a `ZarrInput` (its `level`, else the level of detail the view
+    needs) or a `UniformVolume`. Returns the image, what the frame did, and what was drawn."""
+    from volren.bricked.zarr_input import ZarrInput
+    from volren.bricked.zarr_source import level_for_view
+
+    if isinstance(volume, ZarrInput):
+        if level is None:
+            level = level_for_view(volume.image.levels, camera, width, height)
+        volume.check_level(level)
+        spec: ZarrSpec | VolumeSpec = ZarrSpec(volume.path, level, volume.budget)
+        brick = int(min(volume.image.levels[level].chunks))
+        what = f"{volume.name} level {level}"
+    elif isinstance(volume, UniformVolume):
+        spec, brick, what = VolumeSpec(volume), VOLUME_BRICK, volume.name
+    else:
+        raise VolrenError("a cluster renders uniform volumes (bricks); this one is tetrahedral")
+    client = connect(scheduler) if scheduler else local_client(parse_cluster(cluster or "local"))
+    cluster_renderer = None
+    try:
+        cluster_renderer = ClusterRenderer(client, spec, renderer, brick)
+        image, frame = cluster_renderer.render(settings, tf, camera, width, height, progress)
+    finally:
+        if cluster_renderer is not None:
+            cluster_renderer.close()
+        local = getattr(client, "cluster", None) if not scheduler else None
+        client.close()
+        if local is not None:
+            local.close()
+    return image, frame, what

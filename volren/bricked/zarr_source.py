@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from volren.bricked.chunk_cache import ChunkCache
 from volren.bricked.layout import BrickLayout
+from volren.bricked.memory import keep_large_blocks_on_mmap
 from volren.errors import VolrenError
 from volren.io import ome_zarr_io
 from volren.io.ome_zarr_io import LevelInfo, Multiscale
@@ -35,6 +36,7 @@ class ZarrSource:
             raise VolrenError(f"{image.path}: level {info.key!r} is {info.shape[::-1]}: fewer than 2 samples on an axis")
         self.spacing = info.spacing
         self.origin = info.origin
+        keep_large_blocks_on_mmap()  # resident memory stays at what the cache holds (`memory`)
         self.cache = ChunkCache(budget)
         self._grids: dict[tuple[int, int], BrickGrid] = {}
         self._array = image.array(level)

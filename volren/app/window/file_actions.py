@@ -28,7 +28,7 @@ from volren.app.window.renderer_control import RendererControl
 from volren.app.window.scene_actions import SceneActions
 from volren.app.window.time_control import TimeControl
 from volren.errors import VolrenError
-from volren.io.ome_zarr_io import is_ome_zarr
+from volren.io.ome_zarr_io import MAX_IN_MEMORY_BYTES, is_ome_zarr
 from volren.io.series_io import is_series, load_series
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
@@ -79,6 +79,9 @@ class FileActions(QObject):
         self._tf_by_field: dict[tuple[str, str], TransferFunction] = {}
         self.recent = recent
         self._time = time
+        #: The most an OME-Zarr image's levels may take in memory (`volren view --memory`): the app
+        #: refines up to the finest level within it.
+        self.zarr_memory = MAX_IN_MEMORY_BYTES
         self._scalars: str | None = None  # what the shown volume was opened with
         if time is not None:
             time.stepShown.connect(lambda _index, path: scenes.remember_volume_file(path, self._scalars))
@@ -164,15 +167,18 @@ class FileActions(QObject):
         self.loader.start(series.steps[0] if series else path, tf, scalars, context=context, raw=raw)
 
     def _coarse_first(self, path: PathArg) -> tuple[dict[str, int] | None, tuple[str, list[int]] | None]:
-        """For an OME-Zarr image with levels finer than its coarsest within memory: read the
-        coarsest now and the finer ones after (`LevelRefiner`); (reader options, refinement)."""
-        from volren.io.ome_zarr_io import MAX_IN_MEMORY_BYTES, finest_level_within, open_multiscale
+        """For an OME-Zarr image: read the coarsest level now and the finer ones after
+        (`LevelRefiner`), down to the finest within `zarr_memory`; (reader options, refinement)."""
+        from volren.io.ome_zarr_io import finest_level_within, human_size, level_bytes, open_multiscale
 
         image = open_multiscale(path)
-        finest = finest_level_within(image, MAX_IN_MEMORY_BYTES)
+        finest = finest_level_within(image, self.zarr_memory)
         coarsest = len(image.levels) - 1
-        if finest is None or finest >= coarsest:
-            return None, None  # one level to read (or none that fits: the load says so)
+        if finest is None:
+            raise VolrenError(f"{path}: even the coarsest level ({human_size(level_bytes(image.levels[-1]))}) is more "
+                              f"than the memory allowed ({human_size(self.zarr_memory)})")  # fmt: skip
+        if finest >= coarsest:
+            return {"level": coarsest}, None  # one level to read
         return {"level": coarsest}, (str(path), list(range(coarsest - 1, finest - 1, -1)))
 
     def _on_level_ready(self, level: int, volume: object) -> None:
