@@ -9,6 +9,7 @@ than the whole budget is handed out without being kept).
 
 from __future__ import annotations
 
+import mmap
 from collections import OrderedDict
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
@@ -49,7 +50,7 @@ class ChunkCache:
             _, old = self._items.popitem(last=False)
             self.stats.held_bytes -= old.nbytes
             self.stats.evictions += 1
-        value.flags.writeable = False
+        value = _outside_the_heap(value)
         self._items[key] = value
         self.stats.held_bytes += value.nbytes
         self.stats.peak_bytes = max(self.stats.peak_bytes, self.stats.held_bytes)
@@ -61,3 +62,20 @@ class ChunkCache:
     def clear(self) -> None:
         self._items.clear()
         self.stats.held_bytes = 0
+
+
+def _outside_the_heap(value: NDArray) -> NDArray:
+    """A read-only copy of `value` in its own anonymous memory map, returned to the system the
+    moment it is evicted.
+
+    Why: chunks held in malloc's heap and evicted in LRU order fragment it, and a fragmented heap
+    does not shrink: a process streaming 1024^3 uint16 through a 2 GiB cache grew to 3.4 GiB.
+    (Making malloc map every large block instead kept it at 2.1 GiB but slowed every brick's
+    texture upload by half; only the cache needs it.)"""
+    if value.nbytes == 0:
+        return value
+    buffer = mmap.mmap(-1, value.nbytes)
+    copy = np.frombuffer(buffer, dtype=value.dtype).reshape(value.shape)
+    copy[...] = value
+    copy.flags.writeable = False
+    return copy
