@@ -79,8 +79,13 @@ def test_load_volume_and_render_take_an_ome_zarr_folder(tmp_path, volume):
     save_ome_zarr(volume, path, chunk=16)
     loaded = load_volume(path)
     np.testing.assert_array_equal(loaded.values, volume.values)
-    kwargs = dict(renderer="reference", size=(12, 10), quality=None, step=1.0)
-    np.testing.assert_array_equal(volren.render(path, **kwargs), volren.render(volume, **kwargs))
+    tf = {"version": 1, "kind": "1d", "color": [[0, 0.2, 0.4, 1], [4000, 1, 0.8, 0.1]], "opacity": [[0, 0], [4000, 0.6]],
+          "opacity_unit_distance": 4.0}
+    kwargs = dict(renderer="reference", size=(12, 10), quality=None, step=1.0, tf=tf)
+    np.testing.assert_array_equal(volren.render(path, level=0, **kwargs), volren.render(volume, **kwargs))
+    # without a level or a TF: the level the view needs, and the default TF of the coarsest level
+    thumbnail = volren.render(path, renderer="reference", size=(12, 10))
+    assert thumbnail[..., 3].max() > 0.05
 
 
 def test_nan_stays_out_of_brick_ranges(tmp_path):

@@ -89,7 +89,7 @@ def release_free_heap() -> None:
 
     Why: chunks are decoded into the heap a few hundred KiB at a time, among the small objects
     that stay (the cache's entries), and glibc returns only the heap's top; measured, a process
-    streaming 1024^3 uint16 grew to twice its cache (2.7 GiB for a 1.4 GiB cache), and with a
+    streaming 1024^3 uint16 grew to twice its cache (2.6 GiB for a 1.4 GiB cache), and with a
     trim every 32 misses to the cache plus 0.4 GiB."""
     trim = _malloc_trim()
     if trim is not None:

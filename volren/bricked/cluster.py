@@ -181,7 +181,7 @@ def local_client(workers: int) -> Any:
     """A Client on a new LocalCluster of `workers` processes, one thread each."""
     distributed = require_distributed()
     cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, env=dict(ONE_THREAD_ENV))  # fmt: skip
+                                       dashboard_address=":0", env=dict(ONE_THREAD_ENV))  # fmt: skip
     return distributed.Client(cluster)
 
 

@@ -20,8 +20,8 @@ from volren.model.bricks import BrickGrid
 from volren.model.camera import Camera
 
 #: The share of the memory allowed that the chunk cache may fill: the rest is for the process
-#: itself (Python, the renderer's GL driver, about 0.4 GiB), the frame's images and the allocator's
-#: slack (measured: 1024^3 uint16 streamed with a 1.7 GiB cache peaked at 2.7 GiB resident).
+#: itself (Python, the renderer's GL driver: about 0.4 GiB) and the frame's images (measured with
+#: `volren bench scale`: 2048^3 uint16 at --memory 2GB peaked at 1.9 GiB resident).
 CACHE_SHARE = 0.75
 
 
