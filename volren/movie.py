@@ -12,6 +12,7 @@ import statistics
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from volren.api import prepared_renderer
 from volren.errors import VolrenError
@@ -22,7 +23,10 @@ from volren.model.scene import Scene
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
 from volren.quality import AUTO, resolve
-from volren.renderers.base import ProgressCallback, Renderer, render_frame
+
+if TYPE_CHECKING:
+    from volren.bricked.source import BrickSource
+from volren.renderers.base import FrameStats, ProgressCallback, Renderer, render_frame
 
 
 @dataclass(frozen=True)
@@ -44,6 +48,8 @@ def render_movie(
     lossless: bool = False,
     progress: ProgressCallback | None = None,
     steps: Sequence[str | Path] | None = None,
+    source: BrickSource | None = None,
+    bounds: Sequence[float] | None = None,
 ) -> MovieResult:
     """Render `scene` (with its volume loaded) along `animation` into `path` (.mp4 or .gif), the
     frames over `background`. A scene's renderer `auto` becomes the fastest measured one at
@@ -52,7 +58,11 @@ def render_movie(
 
     `steps`: the files of a time series (the scene's volume is the first): the movie runs through
     them in order, spread evenly over its frames, each read when its first frame comes, with the
-    camera placed on the first step's bounds throughout."""
+    camera placed on the first step's bounds throughout.
+
+    `source`: a level too large for memory (`volren.bricked`), streamed brick by brick for every
+    frame; the scene's volume then only stands in for it. `bounds` place the camera (default: the
+    scene volume's; an OME-Zarr image's full resolution, so that the level drawn does not move it)."""
     if scene.volume is None:
         raise VolrenError("the scene has no volume to make a movie of")
     if scene.renderer == AUTO:
@@ -60,8 +70,24 @@ def render_movie(
         scene = replace(scene, renderer=renderer, settings=settings)
     volumes = None if not steps else _step_volumes(steps, animation.frames, scene.scalars)
     with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
-        return record_movie(renderer, animation, scene.camera, scene.transfer_function, scene.volume.bounds,
-                            scene.size, path, background, lossless, progress, scene.renderer, volumes)  # fmt: skip
+        draw = None if source is None else streamed_frames(source)
+        return record_movie(renderer, animation, scene.camera, scene.transfer_function, bounds or scene.volume.bounds,
+                            scene.size, path, background, lossless, progress, scene.renderer, volumes, draw)  # fmt: skip
+
+
+#: draw(renderer, tf, camera, width, height, progress) -> (image, FrameStats): one frame.
+FrameDrawer = Callable[..., tuple[Any, FrameStats]]
+
+
+def streamed_frames(source: BrickSource) -> FrameDrawer:
+    """Frames of `source` streamed brick by brick (`render_bricked`) with the renderer given."""
+    from volren.bricked.sort_last import render_bricked
+
+    def draw(renderer: Renderer, tf: TransferFunction, camera, width: int, height: int, progress):
+        image, frame = render_bricked(renderer, source, tf, camera, width, height, source.brick, progress)
+        return image, FrameStats(frame.total_ms, width, height, {"bricks_drawn": frame.drawn})
+
+    return draw
 
 
 def _step_volumes(steps: Sequence[str | Path], frames: int, scalars: str | None) -> Callable[[int], Volume | None]:
@@ -93,11 +119,13 @@ def record_movie(
     progress: ProgressCallback | None = None,
     label: str | None = None,
     volumes: Callable[[int], Volume | None] | None = None,
+    draw: FrameDrawer | None = None,
 ) -> MovieResult:
     """The movie from a renderer that holds the volume, settings and `start_tf` (the app brings its
     own): the orbit starts at `start_view`; TF keyframes replace `start_tf` where they are;
     `volumes(i)`, where given, is the volume frame i shows when it is another than the frame
-    before's (a time series)."""
+    before's (a time series); `draw`, where given, draws each frame instead of the renderer alone
+    (`streamed_frames`)."""
     width, height = size
     frames = animation.frames
     times: list[float] = []
@@ -113,7 +141,10 @@ def record_movie(
                 tf = frame_tf
             camera = animation.camera(index, start_view, bounds, width / height)
             within = None if progress is None else _within_frame(progress, index, frames)
-            image, stats = render_frame(renderer, camera, width, height, within, label=label)
+            if draw is None:
+                image, stats = render_frame(renderer, camera, width, height, within, label=label)
+            else:
+                image, stats = draw(renderer, tf, camera, width, height, within)
             times.append(stats.ms)
             writer.append(to_png_pixels(image, background))
             if progress is not None:

@@ -177,3 +177,24 @@ def test_a_time_series_renders_a_step_and_moves_through_all_steps(tmp_path, caps
     assert "--time-step picks one step" in capsys.readouterr().err
     assert main(["render", str(pvd), *flags, "-o", str(tmp_path / "x.png"), "--time-step", "3"]) == 1
     assert "--time-step 3: " in capsys.readouterr().err
+
+
+def test_a_movie_of_an_ome_zarr_level_larger_than_memory_streams_every_frame(tmp_path, capsys):
+    """Issue 24: each frame streamed brick by brick, the same pixels as `volren render` draws."""
+    pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
+    from volren.io.ome_zarr_io import save_ome_zarr
+    from volren.model.volume import UniformVolume
+
+    z, y, x = np.meshgrid(np.arange(18), np.arange(20), np.arange(22), indexing="ij")
+    values = (2000 + 1500 * np.sin(0.4 * x) * np.cos(0.3 * y) + 50 * z).astype(np.uint16)
+    path = tmp_path / "field.zarr"
+    save_ome_zarr(UniformVolume(values, name="field"), path, chunk=8, levels=2)
+    flags = [str(path), "--renderer", "reference", "--size", "24x20", "--level", "0", "--memory", "4KB"]
+    movie = tmp_path / "field.mp4"
+    assert main(["movie", *flags, "-o", str(movie), "--frames", "2", "--lossless"]) == 0
+    capsys.readouterr()
+    frames = decoded(movie)
+    assert len(frames) == 2
+    for index, azimuth in enumerate((0, 180)):
+        assert np.array_equal(frames[index], rendered(tmp_path, *flags, "--azimuth", str(azimuth))), index
+    assert "streamed" in capsys.readouterr().out

@@ -99,11 +99,13 @@ def run(args: argparse.Namespace) -> int:
     except VolrenError as exc:
         raise VolrenError(f"{args.scene}: {exc}" if args.scene else str(exc)) from None
     width, height = scene.size
-    scene = _zarr_level_for_movie(args, scene)
+    scene, source = _zarr_level_for_movie(args, scene)
+    zarr_bounds = args.zarr_input.bounds if getattr(args, "zarr_input", None) is not None else None
     try:
         with frame_bar(f"{scene.renderer} {width}x{height}", animation.frames) as progress:
             result = render_movie(scene, animation, args.output, lossless=args.lossless, progress=progress,
-                                  steps=series.steps if series is not None else None)  # fmt: skip
+                                  steps=series.steps if series is not None else None, source=source,
+                                  bounds=zarr_bounds)  # fmt: skip
     except VolrenError as exc:
         raise explained(exc, args, scene, why) from None
     chosen_by = f" (auto: {why})" if why else ""
@@ -115,13 +117,13 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _zarr_level_for_movie(args: argparse.Namespace, scene):
-    """An OME-Zarr INPUT: the level its first frame needs, read whole, for every frame."""
+    """An OME-Zarr INPUT: the level its first frame needs for every frame, read whole or (larger
+    than --memory) streamed brick by brick; (scene, the streamed source or None)."""
     zarr_input = getattr(args, "zarr_input", None)
     if zarr_input is None:
-        return scene
+        return scene, None
     width, height = scene.size
     frame = zarr_input.frame(scene.renderer, scene.resolved_camera(zarr_input.bounds), width, height, args.level)
     if frame.volume is None:
-        raise VolrenError(f"{zarr_input.name}: level {frame.level} is larger than the memory allowed, and movies are "
-                          "not streamed brick by brick; give --level with a coarser level or a larger --memory")
-    return scene.with_volume(frame.volume)
+        return scene, frame.source
+    return scene.with_volume(frame.volume), None
