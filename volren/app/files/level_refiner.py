@@ -5,11 +5,13 @@ that fits in memory: the person sees the data in a moment instead of after the w
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 
-from PyQt5.QtCore import QObject, QRunnable, QThreadPool, pyqtSignal, pyqtSlot
+from PyQt5.QtCore import QObject, QThreadPool, pyqtSignal, pyqtSlot
 
-from volren.app.core.loading import one_line_error, prepare_for_rendering
+from volren.app.core.loading import prepare_for_rendering
+from volren.app.files.pool_read import ReadSignals, ReadTask
 from volren.model.volume import Volume
 
 #: read(path, level) -> that level, prepared for rendering.
@@ -22,31 +24,6 @@ def read_level(path: str, level: int) -> Volume:
     volume = load_volume(path, level=level)
     prepare_for_rendering(volume)
     return volume
-
-
-class _Signals(QObject):
-    done = pyqtSignal(int, int, object)  # serial, level, volume
-    failed = pyqtSignal(int, str)
-
-
-class _ReadTask(QRunnable):
-    def __init__(self, serial: int, path: str, level: int, read: LevelReader, signals: _Signals) -> None:
-        super().__init__()
-        self._serial, self._path, self._level, self._read, self._signals = serial, path, level, read, signals
-
-    def run(self) -> None:
-        try:
-            volume = self._read(self._path, self._level)
-        except BaseException as exc:  # noqa: BLE001 - every failure becomes a one-line message
-            self._emit("failed", one_line_error(exc, self._path))
-            return
-        self._emit("done", self._level, volume)
-
-    def _emit(self, signal: str, *payload: object) -> None:
-        try:
-            getattr(self._signals, signal).emit(self._serial, *payload)
-        except RuntimeError:  # the window closed while we read
-            pass
 
 
 class LevelRefiner(QObject):
@@ -64,7 +41,7 @@ class LevelRefiner(QObject):
         self._levels: list[int] = []
         self._pool = QThreadPool(self)
         self._pool.setMaxThreadCount(1)
-        self._signals = _Signals(self)
+        self._signals = ReadSignals(self)
         self._signals.done.connect(self._on_done)
         self._signals.failed.connect(self._on_failed)
 
@@ -84,19 +61,22 @@ class LevelRefiner(QObject):
 
     def _next(self) -> None:
         if self._levels:
-            self._pool.start(_ReadTask(self._serial, self._path, self._levels[0], self._read, self._signals))
+            path, level = self._path, self._levels[0]
+            read = functools.partial(self._read, path, level)
+            self._pool.start(ReadTask((self._serial, level), path, read, self._signals))
 
-    @pyqtSlot(int, int, object)
-    def _on_done(self, serial: int, level: int, volume: object) -> None:
+    @pyqtSlot(object, object)
+    def _on_done(self, key: tuple[int, int], volume: object) -> None:
+        serial, level = key
         if serial != self._serial:
             return
         self._levels.pop(0)
         self.levelReady.emit(level, volume)
         self._next()
 
-    @pyqtSlot(int, str)
-    def _on_failed(self, serial: int, message: str) -> None:
-        if serial == self._serial:
+    @pyqtSlot(object, str)
+    def _on_failed(self, key: tuple[int, int], message: str) -> None:
+        if key[0] == self._serial:
             self._levels = []
             self.failed.emit(message)
 

@@ -10,13 +10,15 @@ comes next, and steps no longer near the one shown are not read at all.
 
 from __future__ import annotations
 
+import functools
 from collections import OrderedDict
 from collections.abc import Callable
 from pathlib import Path
 
-from PyQt5.QtCore import QObject, QRunnable, QThreadPool, pyqtSignal, pyqtSlot
+from PyQt5.QtCore import QObject, QThreadPool, pyqtSignal, pyqtSlot
 
-from volren.app.core.loading import one_line_error, prepare_for_rendering
+from volren.app.core.loading import prepare_for_rendering
+from volren.app.files.pool_read import ReadSignals, ReadTask
 from volren.io.series_io import TimeSeries
 from volren.model.volume import Volume
 
@@ -33,33 +35,6 @@ def read_step(path: Path, scalars: str | None) -> Volume:
     volume = load_volume(path, scalars=scalars)
     prepare_for_rendering(volume)
     return volume
-
-
-class _Signals(QObject):
-    """Lives in the GUI thread; emitting from the pool thread queues the call."""
-
-    done = pyqtSignal(int, object)
-    failed = pyqtSignal(int, str)
-
-
-class _ReadTask(QRunnable):
-    def __init__(self, index: int, path: Path, scalars: str | None, read: StepReader, signals: _Signals) -> None:
-        super().__init__()
-        self._index, self._path, self._scalars, self._read, self._signals = index, path, scalars, read, signals
-
-    def run(self) -> None:
-        try:
-            volume = self._read(self._path, self._scalars)
-        except BaseException as exc:  # noqa: BLE001 - every failure becomes a one-line message
-            self._emit("failed", one_line_error(exc, self._path))
-            return
-        self._emit("done", volume)
-
-    def _emit(self, signal: str, payload: object) -> None:
-        try:
-            getattr(self._signals, signal).emit(self._index, payload)
-        except RuntimeError:  # the window closed while we read
-            pass
 
 
 class SeriesSteps(QObject):
@@ -81,7 +56,7 @@ class SeriesSteps(QObject):
         self._wanted: int | None = None
         self._pool = QThreadPool(self)
         self._pool.setMaxThreadCount(1)
-        self._signals = _Signals(self)
+        self._signals = ReadSignals(self)
         self._signals.done.connect(self._on_done)
         self._signals.failed.connect(self._on_failed)
 
@@ -128,7 +103,9 @@ class SeriesSteps(QObject):
             if index in self._cache:
                 continue
             self._reading = index
-            self._pool.start(_ReadTask(index, self.series.steps[index], self._scalars, self._read, self._signals))
+            path = self.series.steps[index]
+            read = functools.partial(self._read, path, self._scalars)
+            self._pool.start(ReadTask(index, path, read, self._signals))
 
     def _store(self, index: int, volume: Volume) -> None:
         self._cache[index] = volume
@@ -140,7 +117,7 @@ class SeriesSteps(QObject):
                 oldest = next(iter(self._cache))
             del self._cache[oldest]
 
-    @pyqtSlot(int, object)
+    @pyqtSlot(object, object)
     def _on_done(self, index: int, volume: object) -> None:
         self._reading = None
         wanted = index == self._wanted
@@ -152,7 +129,7 @@ class SeriesSteps(QObject):
         else:
             self._pump()
 
-    @pyqtSlot(int, str)
+    @pyqtSlot(object, str)
     def _on_failed(self, index: int, message: str) -> None:
         self._reading = None
         if index == self._wanted:
