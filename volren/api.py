@@ -174,9 +174,9 @@ def render(
         vol, source = frame.volume or vol, frame.source
     with prepared_renderer(renderer, vol, transfer, render_settings) as r:
         if source is not None:
-            from volren.bricked.sort_last import render_bricked
+            from volren.bricked.sort_last import render_streamed
 
-            image, _ = render_bricked(r, source, transfer, cam, width, height, source.brick, progress)
+            image, _ = render_streamed(r, source, transfer, cam, width, height, progress)
         else:
             image, _ = render_frame(r, cam, width, height, progress, label=renderer)
         return image

@@ -8,6 +8,7 @@ whose TF differs (so a movie without TF keyframes builds its tables once). Each 
 
 from __future__ import annotations
 
+import functools
 import statistics
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -23,10 +24,10 @@ from volren.model.scene import Scene
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
 from volren.quality import AUTO, resolve
+from volren.renderers.base import FrameStats, ProgressCallback, Renderer, render_frame
 
 if TYPE_CHECKING:
     from volren.bricked.source import BrickSource
-from volren.renderers.base import FrameStats, ProgressCallback, Renderer, render_frame
 
 
 @dataclass(frozen=True)
@@ -70,24 +71,17 @@ def render_movie(
         scene = replace(scene, renderer=renderer, settings=settings)
     volumes = None if not steps else _step_volumes(steps, animation.frames, scene.scalars)
     with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
-        draw = None if source is None else streamed_frames(source)
+        draw = None
+        if source is not None:
+            from volren.bricked.sort_last import render_streamed
+
+            draw = functools.partial(render_streamed, source=source)
         return record_movie(renderer, animation, scene.camera, scene.transfer_function, bounds or scene.volume.bounds,
                             scene.size, path, background, lossless, progress, scene.renderer, volumes, draw)  # fmt: skip
 
 
-#: draw(renderer, tf, camera, width, height, progress) -> (image, FrameStats): one frame.
+#: draw(renderer, tf=, camera=, width=, height=, progress=) -> (image, FrameStats): one frame.
 FrameDrawer = Callable[..., tuple[Any, FrameStats]]
-
-
-def streamed_frames(source: BrickSource) -> FrameDrawer:
-    """Frames of `source` streamed brick by brick (`render_bricked`) with the renderer given."""
-    from volren.bricked.sort_last import render_bricked
-
-    def draw(renderer: Renderer, tf: TransferFunction, camera, width: int, height: int, progress):
-        image, frame = render_bricked(renderer, source, tf, camera, width, height, source.brick, progress)
-        return image, FrameStats(frame.total_ms, width, height, {"bricks_drawn": frame.drawn})
-
-    return draw
 
 
 def _step_volumes(steps: Sequence[str | Path], frames: int, scalars: str | None) -> Callable[[int], Volume | None]:
@@ -144,7 +138,7 @@ def record_movie(
             if draw is None:
                 image, stats = render_frame(renderer, camera, width, height, within, label=label)
             else:
-                image, stats = draw(renderer, tf, camera, width, height, within)
+                image, stats = draw(renderer, tf=tf, camera=camera, width=width, height=height, progress=within)
             times.append(stats.ms)
             writer.append(to_png_pixels(image, background))
             if progress is not None:

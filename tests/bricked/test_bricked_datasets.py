@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from tests.conftest import load_scene_tf
+from volren.api import prepared_renderer
 from volren.bricked.sort_last import render_bricked
 from volren.bricked.source import VolumeSource
 from volren.io.volume_io import load_volume
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
-from volren.renderers.registry import registry
 
 CASES = [
     ("bonsai", 64, RenderSettings(options={"early_termination": False})),
@@ -30,15 +30,9 @@ def test_bricked_equals_whole_on_real_data(shared_data, name, brick, settings, p
     volume = load_volume(shared_data / "uniform" / f"{name}.vti")
     tf = load_scene_tf(f"{name}-smooth")
     camera = Camera.orbit(volume.bounds, 30, 20, parallel=parallel)
-    renderer = registry.create("slicer")
-    try:
-        renderer.set_settings(settings)
-        renderer.set_volume(volume)
-        renderer.set_transfer_function(tf)
+    with prepared_renderer("slicer", volume, tf, settings) as renderer:
         whole = renderer.render(camera, 96, 96)
         bricked, stats = render_bricked(renderer, VolumeSource(volume), tf, camera, 96, 96, brick=brick)
-    finally:
-        renderer.release()
     assert stats.drawn >= 8
     assert whole[..., 3].mean() > 0.05
     error = float(np.sqrt(np.mean((bricked.astype(np.float64) - whole) ** 2)))

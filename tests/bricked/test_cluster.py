@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
+from volren.api import prepared_renderer
 from volren.bricked.cluster import ClusterRenderer, VolumeSpec, ZarrSpec, connect, local_client, parse_cluster
 from volren.errors import VolrenError
 from volren.io import ome_zarr_io
@@ -42,14 +43,8 @@ def client():
 
 
 def whole_render(name, volume, settings, camera, size=(24, 20)):
-    renderer = registry.create(name)
-    try:
-        renderer.set_settings(settings)
-        renderer.set_volume(volume)
-        renderer.set_transfer_function(TF)
+    with prepared_renderer(name, volume, TF, settings) as renderer:
         return renderer.render(camera, *size)
-    finally:
-        renderer.release()
 
 
 def rmse(a, b):

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from volren.api import prepared_renderer
 from volren.bricked.layout import BrickLayout
 from volren.bricked.sort_last import render_bricked
 from volren.bricked.source import VolumeSource
@@ -41,18 +42,12 @@ class CountingSource(VolumeSource):
 
 
 def whole_and_bricked(name, volume, tf, camera, settings, brick, size=(20, 16)):
-    renderer = registry.create(name)
-    try:
-        renderer.set_settings(settings)
-        renderer.set_volume(volume)
-        renderer.set_transfer_function(tf)
+    with prepared_renderer(name, volume, tf, settings) as renderer:
         whole = renderer.render(camera, *size)
         bricked, stats = render_bricked(renderer, VolumeSource(volume), tf, camera, *size, brick=brick)
         assert renderer.region is None  # cleared after the frame
         renderer.set_volume(volume)
         again = renderer.render(camera, *size)  # and whole volumes draw as before
-    finally:
-        renderer.release()
     return whole, bricked, again, stats
 
 

@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from volren.api import prepared_renderer
 from volren.bricked.sort_last import render_bricked
 from volren.bricked.zarr_input import ZarrInput
 from volren.bricked.zarr_source import ZarrSource, level_for_view
@@ -41,16 +42,10 @@ def render_both(path, name, settings, budget, camera=None):
     image = ome_zarr_io.open_multiscale(path)
     whole = ome_zarr_io.load_level(path, 0)
     camera = camera or Camera.orbit(whole.bounds, 35, 25, zoom=1.1)
-    renderer = registry.create(name)
-    try:
-        renderer.set_settings(settings)
-        renderer.set_volume(whole)
-        renderer.set_transfer_function(TF)
+    with prepared_renderer(name, whole, TF, settings) as renderer:
         expected = renderer.render(camera, 24, 20)
         source = ZarrSource(image, 0, budget)
         streamed, frame = render_bricked(renderer, source, TF, camera, 24, 20, brick=source.brick)
-    finally:
-        renderer.release()
     return expected, streamed, frame, source
 
 

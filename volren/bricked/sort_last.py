@@ -27,7 +27,7 @@ from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import UniformVolume
-from volren.renderers.base import ProgressCallback, Renderer, render_frame
+from volren.renderers.base import FrameStats, ProgressCallback, Renderer, render_frame
 
 
 @dataclass(frozen=True)
@@ -152,3 +152,24 @@ def render_bricked(
     stats = BrickedFrame(layout.n_bricks, cost.drawn, int(np.count_nonzero(~visible)), ghost, cost.read_ms,
                          cost.render_ms, cost.composite_ms, total)  # fmt: skip
     return image.astype(np.float32), stats
+
+
+def render_streamed(
+    renderer: Renderer,
+    source: BrickSource,
+    tf: TransferFunction,
+    camera: Camera,
+    width: int,
+    height: int,
+    progress: ProgressCallback | None = None,
+) -> tuple[NDArray[np.float32], FrameStats]:
+    """A frame of `source` in bricks as large as its chunks (`source.brick`), with what it did as
+    the FrameStats every frame has (bricks, times, and the chunk cache's counters)."""
+    image, frame = render_bricked(renderer, source, tf, camera, width, height, source.brick, progress)  # type: ignore[attr-defined]
+    counters = {"bricks": frame.bricks, "bricks_drawn": frame.drawn, "bricks_transparent": frame.transparent,
+                "read_ms": frame.read_ms, "composite_ms": frame.composite_ms}  # fmt: skip
+    cache = getattr(source, "cache", None)
+    if cache is not None:
+        counters.update(cache_misses=cache.stats.misses, cache_hits=cache.stats.hits,
+                        cache_peak_bytes=cache.stats.peak_bytes)  # fmt: skip
+    return image, FrameStats(frame.total_ms, width, height, counters)

@@ -14,12 +14,11 @@ placed on the full resolution's bounds, so it does not move with the level drawn
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 from volren.bricked.zarr_source import ZarrSource, level_bounds, level_for_view
-from volren.errors import VolrenError, VolrenWarning
+from volren.errors import VolrenError
 from volren.io import ome_zarr_io
 from volren.io.ome_zarr_io import Multiscale
 from volren.model.camera import Camera
@@ -66,12 +65,8 @@ class ZarrInput:
             self.check_level(level)
         if support is None or not support.regions:
             if level is None:
-                level = ome_zarr_io.finest_level_within(self.image, self.budget)
-                if level:
-                    whole = ome_zarr_io.human_size(ome_zarr_io.level_bytes(self.image.levels[0]))
-                    warnings.warn(f"{self.name}: its full resolution is {whole}, more than the "
-                                  f"{ome_zarr_io.human_size(self.budget)} allowed; rendering level {level}, the finest "
-                                  f"that fits (renderer {renderer} does not stream bricks)", VolrenWarning, stacklevel=3)  # fmt: skip
+                level = ome_zarr_io.finest_level_said(self.image, self.budget, self.name,
+                                                      f" (renderer {renderer} does not stream bricks)")  # fmt: skip
             return ZarrFrame(level if level is not None else 0,
                              volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))  # fmt: skip
         if level is None:

@@ -409,6 +409,7 @@ def _local_frame(args: argparse.Namespace, scene: Scene, camera, clock: StageClo
     """The frame in this process: (image, FrameStats, what was drawn for the line). An OME-Zarr
     INPUT draws the level `ZarrInput.frame` decides, whole or streamed brick by brick."""
     from volren.api import prepared_renderer
+    from volren.bricked.sort_last import render_streamed
     from volren.cli.progress import progress_bar
     from volren.renderers.base import render_frame
 
@@ -429,20 +430,7 @@ def _local_frame(args: argparse.Namespace, scene: Scene, camera, clock: StageClo
             if source is None:
                 image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
             else:
-                image, stats = streamed_frame(renderer, source, scene, camera, progress)
+                image, stats = render_streamed(renderer, source, scene.transfer_function, camera, width, height,
+                                               progress)  # fmt: skip
                 drawn = drawn[:-1] + f": {stats.counters['bricks_drawn']:.0f} of {stats.counters['bricks']:.0f} bricks drawn)"
     return image, stats, drawn
-
-
-def streamed_frame(renderer, source, scene: Scene, camera, progress):
-    """A frame of a level streamed brick by brick, with its counters as a FrameStats."""
-    from volren.bricked.sort_last import render_bricked
-    from volren.renderers.base import FrameStats
-
-    width, height = scene.size
-    image, frame = render_bricked(renderer, source, scene.transfer_function, camera, width, height, source.brick, progress)
-    cache = source.cache.stats
-    counters = {"bricks": frame.bricks, "bricks_drawn": frame.drawn, "bricks_transparent": frame.transparent,
-                "read_ms": frame.read_ms, "composite_ms": frame.composite_ms, "cache_misses": cache.misses,
-                "cache_hits": cache.hits, "cache_peak_bytes": cache.peak_bytes}  # fmt: skip
-    return image, FrameStats(frame.total_ms, width, height, counters)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import math
 import shutil
+import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,8 +25,16 @@ from typing import Any
 
 import numpy as np
 
-from volren.errors import VolrenError
-from volren.model.pyramid import DEFAULT_CHUNK, block_mean, brick_slices, default_levels, value_range
+from volren.errors import VolrenError, VolrenWarning
+from volren.model.pyramid import (
+    DEFAULT_CHUNK,
+    block_mean,
+    brick_slices,
+    coarser_placement,
+    default_levels,
+    level_shapes,
+    value_range,
+)
 from volren.model.volume import UniformVolume
 
 #: The install hint of the optional packages this format needs.
@@ -204,6 +213,17 @@ def finest_level_within(image: Multiscale, budget: int) -> int | None:
     return next((k for k, level in enumerate(image.levels) if level_bytes(level) <= budget), None)
 
 
+def finest_level_said(image: Multiscale, budget: int, name: str, why: str = "") -> int | None:
+    """`finest_level_within`, with a one-line warning (naming `name`, and `why` after it) when
+    that is not the full resolution."""
+    level = finest_level_within(image, budget)
+    if level:
+        whole = human_size(level_bytes(image.levels[0]))
+        warnings.warn(f"{name}: its full resolution is {whole}, more than the {human_size(budget)} allowed; "
+                      f"rendering level {level}, the finest that fits{why}", VolrenWarning, stacklevel=3)  # fmt: skip
+    return level
+
+
 def human_size(size: float) -> str:
     """Bytes as people read them: 512 KiB, 16.0 MiB, 1.5 GiB."""
     for unit, scale in (("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)):
@@ -295,16 +315,9 @@ def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float]
         raise VolrenError(f"{path}: bricks must be 2 to 1024 samples a side, got {chunk!r}")
     shape = tuple(int(n) for n in values.shape)
     count = levels if levels is not None else default_levels(shape, chunk)
-    if count < 1:
-        raise VolrenError(f"a pyramid needs at least one level, got {count}")
     if not path.absolute().parent.is_dir():
         raise VolrenError(f"{path}: the folder {path.absolute().parent} does not exist")
-    shapes = [shape]
-    for index in range(1, count):
-        if min(shapes[-1]) < 4:
-            raise VolrenError(f"level {index} would have fewer than 2 samples along an axis (level {index - 1} is "
-                              f"{'x'.join(map(str, shapes[-1][::-1]))}); ask for fewer levels")  # fmt: skip
-        shapes.append(tuple(n // 2 for n in shapes[-1]))
+    shapes = level_shapes(shape, count)
     partial = path.with_name(f".{path.name}.partial")
     shutil.rmtree(partial, ignore_errors=True)
     total = sum(_bricks(level_shape, chunk) for level_shape in shapes)
@@ -316,8 +329,7 @@ def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float]
         level_spacing, level_origin = tuple(float(v) for v in spacing), tuple(float(v) for v in origin)
         for index, level_shape in enumerate(shapes):
             if index:
-                level_origin = tuple(o + 0.5 * h for o, h in zip(level_origin, level_spacing, strict=True))
-                level_spacing = tuple(2 * h for h in level_spacing)
+                level_spacing, level_origin = coarser_placement(level_spacing, level_origin)
             array = group.create_array(str(index), shape=level_shape, chunks=(chunk,) * 3, dtype=np.dtype(values.dtype),
                                        fill_value=0)  # fmt: skip
             level_ranges = []

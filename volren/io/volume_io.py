@@ -9,13 +9,12 @@ instead); what the reader returned is checked again; then the dataset becomes a 
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
 from numpy.typing import DTypeLike
 
-from volren.errors import VolrenError, VolrenWarning, file_error
+from volren.errors import VolrenError, file_error
 from volren.io import _pv, reader_messages
 from volren.io.dataset import grid_from_view, tets_from_view, volume_from_grid
 from volren.io.formats import SUPPORTED, find_format
@@ -51,12 +50,7 @@ def load_ome_zarr(path: str | Path, level: int | None = None, memory: int | None
     budget = memory if memory is not None else ome_zarr_io.MAX_IN_MEMORY_BYTES
     name = str(path).rstrip("/").rsplit("/", 1)[-1] if ome_zarr_io.is_url(path) else Path(path).name
     if level is None:
-        image = ome_zarr_io.open_multiscale(path)
-        level = ome_zarr_io.finest_level_within(image, budget)
-        if level:
-            whole = ome_zarr_io.human_size(ome_zarr_io.level_bytes(image.levels[0]))
-            warnings.warn(f"{name}: its full resolution is {whole}, more than the {ome_zarr_io.human_size(budget)} "
-                          f"allowed; rendering level {level}, the finest that fits", VolrenWarning, stacklevel=2)  # fmt: skip
+        level = ome_zarr_io.finest_level_said(ome_zarr_io.open_multiscale(path), budget, name)
     return ome_zarr_io.load_level(path, level, name=name, memory=budget)
 
 

@@ -13,8 +13,7 @@ The brick ranges let a renderer skip a brick that the TF makes transparent witho
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,15 +22,6 @@ from volren.errors import VolrenError
 
 #: Bricks of 64^3 samples: 512 KiB of uint16, small enough to stream, large enough to render.
 DEFAULT_CHUNK = 64
-
-
-@dataclass(frozen=True)
-class Level:
-    """One level: values[k, j, i] with spacing and origin in (x, y, z), as a `UniformVolume`."""
-
-    values: NDArray
-    spacing: tuple[float, float, float]
-    origin: tuple[float, float, float]
 
 
 def block_mean(values: NDArray) -> NDArray:
@@ -55,21 +45,25 @@ def default_levels(shape: tuple[int, ...], chunk: int) -> int:
     return levels
 
 
-def pyramid(values: NDArray, spacing: tuple[float, float, float], origin: tuple[float, float, float],
-            levels: int) -> Iterator[Level]:  # fmt: skip
-    """The `levels` levels from the full resolution down, each made from the one before."""
+def level_shapes(shape: tuple[int, ...], levels: int) -> list[tuple[int, ...]]:
+    """The (z, y, x) shape of each of `levels` levels, the full resolution first: each coarser one
+    half the one before, rounded down (odd last samples left out)."""
     if levels < 1:
         raise VolrenError(f"a pyramid needs at least one level, got {levels}")
-    level = Level(values, spacing, origin)
-    yield level
+    shapes = [tuple(int(n) for n in shape)]
     for index in range(1, levels):
-        if min(level.values.shape) < 4:
+        if min(shapes[-1]) < 4:
             raise VolrenError(f"level {index} would have fewer than 2 samples along an axis (level {index - 1} is "
-                              f"{'x'.join(map(str, level.values.shape[::-1]))}); ask for fewer levels")  # fmt: skip
-        coarse_spacing = tuple(2 * s for s in level.spacing)
-        coarse_origin = tuple(o + 0.5 * s for o, s in zip(level.origin, level.spacing, strict=True))
-        level = Level(block_mean(level.values), coarse_spacing, coarse_origin)  # type: ignore[arg-type]
-        yield level
+                              f"{'x'.join(map(str, shapes[-1][::-1]))}); ask for fewer levels")  # fmt: skip
+        shapes.append(tuple(n // 2 for n in shapes[-1]))
+    return shapes
+
+
+def coarser_placement(spacing: Sequence[float], origin: Sequence[float]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """(spacing, origin) of the level above one placed at `spacing`, `origin`: twice the spacing,
+    and the first block mean at the centre of its block, half a fine voxel in."""
+    return (tuple(2.0 * h for h in spacing),
+            tuple(o + 0.5 * h for o, h in zip(origin, spacing, strict=True)))  # fmt: skip
 
 
 def brick_slices(shape: tuple[int, ...], chunk: int) -> Iterator[tuple[tuple[int, int, int], tuple[slice, ...]]]:

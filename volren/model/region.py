@@ -61,6 +61,11 @@ class Region:
     def whole_max(self) -> Triple:
         return tuple(float(v) for v in self.whole_bounds[1::2])  # type: ignore[return-value]
 
+    @property
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi): the owner box within the whole box, the part of space this brick draws."""
+        return np.maximum(self.owner_min, self.whole_min), np.minimum(self.owner_max, self.whole_max)
+
     def owns(self, points: np.ndarray) -> np.ndarray:
         """Which of the (..., 3) world points belong to this region (half-open box)."""
         points = np.asarray(points)
@@ -70,8 +75,7 @@ class Region:
         """(x0, y0, x1, y1), row 0 at the top, end exclusive: the pixels whose rays can meet this
         region's box (the owner box within the whole box), a pixel wider on every side. The whole
         image when a corner lies behind the eye."""
-        lo = np.maximum(self.owner_min, self.whole_min)
-        hi = np.minimum(self.owner_max, self.whole_max)
+        lo, hi = self.box
         corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
         clip = corners @ (camera.projection_matrix(width / height) @ camera.view_matrix()).T
         if np.any(clip[:, 3] <= 1e-9):

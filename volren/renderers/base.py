@@ -287,6 +287,13 @@ class RendererBase(ABC):
         self._region = region
         self._region_changed()
 
+    def _whole_value_range(self) -> tuple[float, float]:
+        """The value range that normalisations and thresholds use: the whole volume's while a
+        region is set, so that every brick computes them alike; else the volume's own."""
+        if self._region is not None:
+            return self._region.value_range
+        return self._volume.value_range  # type: ignore[union-attr]
+
     def ghost_voxels(self, spacing: tuple[float, float, float], camera: Camera, width: int, height: int) -> int:
         """How many voxels beyond a region's box, per face, a frame with these settings reads from
         a volume of this voxel `spacing`: the caller cuts sub-volumes with at least this many. One
@@ -354,8 +361,7 @@ class RendererBase(ABC):
                 f"renderer {self.name}: bricks composite only with the composite blend mode, not {self._settings.blend_mode}"
             )
         bounds = np.asarray(volume.bounds, dtype=np.float64)  # type: ignore[union-attr]
-        lo = np.maximum(region.owner_min, region.whole_min)
-        hi = np.minimum(region.owner_max, region.whole_max)
+        lo, hi = region.box
         slack = 1e-6 * max(float(np.ptp(np.asarray(region.whole_bounds).reshape(3, 2), axis=1).max()), 1.0)
         if np.any(lo < bounds[0::2] - slack) or np.any(hi > bounds[1::2] + slack):
             raise VolrenError(

@@ -160,7 +160,7 @@ class ReferenceRenderer(RendererBase):
         prepared = self._prepare()
         length = prepared[-1]
         region = self._region
-        lo, hi = region.value_range if region is not None else vol.value_range
+        lo, hi = self._whole_value_range()
         spar = shade_params(settings, camera, hi - lo, length)
         h0 = float(settings.step) * length
 
@@ -176,8 +176,7 @@ class ReferenceRenderer(RendererBase):
         if isinstance(vol, UniformVolume):
             values, org, sp, blo, bhi, _ = prepared
             if region is not None:  # the brick's own box: the integral is exact, so cutting it there is too
-                blo = np.maximum(region.owner_min, region.whole_min)
-                bhi = np.minimum(region.owner_max, region.whole_max)
+                blo, bhi = region.box
 
         if isinstance(vol, UniformVolume) and two_d:
 

@@ -222,10 +222,6 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         # The value range the volume is normalised to may be the whole volume's now (or no longer).
         self._volume_changed()
 
-    def _value_range(self) -> tuple[float, float] | None:
-        """The range tables and the texture are normalised to: the whole volume's for a brick."""
-        return self._region.value_range if self._region is not None else None
-
     def ghost_voxels(self, spacing, camera: Camera, width: int, height: int) -> int:
         """A pre-integrated segment owned by a brick (its front is inside) ends up to one plane
         spacing along the ray beyond the face: its end value and gradient need that many voxels
@@ -252,7 +248,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             self._volume_tex = None
         if self._volume_tex is None:
             volume = self._uniform_volume()
-            info = textures.volume_texture(volume, native, self._value_range())
+            info = textures.volume_texture(volume, native, self._whole_value_range())
             nz, ny, nx = info.data.shape
             limit = self._context().info["GL_MAX_3D_TEXTURE_SIZE"]
             if max(nx, ny, nz) > limit:
@@ -271,7 +267,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     def _ensure_gradient(self) -> Any:
         if self._gradient_tex is None:
             volume = self._uniform_volume()
-            data, scale = textures.gradient_texture(volume, self._value_range())
+            data, scale = textures.gradient_texture(volume, self._whole_value_range())
             nz, ny, nx = volume.values.shape
             tex = self._context().texture3d((nx, ny, nz), 3, data, dtype="f2")
             tex.repeat_x = tex.repeat_y = tex.repeat_z = False
@@ -473,7 +469,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             self._set(program, "u_diffuse", float(s.diffuse))
             self._set(program, "u_specular", float(s.specular))
             self._set(program, "u_specular_power", float(s.specular_power))
-            value_lo, value_hi = region.value_range if region is not None else volume.value_range
+            value_lo, value_hi = self._whole_value_range()
             span = float(value_hi - value_lo)
             self._set(program, "u_gradient_threshold", GRADIENT_EPS * span / volume.characteristic_length)
         if defines["SKIP"]:
@@ -504,6 +500,8 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         opts = self._options()
+        if self._region is not None and opts.path != "march":
+            raise VolrenError("slicer: drawing a brick of a bricked volume needs the option path=march")
         if self._settings.preintegration and getattr(self._tf, "dims", 1) == 2:
             raise VolrenError("slicer: pre-integration needs a 1D transfer function; switch it off for 2D TFs")
         defines = self._defines(opts)
@@ -512,8 +510,6 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         if defines["SKIP"]:
             counters.update(self._brick_mask(opts, self._spacing(), self._min_cosine(camera, width, height)))
         world_to_clip = camera.projection_matrix(width / height) @ camera.view_matrix()
-        if self._region is not None and opts.path != "march":
-            raise VolrenError("slicer: drawing a brick of a bricked volume needs the option path=march")
         if opts.path == "march":
             raw = self._march(defines, camera, opts, width, height, world_to_clip, counters)
         else:
