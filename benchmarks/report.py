@@ -27,6 +27,9 @@ SECTIONS = (
     ("summary.md", "Run time against error", "How fast is each renderer for a given error, against VTK?"),
     ("skip.md", "The cost of skipping", "What does each skipping technique save, and what does it change?"),
     ("stress.md", "Numerical stress", "Do extreme inputs give NaN, Inf or out-of-range pixels?"),
+    ("quality.md", "Fast by default: `auto` at each quality level against VTK's default",
+     "What does a render with no options (or with `--quality LEVEL`) get, against VTK's default, scene by scene? "
+     "(`volren bench quality ... --markdown`)"),
     ("plugins.md", "The plugin renderers (shear-warp, object order)",
      "How do the seeds' CPU algorithms compare with VTK and the slicer at equal error, and with their papers' tables?"),
     ("app.md", "Desktop app responsiveness", "How long from a TF edit to the new frame; frames per second."),

@@ -106,7 +106,7 @@ def test_settings_for_applies_the_level_and_keeps_the_callers_options():
 def test_the_committed_table_round_trips_and_covers_both_kinds():
     table = quality.table()
     assert QualityTable.from_json(json.loads(json.dumps(table.to_json())), "again") == table
-    assert set(table.levels) == {"uniform", "tet"}
+    assert set(table.levels) == {f"{kind}{cls}" for kind in ("uniform", "tet") for cls in ("", "/smooth", "/sharp")}
     for kind, renderers in table.levels.items():
         for name, levels in renderers.items():
             assert list(levels) == list(quality.LEVELS), (kind, name)
@@ -129,3 +129,89 @@ def test_the_cli_quality_flag_sets_the_measured_settings_and_flags_win(tmp_path,
     assert np.array_equal(np.load(out["draft"]), np.load(out["step2"]))
     assert np.array_equal(np.load(out["override"]), np.load(out["step1"]))
     assert not np.array_equal(np.load(out["draft"]), np.load(out["step1"]))
+
+
+def test_tf_sharpness_is_the_steepest_optical_depth_change_across_the_data_range():
+    from volren.model import TransferFunction1D
+
+    ramp = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [10, 0.5]])
+    # -ln(1 - a) rises by ln 2 over the TF's whole span; over data spanning half of it, half that
+    assert quality.tf_sharpness(ramp, (0.0, 10.0)) == pytest.approx(np.log(2.0))
+    assert quality.tf_sharpness(ramp, (0.0, 5.0)) == pytest.approx(np.log(2.0) / 2)
+    assert quality.tf_class(ramp, (0.0, 10.0)) == "smooth"
+    # the same rise over a hundredth of the data's range is sharp
+    assert quality.tf_sharpness(ramp, (0.0, 1000.0)) == pytest.approx(100 * np.log(2.0))
+    assert quality.tf_class(ramp, (0.0, 1000.0)) == "sharp"
+    step = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [5, 0.0], [5, 0.2], [10, 0.2]])
+    assert quality.tf_sharpness(step, (0.0, 10.0)) == np.inf and quality.tf_class(step, (0.0, 10.0)) == "sharp"
+    flat = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.3], [10, 0.3]])
+    assert quality.tf_sharpness(flat, (0.0, 10.0)) == 0.0
+    assert quality.tf_sharpness(ramp, (3.0, 3.0)) == 0.0  # constant data: nothing to be sharp over
+    assert quality.tf_class(object(), (0.0, 1.0)) is None  # not a 1D TF (a 2D one): no class
+    assert quality.scene_kind("uniform", ramp, (0.0, 1000.0)) == "uniform/sharp"
+    assert quality.scene_kind("tet", object(), (0.0, 1.0)) == "tet"
+    assert quality.base_kind("uniform/sharp") == "uniform"
+
+
+def test_levels_are_also_chosen_per_tf_class_and_looked_up_with_a_fallback():
+    rows = rows_for("vtk-smart", "default", (0.01, 0.01), 300)
+    rows += rows_for("slicer", "step 1, post", (0.005, 0.03), 60)  # within on the smooth scene only
+    rows += rows_for("slicer", "step 0.5, pre 512", (0.02, 0.005), 100)  # within on the opaque scene only
+    rows += rows_for("slicer", "step 0.25, pre 512", (0.008, 0.004), 200)  # within on both
+    classes = {("a", "smooth"): "smooth", ("b", "opaque"): "sharp"}
+    table = derive(rows, "test", classes)
+    assert table.choice("slicer", "uniform", "default").label == "step 0.25, pre 512"
+    assert table.choice("slicer", "uniform/smooth", "default").label == "step 1, post"
+    assert table.choice("slicer", "uniform/sharp", "default").label == "step 0.5, pre 512"
+    assert table.choice("slicer", "uniform/smooth", "default").ms == {"a/smooth": 60.0}
+    # a class the table lacks falls back to the kind's own levels
+    lean = QualityTable({"uniform": table.levels["uniform"]}, "t")
+    assert lean.choice("slicer", "uniform/smooth", "default").label == "step 0.25, pre 512"
+    assert sorted(lean.measured("uniform/sharp")) == ["slicer", "vtk"]
+    # settings are at the level they measure as for the TF's class first (step 1 is the sharp class's draft) ...
+    smooth_default = table.choice("slicer", "uniform/smooth", "default").apply(RenderSettings())
+    assert quality.level_of("slicer", "uniform/sharp", smooth_default, table) == "draft"
+    # ... else at the other class's: a TF edited into the other class keeps its level
+    sharp_high = table.choice("slicer", "uniform/sharp", "high").apply(RenderSettings())
+    assert quality.level_of("slicer", "uniform/smooth", sharp_high, table) == "high"
+    assert quality.level_of("slicer", "uniform/sharp", RenderSettings(step=0.3), table) is None
+    # without classes only the kind's levels
+    assert set(derive(rows, "test").levels) == {"uniform"}
+
+
+def test_auto_chooses_by_the_tfs_class(monkeypatch):
+    from volren.model import TransferFunction1D
+
+    uniform = {name: {level: choice(ms) for level in quality.LEVELS} for name, ms in (("slicer", 100), ("objectorder", 50))}
+    sharp = {name: {level: choice(ms) for level in quality.LEVELS} for name, ms in (("slicer", 30), ("objectorder", 80))}
+    table = QualityTable({"uniform": uniform, "uniform/sharp": sharp}, "t")
+    monkeypatch.setattr(quality, "table", lambda: table)
+    smooth_tf = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [10, 0.5]])
+    sharp_tf = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [5, 0.0], [5.01, 1.0], [10, 1.0]])
+    for tf, wanted in ((smooth_tf, "objectorder"), (sharp_tf, "slicer")):
+        kind = quality.scene_kind("uniform", tf, (0.0, 10.0))
+        assert quality.resolve(kind, 1, "auto", None, RenderSettings())[0] == wanted
+
+
+def test_bench_quality_classes_the_scenes_and_writes_the_auto_report(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv("VOLREN_SHARED", raising=False)  # the bundled samples are classed without it
+    rows = [{"dataset": "marschner_lobb", "tf": "sample", "kind": "uniform", "renderer": curve, "settings": label,
+             "ms": str(ms), "rmse": str(rmse)}
+            for curve, label, ms, rmse in (("vtk-smart", "default", 200.0, 0.01), ("slicer", "step 1, post", 40.0, 0.008),
+                                           ("slicer", "step 0.5, post", 80.0, 0.004))]  # fmt: skip
+    runs = tmp_path / "runs.csv"
+    with runs.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    out, md = tmp_path / "levels.json", tmp_path / "quality.md"
+    assert main(["bench", "quality", str(runs), "--out", str(out), "--markdown", str(md)]) == 0
+    printed = capsys.readouterr().out
+    assert "TF class of marschner_lobb/sample: smooth" in printed
+    table = QualityTable.from_json(json.loads(out.read_text()), "t")
+    assert set(table.levels) == {"uniform", "uniform/smooth"}
+    assert table.choice("slicer", "uniform/smooth", "default").label == "step 1, post"
+    text = md.read_text()
+    # auto takes the slicer (the only one of ours measured): 200 / 40 ms, its worst RMSE 0.8x VTK's
+    assert "| marschner_lobb/sample | smooth (12) | slicer: step 1, post | 40 | 200 | 5.0x |" in text
+    assert "| uniform | default | 5.0-5.0x (median 5.0x) over 1 scene, RMSE up to 0.8x |" in text

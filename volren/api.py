@@ -152,11 +152,11 @@ def render(
     for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
         if not math.isfinite(value):
             raise VolrenError(f"{name} must be finite, got {value}")
-    from volren.quality import resolve
+    from volren.quality import kind_of, resolve
 
     on_cluster = bool(cluster or scheduler)
     # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
-    renderer, at_level, _ = resolve(vol.kind, transfer.dims, renderer, quality, RenderSettings().with_(**settings),
+    renderer, at_level, _ = resolve(kind_of(vol, transfer), transfer.dims, renderer, quality, RenderSettings().with_(**settings),
                                     bricks=zarr_input is not None or on_cluster)  # fmt: skip
     render_settings = at_level.with_(**{k: v for k, v in settings.items() if k != "options"})
     check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)

@@ -23,7 +23,7 @@ from volren.model.animation import Animation, View
 from volren.model.scene import Scene
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
-from volren.quality import AUTO, resolve
+from volren.quality import AUTO, kind_of, resolve
 from volren.renderers.base import FrameStats, ProgressCallback, Renderer, render_frame
 
 if TYPE_CHECKING:
@@ -67,7 +67,7 @@ def render_movie(
     if scene.volume is None:
         raise VolrenError("the scene has no volume to make a movie of")
     if scene.renderer == AUTO:
-        renderer, settings, _ = resolve(scene.volume.kind, scene.transfer_function.dims, AUTO, None, scene.settings)
+        renderer, settings, _ = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, AUTO, None, scene.settings)
         scene = replace(scene, renderer=renderer, settings=settings)
     volumes = None if not steps else _step_volumes(steps, animation.frames, scene.scalars)
     with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:

@@ -19,19 +19,34 @@ registered renderer whose configuration for the level was fastest over the scene
 was measured on, among those that can draw the scene (TF dimensions, shading, blend mode) and that
 meet the level's bound (any, where none does); renderers without measurements take part only when
 no measured one can draw the scene.
+
+TF classes: a 1D TF is `sharp` or `smooth` (`tf_class`: how steeply its optical depth changes
+across the data's value range), and a kind's levels may also be chosen over the scenes of one
+class ("uniform/smooth", "uniform/sharp"). Why: what a level needs differs by class, and one
+configuration for every scene pays the sharp TFs' price on the smooth ones. Measured on the shared
+grids (2026-12-02): objectorder's post-classified step 0.5 is within VTK's default's RMSE on every
+smooth TF but 1.64x over it on ironProt's opaque one, its pre-integrated step 0.5 within on every
+sharp TF but 1.83x over on aneurism's smooth one; one configuration for all was step 0.25
+pre-integrated, 2.9x the time of step 0.5 post-classified on bonsai's smooth TF. A scene's kind with
+its class (`scene_kind`) is what callers pass; the table falls back to the kind's own levels where
+it has none for the class.
 """
 
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
+from volren.model.transfer_function import MAX_OPACITY, TransferFunction1D
 
 LEVELS = ("draft", "interactive", "default", "high", "exact")
 DEFAULT_LEVEL = "default"
@@ -40,6 +55,62 @@ AUTO = "auto"
 TABLE_PATH = Path(__file__).with_name("quality_levels.json")
 #: Never chosen by `auto`: the float64 reference (minutes per frame) and the plugin template.
 NOT_AUTO = frozenset({"reference", "example"})
+
+
+#: A 1D TF is `sharp` when its optical depth per opacity unit distance changes by at least this much across
+#: the data's value range at its steepest (`tf_sharpness`). The shared scenes' TFs lie far either side:
+#: smooth 0.3-5.2, spiky and opaque 235-1760 (`volren bench quality` prints each scene's; the bundled
+#: samples' 2.1, 12 and 51), so the class does not hinge on the exact value; 30 is about the shared
+#: scenes' geometric middle.
+SHARP_TF = 30.0
+TF_CLASSES = ("smooth", "sharp")
+
+
+def tf_sharpness(tf: object, value_range: tuple[float, float]) -> float | None:
+    """The steepest change of a 1D TF's optical depth, -ln(1 - a), over its opacity points, times the
+    data's value span (inf for a step); None for a TF that is not 1D."""
+    if not isinstance(tf, TransferFunction1D):
+        return None
+    points = tf.opacity_points
+    span = float(value_range[1]) - float(value_range[0])
+    if len(points) < 2 or not span > 0.0:
+        return 0.0
+    depth = -np.log1p(-np.minimum(np.clip(points[:, 1], 0.0, 1.0), MAX_OPACITY))
+    rise = np.abs(np.diff(depth))
+    run = np.diff(points[:, 0])
+    steps = (run <= 0.0) & (rise > 0.0)
+    if steps.any():
+        return math.inf
+    slopes = np.where(run > 0.0, rise / np.where(run > 0.0, run, 1.0), 0.0)
+    return float(slopes.max()) * span
+
+
+def tf_class(tf: object, value_range: tuple[float, float]) -> str | None:
+    """`sharp` or `smooth` (SHARP_TF) for a 1D TF over data spanning `value_range`; None for other TFs."""
+    sharpness = tf_sharpness(tf, value_range)
+    return sharpness_class(sharpness) if sharpness is not None else None
+
+
+def sharpness_class(sharpness: float) -> str:
+    """The TF class of a `tf_sharpness`."""
+    return "sharp" if sharpness >= SHARP_TF else "smooth"
+
+
+def scene_kind(kind: str, tf: object, value_range: tuple[float, float]) -> str:
+    """The volume kind with the TF's class ("uniform/smooth"), or the kind alone for a TF without one:
+    what the table is looked up by."""
+    cls = tf_class(tf, value_range)
+    return f"{kind}/{cls}" if cls is not None else kind
+
+
+def kind_of(volume: Any, tf: object) -> str:
+    """`scene_kind` of a volume (its `kind` and `value_range`) drawn with `tf`."""
+    return scene_kind(volume.kind, tf, volume.value_range)
+
+
+def base_kind(kind: str) -> str:
+    """The volume kind of a scene kind ("uniform/smooth" -> "uniform")."""
+    return kind.split("/", 1)[0]
 
 
 @dataclass(frozen=True)
@@ -79,11 +150,23 @@ class QualityTable:
     source: str  #: the command and runs that made it
 
     def choice(self, renderer: str, kind: str, level: str) -> LevelChoice | None:
+        """The choice for a scene kind ("uniform/smooth"), else for its volume kind ("uniform")."""
         check_level(level)
-        return self.levels.get(kind, {}).get(renderer, {}).get(level)
+        found = self.levels.get(kind, {}).get(renderer, {}).get(level)
+        if found is None and kind != base_kind(kind):
+            found = self.levels.get(base_kind(kind), {}).get(renderer, {}).get(level)
+        return found
 
     def measured(self, kind: str) -> list[str]:
-        return list(self.levels.get(kind, {}))
+        """The renderers with levels for this scene kind or its volume kind."""
+        names = dict.fromkeys(self.levels.get(kind, {}))
+        names.update(dict.fromkeys(self.levels.get(base_kind(kind), {})))
+        return list(names)
+
+    def siblings(self, kind: str) -> list[str]:
+        """The scene kinds the table holds for this scene's volume kind: its classes, then the kind itself."""
+        base = base_kind(kind)
+        return sorted((k for k in self.levels if base_kind(k) == base), key=lambda k: k == base)
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -142,11 +225,13 @@ def settings_for(renderer: str, kind: str, level: str, settings: RenderSettings,
 
 
 def level_of(renderer: str, kind: str, settings: RenderSettings, quality: QualityTable | None = None) -> str | None:
-    """The first level whose measured settings `settings` are for `renderer` on `kind` volumes,
-    or None (custom settings)."""
+    """The first level whose measured settings `settings` are for `renderer` on this scene kind, else
+    on another class of its volume kind (a TF edited into the other class keeps its level), or None
+    (custom settings)."""
     quality = quality or table()
-    return next((level for level in LEVELS
-                 if (c := quality.choice(renderer, kind, level)) is not None and c.matches(settings)), None)  # fmt: skip
+    kinds = [kind] + [k for k in quality.siblings(kind) if k != kind]
+    return next((level for k in kinds for level in LEVELS
+                 if (c := quality.choice(renderer, k, level)) is not None and c.matches(settings)), None)  # fmt: skip
 
 
 def at_level(renderer: str, kind: str, level: str | None, settings: RenderSettings) -> RenderSettings | None:
@@ -178,7 +263,7 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
         except VolrenError:  # a plugin that does not import: not a candidate
             return False
         level_settings = settings_for(name, kind, level, settings, quality)
-        return capabilities.unsupported_reason(kind, tf_dim, level_settings) is None
+        return capabilities.unsupported_reason(base_kind(kind), tf_dim, level_settings) is None
 
     choices = _measured_choices(quality, kind, level, names)
     cost = _costs(choices)
@@ -188,7 +273,7 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
     for name in names:
         if name not in choices and drawable(name):
             return name, f"no measured renderer draws this scene; {name} can"
-    raise VolrenError(f"no registered renderer can draw this {kind} scene (see `volren renderers`)")
+    raise VolrenError(f"no registered renderer can draw this {base_kind(kind)} scene (see `volren renderers`)")
 
 
 def _measured_choices(quality: QualityTable, kind: str, level: str, names: Iterable[str]) -> dict[str, LevelChoice]:
@@ -239,7 +324,7 @@ def resolve(kind: str, tf_dim: int, renderer: str, level: str | None, settings: 
 
 def _draws_bricks(registry, name: str, kind: str) -> bool:
     try:
-        support = registry.capabilities(name).kinds.get(kind)
+        support = registry.capabilities(name).kinds.get(base_kind(kind))
     except Exception:  # noqa: BLE001 - a plugin that fails to load draws nothing
         return False
     return bool(support is not None and support.regions)

@@ -355,13 +355,14 @@ def test_run_with_screenshot_in_process(qapp, tmp_path):
 
 
 def test_the_first_volume_gets_the_auto_renderer_and_the_status_bar_says_why(make_window, sample, qtbot, error_boxes):
-    from volren.quality import DEFAULT_LEVEL, choose_renderer
+    from volren.quality import DEFAULT_LEVEL, choose_renderer, kind_of
     from volren.renderers.registry import registry
 
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
         w.files.apply_loaded(sample)  # no renderer named: auto
-    expected, _ = choose_renderer("uniform", DEFAULT_LEVEL, 1, w.state.settings, registry.names())
+    kind = kind_of(sample.volume, sample.transfer_function)  # the TF's class chooses too
+    expected, _ = choose_renderer(kind, DEFAULT_LEVEL, 1, w.state.settings, registry.names())
     assert w.state.renderer == blocker.args[0].renderer == expected != "auto"
     assert f"renderer {expected}: " in w.statusBar().currentMessage() and "(auto)" in w.statusBar().currentMessage()
     assert error_boxes == []

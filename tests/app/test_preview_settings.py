@@ -61,6 +61,8 @@ def test_previews_go_to_the_fastest_renderer_measured_that_can_draw_the_scene(mo
     names = ["slow", "fast", "unimportable"]
     renderer, settings = preview_choice("slow", "uniform", 1, default, names, caps.get, False)
     assert (renderer, settings.step, dict(settings.options)) == ("fast", 1.0, {"m": 1})  # worse error: still fastest
+    # a scene kind with the TF's class: the kind's levels where the table has none for the class
+    assert preview_choice("slow", "uniform/sharp", 1, default, names, caps.get, False) == (renderer, settings)
     renderer, settings = preview_choice("slow", "uniform", 1, default, names, caps.get, True)
     assert (renderer, dict(settings.options)) == ("fast", {"m": 2})  # its own drag options
     shaded = default.with_(shade=True)  # fast cannot shade: the user's renderer previews

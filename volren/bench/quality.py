@@ -5,8 +5,11 @@ Each row of runs.csv is one configuration of one curve (`volren.bench.sweep`) on
 for a level when its RMSE is within the level's bound of VTK's default's RMSE on every scene both
 were measured on; the level's choice is the fastest such configuration (total time over those
 scenes); a renderer with no configuration within a bound has it scaled by its own default
-configuration's error (its `meets` flag false), and `exact` is the most accurate configuration. The curves of one registered renderer (VTK's mappers are the `vtk` renderer's) compete
-for that renderer's levels. Later files win where two give the same configuration and scene.
+configuration's error (its `meets` flag false), and `exact` is the most accurate configuration.
+The curves of one registered renderer (VTK's mappers are the `vtk` renderer's) compete for that
+renderer's levels. Later files win where two give the same configuration and scene. The same
+choice is also made over the scenes of each TF class ("uniform/smooth", ...), given by the scenes'
+own TFs and volumes (`scene_sharpness`, `volren.quality.tf_class`).
 """
 
 from __future__ import annotations
@@ -14,11 +17,12 @@ from __future__ import annotations
 import csv
 import math
 from collections import defaultdict
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from volren.bench import sweep
 from volren.errors import VolrenError
-from volren.quality import LEVELS, LevelChoice, QualityTable
+from volren.quality import LEVELS, TF_CLASSES, LevelChoice, QualityTable
 
 #: Each level's bound on RMSE / VTK default's RMSE (None: the most accurate configuration).
 BOUNDS: dict[str, float | None] = {"draft": 4.0, "interactive": 2.0, "default": 1.0, "high": 0.25, "exact": None}
@@ -55,8 +59,10 @@ def _configs(kind: str, curves: set[str]) -> dict[tuple[str, str], sweep.Config]
     return out
 
 
-def derive(rows: list[dict], source: str) -> QualityTable:
-    """The quality table of these rows (see the module docstring)."""
+def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], str] | None = None) -> QualityTable:
+    """The quality table of these rows (see the module docstring): per volume kind over all its
+    scenes, and per TF class (`volren.quality.tf_class`) over the scenes `classes` gives that class
+    ((dataset, tf) -> class), under the scene kind "kind/class"."""
     levels: dict[str, dict[str, dict[str, LevelChoice]]] = {}
     for kind, (peer_curve, peer_label) in VTK_DEFAULT.items():
         kind_rows = [r for r in rows if r.get("kind") == kind and _number(r.get("rmse")) is not None]
@@ -65,41 +71,76 @@ def derive(rows: list[dict], source: str) -> QualityTable:
         if not peer:
             continue
         known = _configs(kind, {r["renderer"] for r in kind_rows})
-        # renderer -> (curve, label) -> scene -> (ms, rmse / peer's)
-        measured: dict[str, dict[tuple[str, str], dict[str, tuple[float, float]]]] = defaultdict(lambda: defaultdict(dict))
-        for r in kind_rows:
-            config = known.get((r["renderer"], r["settings"]))
-            scene = (r["dataset"], r["tf"])
-            ms = _number(r.get("ms"))
-            if config is None or scene not in peer or ms is None or peer[scene] <= 0:
-                continue
-            measured[config.renderer][config.curve, config.label][f"{scene[0]}/{scene[1]}"] = (ms, float(r["rmse"]) / peer[scene])
-        for renderer, configs in measured.items():
-            scenes = set.intersection(*(set(per) for per in configs.values()))
-            complete = {key: per for key, per in configs.items() if set(per) >= scenes and scenes}
-            if not complete:
-                continue
-            per_level = {}
-            own = _own_default(complete)
-            chosen = {"default": _choose(complete, scenes, BOUNDS["default"], own)}
-            ceiling = sum(complete[chosen["default"]][s][0] for s in scenes)
-            for level in LEVELS:
-                if level not in chosen:
-                    below = LEVELS.index(level) < LEVELS.index("default")
-                    chosen[level] = _choose(complete, scenes, BOUNDS[level], own, ceiling if below else math.inf)
-            for level in LEVELS:
-                key = chosen[level]
-                config = known[key]
-                per = complete[key]
-                settings = config.settings()
-                per_level[level] = LevelChoice(
-                    label=f"{key[0]}: {key[1]}" if key[0] != renderer else key[1],
-                    step=settings.step, preintegration=settings.preintegration, options=dict(settings.options),
-                    ms={s: per[s][0] for s in sorted(scenes)}, worst_error_ratio=max(per[s][1] for s in scenes),
-                    meets=BOUNDS[level] is None or max(per[s][1] for s in scenes) <= BOUNDS[level],
-                )  # fmt: skip
-            levels.setdefault(kind, {})[renderer] = per_level
+        found = _levels(kind_rows, peer, known)
+        if found:
+            levels[kind] = found
+        for cls in TF_CLASSES:
+            scenes = {scene for scene in peer if (classes or {}).get(scene) == cls}
+            found = _levels(kind_rows, {s: e for s, e in peer.items() if s in scenes}, known) if scenes else {}
+            if found:
+                levels[f"{kind}/{cls}"] = found
     return QualityTable(levels, source)
+
+
+def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], float],
+            known: Mapping[tuple[str, str], sweep.Config]) -> dict[str, dict[str, LevelChoice]]:  # fmt: skip
+    """renderer -> level -> choice over the scenes of `peer` (scene -> VTK default's RMSE)."""
+    # renderer -> (curve, label) -> scene -> (ms, rmse / peer's)
+    measured: dict[str, dict[tuple[str, str], dict[str, tuple[float, float]]]] = defaultdict(lambda: defaultdict(dict))
+    for r in kind_rows:
+        config = known.get((r["renderer"], r["settings"]))
+        scene = (r["dataset"], r["tf"])
+        ms = _number(r.get("ms"))
+        if config is None or scene not in peer or ms is None or peer[scene] <= 0:
+            continue
+        measured[config.renderer][config.curve, config.label][f"{scene[0]}/{scene[1]}"] = (ms, float(r["rmse"]) / peer[scene])
+    out: dict[str, dict[str, LevelChoice]] = {}
+    for renderer, configs in measured.items():
+        scenes = set.intersection(*(set(per) for per in configs.values()))
+        complete = {key: per for key, per in configs.items() if set(per) >= scenes and scenes}
+        if not complete:
+            continue
+        per_level = {}
+        own = _own_default(complete)
+        chosen = {"default": _choose(complete, scenes, BOUNDS["default"], own)}
+        ceiling = sum(complete[chosen["default"]][s][0] for s in scenes)
+        for level in LEVELS:
+            if level not in chosen:
+                below = LEVELS.index(level) < LEVELS.index("default")
+                chosen[level] = _choose(complete, scenes, BOUNDS[level], own, ceiling if below else math.inf)
+        for level in LEVELS:
+            key = chosen[level]
+            config = known[key]
+            per = complete[key]
+            settings = config.settings()
+            per_level[level] = LevelChoice(
+                label=f"{key[0]}: {key[1]}" if key[0] != renderer else key[1],
+                step=settings.step, preintegration=settings.preintegration, options=dict(settings.options),
+                ms={s: per[s][0] for s in sorted(scenes)}, worst_error_ratio=max(per[s][1] for s in scenes),
+                meets=BOUNDS[level] is None or max(per[s][1] for s in scenes) <= BOUNDS[level],
+            )  # fmt: skip
+        out[renderer] = per_level
+    return out
+
+
+def scene_sharpness(scenes: Iterable[tuple[str, str]], shared: Path | None) -> dict[tuple[str, str], float]:
+    """(dataset, tf) -> `tf_sharpness` of each scene `bench run` knows (the shared datasets when
+    `shared` is given, and the bundled samples), from its TF and its volume's value range."""
+    from volren.bench.datasets import sample_datasets, shared_datasets
+    from volren.quality import tf_sharpness
+
+    datasets = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets()}
+    out: dict[tuple[str, str], float] = {}
+    wanted = sorted(set(scenes))
+    for name in sorted({d for d, _ in wanted}):
+        dataset = datasets.get(name)
+        if dataset is None:
+            continue
+        value_range = dataset.load().value_range
+        for style, tf in dataset.transfer_functions():
+            if (name, style) in wanted and (sharpness := tf_sharpness(tf, value_range)) is not None:
+                out[name, style] = sharpness
+    return out
 
 
 def _choose(configs: dict, scenes: set[str], bound: float | None, own: tuple[str, str] | None,

@@ -62,6 +62,10 @@ def add_quality_parser(kinds) -> None:
     q = kinds.add_parser("quality", help="the quality levels (--quality) and `auto`'s data from bench run results")
     q.add_argument("runs", nargs="+", help="runs.csv files of `volren bench run` (a later file wins on overlaps)")
     q.add_argument("--out", help="the table to write (default: volren/quality_levels.json, the one volren uses)")
+    q.add_argument("--shared", help="the folder with data/ and scenes/, whose scenes' TFs give the TF classes "
+                                    "(default: $VOLREN_SHARED; without it only the bundled samples are classed)")
+    q.add_argument("--markdown", help="also write `auto` against VTK's default per level and scene there "
+                                      "(BENCHMARKS.md's fragment docs/bench/quality.md)")
     q.set_defaults(run=run_quality)
 
 
@@ -69,12 +73,20 @@ def run_quality(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from volren.bench.quality import derive, read_rows
-    from volren.quality import LEVELS, TABLE_PATH
+    from volren.bench.auto_report import auto_scenes, by_class, markdown, summary_line
+    from volren.bench.datasets import shared_folder
+    from volren.bench.quality import derive, read_rows, scene_sharpness
+    from volren.quality import LEVELS, TABLE_PATH, sharpness_class
+    from volren.renderers.registry import registry
 
     paths = [Path(p) for p in args.runs]
     source = "volren bench quality " + " ".join(str(p) for p in paths)
-    quality = derive(read_rows(paths), source)
+    rows = read_rows(paths)
+    sharpness = scene_sharpness({(r["dataset"], r["tf"]) for r in rows}, shared_folder(args.shared, required=False))
+    classes = {scene: sharpness_class(value) for scene, value in sharpness.items()}
+    for (dataset, tf), value in sorted(sharpness.items()):
+        print(f"TF class of {dataset}/{tf}: {classes[dataset, tf]} (sharpness {value:.3g})")
+    quality = derive(rows, source, classes)
     if not quality.levels:
         raise VolrenError(f"{', '.join(args.runs)}: no scene has VTK's default measured, which the levels are defined against")
     out = Path(args.out) if args.out else TABLE_PATH
@@ -88,29 +100,24 @@ def run_quality(args: argparse.Namespace) -> int:
                   f"(x{per[level].worst_error_ratio:.2g} VTK's error, {sum(per[level].ms.values()):.0f} ms)"
                   for level in LEVELS))  # fmt: skip
     print(f"wrote {out}")
-    _print_auto_against_vtk(quality)
-    return 0
-
-
-def _print_auto_against_vtk(quality) -> None:
-    """Per kind and level, `auto`'s choice against VTK's default on each scene both were measured on."""
-    from volren.model.settings import RenderSettings
-    from volren.quality import LEVELS, choose_renderer
-    from volren.renderers.registry import registry
-
-    for kind, renderers in quality.levels.items():
-        vtk = renderers.get("vtk", {}).get("default")
-        if vtk is None:
-            continue
+    scenes = auto_scenes(quality, registry.names())
+    groups: dict[tuple[str, str, str], list] = {}
+    for s in scenes:
+        groups.setdefault((s.kind, s.level, f"{s.renderer} ({s.label})"), []).append(s)
+    for (kind, level, choice), group in groups.items():
+        print(f"auto at {level} on {kind}: {choice}, {summary_line(group)} VTK's default's RMSE")
+    for kind in sorted({s.kind.split("/")[0] for s in by_class(scenes)}):
         for level in LEVELS:
-            name, _ = choose_renderer(kind, level, 1, RenderSettings(), registry.names(), quality)
-            c = renderers[name][level]
-            scenes = sorted(set(c.ms) & set(vtk.ms))
-            speed = [vtk.ms[s] / c.ms[s] for s in scenes]
-            if speed:
-                print(f"auto at {level} on {kind}: {name} ({c.label}), RMSE up to {c.worst_error_ratio:.2g}x VTK's default's, "
-                      f"{min(speed):.1f}-{max(speed):.1f}x its speed over {len(scenes)} scenes (median "
-                      f"{sorted(speed)[len(speed) // 2]:.1f}x)")  # fmt: skip
+            group = [s for s in by_class(scenes) if s.kind.startswith(kind + "/") and s.level == level]
+            print(f"auto at {level} on {kind} by TF class: {summary_line(group)} VTK's default's RMSE")
+    if args.markdown:
+        command = source + (f" --shared {args.shared}" if args.shared else "") + f" --markdown {args.markdown}"
+        try:
+            Path(args.markdown).write_text(markdown(scenes, classes, sharpness, command), encoding="utf-8")
+        except OSError as exc:
+            raise VolrenError(f"{args.markdown}: cannot write: {exc.strerror or exc}") from None
+        print(f"wrote {args.markdown}")
+    return 0
 
 
 def float_list(text: str, what: str) -> list[float]:

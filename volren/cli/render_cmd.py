@@ -310,14 +310,14 @@ def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | No
     """The scene's renderer resolved (`auto`) and its settings at the quality level asked for: the
     flag, the scene file's "quality", or `default` for a render without a scene file (a scene
     file's own settings are kept as they are unless a level is named); and why `auto` chose."""
-    from volren.quality import resolve
+    from volren.quality import kind_of, resolve
 
     if scene.volume is None:
         return scene, None
     named = args.quality or scene.extra.get("quality")
     level = str(named) if named is not None else (None if args.scene else DEFAULT_LEVEL)
     bricks = getattr(args, "zarr_input", None) is not None or wants_cluster(args)
-    renderer, settings, why = resolve(scene.volume.kind, scene.transfer_function.dims, scene.renderer, level,
+    renderer, settings, why = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, scene.renderer, level,
                                       scene.settings, bricks)  # fmt: skip
     return replace(scene, renderer=renderer, settings=settings), why
 

@@ -14,7 +14,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from volren.quality import LEVELS, table
+    from volren.quality import LEVELS, TF_CLASSES, table
     from volren.renderers.registry import registry
 
     quality = table()
@@ -33,14 +33,16 @@ def run(args: argparse.Namespace) -> int:
         if caps.quality:
             print(f"{'':12s} quality axis: {' | '.join(level.label for level in caps.quality)}")
         for kind in sorted(caps.kinds):
-            if quality.choice(name, kind, LEVELS[0]) is None:
-                continue
-            for level in LEVELS:
-                c = quality.choice(name, kind, level)
-                assert c is not None
-                mean_ms = sum(c.ms.values()) / len(c.ms)
-                print(f"{'':12s} --quality {level} on {kind}: {c.label} (measured: {mean_ms:.0f} ms a 512x512 frame "
-                      f"on average, RMSE up to {c.worst_error_ratio:.2g}x VTK's default's over {len(c.ms)} scenes)")
+            for scene_kind in [kind, *(f"{kind}/{cls}" for cls in TF_CLASSES)]:
+                if scene_kind not in quality.levels or name not in quality.levels[scene_kind]:
+                    continue
+                where = kind if scene_kind == kind else f"{kind} with a {scene_kind.split('/')[1]} TF"
+                for level in LEVELS:
+                    c = quality.levels[scene_kind][name][level]
+                    mean_ms = sum(c.ms.values()) / len(c.ms)
+                    print(f"{'':12s} --quality {level} on {where}: {c.label} (measured: {mean_ms:.0f} ms a 512x512 "
+                          f"frame on average, RMSE up to {c.worst_error_ratio:.2g}x VTK's default's over {len(c.ms)} "
+                          f"scenes)")  # fmt: skip
         for key, text in registry.get(name).option_help.items():
             print(f"{'':12s} option {key}: {text}")
     return 0

@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from volren.model.settings import RenderSettings
-from volren.quality import LEVELS, NOT_AUTO, at_level, fastest_measured, level_of
+from volren.quality import LEVELS, NOT_AUTO, at_level, base_kind, fastest_measured, level_of
 from volren.renderers.base import Capabilities
 
 #: The level previews use when the user's level is slower.
@@ -53,7 +53,7 @@ def preview_choice(renderer: str, kind: str, tf_dims: int, settings: RenderSetti
         def can_draw(name: str) -> bool:
             caps = capabilities(name)
             at = at_level(name, kind, PREVIEW_LEVEL, settings)
-            return caps is not None and at is not None and caps.unsupported_reason(kind, tf_dims, at) is None
+            return caps is not None and at is not None and caps.unsupported_reason(base_kind(kind), tf_dims, at) is None
 
         fastest = fastest_measured(kind, PREVIEW_LEVEL, names, can_draw)
         if fastest is not None and fastest != renderer:

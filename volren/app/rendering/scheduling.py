@@ -25,6 +25,7 @@ from volren.app.core.preview_settings import preview_choice
 from volren.app.core.state import Change, ViewState
 from volren.app.rendering.render_service import Frame, RenderRequest, RenderService
 from volren.model.settings import RenderSettings
+from volren.quality import kind_of
 from volren.renderers.base import Capabilities
 from volren.renderers.registry import RendererRegistry
 
@@ -125,11 +126,12 @@ class FrameScheduler(QObject):
         """(renderer, settings) the next preview draws with (`preview_choice`); kept while the
         inputs stay the same objects, since a drag asks for it at the mouse's rate."""
         s = self._state
-        kind = s.volume.kind if s.volume is not None else "uniform"
+        kind = kind_of(s.volume, s.transfer_function) if s.volume is not None else "uniform"
         dims = s.transfer_function.dims if s.transfer_function is not None else 1
         dragged = self._tf_dragged if tf_dragged is None else tf_dragged
-        inputs = (s.renderer, kind, s.settings, dragged, dims)
-        if self._preview is None or any(a is not b for a, b in zip(self._preview[0], inputs, strict=True)):
+        inputs = (s.renderer, kind, s.settings, dragged, dims)  # the kind (with the TF's class) compared by value
+        if self._preview is None or any(a is not b and not (isinstance(a, str) and a == b)
+                                        for a, b in zip(self._preview[0], inputs, strict=True)):
             names = [n for n in self._registry.names() if n not in self._failed_previewers] \
                 if self._registry is not None else [s.renderer]  # fmt: skip
             self._preview = (inputs, preview_choice(s.renderer, kind, dims, s.settings, names, self._capabilities, dragged))

@@ -32,7 +32,7 @@ from volren.io.ome_zarr_io import MAX_IN_MEMORY_BYTES, is_ome_zarr
 from volren.io.series_io import is_series, load_series
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
-from volren.quality import AUTO, at_level, level_of
+from volren.quality import AUTO, at_level, kind_of, level_of
 
 OPEN_FILTER = (
     "Volumes, time series and scenes (*.vti *.vtk *.vtu *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw "
@@ -238,10 +238,10 @@ class FileActions(QObject):
         # the first volume shown gets `auto` unless something names a renderer; later ones keep the user's
         wanted = requested_renderer or loaded.renderer or (AUTO if state.volume is None else state.renderer)
         renderer, notes = self._renderers.choose_for(
-            volume, settings, loaded.transfer_function.dims, wanted, requested_renderer
+            volume, loaded.transfer_function, settings, wanted, requested_renderer
         )
         if loaded.settings is None:
-            settings = self._at_level(renderer, volume.kind, settings)
+            settings = self._at_level(renderer, kind_of(volume, loaded.transfer_function), settings)
         aspect = self._viewport.aspect()
         camera = loaded.resolve_camera(aspect) or default_camera(volume, aspect)
         self._scenes.remember_volume_file(loaded.volume_path, loaded.scalars)
@@ -255,7 +255,8 @@ class FileActions(QObject):
         the renderer and volume kind about to be shown; unchanged for custom settings or where
         nothing was measured. A scene file's own settings are kept as they are."""
         state = self._state
-        level = APP_LEVEL if state.volume is None else level_of(state.renderer, state.volume.kind, state.settings)
+        level = APP_LEVEL if state.volume is None else level_of(state.renderer, kind_of(state.volume, state.transfer_function),
+                                                                state.settings)  # fmt: skip
         return at_level(renderer, kind, level, settings) or settings
 
     def _apply_view_extras(self, loaded: LoadedInput) -> None:

@@ -43,7 +43,8 @@ class QualityControl:
         volume = self._state.volume
         if volume is None:
             return None
-        return quality.table().choice(self._state.renderer, volume.kind, level)  # looked up now: tests swap the table
+        kind = quality.kind_of(volume, self._state.transfer_function)
+        return quality.table().choice(self._state.renderer, kind, level)  # looked up now: tests swap the table
 
     def refresh(self) -> None:
         """Enable the levels measured for the renderer and volume shown; show which one the settings are."""

@@ -23,8 +23,9 @@ from volren.app.rendering.renderer_chooser import RendererChooser
 from volren.app.rendering.viewport import Viewport
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
+from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
-from volren.quality import AUTO, DEFAULT_LEVEL, at_level, choose_renderer, level_of
+from volren.quality import AUTO, DEFAULT_LEVEL, at_level, choose_renderer, kind_of, level_of
 from volren.renderers.registry import RendererRegistry
 
 #: A set-up (new renderer or volume) longer than this without a frame is shown as "preparing".
@@ -72,8 +73,9 @@ class RendererControl:
             option_names = None
         state, settings = self._state, None
         if state.volume is not None:
-            level = level_of(state.renderer, state.volume.kind, state.settings)
-            settings = at_level(name, state.volume.kind, level, state.settings)
+            kind = kind_of(state.volume, state.transfer_function)
+            level = level_of(state.renderer, kind, state.settings)
+            settings = at_level(name, kind, level, state.settings)
         state.set_renderer(name, option_names, settings)
 
     # ------------------------------------------------------------------ options
@@ -94,7 +96,7 @@ class RendererControl:
             self._status_bar.showMessage("; ".join(notes), 15000)
 
     def choose_for(
-        self, volume: Volume, settings: RenderSettings, tf_dims: int, wanted: str, requested: str | None
+        self, volume: Volume, tf: TransferFunction, settings: RenderSettings, wanted: str, requested: str | None
     ) -> tuple[str, list[str]]:
         """The renderer for a volume about to be shown, and notes for the status bar.
 
@@ -103,11 +105,11 @@ class RendererControl:
         the fastest measured renderer that can (`volren.quality`). A new scene also clears the
         memory of the last failure, so it is reported again.
         """
-        options, notes = renderer_options(volume.kind, settings, self._registry, tf_dims)
+        options, notes = renderer_options(volume.kind, settings, self._registry, tf.dims)
         if wanted == AUTO:  # the fastest measured renderer that draws this (volren.quality)
             drawable = {o.name for o in options if o.reason is None}
             try:
-                wanted, why = choose_renderer(volume.kind, DEFAULT_LEVEL, tf_dims, settings, list(drawable),
+                wanted, why = choose_renderer(kind_of(volume, tf), DEFAULT_LEVEL, tf.dims, settings, list(drawable),
                                               can_draw=drawable.__contains__)  # fmt: skip
                 notes.append(f"renderer {wanted}: {why} (auto)")
             except VolrenError as exc:

@@ -1,0 +1,98 @@
+"""What `--renderer auto` gives at each quality level against VTK's default, scene by scene.
+
+Why: issue-style goals ("with no options, at least as accurate as VTK's default and N times faster
+on every shared scene") are about what a user gets, which is `auto`'s choice at the level asked
+for; the table (`volren.quality`) holds each choice's measured frame times per scene and its worst
+RMSE against VTK's default's, so the comparison needs no new runs. `volren bench quality` prints it
+and, with `--markdown`, writes it as the BENCHMARKS.md fragment `quality.md`.
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+from volren.model.settings import RenderSettings
+from volren.quality import LEVELS, QualityTable, base_kind, choose_renderer
+
+
+@dataclass(frozen=True)
+class AutoScene:
+    """`auto`'s choice on one scene at one level, against VTK's default there."""
+
+    kind: str  #: the scene kind the choice was made for ("uniform", or "uniform/smooth" by TF class)
+    level: str
+    scene: str  #: "dataset/tf"
+    renderer: str
+    label: str  #: the chosen configuration
+    ms: float
+    vtk_ms: float
+    worst_error_ratio: float  #: the choice's largest RMSE / VTK default's RMSE over its scenes
+
+    @property
+    def speed(self) -> float:
+        """VTK default's frame time over the choice's (above 1: faster than VTK)."""
+        return self.vtk_ms / self.ms
+
+
+def auto_scenes(quality: QualityTable, registered: list[str]) -> list[AutoScene]:
+    """`auto`'s choice on every scene the table measured VTK's default on, per scene kind and level."""
+    out = []
+    for kind, renderers in quality.levels.items():
+        vtk = renderers.get("vtk", {}).get("default")
+        if vtk is None:
+            continue
+        for level in LEVELS:
+            name, _ = choose_renderer(kind, level, 1, RenderSettings(), registered, quality)
+            choice = quality.choice(name, kind, level)
+            assert choice is not None
+            out += [AutoScene(kind, level, scene, name, choice.label, choice.ms[scene], vtk.ms[scene],
+                              choice.worst_error_ratio) for scene in sorted(set(choice.ms) & set(vtk.ms))]  # fmt: skip
+    return out
+
+
+def by_class(scenes: list[AutoScene]) -> list[AutoScene]:
+    """The rows of the TF-class kinds ("uniform/smooth", ...): what `auto` does, each scene under its class."""
+    return [s for s in scenes if s.kind != base_kind(s.kind)]
+
+
+def summary_line(rows: list[AutoScene]) -> str:
+    """'1.4-11.3x (median 2.9x) over 5 scenes, RMSE up to 0.73x'."""
+    speeds = sorted(r.speed for r in rows)
+    worst = max(r.worst_error_ratio for r in rows)
+    scenes = f"{len(speeds)} scene" + ("s" if len(speeds) != 1 else "")
+    return f"{speeds[0]:.1f}-{speeds[-1]:.1f}x (median {statistics.median(speeds):.1f}x) over {scenes}, RMSE up to {worst:.2g}x"
+
+
+def markdown(scenes: list[AutoScene], classes: Mapping[tuple[str, str], str], sharpness: Mapping[tuple[str, str], float],
+             command: str) -> str:  # fmt: skip
+    """The BENCHMARKS.md fragment: per volume kind and level, `auto` by TF class and with one
+    choice for all scenes; then every scene at `default`."""
+    lines = [
+        f"From `{command}`. Each ratio is VTK's default's frame time over `auto`'s at the level (512x512, warm frames "
+        "with the camera turning, both from the same `bench run`); *RMSE up to*: the chosen configuration's largest "
+        "RMSE over its scenes, as a multiple of VTK's default's on the same scene. *By TF class*: each scene drawn with "
+        "the choice for its TF's class (what `auto` does); *one choice*: the kind's single choice for every scene.",
+        "",
+        "| volumes | level | by TF class | one choice |",
+        "|---|---|---|---|",
+    ]
+    for kind in sorted({base_kind(s.kind) for s in scenes}):
+        for level in LEVELS:
+            classed = [s for s in by_class(scenes) if base_kind(s.kind) == kind and s.level == level]
+            whole = [s for s in scenes if s.kind == kind and s.level == level]
+            lines.append(f"| {kind} | {level} | {summary_line(classed) if classed else '-'} | "
+                         f"{summary_line(whole) if whole else '-'} |")  # fmt: skip
+    lines += ["", "At `default` (what a render with no options gets), scene by scene:", "",
+              "| scene | TF class (sharpness) | auto's choice | ms | VTK's default ms | faster than VTK |",
+              "|---|---|---|---:|---:|---:|"]  # fmt: skip
+    for s in sorted(by_class(scenes), key=lambda s: (base_kind(s.kind), s.scene)):
+        if s.level != "default":
+            continue
+        key = tuple(s.scene.split("/", 1))
+        cls = classes.get(key, "-")
+        sharp = sharpness.get(key)
+        lines.append(f"| {s.scene} | {cls}{f' ({sharp:.3g})' if sharp is not None else ''} | {s.renderer}: {s.label} | "
+                     f"{s.ms:.0f} | {s.vtk_ms:.0f} | {s.speed:.1f}x |")  # fmt: skip
+    return "\n".join(lines) + "\n"
