@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import NDArray
 
 #: Pixels to spare around a projected face: a ray through its edge is always listed.
@@ -155,27 +155,33 @@ def bin_tiles(faces: EntryFaces, tile: int = TILE) -> tuple[NDArray[np.int64], N
     return _bin_tiles(faces.boxes, faces.width, faces.height, tile)
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _bin_pixels(boxes, edges, cells, width, pixels, margin, tile, tile_offsets, tile_members):
+    """Two passes over the pixels, each in parallel (a pixel's list depends on nothing else): count
+    each pixel's covering faces, then write them at the counts' running sums. Serial, this was a
+    quarter of a refined frame of spx (15 of 55 ms at 512x512)."""
     n = pixels.shape[0]
     tiles_x = (width + tile - 1) // tile
-    offsets = np.zeros(n + 1, np.int64)
-    cand = np.empty(0, np.int64)
-    for phase in range(2):
-        if phase == 1:
-            cand = np.empty(offsets[n], np.int64)
-        for j in range(n):
-            x, y = pixels[j] % width, pixels[j] // width
-            b = (y // tile) * tiles_x + x // tile
-            c = offsets[j]
-            for k in range(tile_offsets[b], tile_offsets[b + 1]):
-                i = tile_members[k]
-                if _covers(boxes, edges, i, x, y, margin):
-                    if phase == 1:
-                        cand[c] = cells[i]
-                    c += 1
-            if phase == 0:
-                offsets[j + 1] = c
+    counts = np.zeros(n + 1, np.int64)
+    for j in prange(n):
+        x, y = pixels[j] % width, pixels[j] // width
+        b = (y // tile) * tiles_x + x // tile
+        c = 0
+        for k in range(tile_offsets[b], tile_offsets[b + 1]):
+            if _covers(boxes, edges, tile_members[k], x, y, margin):
+                c += 1
+        counts[j + 1] = c
+    offsets = np.cumsum(counts)
+    cand = np.empty(offsets[n], np.int64)
+    for j in prange(n):
+        x, y = pixels[j] % width, pixels[j] // width
+        b = (y // tile) * tiles_x + x // tile
+        c = offsets[j]
+        for k in range(tile_offsets[b], tile_offsets[b + 1]):
+            i = tile_members[k]
+            if _covers(boxes, edges, i, x, y, margin):
+                cand[c] = cells[i]
+                c += 1
     return offsets, cand
 
 

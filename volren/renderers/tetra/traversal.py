@@ -37,6 +37,9 @@ COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
 #: Entries kept per ray (more are counted and ignored; meshes with this many boundary crossings
 #: along one ray are not seen in practice).
 MAX_ENTRIES = 512
+#: Rays per parallel work item of `cast_rays`: each allocates its entry lists once (three arrays of
+#: MAX_ENTRIES per ray had cost an allocation each).
+RAY_BLOCK = 16
 
 
 @njit(cache=True)
@@ -213,114 +216,116 @@ def cast_rays(
     around an edge or a vertex at zero length as always, and ends where it would run through a
     cell outside `walkable`."""
     n = orig.shape[0]
-    for q in prange(n):
-        for c in range(4):
-            out[q, c] = 0.0
-            stats[q, c] = 0
-        if offsets[q + 1] == offsets[q]:
-            continue
-        ox, oy, oz = orig[q, 0], orig[q, 1], orig[q, 2]
-        dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+    blocks = (n + RAY_BLOCK - 1) // RAY_BLOCK
+    for block in prange(blocks):  # the entry lists are allocated once per block of rays, not per ray
         ts = np.empty(MAX_ENTRIES)
         ids = np.empty(MAX_ENTRIES, np.int64)
         svals = np.empty(MAX_ENTRIES)
-        count, dropped = _entries(q, ox, oy, oz, dx, dy, dz, tfar[q], offsets, cand, planes, tvals, grads, corner,
-                                  boundary, on_plane, ts, ids, svals)
-        stats[q, 3] = dropped
-        if count == 0:
-            continue
-        hx = sp[6] - dx
-        hy = sp[7] - dy
-        hz = sp[8] - dz
-        hn = math.sqrt(hx * hx + hy * hy + hz * hz)
-        if hn > 0.0:
-            hx, hy, hz = hx / hn, hy / hn, hz / hn
-        cr = 0.0
-        cg = 0.0
-        cb = 0.0
-        trans = 1.0
-        best = 0.0
-        found = False
-        integral = 0.0
-        total = 0.0
-        steps = 0
-        integrated = 0
-        cut = 0
-        t_done = -math.inf
-        done = False
-        for e in range(count):
-            if done:
-                break
-            if ts[e] < t_done:
+        for q in range(block * RAY_BLOCK, min(n, (block + 1) * RAY_BLOCK)):
+            for c in range(4):
+                out[q, c] = 0.0
+                stats[q, c] = 0
+            if offsets[q + 1] == offsets[q]:
                 continue
-            t = ids[e]
-            t_in = ts[e]
-            s_in = svals[e]
-            walked = 0
-            while True:
-                t_out, face = _exit(t, ox, oy, oz, dx, dy, dz, planes, on_plane)
-                if face < 0:
+            ox, oy, oz = orig[q, 0], orig[q, 1], orig[q, 2]
+            dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+            count, dropped = _entries(q, ox, oy, oz, dx, dy, dz, tfar[q], offsets, cand, planes, tvals, grads, corner,
+                                      boundary, on_plane, ts, ids, svals)
+            stats[q, 3] = dropped
+            if count == 0:
+                continue
+            hx = sp[6] - dx
+            hy = sp[7] - dy
+            hz = sp[8] - dz
+            hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+            if hn > 0.0:
+                hx, hy, hz = hx / hn, hy / hn, hz / hn
+            cr = 0.0
+            cg = 0.0
+            cb = 0.0
+            trans = 1.0
+            best = 0.0
+            found = False
+            integral = 0.0
+            total = 0.0
+            steps = 0
+            integrated = 0
+            cut = 0
+            t_done = -math.inf
+            done = False
+            for e in range(count):
+                if done:
                     break
-                if t_out < t_in:
-                    t_out = t_in
-                if t_out > tfar[q]:
-                    t_out = tfar[q]
-                if t_out > t_in and not walkable[t]:
-                    t_out = t_in  # the ray leaves the walked cells here
-                    break
-                # the field is linear in the cell: exact along the ray from the entry value
-                s_out = s_in + (grads[t, 0] * dx + grads[t, 1] * dy + grads[t, 2] * dz) * (t_out - t_in)
-                length = t_out - t_in
-                steps += 1
-                walked += 1
-                if length > 0.0:
-                    if mode != COMPOSITE:
-                        if mode == AVERAGE:
-                            integral += 0.5 * (s_in + s_out) * length
-                            total += length
-                        else:
-                            v = max(s_in, s_out) if mode == MAXIMUM else min(s_in, s_out)
-                            if not found or (mode == MAXIMUM and v > best) or (mode == MINIMUM and v < best):
-                                best = v
-                        found = True
-                    elif visible[t]:
-                        r, g, b, a = integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_in, s_out,
-                                                       length)
-                        if sp[0]:
-                            diffuse, specular = _shade_factors(grads[t, 0], grads[t, 1], grads[t, 2], sp, hx, hy, hz)
-                            r = min(r * diffuse + specular * a, a)
-                            g = min(g * diffuse + specular * a, a)
-                            b = min(b * diffuse + specular * a, a)
-                        cr += trans * r
-                        cg += trans * g
-                        cb += trans * b
-                        trans *= 1.0 - a
-                        integrated += 1
-                        if 1.0 - trans >= termination:
-                            done = True
-                            break
-                if t_out >= tfar[q]:
-                    done = True
-                    break
-                nb = neighbors[t, face]
-                if nb < 0 or not ok[nb]:
-                    break
-                if walked >= max_steps:
-                    cut += 1
-                    break
-                t = nb
-                t_in = t_out
-                s_in = s_out
-            t_done = t_out
-        stats[q, 0] = steps
-        stats[q, 1] = integrated
-        stats[q, 2] = cut
-        if mode != COMPOSITE:
-            if found:
-                out[q, 0] = integral / total if mode == AVERAGE else best
-                out[q, 1] = 1.0
-        else:
-            out[q, 0] = cr
-            out[q, 1] = cg
-            out[q, 2] = cb
-            out[q, 3] = 1.0 - trans
+                if ts[e] < t_done:
+                    continue
+                t = ids[e]
+                t_in = ts[e]
+                s_in = svals[e]
+                walked = 0
+                while True:
+                    t_out, face = _exit(t, ox, oy, oz, dx, dy, dz, planes, on_plane)
+                    if face < 0:
+                        break
+                    if t_out < t_in:
+                        t_out = t_in
+                    if t_out > tfar[q]:
+                        t_out = tfar[q]
+                    if t_out > t_in and not walkable[t]:
+                        t_out = t_in  # the ray leaves the walked cells here
+                        break
+                    # the field is linear in the cell: exact along the ray from the entry value
+                    s_out = s_in + (grads[t, 0] * dx + grads[t, 1] * dy + grads[t, 2] * dz) * (t_out - t_in)
+                    length = t_out - t_in
+                    steps += 1
+                    walked += 1
+                    if length > 0.0:
+                        if mode != COMPOSITE:
+                            if mode == AVERAGE:
+                                integral += 0.5 * (s_in + s_out) * length
+                                total += length
+                            else:
+                                v = max(s_in, s_out) if mode == MAXIMUM else min(s_in, s_out)
+                                if not found or (mode == MAXIMUM and v > best) or (mode == MINIMUM and v < best):
+                                    best = v
+                            found = True
+                        elif visible[t]:
+                            r, g, b, a = integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_in, s_out,
+                                                           length)
+                            if sp[0]:
+                                diffuse, specular = _shade_factors(grads[t, 0], grads[t, 1], grads[t, 2], sp, hx, hy, hz)
+                                r = min(r * diffuse + specular * a, a)
+                                g = min(g * diffuse + specular * a, a)
+                                b = min(b * diffuse + specular * a, a)
+                            cr += trans * r
+                            cg += trans * g
+                            cb += trans * b
+                            trans *= 1.0 - a
+                            integrated += 1
+                            if 1.0 - trans >= termination:
+                                done = True
+                                break
+                    if t_out >= tfar[q]:
+                        done = True
+                        break
+                    nb = neighbors[t, face]
+                    if nb < 0 or not ok[nb]:
+                        break
+                    if walked >= max_steps:
+                        cut += 1
+                        break
+                    t = nb
+                    t_in = t_out
+                    s_in = s_out
+                t_done = t_out
+            stats[q, 0] = steps
+            stats[q, 1] = integrated
+            stats[q, 2] = cut
+            if mode != COMPOSITE:
+                if found:
+                    out[q, 0] = integral / total if mode == AVERAGE else best
+                    out[q, 1] = 1.0
+            else:
+                out[q, 0] = cr
+                out[q, 1] = cg
+                out[q, 2] = cb
+                out[q, 3] = 1.0 - trans
