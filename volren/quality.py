@@ -269,7 +269,8 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
     cost = _costs(choices)
     for name in sorted(choices, key=lambda n: (not choices[n].meets, cost[n])):
         if drawable(name):
-            return name, f"the fastest measured at quality {level} that draws this scene"
+            tf = f" for a {kind.split('/', 1)[1]} TF" if kind != base_kind(kind) else ""
+            return name, f"the fastest measured at quality {level}{tf} that draws this scene"
     for name in names:
         if name not in choices and drawable(name):
             return name, f"no measured renderer draws this scene; {name} can"
