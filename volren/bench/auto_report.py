@@ -57,6 +57,11 @@ def by_class(scenes: list[AutoScene]) -> list[AutoScene]:
     return [s for s in scenes if s.kind != base_kind(s.kind)]
 
 
+def classed(scenes: list[AutoScene], kind: str, level: str) -> list[AutoScene]:
+    """The `by_class` rows of one volume kind ("uniform") at one level: every scene under its TF's class."""
+    return [s for s in by_class(scenes) if base_kind(s.kind) == kind and s.level == level]
+
+
 def summary_line(rows: list[AutoScene]) -> str:
     """'1.4-11.3x (median 2.9x) over 5 scenes, RMSE up to 0.73x'."""
     speeds = sorted(r.speed for r in rows)
@@ -80,9 +85,9 @@ def markdown(scenes: list[AutoScene], classes: Mapping[tuple[str, str], str], sh
     ]
     for kind in sorted({base_kind(s.kind) for s in scenes}):
         for level in LEVELS:
-            classed = [s for s in by_class(scenes) if base_kind(s.kind) == kind and s.level == level]
+            rows = classed(scenes, kind, level)
             whole = [s for s in scenes if s.kind == kind and s.level == level]
-            lines.append(f"| {kind} | {level} | {summary_line(classed) if classed else '-'} | "
+            lines.append(f"| {kind} | {level} | {summary_line(rows) if rows else '-'} | "
                          f"{summary_line(whole) if whole else '-'} |")  # fmt: skip
     lines += ["", "At `default` (what a render with no options gets), scene by scene:", "",
               "| scene | TF class (sharpness) | auto's choice | ms | VTK's default ms | faster than VTK |",

@@ -73,10 +73,10 @@ def run_quality(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
 
-    from volren.bench.auto_report import auto_scenes, by_class, markdown, summary_line
+    from volren.bench.auto_report import auto_scenes, by_class, classed, markdown, summary_line
     from volren.bench.datasets import shared_folder
     from volren.bench.quality import derive, read_rows, scene_sharpness
-    from volren.quality import LEVELS, TABLE_PATH, sharpness_class
+    from volren.quality import LEVELS, TABLE_PATH, base_kind, sharpness_class
     from volren.renderers.registry import registry
 
     paths = [Path(p) for p in args.runs]
@@ -106,10 +106,9 @@ def run_quality(args: argparse.Namespace) -> int:
         groups.setdefault((s.kind, s.level, f"{s.renderer} ({s.label})"), []).append(s)
     for (kind, level, choice), group in groups.items():
         print(f"auto at {level} on {kind}: {choice}, {summary_line(group)} VTK's default's RMSE")
-    for kind in sorted({s.kind.split("/")[0] for s in by_class(scenes)}):
+    for kind in sorted({base_kind(s.kind) for s in by_class(scenes)}):
         for level in LEVELS:
-            group = [s for s in by_class(scenes) if s.kind.startswith(kind + "/") and s.level == level]
-            print(f"auto at {level} on {kind} by TF class: {summary_line(group)} VTK's default's RMSE")
+            print(f"auto at {level} on {kind} by TF class: {summary_line(classed(scenes, kind, level))} VTK's default's RMSE")
     if args.markdown:
         command = source + (f" --shared {args.shared}" if args.shared else "") + f" --markdown {args.markdown}"
         try:

@@ -545,10 +545,10 @@ def _cell(i, j, k, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusio
     rows q0..q1, columns c0..c1 that lie in it. Returns (samples taken, pixels saturated). The arrays
     come in tuples: numba inlines a call of at most 30 arguments only (more are passed as *args)."""
     ro, rd, rwd, ri, rt0, rcount, rfirst, rlast = rays
-    xs, tab, post, table, front, back = tables
-    rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished = state
+    xs, tab, post = tables[0], tables[1], tables[2]  # the pre-integration tables are `_pixel_pre`'s
+    rgba, acc, nextk, finished = state[0], state[1], state[2], state[7]  # and so are the previous samples
     hom, hl, hoff, hcols = occlusion
-    c8, g8, e8, eg8 = scratch
+    c8, g8 = scratch[0], scratch[1]
     h = fp[F_H]
     term = fp[F_TERM]
     post_path = mode == COMPOSITE and not pre
