@@ -28,6 +28,7 @@ BUILTIN_ENTRY_POINTS = {
     "reference": "volren.renderers.reference.renderer:ReferenceRenderer",
     "slicer": "volren.renderers.slicer.renderer:SlicerRenderer",
     "tetra": "volren.renderers.tetra.renderer:TetraRenderer",
+    "raycast": "volren.renderers.raycast.renderer:RaycastRenderer",
 }
 
 

@@ -43,56 +43,6 @@ def draw(volume, tf, camera, size=(40, 32), **settings) -> tuple[np.ndarray, Obj
 
 
 # ------------------------------------------------------------------- same samples as a ray caster
-def numpy_march(volume: UniformVolume, tf: TransferFunction1D, camera: Camera, w: int, h_px: int, step: float,
-                offsets: np.ndarray) -> np.ndarray:  # fmt: skip
-    """A plain ray caster: every pixel ray clipped to the box and the clipping planes, cut into
-    segments of the step at (phase + j) steps from its origin (the first and last shorter), each sampled
-    at its middle, trilinear, post-classified with the opacity corrected to the segment's length,
-    front to back."""
-    origins, dirs = camera.pixel_rays(w, h_px)
-    origins, dirs = origins.reshape(-1, 3), dirs.reshape(-1, 3)
-    b = np.asarray(volume.bounds)
-    lo, hi = b[0::2], b[1::2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ta, tb = (lo - origins) / dirs, (hi - origins) / dirs
-    flat = dirs == 0
-    inside = (origins >= lo) & (origins <= hi)
-    t_in = np.where(flat, np.where(inside, -np.inf, np.inf), np.minimum(ta, tb)).max(axis=1)
-    t_out = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(ta, tb)).min(axis=1)
-    near, far = camera.clipping_range
-    t0 = np.maximum(t_in, 0.0)
-    t1 = np.minimum(t_out, (far - near) / (dirs @ camera.direction))
-    hstep = step * volume.characteristic_length
-    values = volume.values.astype(np.float64)
-    dims = np.asarray(volume.dimensions)
-    out = np.zeros((len(origins), 4))
-    for p in range(len(origins)):
-        length = t1[p] - t0[p]
-        if not length > 0:
-            continue
-        j0 = np.floor(t0[p] / hstep)
-        cuts = (offsets[p] + j0 + np.arange(0, int(length / hstep) + 3)) * hstep
-        cuts = cuts[(cuts > t0[p] + 1e-9 * hstep) & (cuts < t1[p] - 1e-9 * hstep)]
-        ends = np.concatenate([[t0[p]], cuts, [t1[p]]])
-        seg = [((a + b) / 2, b - a) for a, b in zip(ends[:-1], ends[1:], strict=True)]
-        tr = 1.0
-        for t, seg_len in seg:
-            idx = (origins[p] + t * dirs[p] - np.asarray(volume.origin)) / np.asarray(volume.spacing)
-            base = np.clip(np.floor(idx), 0, dims - 2).astype(int)
-            f = np.clip(idx - base, 0, 1)
-            s = 0.0
-            for c in range(8):
-                d = np.array([c & 1, (c >> 1) & 1, c >> 2])
-                wgt = np.prod(np.where(d == 1, f, 1 - f))
-                s += wgt * values[base[2] + d[2], base[1] + d[1], base[0] + d[0]]
-            rgb, a = tf.sample(s)
-            alpha = 1 - (1 - min(float(a), 1 - 1e-6)) ** (seg_len / tf.opacity_unit_distance)
-            out[p, :3] += tr * alpha * rgb
-            out[p, 3] += tr * alpha
-            tr *= 1 - alpha
-    return out.reshape(h_px, w, 4)
-
-
 @pytest.mark.parametrize("parallel", [True, False])
 @pytest.mark.parametrize("offsets", ["interleaved", "random"])
 def test_the_samples_are_a_ray_casters(parallel, offsets):
@@ -104,7 +54,7 @@ def test_the_samples_are_a_ray_casters(parallel, offsets):
     image, _ = draw(volume, SHELL_TF, camera, (w, h), step=0.37,
                     options={"depth_offsets": offsets, "jitter_seed": 3, "hidden_volume_removal": False,
                              "classification_table": 0})  # fmt: skip
-    expected = numpy_march(volume, SHELL_TF, camera, w, h, 0.37, pixel_offsets(offsets, w, h, 3))
+    expected = oracles.midpoint_march(volume, SHELL_TF, camera, w, h, 0.37, pixel_offsets(offsets, w, h, 3))
     assert expected[..., 3].max() > 0.3
     np.testing.assert_allclose(image, expected, atol=2e-6)
 

@@ -1,0 +1,184 @@
+"""The `raycast` renderer: a ray caster's samples exactly, skipping that changes no pixel, the
+distance jumps, pre-integration, the projections and bad options."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from volren.errors import VolrenError
+from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
+from volren.renderers.raycast import RaycastRenderer
+from volren.renderers.raycast.occupancy import empty_distance
+from volren.renderers.raycast.renderer import pixel_phases
+from volren.testing import image_error, oracles
+from volren.testing.reference_images import reference_image
+
+# opacity zero below 1.37 and above 2.23: much of the field is transparent (breakpoints off the data)
+SHELL_TF = TransferFunction1D(
+    [[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.37, 0.0], [1.61, 0.7], [2.23, 0.0]], 1.0
+)
+SMOOTH_TF = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.6]], 1.5)
+SPIKE_TF = TransferFunction1D(
+    [[-2, 1, 0.6, 0.2], [4, 0.2, 0.6, 1.0]], [[1.50, 0.0], [1.52, 1.0], [1.54, 0.0]], 0.5
+)
+
+
+def field(shape=(14, 16, 18), spacing=(1.0, 1.0, 1.0)) -> UniformVolume:
+    z, y, x = np.mgrid[0 : shape[0], 0 : shape[1], 0 : shape[2]]
+    values = np.sin(x / 3.0) + np.cos(y / 4.0) + z / 8.0
+    return UniformVolume(values.astype(np.float32), spacing=spacing)
+
+
+def draw(volume, tf, camera, size=(40, 32), **settings) -> tuple[np.ndarray, RaycastRenderer]:
+    renderer = RaycastRenderer()
+    renderer.set_volume(volume)
+    renderer.set_transfer_function(tf)
+    renderer.set_settings(RenderSettings(**settings))
+    image = renderer.render(camera, *size)
+    assert image.dtype == np.float32 and np.all(np.isfinite(image))
+    assert image.min() >= 0 and image.max() <= 1 and np.all(image[..., :3] <= image[..., 3:4] + 1e-6)
+    return image, renderer
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+@pytest.mark.parametrize("offsets", ["interleaved", "midpoint"])
+def test_the_samples_are_a_plain_ray_casters(parallel, offsets):
+    """Brick skipping, distance jumps and the classification table included, the image is a plain
+    float64 ray caster's at the same step and phases (to the table's interpolation)."""
+    volume = field((9, 10, 11), spacing=(1.0, 1.3, 0.8))
+    camera = Camera.orbit(volume.bounds, 35, 25, zoom=1.2, parallel=parallel)
+    w, h = 24, 20
+    image, renderer = draw(volume, SHELL_TF, camera, (w, h), step=0.37,
+                           options={"depth_offsets": offsets, "brick_size": 2, "classification_table": 65536})  # fmt: skip
+    expected = oracles.midpoint_march(volume, SHELL_TF, camera, w, h, 0.37, pixel_phases(offsets, w, h, 0))
+    assert expected[..., 3].max() > 0.3
+    np.testing.assert_allclose(image, expected, atol=2e-4)
+    assert renderer.last_frame.counters["bricks_empty"] > 0
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+@pytest.mark.parametrize("pre", [False, True])
+@pytest.mark.parametrize("brick", [1, 2, 4])
+def test_skipping_changes_no_pixel(parallel, pre, brick):
+    """Skipping empty bricks (and jumping out of empty boxes) leaves every pixel as it is without."""
+    volume = field((20, 22, 24))
+    camera = Camera.orbit(volume.bounds, 50, -20, zoom=1.1, parallel=parallel)
+    common = {"step": 0.5, "preintegration": pre}
+    on, r_on = draw(volume, SHELL_TF, camera, **common, options={"brick_size": brick})
+    off, r_off = draw(
+        volume, SHELL_TF, camera, **common, options={"brick_size": brick, "empty_space_skipping": False}
+    )
+    assert on[..., 3].max() > 0.3
+    np.testing.assert_allclose(on, off, atol=1e-6)
+    samples_on, samples_off = r_on.last_frame.counters["samples"], r_off.last_frame.counters["samples"]
+    if (
+        r_on.last_frame.counters["bricks_empty"] > 0
+    ):  # pre-integrated bricks of 4 here are all near a visible one
+        assert samples_on < samples_off
+    else:
+        assert brick == 4 and pre and samples_on == samples_off
+
+
+def test_an_empty_box_is_left_in_one_jump():
+    """A thin shell of visible values in a large transparent grid: rays jump over the empty boxes."""
+    z, y, x = np.mgrid[0:48, 0:48, 0:48]
+    values = np.where((abs(x - 24) < 2) & (abs(y - 24) < 2) & (abs(z - 24) < 2), 1.0, 0.0).astype(np.float32)
+    volume = UniformVolume(values)
+    tf = TransferFunction1D([[0, 1, 1, 1], [1, 1, 1, 1]], [[0.4, 0.0], [1.0, 0.8]], 1.0)
+    camera = Camera.orbit(volume.bounds, 20, 10, zoom=1.0, parallel=True)
+    image, renderer = draw(volume, tf, camera, (32, 32), step=0.5)
+    counters = renderer.last_frame.counters
+    assert image[..., 3].max() > 0.2
+    assert counters["jumps"] > 0
+    off, r_off = draw(volume, tf, camera, (32, 32), step=0.5, options={"empty_space_skipping": False})
+    np.testing.assert_allclose(image, off, atol=1e-6)
+    assert counters["samples"] < 0.2 * r_off.last_frame.counters["samples"]
+
+
+@pytest.mark.parametrize("shape", [(1, 1, 1), (3, 1, 2), (5, 4, 1), (9, 9, 9), (20, 3, 7)])
+def test_the_empty_distance_is_the_chebyshev_distance_to_a_visible_brick(shape):
+    rng = np.random.default_rng(sum(shape))
+    visible = rng.random(shape) < 0.08
+    distance = empty_distance(visible, cap=5)
+    points = np.argwhere(visible)
+    for idx in np.ndindex(shape):
+        if visible[idx]:
+            assert distance[idx] == 0
+            continue
+        nearest = np.abs(points - np.array(idx)).max(axis=1).min() if len(points) else np.inf
+        assert distance[idx] == min(nearest, 5), idx
+
+
+def test_preintegration_beats_post_classification_on_a_spiky_tf():
+    volume = field((12, 14, 16))
+    camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.2)
+    ref = reference_image(volume, SPIKE_TF, camera, 40, 32)
+    post, _ = draw(volume, SPIKE_TF, camera, step=1.0)
+    pre, _ = draw(volume, SPIKE_TF, camera, step=1.0, preintegration=True, options={"table_size": 1024})
+    assert ref[..., 3].max() > 0.2
+    assert image_error(pre, ref).rmse < 0.5 * image_error(post, ref).rmse
+
+
+@pytest.mark.parametrize("parallel", [True, False])
+def test_a_smooth_tf_matches_the_reference(parallel):
+    volume = field()
+    camera = Camera.orbit(volume.bounds, 25, 35, zoom=1.2, parallel=parallel)
+    ref = reference_image(volume, SMOOTH_TF, camera, 40, 32)
+    for pre in (False, True):
+        image, _ = draw(volume, SMOOTH_TF, camera, step=0.25, preintegration=pre)
+        assert image_error(image, ref).rmse < 0.003
+
+
+@pytest.mark.parametrize("mode", [BlendMode.MAXIMUM, BlendMode.MINIMUM, BlendMode.AVERAGE])
+def test_the_projections_match_the_reference(mode):
+    volume = field((10, 12, 14))
+    camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.2)
+    ref = reference_image(volume, SMOOTH_TF, camera, 40, 32, RenderSettings(blend_mode=mode))
+    image, _ = draw(volume, SMOOTH_TF, camera, step=0.25, blend_mode=mode)
+    assert ref[..., 3].max() > 0.1
+    assert image_error(image, ref).rmse < 0.01
+
+
+def test_a_colour_edit_keeps_the_brick_distances_and_an_opacity_edit_recomputes_them():
+    volume = field()
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    _, renderer = draw(volume, SHELL_TF, camera)
+    distances = renderer._empty[1]
+    recoloured = TransferFunction1D([[-2, 0, 1, 0], [4, 1, 0, 1]], SHELL_TF.opacity_points, 1.0)
+    renderer.set_transfer_function(recoloured)
+    renderer.render(camera, 40, 32)
+    assert renderer._empty[1] is distances
+    renderer.set_transfer_function(SMOOTH_TF)
+    renderer.render(camera, 40, 32)
+    assert renderer._empty[1] is not distances
+
+
+@pytest.mark.parametrize("spacing", [(1.0, 1.0, 100.0), (0.01, 1.0, 1.0)])
+def test_extreme_anisotropy_matches_the_reference(spacing):
+    volume = field((6, 7, 8), spacing=spacing)
+    camera = Camera.orbit(volume.bounds, 40, 30, zoom=1.2)
+    ref = reference_image(volume, SMOOTH_TF, camera, 32, 24)
+    image, _ = draw(volume, SMOOTH_TF, camera, (32, 24), step=0.25)
+    assert image_error(image, ref).rmse < 0.01
+
+
+@pytest.mark.parametrize("axis", range(3))
+def test_a_grid_one_cell_thick_renders_along_every_axis(axis):
+    shape = [6, 7, 8]
+    shape[2 - axis] = 2
+    volume = field(tuple(shape))
+    for azimuth, elevation in ((0, 0), (90, 0), (0, 89)):
+        camera = Camera.orbit(volume.bounds, azimuth, elevation, zoom=1.2)
+        ref = reference_image(volume, SMOOTH_TF, camera, 32, 24)
+        image, _ = draw(volume, SMOOTH_TF, camera, (32, 24), step=0.25)
+        assert image_error(image, ref).rmse < 0.01
+
+
+@pytest.mark.parametrize("options", [{"brick_size": 0}, {"termination_alpha": 0.2}, {"depth_offsets": "random"},
+                                     {"table_size": 8}, {"empty_space_skipping": 1}, {"nope": 1}])  # fmt: skip
+def test_bad_options_are_one_line_errors(options):
+    renderer = RaycastRenderer()
+    with pytest.raises(VolrenError) as err:
+        renderer.set_settings(RenderSettings(options=options))
+    assert "\n" not in str(err.value)

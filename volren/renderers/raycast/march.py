@@ -1,0 +1,411 @@
+"""The numba kernel of `raycast`: every pixel's ray marched front to back through the grid.
+
+Why a CPU ray caster beside object order: when a cell projects to about a pixel (bonsai's 256^3 at
+512^2), object order pays per cell (its footprint, a slab test per pixel) about as much as for the
+samples in it; an image-order march pays per sample only, and a ray stops as soon as it is opaque.
+Empty space is skipped per brick of cells (`occupancy`): a 3D DDA walks the bricks along the ray,
+and from a brick with empty bricks all around it jumps out of the whole empty box at once.
+
+Sample positions are a ray caster's midpoint rule (the slicer's and objectorder's): the ray, clipped
+to the grid's box and the far plane, is cut into segments of the step h at t = (phase + j) h from
+its origin on the near plane (under a parallel projection, planes shared by all pixels; the first
+and last segments cut by the box). Post-classified, each segment is sampled at its middle and its
+opacity corrected to its length; pre-integrated, each segment is looked up by the values at its two
+ends (the back value carried to the next segment), shorter segments corrected to their length.
+A segment whose key point (the middle; pre-integrated, the front, with bricks classified over their
+neighbours' ranges too) lies in an empty brick adds nothing and is skipped. Non-finite values add
+nothing either.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit, prange
+
+#: tiles of TILE x TILE pixels are handed to threads one at a time (neighbouring rays share cache lines)
+TILE = 8
+MAX_OPACITY = 1.0 - 1e-6
+# the float parameters
+F_H, F_LO, F_SCALE, F_TERM = range(4)
+N_F = 4
+
+
+@njit(cache=True, inline="always")
+def _segments(length, h, phase):
+    """(count, first, last): the segments of a ray `length` long cut at phase + j steps from its start."""
+    if not length > 1e-9 * h:
+        return 0, 0.0, 0.0
+    first = phase * h if phase > 0.0 else h
+    if length <= first + 1e-9 * h:
+        return 1, length, length
+    rest = length - first
+    full = math.floor(rest / h)
+    rem = rest - full * h
+    if rem > 1e-9 * h:
+        return int(full) + 2, first, rem
+    return int(full) + 1, first, h
+
+
+@njit(cache=True, inline="always")
+def _segment_start(t0, first, h, k):
+    """Where segment k of a ray begins."""
+    return t0 if k == 0 else t0 + first + (k - 1) * h
+
+
+@njit(cache=True, inline="always")
+def _value(vol, px, py, pz):
+    """Trilinear value at index point (px, py, pz), clamped into the grid."""
+    nz, ny, nx = vol.shape
+    i = min(max(int(math.floor(px)), 0), nx - 2)
+    j = min(max(int(math.floor(py)), 0), ny - 2)
+    k = min(max(int(math.floor(pz)), 0), nz - 2)
+    fx = min(max(px - i, 0.0), 1.0)
+    fy = min(max(py - j, 0.0), 1.0)
+    fz = min(max(pz - k, 0.0), 1.0)
+    x00 = vol[k, j, i] + fx * (vol[k, j, i + 1] - vol[k, j, i])
+    x10 = vol[k, j + 1, i] + fx * (vol[k, j + 1, i + 1] - vol[k, j + 1, i])
+    x01 = vol[k + 1, j, i] + fx * (vol[k + 1, j, i + 1] - vol[k + 1, j, i])
+    x11 = vol[k + 1, j + 1, i] + fx * (vol[k + 1, j + 1, i + 1] - vol[k + 1, j + 1, i])
+    y0 = x00 + fy * (x10 - x00)
+    y1 = x01 + fy * (x11 - x01)
+    return y0 + fz * (y1 - y0)
+
+
+@njit(cache=True, inline="always")
+def _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, lx, ly, lz, hx, hy, hz):
+    """Where the ray (origin o, direction d, 1 / d = i) leaves the index box [l, h]."""
+    te = math.inf
+    if dx > 0.0:
+        te = min(te, (hx - ox) * ix)
+    elif dx < 0.0:
+        te = min(te, (lx - ox) * ix)
+    if dy > 0.0:
+        te = min(te, (hy - oy) * iy)
+    elif dy < 0.0:
+        te = min(te, (ly - oy) * iy)
+    if dz > 0.0:
+        te = min(te, (hz - oz) * iz)
+    elif dz < 0.0:
+        te = min(te, (lz - oz) * iz)
+    return te
+
+
+@njit(cache=True, inline="always")
+def _classify(s, sb, length, pre, post, table, fp):
+    """Premultiplied (r, g, b, a) of a segment `length` long: post-classified at value s, or
+    pre-integrated from s (front) to sb (back); (0, 0, 0, 0) where a value is not finite."""
+    h = fp[F_H]
+    if not (math.isfinite(s) and math.isfinite(sb)):
+        return 0.0, 0.0, 0.0, 0.0
+    if pre:
+        n = table.shape[0]
+        fi = min(max((s - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
+        fj = min(max((sb - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
+        i0 = min(int(fi), n - 2)
+        j0 = min(int(fj), n - 2)
+        wi = fi - i0
+        wj = fj - j0
+        w00 = (1.0 - wi) * (1.0 - wj)
+        w01 = (1.0 - wi) * wj
+        w10 = wi * (1.0 - wj)
+        w11 = wi * wj
+        a = (
+            w00 * table[i0, j0, 3]
+            + w01 * table[i0, j0 + 1, 3]
+            + w10 * table[i0 + 1, j0, 3]
+            + w11 * table[i0 + 1, j0 + 1, 3]
+        )
+        if a <= 0.0:
+            return 0.0, 0.0, 0.0, 0.0
+        r = (
+            w00 * table[i0, j0, 0]
+            + w01 * table[i0, j0 + 1, 0]
+            + w10 * table[i0 + 1, j0, 0]
+            + w11 * table[i0 + 1, j0 + 1, 0]
+        )
+        g = (
+            w00 * table[i0, j0, 1]
+            + w01 * table[i0, j0 + 1, 1]
+            + w10 * table[i0 + 1, j0, 1]
+            + w11 * table[i0 + 1, j0 + 1, 1]
+        )
+        b = (
+            w00 * table[i0, j0, 2]
+            + w01 * table[i0, j0 + 1, 2]
+            + w10 * table[i0 + 1, j0, 2]
+            + w11 * table[i0 + 1, j0 + 1, 2]
+        )
+        if length != h:  # a shorter segment: opacity to its length, colour in proportion
+            a2 = -math.expm1(length / h * math.log1p(-min(a, MAX_OPACITY)))
+            f = a2 / a
+            return r * f, g * f, b * f, a2
+        return r, g, b, a
+    n = post.shape[0]
+    fi = min(max((s - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
+    i0 = min(int(fi), n - 2)
+    w = fi - i0
+    a = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
+    if a <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    if length != h:
+        a = -math.expm1(length / h * math.log1p(-min(a, MAX_OPACITY)))
+    r = post[i0, 0] + w * (post[i0 + 1, 0] - post[i0, 0])
+    g = post[i0, 1] + w * (post[i0 + 1, 1] - post[i0, 1])
+    b = post[i0, 2] + w * (post[i0 + 1, 2] - post[i0, 2])
+    return r * a, g * a, b * a, a
+
+
+@njit(cache=True, inline="always")
+def _pixel_ray(inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz):
+    """Pixel (xx, row at NDC y ny_)'s ray in grid-index space: origin on the near plane, direction in
+    index units per world unit, its inverse, the unit world direction, and where it enters and
+    leaves the box [0, u] (miss: parallel to a face and outside it)."""
+    nx_ = (xx + 0.5) / width * 2.0 - 1.0
+    wn = inv[3, 0] * nx_ + inv[3, 1] * ny_ - inv[3, 2] + inv[3, 3]
+    wf = inv[3, 0] * nx_ + inv[3, 1] * ny_ + inv[3, 2] + inv[3, 3]
+    n0 = (inv[0, 0] * nx_ + inv[0, 1] * ny_ - inv[0, 2] + inv[0, 3]) / wn
+    n1 = (inv[1, 0] * nx_ + inv[1, 1] * ny_ - inv[1, 2] + inv[1, 3]) / wn
+    n2 = (inv[2, 0] * nx_ + inv[2, 1] * ny_ - inv[2, 2] + inv[2, 3]) / wn
+    wx = (inv[0, 0] * nx_ + inv[0, 1] * ny_ + inv[0, 2] + inv[0, 3]) / wf - n0
+    wy = (inv[1, 0] * nx_ + inv[1, 1] * ny_ + inv[1, 2] + inv[1, 3]) / wf - n1
+    wz = (inv[2, 0] * nx_ + inv[2, 1] * ny_ + inv[2, 2] + inv[2, 3]) / wf - n2
+    norm = math.sqrt(wx * wx + wy * wy + wz * wz)
+    wx, wy, wz = wx / norm, wy / norm, wz / norm
+    ox = (n0 - grid_origin[0]) / spacing[0]
+    oy = (n1 - grid_origin[1]) / spacing[1]
+    oz = (n2 - grid_origin[2]) / spacing[2]
+    dx, dy, dz = wx / spacing[0], wy / spacing[1], wz / spacing[2]
+    ix = 1.0 / dx if dx != 0.0 else math.inf
+    iy = 1.0 / dy if dy != 0.0 else math.inf
+    iz = 1.0 / dz if dz != 0.0 else math.inf
+    t_in = -math.inf
+    t_out = math.inf
+    miss = False
+    for a_ in range(3):
+        o_ = ox if a_ == 0 else (oy if a_ == 1 else oz)
+        d_ = dx if a_ == 0 else (dy if a_ == 1 else dz)
+        i_ = ix if a_ == 0 else (iy if a_ == 1 else iz)
+        u_ = ux if a_ == 0 else (uy if a_ == 1 else uz)
+        if d_ == 0.0:
+            if o_ < 0.0 or o_ > u_:
+                miss = True
+        else:
+            ta = (0.0 - o_) * i_
+            tb = (u_ - o_) * i_
+            t_in = max(t_in, min(ta, tb))
+            t_out = min(t_out, max(ta, tb))
+    return ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss
+
+
+@njit(cache=True, parallel=True)
+def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, pre, post, table,
+          fp, tiles, out, counts):  # fmt: skip
+    """Render the tiles `tiles` (indices into the image's TILE x TILE tiles, row-major) into `out`
+    ((height * width, 4), premultiplied RGBA, row 0 at the top); `counts[tile]` = (samples, jumps).
+
+    `empty[bz, by, bx]`: 0 for a brick to sample, else d >= 1 with every brick within Chebyshev
+    distance d - 1 empty too. `inv`: the inverse of projection @ view (pixel centres are unprojected
+    at NDC depth -1 and 1, as `Camera.pixel_rays` does)."""
+    nz, ny, nx = vol.shape
+    nbz, nby, nbx = empty.shape
+    ux, uy, uz = nx - 1.0, ny - 1.0, nz - 1.0
+    h = fp[F_H]
+    term = fp[F_TERM]
+    tiles_x = (width + TILE - 1) // TILE
+    B = brick
+    for q in prange(tiles.shape[0]):
+        tile = tiles[q]
+        x_start = (tile % tiles_x) * TILE
+        y_start = (tile // tiles_x) * TILE
+        taken = 0
+        jumps = 0
+        for yy in range(y_start, min(y_start + TILE, height)):
+            ny_ = 1.0 - (yy + 0.5) / height * 2.0
+            for xx in range(x_start, min(x_start + TILE, width)):
+                p = yy * width + xx
+                ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(
+                    inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz
+                )
+                r = 0.0
+                g = 0.0
+                b = 0.0
+                a = 0.0
+                t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
+                t0 = max(t_in, 0.0)
+                t1 = min(t_out, t_far)
+                ns = 0
+                first = 0.0
+                last = 0.0
+                if not miss and t1 > t0:
+                    ns, first, last = _segments(t1 - t0, h, (phases[p] - t0 / h) % 1.0)
+                k = 0  # the next segment
+                sb = 0.0  # pre-integrated: the value at segment k's front, when `have_front`
+                have_front = False
+                while k < ns:
+                    # (re)start the brick walk at segment k's key point
+                    tk = _segment_start(t0, first, h, k)
+                    lk = first if k == 0 else (last if k == ns - 1 else h)
+                    tkey = tk if pre else tk + 0.5 * lk
+                    bi = min(max(int(ox + tkey * dx), 0), nx - 2) // B
+                    bj = min(max(int(oy + tkey * dy), 0), ny - 2) // B
+                    bk = min(max(int(oz + tkey * dz), 0), nz - 2) // B
+                    d = empty[bk, bj, bi]
+                    sx = 1 if dx > 0.0 else -1
+                    sy = 1 if dy > 0.0 else -1
+                    sz = 1 if dz > 0.0 else -1
+                    tnx = ((bi + (1 if dx > 0.0 else 0)) * B - ox) * ix if dx != 0.0 else math.inf
+                    tny = ((bj + (1 if dy > 0.0 else 0)) * B - oy) * iy if dy != 0.0 else math.inf
+                    tnz = ((bk + (1 if dz > 0.0 else 0)) * B - oz) * iz if dz != 0.0 else math.inf
+                    ddx = B * abs(ix)
+                    ddy = B * abs(iy)
+                    ddz = B * abs(iz)
+                    restart = False
+                    while True:
+                        if d > 1:  # empty bricks all around: leave their box in one jump if that skips
+                            e = d - 1
+                            tb_ = _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, (bi - e) * B, (bj - e) * B,
+                                            (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B, (bk + 1 + e) * B)  # fmt: skip
+                            # the first segment whose key point is at or past tb_
+                            off = 0.0 if pre else 0.5
+                            kn = (
+                                int(math.ceil((tb_ - t0 - first) / h + 1.0 - off - 1e-9))
+                                if tb_ > t0 + first
+                                else 0
+                            )
+                            if kn > k:
+                                k = kn
+                                have_front = False
+                                jumps += 1
+                                restart = True
+                                break
+                        te = min(tnx, tny, tnz)
+                        if d == 0:
+                            while k < ns:
+                                tk = _segment_start(t0, first, h, k)
+                                lk = first if k == 0 else (last if k == ns - 1 else h)
+                                if (tk if pre else tk + 0.5 * lk) >= te:
+                                    break
+                                if pre:
+                                    if not have_front:
+                                        s = _value(vol, ox + tk * dx, oy + tk * dy, oz + tk * dz)
+                                        taken += 1
+                                    else:
+                                        s = sb
+                                    tb2 = tk + lk
+                                    sb = _value(vol, ox + tb2 * dx, oy + tb2 * dy, oz + tb2 * dz)
+                                    have_front = True
+                                else:
+                                    tm = tk + 0.5 * lk
+                                    s = _value(vol, ox + tm * dx, oy + tm * dy, oz + tm * dz)
+                                    sb = s
+                                taken += 1
+                                k += 1
+                                cr, cg, cb, ca = _classify(s, sb, lk, pre, post, table, fp)
+                                if ca > 0.0:
+                                    tr = 1.0 - a
+                                    r += tr * cr
+                                    g += tr * cg
+                                    b += tr * cb
+                                    a += tr * ca
+                                    if a >= term:
+                                        k = ns
+                                        break
+                        else:  # an empty brick: its segments add nothing
+                            off = 0.0 if pre else 0.5
+                            kn = (
+                                int(math.ceil((te - t0 - first) / h + 1.0 - off - 1e-9))
+                                if te > t0 + first
+                                else 0
+                            )
+                            if kn > k:
+                                k = kn
+                                have_front = False
+                        if k >= ns:
+                            break
+                        if tnx <= tny and tnx <= tnz:
+                            bi += sx
+                            tnx += ddx
+                            if bi < 0 or bi >= nbx:
+                                break
+                        elif tny <= tnz:
+                            bj += sy
+                            tny += ddy
+                            if bj < 0 or bj >= nby:
+                                break
+                        else:
+                            bk += sz
+                            tnz += ddz
+                            if bk < 0 or bk >= nbz:
+                                break
+                        d = empty[bk, bj, bi]
+                    if not restart:
+                        break
+                out[p, 0] = min(max(r, 0.0), 1.0)
+                out[p, 1] = min(max(g, 0.0), 1.0)
+                out[p, 2] = min(max(b, 0.0), 1.0)
+                out[p, 3] = min(max(a, 0.0), 1.0)
+        counts[tile, 0] = taken
+        counts[tile, 1] = jumps
+
+
+MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
+
+
+@njit(cache=True, parallel=True)
+def project(vol, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, h, mode, acc):
+    """Maximum, minimum or average of the values along every pixel's ray into acc[p] = (value,
+    weight; weight 0: no finite value met). The same midpoint samples as `march` (the average is
+    their length-weighted mean); maximum and minimum also read every point where the ray crosses a
+    grid plane and its ends, where a trilinear field's extremes along the ray lie on grid lines."""
+    nz, ny, nx = vol.shape
+    ux, uy, uz = nx - 1.0, ny - 1.0, nz - 1.0
+    for yy in prange(height):
+        ny_ = 1.0 - (yy + 0.5) / height * 2.0
+        for xx in range(width):
+            p = yy * width + xx
+            ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(
+                inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz
+            )
+            t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
+            t0 = max(t_in, 0.0)
+            t1 = min(t_out, t_far)
+            value = -math.inf if mode == MAXIMUM else (math.inf if mode == MINIMUM else 0.0)
+            weight = 0.0
+            if not miss and t1 > t0:
+                ns, first, last = _segments(t1 - t0, h, (phases[p] - t0 / h) % 1.0)
+                for k in range(ns):
+                    lk = first if k == 0 else (last if k == ns - 1 else h)
+                    tm = _segment_start(t0, first, h, k) + 0.5 * lk
+                    s = _value(vol, ox + tm * dx, oy + tm * dy, oz + tm * dz)
+                    if not math.isfinite(s):
+                        continue
+                    if mode == AVERAGE:
+                        value += s * lk
+                        weight += lk
+                    else:
+                        value = max(value, s) if mode == MAXIMUM else min(value, s)
+                        weight = 1.0
+                if mode != AVERAGE:
+                    for axis in range(4):  # the grid planes crossed along x, y, z, and the two ends
+                        o_ = ox if axis == 0 else (oy if axis == 1 else oz)
+                        d_ = dx if axis == 0 else (dy if axis == 1 else dz)
+                        if axis < 3 and d_ == 0.0:
+                            continue
+                        if axis < 3:
+                            a_ = o_ + t0 * d_
+                            b_ = o_ + t1 * d_
+                            m0 = int(math.ceil(min(a_, b_)))
+                            m1 = int(math.floor(max(a_, b_)))
+                        else:
+                            m0 = 0
+                            m1 = 1
+                        for m in range(m0, m1 + 1):
+                            t = ((m - o_) / d_) if axis < 3 else (t0 if m == 0 else t1)
+                            t = min(max(t, t0), t1)
+                            s = _value(vol, ox + t * dx, oy + t * dy, oz + t * dz)
+                            if math.isfinite(s):
+                                value = max(value, s) if mode == MAXIMUM else min(value, s)
+                                weight = 1.0
+            acc[p, 0] = value
+            acc[p, 1] = weight
