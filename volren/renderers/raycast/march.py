@@ -48,9 +48,20 @@ def _segments(length, h, phase):
 
 
 @njit(cache=True, inline="always")
-def _segment_start(t0, first, h, k):
-    """Where segment k of a ray begins."""
-    return t0 if k == 0 else t0 + first + (k - 1) * h
+def _segment(t0, first, last, h, ns, k):
+    """(start, length) of segment k of a ray: the first and last are cut by the box, the rest are h."""
+    if k == 0:
+        return t0, first
+    return t0 + first + (k - 1) * h, (last if k == ns - 1 else h)
+
+
+@njit(cache=True, inline="always")
+def _first_segment_past(t, t0, first, h, pre):
+    """The first segment whose key point (its front pre-integrated, else its middle) lies at or past
+    t; 0 when t is within the first segment."""
+    if not t > t0 + first:
+        return 0
+    return int(math.ceil((t - t0 - first) / h + (1.0 if pre else 0.5) - 1e-9))
 
 
 @njit(cache=True, inline="always")
@@ -244,8 +255,7 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                 have_front = False
                 while k < ns:
                     # (re)start the brick walk at segment k's key point
-                    tk = _segment_start(t0, first, h, k)
-                    lk = first if k == 0 else (last if k == ns - 1 else h)
+                    tk, lk = _segment(t0, first, last, h, ns, k)
                     tkey = tk if pre else tk + 0.5 * lk
                     bi = min(max(int(ox + tkey * dx), 0), nx - 2) // B
                     bj = min(max(int(oy + tkey * dy), 0), ny - 2) // B
@@ -266,13 +276,7 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                             e = d - 1
                             tb_ = _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, (bi - e) * B, (bj - e) * B,
                                             (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B, (bk + 1 + e) * B)  # fmt: skip
-                            # the first segment whose key point is at or past tb_
-                            off = 0.0 if pre else 0.5
-                            kn = (
-                                int(math.ceil((tb_ - t0 - first) / h + 1.0 - off - 1e-9))
-                                if tb_ > t0 + first
-                                else 0
-                            )
+                            kn = _first_segment_past(tb_, t0, first, h, pre)
                             if kn > k:
                                 k = kn
                                 have_front = False
@@ -282,8 +286,7 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                         te = min(tnx, tny, tnz)
                         if d == 0:
                             while k < ns:
-                                tk = _segment_start(t0, first, h, k)
-                                lk = first if k == 0 else (last if k == ns - 1 else h)
+                                tk, lk = _segment(t0, first, last, h, ns, k)
                                 if (tk if pre else tk + 0.5 * lk) >= te:
                                     break
                                 if pre:
@@ -312,12 +315,7 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                                         k = ns
                                         break
                         else:  # an empty brick: its segments add nothing
-                            off = 0.0 if pre else 0.5
-                            kn = (
-                                int(math.ceil((te - t0 - first) / h + 1.0 - off - 1e-9))
-                                if te > t0 + first
-                                else 0
-                            )
+                            kn = _first_segment_past(te, t0, first, h, pre)
                             if kn > k:
                                 k = kn
                                 have_front = False
@@ -375,8 +373,8 @@ def project(vol, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, 
             if not miss and t1 > t0:
                 ns, first, last = _segments(t1 - t0, h, (phases[p] - t0 / h) % 1.0)
                 for k in range(ns):
-                    lk = first if k == 0 else (last if k == ns - 1 else h)
-                    tm = _segment_start(t0, first, h, k) + 0.5 * lk
+                    tk, lk = _segment(t0, first, last, h, ns, k)
+                    tm = tk + 0.5 * lk
                     s = _value(vol, ox + tm * dx, oy + tm * dy, oz + tm * dz)
                     if not math.isfinite(s):
                         continue

@@ -118,7 +118,6 @@ class RaycastRenderer(RendererBase):
         self._grid: BrickGrid | None = None
         self._empty: tuple[tuple, NDArray[np.int32]] | None = None
         self._phases: tuple[tuple, NDArray[np.float64]] | None = None
-        self._image: NDArray[np.float32] | None = None
 
     def _volume_changed(self) -> None:
         volume = self.volume
@@ -132,7 +131,7 @@ class RaycastRenderer(RendererBase):
         read_options(options)
 
     def release(self) -> None:
-        self._values = self._grid = self._empty = self._phases = self._image = None
+        self._values = self._grid = self._empty = self._phases = None
         super().release()
 
     def _empty_bricks(
@@ -206,9 +205,8 @@ class RaycastRenderer(RendererBase):
         fp[K.F_H], fp[K.F_LO], fp[K.F_SCALE] = h, lo, (n - 1) / (hi - lo)
         fp[K.F_TERM] = opts["termination_alpha"] if opts["termination_alpha"] < 1.0 else 2.0
 
-        if self._image is None or self._image.shape != (height * width, 4):
-            self._image = np.empty((height * width, 4), np.float32)  # kept: no page faults per frame
-        out = self._image
+        image = np.empty((height, width, 4), np.float32)
+        out = image.reshape(-1, 4)
         n_tiles = ((width + K.TILE - 1) // K.TILE) * ((height + K.TILE - 1) // K.TILE)
         counts = np.zeros((n_tiles, 2), np.int64)
         order = np.arange(n_tiles, dtype=np.int64)
@@ -221,7 +219,6 @@ class RaycastRenderer(RendererBase):
                     progress(min(1.0, (start + TILES_PER_CALL) / n_tiles))
         finally:
             numba.set_parallel_chunksize(old)
-        image = out.reshape(height, width, 4).copy()
         np.minimum(image[..., :3], image[..., 3:4], out=image[..., :3])
         samples, jumps = counts.sum(axis=0)
         return image, {"samples": float(samples), "jumps": float(jumps),
