@@ -318,6 +318,41 @@ def test_grid_arrays_are_read_only():
     assert "bricks" in repr(grid)
 
 
+
+@pytest.mark.parametrize("shape", [(17, 9, 33), (5, 12, 8), (2, 2, 2), (4, 7, 13)])
+@pytest.mark.parametrize("brick", [1, 3, 4])
+@pytest.mark.parametrize("reach", [1, 2])
+def test_reach_covers_exactly_the_cells_within_reach(shape, brick, reach):
+    """With a reach of r cells, a brick over cells [a, b) covers voxels [a - r, b + r] (clipped to
+    the grid, non-finite voxels skipped): exactly, not a whole neighbouring brick."""
+    rng = np.random.default_rng(sum(shape) * 10 + brick + reach)
+    values = rng.normal(size=shape).astype(np.float32)
+    values[rng.random(shape) < 0.1] = np.nan
+    grid = BrickGrid.from_volume(UniformVolume(values), brick, reach=reach)
+    nz, ny, nx = shape
+
+    def ranges(n):
+        return [(max(a - reach, 0), min(a + brick + reach, n - 1)) for a in range(0, max(n - 1, 1), brick)]
+
+    for bk, (k0, k1) in enumerate(ranges(nz)):
+        for bj, (j0, j1) in enumerate(ranges(ny)):
+            for bi, (i0, i1) in enumerate(ranges(nx)):
+                block = values[k0 : k1 + 1, j0 : j1 + 1, i0 : i1 + 1]
+                good = block[np.isfinite(block)]
+                if good.size:
+                    assert grid.vmin[bk, bj, bi] == good.min() and grid.vmax[bk, bj, bi] == good.max()
+                else:
+                    assert grid.empty[bk, bj, bi]
+    whole_bricks = BrickGrid.from_volume(UniformVolume(values), brick).dilated(-(-reach // brick))
+    assert (grid.vmin >= whole_bricks.vmin).all() and (grid.vmax <= whole_bricks.vmax).all()
+
+
+@pytest.mark.parametrize("reach", [-1, 1.5, True])
+def test_bad_reach(reach):
+    with pytest.raises(VolrenError, match="reach"):
+        BrickGrid.from_volume(UniformVolume(np.zeros((4, 4, 4))), 2, reach=reach)
+
+
 # ----------------------------------------------------------------------------- errors
 @pytest.mark.parametrize("brick", [0, -3, 2.5, True])
 def test_bad_brick_size(brick):

@@ -103,11 +103,28 @@ class BrickGrid:
 
     # ------------------------------------------------------------------------ construction
     @classmethod
-    def from_volume(cls, volume: UniformVolume, brick: int = 16) -> BrickGrid:
-        """Build the grid of `volume` with bricks of `brick`^3 cells (one pass over the values)."""
+    def from_volume(cls, volume: UniformVolume, brick: int = 16, reach: int = 0) -> BrickGrid:
+        """Build the grid of `volume` with bricks of `brick`^3 cells (one pass over the values).
+
+        With `reach` > 0, every brick's range also covers the cells up to `reach` cells away
+        (diagonals included). Why: a pre-integrated segment starting in a brick may end that far
+        beyond it. Widening per cell before bricking grows a brick of b cells to b + 2 reach cells,
+        where `dilated` grows it by whole bricks (3b cells for a reach of one).
+        """
         if not isinstance(volume, UniformVolume):
             raise VolrenError(f"brick grids need a uniform volume, got {type(volume).__name__}")
-        return cls.from_array(volume.values, brick, volume.spacing, volume.origin)
+        if isinstance(reach, bool) or not isinstance(reach, (int, np.integer)) or reach < 0:
+            raise VolrenError(f"brick reach must be a non-negative number of cells, got {reach!r}")
+        if reach == 0:
+            return cls.from_array(volume.values, brick, volume.spacing, volume.origin)
+        lo = hi = np.asarray(volume.values)
+        for axis in range(3):
+            for _ in range(int(reach)):  # fmin/fmax pass NaN over: non-finite samples add nothing
+                lo, hi = _shift_reduce(lo, np.fmin, axis), _shift_reduce(hi, np.fmax, axis)
+        low = cls.from_array(lo, brick, volume.spacing, volume.origin)
+        high = cls.from_array(hi, brick, volume.spacing, volume.origin)
+        bad = low.has_nonfinite | high.has_nonfinite
+        return cls(low.vmin, high.vmax, bad, brick, low.dimensions, low.spacing, low.origin)
 
     @classmethod
     def from_array(

@@ -12,8 +12,8 @@ its origin on the near plane (under a parallel projection, planes shared by all 
 and last segments cut by the box). Post-classified, each segment is sampled at its middle and its
 opacity corrected to its length; pre-integrated, each segment is looked up by the values at its two
 ends (the back value carried to the next segment), shorter segments corrected to their length.
-A segment whose key point (the middle; pre-integrated, the front, with bricks classified over their
-neighbours' ranges too) lies in an empty brick adds nothing and is skipped. Non-finite values add
+A segment whose key point (the middle; pre-integrated, the front, with bricks classified over the
+cells a segment can reach from them too) lies in an empty brick adds nothing and is skipped. Non-finite values add
 nothing either.
 """
 
@@ -74,10 +74,14 @@ def _value(vol, px, py, pz):
     fx = min(max(px - i, 0.0), 1.0)
     fy = min(max(py - j, 0.0), 1.0)
     fz = min(max(pz - k, 0.0), 1.0)
-    x00 = vol[k, j, i] + fx * (vol[k, j, i + 1] - vol[k, j, i])
-    x10 = vol[k, j + 1, i] + fx * (vol[k, j + 1, i + 1] - vol[k, j + 1, i])
-    x01 = vol[k + 1, j, i] + fx * (vol[k + 1, j, i + 1] - vol[k + 1, j, i])
-    x11 = vol[k + 1, j + 1, i] + fx * (vol[k + 1, j + 1, i + 1] - vol[k + 1, j + 1, i])
+    v000, v001 = float(vol[k, j, i]), float(vol[k, j, i + 1])  # float(): 8-bit volumes stay 8-bit
+    v010, v011 = float(vol[k, j + 1, i]), float(vol[k, j + 1, i + 1])
+    v100, v101 = float(vol[k + 1, j, i]), float(vol[k + 1, j, i + 1])
+    v110, v111 = float(vol[k + 1, j + 1, i]), float(vol[k + 1, j + 1, i + 1])
+    x00 = v000 + fx * (v001 - v000)
+    x10 = v010 + fx * (v011 - v010)
+    x01 = v100 + fx * (v101 - v100)
+    x11 = v110 + fx * (v111 - v110)
     y0 = x00 + fy * (x10 - x00)
     y1 = x01 + fy * (x11 - x01)
     return y0 + fz * (y1 - y0)
