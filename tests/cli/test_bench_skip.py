@@ -43,7 +43,7 @@ def rows(request) -> dict[tuple[str, str], dict]:
     # values below 0.8 transparent, above 1 opaque
     cyl_tf = TransferFunction1D(GREY, [[-1.0, 0.0], [0.8, 0.0], [1.0, 1.0]], 0.1)
     cyl = _scene("hollow_cylinder", hollow_cylinder(), cyl_tf)
-    out = skipping.run([sphere, cyl], ["slicer", "tetra"], size=40, frames=2, turn=1.0, base=RenderSettings())
+    out = skipping.run([sphere, cyl], ["slicer", "tetra", "raycast"], size=40, frames=2, turn=1.0, base=RenderSettings())
     return {(r["renderer"], r["variant"]): r for r in out}
 
 
@@ -63,12 +63,16 @@ def test_each_technique_saves_work(rows):
         t["no_transparent_skip"]["cells_integrated"], t["no_early_termination"]["cells_integrated"]
     )
     assert t["all_on"]["cells_transparent"] > 0 and t["no_transparent_skip"]["cells_transparent"] == 0
+    r = {v: rows["raycast", v] for v in ("all_on", "no_empty_space", "no_early_termination", "all_off")}
+    assert r["all_on"]["samples"] < r["no_empty_space"]["samples"] <= r["all_off"]["samples"]
+    assert r["all_on"]["samples"] < r["no_early_termination"]["samples"] <= r["all_off"]["samples"]
+    assert ("raycast", "shading") not in rows  # no shading: the capabilities say so
 
 
-@pytest.mark.parametrize("renderer", ["slicer", "tetra"])
+@pytest.mark.parametrize("renderer", ["slicer", "tetra", "raycast"])
 def test_images_within_the_documented_tolerance(rows, renderer):
     """Empty space and transparent cells add nothing: exact; an early stop leaves at most the
-    remaining transparency, 1 - 0.999, in any channel (both renderers' default termination_alpha)."""
+    remaining transparency, 1 - 0.999, in any channel (the renderers' default termination_alpha)."""
     stops_early = {
         "all_on": True,
         "no_empty_space": True,
@@ -89,6 +93,8 @@ def test_images_within_the_documented_tolerance(rows, renderer):
         assert math.isclose(row["bound_vs_all_on"], allowed_on) and math.isclose(
             row["bound_vs_all_off"], allowed_off
         )
+    if renderer == "raycast":
+        return  # no shading
     shaded = rows[renderer, "shading"]
     assert shaded["max_abs_vs_all_on"] > 0.01 and math.isnan(shaded["bound_vs_all_on"])
 
@@ -129,11 +135,12 @@ def test_cli_writes_csv_and_markdown(tmp_path, capsys, opengl):
     ):
         assert column in table[0], column
     found = {(r["dataset"], r["renderer"], r["variant"]) for r in table}
-    # phantom_ct: slicer (6 rows), vtk (3) and the shearwarp and objectorder plugins (6 each);
-    # hollow_cylinder: tetra (6) and vtk without shading (2)
-    assert len(table) == 29 and ("hollow_cylinder", "vtk", "shading") not in found
+    # phantom_ct: slicer (6 rows), vtk (3), the shearwarp and objectorder plugins (6 each) and raycast
+    # (5: no shading); hollow_cylinder: tetra (6) and vtk without shading (2)
+    assert len(table) == 34 and ("phantom_ct", "raycast", "shading") not in found and ("hollow_cylinder", "vtk", "shading") not in found
     assert ("phantom_ct", "shearwarp", "no_early_termination") in found
     assert ("phantom_ct", "objectorder", "no_hidden_volume_removal") in found
+    assert ("phantom_ct", "raycast", "no_empty_space") in found
     assert ("phantom_ct", "slicer", "no_empty_space") in found and (
         "hollow_cylinder",
         "tetra",

@@ -36,19 +36,17 @@ class AutoScene:
         return self.vtk_ms / self.ms
 
 
-def auto_scenes(quality: QualityTable, registered: list[str]) -> list[AutoScene]:
-    """`auto`'s choice on every scene the table measured VTK's default on, per scene kind and level."""
+def auto_scenes(quality: QualityTable, registered: list[str], vtk_ms: Mapping[str, float]) -> list[AutoScene]:
+    """`auto`'s choice on every scene with VTK's default's frame time in `vtk_ms` ("dataset/tf" ->
+    ms, `volren.bench.quality.vtk_default_ms`), per scene kind and level."""
     out = []
-    for kind, renderers in quality.levels.items():
-        vtk = renderers.get("vtk", {}).get("default")
-        if vtk is None:
-            continue
+    for kind in quality.levels:
         for level in LEVELS:
             name, _ = choose_renderer(kind, level, 1, RenderSettings(), registered, quality)
             choice = quality.choice(name, kind, level)
             assert choice is not None
-            out += [AutoScene(kind, level, scene, name, choice.label, choice.ms[scene], vtk.ms[scene],
-                              choice.worst_error_ratio) for scene in sorted(set(choice.ms) & set(vtk.ms))]  # fmt: skip
+            out += [AutoScene(kind, level, scene, name, choice.label, choice.ms[scene], vtk_ms[scene],
+                              choice.worst_error_ratio) for scene in sorted(set(choice.ms) & set(vtk_ms))]  # fmt: skip
     return out
 
 
@@ -70,8 +68,8 @@ def summary_line(rows: list[AutoScene]) -> str:
     return f"{speeds[0]:.1f}-{speeds[-1]:.1f}x (median {statistics.median(speeds):.1f}x) over {scenes}, RMSE up to {worst:.2g}x"
 
 
-def markdown(scenes: list[AutoScene], classes: Mapping[tuple[str, str], str], sharpness: Mapping[tuple[str, str], float],
-             command: str) -> str:  # fmt: skip
+def markdown(scenes: list[AutoScene], classes: Mapping[tuple[str, str], str],
+             features: Mapping[tuple[str, str], tuple[float, float]], command: str) -> str:  # fmt: skip
     """The BENCHMARKS.md fragment: per volume kind and level, `auto` by TF class and with one
     choice for all scenes; then every scene at `default`."""
     lines = [
@@ -90,14 +88,15 @@ def markdown(scenes: list[AutoScene], classes: Mapping[tuple[str, str], str], sh
             lines.append(f"| {kind} | {level} | {summary_line(rows) if rows else '-'} | "
                          f"{summary_line(whole) if whole else '-'} |")  # fmt: skip
     lines += ["", "At `default` (what a render with no options gets), scene by scene:", "",
-              "| scene | TF class (sharpness) | auto's choice | ms | VTK's default ms | faster than VTK |",
+              "| scene | TF class (sharpness, visible fraction) | auto's choice | ms | VTK's default ms | faster than VTK |",
               "|---|---|---|---:|---:|---:|"]  # fmt: skip
     for s in sorted(by_class(scenes), key=lambda s: (base_kind(s.kind), s.scene)):
         if s.level != "default":
             continue
         key = tuple(s.scene.split("/", 1))
         cls = classes.get(key, "-")
-        sharp = sharpness.get(key)
-        lines.append(f"| {s.scene} | {cls}{f' ({sharp:.3g})' if sharp is not None else ''} | {s.renderer}: {s.label} | "
+        feature = features.get(key)
+        shown = f" ({feature[0]:.3g}, {feature[1]:.2g})" if feature is not None else ""
+        lines.append(f"| {s.scene} | {cls}{shown} | {s.renderer}: {s.label} | "
                      f"{s.ms:.0f} | {s.vtk_ms:.0f} | {s.speed:.1f}x |")  # fmt: skip
     return "\n".join(lines) + "\n"

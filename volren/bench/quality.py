@@ -9,7 +9,7 @@ configuration's error (its `meets` flag false), and `exact` is the most accurate
 The curves of one registered renderer (VTK's mappers are the `vtk` renderer's) compete for that
 renderer's levels. Later files win where two give the same configuration and scene. The same
 choice is also made over the scenes of each TF class ("uniform/smooth", ...), given by the scenes'
-own TFs and volumes (`scene_sharpness`, `volren.quality.tf_class`).
+own TFs and volumes (`scene_features`, `volren.quality.tf_class`).
 """
 
 from __future__ import annotations
@@ -82,6 +82,15 @@ def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], str]
     return QualityTable(levels, source)
 
 
+def vtk_default_ms(rows: list[dict]) -> dict[str, float]:
+    """"dataset/tf" -> VTK's default configuration's frame time (`VTK_DEFAULT`, per volume kind): the
+    peer of `auto`'s speed ratios. Not the `vtk` renderer's `default` level, which may be a faster
+    VTK configuration within the same error."""
+    peers = {(kind, curve, label) for kind, (curve, label) in VTK_DEFAULT.items()}
+    return {f"{r['dataset']}/{r['tf']}": ms for r in rows
+            if (r.get("kind"), r["renderer"], r["settings"]) in peers and (ms := _number(r.get("ms"))) is not None}  # fmt: skip
+
+
 def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], float],
             known: Mapping[tuple[str, str], sweep.Config]) -> dict[str, dict[str, LevelChoice]]:  # fmt: skip
     """renderer -> level -> choice over the scenes of `peer` (scene -> VTK default's RMSE)."""
@@ -123,14 +132,17 @@ def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], float],
     return out
 
 
-def scene_sharpness(scenes: Iterable[tuple[str, str]], shared: Path | None) -> dict[tuple[str, str], float]:
-    """(dataset, tf) -> `tf_sharpness` of each scene `bench run` knows (the shared datasets when
-    `shared` is given, and the bundled samples), from its TF and its volume's value range."""
+def scene_features(
+    scenes: Iterable[tuple[str, str]], shared: Path | None
+) -> dict[tuple[str, str], tuple[float, float]]:
+    """(dataset, tf) -> (`tf_sharpness`, `tf_visible_fraction`) of each scene `bench run` knows (the
+    shared datasets when `shared` is given, and the bundled samples), from its TF and its volume's
+    value range."""
     from volren.bench.datasets import sample_datasets, shared_datasets
-    from volren.quality import tf_sharpness
+    from volren.quality import tf_sharpness, tf_visible_fraction
 
     datasets = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets()}
-    out: dict[tuple[str, str], float] = {}
+    out: dict[tuple[str, str], tuple[float, float]] = {}
     wanted = sorted(set(scenes))
     for name in sorted({d for d, _ in wanted}):
         dataset = datasets.get(name)
@@ -138,8 +150,9 @@ def scene_sharpness(scenes: Iterable[tuple[str, str]], shared: Path | None) -> d
             continue
         value_range = dataset.load().value_range
         for style, tf in dataset.transfer_functions():
-            if (name, style) in wanted and (sharpness := tf_sharpness(tf, value_range)) is not None:
-                out[name, style] = sharpness
+            sharpness, visible = tf_sharpness(tf, value_range), tf_visible_fraction(tf, value_range)
+            if (name, style) in wanted and sharpness is not None and visible is not None:
+                out[name, style] = (sharpness, visible)
     return out
 
 

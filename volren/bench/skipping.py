@@ -27,6 +27,9 @@ Techniques and their switches:
   opacity are not entered: exact) and `hidden_volume_removal` (nodes whose footprint the
   hierarchical occlusion map shows finished are skipped whole: within 1 - its termination_alpha
   0.999); `cells` counts the leaf cells processed.
+- raycast: `empty_space_skipping` (bricks of 4 cells whose value range, widened by the cells a
+  pre-integrated segment reaches, maps to zero opacity are not sampled, and a ray leaves a box of
+  them in one jump: exact) and early termination at `termination_alpha` 0.999 (off: 1).
 - vtk: VTK's mappers skip on their own (the GPU ray caster stops a ray at opacity 1 - 1/255, a
   shader constant) with no switch, so vtk gets the all-on row only, as the peer, plus its lighting
   (grids) and TF-edit rows.
@@ -69,7 +72,7 @@ ALPHA = 0.999
 TERMINATION_ALPHA = {"shearwarp": 0.995}
 #: Float32 rounding allowed on top of a bound (the slicer composites in float32 on the GPU).
 ROUNDING = 1e-5
-RENDERERS = ("slicer", "tetra", "vtk", "shearwarp", "objectorder")
+RENDERERS = ("slicer", "tetra", "vtk", "shearwarp", "objectorder", "raycast")
 
 
 @dataclass(frozen=True)
@@ -118,6 +121,10 @@ VARIANTS: dict[str, tuple[Variant, ...]] = {
         ("no_octree_skipping", "octree skipping off", {"octree_skipping": False}),
         ("no_hidden_volume_removal", "hidden volume removal off", {"hidden_volume_removal": False}),
     ),
+    "raycast": _two_switches(
+        ("no_empty_space", "empty-space skipping off", {"empty_space_skipping": False}),
+        ("no_early_termination", "early termination off", {"termination_alpha": 1.0}),
+    ),
     "vtk": (
         Variant("all_on", "VTK's own skipping (no switch)"),
         Variant("shading", "shading on", kind="shading", shade=True),
@@ -138,6 +145,9 @@ TECHNIQUES = {
     ("objectorder", "no_octree_skipping"): ("octree skipping", "cells"),
     ("objectorder", "no_hidden_volume_removal"): ("hidden volume removal", "cells"),
     ("objectorder", "all_off"): ("all skipping", "cells"),
+    ("raycast", "no_empty_space"): ("empty-space skipping", "samples"),
+    ("raycast", "no_early_termination"): ("early termination", "samples"),
+    ("raycast", "all_off"): ("all skipping", "samples"),
 }
 WORK_COUNTERS = (
     "samples",

@@ -75,17 +75,17 @@ def run_quality(args: argparse.Namespace) -> int:
 
     from volren.bench.auto_report import auto_scenes, by_class, classed, markdown, summary_line
     from volren.bench.datasets import shared_folder
-    from volren.bench.quality import derive, read_rows, scene_sharpness
-    from volren.quality import LEVELS, TABLE_PATH, base_kind, sharpness_class
+    from volren.bench.quality import derive, read_rows, scene_features, vtk_default_ms
+    from volren.quality import LEVELS, TABLE_PATH, base_kind, features_class
     from volren.renderers.registry import registry
 
     paths = [Path(p) for p in args.runs]
     source = "volren bench quality " + " ".join(str(p) for p in paths)
     rows = read_rows(paths)
-    sharpness = scene_sharpness({(r["dataset"], r["tf"]) for r in rows}, shared_folder(args.shared, required=False))
-    classes = {scene: sharpness_class(value) for scene, value in sharpness.items()}
-    for (dataset, tf), value in sorted(sharpness.items()):
-        print(f"TF class of {dataset}/{tf}: {classes[dataset, tf]} (sharpness {value:.3g})")
+    features = scene_features({(r["dataset"], r["tf"]) for r in rows}, shared_folder(args.shared, required=False))
+    classes = {scene: features_class(*value) for scene, value in features.items()}
+    for (dataset, tf), (sharpness, visible) in sorted(features.items()):
+        print(f"TF class of {dataset}/{tf}: {classes[dataset, tf]} (sharpness {sharpness:.3g}, visible on {visible:.2g} of the range)")
     quality = derive(rows, source, classes)
     if not quality.levels:
         raise VolrenError(f"{', '.join(args.runs)}: no scene has VTK's default measured, which the levels are defined against")
@@ -100,7 +100,7 @@ def run_quality(args: argparse.Namespace) -> int:
                   f"(x{per[level].worst_error_ratio:.2g} VTK's error, {sum(per[level].ms.values()):.0f} ms)"
                   for level in LEVELS))  # fmt: skip
     print(f"wrote {out}")
-    scenes = auto_scenes(quality, registry.names())
+    scenes = auto_scenes(quality, registry.names(), vtk_default_ms(rows))
     groups: dict[tuple[str, str, str], list] = {}
     for s in scenes:
         groups.setdefault((s.kind, s.level, f"{s.renderer} ({s.label})"), []).append(s)
@@ -112,7 +112,7 @@ def run_quality(args: argparse.Namespace) -> int:
     if args.markdown:
         command = source + (f" --shared {args.shared}" if args.shared else "") + f" --markdown {args.markdown}"
         try:
-            Path(args.markdown).write_text(markdown(scenes, classes, sharpness, command), encoding="utf-8")
+            Path(args.markdown).write_text(markdown(scenes, classes, features, command), encoding="utf-8")
         except OSError as exc:
             raise VolrenError(f"{args.markdown}: cannot write: {exc.strerror or exc}") from None
         print(f"wrote {args.markdown}")
@@ -137,7 +137,7 @@ def add_skip_parser(kinds) -> None:
     k.add_argument("--samples", action="store_true", help="the bundled samples instead of the shared datasets")
     k.add_argument("--datasets", help="comma-separated (default: every shared dataset, or every sample)")
     k.add_argument("--styles", help="TF styles (default smooth,spiky,opaque)")
-    k.add_argument("--renderers", help="comma-separated of slicer, tetra, vtk, shearwarp, objectorder (default: those installed)")
+    k.add_argument("--renderers", help="comma-separated of slicer, tetra, vtk, shearwarp, objectorder, raycast (default: those installed)")
     k.add_argument("--size", type=int, help="image side in pixels (default 512; 128 with --quick)")
     k.add_argument("--frames", type=int, help="timed frames per row, median (default 5; 3 with --quick)")
     k.add_argument("--turn", type=float, default=1.0, help="azimuth degrees between timed frames (0: fixed)")
