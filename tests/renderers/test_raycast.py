@@ -76,6 +76,29 @@ def test_skipping_changes_no_pixel(parallel, pre, step, brick):
     assert r_on.last_frame.counters["samples"] < r_off.last_frame.counters["samples"]
 
 
+@pytest.mark.parametrize("pre", [False, True])
+def test_skipping_is_exact_where_data_values_sit_on_a_peaks_foot(pre):
+    """Voxels exactly at the value where a TF peak starts (opacity 0 there) make a brick transparent
+    for the TF, but the classification table gives such a value the interpolation of the entries
+    either side of it, a little opacity: bricks are classified over ranges widened by one entry, so
+    skipping stays exact (found by `volren bench skip` on bonsai's spiky TF, 1.3e-2 before)."""
+    z, y, x = np.mgrid[0:24, 0:22, 0:20]
+    blob = np.exp(-((x - 10) ** 2 + (y - 11) ** 2 + (z - 12) ** 2) / 20.0)
+    values = np.where(blob > 0.05, 41 + np.round(blob * 12), 41)  # a plateau at 41 ...
+    values = np.where(x < 5, 0, values).astype(np.uint8)  # ... and a background of 0, truly empty
+    tf = TransferFunction1D([[0, 1, 0.6, 0.2], [255, 0.2, 0.6, 1.0]],
+                            [[0, 0.0], [41, 0.0], [43, 0.7], [45, 0.7], [47, 0.0], [255, 0.0]], 1.0)  # fmt: skip
+    volume = UniformVolume(values)
+    camera = Camera.orbit(volume.bounds, 40, 25, zoom=1.1)
+    options = {"brick_size": 2}
+    on, r_on = draw(volume, tf, camera, step=0.5, preintegration=pre, options=options)
+    off, _ = draw(volume, tf, camera, step=0.5, preintegration=pre, options={**options, "empty_space_skipping": False})
+    assert on[..., 3].max() > 0.3 and r_on.last_frame.counters["bricks_empty"] > 0
+    faint = (off[..., 3] > 0.0) & (off[..., 3] < 0.05)  # the plateau: not quite transparent in the table
+    assert faint.any()
+    np.testing.assert_allclose(on, off, atol=1e-6)
+
+
 def test_an_8_bit_volume_draws_as_its_float_copy():
     """8-bit volumes are kept 8-bit (a quarter of the memory); differences of neighbouring voxels
     must not wrap around."""

@@ -243,24 +243,30 @@ class BrickGrid:
         return np.prod(np.maximum(end - first, 1), axis=-1).astype(np.int64)
 
     # ------------------------------------------------------------------------ classification
-    def max_opacity(self, tf: TransferFunction1D) -> NDArray[np.float64]:
-        """The largest opacity `tf` takes on [vmin, vmax] of every brick (0 for empty bricks); for
-        a 2D TF an upper bound over every gradient magnitude (`_max_opacity_2d`)."""
-        lo = np.where(self.empty, 0.0, self.vmin)
-        hi = np.where(self.empty, 0.0, self.vmax)
+    def max_opacity(self, tf: TransferFunction1D, pad: float = 0.0) -> NDArray[np.float64]:
+        """The largest opacity `tf` takes on [vmin - pad, vmax + pad] of every brick (0 for empty
+        bricks); for a 2D TF an upper bound over every gradient magnitude (`_max_opacity_2d`)."""
+        lo = np.where(self.empty, 0.0, self.vmin - pad)
+        hi = np.where(self.empty, 0.0, self.vmax + pad)
         bound = _max_opacity_2d if getattr(tf, "dims", 1) == 2 else max_opacity_between
         return np.where(self.empty, 0.0, bound(tf, lo, hi))
 
-    def visible(self, tf: TransferFunction1D, threshold: float = 0.0) -> NDArray[np.bool_]:
-        """Per brick: True iff `tf`'s opacity exceeds `threshold` somewhere in [vmin, vmax].
+    def visible(self, tf: TransferFunction1D, threshold: float = 0.0, pad: float = 0.0) -> NDArray[np.bool_]:
+        """Per brick: True iff `tf`'s opacity exceeds `threshold` somewhere in [vmin - pad, vmax + pad].
 
         Conservative for every sample interpolated inside the brick (and exact for the interval):
         a brick that is False holds no sample with opacity > threshold. Empty bricks are False.
+        `pad`: a renderer that classifies through a table of TF samples gives a value the
+        interpolation of the entries either side of it, so its bricks need ranges widened by one
+        entry's spacing (else a brick of values exactly where a peak starts is skipped though the
+        table gives it a little opacity, and skipping would change the image).
         """
         threshold = float(threshold)
         if not np.isfinite(threshold):
             raise VolrenError(f"visibility threshold must be finite, got {threshold!r}")
-        return (self.max_opacity(tf) > threshold) & ~self.empty
+        if not (np.isfinite(pad) and pad >= 0.0):
+            raise VolrenError(f"visibility pad must be finite and non-negative, got {pad!r}")
+        return (self.max_opacity(tf, float(pad)) > threshold) & ~self.empty
 
     def stats(self, visible: NDArray[np.bool_]) -> BrickStats:
         """Counters for a `visible` mask: bricks, visible bricks, cells skipped."""

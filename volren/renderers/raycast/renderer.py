@@ -136,19 +136,21 @@ class RaycastRenderer(RendererBase):
         super().release()
 
     def _empty_bricks(
-        self, tf: TransferFunction1D, brick: int, skipping: bool, reach: int
+        self, tf: TransferFunction1D, brick: int, skipping: bool, reach: int, pad: float
     ) -> NDArray[np.int32]:
         """Each brick's distance to the nearest brick to sample (`occupancy`), kept while the TF's
-        opacity, the brick size and the reach stay (a colour edit reuses it)."""
+        opacity, the brick size, the reach and the table spacing `pad` stay (a colour edit reuses
+        it). Bricks are classified over ranges widened by `pad`, one entry of the classification
+        table, which interpolates between the entries either side of a value."""
         volume = self.volume
         assert isinstance(volume, UniformVolume)
-        key = (tf.opacity_points.tobytes(), brick, skipping, reach)
+        key = (tf.opacity_points.tobytes(), brick, skipping, reach, pad)
         if self._empty is not None and self._empty[0] == key:
             return self._empty[1]
         if self._grid is None or self._grid[0] != (brick, reach):
             self._grid = ((brick, reach), BrickGrid.from_volume(volume, brick, reach))
         grid = self._grid[1]
-        visible = grid.visible(tf) if skipping else np.ones(grid.shape, dtype=bool)
+        visible = grid.visible(tf, pad=pad) if skipping else np.ones(grid.shape, dtype=bool)
         distance = empty_distance(visible)
         self._empty = (key, distance)
         return distance
@@ -183,7 +185,6 @@ class RaycastRenderer(RendererBase):
         brick = int(opts["brick_size"])
         # a pre-integrated segment starting in a cell ends at most this many cells beyond it
         reach = int(math.ceil(h / min(volume.spacing) - 1e-9)) if pre else 0
-        empty = self._empty_bricks(tf, brick, bool(opts["empty_space_skipping"]), reach)
 
         vlo, vhi = volume.value_range
         tlo, thi = tf.value_range
@@ -205,6 +206,7 @@ class RaycastRenderer(RendererBase):
         fp = np.zeros(K.N_F)
         fp[K.F_H], fp[K.F_LO], fp[K.F_SCALE] = h, lo, (n - 1) / (hi - lo)
         fp[K.F_TERM] = opts["termination_alpha"] if opts["termination_alpha"] < 1.0 else 2.0
+        empty = self._empty_bricks(tf, brick, bool(opts["empty_space_skipping"]), reach, (hi - lo) / (n - 1))
 
         image = np.empty((height, width, 4), np.float32)
         out = image.reshape(-1, 4)
