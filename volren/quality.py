@@ -70,8 +70,9 @@ SHARP_TF = 30.0
 #: samples 0.20-1 (`volren bench quality` prints each scene's); 0.1 is about their geometric middle.
 #: Why a class of its own: VTK's post-classified default misses most of a thin peak (its RMSE on
 #: bonsai's spiky TF is 3.6x that on the opaque one), so coarser pre-integrated settings reach its
-#: error there and not on the steps (shearwarp's, measured 2026-12-03: within it on every spiky TF,
-#: 1.4-1.9x over it on the opaque ones and phantom_ct's).
+#: error there and not on the steps (shearwarp's pre-integrated oversampling 1, measured 2026-12-03:
+#: within it on every spiky TF, up to 0.9x; 1.55-1.9x over it on three of the four opaque TFs and
+#: 1.42x on phantom_ct's).
 BAND_TF = 0.1
 TF_CLASSES = ("smooth", "sharp", "band")
 
