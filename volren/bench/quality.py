@@ -64,10 +64,9 @@ def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], str]
     scenes, and per TF class (`volren.quality.tf_class`) over the scenes `classes` gives that class
     ((dataset, tf) -> class), under the scene kind "kind/class"."""
     levels: dict[str, dict[str, dict[str, LevelChoice]]] = {}
-    for kind, (peer_curve, peer_label) in VTK_DEFAULT.items():
+    for kind in VTK_DEFAULT:
         kind_rows = [r for r in rows if r.get("kind") == kind and _number(r.get("rmse")) is not None]
-        peer = {(r["dataset"], r["tf"]): float(r["rmse"]) for r in kind_rows
-                if r["renderer"] == peer_curve and r["settings"] == peer_label}  # fmt: skip
+        peer = {(r["dataset"], r["tf"]): float(r["rmse"]) for r in kind_rows if _is_vtk_default(r)}
         if not peer:
             continue
         known = _configs(kind, {r["renderer"] for r in kind_rows})
@@ -86,9 +85,12 @@ def vtk_default_ms(rows: list[dict]) -> dict[str, float]:
     """"dataset/tf" -> VTK's default configuration's frame time (`VTK_DEFAULT`, per volume kind): the
     peer of `auto`'s speed ratios. Not the `vtk` renderer's `default` level, which may be a faster
     VTK configuration within the same error."""
-    peers = {(kind, curve, label) for kind, (curve, label) in VTK_DEFAULT.items()}
-    return {f"{r['dataset']}/{r['tf']}": ms for r in rows
-            if (r.get("kind"), r["renderer"], r["settings"]) in peers and (ms := _number(r.get("ms"))) is not None}  # fmt: skip
+    return {f"{r['dataset']}/{r['tf']}": ms for r in rows if _is_vtk_default(r) and (ms := _number(r.get("ms"))) is not None}
+
+
+def _is_vtk_default(row: Mapping[str, str]) -> bool:
+    """Whether a runs.csv row is VTK's default configuration for its volume kind (`VTK_DEFAULT`)."""
+    return VTK_DEFAULT.get(row.get("kind", "")) == (row["renderer"], row["settings"])
 
 
 def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], float],
@@ -150,8 +152,10 @@ def scene_features(
             continue
         value_range = dataset.load().value_range
         for style, tf in dataset.transfer_functions():
+            if (name, style) not in wanted:
+                continue
             sharpness, visible = tf_sharpness(tf, value_range), tf_visible_fraction(tf, value_range)
-            if (name, style) in wanted and sharpness is not None and visible is not None:
+            if sharpness is not None and visible is not None:
                 out[name, style] = (sharpness, visible)
     return out
 
