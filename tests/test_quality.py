@@ -239,3 +239,67 @@ def test_bench_quality_classes_the_scenes_and_writes_the_auto_report(tmp_path, m
     # auto takes the slicer (the only one of ours measured): 200 / 40 ms, its worst RMSE 0.8x VTK's
     assert "| marschner_lobb/sample | smooth (12, 0.2) | slicer: step 1, post | 40 | 200 | 5.0x |" in text
     assert "| uniform | default | 5.0-5.0x (median 5.0x) over 1 scene, RMSE up to 0.8x |" in text
+
+
+def test_auto_passes_over_a_renderer_that_cannot_draw_the_view():
+    from volren.model import Camera
+
+    table = table_of(shearwarp=choice(10), objectorder=choice(50))
+    names = registry.names()
+    bounds = (0.0, 10.0, 0.0, 8.0, 0.0, 6.0)
+    outside = Camera.orbit(bounds, 30, 20)
+    inside = Camera(position=(4.0, 3.0, 2.0), focal_point=(9.0, 7.0, 5.0), clipping_range=(0.01, 50.0))
+    parallel_inside = Camera(position=(4.0, 3.0, 2.0), focal_point=(9.0, 7.0, 5.0), parallel=True,
+                             clipping_range=(0.01, 50.0))  # fmt: skip
+
+    def chosen(*cameras):
+        return choose_renderer("uniform", "default", 1, RenderSettings(), names, table, cameras=cameras, bounds=bounds)[0]
+
+    assert registry.capabilities("shearwarp").camera_reason("uniform", inside, bounds)
+    assert chosen(outside) == "shearwarp" and chosen(parallel_inside) == "shearwarp"
+    assert chosen(inside) == "objectorder"
+    assert chosen(outside, inside) == "objectorder"  # a movie: every frame's view must be drawable
+    # the app's own list of drawable renderers still meets the view test
+    only = {"shearwarp", "objectorder"}
+    assert choose_renderer("uniform", "default", 1, RenderSettings(), names, table, can_draw=only.__contains__,
+                           cameras=(inside,), bounds=bounds)[0] == "objectorder"  # fmt: skip
+
+
+def test_the_api_renders_from_inside_the_volume_with_auto_where_its_first_choice_cannot():
+    import volren
+    from volren.model import Camera, TransferFunction1D, UniformVolume
+
+    values = np.fromfunction(lambda z, y, x: (x + 2 * y + 3 * z) % 100, (12, 12, 12)).astype(np.float32)
+    volume = UniformVolume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0))
+    band = TransferFunction1D([[0, 1, 0.5, 0.2], [100, 1, 0.5, 0.2]], [[0, 0.0], [49, 0.0], [50, 1.0], [51, 0.0], [100, 0.0]], 0.2)
+    kind = quality.scene_kind("uniform", band, volume.value_range)
+    assert kind == "uniform/band" and quality.resolve(kind, 1, "auto", None, RenderSettings())[0] == "shearwarp"
+    inside = Camera(position=(5.0, 5.0, 5.0), focal_point=(11.0, 11.0, 11.0), clipping_range=(0.01, 50.0))
+    with pytest.raises(VolrenError, match="inside"):
+        volren.render(volume, band, renderer="shearwarp", camera=inside, size=(24, 24))
+    image = volren.render(volume, band, camera=inside, size=(24, 24))  # auto: another renderer draws it
+    assert np.isfinite(image).all() and image[..., 3].max() > 0.05
+
+
+def test_the_cli_renders_from_inside_the_volume_with_auto_and_names_the_renderer(tmp_path, capsys):
+    from volren.io.volume_writer import save_volume
+    from volren.model import Camera, UniformVolume
+
+    values = np.fromfunction(lambda z, y, x: (x + 2 * y + 3 * z) % 100, (12, 12, 12)).astype(np.float32)
+    volume_path = tmp_path / "v.vti"
+    save_volume(UniformVolume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0)), volume_path)
+    band = {"color": [[0, 1, 0.5, 0.2], [100, 1, 0.5, 0.2]],
+            "opacity": [[0, 0.0], [49, 0.0], [50, 1.0], [51, 0.0], [100, 0.0]], "opacity_unit_distance": 0.2}  # fmt: skip
+    inside = Camera(position=(5.0, 5.0, 5.0), focal_point=(11.0, 11.0, 11.0), clipping_range=(0.01, 50.0))
+    scene = {"version": 1, "volume": {"path": str(volume_path)}, "transfer_function": band,
+             "camera": inside.to_dict(), "size": [24, 24]}  # fmt: skip
+    scene_path = tmp_path / "scene.json"
+    scene_path.write_text(json.dumps(scene))
+    assert main(["render", "--scene", str(scene_path), "--save-array", str(tmp_path / "in.npy")]) == 0
+    line = capsys.readouterr().out
+    assert line.split(" ", 1)[0] != "shearwarp" and "(auto:" in line
+    assert np.load(tmp_path / "in.npy")[..., 3].max() > 0.05
+    scene["camera"] = {"azimuth": 30, "elevation": 20}  # from outside, the band TF's choice draws it
+    scene_path.write_text(json.dumps(scene))
+    assert main(["render", "--scene", str(scene_path), "--quality", "default", "--save-array", str(tmp_path / "out.npy")]) == 0
+    assert capsys.readouterr().out.startswith("shearwarp (auto:")

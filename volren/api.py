@@ -155,13 +155,13 @@ def render(
     from volren.quality import kind_of, resolve
 
     on_cluster = bool(cluster or scheduler)
-    # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
-    renderer, at_level, _ = resolve(kind_of(vol, transfer), transfer.dims, renderer, quality, RenderSettings().with_(**settings),
-                                    bricks=zarr_input is not None or on_cluster)  # fmt: skip
-    render_settings = at_level.with_(**{k: v for k, v in settings.items() if k != "options"})
-    check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
     bounds = zarr_input.bounds if zarr_input is not None else vol.bounds
     cam = camera or Camera.orbit(bounds, azimuth, elevation, zoom, parallel, width / height)
+    # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
+    renderer, at_level, _ = resolve(kind_of(vol, transfer), transfer.dims, renderer, quality, RenderSettings().with_(**settings),
+                                    bricks=zarr_input is not None or on_cluster, cameras=(cam,), bounds=bounds)  # fmt: skip
+    render_settings = at_level.with_(**{k: v for k, v in settings.items() if k != "options"})
+    check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
     if on_cluster:
         from volren.bricked.cluster import render_on_cluster
 

@@ -67,7 +67,10 @@ def render_movie(
     if scene.volume is None:
         raise VolrenError("the scene has no volume to make a movie of")
     if scene.renderer == AUTO:
-        renderer, settings, _ = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, AUTO, None, scene.settings)
+        place = bounds or scene.volume.bounds
+        cameras = [animation.camera(i, scene.camera, place, scene.size[0] / scene.size[1]) for i in range(animation.frames)]
+        renderer, settings, _ = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, AUTO, None,
+                                        scene.settings, cameras=cameras, bounds=scene.volume.bounds)  # fmt: skip
         scene = replace(scene, renderer=renderer, settings=settings)
     volumes = None if not steps else _step_volumes(steps, animation.frames, scene.scalars)
     with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from volren.errors import VolrenError
+from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import MAX_OPACITY, TransferFunction1D
 
@@ -269,11 +270,14 @@ def at_level(renderer: str, kind: str, level: str | None, settings: RenderSettin
 
 def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings, names: Iterable[str],
                     quality: QualityTable | None = None,
-                    can_draw: Callable[[str], bool] | None = None) -> tuple[str, str]:  # fmt: skip
+                    can_draw: Callable[[str], bool] | None = None, cameras: Sequence[Camera] = (),
+                    bounds: Sequence[float] | None = None) -> tuple[str, str]:  # fmt: skip
     """(`auto`'s renderer, why) for a scene of this kind, TF dimension and settings at `level`,
     among the registered `names`. Candidates are tried fastest first (those meeting the level's
     bound before the others), so only the chosen renderer and the faster ones that cannot draw
-    the scene are imported. `can_draw` replaces the capabilities test (the app has its own list)."""
+    the scene are imported. `can_draw` replaces the capabilities test (the app has its own list).
+    `cameras` (with the volume's `bounds`): the views to be drawn, every one of which the
+    renderer must be able to draw (`Capabilities.camera_reason`: an eye inside the volume)."""
     from volren.renderers.registry import registry
 
     quality = quality or table()
@@ -281,14 +285,17 @@ def choose_renderer(kind: str, level: str, tf_dim: int, settings: RenderSettings
     names = [n for n in names if n not in NOT_AUTO]
 
     def drawable(name: str) -> bool:
-        if can_draw is not None:
-            return can_draw(name)
+        if can_draw is not None and not can_draw(name):
+            return False
         try:
             capabilities = registry.capabilities(name)
-        except VolrenError:  # a plugin that does not import: not a candidate
-            return False
-        level_settings = settings_for(name, kind, level, settings, quality)
-        return capabilities.unsupported_reason(base_kind(kind), tf_dim, level_settings) is None
+        except VolrenError:  # a plugin that does not import: not a candidate (unless `can_draw` says so)
+            return can_draw is not None
+        if can_draw is None:
+            level_settings = settings_for(name, kind, level, settings, quality)
+            if capabilities.unsupported_reason(base_kind(kind), tf_dim, level_settings) is not None:
+                return False
+        return bounds is None or all(capabilities.camera_reason(base_kind(kind), c, bounds) is None for c in cameras)
 
     choices = _measured_choices(quality, kind, level, names)
     cost = _costs(choices)
@@ -328,11 +335,13 @@ def fastest_measured(kind: str, level: str, names: Iterable[str], can_draw: Call
 
 
 def resolve(kind: str, tf_dim: int, renderer: str, level: str | None, settings: RenderSettings,
-            bricks: bool = False) -> tuple[str, RenderSettings, str | None]:  # fmt: skip
+            bricks: bool = False, cameras: Sequence[Camera] = (),
+            bounds: Sequence[float] | None = None) -> tuple[str, RenderSettings, str | None]:  # fmt: skip
     """(renderer, settings, why): `auto` resolved at `level` (`default` when None), the level's
     measured settings applied (none when `level` is None), and why `auto` chose its renderer (None
     when one was named). With `bricks`, `auto` chooses among the renderers that draw bricks (a
-    bricked volume, a cluster). The one place the CLI and the API turn a request into what is drawn."""
+    bricked volume, a cluster); with `cameras` and the volume's `bounds`, among those that draw
+    every one of those views. The one place the CLI and the API turn a request into what is drawn."""
     from volren.renderers.registry import registry
 
     if level is not None:
@@ -342,7 +351,8 @@ def resolve(kind: str, tf_dim: int, renderer: str, level: str | None, settings: 
         names = registry.names()
         if bricks:
             names = [n for n in names if _draws_bricks(registry, n, kind)]
-        renderer, why = choose_renderer(kind, level or DEFAULT_LEVEL, tf_dim, settings, names)
+        renderer, why = choose_renderer(kind, level or DEFAULT_LEVEL, tf_dim, settings, names, cameras=cameras,
+                                        bounds=bounds)  # fmt: skip
     if level is not None:
         settings = settings_for(renderer, kind, level, settings)
     return renderer, settings, why

@@ -174,6 +174,14 @@ class DragOptionsRenderer(FakeRenderer):
     option_help: ClassVar[Mapping[str, str]] = {"table_size": "entries"}
 
 
+class OutsideOnlyRenderer(FakeRenderer):
+    """Cannot draw a perspective view from inside the volume (as shearwarp)."""
+
+    name: ClassVar[str] = "fake_outside_only"
+    capabilities: ClassVar[Capabilities] = Capabilities(kinds={"uniform": KindSupport(eye_inside=False)},
+                                                        summary="no eye inside")  # fmt: skip
+
+
 class BrokenRenderer(FakeRenderer):
     name: ClassVar[str] = "fake_broken"
 
@@ -185,7 +193,7 @@ class BrokenRenderer(FakeRenderer):
 def fake_renderers() -> Iterator[dict[str, type]]:
     """Register the fake renderers in-process; unregistered afterwards."""
     classes = {cls.name: cls for cls in (FakeRenderer, TetOnlyRenderer, BrokenRenderer, SlowSetupRenderer,
-                                         DragOptionsRenderer)}  # fmt: skip
+                                         DragOptionsRenderer, OutsideOnlyRenderer)}  # fmt: skip
     FakeRenderer.calls.clear()
     for name, cls in classes.items():
         registry.register(name, cls, replace=True)

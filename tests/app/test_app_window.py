@@ -207,6 +207,24 @@ def test_renderer_that_raises_reports_and_falls_back(loaded_window, fake_rendere
     assert blocker.args[0].renderer == "vtk" and w.state.camera is camera
 
 
+def test_a_renderer_that_cannot_draw_a_view_from_inside_gives_way_to_one_that_can(make_window, fake_renderers,
+                                                                                   sample, qtbot, error_boxes):  # fmt: skip
+    from volren.model import Camera
+
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake_outside_only")
+    assert w.state.renderer == "fake_outside_only" and error_boxes == []
+    lo, hi = np.asarray(w.state.volume.bounds[0::2]), np.asarray(w.state.volume.bounds[1::2])
+    inside = Camera(position=tuple(lo + 0.4 * (hi - lo)), focal_point=tuple(hi), clipping_range=(0.01, 100.0))
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.state.set_camera(inside)
+    drawn = blocker.args[0].renderer
+    assert drawn not in ("fake_outside_only", "reference") and w.state.renderer == drawn
+    assert len(error_boxes) == 1 and "inside" in error_boxes[0][1] and f"switched to {drawn}" in error_boxes[0][1]
+    assert blocker.args[0].camera == inside
+
+
 def test_requested_renderer_that_cannot_draw_is_an_error(make_window, fake_renderers, sample, qtbot, error_boxes):
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:

@@ -316,9 +316,11 @@ def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | No
         return scene, None
     named = args.quality or scene.extra.get("quality")
     level = str(named) if named is not None else (None if args.scene else DEFAULT_LEVEL)
-    bricks = getattr(args, "zarr_input", None) is not None or wants_cluster(args)
+    zarr_input = getattr(args, "zarr_input", None)
+    bricks = zarr_input is not None or wants_cluster(args)
+    bounds = zarr_input.bounds if zarr_input is not None else scene.volume.bounds
     renderer, settings, why = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, scene.renderer, level,
-                                      scene.settings, bricks)  # fmt: skip
+                                      scene.settings, bricks, cameras=(scene.resolved_camera(bounds),), bounds=bounds)  # fmt: skip
     return replace(scene, renderer=renderer, settings=settings), why
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
@@ -39,6 +39,20 @@ from volren.model.volume import Volume, VolumeKind
 ProgressCallback = Callable[[float], None]
 
 MAX_IMAGE_SIDE = 16384
+#: How far outside the bounds, as a fraction of their largest side, an eye still counts as inside.
+EYE_INSIDE_MARGIN = 1e-6
+
+
+def eye_inside_bounds(camera: Camera, bounds: Sequence[float]) -> bool:
+    """Whether a perspective camera's eye lies inside `bounds` (xmin, xmax, ymin, ymax, zmin, zmax),
+    faces included, within `EYE_INSIDE_MARGIN`: where rays start inside the volume."""
+    if camera.parallel:
+        return False
+    lo = np.asarray(bounds[0::2], dtype=np.float64)
+    hi = np.asarray(bounds[1::2], dtype=np.float64)
+    margin = EYE_INSIDE_MARGIN * float(np.max(hi - lo))
+    eye = np.asarray(camera.position, dtype=np.float64)
+    return bool(np.all(eye >= lo - margin) and np.all(eye <= hi + margin))
 
 
 @dataclass(frozen=True)
@@ -101,6 +115,10 @@ class KindSupport:
     #: Draws a brick's share of a whole volume (`set_region`, composite blending), so that layers
     #: composited front to back equal the whole render (the kit's `bricks` check).
     regions: bool = False
+    #: Draws perspective views whose eye lies inside the volume's bounds (a fly-through, an
+    #: endoscopic view; the kit's `eye_inside` check). False: such a frame is refused with a one-line
+    #: VolrenError before the renderer runs, and `auto` passes the renderer over for such a view.
+    eye_inside: bool = True
 
 
 @dataclass(frozen=True)
@@ -151,6 +169,16 @@ class Capabilities:
                     f"volumes (only {modes})"
                 )
         return None
+
+    def camera_reason(self, volume_kind: str, camera: Camera, bounds: Sequence[float]) -> str | None:
+        """Why this renderer cannot draw a volume with these `bounds` from `camera`, or None."""
+        support = self.kinds.get(volume_kind)  # type: ignore[call-overload]
+        if support is None or support.eye_inside or not eye_inside_bounds(camera, bounds):
+            return None
+        return (
+            f"cannot draw a perspective view from inside the {volume_kind} volume's bounds: move the camera "
+            "out, use a parallel projection or another renderer"
+        )
 
     def describe(self) -> str:
         parts = []
@@ -335,6 +363,7 @@ class RendererBase(ABC):
         if self._tf is None:
             raise VolrenError(f"renderer {self.name}: no transfer function set")
         reason = self.capabilities.unsupported_reason(self._volume.kind, self._tf.dims, self._settings)
+        reason = reason or self.capabilities.camera_reason(self._volume.kind, camera, self._volume.bounds)
         if reason:
             raise VolrenError(f"renderer {self.name} {reason}")
         if self._region is not None:

@@ -399,6 +399,33 @@ class _Cancel(Exception):
     """Raised by the kit's progress callback to cancel a frame."""
 
 
+def check_eye_inside(ctx: CheckContext) -> list[Measurement]:
+    """A perspective eye inside a homogeneous box (a fly-through): as the box check's closed form
+    where the kind declares `eye_inside`, else refused with a one-line VolrenError."""
+    out = []
+    tf = TransferFunction1D.constant(0.35, (0.9, 0.4, 0.2), opacity_unit_distance=0.8)
+    for kind in ctx.kinds():
+        volume = _box(kind)
+        lo, hi = np.asarray(volume.bounds[0::2]), np.asarray(volume.bounds[1::2])
+        camera = Camera(position=tuple(lo + (hi - lo) * (0.3, 0.4, 0.35)), focal_point=tuple(hi - (hi - lo) * 0.1),
+                        clipping_range=(0.01, 50.0))  # fmt: skip
+        w, h = 48, 40
+        if ctx.capabilities.kinds[kind].eye_inside:  # type: ignore[index]
+            image = ctx.draw(ctx.renderer(), volume, tf, camera, w, h)
+            expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, volume.bounds),
+                                                 (0.9, 0.4, 0.2), 0.35, 0.8)  # fmt: skip
+            out.append(Measurement("eye_inside", kind, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
+            continue
+        try:
+            ctx.draw(ctx.renderer(), volume, tf, camera, w, h)
+        except VolrenError as exc:
+            out.append(Measurement("eye_inside", f"{kind}, declared not drawn", "refusals not in one line",
+                                   int("\n" in str(exc)), 0))  # fmt: skip
+            continue
+        out.append(Measurement("eye_inside", f"{kind}, declared not drawn", "frames drawn instead of refused", 1, 0))
+    return out
+
+
 def _kit_scene(kind: str) -> tuple[Volume, TransferFunction1D, Camera]:
     volume = lattice_volume(kind, lambda x, y, z: np.sin(x) + np.cos(1.3 * y) + 0.5 * z, (8, 7, 6), (0.9, 0.8, 1.0))
     tf = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.8]], 0.6)
@@ -608,6 +635,6 @@ class Check:
 CHECKS: Sequence[Check] = tuple(
     Check(fn.__name__.removeprefix("check_"), fn)
     for fn in (check_output, check_empty, check_box, check_clip, check_ramp, check_projection, check_nan, check_point,
-               check_step, check_shading, check_progress, check_cancel, check_release, check_capabilities,
-               check_bricks)
+               check_step, check_shading, check_eye_inside, check_progress, check_cancel, check_release,
+               check_capabilities, check_bricks)
 )  # fmt: skip

@@ -201,6 +201,8 @@ class ShearWarpRenderer(RendererBase):
                 # measured with the full kit (docs/conformance/shearwarp.txt): RMSE up to 0.0058 (the
                 # NaN scene), 0.0049 (the ramp seen along +x), the point 0.058 px off
                 accuracy=Accuracy(rmse=0.01, position_px=0.1),
+                # from inside, the slices lie on both sides of the eye along every axis (`choose_axis`)
+                eye_inside=False,
             )
         },
         backend="cpu",

@@ -187,6 +187,35 @@ class RendererControl:
         self._preparing = None
         self.frame_label.setText(f"{renderer}  |  rendering {100 * fraction:.0f}%")
 
+    def _fallback(self, request: RenderRequest, usable: set[str]) -> str | None:
+        """The renderer to switch to after `request` failed: the last one that drew, where it can
+        draw this view, else (when the failed one cannot draw this view at all: an eye inside the
+        volume) the fastest measured one that can; None when there is none."""
+        volume, camera = request.volume, request.camera
+        try:
+            refused = self._registry.capabilities(request.renderer).camera_reason(volume.kind, camera, volume.bounds)
+        except VolrenError:
+            refused = None
+
+        def draws_view(name: str) -> bool:
+            try:
+                return self._registry.capabilities(name).camera_reason(volume.kind, camera, volume.bounds) is None
+            except VolrenError:
+                return False
+
+        last = self._last_good_renderer
+        if last in usable and draws_view(last):
+            return last
+        if refused is None:
+            return None
+        candidates = {n for n in usable if draws_view(n)}
+        try:
+            chosen, _ = choose_renderer(kind_of(volume, request.tf), DEFAULT_LEVEL, request.tf.dims, request.settings,
+                                        sorted(candidates), can_draw=candidates.__contains__)  # fmt: skip
+        except VolrenError:
+            return None
+        return chosen
+
     def render_failed(self, request: RenderRequest, message: str) -> None:
         """Back to the last renderer that drew, if it can; report once per renderer and scene."""
         self._preparing = None
@@ -194,12 +223,11 @@ class RendererControl:
         if name != self._state.renderer:
             return  # the person switched away already
         text = message if message.startswith(f"renderer {name}") else f"renderer {name} failed: {message}"
-        fallback = self._last_good_renderer
-        usable = {o.name for o in self.options() if o.enabled}
-        if fallback == name or fallback not in usable:
-            fallback = None
+        usable = {o.name for o in self.options() if o.enabled} - {name}
+        fallback = self._fallback(request, usable)
         if fallback is not None:
-            text += f"; switched back to {fallback}"
+            back = "back " if fallback == self._last_good_renderer else ""
+            text += f"; switched {back}to {fallback}"
             self.switch(fallback)  # re-renders behind the message box
         else:
             self.frame_label.setText(f"{name}  |  render failed")

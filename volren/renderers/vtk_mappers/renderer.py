@@ -149,7 +149,10 @@ class VtkRenderer(RendererBase):
             "uniform": KindSupport(
                 shading=True, blend_modes=CONTRACT_BLEND_MODES, accuracy=Accuracy(rmse=0.07, position_px=0.1)
             ),
-            "tet": KindSupport(preintegration=True, accuracy=Accuracy(rmse=0.025, position_px=0.4)),
+            # VTK's unstructured-grid mappers draw wrong images from an eye inside the mesh's bounds
+            # (measured on the kit's eye_inside scene, 0.025 allowed: RMSE 0.58 for the ray caster,
+            # which draws nothing, 0.13 zsweep, 0.087 projected), so such views are refused
+            "tet": KindSupport(preintegration=True, accuracy=Accuracy(rmse=0.025, position_px=0.4), eye_inside=False),
         },
         quality=(
             QualityLevel("step 2", step=2.0),
