@@ -26,6 +26,8 @@ from numba import njit, prange
 #: tiles of TILE x TILE pixels are handed to threads one at a time (neighbouring rays share cache lines)
 TILE = 8
 MAX_OPACITY = 1.0 - 1e-6
+#: Post-classified segments of visible bricks held back before they are composited (`_composite_post`)
+MAX_RUN = 64
 # the float parameters
 F_H, F_LO, F_SCALE, F_TERM = range(4)
 N_F = 4
@@ -62,6 +64,57 @@ def _first_segment_past(t, t0, first, h, pre):
     if not t > t0 + first:
         return 0
     return int(math.ceil((t - t0 - first) / h + (1.0 if pre else 0.5) - 1e-9))
+
+
+@njit(cache=True, inline="always")
+def _middles_before(t, t0, first, last, h, ns):
+    """How many of a ray's segments have their middle (a post-classified segment's key point) before t."""
+    if ns == 0 or not t > t0 + 0.5 * first:
+        return 0
+    c = max(int(math.ceil((t - t0 - first) / h + 0.5)), 1)
+    if c >= ns:
+        return ns
+    if c == ns - 1 and ns >= 2 and t0 + first + (ns - 2) * h + 0.5 * last < t:
+        return ns
+    return c
+
+
+@njit(cache=True, inline="always")
+def _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ka, kb, r, g, b, a, term):
+    """(r, g, b, a, segments sampled) after compositing the post-classified segments [ka, kb) of a
+    ray front to back onto it, stopping once a reaches `term`. One counted loop over a run of
+    visible bricks: the per-brick loop's exit test at every sample and its mispredicted exit at
+    every brick go (7-12 % of a frame on bonsai and marschner_lobb, interleaved in one process)."""
+    n_ = post.shape[0]
+    base = t0 + first - 0.5 * h
+    sampled = kb - ka
+    for kk in range(ka, kb):
+        if kk == 0 or kk == ns - 1:
+            tk, lk = _segment(t0, first, last, h, ns, kk)
+            tm = tk + 0.5 * lk
+        else:
+            lk = h
+            tm = base + kk * h
+        s = _value(vol, ox + tm * dx, oy + tm * dy, oz + tm * dz)
+        if not math.isfinite(s):
+            continue
+        fi = min(max((s - lo_) * scale_, 0.0), n_ - 1.0)
+        i0 = min(int(fi), n_ - 2)
+        w = fi - i0
+        ca = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
+        if ca <= 0.0:
+            continue
+        if lk != h:
+            ca = -math.expm1(lk / h * math.log1p(-min(ca, MAX_OPACITY)))
+        tr = (1.0 - a) * ca
+        r += tr * (post[i0, 0] + w * (post[i0 + 1, 0] - post[i0, 0]))
+        g += tr * (post[i0, 1] + w * (post[i0 + 1, 1] - post[i0, 1]))
+        b += tr * (post[i0, 2] + w * (post[i0 + 1, 2] - post[i0, 2]))
+        a += tr
+        if a >= term:
+            sampled = kk + 1 - ka
+            break
+    return r, g, b, a, sampled
 
 
 @njit(cache=True, inline="always")
@@ -227,8 +280,14 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
     ux, uy, uz = nx - 1.0, ny - 1.0, nz - 1.0
     h = fp[F_H]
     term = fp[F_TERM]
+    lo_ = fp[F_LO]
+    scale_ = fp[F_SCALE]
     tiles_x = (width + TILE - 1) // TILE
     B = brick
+    shift = -1  # log2 of the brick size where it is a power of two: a shift instead of a division
+    for q_ in range(7):
+        if (1 << q_) == B:
+            shift = q_
     for q in prange(tiles.shape[0]):
         tile = tiles[q]
         x_start = (tile % tiles_x) * TILE
@@ -257,13 +316,19 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                 k = 0  # the next segment
                 sb = 0.0  # pre-integrated: the value at segment k's front, when `have_front`
                 have_front = False
+                ra = 0  # post-classified: segments [ra, rb) lie in a run of visible bricks, not yet composited
+                rb = 0
                 while k < ns:
                     # (re)start the brick walk at segment k's key point
                     tk, lk = _segment(t0, first, last, h, ns, k)
                     tkey = tk if pre else tk + 0.5 * lk
-                    bi = min(max(int(ox + tkey * dx), 0), nx - 2) // B
-                    bj = min(max(int(oy + tkey * dy), 0), ny - 2) // B
-                    bk = min(max(int(oz + tkey * dz), 0), nz - 2) // B
+                    bi = min(max(int(ox + tkey * dx), 0), nx - 2)
+                    bj = min(max(int(oy + tkey * dy), 0), ny - 2)
+                    bk = min(max(int(oz + tkey * dz), 0), nz - 2)
+                    if shift >= 0:
+                        bi, bj, bk = bi >> shift, bj >> shift, bk >> shift
+                    else:
+                        bi, bj, bk = bi // B, bj // B, bk // B
                     d = empty[bk, bj, bi]
                     sx = 1 if dx > 0.0 else -1
                     sy = 1 if dy > 0.0 else -1
@@ -282,13 +347,34 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                                             (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B, (bk + 1 + e) * B)  # fmt: skip
                             kn = _first_segment_past(tb_, t0, first, h, pre)
                             if kn > k:
+                                if rb > ra:
+                                    r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+                                    taken += n_run
+                                    ra = rb
+                                    if a >= term:
+                                        k = ns
+                                        break
                                 k = kn
                                 have_front = False
                                 jumps += 1
                                 restart = True
                                 break
                         te = min(tnx, tny, tnz)
-                        if d == 0:
+                        if d == 0 and not pre:  # its segments join the run, composited when it ends
+                            kn = _middles_before(te, t0, first, last, h, ns)
+                            if kn > k:
+                                if rb != k:
+                                    ra = k
+                                rb = kn
+                                k = kn
+                                if rb - ra >= MAX_RUN:  # an opaque ray stops within a run: walk no further first
+                                    r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+                                    taken += n_run
+                                    ra = rb
+                                    if a >= term:
+                                        k = ns
+                                        break
+                        elif d == 0:
                             while k < ns:
                                 tk, lk = _segment(t0, first, last, h, ns, k)
                                 if (tk if pre else tk + 0.5 * lk) >= te:
@@ -319,6 +405,13 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                                         k = ns
                                         break
                         else:  # an empty brick: its segments add nothing
+                            if rb > ra:
+                                r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+                                taken += n_run
+                                ra = rb
+                                if a >= term:
+                                    k = ns
+                                    break
                             kn = _first_segment_past(te, t0, first, h, pre)
                             if kn > k:
                                 k = kn
@@ -343,6 +436,9 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                         d = empty[bk, bj, bi]
                     if not restart:
                         break
+                if rb > ra and a < term:
+                    r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+                    taken += n_run
                 out[p, 0] = min(max(r, 0.0), 1.0)
                 out[p, 1] = min(max(g, 0.0), 1.0)
                 out[p, 2] = min(max(b, 0.0), 1.0)
