@@ -303,3 +303,28 @@ def test_the_cli_renders_from_inside_the_volume_with_auto_and_names_the_renderer
     scene_path.write_text(json.dumps(scene))
     assert main(["render", "--scene", str(scene_path), "--quality", "default", "--save-array", str(tmp_path / "out.npy")]) == 0
     assert capsys.readouterr().out.startswith("shearwarp (auto:")
+
+
+def test_clipping_planes_that_cut_a_mesh_pass_vtk_over():
+    from dataclasses import replace
+
+    from volren.model import Camera
+    from volren.renderers.base import clipping_planes_cut
+
+    bounds = (0.0, 10.0, 0.0, 8.0, 0.0, 6.0)
+    whole = Camera.orbit(bounds, 30, 20)
+    near, far = whole.clipping_range
+    depth = float(np.linalg.norm(np.asarray(whole.position) - np.asarray(whole.focal_point)))
+    cut_near = replace(whole, clipping_range=(depth, far))  # through the box's centre
+    cut_far = replace(whole, clipping_range=(near, depth))
+    assert not clipping_planes_cut(whole, bounds)
+    assert clipping_planes_cut(cut_near, bounds) and clipping_planes_cut(cut_far, bounds)
+    vtk = registry.capabilities("vtk")
+    assert vtk.camera_reason("tet", whole, bounds) is None
+    assert "near or far plane cuts" in vtk.camera_reason("tet", cut_near, bounds)
+    assert vtk.camera_reason("uniform", cut_near, bounds) is None  # the grid mappers clip
+    tets = QualityTable({"tet": {"vtk": {level: choice(10) for level in quality.LEVELS},
+                                 "tetra": {level: choice(50) for level in quality.LEVELS}}}, "t")  # fmt: skip
+    names = registry.names()
+    assert choose_renderer("tet", "default", 1, RenderSettings(), names, tets, cameras=(whole,), bounds=bounds)[0] == "vtk"
+    assert choose_renderer("tet", "default", 1, RenderSettings(), names, tets, cameras=(cut_near,), bounds=bounds)[0] == "tetra"

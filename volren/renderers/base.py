@@ -55,6 +55,19 @@ def eye_inside_bounds(camera: Camera, bounds: Sequence[float]) -> bool:
     return bool(np.all(eye >= lo - margin) and np.all(eye <= hi + margin))
 
 
+def clipping_planes_cut(camera: Camera, bounds: Sequence[float]) -> bool:
+    """Whether the camera's near or far plane passes through the box `bounds` (an eye inside it
+    included), beyond `EYE_INSIDE_MARGIN` of the depth range of its corners."""
+    lo = np.asarray(bounds[0::2], dtype=np.float64)
+    hi = np.asarray(bounds[1::2], dtype=np.float64)
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    depth = (corners - np.asarray(camera.position, dtype=np.float64)) @ camera.direction
+    d0, d1 = float(depth.min()), float(depth.max())
+    margin = EYE_INSIDE_MARGIN * max(d1 - d0, float(np.max(hi - lo)))
+    near, far = camera.clipping_range
+    return bool(d0 + margin < near < d1 - margin or d0 + margin < far < d1 - margin)
+
+
 @dataclass(frozen=True)
 class Accuracy:
     """How close a renderer's images come to the exact ones at its default quality, as it claims.
@@ -119,6 +132,9 @@ class KindSupport:
     #: endoscopic view; the kit's `eye_inside` check). False: such a frame is refused with a one-line
     #: VolrenError before the renderer runs, and `auto` passes the renderer over for such a view.
     eye_inside: bool = True
+    #: Honours near and far planes that cut the volume (a camera zoomed into it, planes placed by
+    #: hand; the kit's `clip` check). False: such a frame is refused like an eye inside.
+    clipping: bool = True
 
 
 @dataclass(frozen=True)
@@ -173,12 +189,19 @@ class Capabilities:
     def camera_reason(self, volume_kind: str, camera: Camera, bounds: Sequence[float]) -> str | None:
         """Why this renderer cannot draw a volume with these `bounds` from `camera`, or None."""
         support = self.kinds.get(volume_kind)  # type: ignore[call-overload]
-        if support is None or support.eye_inside or not eye_inside_bounds(camera, bounds):
+        if support is None:
             return None
-        return (
-            f"cannot draw a perspective view from inside the {volume_kind} volume's bounds: move the camera "
-            "out, use a parallel projection or another renderer"
-        )
+        if not support.eye_inside and eye_inside_bounds(camera, bounds):
+            return (
+                f"cannot draw a perspective view from inside the {volume_kind} volume's bounds: move the camera "
+                "out, use a parallel projection or another renderer"
+            )
+        if not support.clipping and clipping_planes_cut(camera, bounds):
+            return (
+                f"cannot draw a view whose near or far plane cuts the {volume_kind} volume: move the camera "
+                "back, widen the clipping range or use another renderer"
+            )
+        return None
 
     def describe(self) -> str:
         parts = []

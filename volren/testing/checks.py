@@ -11,6 +11,7 @@ Every image any check renders is also held to the output rules (float32 (H, W, 4
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable, Iterator, Sequence
@@ -243,6 +244,9 @@ def check_clip(ctx: CheckContext) -> list[Measurement]:
             w, h = 48, 40
             camera = Camera.orbit(volume.bounds, -35, 25, zoom=1.3, parallel=parallel, aspect=w / h)
             camera = clipped_camera(camera, volume.bounds, near, far)
+            if not ctx.capabilities.kinds[kind].clipping:  # type: ignore[index]
+                out.append(_refusal("clip", f"{kind}, {name}, declared not drawn", functools.partial(ctx.draw, renderer, volume, tf, camera, w, h)))
+                continue
             image = ctx.draw(renderer, volume, tf, camera, w, h)
             expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, volume.bounds),
                                                  (0.3, 0.8, 0.6), 0.45, 0.6)  # fmt: skip
@@ -416,14 +420,18 @@ def check_eye_inside(ctx: CheckContext) -> list[Measurement]:
                                                  (0.9, 0.4, 0.2), 0.35, 0.8)  # fmt: skip
             out.append(Measurement("eye_inside", kind, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
             continue
-        try:
-            ctx.draw(ctx.renderer(), volume, tf, camera, w, h)
-        except VolrenError as exc:
-            out.append(Measurement("eye_inside", f"{kind}, declared not drawn", "refusals not in one line",
-                                   int("\n" in str(exc)), 0))  # fmt: skip
-            continue
-        out.append(Measurement("eye_inside", f"{kind}, declared not drawn", "frames drawn instead of refused", 1, 0))
+        renderer = ctx.renderer()
+        out.append(_refusal("eye_inside", f"{kind}, declared not drawn", functools.partial(ctx.draw, renderer, volume, tf, camera, w, h)))
     return out
+
+
+def _refusal(check: str, case: str, draw: Callable[[], Any]) -> Measurement:
+    """A view the renderer declares it cannot draw: refused with a one-line VolrenError, not drawn."""
+    try:
+        draw()
+    except VolrenError as exc:
+        return Measurement(check, case, "refusals not in one line", int("\n" in str(exc)), 0)
+    return Measurement(check, case, "frames drawn instead of refused", 1, 0)
 
 
 def _kit_scene(kind: str) -> tuple[Volume, TransferFunction1D, Camera]:
