@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -306,8 +307,6 @@ def test_the_cli_renders_from_inside_the_volume_with_auto_and_names_the_renderer
 
 
 def test_clipping_planes_that_cut_a_mesh_pass_vtk_over():
-    from dataclasses import replace
-
     from volren.model import Camera
     from volren.renderers.base import clipping_planes_cut
 
@@ -328,3 +327,23 @@ def test_clipping_planes_that_cut_a_mesh_pass_vtk_over():
     names = registry.names()
     assert choose_renderer("tet", "default", 1, RenderSettings(), names, tets, cameras=(whole,), bounds=bounds)[0] == "vtk"
     assert choose_renderer("tet", "default", 1, RenderSettings(), names, tets, cameras=(cut_near,), bounds=bounds)[0] == "tetra"
+
+
+def test_a_movie_from_inside_the_volume_refuses_up_front_or_goes_to_a_renderer_that_draws_it(tmp_path):
+    from volren.model import Camera, TransferFunction1D, UniformVolume
+    from volren.model.animation import Animation
+    from volren.model.scene import Scene
+    from volren.movie import render_movie
+
+    values = np.fromfunction(lambda z, y, x: (x + 2 * y + 3 * z) % 100, (12, 12, 12)).astype(np.float32)
+    volume = UniformVolume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0))
+    band = TransferFunction1D([[0, 1, 0.5, 0.2], [100, 1, 0.5, 0.2]], [[0, 0.0], [49, 0.0], [50, 1.0], [51, 0.0], [100, 0.0]], 0.2)
+    inside = Camera(position=(5.5, 5.5, 5.0), focal_point=(5.5, 5.5, 11.0), clipping_range=(0.01, 50.0))
+    animation = Animation(frames=3, fps=3)
+    scene = Scene("v.vti", band, camera=inside, renderer="shearwarp", size=(16, 16), volume=volume)
+    path = tmp_path / "m.gif"
+    with pytest.raises(VolrenError, match=r"movie frame 1 of 3: renderer shearwarp cannot draw .* inside") as info:
+        render_movie(scene, animation, path)
+    assert "\n" not in str(info.value) and not path.exists()
+    render_movie(replace(scene, renderer="auto"), animation, path)  # auto passes shearwarp over
+    assert path.stat().st_size > 0

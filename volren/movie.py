@@ -83,6 +83,22 @@ def render_movie(
                             scene.size, path, background, lossless, progress, scene.renderer, volumes, draw)  # fmt: skip
 
 
+def _check_views(renderer: Renderer, animation: Animation, start_view: View, bounds: Sequence[float], aspect: float,
+                 label: str | None) -> None:  # fmt: skip
+    """A one-line error before the first frame when the renderer cannot draw some frame's view (an
+    eye inside the volume, a clipping plane through it: `Capabilities.camera_reason`), rather than
+    after minutes of frames."""
+    capabilities = getattr(renderer, "capabilities", None)
+    volume = getattr(renderer, "volume", None)
+    if capabilities is None or volume is None:
+        return
+    for index in range(animation.frames):
+        reason = capabilities.camera_reason(volume.kind, animation.camera(index, start_view, bounds, aspect), volume.bounds)
+        if reason:
+            name = label or getattr(renderer, "name", "the renderer")
+            raise VolrenError(f"movie frame {index + 1} of {animation.frames}: renderer {name} {reason}")
+
+
 #: draw(renderer, tf=, camera=, width=, height=, progress=) -> (image, FrameStats): one frame.
 FrameDrawer = Callable[..., tuple[Any, FrameStats]]
 
@@ -127,6 +143,8 @@ def record_movie(
     frames = animation.frames
     times: list[float] = []
     tf = start_tf
+    if draw is None:
+        _check_views(renderer, animation, start_view, bounds, width / height, label)
     with movie_writer(path, animation.fps, lossless) as writer:
         for index in range(frames):
             volume = volumes(index) if volumes is not None else None
