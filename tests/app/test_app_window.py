@@ -641,3 +641,30 @@ def test_a_preview_renderer_that_fails_previews_no_more_and_the_still_frame_come
     assert frames[0].renderer == "fake_drag" and not frames[0].full
     w.state.end_interaction()
     assert error_boxes == [] and w.state.renderer == "fake_drag"
+
+
+def test_a_preview_renderer_that_cannot_draw_the_view_is_passed_over_only_while_it_cannot(
+    make_window, fake_renderers, sample, qtbot, monkeypatch, error_boxes
+):
+    from volren.model import Camera
+
+    use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
+                             "fake_outside_only": {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake_drag")
+    outside = w.state.camera
+    lo, hi = np.asarray(w.state.volume.bounds[0::2]), np.asarray(w.state.volume.bounds[1::2])
+    inside = Camera(position=tuple(lo + 0.4 * (hi - lo)), focal_point=tuple(hi), clipping_range=(0.01, 100.0))
+    frames = []
+    w.frameShown.connect(frames.append)
+    w.state.begin_interaction()
+    w.state.set_camera(inside)
+    qtbot.waitUntil(lambda: any(not f.full for f in frames), timeout=FRAME_TIMEOUT_MS)
+    assert next(f for f in frames if not f.full).renderer == "fake_drag"  # the fast one refuses this view
+    frames.clear()
+    w.state.set_camera(outside.azimuth(5.0))
+    qtbot.waitUntil(lambda: any(not f.full for f in frames), timeout=FRAME_TIMEOUT_MS)
+    assert next(f for f in frames if not f.full).renderer == "fake_outside_only"  # and previews again outside
+    w.state.end_interaction()
+    assert error_boxes == [] and w.state.renderer == "fake_drag"

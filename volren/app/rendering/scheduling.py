@@ -129,22 +129,43 @@ class FrameScheduler(QObject):
         kind = kind_of(s.volume, s.transfer_function) if s.volume is not None else "uniform"
         dims = s.transfer_function.dims if s.transfer_function is not None else 1
         dragged = self._tf_dragged if tf_dragged is None else tf_dragged
-        inputs = (s.renderer, kind, s.settings, dragged, dims)  # the kind (with the TF's class) compared by value
-        if self._preview is None or any(a is not b and not (isinstance(a, str) and a == b)
+        names = [n for n in self._registry.names() if n not in self._failed_previewers] \
+            if self._registry is not None else [s.renderer]  # fmt: skip
+        refused = self._refusing_the_view(names)
+        # the kind (with the TF's class) and the renderers refusing this view compared by value
+        inputs = (s.renderer, kind, s.settings, dragged, dims, refused)
+        if self._preview is None or any(a is not b and not (isinstance(a, str | frozenset) and a == b)
                                         for a, b in zip(self._preview[0], inputs, strict=True)):
-            names = [n for n in self._registry.names() if n not in self._failed_previewers] \
-                if self._registry is not None else [s.renderer]  # fmt: skip
-            self._preview = (inputs, preview_choice(s.renderer, kind, dims, s.settings, names, self._capabilities, dragged))
+            usable = [n for n in names if n not in refused or n == s.renderer]
+            self._preview = (inputs, preview_choice(s.renderer, kind, dims, s.settings, usable, self._capabilities, dragged))
         return self._preview[1]
 
+    def _refusing_the_view(self, names: list[str]) -> frozenset[str]:
+        """The renderers among `names` that cannot draw the current view (an eye inside the volume,
+        a clipping plane through it: `Capabilities.camera_reason`); they preview again once the
+        camera is back where they can."""
+        s = self._state
+        volume, camera = s.render_volume, s.camera
+        if volume is None or camera is None:
+            return frozenset()
+        refused = set()
+        for name in names:
+            caps = self._capabilities(name)
+            if caps is not None and caps.camera_reason(volume.kind, camera, volume.bounds) is not None:
+                refused.add(name)
+        return frozenset(refused)
+
     def _on_failed(self, request: RenderRequest, _message: str) -> None:
-        """A preview renderer that raised previews no more (the still frames' renderer's own
-        failures are the renderer control's to report)."""
-        if request.renderer != self._state.renderer:
+        """A preview renderer that raised previews no more, unless it only refused the view (the
+        still frames' renderer's own failures are the renderer control's to report)."""
+        if request.renderer == self._state.renderer:
+            return
+        caps = self._capabilities(request.renderer)
+        if caps is None or caps.camera_reason(request.volume.kind, request.camera, request.volume.bounds) is None:
             self._failed_previewers.add(request.renderer)
-            self._preview = None
-            self._last_full = None
-            self.request_full()
+        self._preview = None  # chosen again, without it
+        self._last_full = None
+        self.request_full()
 
     def _capabilities(self, name: str) -> Capabilities | None:
         if self._registry is None:
