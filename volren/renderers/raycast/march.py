@@ -341,19 +341,21 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                     ddz = B * abs(iz)
                     restart = False
                     while True:
+                        if rb > ra and (d != 0 or rb - ra >= MAX_RUN):
+                            # the run ends at an empty brick, or is long (an opaque ray stops within
+                            # it: walk no further first): composite it
+                            r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+                            taken += n_run
+                            ra = rb
+                            if a >= term:
+                                k = ns
+                                break
                         if d > 1:  # empty bricks all around: leave their box in one jump if that skips
                             e = d - 1
                             tb_ = _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, (bi - e) * B, (bj - e) * B,
                                             (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B, (bk + 1 + e) * B)  # fmt: skip
                             kn = _first_segment_past(tb_, t0, first, h, pre)
                             if kn > k:
-                                if rb > ra:
-                                    r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
-                                    taken += n_run
-                                    ra = rb
-                                    if a >= term:
-                                        k = ns
-                                        break
                                 k = kn
                                 have_front = False
                                 jumps += 1
@@ -367,13 +369,6 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                                     ra = k
                                 rb = kn
                                 k = kn
-                                if rb - ra >= MAX_RUN:  # an opaque ray stops within a run: walk no further first
-                                    r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
-                                    taken += n_run
-                                    ra = rb
-                                    if a >= term:
-                                        k = ns
-                                        break
                         elif d == 0:
                             while k < ns:
                                 tk, lk = _segment(t0, first, last, h, ns, k)
@@ -405,13 +400,6 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
                                         k = ns
                                         break
                         else:  # an empty brick: its segments add nothing
-                            if rb > ra:
-                                r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
-                                taken += n_run
-                                ra = rb
-                                if a >= term:
-                                    k = ns
-                                    break
                             kn = _first_segment_past(te, t0, first, h, pre)
                             if kn > k:
                                 k = kn
