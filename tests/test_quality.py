@@ -266,13 +266,22 @@ def test_auto_passes_over_a_renderer_that_cannot_draw_the_view():
                            cameras=(inside,), bounds=bounds)[0] == "objectorder"  # fmt: skip
 
 
-def test_the_api_renders_from_inside_the_volume_with_auto_where_its_first_choice_cannot():
-    import volren
-    from volren.model import Camera, TransferFunction1D, UniformVolume
+def band_scene():
+    """A 12^3 grid of values 0..99 and a band TF (a peak at 50): `auto` draws it with shearwarp
+    from outside."""
+    from volren.model import TransferFunction1D, UniformVolume
 
     values = np.fromfunction(lambda z, y, x: (x + 2 * y + 3 * z) % 100, (12, 12, 12)).astype(np.float32)
     volume = UniformVolume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0))
     band = TransferFunction1D([[0, 1, 0.5, 0.2], [100, 1, 0.5, 0.2]], [[0, 0.0], [49, 0.0], [50, 1.0], [51, 0.0], [100, 0.0]], 0.2)
+    return volume, band
+
+
+def test_the_api_renders_from_inside_the_volume_with_auto_where_its_first_choice_cannot():
+    import volren
+    from volren.model import Camera
+
+    volume, band = band_scene()
     kind = quality.scene_kind("uniform", band, volume.value_range)
     assert kind == "uniform/band" and quality.resolve(kind, 1, "auto", None, RenderSettings())[0] == "shearwarp"
     inside = Camera(position=(5.0, 5.0, 5.0), focal_point=(11.0, 11.0, 11.0), clipping_range=(0.01, 50.0))
@@ -284,13 +293,12 @@ def test_the_api_renders_from_inside_the_volume_with_auto_where_its_first_choice
 
 def test_the_cli_renders_from_inside_the_volume_with_auto_and_names_the_renderer(tmp_path, capsys):
     from volren.io.volume_writer import save_volume
-    from volren.model import Camera, UniformVolume
+    from volren.model import Camera
 
-    values = np.fromfunction(lambda z, y, x: (x + 2 * y + 3 * z) % 100, (12, 12, 12)).astype(np.float32)
+    volume, band_tf = band_scene()
     volume_path = tmp_path / "v.vti"
-    save_volume(UniformVolume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0)), volume_path)
-    band = {"color": [[0, 1, 0.5, 0.2], [100, 1, 0.5, 0.2]],
-            "opacity": [[0, 0.0], [49, 0.0], [50, 1.0], [51, 0.0], [100, 0.0]], "opacity_unit_distance": 0.2}  # fmt: skip
+    save_volume(volume, volume_path)
+    band = band_tf.to_dict()
     inside = Camera(position=(5.0, 5.0, 5.0), focal_point=(11.0, 11.0, 11.0), clipping_range=(0.01, 50.0))
     scene = {"version": 1, "volume": {"path": str(volume_path)}, "transfer_function": band,
              "camera": inside.to_dict(), "size": [24, 24]}  # fmt: skip
@@ -330,14 +338,12 @@ def test_clipping_planes_that_cut_a_mesh_pass_vtk_over():
 
 
 def test_a_movie_from_inside_the_volume_refuses_up_front_or_goes_to_a_renderer_that_draws_it(tmp_path):
-    from volren.model import Camera, TransferFunction1D, UniformVolume
+    from volren.model import Camera
     from volren.model.animation import Animation
     from volren.model.scene import Scene
     from volren.movie import render_movie
 
-    values = np.fromfunction(lambda z, y, x: (x + 2 * y + 3 * z) % 100, (12, 12, 12)).astype(np.float32)
-    volume = UniformVolume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0))
-    band = TransferFunction1D([[0, 1, 0.5, 0.2], [100, 1, 0.5, 0.2]], [[0, 0.0], [49, 0.0], [50, 1.0], [51, 0.0], [100, 0.0]], 0.2)
+    volume, band = band_scene()
     inside = Camera(position=(5.5, 5.5, 5.0), focal_point=(5.5, 5.5, 11.0), clipping_range=(0.01, 50.0))
     animation = Animation(frames=3, fps=3)
     scene = Scene("v.vti", band, camera=inside, renderer="shearwarp", size=(16, 16), volume=volume)

@@ -207,16 +207,21 @@ def test_renderer_that_raises_reports_and_falls_back(loaded_window, fake_rendere
     assert blocker.args[0].renderer == "vtk" and w.state.camera is camera
 
 
-def test_a_renderer_that_cannot_draw_a_view_from_inside_gives_way_to_one_that_can(make_window, fake_renderers,
-                                                                                   sample, qtbot, error_boxes):  # fmt: skip
+def inside_camera(bounds):
+    """A perspective camera with its eye inside `bounds`, looking at their far corner."""
     from volren.model import Camera
 
+    lo, hi = np.asarray(bounds[0::2]), np.asarray(bounds[1::2])
+    return Camera(position=tuple(lo + 0.4 * (hi - lo)), focal_point=tuple(hi), clipping_range=(0.01, 100.0))
+
+
+def test_a_renderer_that_cannot_draw_a_view_from_inside_gives_way_to_one_that_can(make_window, fake_renderers,
+                                                                                   sample, qtbot, error_boxes):  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "fake_outside_only")
     assert w.state.renderer == "fake_outside_only" and error_boxes == []
-    lo, hi = np.asarray(w.state.volume.bounds[0::2]), np.asarray(w.state.volume.bounds[1::2])
-    inside = Camera(position=tuple(lo + 0.4 * (hi - lo)), focal_point=tuple(hi), clipping_range=(0.01, 100.0))
+    inside = inside_camera(w.state.volume.bounds)
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
         w.state.set_camera(inside)
     drawn = blocker.args[0].renderer
@@ -646,16 +651,13 @@ def test_a_preview_renderer_that_fails_previews_no_more_and_the_still_frame_come
 def test_a_preview_renderer_that_cannot_draw_the_view_is_passed_over_only_while_it_cannot(
     make_window, fake_renderers, sample, qtbot, monkeypatch, error_boxes
 ):
-    from volren.model import Camera
-
     use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
                              "fake_outside_only": {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "fake_drag")
     outside = w.state.camera
-    lo, hi = np.asarray(w.state.volume.bounds[0::2]), np.asarray(w.state.volume.bounds[1::2])
-    inside = Camera(position=tuple(lo + 0.4 * (hi - lo)), focal_point=tuple(hi), clipping_range=(0.01, 100.0))
+    inside = inside_camera(w.state.volume.bounds)
     frames = []
     w.frameShown.connect(frames.append)
     w.state.begin_interaction()

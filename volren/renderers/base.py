@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
-from volren.model.camera import Camera
+from volren.model.camera import Camera, bounds_corners
 from volren.model.region import Region
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
@@ -58,12 +58,10 @@ def eye_inside_bounds(camera: Camera, bounds: Sequence[float]) -> bool:
 def clipping_planes_cut(camera: Camera, bounds: Sequence[float]) -> bool:
     """Whether the camera's near or far plane passes through the box `bounds` (an eye inside it
     included), beyond `EYE_INSIDE_MARGIN` of the depth range of its corners."""
-    lo = np.asarray(bounds[0::2], dtype=np.float64)
-    hi = np.asarray(bounds[1::2], dtype=np.float64)
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    corners = bounds_corners(bounds)
     depth = (corners - np.asarray(camera.position, dtype=np.float64)) @ camera.direction
     d0, d1 = float(depth.min()), float(depth.max())
-    margin = EYE_INSIDE_MARGIN * max(d1 - d0, float(np.max(hi - lo)))
+    margin = EYE_INSIDE_MARGIN * max(d1 - d0, float(np.max(np.ptp(corners, axis=0))))
     near, far = camera.clipping_range
     return bool(d0 + margin < near < d1 - margin or d0 + margin < far < d1 - margin)
 

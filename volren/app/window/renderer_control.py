@@ -192,26 +192,22 @@ class RendererControl:
         draw this view, else (when the failed one cannot draw this view at all: an eye inside the
         volume) the fastest measured one that can; None when there is none."""
         volume, camera = request.volume, request.camera
-        try:
-            refused = self._registry.capabilities(request.renderer).camera_reason(volume.kind, camera, volume.bounds)
-        except VolrenError:
-            refused = None
 
-        def draws_view(name: str) -> bool:
+        def refuses_view(name: str) -> bool:
             try:
-                return self._registry.capabilities(name).camera_reason(volume.kind, camera, volume.bounds) is None
+                return self._registry.capabilities(name).camera_reason(volume.kind, camera, volume.bounds) is not None
             except VolrenError:
-                return False
+                return True
 
         last = self._last_good_renderer
-        if last in usable and draws_view(last):
+        if last in usable and not refuses_view(last):
             return last
-        if refused is None:
+        if not refuses_view(request.renderer):
             return None
-        candidates = {n for n in usable if draws_view(n)}
         try:
             chosen, _ = choose_renderer(kind_of(volume, request.tf), DEFAULT_LEVEL, request.tf.dims, request.settings,
-                                        sorted(candidates), can_draw=candidates.__contains__)  # fmt: skip
+                                        sorted(usable), can_draw=usable.__contains__, cameras=(camera,),
+                                        bounds=volume.bounds)  # fmt: skip
         except VolrenError:
             return None
         return chosen
