@@ -86,6 +86,50 @@ def test_octree_skipping_changes_no_pixel(parallel, pre):
         np.testing.assert_array_equal(on, off)
 
 
+def _views(volume, parallel):
+    """Cameras whose rays run every way along some axis and one way along others: oblique, from
+    below, along an axis, from inside (perspective), and with the far plane through the volume."""
+    cams = [Camera.orbit(volume.bounds, az, el, zoom=1.1, parallel=parallel)
+            for az, el in ((35, 25), (-120, -40), (0, 0), (90, 0), (200, 70))]  # fmt: skip
+    cams.append(distant_camera_cut_by_far_plane(volume.bounds, 0.45, parallel))
+    if not parallel:
+        cams.append(Camera(position=(6.0, 5.0, 4.0), focal_point=(13.0, 1.0, 9.0), view_angle=70.0))
+    return cams
+
+
+# a band of opacity just under the top face (z), where rays that leave through it end their last
+# piece, and one around the middle: segments run out of both into cells that are transparent
+TOP_TF = TransferFunction1D([[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]],
+                            [[1.2, 0.0], [1.5, 0.8], [1.8, 0.0], [2.5, 0.0], [2.8, 0.9]], 1.0)
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_one_sided_dilation_skips_cells_and_changes_no_pixel(parallel):
+    """Pre-integrated, the octree dilates each cell's range toward the eye only (the back end of the
+    rim both ways): every view draws what skipping nothing draws, and an oblique one classifies
+    fewer cells visible than the box both ways would."""
+    from volren_objectorder.octree import Reach
+
+    volume = field((12, 13, 14), spacing=(1.0, 0.8, 1.2))
+    # and scattered voxels, some on the faces, that only a spike of the TF sees: a ray's last
+    # piece then often ends on a visible point of a face outside its last sample's cell
+    spots = (np.random.default_rng(5).random((12, 13, 14)) < 0.03).astype(np.float32)
+    spike = TransferFunction1D([[0, 1, 0.5, 0.2], [1, 0.3, 0.6, 1.0]], [[0.0, 0.0], [0.05, 0.0], [0.5, 1.0]], 0.5)
+    options = {"hidden_volume_removal": False}
+    for vol, tf in ((volume, TOP_TF), (UniformVolume(spots, spacing=(1.0, 0.8, 1.2)), spike)):
+        for camera in _views(vol, parallel):
+            on, _ = draw(vol, tf, camera, (36, 30), preintegration=True, step=0.7, options=options)
+            off, _ = draw(vol, tf, camera, (36, 30), preintegration=True, step=0.7,
+                          options={**options, "octree_skipping": False})  # fmt: skip
+            assert on[..., 3].max() > 0.02
+            np.testing.assert_allclose(on, off, atol=1e-6, err_msg=str(camera))
+    camera = _views(volume, parallel)[0]
+    _, r = draw(volume, TOP_TF, camera, (36, 30), preintegration=True, step=0.7)
+    one_sided = r.last_frame.counters["cells_visible"]
+    both = r.octree.classify(TOP_TF, Reach.both_ways((1, 1, 1))).visible_cells
+    assert one_sided < 0.95 * both
+
+
 @pytest.mark.parametrize("parallel", [False, True])
 def test_hidden_volume_removal_skips_cells_and_changes_little(parallel):
     volume = field((24, 24, 24))
@@ -258,16 +302,18 @@ def test_a_user_camera_whose_far_plane_cuts_the_volume_matches_the_reference(par
         assert image_error(image, truth).rmse < 0.01, mode
 
 
-@pytest.mark.parametrize("radius", [(1, 1, 1), (2, 0, 3), (0, 0, 0), (5, 5, 5)])
+@pytest.mark.parametrize("window", [((1, 1), (1, 1), (1, 1)), ((2, 0), (0, 0), (0, 3)), ((0, 0),) * 3, ((5, 5),) * 3,
+                                    ((0, 1), (2, 1), (1, 0))])  # fmt: skip
 @pytest.mark.parametrize("shape", [(5, 6, 7), (1, 3, 9), (17, 2, 4)])
-def test_the_dilated_ranges_are_the_min_and_max_over_each_box(shape, radius):
-    """`_dilate` against brute force: every element's box of +-radius cells (clipped to the grid)."""
+def test_the_dilated_ranges_are_the_min_and_max_over_each_box(shape, window):
+    """`_dilate` against brute force: every element's box from `below` to `above` cells along each
+    axis (clipped to the grid)."""
     from volren_objectorder.octree import _dilate
 
     a = np.random.default_rng(sum(shape)).random(shape).astype(np.float32)
-    rx, ry, rz = radius
+    (bx, ax), (by, ay), (bz, az) = window
     for take_max, reduce in ((True, np.max), (False, np.min)):
-        got = _dilate(a, radius, take_max)
+        got = _dilate(a, window, take_max)
         for k, j, i in np.ndindex(shape):
-            box = a[max(k - rz, 0):k + rz + 1, max(j - ry, 0):j + ry + 1, max(i - rx, 0):i + rx + 1]
+            box = a[max(k - bz, 0):k + az + 1, max(j - by, 0):j + ay + 1, max(i - bx, 0):i + ax + 1]
             assert got[k, j, i] == reduce(box)

@@ -37,6 +37,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
+from volren.model.camera import bounds_corners
 from volren.model.preintegration import lighting_tables, preintegrate
 from volren.model.settings import check_step
 from volren.renderers.base import (
@@ -48,7 +49,7 @@ from volren.renderers.base import (
     RendererBase,
 )
 from volren_objectorder import composite as K
-from volren_objectorder.octree import Classification, MinMaxOctree
+from volren_objectorder.octree import Classification, MinMaxOctree, Reach
 from volren_objectorder.patterns import OFFSET_MODES, RayTable, pixel_offsets, ray_table, screen_matrix
 
 #: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
@@ -99,6 +100,25 @@ def read_options(options: Mapping[str, Any]) -> dict[str, Any]:
     if 0 < out["classification_table"] < 16:
         fail("classification_table", "0 or an integer in 16..65536")
     return out
+
+
+def segment_reach(camera: Camera, volume: UniformVolume, rays: RayTable, h: float) -> Reach:
+    """The cells a pre-integrated segment ending in a cell can take its values from this frame: a
+    segment's front lies up to h back along its ray, so along an axis the window runs toward
+    lower indices only where every ray runs toward higher ones (and the other way round); the faces
+    the rays leave through get the box both ways (a last sample's piece runs on to the exit point),
+    and so does every cell when the far plane cuts the volume (rays then end inside it)."""
+    cells = tuple(int(math.ceil(h / s - 1e-9)) for s in volume.spacing)
+    corners = bounds_corners(volume.bounds)
+    depth = (corners - np.asarray(camera.position, dtype=np.float64)) @ np.asarray(camera.direction, dtype=np.float64)
+    if float(depth.max()) >= camera.clipping_range[1]:
+        return Reach.both_ways(cells)  # type: ignore[arg-type]
+    hit = rays.direction[rays.count > 0]
+    rising = (hit > 0.0).any(axis=0)
+    falling = (hit < 0.0).any(axis=0)
+    window = tuple((c if up else 0, c if down else 0) for c, up, down in zip(cells, rising, falling))
+    rim = tuple((c + 1 if down else 0, c + 1 if up else 0) for c, up, down in zip(cells, rising, falling))
+    return Reach(window, rim)  # type: ignore[arg-type]
 
 
 class ObjectOrderRenderer(RendererBase):
@@ -175,17 +195,15 @@ class ObjectOrderRenderer(RendererBase):
         return self._octree
 
     # ------------------------------------------------------------------------ render
-    def _classification(self, tf: TransferFunction1D, composite: bool, skipping: bool, pre: bool,
-                        h: float) -> Classification:  # fmt: skip
+    def _classification(self, tf: TransferFunction1D, composite: bool, skipping: bool, pre: bool, h: float,
+                        camera: Camera, rays: RayTable) -> Classification:  # fmt: skip
         octree = self._octree
         assert octree is not None
         if not (composite and skipping):
             return octree.classify(None)
-        reach = (0, 0, 0)
-        if pre:  # a segment's front sample may lie up to h away: dilate by the cells that spans
-            spacing = self.volume.spacing  # type: ignore[union-attr]
-            reach = tuple(int(math.ceil(h / s - 1e-9)) for s in spacing)  # type: ignore[assignment]
-        return octree.classify(tf, reach)  # type: ignore[arg-type]
+        volume = self.volume
+        assert isinstance(volume, UniformVolume)
+        return octree.classify(tf, segment_reach(camera, volume, rays, h) if pre else Reach())
 
     def _render(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
@@ -208,7 +226,7 @@ class ObjectOrderRenderer(RendererBase):
         rays = ray_table(camera, volume, width, height, h, self._offsets(offset_mode, width, height, opts["jitter_seed"]),
                          self._rays)  # fmt: skip
         self._rays = rays
-        cls = self._classification(tf, composite, bool(opts["octree_skipping"]), pre, h)
+        cls = self._classification(tf, composite, bool(opts["octree_skipping"]), pre, h, camera, rays)
         M = screen_matrix(camera, volume, width, height)
         spacing = np.asarray(volume.spacing, dtype=np.float64)
         eye = (np.asarray(camera.position, dtype=np.float64) - np.asarray(volume.origin)) / spacing
