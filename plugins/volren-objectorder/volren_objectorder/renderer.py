@@ -56,7 +56,9 @@ from volren_objectorder.patterns import OFFSET_MODES, RayTable, pixel_offsets, r
 GRADIENT_EPS = 1e-6
 
 OPTIONS: dict[str, tuple[Any, str]] = {
-    "octree_skipping": (True, "skip octree nodes the TF makes transparent (true/false; the image is the same)"),
+    "octree_skipping": (True, "skip octree nodes the TF makes transparent (true/false; the image is the same, "
+                              "except where a pre-integration table too coarse for the TF leaks opacity into "
+                              "values the TF makes transparent: skipped, that leak is left out)"),
     "hidden_volume_removal": (True, "stop pixels at termination_alpha and skip octree nodes whose footprint lies on "
                                     "finished pixels (hierarchical occlusion map; true/false; composite only)"),
     "termination_alpha": (0.999, "opacity at which a pixel counts as opaque (0.5 to 1)"),
