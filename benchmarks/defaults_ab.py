@@ -1,0 +1,100 @@
+"""`python -m benchmarks.defaults_ab`: a render with no options against VTK's default, frames interleaved.
+
+Why: the fast-defaults goal is about what `volren render` gives with no options (`auto` at quality
+`default`) against VTK's default (vtkSmartVolumeMapper on grids, the unstructured ray caster on
+meshes: the peer of `volren bench quality`) on every shared scene: at no more error, >= 3x faster
+on grids and >= 10x on meshes. `volren bench quality` reads both frame times from sweeps taken
+minutes apart, and this machine's frame times drift by 20-40 % between runs; here each scene's two
+renderers draw alternately, one frame each with the camera turning 2 degrees between pairs (which
+of the two goes first alternates too), so both see the same load.
+
+    python -m benchmarks.defaults_ab [--shared DIR] [--datasets a,b] [--frames N] [--size S]
+
+Prints a markdown table: per scene `auto`'s choice, both medians, VTK's over ours, and both RMSEs
+against `reference` (cached as `volren.testing.reference_images` does) with their ratio.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+from contextlib import ExitStack
+
+from benchmarks._cli import run
+from volren.api import prepared_renderer
+from volren.bench.datasets import Dataset, sample_datasets, shared_datasets, shared_folder
+from volren.bench.quality import VTK_DEFAULT, _configs
+from volren.model import RenderSettings
+from volren.quality import kind_of, resolve
+from volren.renderers.base import render_frame
+from volren.testing import image_error
+from volren.testing.reference_images import reference_image
+
+TURN = 2.0  # degrees of azimuth between frame pairs, as `volren bench run` turns
+
+
+def _timed(renderer, camera, size: int) -> float:
+    start = time.perf_counter()
+    render_frame(renderer, camera, size, size)
+    return (time.perf_counter() - start) * 1000.0
+
+
+def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str:
+    """One scene: both renderers prepared, a warm-up frame each at the scene's view (scored against
+    the reference), then `frames` pairs of turning frames."""
+    camera_at = lambda turn: d.camera(volume.bounds, turn=turn)  # noqa: E731
+    name, settings, _ = resolve(kind_of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
+                                cameras=(camera_at(0.0),), bounds=volume.bounds)  # fmt: skip
+    curve, label = VTK_DEFAULT[d.kind]
+    peer = _configs(d.kind, {curve})[(curve, label)]
+    truth = reference_image(volume, tf, camera_at(0.0), size, size)
+    with ExitStack() as stack:
+        ours = stack.enter_context(prepared_renderer(name, volume, tf, settings))
+        vtk = stack.enter_context(prepared_renderer(peer.renderer, volume, tf, peer.settings()))
+        errors = [image_error(render_frame(r, camera_at(0.0), size, size)[0], truth).rmse for r in (ours, vtk)]
+        ms: tuple[list[float], list[float]] = ([], [])
+        for f in range(frames):
+            camera = camera_at(TURN * (f + 1))
+            order = (0, 1) if f % 2 == 0 else (1, 0)
+            for which in order:
+                ms[which].append(_timed((ours, vtk)[which], camera, size))
+    ours_ms, vtk_ms = statistics.median(ms[0]), statistics.median(ms[1])
+    chosen = f"{name}: {settings.step:g} step{', pre-integrated' if settings.preintegration else ''}"
+    if settings.options:
+        chosen += ", " + ", ".join(f"{k} {v}" for k, v in sorted(settings.options.items()))
+    return (f"| {d.name}/{style} | {chosen} | {ours_ms:.0f} | {vtk_ms:.0f} | {vtk_ms / ours_ms:.1f}x "
+            f"| {errors[0]:.3g} | {errors[1]:.3g} | {errors[0] / errors[1]:.2f} |")  # fmt: skip
+
+
+def measure(args: argparse.Namespace) -> int:
+    shared = shared_folder(args.shared, required=False)
+    found = {**(shared_datasets(shared) if shared else {}), **sample_datasets()}
+    names = args.datasets.split(",") if args.datasets else list(found)
+    print(f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}\n")
+    print(f"{args.size}x{args.size}, medians of {args.frames} frames each, interleaved.\n")
+    print("| scene | auto's choice (no options) | ours ms | VTK's default ms | VTK / ours | our RMSE "
+          "| VTK's RMSE | ours / VTK's |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|")
+    for name in names:
+        d = found[name]
+        volume = d.load()
+        for style, tf in d.transfer_functions():
+            print(scene_row(d, volume, style, tf, args.size, args.frames), flush=True)
+    print(f"\nload average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.defaults_ab", description=__doc__.split("\n")[0])
+    parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED; without "
+                                         "it, the bundled samples only)")  # fmt: skip
+    parser.add_argument("--datasets", default="", help="comma-separated datasets (default: every one)")
+    parser.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
+    parser.add_argument("--frames", type=int, default=7, help="timed frame pairs per scene, median (default 7)")
+    return run(measure, parser, argv)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
