@@ -8,7 +8,7 @@ minutes apart, and this machine's frame times drift by 20-40 % between runs; her
 renderers draw alternately, one frame each with the camera turning 2 degrees between pairs (which
 of the two goes first alternates too), so both see the same load.
 
-    python -m benchmarks.defaults_ab [--shared DIR] [--datasets a,b] [--frames N] [--size S]
+    python -m benchmarks.defaults_ab [--shared DIR] [--datasets a,b] [--frames N] [--size S] [--out FILE]
 
 Prints a markdown table: per scene `auto`'s choice, both medians, VTK's over ours, and both RMSEs
 against `reference` (cached as `volren.testing.reference_images` does) with their ratio.
@@ -17,10 +17,12 @@ against `reference` (cached as `volren.testing.reference_images` does) with thei
 from __future__ import annotations
 
 import argparse
+import datetime
 import os
 import statistics
 import time
 from contextlib import ExitStack
+from pathlib import Path
 
 from benchmarks._cli import run
 from volren.api import prepared_renderer
@@ -39,6 +41,10 @@ def _timed(renderer, camera, size: int) -> float:
     start = time.perf_counter()
     render_frame(renderer, camera, size, size)
     return (time.perf_counter() - start) * 1000.0
+
+
+def _ms(value: float) -> str:
+    return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
 
 
 def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str:
@@ -64,7 +70,7 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
     chosen = f"{name}: {settings.step:g} step{', pre-integrated' if settings.preintegration else ''}"
     if settings.options:
         chosen += ", " + ", ".join(f"{k} {v}" for k, v in sorted(settings.options.items()))
-    return (f"| {d.name}/{style} | {chosen} | {ours_ms:.0f} | {vtk_ms:.0f} | {vtk_ms / ours_ms:.1f}x "
+    return (f"| {d.name}/{style} | {chosen} | {_ms(ours_ms)} | {_ms(vtk_ms)} | {vtk_ms / ours_ms:.1f}x "
             f"| {errors[0]:.3g} | {errors[1]:.3g} | {errors[0] / errors[1]:.2f} |")  # fmt: skip
 
 
@@ -72,17 +78,24 @@ def measure(args: argparse.Namespace) -> int:
     shared = shared_folder(args.shared, required=False)
     found = {**(shared_datasets(shared) if shared else {}), **sample_datasets()}
     names = args.datasets.split(",") if args.datasets else list(found)
-    print(f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}\n")
-    print(f"{args.size}x{args.size}, medians of {args.frames} frames each, interleaved.\n")
-    print("| scene | auto's choice (no options) | ours ms | VTK's default ms | VTK / ours | our RMSE "
-          "| VTK's RMSE | ours / VTK's |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|")
+    lines = [f"Measured {datetime.date.today()} by `python -m benchmarks.defaults_ab --shared ../shared --frames "
+             f"{args.frames}`: {args.size}x{args.size}, per scene the median of {args.frames} turning frames of each "
+             "renderer, the two renderers' frames interleaved; RMSE at the scene's view against `reference`.",
+             "", f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}", "",
+             "| scene | auto's choice (no options) | ours ms | VTK's default ms | VTK / ours | our RMSE "
+             "| VTK's RMSE | ours / VTK's |", "|---|---|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
+    for line in lines:
+        print(line)
     for name in names:
         d = found[name]
         volume = d.load()
         for style, tf in d.transfer_functions():
-            print(scene_row(d, volume, style, tf, args.size, args.frames), flush=True)
-    print(f"\nload average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+            lines.append(scene_row(d, volume, style, tf, args.size, args.frames))
+            print(lines[-1], flush=True)
+    lines += ["", f"load average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}"]
+    print(lines[-1])
+    if args.out:
+        Path(args.out).write_text("\n".join(lines) + "\n")
     return 0
 
 
@@ -93,6 +106,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--datasets", default="", help="comma-separated datasets (default: every one)")
     parser.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
     parser.add_argument("--frames", type=int, default=7, help="timed frame pairs per scene, median (default 7)")
+    parser.add_argument("--out", help="also write the table to this Markdown file (BENCHMARKS.md's fragment: "
+                                      "docs/bench/defaults_ab.md)")  # fmt: skip
     return run(measure, parser, argv)
 
 

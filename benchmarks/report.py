@@ -30,6 +30,9 @@ SECTIONS = (
     ("quality.md", "Fast by default: `auto` at each quality level against VTK's default",
      "What does a render with no options (or with `--quality LEVEL`) get, against VTK's default, scene by scene? "
      "(`volren bench quality ... --markdown`)"),
+    ("defaults_ab.md", "No options against VTK's default, frames interleaved",
+     "The same question as the table above, each scene's two renderers drawing alternately so that both see the "
+     "same load (`python -m benchmarks.defaults_ab`)"),
     ("plugins.md", "The plugin renderers (shear-warp, object order)",
      "How do the seeds' CPU algorithms compare with VTK and the slicer at equal error, and with their papers' tables?"),
     ("app.md", "Desktop app responsiveness", "How long from a TF edit to the new frame; frames per second."),
