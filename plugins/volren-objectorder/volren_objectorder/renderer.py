@@ -50,7 +50,14 @@ from volren.renderers.base import (
 )
 from volren_objectorder import composite as K
 from volren_objectorder.octree import Classification, MinMaxOctree, Reach
-from volren_objectorder.patterns import OFFSET_MODES, RayTable, pixel_offsets, ray_table, screen_matrix
+from volren_objectorder.patterns import (
+    OFFSET_MODES,
+    RayTable,
+    direction_signs,
+    pixel_offsets,
+    ray_table,
+    screen_matrix,
+)
 
 #: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
 GRADIENT_EPS = 1e-6
@@ -115,9 +122,7 @@ def segment_reach(camera: Camera, volume: UniformVolume, rays: RayTable, h: floa
     depth = (corners - np.asarray(camera.position, dtype=np.float64)) @ np.asarray(camera.direction, dtype=np.float64)
     if float(depth.max()) >= camera.clipping_range[1]:
         return Reach.both_ways(cells)  # type: ignore[arg-type]
-    hit = rays.direction[rays.count > 0]
-    rising = (hit > 0.0).any(axis=0)
-    falling = (hit < 0.0).any(axis=0)
+    rising, falling = direction_signs(rays.direction, rays.count)
     window = tuple((c if up else 0, c if down else 0) for c, up, down in zip(cells, rising, falling))
     rim = tuple((c + 1 if down else 0, c + 1 if up else 0) for c, up, down in zip(cells, rising, falling))
     return Reach(window, rim)  # type: ignore[arg-type]
