@@ -85,12 +85,23 @@ def _opacity_at(xs, alphas, s):
     return alphas[a] + f * (alphas[b] - alphas[a])
 
 
+@njit(cache=True, inline="always")
+def _visible_on(xs, alphas, a, b):
+    """Whether the piecewise-linear opacity is non-zero somewhere on [a, b]: at an end, or at a
+    control point inside (where its largest value on the interval lies otherwise)."""
+    if _opacity_at(xs, alphas, a) > 0.0 or _opacity_at(xs, alphas, b) > 0.0:
+        return True
+    for p in range(xs.shape[0]):
+        if xs[p] > a and xs[p] < b and alphas[p] > 0.0:
+            return True
+    return False
+
+
 @njit(cache=True, parallel=True)
 def _classify(own_lo, own_hi, lo, hi, xs, alphas, out):
     """out[cell] = 1 where the opacity is non-zero somewhere on [lo, hi] (the cell's range, or its
     dilated one); a cell that is itself empty (a non-finite corner) is 0 whatever its neighbours."""
     nz, ny, nx = lo.shape
-    npts = xs.shape[0]
     for k in prange(nz):
         for j in range(ny):
             for i in range(nx):
@@ -99,12 +110,7 @@ def _classify(own_lo, own_hi, lo, hi, xs, alphas, out):
                 if own_lo[k, j, i] > own_hi[k, j, i] or a > b:
                     out[k, j, i] = 0
                     continue
-                best = max(_opacity_at(xs, alphas, a), _opacity_at(xs, alphas, b))
-                if best <= 0.0:
-                    for p in range(npts):  # control points inside (a, b)
-                        if xs[p] > a and xs[p] < b and alphas[p] > best:
-                            best = alphas[p]
-                out[k, j, i] = 1 if best > 0.0 else 0
+                out[k, j, i] = 1 if _visible_on(xs, alphas, a, b) else 0
 
 
 @njit(cache=True)
@@ -194,7 +200,6 @@ def _classify_rim(own_lo, own_hi, rim, radius, xs, alphas, out):
     face of the grid, where a ray's last piece runs on to its exit point. Brute force over the
     box: the rim is a thin shell."""
     nz, ny, nx = own_lo.shape
-    npts = xs.shape[0]
     rx, ry, rz = radius[0], radius[1], radius[2]
     for k in prange(nz):
         for j in range(ny):
@@ -211,21 +216,18 @@ def _classify_rim(own_lo, own_hi, rim, radius, xs, alphas, out):
                         for ii in range(max(i - rx, 0), min(i + rx, nx - 1) + 1):
                             a = min(a, own_lo[kk, jj, ii])
                             b = max(b, own_hi[kk, jj, ii])
-                best = max(_opacity_at(xs, alphas, a), _opacity_at(xs, alphas, b))
-                if best <= 0.0:
-                    for p in range(npts):
-                        if xs[p] > a and xs[p] < b and alphas[p] > best:
-                            best = alphas[p]
-                if best > 0.0:
+                if _visible_on(xs, alphas, a, b):
                     out[k, j, i] = 1
 
 
 @dataclass(frozen=True)
 class Reach:
-    """The cells whose values a pre-integrated segment ending in a cell can take: `window`, per
-    axis (x, y, z), (below, above) cells in index order (toward the eye); and within `rim`
-    ((low, high) cells of each face, the faces the rays leave through) the whole box of
-    max(below, above) cells both ways, for the rays' last pieces. `NONE`: post-classified."""
+    """The cells whose values a pre-integrated segment ending in a cell can take. `window`: per
+    axis (x, y, z), (below, above), the cells toward lower and higher indices (the side of the eye
+    only, where every ray runs one way). `rim`: per axis, (low, high), how many cells next to each
+    face take the whole box of max(below, above) cells both ways (the faces the rays leave
+    through: a ray's last piece runs on to its exit point). `Reach()`: the cell alone, as
+    post-classified samples need."""
 
     window: Window = ((0, 0), (0, 0), (0, 0))
     rim: Window = ((0, 0), (0, 0), (0, 0))
