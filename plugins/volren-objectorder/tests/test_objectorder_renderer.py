@@ -130,6 +130,30 @@ def test_one_sided_dilation_skips_cells_and_changes_no_pixel(parallel):
     assert one_sided < 0.95 * both
 
 
+def test_the_reach_is_one_sided_only_where_it_is_cheap_and_exact():
+    """One-sided along axes whose rays all run one way, with a rim at the faces they leave through;
+    both ways everywhere when a step spans more than a cell (the rim's boxes would grow with the
+    step cubed) or the far plane cuts the volume."""
+    from volren_objectorder.octree import Reach
+    from volren_objectorder.patterns import pixel_offsets, ray_table
+    from volren_objectorder.renderer import segment_reach
+
+    def reach(volume, camera, step):
+        h = step * volume.characteristic_length
+        rays = ray_table(camera, volume, 24, 20, h, pixel_offsets("interleaved", 24, 20, 0))
+        return segment_reach(camera, volume, rays, h)
+
+    volume = field((10, 11, 12))
+    oblique = reach(volume, Camera.orbit(volume.bounds, 35, 25, parallel=True), 0.5)
+    assert oblique != Reach.both_ways((1, 1, 1)) and all(sum(w) == 1 for w in oblique.window)
+    assert all(sum(r) == 2 for r in oblique.rim)  # the rim on the face each axis's rays leave through
+    flat = UniformVolume(volume.values, spacing=(1.0, 1.0, 0.01))
+    assert reach(flat, Camera.orbit(flat.bounds, 35, 25, parallel=True), 0.5) == Reach.both_ways(
+        tuple(int(np.ceil(0.5 * flat.characteristic_length / s - 1e-9)) for s in flat.spacing))
+    far = reach(volume, distant_camera_cut_by_far_plane(volume.bounds, 0.45, True), 0.5)
+    assert far == Reach.both_ways((1, 1, 1))
+
+
 @pytest.mark.parametrize("parallel", [False, True])
 def test_hidden_volume_removal_skips_cells_and_changes_little(parallel):
     volume = field((24, 24, 24))

@@ -116,8 +116,14 @@ def segment_reach(camera: Camera, volume: UniformVolume, rays: RayTable, h: floa
     segment's front lies up to h back along its ray, so along an axis the window runs toward
     lower indices only where every ray runs toward higher ones (and the other way round); the faces
     the rays leave through get the box both ways (a last sample's piece runs on to the exit point),
-    and so does every cell when the far plane cuts the volume (rays then end inside it)."""
+    and so does every cell when the far plane cuts the volume (rays then end inside it) or when a
+    step spans more than one cell along an axis."""
     cells = tuple(int(math.ceil(h / s - 1e-9)) for s in volume.spacing)
+    if max(cells) > 1:
+        # a step longer than a cell (anisotropic spacing, coarse steps): the rim's brute-force box
+        # would grow with the step cubed (spacing 1:100 at step 0.5: boxes of 3 x 3 x 69 cells on
+        # most of the grid), the separable dilation both ways does not
+        return Reach.both_ways(cells)  # type: ignore[arg-type]
     corners = bounds_corners(volume.bounds)
     depth = (corners - np.asarray(camera.position, dtype=np.float64)) @ np.asarray(camera.direction, dtype=np.float64)
     if float(depth.max()) >= camera.clipping_range[1]:
