@@ -578,17 +578,24 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
     assert frames[1].camera == frames[0].camera == w.state.camera
 
 
+def window_previewing_with(make_window, monkeypatch, qtbot, sample, preview: str):
+    """A window showing `fake_drag`'s still frame of `sample`, with `preview` measured faster than
+    `fake_drag` at `interactive` (so it draws the previews while it can)."""
+    use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
+                             preview: {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake_drag")
+    return w
+
+
 def test_previews_are_drawn_by_the_fastest_measured_renderer_and_the_label_says_so(
     make_window, fake_renderers, sample, qtbot, monkeypatch
 ):
     """Issue 22: "the fastest renderer for previews and the chosen one for the still frame, saying
     so": with `fake` measured faster at `interactive`, a rotation of a `fake_drag` scene at a level
     previews with `fake` (named in the frame label) and ends with `fake_drag`'s still frame."""
-    use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
-                             "fake": {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
-    w = make_window()
-    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.files.apply_loaded(sample, "fake_drag")
+    w = window_previewing_with(make_window, monkeypatch, qtbot, sample, "fake")
     frames, labels = [], []
     w.frameShown.connect(lambda f: (frames.append(f), labels.append(w.renderers.frame_label.text())))
     w.state.begin_interaction()
@@ -630,11 +637,7 @@ def test_the_preview_renderer_is_set_up_while_the_view_is_still(make_window, fak
 def test_a_preview_renderer_that_fails_previews_no_more_and_the_still_frame_comes(
     make_window, fake_renderers, sample, qtbot, monkeypatch, error_boxes
 ):
-    use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
-                             "fake_broken": {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
-    w = make_window()
-    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.files.apply_loaded(sample, "fake_drag")
+    w = window_previewing_with(make_window, monkeypatch, qtbot, sample, "fake_broken")
     w.state.begin_interaction()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as still:
         w.state.set_camera(w.state.camera.azimuth(5.0))  # fake_broken's preview fails: the still frame follows
@@ -651,11 +654,7 @@ def test_a_preview_renderer_that_fails_previews_no_more_and_the_still_frame_come
 def test_a_preview_renderer_that_cannot_draw_the_view_is_passed_over_only_while_it_cannot(
     make_window, fake_renderers, sample, qtbot, monkeypatch, error_boxes
 ):
-    use_levels(monkeypatch, {"fake_drag": {"interactive": level(0.5, ms=50.0)},
-                             "fake_outside_only": {"interactive": level(1.0, ms=5.0)}})  # fmt: skip
-    w = make_window()
-    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.files.apply_loaded(sample, "fake_drag")
+    w = window_previewing_with(make_window, monkeypatch, qtbot, sample, "fake_outside_only")
     outside = w.state.camera
     inside = inside_camera(w.state.volume.bounds)
     frames = []
