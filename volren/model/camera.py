@@ -122,6 +122,12 @@ class Camera:
         """Unit direction of projection (from the position toward the focal point)."""
         return _normalized(np.subtract(self.focal_point, self.position))
 
+    def depth_range(self, bounds: Sequence[float]) -> tuple[float, float]:
+        """The nearest and farthest depth of the box `bounds`' corners along the view direction,
+        from the eye: where the near and far planes cut the box when they lie between the two."""
+        depth = (bounds_corners(bounds) - np.asarray(self.position, dtype=np.float64)) @ self.direction
+        return float(depth.min()), float(depth.max())
+
     def _axes(self) -> tuple[NDArray, NDArray, NDArray]:
         """(sideways, orthogonal up, view-plane normal): the rows of the view rotation."""
         vpn = _normalized(np.subtract(self.position, self.focal_point))

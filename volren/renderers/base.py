@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
-from volren.model.camera import Camera, bounds_corners
+from volren.model.camera import Camera
 from volren.model.region import Region
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
@@ -58,10 +58,8 @@ def eye_inside_bounds(camera: Camera, bounds: Sequence[float]) -> bool:
 def clipping_planes_cut(camera: Camera, bounds: Sequence[float]) -> bool:
     """Whether the camera's near or far plane passes through the box `bounds` (an eye inside it
     included), beyond `EYE_INSIDE_MARGIN` of the depth range of its corners."""
-    corners = bounds_corners(bounds)
-    depth = (corners - np.asarray(camera.position, dtype=np.float64)) @ camera.direction
-    d0, d1 = float(depth.min()), float(depth.max())
-    margin = EYE_INSIDE_MARGIN * max(d1 - d0, float(np.max(np.ptp(corners, axis=0))))
+    d0, d1 = camera.depth_range(bounds)
+    margin = EYE_INSIDE_MARGIN * max(d1 - d0, float(np.max(np.subtract(bounds[1::2], bounds[0::2]))))
     near, far = camera.clipping_range
     return bool(d0 + margin < near < d1 - margin or d0 + margin < far < d1 - margin)
 

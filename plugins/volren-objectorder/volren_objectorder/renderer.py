@@ -37,7 +37,6 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
-from volren.model.camera import bounds_corners
 from volren.model.preintegration import lighting_tables, preintegrate
 from volren.model.settings import check_step
 from volren.renderers.base import (
@@ -124,9 +123,7 @@ def segment_reach(camera: Camera, volume: UniformVolume, rays: RayTable, h: floa
         # would grow with the step cubed (spacing 1:100 at step 0.5: boxes of 3 x 3 x 69 cells on
         # most of the grid), the separable dilation both ways does not
         return Reach.both_ways(cells)  # type: ignore[arg-type]
-    corners = bounds_corners(volume.bounds)
-    depth = (corners - np.asarray(camera.position, dtype=np.float64)) @ np.asarray(camera.direction, dtype=np.float64)
-    if float(depth.max()) >= camera.clipping_range[1]:
+    if camera.depth_range(volume.bounds)[1] >= camera.clipping_range[1]:
         return Reach.both_ways(cells)  # type: ignore[arg-type]
     rising, falling = direction_signs(rays.direction, rays.count)
     window = tuple((c if up else 0, c if down else 0) for c, up, down in zip(cells, rising, falling))
