@@ -119,14 +119,17 @@ def _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, l
 
 @njit(cache=True, inline="always")
 def _value(vol, px, py, pz):
-    """Trilinear value at index point (px, py, pz), clamped into the grid."""
+    """Trilinear value at index point (px, py, pz) inside the grid's box. Every sample of a ray lies
+    between its entry and exit points, so only the cell index is clamped (against rounding, and to
+    keep every read inside the array): the weights' clamps and a floor cost 5-12 % of a frame on
+    the smooth TFs (bonsai, ironProt; interleaved in one process) and changed no pixel."""
     nz, ny, nx = vol.shape
-    i = min(max(int(math.floor(px)), 0), nx - 2)
-    j = min(max(int(math.floor(py)), 0), ny - 2)
-    k = min(max(int(math.floor(pz)), 0), nz - 2)
-    fx = min(max(px - i, 0.0), 1.0)
-    fy = min(max(py - j, 0.0), 1.0)
-    fz = min(max(pz - k, 0.0), 1.0)
+    i = max(min(int(px), nx - 2), 0)  # int() truncates: the floor for px >= 0
+    j = max(min(int(py), ny - 2), 0)
+    k = max(min(int(pz), nz - 2), 0)
+    fx = px - i
+    fy = py - j
+    fz = pz - k
     v000, v001 = float(vol[k, j, i]), float(vol[k, j, i + 1])  # float(): 8-bit volumes stay 8-bit
     v010, v011 = float(vol[k, j + 1, i]), float(vol[k, j + 1, i + 1])
     v100, v101 = float(vol[k + 1, j, i]), float(vol[k + 1, j, i + 1])
