@@ -9,6 +9,7 @@ import pytest
 from volren.errors import VolrenError
 from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.renderers.raycast import RaycastRenderer
+from volren.renderers.raycast import march as K
 from volren.renderers.raycast.occupancy import empty_distance
 from volren.renderers.raycast.renderer import pixel_phases
 from volren.testing import image_error, oracles
@@ -209,9 +210,60 @@ def test_a_grid_one_cell_thick_renders_along_every_axis(axis):
 
 
 @pytest.mark.parametrize("options", [{"brick_size": 0}, {"termination_alpha": 0.2}, {"depth_offsets": "random"},
-                                     {"table_size": 8}, {"empty_space_skipping": 1}, {"nope": 1}])  # fmt: skip
+                                     {"table_size": 8}, {"empty_space_skipping": 1}, {"nope": 1},
+                                     {"image_stride": 3}, {"image_stride": 128}, {"refine_tolerance": 2.0},
+                                     {"refine_tolerance": True}])  # fmt: skip
 def test_bad_options_are_one_line_errors(options):
     renderer = RaycastRenderer()
     with pytest.raises(VolrenError) as err:
         renderer.set_settings(RenderSettings(options=options))
     assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("pre", [False, True])
+def test_rays_for_listed_pixels_are_the_tiles_rays(pre):
+    """`march_pixels` (what adaptive refinement casts) draws each listed pixel exactly as the tiled
+    march does, in any order."""
+    volume = field()
+    camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.2, parallel=False)
+    w, h = 40, 32
+    full, renderer = draw(volume, SHELL_TF, camera, (w, h), preintegration=pre)
+    calls = []
+    real = K.march_pixels
+
+    def spy(*args):
+        calls.append(args)
+        return real(*args)
+
+    K.march_pixels = spy
+    try:
+        refined, _ = draw(volume, SHELL_TF, camera, (w, h), preintegration=pre,
+                          options={"image_stride": 4, "refine_tolerance": 0.0})  # fmt: skip
+    finally:
+        K.march_pixels = real
+    assert calls
+    *inputs, pixels, out, counts = calls[0]
+    picked = np.random.default_rng(1).permutation(w * h)[:200]
+    rgba = np.empty((200, 4), np.float32)
+    K.march_pixels(*inputs, picked, rgba, np.zeros((200, 2), np.int64))
+    np.testing.assert_array_equal(np.minimum(rgba[:, :3], rgba[:, 3:]), full.reshape(-1, 4)[picked, :3])
+    np.testing.assert_array_equal(rgba[:, 3], full.reshape(-1, 4)[picked, 3])
+
+
+def test_adaptive_refinement_casts_fewer_rays_near_the_full_image():
+    """Where the image is smooth, refinement casts a fraction of the rays and interpolates the rest
+    close to the full image; silhouettes are cast to the pixel; a lower tolerance casts more."""
+    z, y, x = np.mgrid[0:16, 0:16, 0:16]
+    volume = UniformVolume((np.sin(x / 6.0) + y / 12.0 + z / 10.0).astype(np.float32))
+    camera = Camera.orbit(volume.bounds, 25, 35, zoom=1.2)
+    w, h = 96, 80
+    full, _ = draw(volume, SMOOTH_TF, camera, (w, h))
+    refined, renderer = draw(volume, SMOOTH_TF, camera, (w, h), options={"image_stride": 8, "refine_tolerance": 0.05})
+    rays = renderer.last_frame.counters["rays_cast"]
+    assert rays < 0.5 * w * h
+    err = image_error(refined, full)
+    assert err.rmse < 2e-3 and err.max_abs < 0.03
+    np.testing.assert_array_equal(refined[..., 3] > 0, full[..., 3] > 0)
+    finer, renderer = draw(volume, SMOOTH_TF, camera, (w, h), options={"image_stride": 8, "refine_tolerance": 0.01})
+    assert renderer.last_frame.counters["rays_cast"] > rays
+    assert image_error(finer, full).rmse < 0.2 * err.rmse

@@ -269,6 +269,169 @@ def _pixel_ray(inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz):
     return ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss
 
 
+@njit(cache=True, inline="always")
+def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_dir, t_far_eye, phase, pre, post, table, fp):  # fmt: skip
+    """(r, g, b, a, samples, jumps): pixel column xx's ray at NDC y ny_ marched front to back
+    (premultiplied, not yet clamped); `shift`: log2 of the brick size B, or -1."""
+    nz, ny, nx = vol.shape
+    nbz, nby, nbx = empty.shape
+    ux, uy, uz = nx - 1.0, ny - 1.0, nz - 1.0
+    h = fp[F_H]
+    term = fp[F_TERM]
+    lo_ = fp[F_LO]
+    scale_ = fp[F_SCALE]
+    taken = 0
+    jumps = 0
+    ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(
+        inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz
+    )
+    r = 0.0
+    g = 0.0
+    b = 0.0
+    a = 0.0
+    t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
+    t0 = max(t_in, 0.0)
+    t1 = min(t_out, t_far)
+    ns = 0
+    first = 0.0
+    last = 0.0
+    if not miss and t1 > t0:
+        ns, first, last = _segments(t1 - t0, h, (phase - t0 / h) % 1.0)
+    k = 0  # the next segment
+    sb = 0.0  # pre-integrated: the value at segment k's front, when `have_front`
+    have_front = False
+    ra = 0  # post-classified: segments [ra, rb) lie in a run of visible bricks, not yet composited
+    rb = 0
+    while k < ns:
+        # (re)start the brick walk at segment k's key point
+        tk, lk = _segment(t0, first, last, h, ns, k)
+        tkey = tk if pre else tk + 0.5 * lk
+        bi = min(max(int(ox + tkey * dx), 0), nx - 2)
+        bj = min(max(int(oy + tkey * dy), 0), ny - 2)
+        bk = min(max(int(oz + tkey * dz), 0), nz - 2)
+        if shift >= 0:
+            bi, bj, bk = bi >> shift, bj >> shift, bk >> shift
+        else:
+            bi, bj, bk = bi // B, bj // B, bk // B
+        d = empty[bk, bj, bi]
+        sx = 1 if dx > 0.0 else -1
+        sy = 1 if dy > 0.0 else -1
+        sz = 1 if dz > 0.0 else -1
+        tnx = ((bi + (1 if dx > 0.0 else 0)) * B - ox) * ix if dx != 0.0 else math.inf
+        tny = ((bj + (1 if dy > 0.0 else 0)) * B - oy) * iy if dy != 0.0 else math.inf
+        tnz = ((bk + (1 if dz > 0.0 else 0)) * B - oz) * iz if dz != 0.0 else math.inf
+        ddx = B * abs(ix)
+        ddy = B * abs(iy)
+        ddz = B * abs(iz)
+        restart = False
+        while True:
+            if rb > ra and (d != 0 or rb - ra >= MAX_RUN):
+                # the run ends at an empty brick, or is long (an opaque ray stops within
+                # it: walk no further first): composite it
+                r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+                taken += n_run
+                ra = rb
+                if a >= term:
+                    k = ns
+                    break
+            if d > 1:  # empty bricks all around: leave their box in one jump if that skips
+                e = d - 1
+                tb_ = _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, (bi - e) * B, (bj - e) * B,
+                                (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B, (bk + 1 + e) * B)  # fmt: skip
+                kn = _first_segment_past(tb_, t0, first, h, pre)
+                if kn > k:
+                    k = kn
+                    have_front = False
+                    jumps += 1
+                    restart = True
+                    break
+            te = min(tnx, tny, tnz)
+            if d == 0 and not pre:  # its segments join the run, composited when it ends
+                kn = _middles_before(te, t0, first, last, h, ns)
+                if kn > k:
+                    if rb != k:
+                        ra = k
+                    rb = kn
+                    k = kn
+            elif d == 0:
+                while k < ns:
+                    tk, lk = _segment(t0, first, last, h, ns, k)
+                    if (tk if pre else tk + 0.5 * lk) >= te:
+                        break
+                    if pre:
+                        if not have_front:
+                            s = _value(vol, ox + tk * dx, oy + tk * dy, oz + tk * dz)
+                            taken += 1
+                        else:
+                            s = sb
+                        tb2 = tk + lk
+                        sb = _value(vol, ox + tb2 * dx, oy + tb2 * dy, oz + tb2 * dz)
+                        have_front = True
+                    else:
+                        tm = tk + 0.5 * lk
+                        s = _value(vol, ox + tm * dx, oy + tm * dy, oz + tm * dz)
+                        sb = s
+                    taken += 1
+                    k += 1
+                    cr, cg, cb, ca = _classify(s, sb, lk, pre, post, table, fp)
+                    if ca > 0.0:
+                        tr = 1.0 - a
+                        r += tr * cr
+                        g += tr * cg
+                        b += tr * cb
+                        a += tr * ca
+                        if a >= term:
+                            k = ns
+                            break
+            else:  # an empty brick: its segments add nothing
+                kn = _first_segment_past(te, t0, first, h, pre)
+                if kn > k:
+                    k = kn
+                    have_front = False
+            if k >= ns:
+                break
+            if tnx <= tny and tnx <= tnz:
+                bi += sx
+                tnx += ddx
+                if bi < 0 or bi >= nbx:
+                    break
+            elif tny <= tnz:
+                bj += sy
+                tny += ddy
+                if bj < 0 or bj >= nby:
+                    break
+            else:
+                bk += sz
+                tnz += ddz
+                if bk < 0 or bk >= nbz:
+                    break
+            d = empty[bk, bj, bi]
+        if not restart:
+            break
+    if rb > ra and a < term:
+        r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+        taken += n_run
+    return r, g, b, a, taken, jumps
+
+
+@njit(cache=True, inline="always")
+def _brick_shift(brick):
+    """log2 of the brick size where it is a power of two (a shift instead of a division), else -1."""
+    shift = -1
+    for q_ in range(7):
+        if (1 << q_) == brick:
+            shift = q_
+    return shift
+
+
+@njit(cache=True, inline="always")
+def _store(out, p, r, g, b, a):
+    out[p, 0] = min(max(r, 0.0), 1.0)
+    out[p, 1] = min(max(g, 0.0), 1.0)
+    out[p, 2] = min(max(b, 0.0), 1.0)
+    out[p, 3] = min(max(a, 0.0), 1.0)
+
+
 @njit(cache=True, parallel=True)
 def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, pre, post, table,
           fp, tiles, out, counts):  # fmt: skip
@@ -278,19 +441,8 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
     `empty[bz, by, bx]`: 0 for a brick to sample, else d >= 1 with every brick within Chebyshev
     distance d - 1 empty too. `inv`: the inverse of projection @ view (pixel centres are unprojected
     at NDC depth -1 and 1, as `Camera.pixel_rays` does)."""
-    nz, ny, nx = vol.shape
-    nbz, nby, nbx = empty.shape
-    ux, uy, uz = nx - 1.0, ny - 1.0, nz - 1.0
-    h = fp[F_H]
-    term = fp[F_TERM]
-    lo_ = fp[F_LO]
-    scale_ = fp[F_SCALE]
     tiles_x = (width + TILE - 1) // TILE
-    B = brick
-    shift = -1  # log2 of the brick size where it is a power of two: a shift instead of a division
-    for q_ in range(7):
-        if (1 << q_) == B:
-            shift = q_
+    shift = _brick_shift(brick)
     for q in prange(tiles.shape[0]):
         tile = tiles[q]
         x_start = (tile % tiles_x) * TILE
@@ -301,141 +453,30 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
             ny_ = 1.0 - (yy + 0.5) / height * 2.0
             for xx in range(x_start, min(x_start + TILE, width)):
                 p = yy * width + xx
-                ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(
-                    inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz
-                )
-                r = 0.0
-                g = 0.0
-                b = 0.0
-                a = 0.0
-                t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
-                t0 = max(t_in, 0.0)
-                t1 = min(t_out, t_far)
-                ns = 0
-                first = 0.0
-                last = 0.0
-                if not miss and t1 > t0:
-                    ns, first, last = _segments(t1 - t0, h, (phases[p] - t0 / h) % 1.0)
-                k = 0  # the next segment
-                sb = 0.0  # pre-integrated: the value at segment k's front, when `have_front`
-                have_front = False
-                ra = 0  # post-classified: segments [ra, rb) lie in a run of visible bricks, not yet composited
-                rb = 0
-                while k < ns:
-                    # (re)start the brick walk at segment k's key point
-                    tk, lk = _segment(t0, first, last, h, ns, k)
-                    tkey = tk if pre else tk + 0.5 * lk
-                    bi = min(max(int(ox + tkey * dx), 0), nx - 2)
-                    bj = min(max(int(oy + tkey * dy), 0), ny - 2)
-                    bk = min(max(int(oz + tkey * dz), 0), nz - 2)
-                    if shift >= 0:
-                        bi, bj, bk = bi >> shift, bj >> shift, bk >> shift
-                    else:
-                        bi, bj, bk = bi // B, bj // B, bk // B
-                    d = empty[bk, bj, bi]
-                    sx = 1 if dx > 0.0 else -1
-                    sy = 1 if dy > 0.0 else -1
-                    sz = 1 if dz > 0.0 else -1
-                    tnx = ((bi + (1 if dx > 0.0 else 0)) * B - ox) * ix if dx != 0.0 else math.inf
-                    tny = ((bj + (1 if dy > 0.0 else 0)) * B - oy) * iy if dy != 0.0 else math.inf
-                    tnz = ((bk + (1 if dz > 0.0 else 0)) * B - oz) * iz if dz != 0.0 else math.inf
-                    ddx = B * abs(ix)
-                    ddy = B * abs(iy)
-                    ddz = B * abs(iz)
-                    restart = False
-                    while True:
-                        if rb > ra and (d != 0 or rb - ra >= MAX_RUN):
-                            # the run ends at an empty brick, or is long (an opaque ray stops within
-                            # it: walk no further first): composite it
-                            r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
-                            taken += n_run
-                            ra = rb
-                            if a >= term:
-                                k = ns
-                                break
-                        if d > 1:  # empty bricks all around: leave their box in one jump if that skips
-                            e = d - 1
-                            tb_ = _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, (bi - e) * B, (bj - e) * B,
-                                            (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B, (bk + 1 + e) * B)  # fmt: skip
-                            kn = _first_segment_past(tb_, t0, first, h, pre)
-                            if kn > k:
-                                k = kn
-                                have_front = False
-                                jumps += 1
-                                restart = True
-                                break
-                        te = min(tnx, tny, tnz)
-                        if d == 0 and not pre:  # its segments join the run, composited when it ends
-                            kn = _middles_before(te, t0, first, last, h, ns)
-                            if kn > k:
-                                if rb != k:
-                                    ra = k
-                                rb = kn
-                                k = kn
-                        elif d == 0:
-                            while k < ns:
-                                tk, lk = _segment(t0, first, last, h, ns, k)
-                                if (tk if pre else tk + 0.5 * lk) >= te:
-                                    break
-                                if pre:
-                                    if not have_front:
-                                        s = _value(vol, ox + tk * dx, oy + tk * dy, oz + tk * dz)
-                                        taken += 1
-                                    else:
-                                        s = sb
-                                    tb2 = tk + lk
-                                    sb = _value(vol, ox + tb2 * dx, oy + tb2 * dy, oz + tb2 * dz)
-                                    have_front = True
-                                else:
-                                    tm = tk + 0.5 * lk
-                                    s = _value(vol, ox + tm * dx, oy + tm * dy, oz + tm * dz)
-                                    sb = s
-                                taken += 1
-                                k += 1
-                                cr, cg, cb, ca = _classify(s, sb, lk, pre, post, table, fp)
-                                if ca > 0.0:
-                                    tr = 1.0 - a
-                                    r += tr * cr
-                                    g += tr * cg
-                                    b += tr * cb
-                                    a += tr * ca
-                                    if a >= term:
-                                        k = ns
-                                        break
-                        else:  # an empty brick: its segments add nothing
-                            kn = _first_segment_past(te, t0, first, h, pre)
-                            if kn > k:
-                                k = kn
-                                have_front = False
-                        if k >= ns:
-                            break
-                        if tnx <= tny and tnx <= tnz:
-                            bi += sx
-                            tnx += ddx
-                            if bi < 0 or bi >= nbx:
-                                break
-                        elif tny <= tnz:
-                            bj += sy
-                            tny += ddy
-                            if bj < 0 or bj >= nby:
-                                break
-                        else:
-                            bk += sz
-                            tnz += ddz
-                            if bk < 0 or bk >= nbz:
-                                break
-                        d = empty[bk, bj, bi]
-                    if not restart:
-                        break
-                if rb > ra and a < term:
-                    r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
-                    taken += n_run
-                out[p, 0] = min(max(r, 0.0), 1.0)
-                out[p, 1] = min(max(g, 0.0), 1.0)
-                out[p, 2] = min(max(b, 0.0), 1.0)
-                out[p, 3] = min(max(a, 0.0), 1.0)
+                r, g, b, a, n, j = _ray(vol, empty, brick, shift, inv, xx, ny_, width, grid_origin, spacing, view_dir,
+                                        t_far_eye, phases[p], pre, post, table, fp)  # fmt: skip
+                taken += n
+                jumps += j
+                _store(out, p, r, g, b, a)
         counts[tile, 0] = taken
         counts[tile, 1] = jumps
+
+
+@njit(cache=True, parallel=True)
+def march_pixels(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, pre, post,
+                 table, fp, pixels, out, counts):  # fmt: skip
+    """As `march`, for the listed pixels (row-major indices) only: out[q] and counts[q] are pixel
+    pixels[q]'s colour and (samples, jumps). Adaptive image refinement asks for scattered pixels."""
+    shift = _brick_shift(brick)
+    for q in prange(pixels.shape[0]):
+        p = pixels[q]
+        yy = p // width
+        ny_ = 1.0 - (yy + 0.5) / height * 2.0
+        r, g, b, a, n, j = _ray(vol, empty, brick, shift, inv, p - yy * width, ny_, width, grid_origin, spacing,
+                                view_dir, t_far_eye, phases[p], pre, post, table, fp)  # fmt: skip
+        counts[q, 0] = n
+        counts[q, 1] = j
+        _store(out, q, r, g, b, a)
 
 
 MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
