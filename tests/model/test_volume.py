@@ -143,3 +143,13 @@ def test_a_tet_volume_keeps_one_copy_of_each_tet_with_a_note():
     assert volume.notes == ("twice.vtu: 4 duplicated tetrahedra merged",)
     single = TetVolume(points, tets, values)
     assert single.merged_tet_count == 0 and not single.notes
+
+
+def test_a_meshs_bounds_are_its_points_extent_computed_once():
+    """The app asks for the bounds per renderer on every preview request: a mesh of a million
+    points must not scan them each time (it held oxygen's TF-drag previews back until the drag ended)."""
+    points = np.random.default_rng(0).normal(size=(50, 3))
+    volume = TetVolume(points, [[0, 1, 2, 3]], np.zeros(50))
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    assert volume.bounds == (lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
+    assert volume.bounds is volume.bounds

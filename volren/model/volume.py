@@ -240,9 +240,11 @@ class TetVolume:
         ):
             object.__setattr__(self, name, value)
 
-    @property
+    @cached_property
     def bounds(self) -> tuple[float, float, float, float, float, float]:
-        """(xmin, xmax, ymin, ymax, zmin, zmax) of the points, VTK's order."""
+        """(xmin, xmax, ymin, ymax, zmin, zmax) of the points, VTK's order (computed once: on
+        oxygen's 1.2 M points each call took 13 ms, and the app asks for it per renderer on every
+        preview request, which held a TF drag's previews back until the drag ended)."""
         lo = self.points.min(axis=0)
         hi = self.points.max(axis=0)
         return (lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
