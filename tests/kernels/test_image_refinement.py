@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from volren.errors import VolrenError
-from volren.kernels.image_refinement import check_stride, refine_image
+from volren.kernels.image_refinement import check_stride, check_tolerance, refine_image
 
 
 class Caster:
@@ -135,3 +135,14 @@ def test_progress_reports_each_level():
 def test_bad_strides(stride):
     with pytest.raises(VolrenError, match="image_stride"):
         check_stride(stride)
+
+
+@pytest.mark.parametrize("tolerance", [-0.01, 1.5, True, "0.1", None])
+def test_bad_tolerances(tolerance):
+    with pytest.raises(VolrenError, match=r"refine_tolerance must lie in \[0, 1\]"):
+        check_tolerance(tolerance)
+
+
+@pytest.mark.parametrize("tolerance", [0, 0.05, 1])
+def test_tolerances_in_range_are_floats(tolerance):
+    assert check_tolerance(tolerance) == float(tolerance) and isinstance(check_tolerance(tolerance), float)

@@ -35,6 +35,14 @@ def check_stride(stride: object, name: str = "option image_stride") -> int:
     return stride
 
 
+def check_tolerance(tolerance: object, name: str = "option refine_tolerance") -> float:
+    """The tolerance as a float in [0, 1] (a difference of premultiplied channels), else an error
+    naming the option."""
+    if isinstance(tolerance, bool) or not isinstance(tolerance, int | float) or not 0.0 <= tolerance <= 1.0:
+        raise VolrenError(f"{name} must lie in [0, 1], got {tolerance!r}")
+    return float(tolerance)
+
+
 def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance: float,
                  progress: ProgressCallback | None = None) -> tuple[NDArray[np.float64], int]:
     """The (height * width, 4) image and the number of rays cast.

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
-from volren.kernels.image_refinement import check_stride, refine_image
+from volren.kernels.image_refinement import check_stride, check_tolerance, refine_image
 from volren.kernels.row_blocks import parallel_chunk_size
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.bricks import BrickGrid
@@ -83,9 +83,7 @@ def read_options(options: Mapping[str, Any]) -> dict[str, Any]:
         if isinstance(v, bool) or not isinstance(v, int) or not (lo <= v <= hi):
             fail(name, f"an integer in {lo}..{hi}")
     check_stride(out["image_stride"], "renderer raycast: option image_stride")
-    tol = out["refine_tolerance"]
-    if isinstance(tol, bool) or not isinstance(tol, int | float) or not (0.0 <= tol <= 1.0):
-        fail("refine_tolerance", "a number in [0, 1]")
+    check_tolerance(out["refine_tolerance"], "renderer raycast: option refine_tolerance")
     return out
 
 

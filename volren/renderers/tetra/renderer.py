@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.kernels.camera_rays import image_rays, pixel_rays
-from volren.kernels.image_refinement import check_stride, refine_image
+from volren.kernels.image_refinement import check_stride, check_tolerance, refine_image
 from volren.kernels.row_blocks import parallel_chunk_size, run_in_row_blocks
 from volren.kernels.shading import shade_params
 from volren.kernels.tet_planes import packed_face_planes
@@ -234,9 +234,7 @@ class TetraRenderer(RendererBase):
         check_stride(opts["image_stride"], "tetra option image_stride")
         if opts["backend"] == "gl" and opts["image_stride"] > 1:
             raise VolrenError("tetra option image_stride > 1 runs on the cpu backend only (backend=cpu or auto)")
-        tol = opts["refine_tolerance"]
-        if isinstance(tol, bool) or not isinstance(tol, int | float) or not 0.0 <= tol <= 1.0:
-            raise VolrenError(f"tetra option refine_tolerance must lie in [0, 1], got {tol!r}")
+        check_tolerance(opts["refine_tolerance"], "tetra option refine_tolerance")
         for name, low in (("table_size", 2), ("table_lengths", 1), ("max_steps", 1)):
             v = opts[name]
             if isinstance(v, bool) or not isinstance(v, int) or v < low:
