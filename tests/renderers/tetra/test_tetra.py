@@ -189,6 +189,31 @@ def test_rays_jump_over_transparent_cells(view):
     assert rmse(jumped, reference) < 2e-3
 
 
+def test_tf_edits_keep_the_walk_set_while_the_visible_cells_stay():
+    """A held renderer keeps the set of cells rays walk through while a TF edit leaves the same
+    cells visible (a peak's height), and rebuilds it when they change (a shell's support widened):
+    each frame equals a new renderer's of the edited TF, so a stale set never hides cells."""
+    mesh, tf = shells()
+    camera, size = shell_cameras(mesh)["perspective"]
+    edits = {
+        "lower peak": [[0, 0], [2.4, 0], [3, 0.3], [3.6, 0], [12.4, 0], [14, 0.8], [15.6, 0]],
+        "wider shell": [[0, 0], [1.2, 0], [3, 0.3], [3.6, 0], [12.4, 0], [14, 0.8], [15.6, 0]],
+    }
+    options = {"backend": "cpu"}
+    with prepared_renderer("tetra", mesh, tf, RenderSettings(options=options)) as held:
+        held.render(camera, size, size)
+        sets = [held._visible_walk[1]]
+        for opacity in edits.values():
+            tf.set_opacity_points(np.array(opacity, dtype=np.float64))
+            held.set_transfer_function(tf)
+            image = held.render(camera, size, size)
+            sets.append(held._visible_walk[1])
+            fresh, _ = render("tetra", mesh, tf, camera, size, options=options)
+            assert np.array_equal(image, fresh)
+    assert sets[1] is sets[0]  # the peak's height: same cells
+    assert sets[2] is not sets[1] and sets[2].cells.sum() > sets[1].cells.sum()
+
+
 def refined(volume, tf, camera, size, stride, tolerance, **settings):
     return render("tetra", volume, tf, camera, size, options={"backend": "cpu", "image_stride": stride,
                                                               "refine_tolerance": tolerance}, **settings)

@@ -198,7 +198,8 @@ def test_the_entry_lists_grow(monkeypatch):
 
 
 def test_uploads_follow_the_tf_and_the_volume(kuhn):
-    """The mesh goes up once per volume, the tables once per TF version; camera moves send neither."""
+    """The mesh goes up once per volume, the tables once per TF version, the entry faces once per set of
+    visible cells; camera moves send none of them."""
     mesh, tf, camera = kuhn
     tf = tf.copy()
     with prepared_renderer("tetra", mesh, tf, RenderSettings(options=GL)) as renderer:
@@ -208,9 +209,12 @@ def test_uploads_follow_the_tf_and_the_volume(kuhn):
         mesh_planes = walk._mesh_buffers["planes"]
         renderer.render(Camera.orbit(mesh.bounds, 60, 10, 1.0), 16, 16)
         assert walk._table is tables and walk._mesh_buffers["planes"] is mesh_planes and walk._faces is faces
-        tf.set_opacity_points([[0, 0.0], [24, 0.5]])  # the entry faces are the visible cells' ones
+        tf.set_opacity_points([[0, 0.0], [24, 0.5]])  # every cell stays visible: the entry faces stay
         renderer.render(camera, 16, 16)
         assert walk._table is not tables and walk._mesh_buffers["planes"] is mesh_planes
+        assert walk._faces is faces
+        tf.set_opacity_points([[0, 0.0], [12, 0.0], [24, 0.5]])  # the entry faces are the visible cells' ones
+        renderer.render(camera, 16, 16)
         assert walk._faces is not faces
         objects = len(walk.gl_objects)
         renderer.set_volume(TetVolume(mesh.points, mesh.tets, mesh.values * 2))

@@ -128,7 +128,8 @@ class TetraRenderer(RendererBase):
         self._table_key: tuple | None = None
         self._table: tuple | None = None
         self._cell_ranges: tuple[NDArray, NDArray, NDArray] | None = None  # (the cells' corner values, lo, hi)
-        self._visible_walk: tuple[Any, WalkedCells] | None = None  # (table key, the visible cells' walk set)
+        self._visible_walk: tuple[NDArray[np.bool_], WalkedCells] | None = None  # (visible cells, their walk set)
+        self._walk_version = 0  # which walk set the GL walk's entry faces hold
         self._gl: GLWalk | None = None
         self._generation = 0  # which volume the GL walk's buffers hold
 
@@ -180,12 +181,15 @@ class TetraRenderer(RendererBase):
     def _walked_cells(self, usable: WalkedCells, visible: NDArray[np.bool_] | None) -> WalkedCells:
         """The cells rays walk through: the usable ones, or (`visible` given) only those the TF
         makes visible, so that rays jump over transparent regions from exit to next entry instead
-        of stepping through them cell by cell. Cached per TF table."""
+        of stepping through them cell by cell. Kept while the same cells are visible: most TF edits
+        (a colour, an opacity that stays above zero, a peak moved inside its support) change the
+        table but not the set, whose rebuild took 21 of a 91 ms TF-drag preview on oxygen."""
         if visible is None:
             return usable
-        if self._visible_walk is None or self._visible_walk[0] != self._table_key:
+        if self._visible_walk is None or not np.array_equal(self._visible_walk[0], visible):
             tets, neighbors, _, packed, _ = self._planes  # type: ignore[misc]
-            self._visible_walk = (self._table_key, walked_cells(usable.cells & visible, tets, neighbors, packed))
+            self._visible_walk = (visible, walked_cells(usable.cells & visible, tets, neighbors, packed))
+            self._walk_version += 1
         return self._visible_walk[1]
 
     @staticmethod
@@ -308,7 +312,7 @@ class TetraRenderer(RendererBase):
             walk = self._gl_walk(mesh, tets, neighbors, packed, tvals, grads, usable)
             walk.set_tables((self._generation, self._table_key, opts["skip_transparent"]), depth[..., 0], ratio,
                             visible)
-            walk.set_entry_faces((self._generation, self._table_key if jump else None), walked, mesh.points)
+            walk.set_entry_faces((self._generation, self._walk_version if jump else None), walked, mesh.points)
             params = WalkParameters(mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]),
                                     jump)
             near = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
