@@ -56,8 +56,8 @@ OPTIONS: dict[str, tuple[Any, str]] = {
     "refine_tolerance": (0.02, "with image_stride > 1: the largest difference in any premultiplied RGBA channel "
                                "between a block's corner rays that is interpolated instead of cast (0 to 1)"),
     "target_error": (0.0, "0: march at the settings' step; above 0 (composite only): the largest step of step x "
-                          "2^(-k/4), k = 0..8, whose RMSE over the image's root mean square (0.01: 1 %), "
-                          "estimated on about 4096 of the frame's rays against a march 8x finer than step, is "
+                          "2^(-k/8), k = 0..24, whose RMSE over the image's root mean square (0.01: 1 %), "
+                          "estimated on about 4096 of the frame's rays against a march 16x finer than step, is "
                           "at most this; chosen at the first frame of a TF and volume (0 to 1)"),
 }  # fmt: skip
 #: Tiles per progress call.
@@ -123,6 +123,8 @@ class RaycastRenderer(RendererBase):
         backend="cpu",
         summary="image-order ray casting (numba): brick skipping with distance jumps, early ray termination, "
         "adaptive image refinement, the step chosen from an error target",
+        # a TF drag's previews march at the level's coarsest step instead of estimating the error per edit
+        tf_drag_options={"target_error": 0.0},
         quality=(
             QualityLevel("step 1", step=1.0, preintegration=False),
             QualityLevel("step 1, pre-integrated", step=1.0, preintegration=True),
@@ -133,12 +135,12 @@ class RaycastRenderer(RendererBase):
                          options={"image_stride": 8, "refine_tolerance": 0.02}),
             QualityLevel("step 0.5, refine 4/0.01", step=0.5, preintegration=False,
                          options={"image_stride": 4, "refine_tolerance": 0.01}),
-            # the step chosen per TF and volume from an error estimate (`step_choice`), at most 1
-            QualityLevel("error 1 %, refine 8/0.02", step=1.0, preintegration=False,
+            # the step chosen per TF and volume from an error estimate (`step_choice`), 2 to 0.25
+            QualityLevel("error 1 %, refine 8/0.02", step=2.0, preintegration=False,
                          options={"target_error": 0.01, "image_stride": 8, "refine_tolerance": 0.02}),
-            QualityLevel("error 0.4 %, refine 4/0.01", step=1.0, preintegration=False,
+            QualityLevel("error 0.4 %, refine 4/0.01", step=2.0, preintegration=False,
                          options={"target_error": 0.004, "image_stride": 4, "refine_tolerance": 0.01}),
-            QualityLevel("error 0.2 %", step=1.0, preintegration=False, options={"target_error": 0.002}),
+            QualityLevel("error 0.2 %", step=2.0, preintegration=False, options={"target_error": 0.002}),
         ),
     )
     option_help: ClassVar[Mapping[str, str]] = {name: text for name, (_, text) in OPTIONS.items()}
