@@ -11,7 +11,7 @@ from volren.errors import VolrenError
 from volren.model import Camera, RenderSettings
 from volren.renderers.raycast import RaycastRenderer
 from volren.renderers.raycast import renderer as raycast_module
-from volren.renderers.raycast.step_choice import FINE, candidate_steps, largest_step_within, sample_pixels
+from volren.renderers.raycast.step_choice import FINE, candidate_steps, largest_step_within, sample_size
 
 
 def relative_rmse(image: np.ndarray, fine: np.ndarray) -> float:
@@ -19,15 +19,10 @@ def relative_rmse(image: np.ndarray, fine: np.ndarray) -> float:
     return float(np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(b**2)))
 
 
-def test_the_sample_is_a_grid_of_about_4096_pixels_holding_both_phases():
-    pixels = sample_pixels(512, 512)
-    y, x = np.divmod(pixels, 512)
-    assert 3000 < len(pixels) < 6000 and len(np.unique(pixels)) == len(pixels)
-    assert x.min() >= 0 and x.max() < 512 and y.max() < 512
-    spacing = np.diff(np.unique(x))
-    assert np.all(spacing == spacing[0]) and spacing[0] % 2 == 1
-    assert set(np.unique((x + y) % 2)) == {0, 1}  # interleaved offsets' two phases
-    assert np.array_equal(sample_pixels(40, 32), np.arange(40 * 32))  # a small image: every pixel
+def test_the_sample_is_an_image_of_about_4096_rays_with_the_frames_aspect():
+    for width, height in ((512, 512), (800, 600), (8, 8), (1, 300)):
+        w, h = sample_size(width, height)
+        assert 3500 < w * h < 4700 and abs(w / h - width / height) < 0.05 * width / height + 1.0 / h
 
 
 def test_the_largest_candidate_within_the_target_is_chosen():
@@ -49,25 +44,39 @@ def test_the_largest_candidate_within_the_target_is_chosen():
 
 @pytest.mark.parametrize("pre", [False, True])
 def test_the_chosen_step_is_the_largest_candidate_within_the_target(pre):
-    """On an image small enough that every pixel is sampled, the estimate is exact: the frame at
-    the chosen step is within the target of the march 8x finer, the next coarser candidate is not,
-    and the frame is the one drawn with that step given directly."""
+    """Drawn at the sample's own size (64x64), the estimate is exact: the frame at the chosen step
+    is within the target of the march 16x finer, the next coarser candidate is not, and the frame
+    is the one drawn with that step given directly."""
     volume = field()
     camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.2)
     target = 0.005  # the shell TF's error: 0.6 % at step 0.6, 0.46 % at 0.5 (post-classified)
-    image, renderer = draw(volume, SHELL_TF, camera, step=1.0, preintegration=pre, options={"target_error": target})
+    size = sample_size(64, 64)
+    assert size == (64, 64)
+    image, renderer = draw(volume, SHELL_TF, camera, size, step=1.0, preintegration=pre,
+                           options={"target_error": target})  # fmt: skip
     counters = renderer.last_frame.counters
     chosen = counters["step"]
-    fine, _ = draw(volume, SHELL_TF, camera, step=1.0 / FINE, preintegration=pre)
+    fine, _ = draw(volume, SHELL_TF, camera, size, step=1.0 / FINE, preintegration=pre)
     assert relative_rmse(image, fine) <= target
     assert relative_rmse(image, fine) == pytest.approx(counters["step_relative_error"], rel=1e-3)
     steps = candidate_steps(1.0)
     k = int(np.argmin([abs(s - chosen) for s in steps]))
     assert 0 < k < len(steps) - 1  # the field needs a finer step than 1 and a coarser one than the finest
-    coarser, _ = draw(volume, SHELL_TF, camera, step=steps[k - 1], preintegration=pre)
+    coarser, _ = draw(volume, SHELL_TF, camera, size, step=steps[k - 1], preintegration=pre)
     assert relative_rmse(coarser, fine) > target
-    direct, _ = draw(volume, SHELL_TF, camera, step=chosen, preintegration=pre)
+    direct, _ = draw(volume, SHELL_TF, camera, size, step=chosen, preintegration=pre)
     np.testing.assert_allclose(image, direct, atol=1e-6)
+
+
+def test_the_choice_does_not_depend_on_the_first_frames_size():
+    """The app warms a renderer up with an 8x8 frame: the step it keeps is the one a 512x512 first
+    frame would choose."""
+    volume = field()
+    camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.2)
+    options = {"target_error": 0.005}
+    _, small = draw(volume, SHELL_TF, camera, (8, 8), step=1.0, options=options)
+    _, large = draw(volume, SHELL_TF, camera, (512, 512), step=1.0, options=options)
+    assert small.last_frame.counters["step"] == large.last_frame.counters["step"] < 1.0
 
 
 def test_the_step_is_kept_while_the_camera_turns_and_chosen_again_for_a_new_tf(monkeypatch):
@@ -82,6 +91,8 @@ def test_the_step_is_kept_while_the_camera_turns_and_chosen_again_for_a_new_tf(m
     renderer.set_settings(RenderSettings(step=1.0, options={"target_error": 0.01}))
     for azimuth in (30, 40, 50):
         renderer.render(Camera.orbit(volume.bounds, azimuth, 20), 40, 32)
+        if azimuth > 30:
+            assert renderer.last_frame.counters["step_choice_ms"] < 1.0  # kept: nothing estimated
     assert len(calls) == 1
     tf.set_color_points([[-2, 1.0, 0.3, 0.3], [4, 0.1, 0.8, 0.1]])  # colour only: the error changes too
     renderer.render(Camera.orbit(volume.bounds, 50, 20), 40, 32)

@@ -13,6 +13,7 @@ so, and `auto` picks another renderer for shaded scenes.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -36,7 +37,7 @@ from volren.renderers.base import (
 )
 from volren.renderers.raycast import march as K
 from volren.renderers.raycast.occupancy import empty_distance
-from volren.renderers.raycast.step_choice import largest_step_within, sample_pixels
+from volren.renderers.raycast.step_choice import largest_step_within, sample_size
 
 OFFSET_MODES = ("interleaved", "midpoint")
 OPTIONS: dict[str, tuple[Any, str]] = {
@@ -57,8 +58,8 @@ OPTIONS: dict[str, tuple[Any, str]] = {
                                "between a block's corner rays that is interpolated instead of cast (0 to 1)"),
     "target_error": (0.0, "0: march at the settings' step; above 0 (composite only): the largest step of step x "
                           "2^(-k/8), k = 0..24, whose RMSE over the image's root mean square (0.01: 1 %), "
-                          "estimated on about 4096 of the frame's rays against a march 16x finer than step, is "
-                          "at most this; chosen at the first frame of a TF and volume (0 to 1)"),
+                          "estimated on the rays of a ~64x64 image of the view against a march 16x finer than "
+                          "step, is at most this; chosen at the first frame of a TF and volume (0 to 1)"),
 }  # fmt: skip
 #: Tiles per progress call.
 TILES_PER_CALL = 1024
@@ -220,8 +221,10 @@ class RaycastRenderer(RendererBase):
         view = (inv, width, height, origin, spacing, view_dir, float(far - near), phases)
         chosen: dict[str, float] = {}
         if opts["target_error"] > 0:
-            h, estimate = self._step_within(tf, h, pre, opts, view)
-            chosen = {"step": h / volume.characteristic_length, "step_relative_error": estimate}
+            start = time.perf_counter()
+            h, estimate = self._step_within(tf, h, pre, opts, view, mode_key)
+            chosen = {"step": h / volume.characteristic_length, "step_relative_error": estimate,
+                      "step_choice_ms": 1000.0 * (time.perf_counter() - start)}  # fmt: skip
         args = self._march_args(tf, h, pre, opts, view)
         empty = args[1]
         stride = int(opts["image_stride"])
@@ -266,19 +269,23 @@ class RaycastRenderer(RendererBase):
         return (self._values, empty, brick, *view, pre, post, table, fp)
 
     def _step_within(self, tf: TransferFunction1D, coarsest: float, pre: bool, opts: Mapping[str, Any],
-                     view: tuple) -> tuple[float, float]:  # fmt: skip
-        """(step, its estimated relative RMSE) for the target_error option (`step_choice`), estimated on a
-        sample of this frame's rays and kept while the TF, the volume and the settings stay (a
-        camera move keeps it: the step must not change from frame to frame of a rotation)."""
+                     view: tuple, phase_mode: str) -> tuple[float, float]:  # fmt: skip
+        """(step, its estimated relative RMSE) for the target_error option (`step_choice`), estimated on
+        every ray of a ~64x64 image of this frame's view and kept while the TF, the volume and the
+        settings stay (a camera move keeps it: the step must not change from frame to frame of a
+        rotation)."""
         key = (tf.color_points.tobytes(), tf.opacity_points.tobytes(), tf.opacity_unit_distance, coarsest, pre,
                *(opts[k] for k in ("target_error", "table_size", "classification_table", "termination_alpha",
                                    "brick_size", "empty_space_skipping")))  # fmt: skip
         if self._step is None or self._step[0] != key:
-            pixels = sample_pixels(view[1], view[2])
+            width, height = sample_size(view[1], view[2])
+            phases = pixel_phases(phase_mode, width, height, opts["jitter_seed"])
+            sampled = (view[0], width, height, *view[3:7], phases)
+            pixels = np.arange(width * height, dtype=np.int64)
 
             def march(h: float) -> NDArray[np.float32]:
                 rgba = np.empty((len(pixels), 4), np.float32)
-                K.march_pixels(*self._march_args(tf, h, pre, opts, view), pixels, rgba,
+                K.march_pixels(*self._march_args(tf, h, pre, opts, sampled), pixels, rgba,
                                np.zeros((len(pixels), 2), np.int64))  # fmt: skip
                 np.minimum(rgba[:, :3], rgba[:, 3:4], out=rgba[:, :3])
                 return rgba

@@ -6,7 +6,8 @@ aneurism's are 3-4x beyond it), so one step per class is too fine for some scene
 step control for ODEs, the error is estimated a posteriori: a sample of the frame's rays is
 marched at a much finer step, which stands in for the exact image (post-classified and
 pre-integrated sampling both converge to it as the step shrinks), and at candidate steps found by
-bisection between the coarsest and the finest; the coarsest found within the target is used. The RMSE over a uniform sample of pixels estimates DESIGN.md's RMSE over all of them.
+bisection between the coarsest and the finest; the coarsest found within the target is used. The RMSE over the rays of a coarser image of the same view estimates DESIGN.md's RMSE over the frame's
+pixels (each ray is a sample of the same image plane).
 
 The target is relative to the image's root mean square (a normalised RMSE), so that it asks the
 same of a volume that fills the view and of one that covers a tenth of it: VTK's default makes
@@ -30,14 +31,12 @@ FINE = 16
 SAMPLE_RAYS = 4096
 
 
-def sample_pixels(width: int, height: int, rays: int = SAMPLE_RAYS) -> NDArray[np.int64]:
-    """Row-major indices of about `rays` pixels on a regular grid. Its spacing is odd so that the
-    sample holds both phases of interleaved depth offsets (an even spacing meets one only)."""
-    spacing = max(1, int(math.sqrt(width * height / rays)))
-    spacing += 1 - spacing % 2
-    first = spacing // 2
-    ys, xs = np.mgrid[min(first, height - 1) : height : spacing, min(first, width - 1) : width : spacing]
-    return np.ascontiguousarray((ys * width + xs).ravel(), dtype=np.int64)
+def sample_size(width: int, height: int, rays: int = SAMPLE_RAYS) -> tuple[int, int]:
+    """The size of the image whose every pixel's ray is sampled: about `rays` pixels, the frame's
+    aspect. Why a size of its own and not a subset of the frame's pixels: the estimate must not
+    depend on the first frame's size (the app warms a renderer up with an 8x8 frame)."""
+    aspect = width / height
+    return max(1, round(math.sqrt(rays * aspect))), max(1, round(math.sqrt(rays / aspect)))
 
 
 def candidate_steps(coarsest: float) -> list[float]:
