@@ -56,18 +56,18 @@ def largest_step_within(march: Callable[[float], NDArray], coarsest: float, targ
         rmse = float(np.sqrt(np.mean((np.asarray(march(steps[k]), dtype=np.float64) - fine) ** 2)))
         return rmse / scale if scale > 0.0 else 0.0
 
-    errors = {0: error(0)}
-    if errors[0] <= target:
-        return steps[0], errors[0]
-    coarse, fine_k = 0, len(steps) - 1  # the error at `coarse` exceeds the target; `fine_k` is unknown
-    errors[fine_k] = error(fine_k)
-    if errors[fine_k] > target:
-        return steps[fine_k], errors[fine_k]
-    while fine_k - coarse > 1:
-        middle = (coarse + fine_k) // 2
-        errors[middle] = error(middle)
-        if errors[middle] <= target:
-            fine_k = middle
+    best = error(0)
+    if best <= target:
+        return steps[0], best
+    coarse, within = 0, len(steps) - 1  # the error exceeds the target at `coarse`, and at `within`?
+    best = error(within)
+    if best > target:
+        return steps[within], best
+    while within - coarse > 1:
+        middle = (coarse + within) // 2
+        e = error(middle)
+        if e <= target:
+            within, best = middle, e
         else:
             coarse = middle
-    return steps[fine_k], errors[fine_k]
+    return steps[within], best
