@@ -121,9 +121,12 @@ def _full_frame_after(app, window, probe: _Probe, act: Callable[[], None], timeo
     return (t - start) * 1000.0, frame.ms
 
 
-def _move_point(tf, fraction: float) -> None:
-    """Move the TF's highest opacity point a little along the value axis (an editor gesture)."""
-    points = tf.opacity_points.copy()
+def _move_point(tf, fraction: float, base) -> None:
+    """Move the TF's highest opacity point a little along the value axis (an editor gesture), to
+    `fraction` of the way across the middle fifth of its span in the TF's `base` points: from the
+    base, so that the TF does not drift from edit to edit (where the peak was the last point, each
+    edit moved it towards its neighbour and bonsai's ramp ended 30 times steeper)."""
+    points = np.array(base, dtype=np.float64)
     peak = int(np.argmax(points[:, 1]))
     lo = points[peak - 1, 0] if peak > 0 else points[peak, 0]
     hi = points[peak + 1, 0] if peak + 1 < len(points) else points[peak, 0]
@@ -160,10 +163,11 @@ def measure(
         if requested is None:
             renderer = f"{window.state.renderer} (auto)"
         state = window.state
+        base = state.transfer_function.opacity_points.copy()
         edit_ms, frame_ms = [], []
         for i in range(edits + 1):
             ms, rendered = _full_frame_after(
-                app, window, probe, lambda i=i: _move_point(state.transfer_function, (i % 2) * 1.0), timeout_s
+                app, window, probe, lambda i=i: _move_point(state.transfer_function, (i % 2) * 1.0, base), timeout_s
             )
             if i:  # the first edit builds tables that later edits reuse or rebuild alike
                 edit_ms.append(ms)
@@ -184,7 +188,7 @@ def measure(
             state.end_interaction()
             return shown / elapsed
 
-        drag_fps = gesture(lambda k: _move_point(state.transfer_function, (k % 60) / 59.0))
+        drag_fps = gesture(lambda k: _move_point(state.transfer_function, (k % 60) / 59.0, base))
         drag_previews = [f for _, f in probe.shown[-5:] if not f.full]
         drag_preview = (drag_previews[-1].width, drag_previews[-1].height) if drag_previews else (0, 0)
         _wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
