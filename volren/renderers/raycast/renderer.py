@@ -97,6 +97,14 @@ def read_options(options: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
+def _march_listed(args: tuple, pixels: NDArray[np.int64]) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+    """(premultiplied RGBA (n, 4), (samples, jumps) (n, 2)) of the listed pixels' rays (`march_pixels`)."""
+    rgba = np.empty((len(pixels), 4), np.float32)
+    counts = np.zeros((len(pixels), 2), np.int64)
+    K.march_pixels(*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
+    return rgba, counts
+
+
 def pixel_phases(mode: str, width: int, height: int, seed: int) -> NDArray[np.float64]:
     """The phase in [0, 1) of every pixel's segment boundaries (row-major, row 0 at the top)."""
     if mode == "midpoint":
@@ -284,10 +292,8 @@ class RaycastRenderer(RendererBase):
             pixels = np.arange(width * height, dtype=np.int64)
 
             def march(h: float) -> NDArray[np.float32]:
-                rgba = np.empty((len(pixels), 4), np.float32)
-                K.march_pixels(*self._march_args(tf, h, pre, opts, sampled), pixels, rgba,
-                               np.zeros((len(pixels), 2), np.int64))  # fmt: skip
-                np.minimum(rgba[:, :3], rgba[:, 3:4], out=rgba[:, :3])
+                rgba = _march_listed(self._march_args(tf, h, pre, opts, sampled), pixels)[0]
+                np.minimum(rgba[:, :3], rgba[:, 3:4], out=rgba[:, :3])  # as the frame's pixels are
                 return rgba
 
             with parallel_chunk_size(PIXEL_CHUNK):
@@ -318,9 +324,7 @@ class RaycastRenderer(RendererBase):
         totals = np.zeros(2, np.int64)
 
         def cast(pixels: NDArray[np.int64]) -> NDArray[np.float32]:
-            rgba = np.empty((len(pixels), 4), np.float32)
-            counts = np.zeros((len(pixels), 2), np.int64)
-            K.march_pixels(*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
+            rgba, counts = _march_listed(args, pixels)
             totals[:] += counts.sum(axis=0)
             return rgba
 
