@@ -90,10 +90,7 @@ def read_options(options: Mapping[str, Any]) -> dict[str, Any]:
             fail(name, f"an integer in {lo}..{hi}")
     check_stride(out["image_stride"], "renderer raycast: option image_stride")
     check_tolerance(out["refine_tolerance"], "renderer raycast: option refine_tolerance")
-    e = out["target_error"]
-    if isinstance(e, bool) or not isinstance(e, int | float) or not (0.0 <= e <= 1.0):
-        fail("target_error", "a number in [0, 1]")
-    out["target_error"] = float(e)
+    out["target_error"] = check_tolerance(out["target_error"], "renderer raycast: option target_error")
     return out
 
 

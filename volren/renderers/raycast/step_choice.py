@@ -3,11 +3,12 @@
 Why: how fine a step an image needs depends on the data and the TF, not only on the TF's class
 (at step 1 bonsai's smooth TF is within a third of VTK's default's error, ironProt's and
 aneurism's are 3-4x beyond it), so one step per class is too fine for some scenes. As in adaptive
-step control for ODEs, the error is estimated a posteriori: a sample of the frame's rays is
-marched at a much finer step, which stands in for the exact image (post-classified and
-pre-integrated sampling both converge to it as the step shrinks), and at candidate steps found by
-bisection between the coarsest and the finest; the coarsest found within the target is used. The RMSE over the rays of a coarser image of the same view estimates DESIGN.md's RMSE over the frame's
-pixels (each ray is a sample of the same image plane).
+step control for ODEs, the error is estimated a posteriori: the rays of a ~64x64 image of the
+frame's view are marched at a much finer step, which stands in for the exact image
+(post-classified and pre-integrated sampling both converge to it as the step shrinks), and at
+candidate steps found by bisection between the coarsest and the finest; the coarsest found within
+the target is used. The RMSE over those rays estimates DESIGN.md's RMSE over the frame's pixels
+(each ray is a sample of the same image plane).
 
 The target is relative to the image's root mean square (a normalised RMSE), so that it asks the
 same of a volume that fills the view and of one that covers a tenth of it: VTK's default makes
