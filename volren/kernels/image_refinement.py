@@ -52,43 +52,83 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
     whether they see anything is filled by bilinear interpolation between them, the others are
     split until the blocks are one pixel wide.
     Cast pixels are never overwritten by interpolation."""
-    image = np.zeros((height * width, 4))
+    image: NDArray[np.floating] | None = None  # the cast rays' dtype, allocated at the first cast
     done = np.zeros(height * width, dtype=bool)
+    wanted = np.zeros(height * width, dtype=bool)
     cast_count = 0
 
-    def sample(xs: NDArray[np.int64], ys: NDArray[np.int64]) -> None:
-        nonlocal cast_count
-        wanted = np.zeros(height * width, dtype=bool)
-        wanted[np.minimum(ys, height - 1) * width + np.minimum(xs, width - 1)] = True
-        index = np.flatnonzero(wanted & ~done)
+    def sample(xs: NDArray[np.int64], ys: NDArray[np.int64], spacing: int, count: int) -> None:
+        """Cast the points of a count x count lattice `spacing` apart at each (x, y) not cast yet."""
+        nonlocal cast_count, image
+        index = _new_pixels(xs, ys, spacing, count, width, height, done, wanted)
         if index.size:
-            image[index] = cast(index)
-            done[index] = True
+            rgba = cast(index)
+            if image is None:
+                image = np.zeros((height * width, 4), dtype=rgba.dtype)
+            _scatter(image, index, rgba)
             cast_count += int(index.size)
 
     x0, y0 = np.meshgrid(np.arange(0, max(width - 1, 1), stride, dtype=np.int64),
                          np.arange(0, max(height - 1, 1), stride, dtype=np.int64))
     x0, y0 = x0.ravel(), y0.ravel()
     size = stride
-    sample(np.concatenate([x0, x0 + size, x0, x0 + size]), np.concatenate([y0, y0, y0 + size, y0 + size]))
+    sample(x0, y0, size, 2)  # the blocks' corners
     levels = int(math.log2(stride))
     for level in range(levels):
+        assert image is not None  # the first level cast at least the image's corner pixel
         xa, ya = np.minimum(x0, width - 1), np.minimum(y0, height - 1)
         xb, yb = np.minimum(x0 + size, width - 1), np.minimum(y0 + size, height - 1)
         split = _split(image, width, xa, ya, xb, yb, tolerance)
         keep = ~split
         _fill(image, done, width, xa[keep], ya[keep], xb[keep], yb[keep])
         half = size // 2
-        x0 = np.concatenate([x0[split] + dx for dx in (0, half, 0, half)])
-        y0 = np.concatenate([y0[split] + dy for dy in (0, 0, half, half)])
+        x0, y0 = x0[split], y0[split]
         # the children's corners: the parents' corners (cast already), edge midpoints and centres
-        sample(np.concatenate([x0, x0 + half, x0, x0 + half]), np.concatenate([y0, y0, y0 + half, y0 + half]))
+        sample(x0, y0, half, 3)
+        x0 = np.concatenate([x0 + dx for dx in (0, half, 0, half)])
+        y0 = np.concatenate([y0 + dy for dy in (0, 0, half, half)])
         size = half
         if progress is not None:
             progress((level + 1) / levels)
     if not levels and progress is not None:
         progress(1.0)
+    assert image is not None  # the first level casts at least the image's corner pixel
     return image, cast_count
+
+
+@njit(cache=True)
+def _new_pixels(xs, ys, spacing, count, width, height, done, wanted):
+    """The pixels of a count x count lattice `spacing` apart at each (x, y) (clamped to the image)
+    not cast yet, sorted, each once; marked done. `wanted` is all False on entry and on return (a
+    scan of the image is cheaper than a sort, and than listing every lattice point first)."""
+    n = 0
+    for k in range(xs.shape[0]):
+        for j in range(count):
+            row = min(ys[k] + j * spacing, height - 1) * width
+            for i in range(count):
+                p = row + min(xs[k] + i * spacing, width - 1)
+                if not done[p] and not wanted[p]:
+                    wanted[p] = True
+                    n += 1
+    index = np.empty(n, np.int64)
+    q = 0
+    for p in range(wanted.shape[0]):
+        if wanted[p]:
+            wanted[p] = False
+            done[p] = True
+            index[q] = p
+            q += 1
+            if q == n:
+                break
+    return index
+
+
+@njit(cache=True)
+def _scatter(image, index, rgba):
+    """image[index] = rgba."""
+    for q in range(index.shape[0]):
+        for ch in range(4):
+            image[index[q], ch] = rgba[q, ch]
 
 
 @njit(cache=True)

@@ -426,10 +426,13 @@ def _brick_shift(brick):
 
 @njit(cache=True, inline="always")
 def _store(out, p, r, g, b, a):
-    out[p, 0] = min(max(r, 0.0), 1.0)
-    out[p, 1] = min(max(g, 0.0), 1.0)
-    out[p, 2] = min(max(b, 0.0), 1.0)
-    out[p, 3] = min(max(a, 0.0), 1.0)
+    """A pixel's premultiplied colour, clamped to [0, 1] and rgb to at most alpha (rounding can
+    leave a channel just above it; interpolation between such pixels keeps the bound)."""
+    a = min(max(a, 0.0), 1.0)
+    out[p, 0] = min(max(r, 0.0), a)
+    out[p, 1] = min(max(g, 0.0), a)
+    out[p, 2] = min(max(b, 0.0), a)
+    out[p, 3] = a
 
 
 @njit(cache=True, parallel=True)

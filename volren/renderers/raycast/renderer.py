@@ -238,7 +238,6 @@ class RaycastRenderer(RendererBase):
         else:
             image, samples, jumps = self._every_pixel(args, width, height, progress)
             rays = width * height
-        np.minimum(image[..., :3], image[..., 3:4], out=image[..., :3])
         return image, {"samples": float(samples), "jumps": float(jumps), "rays_cast": float(rays),
                        "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size), **chosen}  # fmt: skip
 
@@ -289,9 +288,7 @@ class RaycastRenderer(RendererBase):
             pixels = np.arange(width * height, dtype=np.int64)
 
             def march(h: float) -> NDArray[np.float32]:
-                rgba = _march_listed(self._march_args(tf, h, pre, opts, sampled), pixels)[0]
-                np.minimum(rgba[:, :3], rgba[:, 3:4], out=rgba[:, :3])  # as the frame's pixels are
-                return rgba
+                return _march_listed(self._march_args(tf, h, pre, opts, sampled), pixels)[0]
 
             with parallel_chunk_size(PIXEL_CHUNK):
                 self._step = (key, largest_step_within(march, coarsest, opts["target_error"]))
@@ -327,7 +324,7 @@ class RaycastRenderer(RendererBase):
 
         with parallel_chunk_size(PIXEL_CHUNK):
             rgba, rays = refine_image(cast, width, height, stride, float(tolerance), progress)
-        image = rgba.astype(np.float32).reshape(height, width, 4)
+        image = rgba.astype(np.float32, copy=False).reshape(height, width, 4)
         return image, int(totals[0]), int(totals[1]), rays
 
     def _project(self, tf: TransferFunction1D, mode: BlendMode, inv: NDArray[np.float64], width: int, height: int,
