@@ -149,6 +149,15 @@ def test_frame_cost_fits_fixed_and_per_pixel_parts_from_full_frames_and_the_late
     assert cost.model() == pytest.approx((40.0, 28.0 / 28_000))  # 28 ms less for 28,000 fewer pixels
     cost.note(25_000, 79.0)  # a preview over half the full frame's pixels: no fit, all per pixel
     assert cost.model() == (0.0, 80.0 / 40_000)
+    # the largest size drawn twice, each paying something once (shear-warp's first frames along
+    # a new axis), then steady previews two thirds its size: these set the rate
+    cost = FrameCost()
+    cost.note(120_000, 118.0)
+    cost.note(120_000, 688.0)
+    assert cost.model() == (0.0, 118.0 / 120_000)
+    for ms in (52.0, 47.0, 50.0):
+        cost.note(81_000, ms)
+    assert cost.model() == (0.0, 47.0 / 81_000)
 
 
 def test_pick_renderer_keeps_current_else_prefers_vtk():

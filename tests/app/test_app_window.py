@@ -578,6 +578,33 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
     assert frames[1].camera == frames[0].camera == w.state.camera
 
 
+def test_frames_with_a_new_tf_size_the_tf_drags_previews_only(make_window, fake_renderers, sample, qtbot):
+    """A frame with a new TF also pays for what the renderer keeps per TF (raycast's step choice):
+    such frames size a TF drag's previews, and a rotation's only until frames without a new TF
+    are measured (sized from TF edits' frames, bonsai's rotation previews were 17 % of the pixels
+    at 18 fps)."""
+    from volren.app.rendering.render_service import Frame
+
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake")
+    width, height = w.viewport.pixel_size()
+    preview = w.scheduler.preview(tf_dragged=False)
+    w.scheduler._costs.clear()  # forget the fake renderer's real (instant) frames
+
+    def note(ms: float, tf_changed: bool) -> None:
+        w.scheduler.note_frame(Frame(0, preview[0], width, height, ms, True, np.zeros((1, 1, 3), np.uint8),
+                                     w.state.camera, preview[1], False, tf_changed))  # fmt: skip
+
+    budget = w.scheduler.preview_budget_ms
+    note(400.0 * budget, True)  # a TF edit's frame: 400x the budget, 1 % of the pixels would be 4x
+    assert w.scheduler.current_preview_scale(preview) == pytest.approx(0.1)  # none without a new TF yet
+    note(0.5 * budget, False)  # a rotation's frame: within the budget at full size
+    assert w.scheduler.current_preview_scale(preview) == w.scheduler.preview_scale
+    w.scheduler._tf_dragged = True
+    assert w.scheduler.current_preview_scale(preview) == pytest.approx(0.1)
+
+
 def window_previewing_with(make_window, monkeypatch, qtbot, sample, preview: str):
     """A window showing `fake_drag`'s still frame of `sample`, with `preview` measured faster than
     `fake_drag` at `interactive` (so it draws the previews while it can)."""

@@ -68,6 +68,7 @@ class Frame:
     camera: Camera
     settings: RenderSettings | None = None  #: what it was drawn with (previews may be cheaper than the state's)
     setup: bool = False  #: its time includes a renderer set-up (a new renderer or volume)
+    tf_changed: bool = False  #: the renderer was given a new TF for it (its tables, an error estimate)
 
 
 #: The side of a warm-up's frame (`RenderService.warm`): enough to build tables and compile nothing.
@@ -176,9 +177,10 @@ class RenderWorker(QObject):
             else:
                 self.frameReady.emit(frame)
 
-    def _sync(self, request: RenderRequest) -> tuple[Renderer, bool]:
-        """The request's renderer, given what it needs; and whether that meant a set-up (a new
-        renderer or volume: that frame's time says little about the next ones')."""
+    def _sync(self, request: RenderRequest) -> tuple[Renderer, bool, bool]:
+        """The request's renderer, given what it needs; whether that meant a set-up (a new
+        renderer or volume: that frame's time says little about the next ones'); and whether it
+        was given a new TF (that frame also pays for what the renderer keeps per TF)."""
         slot = self._slots.get(request.renderer)
         setup = slot is None or slot.volume is not request.volume
         if setup and not request.warm:
@@ -198,13 +200,14 @@ class RenderWorker(QObject):
         if slot.volume is not request.volume:
             renderer.set_volume(request.volume)
             slot.volume = request.volume
-        if slot.tf_key != request.tf_key:
+        tf_changed = slot.tf_key != request.tf_key
+        if tf_changed:
             renderer.set_transfer_function(request.tf)
             slot.tf_key = request.tf_key
-        return renderer, setup
+        return renderer, setup, tf_changed
 
     def _render(self, request: RenderRequest) -> Frame:
-        renderer, setup = self._sync(request)
+        renderer, setup, tf_changed = self._sync(request)
 
         start = time.perf_counter()
         last_report = [start]
@@ -226,7 +229,7 @@ class RenderWorker(QObject):
         rgb = to_png_pixels(image, request.background)
         return Frame(
             request.serial, request.renderer, request.width, request.height, stats.ms, request.full, rgb, request.camera,
-            request.settings, setup,
+            request.settings, setup, tf_changed,
         )
 
     def _release(self, name: str) -> None:

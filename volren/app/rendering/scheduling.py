@@ -63,7 +63,8 @@ class FrameScheduler(QObject):
         service.renderFailed.connect(self._on_failed)
         self.preview_scale = preview_scale
         self.preview_budget_ms = PREVIEW_BUDGET_MS
-        self._costs: dict[tuple[str, str], FrameCost] = {}  # per renderer and settings (repr: options are a dict)
+        # per renderer, settings (repr: options are a dict) and whether the frame had a new TF
+        self._costs: dict[tuple[str, str, bool], FrameCost] = {}
         self._tf_dragged = False  # the gesture in progress drags the TF
         self._preview: tuple[tuple, tuple[str, RenderSettings]] | None = None  # (inputs, preview) last made
         self._warmed: tuple[str, int] | None = None  # (renderer, id(volume)) last warmed up for previews
@@ -102,8 +103,8 @@ class FrameScheduler(QObject):
         paid a set-up: a preview renderer's first frame of bonsai took 0.7 s, ten times the next,
         and kept the previews at a tenth of the pixels)."""
         if not frame.setup:
-            self._costs.setdefault(self._cost_key(frame.renderer, frame.settings), FrameCost()).note(
-                frame.width * frame.height, frame.ms)  # fmt: skip
+            key = (*self._cost_key(frame.renderer, frame.settings), frame.tf_changed)
+            self._costs.setdefault(key, FrameCost()).note(frame.width * frame.height, frame.ms)
         self._refine(frame)
         if frame.full and frame.serial == self._service.latest_serial:
             self._warm_previewer()
@@ -181,10 +182,19 @@ class FrameScheduler(QObject):
             self._cost_keys = (settings, repr(settings))
         return renderer, self._cost_keys[1]
 
+    def _cost(self, frame: tuple[str, RenderSettings], tf_changed: bool) -> FrameCost | None:
+        """What frames of (renderer, settings) cost, with a new TF each or not, as the frame asked
+        for will (those of the other kind until it has some). Why apart: a frame with a new TF also
+        pays for what the renderer keeps per TF (raycast's step choice, 0.1 s on bonsai), and
+        rotation previews sized from the TF edits' frames were 17 % of the pixels at 18 fps."""
+        key = self._cost_key(*frame)
+        return self._costs.get((*key, tf_changed)) or self._costs.get((*key, not tf_changed))
+
     def current_preview_scale(self, preview: tuple[str, RenderSettings] | None = None) -> float:
-        """The side scale of the next preview, from what frames of its renderer and settings cost."""
+        """The side scale of the next preview, from what frames of its renderer and settings cost
+        (during a TF drag, frames with a new TF each)."""
         width, height = self._viewport_size()
-        cost = self._costs.get(self._cost_key(*(preview or self.preview())))
+        cost = self._cost(preview or self.preview(), self._tf_dragged)
         model = cost.model() if cost is not None else None
         if model is None:
             return self.preview_scale
@@ -243,7 +253,7 @@ class FrameScheduler(QObject):
 
     def _predicted_ms(self, frame: tuple[str, RenderSettings], pixels: int) -> float | None:
         """What a frame of `pixels` by (renderer, settings) costs, from that pair's frames (None: none yet)."""
-        cost = self._costs.get(self._cost_key(*frame))
+        cost = self._cost(frame, False)
         model = cost.model() if cost is not None else None
         return model[0] + model[1] * pixels if model is not None else None
 
