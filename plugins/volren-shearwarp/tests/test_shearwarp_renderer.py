@@ -403,3 +403,26 @@ def test_planes_clear_of_the_volume_keep_the_fast_path_and_the_image():
     wider, renderer = draw(volume, SMOOTH_TF, replace(camera, clipping_range=(near / 2, far * 2)), preintegration=True)
     assert renderer.last_frame.counters["clipped"] == 0.0
     assert np.array_equal(image, wider)
+
+
+def test_a_new_tf_makes_only_the_lengths_its_frame_needs_and_a_turn_makes_the_batch():
+    """Under perspective a frame with a new TF makes the tables of its own segment lengths only (a
+    TF drag makes a new TF every frame); the first frame that misses a length, a turning camera's,
+    makes every length a turn about the volume needs in one batch, so the next turns wait for none."""
+    volume = field((24, 26, 28))
+    renderer = ShearWarpRenderer()
+    renderer.set_volume(volume)
+    renderer.set_settings(RenderSettings(preintegration=True))
+    camera = Camera.orbit(volume.bounds, 20.0, 10.0, zoom=2.0)
+    for tf in (SMOOTH_TF.copy(), SMOOTH_TF.copy()):
+        tf.set_opacity_points([[-1, 0.0], [4, 0.5]])  # a new TF version
+        renderer.set_transfer_function(tf)
+        renderer.render(camera, 48, 40)
+        assert renderer.last_frame is not None
+        assert len(renderer._pools["pre"].slots) == renderer.last_frame.counters["table_lengths"] > 1
+    made = []
+    for azimuth in range(24, 40, 3):
+        renderer.render(Camera.orbit(volume.bounds, azimuth, 10.0, zoom=2.0), 48, 40)
+        made.append(len(renderer._pools["pre"].slots))
+    assert made[0] > 2 * renderer.last_frame.counters["table_lengths"]  # the batch
+    assert made[1:] == [made[0]] * (len(made) - 1)  # nothing more while turning

@@ -381,8 +381,11 @@ class ShearWarpRenderer(RendererBase):
             # a camera turning about the volume then rarely waits for tables (without, bonsai turning 2 degrees a
             # frame needed a batch every 2-3 frames, about 9 ms a frame)
             ax_lo, ax_hi = grid_ids(spacing_c / planes, TURNING_SPAN * spacing_c / planes, reference)
+            # ... but not at a TF's first frame: a TF drag makes a new TF every frame, and with the batch each of
+            # bonsai's drag previews made twice the lengths it needed (tables 30 ms of 80 a preview; 15 ms without)
             extra = [grid_length(i, reference)
-                     for i in range(min(id_lo, ax_lo) - GRID_MARGIN, max(id_hi, ax_hi) + GRID_MARGIN + 1)]
+                     for i in range(min(id_lo, ax_lo) - GRID_MARGIN, max(id_hi, ax_hi) + GRID_MARGIN + 1)
+                     ] if pool.slots else None  # fmt: skip
             slots = pool.gather(tf, n, lo, hi, grid, extra)
             pixel_slots(col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm), slots, layers)
         else:
