@@ -141,6 +141,11 @@ class RaycastRenderer(RendererBase):
                          options={"image_stride": 8, "refine_tolerance": 0.02}),
             QualityLevel("step 0.5, refine 4/0.01", step=0.5, preintegration=False,
                          options={"image_stride": 4, "refine_tolerance": 0.01}),
+            # sharp TFs (thin shells, opaque surfaces): a fine step, most rays interpolated, small bricks
+            QualityLevel("step 0.25, refine 8/0.02", step=0.25, preintegration=False,
+                         options={"image_stride": 8, "refine_tolerance": 0.02}),
+            QualityLevel("step 0.25, refine 8/0.02, bricks 2", step=0.25, preintegration=False,
+                         options={"image_stride": 8, "refine_tolerance": 0.02, "brick_size": 2}),
             # the step chosen per TF and volume from an error estimate (`step_choice`), 2 to 0.25
             QualityLevel("error 1 %, refine 8/0.02", step=2.0, preintegration=False,
                          options={"target_error": 0.01, "image_stride": 8, "refine_tolerance": 0.02}),
