@@ -44,8 +44,8 @@ def check_tolerance(tolerance: object, name: str = "option refine_tolerance") ->
 
 
 def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance: float,
-                 progress: ProgressCallback | None = None) -> tuple[NDArray[np.float64], int]:
-    """The (height * width, 4) image and the number of rays cast.
+                 progress: ProgressCallback | None = None) -> tuple[NDArray[np.floating], int]:
+    """The (height * width, 4) image (in the dtype `cast` returns) and the number of rays cast.
 
     The blocks of each level are `stride` pixels wide (the last row and column of blocks are cut at
     the image's edge); a block whose four corners differ by at most `tolerance` and agree on
