@@ -2,10 +2,12 @@
 
 Why: with no GPU, a ray per pixel marched front to back is the cheapest way to a ray caster's image
 when cells project to about a pixel: it pays per sample, stops a ray once it is opaque, and skips
-empty space per brick (`march`, `occupancy`). Samples, classification and pre-integration follow
-DESIGN.md's optical model exactly as the slicer and objectorder do (the midpoint rule on planes shared
-by all pixels, neighbouring pixels half a step apart), so the three agree to float precision at the
-same step. Maximum, minimum and average march
+empty space per brick (`march`, `occupancy`). Post-classified samples follow DESIGN.md's optical
+model exactly as the slicer and objectorder do (the midpoint rule on planes shared by all pixels,
+neighbouring pixels half a step apart): raycast and objectorder agree to float precision at the
+same step. Pre-integrated segments run from plane to plane (the slicer's), objectorder's from
+sample to sample, so those images differ by the discretisation (up to 0.04 on a sharp TF, stop 41).
+Maximum, minimum and average march
 the same samples (and, for the extremes, every grid-plane crossing). No shading: the capabilities say
 so, and `auto` picks another renderer for shaded scenes.
 """
