@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from volren.cli.main import main
-from volren.model import BlendMode
+from volren.errors import VolrenError
+from volren.model import BlendMode, RenderSettings
 from volren.prepare import prepare, prepare_renderer
-from volren.renderers.base import Capabilities, KindSupport, RendererBase
+from volren.renderers.base import Capabilities, KindSupport, QualityLevel, RendererBase
 from volren.renderers.registry import registry
 
 
@@ -36,14 +37,32 @@ class Broken(Counting):
         raise RuntimeError("kernel failed\nwith detail")
 
 
+class Leveled(Counting):
+    """A quality axis whose refined level applies to grids only."""
+
+    name = "prepare-leveled"
+    capabilities = Capabilities(
+        {"uniform": KindSupport(), "tet": KindSupport()}, backend="test",
+        quality=(QualityLevel("coarse", step=2.0), QualityLevel("refined", options={"image_stride": 4})),
+    )  # fmt: skip
+
+    def _check_options(self, options):
+        if "image_stride" in options and self.volume is not None and self.volume.kind == "tet":
+            raise VolrenError("renderer prepare-leveled: option image_stride is for grids")
+
+    def _render(self, camera, width, height, progress):
+        Counting.drawn.append((self.volume.kind, self.settings.step, dict(self.settings.options)))
+        return np.zeros((height, width, 4), np.float32), {}
+
+
 @pytest.fixture
 def fakes():
-    registry.register(Counting.name, Counting, replace=True)
-    registry.register(Broken.name, Broken, replace=True)
+    for cls in (Counting, Broken, Leveled):
+        registry.register(cls.name, cls, replace=True)
     Counting.drawn = []
     yield
-    registry.unregister(Counting.name)
-    registry.unregister(Broken.name)
+    for cls in (Counting, Broken, Leveled):
+        registry.unregister(cls.name)
 
 
 def test_every_claimed_combination_scalar_type_and_projection_is_drawn(fakes):
@@ -57,6 +76,19 @@ def test_every_claimed_combination_scalar_type_and_projection_is_drawn(fakes):
         (pre, mode, parallel) for pre in (False, True) for mode in (BlendMode.COMPOSITE, BlendMode.MAXIMUM)
         for parallel in (False, True)}  # fmt: skip
     assert not any(d[2] for d in drawn if d[0] == "tet")  # not claimed there
+
+
+def test_every_quality_level_is_drawn_where_it_applies(fakes):
+    """A level's options reach kernels the default settings do not (adaptive refinement): each
+    level is drawn too, and one the volume's kind refuses is passed over, not an error."""
+    result = prepare_renderer(Leveled.name)
+    assert result.error is None and result.frames == len(Counting.drawn)
+    default_step = RenderSettings().step
+    levels = [(kind, step, options.get("image_stride")) for kind, step, options in Counting.drawn
+              if step != default_step or options]  # fmt: skip
+    # uniform: 5 scalar types x 2 levels x 2 projections; tet: the coarse level only, 2 projections
+    assert len(levels) == 5 * 2 * 2 + 2
+    assert set(levels) == {("uniform", 2.0, None), ("uniform", default_step, 4), ("tet", 2.0, None)}
 
 
 def test_a_failing_renderer_is_reported_in_one_line_and_the_rest_still_prepared(fakes, capsys):

@@ -4,7 +4,8 @@ Why: the CPU renderers' kernels are numba functions cached on disk (``cache=True
 types, and a fresh install has no cache: the first `tetra` frame waited 37-46 s and the first
 `reference` frame 54 s while numba compiled. `scripts/setup.sh` runs `volren prepare` once per
 change of the sources, which draws a tiny scene with every registered renderer in every
-combination its capabilities claim (TF dimensions, pre-integration, shading, blend modes; both
+combination its capabilities claim and at every level of its quality axis (TF dimensions,
+pre-integration, shading, blend modes, the levels' options; both
 projections; every kept scalar type of a uniform grid), so that every specialization a real scene
 needs is compiled and cached (and the OpenGL drivers' shader caches are warm). numba checks each
 cached function against its source file's time stamp, and packages whose kernels span modules drop
@@ -50,8 +51,13 @@ def _volumes(kind: str) -> Iterator[Volume]:
         yield UniformVolume(ramp.astype(dtype), spacing=(1.0, 0.9, 1.1), name=f"prepare {np.dtype(dtype).name}")
 
 
-def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Camera]]]]:
-    """Per small volume, the (TF, settings, camera) of every combination `name`'s capabilities claim."""
+def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Camera, bool]]]]:
+    """Per small volume, the (TF, settings, camera, optional) of every combination `name`'s
+    capabilities claim, then of every level of its quality axis with a 1D TF: a level's options
+    (adaptive image refinement, an error target) reach kernels the default settings never do, and
+    `volren render`'s default level is one of them (with them compiled at the first frame, a fresh
+    install's first refined tetra frame took 2.0 s instead of 0.8). A level is optional: one that
+    does not apply to this kind of volume is passed over."""
     from volren.renderers.registry import registry
 
     capabilities = registry.capabilities(name)
@@ -61,13 +67,15 @@ def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Came
             tf1 = TransferFunction1D([[lo, 0.2, 0.4, 0.9], [hi, 1.0, 0.6, 0.1]], [[lo, 0.0], [hi, 0.8]])
             tf2 = kit_tf_2d()
             cameras = [Camera.orbit(volume.bounds, 30, 20, parallel=parallel) for parallel in (False, True)]
-            yield volume, [(tf1 if dims == 1 else tf2, settings, camera)
-                           for dims, settings, claimed in contract_combinations(support) if claimed
-                           for camera in cameras]  # fmt: skip
+            claimed = [(tf1 if dims == 1 else tf2, settings, camera, False)
+                       for dims, settings, is_claimed in contract_combinations(support) if is_claimed
+                       for camera in cameras]  # fmt: skip
+            levels = [(tf1, level.apply(), camera, True) for level in capabilities.quality for camera in cameras]
+            yield volume, claimed + levels
 
 
 def prepare_renderer(name: str) -> Prepared:
-    """Draw every claimed combination with renderer `name` (one renderer per volume, as the app keeps
+    """Draw every claimed combination and quality level with renderer `name` (one renderer per volume, as the app keeps
     one); an error stops it and is reported in one line."""
     from volren.renderers.registry import registry
 
@@ -78,10 +86,15 @@ def prepare_renderer(name: str) -> Prepared:
             renderer = registry.create(name)
             try:
                 renderer.set_volume(volume)
-                for tf, settings, camera in frames_of_volume:
-                    renderer.set_transfer_function(tf)
-                    renderer.set_settings(settings)
-                    renderer.render(camera, SIZE, SIZE)
+                for tf, settings, camera, optional in frames_of_volume:
+                    try:
+                        renderer.set_transfer_function(tf)
+                        renderer.set_settings(settings)
+                        renderer.render(camera, SIZE, SIZE)
+                    except VolrenError:
+                        if not optional:
+                            raise
+                        continue
                     frames += 1
             finally:
                 renderer.release()
