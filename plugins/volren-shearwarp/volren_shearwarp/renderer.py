@@ -208,6 +208,12 @@ class ShearWarpRenderer(RendererBase):
         backend="cpu",
         summary="shear-warp (numba): RLE empty-space skipping, early termination, pre-integration, 2D warp",
         quality=(
+            # half an intermediate pixel per output pixel (one per voxel is kept): the classic shear-warp
+            # image where voxels cover several pixels, the warp's Catmull-Rom filter doing the rest
+            QualityLevel("post-classified, oversampling 0.5", step=0.5, preintegration=False,
+                         options={"oversampling": 0.5}),
+            QualityLevel("pre-integrated, oversampling 0.5", step=0.5, preintegration=True,
+                         options={"oversampling": 0.5}),
             QualityLevel("post-classified, oversampling 1", step=0.5, preintegration=False,
                          options={"oversampling": 1.0}),
             QualityLevel("pre-integrated, oversampling 1", step=0.5, preintegration=True, options={"oversampling": 1.0}),

@@ -32,10 +32,33 @@ def _weights(f, cubic):
     return (-0.5 * f3 + f2 - 0.5 * f, 1.5 * f3 - 2.5 * f2 + 1.0, -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2)
 
 
-@njit(parallel=True, cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy", fastmath=True)
+def _row_taps(row, p0, w0, w1, w2, w3):
+    """(r, g, b, a) of taps p0 - 1 .. p0 + 2 of one intermediate row, weighted (all inside)."""
+    t0, t1, t2, t3 = row[p0 - 1], row[p0], row[p0 + 1], row[p0 + 2]
+    return (w0 * t0[0] + w1 * t1[0] + w2 * t2[0] + w3 * t3[0], w0 * t0[1] + w1 * t1[1] + w2 * t2[1] + w3 * t3[1],
+            w0 * t0[2] + w1 * t1[2] + w2 * t2[2] + w3 * t3[2], w0 * t0[3] + w1 * t1[3] + w2 * t2[3] + w3 * t3[3])  # fmt: skip
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _store(out, j, i, r, g, bl, al):
+    """Pixel (i, j) under the output rules: values in [0, 1], colour <= alpha."""
+    al = min(max(al, 0.0), 1.0)
+    out[j, i, 0] = min(max(r, 0.0), al)
+    out[j, i, 1] = min(max(g, 0.0), al)
+    out[j, i, 2] = min(max(bl, 0.0), al)
+    out[j, i, 3] = al
+
+
+@njit(parallel=True, cache=True, error_model="numpy", fastmath=True)
 def warp_image(inter, hom, sign, a0, b0, scale, cubic, out):
     """out[j, i] = `inter` (premultiplied RGBA) resampled where pixel (i, j)'s ray meets the
-    plane; then clamped to the output rules (values in [0, 1], colour <= alpha)."""
+    plane; then clamped to the output rules (values in [0, 1], colour <= alpha).
+
+    Speed: a pixel whose 16 taps all lie inside the image (nearly all of them) takes them without a
+    test per tap, in float32 and with fastmath (the intermediate image is finite, so the flags'
+    no-NaN assumption holds), which lets the compiler keep a tap's four channels in one vector
+    register: 7.0 -> about 3.5 ms for a 512 x 512 frame on this 2-core machine (docs/shearwarp.md)."""
     height, width = out.shape[0], out.shape[1]
     ih, iw = inter.shape[0], inter.shape[1]
     for j in prange(height):
@@ -57,6 +80,17 @@ def warp_image(inter, hom, sign, a0, b0, scale, cubic, out):
             q0 = int(math.floor(q))
             wp0, wp1, wp2, wp3 = _weights(p - p0, cubic)
             wq0, wq1, wq2, wq3 = _weights(q - q0, cubic)
+            if p0 >= 1 and p0 + 2 < iw and q0 >= 1 and q0 + 2 < ih:
+                w0, w1, w2, w3 = np.float32(wp0), np.float32(wp1), np.float32(wp2), np.float32(wp3)
+                r0 = _row_taps(inter[q0 - 1], p0, w0, w1, w2, w3)
+                r1 = _row_taps(inter[q0], p0, w0, w1, w2, w3)
+                r2 = _row_taps(inter[q0 + 1], p0, w0, w1, w2, w3)
+                r3 = _row_taps(inter[q0 + 2], p0, w0, w1, w2, w3)
+                v0, v1, v2, v3 = np.float32(wq0), np.float32(wq1), np.float32(wq2), np.float32(wq3)
+                _store(out, j, i, v0 * r0[0] + v1 * r1[0] + v2 * r2[0] + v3 * r3[0],
+                       v0 * r0[1] + v1 * r1[1] + v2 * r2[1] + v3 * r3[1], v0 * r0[2] + v1 * r1[2] + v2 * r2[2] + v3 * r3[2],
+                       v0 * r0[3] + v1 * r1[3] + v2 * r2[3] + v3 * r3[3])  # fmt: skip
+                continue
             r = 0.0
             g = 0.0
             bl = 0.0
@@ -77,11 +111,7 @@ def warp_image(inter, hom, sign, a0, b0, scale, cubic, out):
                     g += w * inter[qq, pp, 1]
                     bl += w * inter[qq, pp, 2]
                     al += w * inter[qq, pp, 3]
-            al = min(max(al, 0.0), 1.0)
-            out[j, i, 0] = min(max(r, 0.0), al)
-            out[j, i, 1] = min(max(g, 0.0), al)
-            out[j, i, 2] = min(max(bl, 0.0), al)
-            out[j, i, 3] = al
+            _store(out, j, i, r, g, bl, al)
 
 
 def warp(inter: NDArray[np.float32], homography: NDArray[np.float64], sign: float, origin_ab: tuple[float, float],
