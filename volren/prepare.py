@@ -56,7 +56,7 @@ def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Came
     capabilities claim, then of every level of its quality axis with a 1D TF: a level's options
     (adaptive image refinement, an error target) reach kernels the default settings never do, and
     `volren render`'s default level is one of them (with them compiled at the first frame, a fresh
-    install's first refined tetra frame took 2.0 s instead of 0.8). A level is optional: one that
+    install's first refined tetra frame took 2.0 s instead of 0.7). A level is optional: one that
     does not apply to this kind of volume is passed over."""
     from volren.renderers.registry import registry
 
