@@ -301,7 +301,8 @@ def test_an_eye_inside_the_volume_is_refused_in_one_line_under_perspective():
 @pytest.mark.parametrize("options", [{"oversampling": 0}, {"table_size": 3}, {"lookup": "cubic"},
                                      {"early_termination": "yes"}, {"termination_alpha": 2}, {"nope": 1},
                                      {"downsample": 3}, {"downsample": 2.0}, {"downsample": True},
-                                     {"jitter_seed": -1}, {"jitter_seed": 1.5}])  # fmt: skip
+                                     {"jitter_seed": -1}, {"jitter_seed": 1.5}, {"length_ratio": 1.0},
+                                     {"length_ratio": 2}, {"length_ratio": "coarse"}])  # fmt: skip
 def test_bad_options_are_one_line_errors(options):
     with pytest.raises(VolrenError) as info:
         ShearWarpRenderer().set_settings(RenderSettings(options=options))
@@ -426,3 +427,20 @@ def test_a_new_tf_makes_only_the_lengths_its_frame_needs_and_a_turn_makes_the_ba
         made.append(len(renderer._pools["pre"].slots))
     assert made[0] > 2 * renderer.last_frame.counters["table_lengths"]  # the batch
     assert made[1:] == [made[0]] * (len(made) - 1)  # nothing more while turning
+
+
+def test_a_coarser_length_grid_makes_fewer_tables_and_stays_near_the_fine_one():
+    """`length_ratio` (a TF drag's previews use 1.1): fewer tables per TF under perspective, each
+    segment's opacity off by at most (ratio - 1) / 2 of its optical depth; against the exact lengths
+    (ratio 1.001) the fine default grid and the coarse one differ by about their ratios' error."""
+    volume = field((24, 26, 28))
+    camera = Camera.orbit(volume.bounds, 20.0, 10.0, zoom=2.0)
+    images, lengths = {}, {}
+    for ratio in (1.001, 1.02, 1.1):
+        images[ratio], renderer = draw(volume, SMOOTH_TF, camera, (96, 80), preintegration=True,
+                                       options={"length_ratio": ratio})  # fmt: skip
+        lengths[ratio] = renderer.last_frame.counters["table_lengths"]
+    assert lengths[1.001] > lengths[1.02] > lengths[1.1] >= 1
+    fine = np.abs(images[1.02] - images[1.001]).max()
+    coarse = np.abs(images[1.1] - images[1.001]).max()
+    assert 0 < fine < coarse < 0.02  # measured 0.0031 and 0.0104 (alpha up to 1)

@@ -68,7 +68,15 @@ from volren.renderers.base import (
 from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport
 from volren_shearwarp.composite import AVERAGE, MAXIMUM, MINIMUM, composite_slabs, project_slabs
 from volren_shearwarp.factorization import Factorization, WarpMap, factorize
-from volren_shearwarp.tables import GRID_MARGIN, TablePool, grid_ids, grid_length, pixel_slots, slot_bounds
+from volren_shearwarp.tables import (
+    GRID_MARGIN,
+    LENGTH_RATIO,
+    TablePool,
+    grid_ids,
+    grid_length,
+    pixel_slots,
+    slot_bounds,
+)
 from volren_shearwarp.warp import warp
 
 #: Intermediate rows per dynamically scheduled chunk of the parallel kernels.
@@ -110,6 +118,9 @@ OPTIONS: dict[str, tuple[Any, str]] = {
     "opacity_correction": (True, "correct each segment's opacity (and colour) to its length, 1 - (1 - a)^(d / d_u) "
                                  "(true/false; false draws every slab as if d_u long: the seed's 'NC' column, for "
                                  "measuring what the correction costs, not for use)"),
+    "length_ratio": (LENGTH_RATIO, "under perspective, the ratio between neighbouring segment lengths that get their "
+                                   "own table (1.001 to 1.25): a segment's opacity is off by at most (ratio - 1) / 2 "
+                                   "of its optical depth; coarser makes fewer tables per TF"),
     "jitter_seed": (0, "seed of the per-pixel sample offsets drawn with the `jitter` setting (an integer >= 0)"),
     "downsample": (1, "render a copy of the volume reduced this many times along each axis (1, 2, 4 or 8; "
                       "`volren.model.downsample`): a draft at about 1/factor^3 of the compositing"),
@@ -132,6 +143,7 @@ def _read_options(options: Mapping[str, Any]) -> dict[str, Any]:
     if out["oversampling"] != "auto":
         out["oversampling"] = number("oversampling", 0.25, 8.0)
     out["termination_alpha"] = number("termination_alpha", 0.5, 1.0)
+    out["length_ratio"] = number("length_ratio", 1.001, 1.25)
     size = out["table_size"]
     if size != "auto" and (isinstance(size, bool) or not isinstance(size, int) or not (16 <= size <= 4096)):
         raise VolrenError(f"renderer shearwarp: option table_size must be 'auto' or an integer in 16..4096, got {size!r}")
@@ -223,8 +235,9 @@ class ShearWarpRenderer(RendererBase):
             QualityLevel("pre-integrated, oversampling 3, step 0.25, bilinear lookup", step=0.25, preintegration=True,
                          options={"oversampling": 3.0, "lookup": "bilinear"}),
         ),
-        # a TF drag rebuilds the pre-integration table each edit: 81 -> 49 ms a 400x300 bonsai preview
-        tf_drag_options={"table_size": 64},
+        # a TF drag rebuilds the pre-integration tables each edit: 81 -> 49 ms a 400x300 bonsai preview at 64
+        # entries; its 19 lengths' tables took 13-17 ms of those, 5 lengths at ratio 1.1 took 3-4 ms (cProfile)
+        tf_drag_options={"table_size": 64, "length_ratio": 1.1},
     )  # fmt: skip
     option_help: ClassVar[Mapping[str, str]] = {name: text for name, (_, text) in OPTIONS.items()}
 
@@ -381,19 +394,20 @@ class ShearWarpRenderer(RendererBase):
             shortest = math.sqrt(col_d2.min() + row_d2.min() + dc2) * inv_norm
             longest = math.sqrt(col_d2.max() + row_d2.max() + dc2) * inv_norm
             reference = volume.mean_spacing
-            id_lo, id_hi = grid_ids(shortest, longest, reference)
-            grid = [grid_length(i, reference) for i in range(id_lo, id_hi + 1)]
+            ratio = opts["length_ratio"]
+            id_lo, id_hi = grid_ids(shortest, longest, reference, ratio)
+            grid = [grid_length(i, reference, ratio) for i in range(id_lo, id_hi + 1)]
             # the batch that makes missing tables also makes every length from the axial one to TURNING_SPAN x it:
             # a camera turning about the volume then rarely waits for tables (without, bonsai turning 2 degrees a
             # frame needed a batch every 2-3 frames, about 9 ms a frame)
-            ax_lo, ax_hi = grid_ids(spacing_c / planes, TURNING_SPAN * spacing_c / planes, reference)
+            ax_lo, ax_hi = grid_ids(spacing_c / planes, TURNING_SPAN * spacing_c / planes, reference, ratio)
             # ... but not at a TF's first frame: a TF drag makes a new TF every frame, and with the batch each of
             # bonsai's drag previews made twice the lengths it needed (tables 30 ms of 80 a preview; 15 ms without)
-            extra = [grid_length(i, reference)
+            extra = [grid_length(i, reference, ratio)
                      for i in range(min(id_lo, ax_lo) - GRID_MARGIN, max(id_hi, ax_hi) + GRID_MARGIN + 1)
                      ] if pool.slots else None  # fmt: skip
             slots = pool.gather(tf, n, lo, hi, grid, extra)
-            pixel_slots(col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm), slots, layers)
+            pixel_slots(col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm, ratio), slots, layers)
         else:
             grid = [fac.slab_length / planes]
             layers[0, 0] = pool.gather(tf, n, lo, hi, grid)[0]
