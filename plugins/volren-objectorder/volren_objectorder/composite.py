@@ -336,9 +336,9 @@ def _half_vector(rwd, p, fp):
 
 
 @njit(cache=True, inline="always")
-def _post_rgba(xs, tab, post, use_post, s, length, fd, sp, fp):
+def _post_rgba(xs, tab, post, use_post, s, length, shaded, fd, sp, fp):
     """Premultiplied (r, g, b, alpha) of a post-classified piece of `length` at value s, shaded with
-    (fd, sp): from the table for a full step (`_post_table`), exactly otherwise (`_post`)."""
+    (fd, sp) when `shaded`: from the table for a full step (`_post_table`), exactly otherwise (`_post`)."""
     h = fp[F_H]
     if use_post and length == h:
         n = post.shape[0]
@@ -348,9 +348,13 @@ def _post_rgba(xs, tab, post, use_post, s, length, fd, sp, fp):
         alpha = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
         if alpha <= 0.0:
             return 0.0, 0.0, 0.0, 0.0
-        r = _clamp01((post[i0, 0] + w * (post[i0 + 1, 0] - post[i0, 0])) * fd + sp)
-        g = _clamp01((post[i0, 1] + w * (post[i0 + 1, 1] - post[i0, 1])) * fd + sp)
-        b = _clamp01((post[i0, 2] + w * (post[i0 + 1, 2] - post[i0, 2])) * fd + sp)
+        r = post[i0, 0] + w * (post[i0 + 1, 0] - post[i0, 0])
+        g = post[i0, 1] + w * (post[i0 + 1, 1] - post[i0, 1])
+        b = post[i0, 2] + w * (post[i0 + 1, 2] - post[i0, 2])
+        if shaded:  # unshaded, the table's colours lie in [0, 1] already: 5-6 % of phantom_ct's frame
+            r = _clamp01(r * fd + sp)
+            g = _clamp01(g * fd + sp)
+            b = _clamp01(b * fd + sp)
         return r * alpha, g * alpha, b * alpha, alpha
     if length <= 0.0:
         return 0.0, 0.0, 0.0, 0.0
@@ -392,7 +396,8 @@ def _pixel_post(p, kk, thi, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, firs
         if shade:
             fd, sp = _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz),
                             _trilinear_g(g8, 2, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
-        cr, cg, cb, ca = _post_rgba(xs, tab, post, use_post, s, sample_length(first, h, ns, last, kk), fd, sp, fp)
+        cr, cg, cb, ca = _post_rgba(xs, tab, post, use_post, s, sample_length(first, h, ns, last, kk), shade, fd,
+                                     sp, fp)  # fmt: skip
         if ca > 0.0:
             tr = 1.0 - a
             r += tr * cr
