@@ -3,13 +3,14 @@ cached there) and post-classification LUTs, gathered into one array per frame ke
 
 Why by length: a parallel view has one segment length, and its table is exact. Under
 perspective every intermediate ray has its own length (the same for all its slabs), so lengths
-are snapped to a geometric grid L_ref r^i (r = `LENGTH_RATIO` by default, anchored at a fixed length so
-the grid does not move with the camera): the opacity of a segment is off by at most (r - 1) / 2 of
-its optical depth, 1% at r = 1.02, and the tables of a turning camera are mostly the ones already
-made. A coarser grid makes fewer tables per TF (a TF drag's previews make new ones every frame). Each length's table is computed once per TF version and kept in a pool; a frame that needs
-lengths the pool lacks computes them in one batch with the lengths that any view along the same
-axis needs (the renderer's choice) and `GRID_MARGIN` more on each side, so that a turning camera
-does not wait for tables (about 2.7 ms each at n = 256, batched).
+are snapped to a geometric grid L_ref r^i (r = `LENGTH_RATIO` by default, anchored at a fixed
+length so the grid does not move with the camera): the opacity of a segment is off by at most
+(r - 1) / 2 of its optical depth, 1% at r = 1.02, and the tables of a turning camera are mostly
+the ones already made; a coarser grid makes fewer tables per TF (a TF drag's previews make new
+ones every frame). Each length's table is computed once per TF version and kept in a pool; a
+frame that needs lengths the pool lacks computes them in one batch with the lengths that any view
+along the same axis needs (the renderer's choice) and `GRID_MARGIN` more on each side, so that a
+turning camera does not wait for tables (about 2.7 ms each at n = 256, batched).
 """
 
 from __future__ import annotations
