@@ -3,11 +3,11 @@ cached there) and post-classification LUTs, gathered into one array per frame ke
 
 Why by length: a parallel view has one segment length, and its table is exact. Under
 perspective every intermediate ray has its own length (the same for all its slabs), so lengths
-are snapped to a geometric grid L_ref r^i (r = `LENGTH_RATIO` by default, anchored at a fixed
-length so the grid does not move with the camera): the opacity of a segment is off by at most
-(r - 1) / 2 of its optical depth, 1% at r = 1.02, and the tables of a turning camera are mostly
-the ones already made; a coarser grid makes fewer tables per TF (a TF drag's previews make new
-ones every frame). Each length's table is computed once per TF version and kept in a pool; a
+are snapped to a geometric grid L_ref r^i (r: the renderer's option `length_ratio`, by default
+`LENGTH_RATIO`; L_ref fixed, so the grid does not move with the camera): the opacity of a segment is
+off by at most (r - 1) / 2 of its optical depth, 1% at r = 1.02, and the tables of a turning
+camera are mostly the ones already made; a coarser grid makes fewer tables per TF (a TF drag's
+previews make new ones every frame). Each length's table is computed once per TF version and kept in a pool; a
 frame that needs lengths the pool lacks computes them in one batch with the lengths that any view
 along the same axis needs (the renderer's choice) and `GRID_MARGIN` more on each side, so that a
 turning camera does not wait for tables (about 2.7 ms each at n = 256, batched).
@@ -25,19 +25,19 @@ from numpy.typing import NDArray
 from volren.model import TransferFunction1D
 from volren.model.preintegration import lighting_tables, preintegrate
 
-#: Ratio between neighbouring lengths of the perspective grid.
+#: Ratio between neighbouring lengths of the perspective grid (the option `length_ratio`'s default).
 LENGTH_RATIO = 1.02
 #: Extra grid lengths computed on each side when a frame needs new ones.
 GRID_MARGIN = 3
 
 
-def grid_ids(shortest: float, longest: float, reference: float, ratio: float = LENGTH_RATIO) -> tuple[int, int]:
+def grid_ids(shortest: float, longest: float, reference: float, ratio: float) -> tuple[int, int]:
     """The first and last grid index that lengths in [shortest, longest] snap to."""
     step = math.log(ratio)
     return round(math.log(shortest / reference) / step), round(math.log(longest / reference) / step)
 
 
-def grid_length(i: int, reference: float, ratio: float = LENGTH_RATIO) -> float:
+def grid_length(i: int, reference: float, ratio: float) -> float:
     return reference * ratio**i
 
 
@@ -59,8 +59,7 @@ def pixel_slots(col_d2, row_d2, dc2, bounds, slot_of_id, out):
             out[q, p] = slot_of_id[i]
 
 
-def slot_bounds(id_lo: int, id_hi: int, reference: float, inv_norm: float,
-                ratio: float = LENGTH_RATIO) -> NDArray[np.float64]:  # fmt: skip
+def slot_bounds(id_lo: int, id_hi: int, reference: float, inv_norm: float, ratio: float) -> NDArray[np.float64]:
     """The `bounds` of `pixel_slots` for grid indices id_lo..id_hi."""
     halfway = reference * ratio ** (np.arange(id_lo, id_hi, dtype=np.float64) + 0.5)
     return (halfway / inv_norm) ** 2
