@@ -46,9 +46,9 @@ TETRA_LENGTHS = 32
 TETRA_REFINEMENT = ((8, 0.02), (8, 0.05), (16, 0.03), (16, 0.05), (16, 0.1), (32, 0.2), (64, 0.4), (64, 1.0))
 QUICK_TETRA_REFINEMENT = ((16, 0.1),)
 #: The tables (size, lengths) each refinement setting is swept with: besides the default, two
-#: lighter ones. The table sweep at a ray per pixel puts their error far below the refinement's on
-#: smooth TFs (256x8 also on spiky ones), and a smaller table is cheaper to build and to read (the
-#: 256x32 one is 50 MB, and its reads are most of a refined frame's walk).
+#: lighter ones, also swept at a ray per pixel (where their own error shows: far below refinement's
+#: on smooth TFs, and for 256x8 also on spiky ones). A smaller table is cheaper to build and to read
+#: (the 256x32 one is 50 MB, and its reads are most of a refined frame's walk).
 TETRA_REFINEMENT_TABLES = ((TETRA_TABLE, TETRA_LENGTHS), (TETRA_TABLE, 8), (128, 8))
 
 
@@ -159,8 +159,9 @@ def _vtk_uniform(steps: Iterable[float]) -> list[Config]:
 def _tetra(tables: Iterable[int], short_lengths: bool, refinement: Iterable[tuple[int, float]],
            tables_refined: Iterable[tuple[int, int]]) -> list[Config]:
     out = [Config("tetra", table_size=n, table_lengths=TETRA_LENGTHS, skipping=True) for n in tables]
-    if short_lengths:
-        out.append(Config("tetra", table_size=TETRA_TABLE, table_lengths=8, skipping=True))
+    if short_lengths:  # every table the refinement runs with, at a ray per pixel too (its own error)
+        out += [Config("tetra", table_size=size, table_lengths=lengths, skipping=True)
+                for size, lengths in TETRA_REFINEMENT_TABLES if lengths != TETRA_LENGTHS]
     out.append(Config("tetra", table_size=TETRA_TABLE, table_lengths=TETRA_LENGTHS, skipping=False))
     out += [Config("tetra", table_size=size, table_lengths=lengths, skipping=True, image_stride=stride,
                    refine_tolerance=tol) for size, lengths in tables_refined for stride, tol in refinement]
