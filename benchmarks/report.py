@@ -35,6 +35,9 @@ SECTIONS = (
      "same load (`python -m benchmarks.defaults_ab`)"),
     ("plugins.md", "The plugin renderers (shear-warp, object order)",
      "How do the seeds' CPU algorithms compare with VTK and the slicer at equal error, and with their papers' tables?"),
+    ("resampling_floor.md", "What resampling costs against a point-sampled reference",
+     "How close can a renderer that resamples its rays (shear-warp's warp) come to `reference`, whose pixels are "
+     "point samples, however exact its rays? (`python -m benchmarks.resampling_floor`)"),
     ("app.md", "Desktop app responsiveness", "How long from a TF edit to the new frame; frames per second."),
     ("first_preview.md", "The first gesture after opening", "How long does the first preview of a gesture wait "
      "when it is drawn by another renderer than the still frames? (`python -m benchmarks.first_preview`)"),
