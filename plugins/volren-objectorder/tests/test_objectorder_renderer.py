@@ -10,7 +10,7 @@ from volren_objectorder import ObjectOrderRenderer
 from volren_objectorder.patterns import pixel_offsets
 
 from volren.errors import VolrenError
-from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume
+from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.model.crop import crop_volume
 from volren.testing import conformance_test, image_error, oracles
 from volren.testing.reference_images import reference_image
@@ -84,6 +84,38 @@ def test_octree_skipping_changes_no_pixel(parallel, pre):
         np.testing.assert_allclose(on, off, atol=1e-6)
     else:
         np.testing.assert_array_equal(on, off)
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+@pytest.mark.parametrize("settings", [
+    {},
+    {"preintegration": True},
+    {"shade": True},
+    {"shade": True, "preintegration": True},
+    {"blend_mode": BlendMode.MAXIMUM},
+    {"blend_mode": BlendMode.MINIMUM},
+    {"blend_mode": BlendMode.AVERAGE},
+])  # fmt: skip
+def test_blocks_of_cells_draw_the_cells_image(parallel, settings):
+    # an odd number of cells along x and z (blocks one cell thick at the far side), a NaN corner, a TF
+    # that leaves some cells of a block transparent, hidden volume removal off so that every node
+    # above the cells goes one way or the other: as blocks, or cell by cell (block_pixels 0)
+    volume = field((14, 16, 18))
+    values = volume.values.copy()
+    values[7, 8, 9] = np.nan
+    volume = UniformVolume(values)
+    camera = Camera.orbit(volume.bounds, 35, 25, parallel=parallel)
+    common = {"hidden_volume_removal": False}
+    blocks, r_blocks = draw(volume, SHELL_TF, camera, (64, 48), **settings, options={**common, "block_pixels": 4096})
+    cells, r_cells = draw(volume, SHELL_TF, camera, (64, 48), **settings, options={**common, "block_pixels": 0})
+    c_blocks, c_cells = r_blocks.last_frame.counters, r_cells.last_frame.counters
+    if settings.get("blend_mode", BlendMode.COMPOSITE) == BlendMode.COMPOSITE:
+        assert c_blocks["nodes"] < 0.5 * c_cells["nodes"]  # the leaf cells were not visited one by one
+    else:  # blocks composite only
+        assert c_blocks["nodes"] == c_cells["nodes"]
+    assert c_blocks["samples"] == c_cells["samples"]
+    np.testing.assert_allclose(blocks, cells, atol=2e-6)
+    assert np.abs(blocks - cells).max() < np.abs(cells).max() * 1e-5 + 1e-12
 
 
 def _views(volume, parallel):
@@ -279,7 +311,7 @@ def test_a_cropped_volume_renders_its_part():
 
 @pytest.mark.parametrize("options", [{"octree_skipping": 1}, {"hidden_volume_removal": "no"}, {"termination_alpha": 2},
                                      {"depth_offsets": "halton"}, {"jitter_seed": -1}, {"table_size": 3},
-                                     {"band_rows": 0}, {"classification_table": 8}, {"nope": 1}])  # fmt: skip
+                                     {"band_rows": 0}, {"classification_table": 8}, {"block_pixels": -1}, {"nope": 1}])  # fmt: skip
 def test_bad_options_are_one_line_errors(options):
     with pytest.raises(VolrenError) as info:
         ObjectOrderRenderer().set_settings(RenderSettings(options=options))

@@ -77,6 +77,10 @@ OPTIONS: dict[str, tuple[Any, str]] = {
                                    "(0: classify every sample exactly, a search and an exp and a log each; or 16 "
                                    "to 65536)"),
     "band_rows": (32, "image rows per parallel band (1 to 4096; smaller bands are used for small images)"),
+    "block_pixels": (36, "draw the 2 x 2 x 2 cells under an octree node as one block (one footprint, one load of "
+                         "their 27 grid points, one slab test per pixel) when its footprint has at most this "
+                         "many pixels, none of them finished, and 4 of its cells or more are visible; compositing only; the image is the same (0 to "
+                         "65536; 0: cell by cell)"),
 }  # fmt: skip
 
 _MODES = {BlendMode.COMPOSITE: K.COMPOSITE, BlendMode.MAXIMUM: K.MAXIMUM, BlendMode.MINIMUM: K.MINIMUM,
@@ -101,7 +105,7 @@ def read_options(options: Mapping[str, Any]) -> dict[str, Any]:
     if out["depth_offsets"] not in OFFSET_MODES:
         fail("depth_offsets", "one of " + ", ".join(repr(m) for m in OFFSET_MODES))
     for name, lo, hi in (("jitter_seed", 0, 2**63 - 1), ("table_size", 16, 4096), ("band_rows", 1, 4096),
-                         ("classification_table", 0, 65536)):  # fmt: skip
+                         ("classification_table", 0, 65536), ("block_pixels", 0, 65536)):  # fmt: skip
         v = out[name]
         if isinstance(v, bool) or not isinstance(v, int) or not (lo <= v <= hi):
             fail(name, f"an integer in {lo}..{hi}")
@@ -277,7 +281,7 @@ class ObjectOrderRenderer(RendererBase):
         fp[K.F_LX:K.F_LZ + 1] = light
         fp[K.F_ISX:K.F_ISZ + 1] = 1.0 / spacing
         fp[K.F_PLO], fp[K.F_PSCALE] = lo, (len(post) - 1) / (hi - lo)
-        ip = np.array([mode, pre, shade, hvr], dtype=np.int64)
+        ip = np.array([mode, pre, shade, hvr, opts["block_pixels"]], dtype=np.int64)
 
         pixels = width * height
         # per-pixel state, kept across frames (no page faults on fresh memory); rgba, nextk and
