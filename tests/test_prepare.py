@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import faulthandler
+
 import numpy as np
 import pytest
 
 from volren.cli.main import main
 from volren.errors import VolrenError
 from volren.model import BlendMode, RenderSettings
-from volren.prepare import prepare, prepare_renderer
+from volren.prepare import _prepare_in_processes, prepare, prepare_renderer
 from volren.renderers.base import Capabilities, KindSupport, QualityLevel, RendererBase
 from volren.renderers.registry import registry
 
@@ -107,3 +109,29 @@ def test_an_unknown_name_is_a_one_line_error(capsys):
     assert main(["prepare", "--renderers", "nope"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "unknown renderer nope" in err
+
+
+def test_renderers_are_prepared_at_once_in_worker_processes(fakes):
+    """jobs > 1: the entry points' renderers in spawned workers, one registered at run time (which a
+    worker does not know) here; results in the order asked, each reported as it finishes."""
+    seen = []
+    results = prepare(["example", Counting.name], seen.append, jobs=2)
+    assert [r.name for r in results] == ["example", Counting.name]
+    assert sorted(r.name for r in seen) == sorted(["example", Counting.name])
+    assert all(r.error is None and r.frames > 0 for r in results)
+    assert len(Counting.drawn) == results[1].frames  # drawn in this process
+
+
+def test_a_worker_process_that_dies_is_reported_for_its_renderers():
+    """A crash (here a segfault) in a worker breaks the pool: the renderers it leaves are reported
+    as not prepared, and set-up goes on."""
+    seen = []
+    results = _prepare_in_processes(["example", "reference"], seen.append, 2, work=faulthandler._sigsegv)
+    assert [r.name for r in results] == ["example", "reference"] and len(seen) == 2
+    assert all(r.frames == 0 and r.error.startswith("worker process failed: ") for r in results)
+
+
+def test_jobs_below_one_is_a_one_line_error(capsys):
+    assert main(["prepare", "--renderers", "example", "--jobs", "0"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--jobs: must be at least 1" in err

@@ -200,6 +200,12 @@ class RendererRegistry:
             out[name] = caps.unsupported_reason(volume_kind, tf_dim, settings)
         return out
 
+    def registered_in_process(self, name: str) -> bool:
+        """Whether `name` was registered by `register` in this process (another process, which reads
+        only the entry points, does not know it)."""
+        entry = self._discover().get(name)
+        return entry is not None and entry.loaded is not None
+
     # ------------------------------------------------------------------------ mutation
     def register(self, name: str, cls: type, replace: bool = False) -> None:
         """Register a class in-process (scripts, tests); built-in names cannot be replaced."""

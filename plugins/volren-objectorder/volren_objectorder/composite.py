@@ -85,21 +85,6 @@ def _point_gradient(vol, x, y, z, fp):
 
 
 @njit(cache=True)
-def _load_cell(vol, i, j, k, shade, fp, c8, g8):
-    """The eight corner values (bit 0: +x, bit 1: +y, bit 2: +z) and, when shading, gradients."""
-    for c in range(8):
-        x = i + (c & 1)
-        y = j + ((c >> 1) & 1)
-        z = k + (c >> 2)
-        c8[c] = vol[z, y, x]
-        if shade:
-            gx, gy, gz = _point_gradient(vol, x, y, z, fp)
-            g8[c, 0] = gx
-            g8[c, 1] = gy
-            g8[c, 2] = gz
-
-
-@njit(cache=True)
 def _load_block(vol, x0, y0, z0, sx, sy, sz, shade, fp, cb, gb):
     """The grid points of the block of sx x sy x sz cells from (x0, y0, z0), point (x0 + a, y0 + b,
     z0 + c) at cb[9 c + 3 b + a], and, when shading, their gradients."""
@@ -142,15 +127,14 @@ def _sub_cell(blk, fx, fy, fz):
 
 
 @njit(cache=True, inline="always")
-def _in_cell(blk, x, y, z):
-    """`locate` for a block of one visible cell: (visible, first grid point, coordinates in the cell)."""
-    return True, 0, _clamp01(x), _clamp01(y), _clamp01(z)
-
-
-@njit(cache=True, inline="always")
-def _in_block(blk, x, y, z):
-    """`locate` for a block of 2 x 2 x 2 cells: the cell holding block-local (x, y, z), and whether the TF
-    leaves it visible."""
+def _locate_in(blk, x, y, z):
+    """The sample at block-local (x, y, z) in block `blk` = (visible cells' bits, sx, sy, sz, size):
+    (whether the TF leaves its cell visible, the index of the cell's first grid point among the
+    block's 27, the point's coordinates in the cell). A block of one cell (size 1, always visible)
+    pays no test of which cell holds the sample: the branch goes the same way for all of a block's
+    samples."""
+    if blk[4] == 1:
+        return True, 0, _clamp01(x), _clamp01(y), _clamp01(z)
     bit, base, fx, fy, fz = _sub_cell(blk, _clamp02(x), _clamp02(y), _clamp02(z))
     return (blk[0] >> bit) & 1 != 0, base, fx, fy, fz
 
@@ -173,28 +157,6 @@ def _trilinear_at_g(gb, comp, b, fx, fy, fz):
     x10 = gb[b + 3, comp] + fx * (gb[b + 4, comp] - gb[b + 3, comp])
     x01 = gb[b + 9, comp] + fx * (gb[b + 10, comp] - gb[b + 9, comp])
     x11 = gb[b + 12, comp] + fx * (gb[b + 13, comp] - gb[b + 12, comp])
-    y0 = x00 + fy * (x10 - x00)
-    y1 = x01 + fy * (x11 - x01)
-    return y0 + fz * (y1 - y0)
-
-
-@njit(cache=True, inline="always")
-def _trilinear(c8, fx, fy, fz):
-    x00 = c8[0] + fx * (c8[1] - c8[0])
-    x10 = c8[2] + fx * (c8[3] - c8[2])
-    x01 = c8[4] + fx * (c8[5] - c8[4])
-    x11 = c8[6] + fx * (c8[7] - c8[6])
-    y0 = x00 + fy * (x10 - x00)
-    y1 = x01 + fy * (x11 - x01)
-    return y0 + fz * (y1 - y0)
-
-
-@njit(cache=True, inline="always")
-def _trilinear_g(g8, comp, fx, fy, fz):
-    x00 = g8[0, comp] + fx * (g8[1, comp] - g8[0, comp])
-    x10 = g8[2, comp] + fx * (g8[3, comp] - g8[2, comp])
-    x01 = g8[4, comp] + fx * (g8[5, comp] - g8[4, comp])
-    x11 = g8[6, comp] + fx * (g8[7, comp] - g8[6, comp])
     y0 = x00 + fy * (x10 - x00)
     y1 = x01 + fy * (x11 - x01)
     return y0 + fz * (y1 - y0)
@@ -320,25 +282,22 @@ def _segment(rgba, p, sf, sb, length, fd_f, sp_f, fd_b, sp_b, shade, table, fron
 
 
 @njit(cache=True)
-def _fetch(vol, px, py, pz, c8):
+def _fetch(vol, px, py, pz, fp, cb, gb):
     """The trilinear value at index point (px, py, pz); NaN when a corner of its cell is not finite
-    (c8: scratch for the corners)."""
+    (a NaN or an infinity reaches the interpolated value whatever the weights; cb: scratch for the
+    cell's grid points, laid out as `_load_block`'s; gb: unused, the gradients' scratch)."""
     i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
-    for c in range(8):
-        v = vol[k + (c >> 2), j + ((c >> 1) & 1), i + (c & 1)]
-        if not np.isfinite(v):
-            return np.nan
-        c8[c] = v
-    return _trilinear(c8, fx, fy, fz)
+    _load_block(vol, i, j, k, 1, 1, 1, False, fp, cb, gb)
+    return _trilinear_at(cb, 0, fx, fy, fz)
 
 
 @njit(cache=True)
-def _fetch_light(vol, px, py, pz, hx, hy, hz, fp, c8, g8):
-    """The lighting (diffuse factor, specular term) at index point (px, py, pz) (c8, g8: scratch)."""
+def _fetch_light(vol, px, py, pz, hx, hy, hz, fp, cb, gb):
+    """The lighting (diffuse factor, specular term) at index point (px, py, pz) (cb, gb: scratch)."""
     i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
-    _load_cell(vol, i, j, k, True, fp, c8, g8)
-    return _light(_trilinear_g(g8, 0, fx, fy, fz), _trilinear_g(g8, 1, fx, fy, fz), _trilinear_g(g8, 2, fx, fy, fz),
-                  hx, hy, hz, fp)  # fmt: skip
+    _load_block(vol, i, j, k, 1, 1, 1, True, fp, cb, gb)
+    return _light(_trilinear_at_g(gb, 0, 0, fx, fy, fz), _trilinear_at_g(gb, 1, 0, fx, fy, fz),
+                  _trilinear_at_g(gb, 2, 0, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
 
 
 @njit(cache=True)
@@ -352,7 +311,7 @@ def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz
     px = ro[p, 0] + te * dx
     py = ro[p, 1] + te * dy
     pz = ro[p, 2] + te * dz
-    se = _fetch(vol, px, py, pz, e8)
+    se = _fetch(vol, px, py, pz, fp, e8, eg8)
     if not np.isfinite(se):
         return
     fde = 1.0
@@ -454,7 +413,7 @@ def _post_rgba(xs, tab, post, use_post, s, length, shaded, fd, sp, fp):
 
 
 @njit(cache=True, inline="always")
-def _pixel_post(p, kk, thi, locate, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, shade, use_post,
+def _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, shade, use_post,
                 xs, tab, post, fp, rgba):  # fmt: skip
     """Composite, post-classified: pixel p's samples kk.. with t < thi in the current cell, front to
     back. The pixel's colour stays in registers for the cell (one load and one store instead of a
@@ -471,7 +430,7 @@ def _pixel_post(p, kk, thi, locate, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy,
         t = sample_t(t0, first, h, ns, last, kk)
         if t >= thi:
             break
-        visible, base, fx, fy, fz = locate(blk, ox + t * dx, oy + t * dy, oz + t * dz)
+        visible, base, fx, fy, fz = _locate_in(blk, ox + t * dx, oy + t * dy, oz + t * dz)
         if not visible:  # in a cell the TF leaves transparent: no sample, as in cell order
             kk += 1
             continue
@@ -505,7 +464,7 @@ def _pixel_post(p, kk, thi, locate, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy,
 
 
 @njit(cache=True, inline="always")
-def _pixel_pre(p, kk, thi, locate, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, fp,
+def _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, fp,
                rays, tables, state, scratch):  # fmt: skip
     """Composite, pre-integrated: pixel p's samples kk.. with t < thi in the current cell, each closing
     the segment from the ray's previous sample. Returns (next sample, samples taken, 1 if it saturated).
@@ -523,7 +482,7 @@ def _pixel_pre(p, kk, thi, locate, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, 
         t = sample_t(t0, first, h, ns, last, kk)
         if t >= thi:
             break
-        visible, base, fx, fy, fz = locate(blk, ox + t * dx, oy + t * dy, oz + t * dz)
+        visible, base, fx, fy, fz = _locate_in(blk, ox + t * dx, oy + t * dy, oz + t * dz)
         if not visible:  # in a cell the TF leaves transparent: no sample, as in cell order
             kk += 1
             continue
@@ -548,7 +507,7 @@ def _pixel_pre(p, kk, thi, locate, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, 
                 px = ro[p, 0] + tp * dx
                 py = ro[p, 1] + tp * dy
                 pz = ro[p, 2] + tp * dz
-                sf = _fetch(vol, px, py, pz, e8)
+                sf = _fetch(vol, px, py, pz, fp, e8, eg8)
                 fd_f = 1.0
                 sp_f = 0.0
                 if shade and np.isfinite(sf):
@@ -643,14 +602,14 @@ def _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1
 
 
 @njit(cache=True, inline="always")
-def _block(x0, y0, z0, locate, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch, fp,
+def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch, fp,
            mode, pre, shade, hvr, use_post, ncx, ncy, ncz):  # fmt: skip
     """The block of up to size^3 leaf cells from cell (x0, y0, z0), `cells` = bits + 256 size: size 1
-    (a cell, `locate` = `_in_cell`) or 2 (an octree node one level above the cells, `_in_block`); its
-    grid points loaded once, then the samples of every unfinished pixel of rows q0..q1, columns
-    c0..c1 that lie in it, none in the cells the TF leaves transparent (bits: the octree's leaf bits,
-    x + 2 y + 4 z). Returns (samples taken, pixels saturated). `locate` is a compile-time choice
-    (numba specializes the inlined loops for each): a cell's samples pay no test of which cell holds them.
+    (a cell) or 2 (an octree node one level above the cells); its grid points loaded once, then the
+    samples of every unfinished pixel of rows q0..q1, columns c0..c1 that lie in it, none in the
+    cells the TF leaves transparent (bits: the octree's leaf bits, x + 2 y + 4 z). Returns (samples
+    taken, pixels saturated). The walk calls it from one place, so that it is compiled once, with its
+    pixel loops inlined (two copies, one per size, had doubled the plugin's compile time).
 
     Why blocks: the footprint, the occlusion test, the loads and the slab tests are then paid once for
     up to eight cells, and a pixel's slab test once for the cells of the block it crosses (the block's
@@ -673,7 +632,7 @@ def _block(x0, y0, z0, locate, cells, c0, c1, q0, q1, r0, width, vol, rays, tabl
     sx = min(size, ncx - x0)
     sy = min(size, ncy - y0)
     sz = min(size, ncz - z0)
-    blk = (np.int64(bits), np.int64(sx), np.int64(sy), np.int64(sz))  # one type: indexable
+    blk = (np.int64(bits), np.int64(sx), np.int64(sy), np.int64(sz), np.int64(size))  # one type: indexable
     _load_block(vol, x0, y0, z0, sx, sy, sz, shade, fp, c8, g8)
     for r in range(q0, q1 + 1):
         for c in range(c0, c1 + 1):
@@ -698,10 +657,10 @@ def _block(x0, y0, z0, locate, cells, c0, c1, q0, q1, r0, width, vol, rays, tabl
             if shade:
                 hx, hy, hz = _half_vector(rwd, p, fp)
             if post_path:
-                kk, taken, sat = _pixel_post(p, kk, thi, locate, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first,
+                kk, taken, sat = _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first,
                                              last, ns, shade, use_post, xs, tab, post, fp, rgba)  # fmt: skip
             elif mode == COMPOSITE:
-                kk, taken, sat = _pixel_pre(p, kk, thi, locate, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0,
+                kk, taken, sat = _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0,
                                             first, last, ns, fp, rays, tables, state, scratch)  # fmt: skip
             else:
                 kk, taken, sat = _pixel_project(p, kk, tlo, thi, mode, c8, ox, oy, oz, dx, dy, dz, t0, first, last, ns,
@@ -730,8 +689,8 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, 
     stack = np.empty((depth, 4), np.int64)
     c8 = np.empty(27)  # a block's grid points (`_load_block`)
     g8 = np.zeros((27, 3))
-    e8 = np.empty(8)
-    eg8 = np.zeros((8, 3))
+    e8 = np.empty(27)  # one cell's grid points for `_fetch`, as `_load_block` lays them out
+    eg8 = np.zeros((27, 3))
     _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats,
@@ -795,68 +754,51 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, p
         i = stack[top, 1]
         j = stack[top, 2]
         k = stack[top, 3]
-        count = counts[offsets[lv] + (k * shapes[lv, 1] + j) * shapes[lv, 2] + i]
+        # level 0's counts are the leaf bits of level 1 (pushed only when visible), but a one-cell grid's root
+        count = 1 if lv == 0 and levels > 1 else counts[offsets[lv] + (k * shapes[lv, 1] + j) * shapes[lv, 2] + i]
         if count == 0:
             continue
         c0, c1, q0, q1, own = _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1)
         if q0 > q1:
             continue
         n_nodes += own
-        if hvr and hom_covered(hom, hl, hoff, hcols, q0 - r0, q1 - r0, c0, c1):
+        # a cell's footprint is tested against the map even without hidden volume removal (pixels whose
+        # rays have ended are finished too)
+        if (hvr or lv == 0) and hom_covered(hom, hl, hoff, hcols, q0 - r0, q1 - r0, c0, c1):
             n_occ_cells += count * own
             n_occ_nodes += own
             continue
-        if lv == 0:  # the root of a one-cell grid
-            n_cells += own
-            taken, sat = _block(i, j, k, _in_cell, 256 + 1, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch,
-                                fp, mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
-            n_samples += taken
-            n_saturated += sat
-            continue
-        mask = child_order_mask(lv, i, j, k, perspective, eye, vdir)
-        bits8 = leaves[k, j, i] if lv == 1 else 0
-        if lv == 1 and count >= 4 and (q1 - q0 + 1) * (c1 - c0 + 1) <= block_pixels and not (
+        if lv == 0:  # a leaf cell (pushed by its level-1 node, below) or the root of a one-cell grid
+            cells = 256 + 1
+            x0, y0, z0 = i, j, k
+        elif lv == 1 and count >= 4 and (q1 - q0 + 1) * (c1 - c0 + 1) <= block_pixels and not (
                 hvr and _finished_pixel(finished, q0, q1, c0, c1, width)):  # fmt: skip
-            n_cells += count * own  # no pixel of its footprint is finished: none of its cells is hidden
-            taken, sat = _block(2 * i, 2 * j, 2 * k, _in_block, 512 + bits8, c0, c1, q0, q1, r0, width, vol, rays, tables, state,
-                                occlusion, scratch, fp, mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
-            n_samples += taken
-            n_saturated += sat
-            continue
-        if lv == 1:  # the leaf cells one by one, nearest first, each footprint against the occlusion map
-            for n in range(8):
+            # no pixel of its footprint is finished: none of its cells is hidden
+            cells = 512 + leaves[k, j, i]
+            x0, y0, z0 = 2 * i, 2 * j, 2 * k
+        else:  # its children onto the stack, farthest first: the nearest is visited next
+            mask = child_order_mask(lv, i, j, k, perspective, eye, vdir)
+            bits8 = leaves[k, j, i] if lv == 1 else 0
+            cl = lv - 1
+            for n in range(7, -1, -1):
                 bits = n ^ mask
-                if not (bits8 >> bits) & 1:
+                if lv == 1 and not (bits8 >> bits) & 1:  # a cell the TF leaves transparent
                     continue
                 ci = 2 * i + (bits & 1)
                 cj = 2 * j + ((bits >> 1) & 1)
                 ck = 2 * k + (bits >> 2)
-                c0, c1, q0, q1, own = _node_rect(M, 0, ci, cj, ck, ncx, ncy, ncz, perspective, width, height, r0, r1)
-                if q0 > q1:
-                    continue
-                n_nodes += own
-                if hom_covered(hom, hl, hoff, hcols, q0 - r0, q1 - r0, c0, c1):
-                    n_occ_cells += own
-                    n_occ_nodes += own
-                    continue
-                n_cells += own
-                taken, sat = _block(ci, cj, ck, _in_cell, 256 + 1, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion,
-                                    scratch, fp, mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
-                n_samples += taken
-                n_saturated += sat
+                if ci < shapes[cl, 2] and cj < shapes[cl, 1] and ck < shapes[cl, 0]:
+                    stack[top, 0] = cl
+                    stack[top, 1] = ci
+                    stack[top, 2] = cj
+                    stack[top, 3] = ck
+                    top += 1
             continue
-        cl = lv - 1
-        for n in range(7, -1, -1):  # pushed farthest first: the nearest is visited next
-            bits = n ^ mask
-            ci = 2 * i + (bits & 1)
-            cj = 2 * j + ((bits >> 1) & 1)
-            ck = 2 * k + (bits >> 2)
-            if ci < shapes[cl, 2] and cj < shapes[cl, 1] and ck < shapes[cl, 0]:
-                stack[top, 0] = cl
-                stack[top, 1] = ci
-                stack[top, 2] = cj
-                stack[top, 3] = ck
-                top += 1
+        n_cells += count * own
+        taken, sat = _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch,
+                            fp, mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
+        n_samples += taken
+        n_saturated += sat
     stats[S_NODES] += n_nodes
     stats[S_CELLS] += n_cells
     stats[S_OCCLUDED_CELLS] += n_occ_cells

@@ -135,6 +135,13 @@ def segment_reach(camera: Camera, volume: UniformVolume, rays: RayTable, h: floa
     return Reach(window, rim)  # type: ignore[arg-type]
 
 
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """A read-only view of `array` (for one numba type per table argument)."""
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
 class ObjectOrderRenderer(RendererBase):
     """Object-order ray casting on uniform grids: composite, maximum, minimum, average, shading,
     pre-integration; parallel and perspective."""
@@ -266,6 +273,9 @@ class ObjectOrderRenderer(RendererBase):
             front, back = lit.front, lit.back
         elif pre:
             table = preintegrate(tf, n, step=h, value_range=(lo, hi))
+        # all read-only, as the cached tables are: numba compiles a kernel once per combination of
+        # writable and read-only arrays, and the mixed ones had tripled the plugin's compile time
+        table, front, back = (_read_only(t) for t in (table, front, back))
         post = np.zeros((1, 4))  # one row: no table, every sample classified exactly
         n_post = int(opts["classification_table"])
         if composite and not pre and n_post:

@@ -1,7 +1,8 @@
 """Run fuzz cases as child processes with a time limit, and classify what came back.
 
 Two ways to start a child: `fork` (default) forks this process after importing volren, VTK and
-PyVista once, so a case costs its own work (about 0.1 s, not the 1 s of a fresh interpreter);
+PyVista once and loading the ray caster's kernels (`preload`), so a case costs its own work (about
+0.1 s for an error, not the 1 s of a fresh interpreter; a small grid's two renders 0.5 s, not 5 s);
 `exec` runs `python -m volren.cli.main` afresh, exactly as a user would. Either way the child is
 its own process: a crash, an abort or a hang is seen from outside.
 
@@ -240,14 +241,38 @@ def classify(case: Case, runs: list[Run]) -> Result:
 # ---------------------------------------------------------------------------------- the loop
 
 
+#: The CPU renderer that `volren render` chooses for the corpus's small grids (auto, at the default
+#: quality), whose kernels the parent loads before forking (`preload`).
+GRID_RENDERER = "raycast"
+
+
 def preload() -> None:
-    """Import what every case needs once, before forking (VTK, PyVista, the readers, the CLI)."""
+    """Import what every case needs once, before forking (VTK, PyVista, the readers, the CLI), and
+    load the numba kernels that `volren render` draws a small grid with, in both scalar types the ray
+    caster keeps: a child then pays its own work only (a grid case took 2.5 s a run, most of it numba
+    loading the cached kernels afresh in every child). The kernels run on numba's workqueue threads
+    here and in the children: a child forked from a process whose GNU OpenMP threads have run aborts,
+    while a workqueue child starts threads of its own. No OpenGL context is made before forking."""
+    import numba
+
+    try:
+        layer = numba.threading_layer()  # this process has run a parallel kernel already
+    except ValueError:
+        numba.config.THREADING_LAYER = layer = "workqueue"
     import pyvista  # noqa: F401
     import vtkmodules.all  # noqa: F401
 
-    import volren.api  # noqa: F401
+    import volren.api
     import volren.cli.main  # noqa: F401
     import volren.io  # noqa: F401
+    from volren.model import UniformVolume
+
+    if layer != "workqueue":  # loading the kernels would run them on threads no child may inherit
+        return
+    ramp = np.add.outer(np.add.outer(np.arange(6.0), np.arange(7.0)), np.arange(8.0))
+    for dtype in (np.uint8, np.float32):
+        volume = UniformVolume(ramp.astype(dtype), name="fuzz warm-up")
+        volren.api.render(volume, renderer=GRID_RENDERER, size=(24, 24))
 
 
 def run_cases(

@@ -274,6 +274,8 @@ class RaycastRenderer(RendererBase):
             rgb, a = tf.sample(np.linspace(lo, hi, n))
             alpha = -np.expm1(h / tf.opacity_unit_distance * np.log1p(-np.minimum(a, K.MAX_OPACITY)))
             post = np.ascontiguousarray(np.concatenate([rgb, alpha[:, None]], axis=1), dtype=np.float64)
+        table = table.view()  # read-only, as a cached table is: numba compiles a kernel once per
+        table.flags.writeable = False  # combination of writable and read-only arrays
         fp = np.zeros(K.N_F)
         fp[K.F_H], fp[K.F_LO], fp[K.F_SCALE] = h, lo, (n - 1) / (hi - lo)
         fp[K.F_TERM] = opts["termination_alpha"] if opts["termination_alpha"] < 1.0 else 2.0
