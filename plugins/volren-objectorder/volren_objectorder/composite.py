@@ -468,7 +468,7 @@ def _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, 
                rays, tables, state, scratch):  # fmt: skip
     """Composite, pre-integrated: pixel p's samples kk.. with t < thi in the current cell, each closing
     the segment from the ray's previous sample. Returns (next sample, samples taken, 1 if it saturated).
-    Inlined into the walk like `_pixel_post` (so at most 30 arguments, the arrays in `_cell`'s tuples):
+    Inlined into the walk like `_pixel_post` (so at most 30 arguments, the arrays in `_block`'s tuples):
     as a call, its 36 arguments (an array is passed as seven words) cost more than its samples, bonsai's
     smooth TF at step 0.5 taking 1.5 s instead of 0.4 s post-classified."""
     ro = rays[0]
