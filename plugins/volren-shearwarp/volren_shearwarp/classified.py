@@ -7,11 +7,13 @@ space is skipped by run-length encoding (Lacroute and Levoy 1994): per slab (two
 slices) and per cell row, the runs of cells where something may show.
 
 When a cell is transparent, for pre-integration: a slab's segment runs linearly from a front
-value (bilinear in one slice) to a back value (bilinear in the next), so its colour is zero only
+value (bilinear in one slice) to a back value (bilinear in the slab's other slice: the next, or
+`stride` slices on when the renderer composites every stride-th slice), so its colour is zero only
 when the TF opacity is zero on the whole interval between them. A ray whose front point lies in
-cell (a, b) has its back point within r = ceil(largest shear) cells of it (r = 1 for every
-parallel view, since the principal axis has the largest slope), so every value it can meet lies
-between the min and the max of the corners of the (2r + 1)^2 block of 3D cells around (a, b). The cell is skipped only when the opacity is zero on all of [min, max]: the
+cell (a, b) has its back point within r = ceil(stride x largest shear) cells of it (r = 1 for
+every parallel view at stride 1, since the principal axis has the largest slope), so every value it
+can meet lies between the min and the max of the vertices, in the slab's two slices, of the
+(2r + 1)^2 block of cells around (a, b). The cell is skipped only when the opacity is zero on all of [min, max]: the
 interval, not the union of its cells' ranges, since a segment between two values passes
 through everything in between. Cells with a NaN corner are transparent (DESIGN.md) and add
 nothing to the range.
@@ -78,22 +80,43 @@ class OpacitySupport:
         return int(self.counts[-1]) == 0
 
 
+def slab_pairs(slices: int, stride: int, forward: bool) -> NDArray[np.int64]:
+    """The (lower, upper) slice of each slab when every `stride`-th slice is composited from the
+    front (`forward`: from slice 0, else from the last), sorted by lower slice; the slab at the
+    back end is shorter when stride does not divide slices - 1. Stride 1: (k, k + 1)."""
+    ks = np.arange(0, slices, stride) if forward else np.arange(slices - 1, -1, -stride)[::-1]
+    if ks[0] != 0:
+        ks = np.concatenate([[0], ks])
+    if ks[-1] != slices - 1:
+        ks = np.concatenate([ks, [slices - 1]])
+    return np.ascontiguousarray(np.stack([ks[:-1], ks[1:]], axis=1).astype(np.int64))
+
+
+def pairs_key(slices: int, stride: int, forward: bool) -> tuple[int, int]:
+    """What tells `slab_pairs` apart: (stride, where its short slab is); stride 1 has one layout."""
+    if stride == 1 or (slices - 1) % stride == 0:
+        return stride, 0
+    return stride, 1 if forward else -1
+
+
 @dataclass
 class AxisCopy:
     """The volume's values laid out for one principal axis: `values[k, b, a]` float32."""
 
     axis: int
     values: NDArray[np.float32]
-    runs: dict[int, Runs] = field(default_factory=dict)  #: by radius
-    #: by radius: each block's (lowest, highest) range bin, uint8 (`_block_ranges`), kept across TF edits
-    ranges: dict[int, tuple[NDArray[np.uint8], NDArray[np.uint8]]] = field(default_factory=dict)
+    runs: dict[tuple, Runs] = field(default_factory=dict)  #: by (radius, `pairs_key`)
+    #: by (radius, `pairs_key`): each block's (lowest, highest) range bin, uint8 (`_block_ranges`), kept
+    #: across TF edits
+    ranges: dict[tuple, tuple[NDArray[np.uint8], NDArray[np.uint8]]] = field(default_factory=dict)
     ranges_key: tuple[float, float] | None = None  #: the value range the bins span
 
 
 @dataclass(frozen=True)
 class Runs:
-    """Runs of possibly visible cells: for slab k (slices k, k+1) and cell row b, the runs
-    `starts[i]:ends[i]` (cell indices along a) for i in `offsets[k * (nb - 1) + b]` up to the next."""
+    """Runs of possibly visible cells: for slab k (the k-th of `slab_pairs`: slices k, k + 1 at
+    stride 1) and cell row b, the runs `starts[i]:ends[i]` (cell indices along a) for i in
+    `offsets[k * (nb - 1) + b]` up to the next."""
 
     offsets: NDArray[np.int64]
     starts: NDArray[np.int32]
@@ -116,10 +139,10 @@ RANGE_BINS = 256
 
 
 @njit(parallel=True, cache=True)
-def _block_ranges(vol, lo, scale, bins, radius, bmin, bmax):
+def _block_ranges(vol, pairs, lo, scale, bins, radius, bmin, bmax):
     """bmin, bmax[k, b, a] = the range bins (of RANGE_BINS over [lo, hi]) of the lowest and highest
-    value over the vertices, in both slices of slab k, of the block of cells within `radius` of
-    (a, b); bmin > bmax where the block has no finite vertex (transparent).
+    value over the vertices, in both slices of slab k (pairs[k]), of the block of cells within
+    `radius` of (a, b); bmin > bmax where the block has no finite vertex (transparent).
 
     Why cached: this is the TF-independent part of classifying a cell, and most of its cost; an
     opacity edit then only compares each block's range with the new support (`_mask_from_ranges`).
@@ -130,13 +153,15 @@ def _block_ranges(vol, lo, scale, bins, radius, bmin, bmax):
     shift = 0
     while (RANGE_BINS << shift) < bins:
         shift += 1
-    for k in prange(nc - 1):
+    for k in prange(pairs.shape[0]):
+        k0 = pairs[k, 0]
+        k1 = pairs[k, 1]
         vmin = np.empty((nb, na), np.float32)
         vmax = np.empty((nb, na), np.float32)
         for b in range(nb):
             for a in range(na):
-                v0 = vol[k, b, a]
-                v1 = vol[k + 1, b, a]
+                v0 = vol[k0, b, a]
+                v1 = vol[k1, b, a]
                 ok0 = math.isfinite(v0)
                 ok1 = math.isfinite(v1)
                 if ok0 and ok1:
@@ -244,13 +269,17 @@ def _runs_from_mask(mask, min_gap):
     return offsets, starts, ends
 
 
-def block_ranges(values: NDArray[np.float32], support: OpacitySupport, radius: int) -> tuple[NDArray, NDArray]:
-    """`_block_ranges` of one axis copy (bins over the support's value range, fixed per volume)."""
+def block_ranges(values: NDArray[np.float32], support: OpacitySupport, radius: int,
+                 pairs: NDArray[np.int64] | None = None) -> tuple[NDArray, NDArray]:  # fmt: skip
+    """`_block_ranges` of one axis copy for the slabs `pairs` (default: every slice, `slab_pairs`
+    at stride 1), bins over the support's value range, fixed per volume."""
     nc, nb, na = values.shape
-    bmin = np.empty((nc - 1, nb - 1, na - 1), np.uint8)
-    bmax = np.empty((nc - 1, nb - 1, na - 1), np.uint8)
+    if pairs is None:
+        pairs = slab_pairs(nc, 1, True)
+    bmin = np.empty((pairs.shape[0], nb - 1, na - 1), np.uint8)
+    bmax = np.empty((pairs.shape[0], nb - 1, na - 1), np.uint8)
     bins = support.counts.shape[0] - 1
-    _block_ranges(values, support.lo, bins / (support.hi - support.lo), bins, radius, bmin, bmax)
+    _block_ranges(values, pairs, support.lo, bins / (support.hi - support.lo), bins, radius, bmin, bmax)
     return bmin, bmax
 
 
@@ -292,17 +321,20 @@ class ClassifiedVolume:
             self.copy_ms[axis] = (time.perf_counter() - start) * 1000.0
         return found
 
-    def runs(self, axis: int, support: OpacitySupport, radius: int = 1) -> Runs:
-        """The runs of `axis` for `support` and `radius`, rebuilt only when the support changed."""
+    def runs(self, axis: int, support: OpacitySupport, radius: int = 1, stride: int = 1, forward: bool = True) -> Runs:
+        """The runs of `axis` for `support` and `radius`, over the slabs of every `stride`-th slice
+        composited from the front (`slab_pairs`), rebuilt only when the support changed."""
         copy = self.copy(axis)
-        found = copy.runs.get(radius)
+        slices = copy.values.shape[0]
+        key = (radius, *pairs_key(slices, stride, forward))
+        found = copy.runs.get(key)
         if found is None or found.digest != support.digest:
             if copy.ranges_key != (support.lo, support.hi):
                 copy.ranges.clear()
                 copy.ranges_key = (support.lo, support.hi)
-            if radius not in copy.ranges:
-                copy.ranges[radius] = block_ranges(copy.values, support, radius)
-            found = copy.runs[radius] = build_runs(copy.ranges[radius], support, radius)
+            if key not in copy.ranges:
+                copy.ranges[key] = block_ranges(copy.values, support, radius, slab_pairs(slices, stride, forward))
+            found = copy.runs[key] = build_runs(copy.ranges[key], support, radius)
         return found
 
     @property

@@ -501,7 +501,7 @@ def composite_slabs(
     vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows,
     rgba, buf_x, buf_d, buf_s, stamp, skip,
     layers, per_pixel_layer, table, table_back, lut, preintegrated, bilinear_lookup, lo, scale,
-    offsets, starts, ends, use_runs, use_termination, term_alpha, has_nan,
+    offsets, starts, ends, use_runs, run_slab, slab_frac, use_termination, term_alpha, has_nan,
     shading, light, half, ray_dirs, ka, kd, ks, power, gthr, inv_sp,
     clipping, clip_lo, clip_hi, jitter, offsets_u, buf_len, counters,
 ):  # fmt: skip
@@ -509,6 +509,11 @@ def composite_slabs(
     (intermediate image, premultiplied RGBA float32), clearing each row's image, stamps and skip
     links first when m0 <= 1 (the buffers are reused from frame to frame). counters[q] +=
     (segments composited, pixels skipped as empty, pixels terminated).
+
+    `order` may skip slices (every stride-th slice: the slabs then span stride slices, and the
+    tables are for that length); slab m's runs are run_slab[m]'s of the runs, and slab_frac[m] is its
+    length in whole slabs (below 1 for a short last slab, which goes the general way, its segments
+    corrected to their part like clipped ones).
 
     With `clipping`, pixel (q, p)'s ray is drawn only for u in [clip_lo[q, p], clip_hi[q, p]]
     (`Factorization.clip_limits`; slab m spans u in [m - 1, m]): the fast spans keep the pixels
@@ -540,7 +545,8 @@ def composite_slabs(
         for m in range(max(m0, 1), m1):
             kf = order[m - 1]
             kb = order[m]
-            slab = min(kf, kb)
+            slab = run_slab[m]
+            whole = slab_frac[m]
             bf = alpha_b[kf] + beta_b[kf] * q
             bb = alpha_b[kb] + beta_b[kb] * q
             if max(bf, bb) < 0.0 or min(bf, bb) > top_b:
@@ -560,7 +566,7 @@ def composite_slabs(
             # pixels whose segment has both ends inside the slice rectangle: no clipping
             in_lo = p_hi
             in_hi = p_hi
-            if row_inside and lean:
+            if row_inside and lean and whole == 1.0:
                 in_lo = max(_first_past(af0, afs, 0.0, False, _guess(af0, afs, 0.0)),
                             _first_past(ab0, abs_, 0.0, False, _guess(ab0, abs_, 0.0)))  # fmt: skip
                 in_hi = min(_first_past(af0, afs, top_a, True, _guess(af0, afs, top_a)),
@@ -650,7 +656,7 @@ def composite_slabs(
                         u1 = min((j + 1) * inv_sub, t1)
                         if u1 <= u0:
                             continue
-                        frac = (u1 - u0) * sub
+                        frac = (u1 - u0) * sub * whole
                         plane = (m - 1) * sub + j
                         w0 = j * inv_sub
                         w1 = (j + 1) * inv_sub if j + 1 < sub else 1.0

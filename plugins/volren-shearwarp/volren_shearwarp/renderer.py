@@ -21,8 +21,13 @@ How a frame goes (module per step):
 Sampling: the rays cross every slice along the principal axis (shear-warp's own rate: a bilinear
 sample in a slice is an exact trilinear sample, and pre-integration integrates the segment between
 two of them exactly for data linear along it). `step` below 0.5 adds planes between slices:
-ceil(slice spacing / (2 step mean spacing)) segments per slab (1 at the default 0.5 and above,
-2 at 0.25), sampled trilinearly. Blend modes maximum / minimum / average take the values at the same planes.
+ceil(slice spacing / (2 step mean spacing)) segments per slab (1 at the default 0.5, 2 at 0.25),
+sampled trilinearly. `step` 1 and above composites every stride-th slice only, stride =
+floor(2 step mean spacing / slice spacing) (`slice_stride`: 2 at step 1, 4 at step 2), one segment
+from slice to slice with tables for its length: a draft at 1/stride of the segments, like a ray
+caster's longer step (the last slab is shorter where the stride does not divide the slices, and is
+corrected to its length). Blend modes maximum / minimum / average, jitter and a near or far plane
+that cuts the volume take every slice.
 
 Clipping: only what lies between the camera's near and far planes is drawn. Along each intermediate
 ray the depth is linear in the slice index, so each ray keeps an interval of slices
@@ -38,7 +43,7 @@ which takes the general way, and its first and last segments from where the ray 
 it leaves. Maximum, minimum and average are exact along the piecewise-linear ray and take no jitter.
 
 Counters: samples (segments composited), rays (intermediate pixels), empty_pixels_skipped (pixel
-slabs skipped by the runs), pixels_terminated, slices, planes_per_slab, intermediate_width /
+slabs skipped by the runs), pixels_terminated, slices (composited), slice_stride, planes_per_slab, intermediate_width /
 _height, table_lengths, clipped (1 when the near or far plane cut the volume).
 """
 
@@ -90,6 +95,8 @@ BLOCK_MS = 60.0
 MAX_BLOCKS, FIRST_BLOCKS = 16, 4
 #: Most planes per slab that `step` may ask for.
 MAX_PLANES_PER_SLAB = 256
+#: Most slices a slab may span (`slice_stride`).
+MAX_SLICE_STRIDE = 8
 #: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
 GRADIENT_EPS = 1e-6
 #: Runs are built for rays moving up to this many cells per slice (steeper views go without).
@@ -192,6 +199,25 @@ def auto_table_size(tau: float) -> int:
     return 128 if 2.0 * tau < 1.0 else 256
 
 
+def slice_stride(step: float, slice_spacing: float, mean_spacing: float, slices: int) -> int:
+    """Slices per slab for `step` (in mean spacings; 0.5 is one slice per slab, shear-warp's own
+    rate, see `planes` in `_render`): floor(2 step mean spacing / slice spacing), 1 to
+    MAX_SLICE_STRIDE, and at most slices - 1."""
+    stride = int(math.floor(2.0 * step * mean_spacing / slice_spacing + 1e-9))
+    return max(1, min(stride, MAX_SLICE_STRIDE, slices - 1))
+
+
+def strided_order(order: NDArray[np.int64], stride: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """Every stride-th slice of the compositing order, the last slice kept, and each slab's length
+    in whole slabs (index m: the slab between entries m - 1 and m; below 1 only for a short last one)."""
+    picked = order[::stride]
+    if picked[-1] != order[-1]:
+        picked = np.append(picked, order[-1])
+    frac = np.ones(len(picked))
+    frac[1:] = np.abs(np.diff(picked)) / stride
+    return np.ascontiguousarray(picked, dtype=np.int64), frac
+
+
 def _rows(height: int) -> NDArray[np.int64]:
     """The intermediate rows, for kernels that hand them to threads ROW_CHUNK at a time (dynamic
     chunks: a static split waits for the slowest thread, and on a shared machine one core is often
@@ -220,6 +246,16 @@ class ShearWarpRenderer(RendererBase):
         backend="cpu",
         summary="shear-warp (numba): RLE empty-space skipping, early termination, pre-integration, 2D warp",
         quality=(
+            # every 2nd / 4th slice (`slice_stride`): fewer segments, where the data is smooth along the
+            # principal axis as accurate as VTK's step 2 (stop 47, docs/shearwarp.md: bonsai smooth 0.0044 at step
+            # 1 post-classified against VTK's 0.0069, at 0.6x every slice's time; spiky and opaque TFs at step 2
+            # pre-integrated)
+            QualityLevel("post-classified, oversampling 0.5, step 1", step=1.0, preintegration=False,
+                         options={"oversampling": 0.5}),
+            QualityLevel("pre-integrated, oversampling 0.5, step 2", step=2.0, preintegration=True,
+                         options={"oversampling": 0.5}),
+            QualityLevel("pre-integrated, oversampling 0.5, step 1", step=1.0, preintegration=True,
+                         options={"oversampling": 0.5}),
             # half an intermediate pixel per output pixel (one per voxel is kept): the classic shear-warp
             # image where voxels cover several pixels, the warp's Catmull-Rom filter doing the rest
             QualityLevel("post-classified, oversampling 0.5", step=0.5, preintegration=False,
@@ -345,7 +381,7 @@ class ShearWarpRenderer(RendererBase):
         counters: dict[str, float] = {
             "rays": float(fac.width * fac.height), "slices": float(len(order)), "planes_per_slab": float(planes),
             "intermediate_width": float(fac.width), "intermediate_height": float(fac.height),
-            "clipped": float(clipping),
+            "clipped": float(clipping), "slice_stride": 1.0,
         }  # fmt: skip
 
         if settings.blend_mode is not BlendMode.COMPOSITE:
@@ -371,13 +407,20 @@ class ShearWarpRenderer(RendererBase):
                 progress(1.0)
             counters.update(samples=0.0, empty_pixels_skipped=0.0, pixels_terminated=0.0, table_lengths=0.0)
             return np.zeros((height, width, 4), np.float32), counters
-        radius = max(MIN_RUN_RADIUS, math.ceil(fac.max_shear - 1e-9))
-        use_runs = bool(opts["empty_space_skipping"]) and radius <= MAX_RUN_RADIUS
+        stride = 1 if clipping or settings.jitter else slice_stride(settings.step, spacing_c, volume.mean_spacing, len(order))
+        forward = bool(order[-1] > order[0])
+        order, slab_frac = strided_order(order, stride)
+        counters.update(slices=float(len(order)), slice_stride=float(stride))
+        # the run index of slab m: slabs are numbered by their lower slice (`classified.slab_pairs`)
+        run_slab = np.arange(-1, len(order) - 1) if forward else len(order) - 1 - np.arange(len(order))
+        radius = max(MIN_RUN_RADIUS, math.ceil(stride * fac.max_shear - 1e-9))
+        use_runs = bool(opts["empty_space_skipping"]) and radius <= MAX_RUN_RADIUS * stride
         if use_runs:
-            runs = classified.runs(fac.axis, support, radius)
+            runs = classified.runs(fac.axis, support, radius, stride, forward)
             offsets, starts, ends = runs.offsets, runs.starts, runs.ends
         else:
             offsets, starts, ends = np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32)
+        per_slab = stride / planes  # slices a segment spans
 
         # tables by segment length: exact for a parallel view, snapped to a grid under perspective
         shading = bool(settings.shade)
@@ -390,7 +433,7 @@ class ShearWarpRenderer(RendererBase):
             layers[0, 0] = pool.gather(tf, n, lo, hi, grid)[0]
         elif per_pixel:
             col_d2, row_d2, dc2, inv_norm = fac.length_terms()
-            inv_norm /= planes
+            inv_norm *= per_slab
             shortest = math.sqrt(col_d2.min() + row_d2.min() + dc2) * inv_norm
             longest = math.sqrt(col_d2.max() + row_d2.max() + dc2) * inv_norm
             reference = volume.mean_spacing
@@ -400,7 +443,7 @@ class ShearWarpRenderer(RendererBase):
             # the batch that makes missing tables also makes every length from the axial one to TURNING_SPAN x it:
             # a camera turning about the volume then rarely waits for tables (without, bonsai turning 2 degrees a
             # frame needed a batch every 2-3 frames, about 9 ms a frame)
-            ax_lo, ax_hi = grid_ids(spacing_c / planes, TURNING_SPAN * spacing_c / planes, reference, ratio)
+            ax_lo, ax_hi = grid_ids(spacing_c * per_slab, TURNING_SPAN * spacing_c * per_slab, reference, ratio)
             # ... but not at a TF's first frame: a TF drag makes a new TF every frame, and with the batch each of
             # bonsai's drag previews made twice the lengths it needed (tables 30 ms of 80 a preview; 15 ms without)
             extra = [grid_length(i, reference, ratio)
@@ -409,7 +452,7 @@ class ShearWarpRenderer(RendererBase):
             slots = pool.gather(tf, n, lo, hi, grid, extra)
             pixel_slots(col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm, ratio), slots, layers)
         else:
-            grid = [fac.slab_length / planes]
+            grid = [fac.slab_length * per_slab]
             layers[0, 0] = pool.gather(tf, n, lo, hi, grid)[0]
         counters["table_lengths"] = float(len(grid))
         front = pool.front
@@ -461,7 +504,8 @@ class ShearWarpRenderer(RendererBase):
                 rgba, buf_x, buf_d, buf_s, stamp, skip,
                 layers, per_pixel, table, back, lut, bool(settings.preintegration),
                 opts["lookup"] == "bilinear", float(lo), float(scale),
-                offsets, starts, ends, use_runs, bool(opts["early_termination"]), float(opts["termination_alpha"]),
+                offsets, starts, ends, use_runs, run_slab, slab_frac, bool(opts["early_termination"]),
+                float(opts["termination_alpha"]),
                 has_nan,
                 shading, light, half, ray_dirs, float(settings.ambient), float(settings.diffuse),
                 float(settings.specular), float(settings.specular_power), float(gthr), inv_sp,
