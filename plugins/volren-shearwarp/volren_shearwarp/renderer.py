@@ -413,7 +413,9 @@ class ShearWarpRenderer(RendererBase):
         counters.update(slices=float(len(order)), slice_stride=float(stride))
         # the run index of slab m: slabs are numbered by their lower slice (`classified.slab_pairs`)
         run_slab = np.arange(-1, len(order) - 1) if forward else len(order) - 1 - np.arange(len(order))
-        radius = max(MIN_RUN_RADIUS, math.ceil(stride * fac.max_shear - 1e-9))
+        # stride x whole shears: a camera turning under perspective then meets a few radii, not one per
+        # stride-th of a shear (each new radius is a ranges pass, 75 ms on engine)
+        radius = max(MIN_RUN_RADIUS, stride * math.ceil(fac.max_shear - 1e-9))
         use_runs = bool(opts["empty_space_skipping"]) and radius <= MAX_RUN_RADIUS * stride
         if use_runs:
             runs = classified.runs(fac.axis, support, radius, stride, forward)

@@ -50,15 +50,46 @@ def _store(out, j, i, r, g, bl, al):
     out[j, i, 3] = al
 
 
+@njit(parallel=True, cache=True, error_model="numpy")
+def empty_taps(inter, empty):
+    """empty[q, p] = 1 where the 4 x 4 taps of a pixel whose first interior tap is (p, q) (taps p - 1
+    .. p + 2, q - 1 .. q + 2) are all transparent black, else 0.
+
+    Why: sparse scenes (vessels, a protein, an engine's opaque surface) leave most of the
+    intermediate image empty, and the warp can then skip such pixels' 16 taps with one load. Two
+    separable passes (along rows, then columns) over the image: about 0.5 ms at 300 x 300."""
+    ih, iw = inter.shape[0], inter.shape[1]
+    along = np.empty((ih, iw), np.uint8)
+    for q in prange(ih):
+        for p in range(iw):
+            found = 0
+            for pp in range(max(p - 1, 0), min(p + 3, iw)):
+                if inter[q, pp, 0] != 0.0 or inter[q, pp, 1] != 0.0 or inter[q, pp, 2] != 0.0 or inter[q, pp, 3] != 0.0:
+                    found = 1
+                    break
+            along[q, p] = found
+    for q in prange(ih):
+        for p in range(iw):
+            found = 0
+            for qq in range(max(q - 1, 0), min(q + 3, ih)):
+                if along[qq, p]:
+                    found = 1
+                    break
+            empty[q, p] = 1 - found
+
+
 @njit(parallel=True, cache=True, error_model="numpy", fastmath=True)
-def warp_image(inter, hom, sign, a0, b0, scale, cubic, out):
+def warp_image(inter, hom, sign, a0, b0, scale, cubic, out, empty):
     """out[j, i] = `inter` (premultiplied RGBA) resampled where pixel (i, j)'s ray meets the
-    plane; then clamped to the output rules (values in [0, 1], colour <= alpha).
+    plane; then clamped to the output rules (values in [0, 1], colour <= alpha). `empty` from
+    `empty_taps`.
 
     Speed: a pixel whose 16 taps all lie inside the image (nearly all of them) takes them without a
     test per tap, in float32 and with fastmath (the intermediate image is finite, so the flags'
     no-NaN assumption holds), which lets the compiler keep a tap's four channels in one vector
-    register: 6.5 -> 3.9 ms for a 512 x 512 frame on this 2-core machine (docs/shearwarp.md)."""
+    register: 6.5 -> 3.9 ms for a 512 x 512 frame on this 2-core machine (docs/shearwarp.md); and
+    none at all where they are all transparent (`empty`): 4.9 -> 3.4 ms on engine's opaque TF, 5.4
+    -> 2.8 ms on aneurism's (63 % and 84 % of the intermediate image empty; stop 47, scratch)."""
     height, width = out.shape[0], out.shape[1]
     ih, iw = inter.shape[0], inter.shape[1]
     for j in prange(height):
@@ -78,9 +109,12 @@ def warp_image(inter, hom, sign, a0, b0, scale, cubic, out):
                 continue
             p0 = int(math.floor(p))
             q0 = int(math.floor(q))
+            inside = p0 >= 1 and p0 + 2 < iw and q0 >= 1 and q0 + 2 < ih
+            if inside and empty[q0, p0]:
+                continue
             wp0, wp1, wp2, wp3 = _weights(p - p0, cubic)
             wq0, wq1, wq2, wq3 = _weights(q - q0, cubic)
-            if p0 >= 1 and p0 + 2 < iw and q0 >= 1 and q0 + 2 < ih:
+            if inside:
                 w0, w1, w2, w3 = np.float32(wp0), np.float32(wp1), np.float32(wp2), np.float32(wp3)
                 r0 = _row_taps(inter[q0 - 1], p0, w0, w1, w2, w3)
                 r1 = _row_taps(inter[q0], p0, w0, w1, w2, w3)
@@ -118,6 +152,8 @@ def warp(inter: NDArray[np.float32], homography: NDArray[np.float64], sign: floa
          scale: float, width: int, height: int, cubic: bool = True) -> NDArray[np.float32]:  # fmt: skip
     """The output image (height, width, 4) float32 from the intermediate image."""
     out = np.empty((height, width, 4), np.float32)
+    empty = np.empty(inter.shape[:2], np.uint8)
+    empty_taps(inter, empty)
     warp_image(inter, np.ascontiguousarray(homography), float(sign), float(origin_ab[0]), float(origin_ab[1]),
-               float(scale), bool(cubic), out)  # fmt: skip
+               float(scale), bool(cubic), out, empty)  # fmt: skip
     return out
