@@ -218,6 +218,15 @@ def strided_order(order: NDArray[np.int64], stride: int) -> tuple[NDArray[np.int
     return np.ascontiguousarray(picked, dtype=np.int64), frac
 
 
+def _half_pixel_level(preintegrated: bool, step: float) -> QualityLevel:
+    """The quality level at oversampling 0.5 (one intermediate pixel per voxel where voxels cover
+    several output pixels), labelled as the benchmarks and `volren/quality_levels.json` name it."""
+    label = f"{'pre-integrated' if preintegrated else 'post-classified'}, oversampling 0.5"
+    if step != 0.5:
+        label += f", step {step:g}"
+    return QualityLevel(label, step=step, preintegration=preintegrated, options={"oversampling": 0.5})
+
+
 def _rows(height: int) -> NDArray[np.int64]:
     """The intermediate rows, for kernels that hand them to threads ROW_CHUNK at a time (dynamic
     chunks: a static split waits for the slowest thread, and on a shared machine one core is often
@@ -250,18 +259,13 @@ class ShearWarpRenderer(RendererBase):
             # principal axis as accurate as VTK's step 2 (stop 47, docs/shearwarp.md: bonsai smooth 0.0044 at step
             # 1 post-classified against VTK's 0.0069, at 0.6x every slice's time; spiky and opaque TFs at step 2
             # pre-integrated)
-            QualityLevel("post-classified, oversampling 0.5, step 1", step=1.0, preintegration=False,
-                         options={"oversampling": 0.5}),
-            QualityLevel("pre-integrated, oversampling 0.5, step 2", step=2.0, preintegration=True,
-                         options={"oversampling": 0.5}),
-            QualityLevel("pre-integrated, oversampling 0.5, step 1", step=1.0, preintegration=True,
-                         options={"oversampling": 0.5}),
+            _half_pixel_level(False, 1.0),
+            _half_pixel_level(True, 2.0),
+            _half_pixel_level(True, 1.0),
             # half an intermediate pixel per output pixel (one per voxel is kept): the classic shear-warp
             # image where voxels cover several pixels, the warp's Catmull-Rom filter doing the rest
-            QualityLevel("post-classified, oversampling 0.5", step=0.5, preintegration=False,
-                         options={"oversampling": 0.5}),
-            QualityLevel("pre-integrated, oversampling 0.5", step=0.5, preintegration=True,
-                         options={"oversampling": 0.5}),
+            _half_pixel_level(False, 0.5),
+            _half_pixel_level(True, 0.5),
             QualityLevel("post-classified, oversampling 1", step=0.5, preintegration=False,
                          options={"oversampling": 1.0}),
             QualityLevel("pre-integrated, oversampling 1", step=0.5, preintegration=True, options={"oversampling": 1.0}),
