@@ -135,6 +135,22 @@ def test_a_worker_lost_mid_frame_has_its_bricks_rerun_elsewhere(client, tmp_path
     assert frame.drawn == frame.bricks
 
 
+def test_a_frame_after_every_worker_restarted_sends_the_volume_again(client):
+    """The scattered volume lives only on the workers: when they are all replaced (a restart, or every
+    worker that held it lost), the next frame scatters it again and draws, instead of failing."""
+    volume = field_volume()
+    settings = RenderSettings()
+    camera = Camera.orbit(volume.bounds, 15, 35)
+    renderer = ClusterRenderer(client, VolumeSpec(volume), "reference", brick=6)
+    try:
+        client.restart()
+        image, frame = renderer.render(settings, TF, camera, 24, 20)
+    finally:
+        renderer.close()
+    assert rmse(image, whole_render("reference", volume, settings, camera)) <= 1e-5
+    assert frame.drawn == frame.bricks
+
+
 def test_volren_render_from_python_on_a_local_cluster():
     import volren
 

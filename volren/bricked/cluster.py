@@ -221,10 +221,18 @@ class ClusterRenderer:
         self._probe = registry.create(renderer)  # for capabilities and ghost voxels; draws nothing
         check_draws_bricks(self._probe)
         self.source: BrickSource = spec.open()
-        self._data = client.scatter(spec.volume, broadcast=True) if isinstance(spec, VolumeSpec) else None
         self.spec = spec
+        self._data = self._scatter()
         self.layout: BrickLayout = brick_layout(self.source, brick)
         self._owners: dict[int, str] = {}
+
+    def _scatter(self) -> Any:
+        """The in-memory volume on every running worker (None for a `ZarrSpec`), under a key of its own:
+        a key from the volume's hash is shared by every renderer of equal data, so one renderer's
+        release could forget what another still uses."""
+        if not isinstance(self.spec, VolumeSpec):
+            return None
+        return self.client.scatter(self.spec.volume, broadcast=True, hash=False)
 
     def _block_owners(self, blocks: NDArray[np.intp]) -> dict[int, str]:
         """Which worker keeps each k-d block (kept from frame to frame while the workers stay)."""
@@ -256,30 +264,38 @@ class ClusterRenderer:
                 runs.append([])
                 run_blocks.append(block)
             runs[-1].append(index)
-        futures = [
-            self.client.submit(render_run, self.spec, self._data, self.renderer_name, settings, tf, camera, width, height,
-                               self.layout.brick, ghost, run, workers=[owners[block]], allow_other_workers=True,
-                               retries=2, pure=False)  # fmt: skip
-            for run, block in zip(runs, run_blocks, strict=True)
-        ]
-        index_of = {f.key: n for n, f in enumerate(futures)}
-        layers: list[RunLayer | None] = [None] * len(futures)
+        layers: list[RunLayer | None] = [None] * len(runs)
         total_bricks = sum(len(r) for r in runs)
         done = 0
-        try:
-            for future in distributed.as_completed(futures):
-                n = index_of[future.key]
-                layers[n] = future.result()
-                done += len(runs[n])
-                if progress is not None:
-                    progress(done / max(total_bricks, 1))
-        except VolrenError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - a worker's failure, whatever it was, on one line
-            for future in futures:
-                future.cancel()
-            reason = " ".join(str(exc).split())[:200]
-            raise VolrenError(f"the cluster could not render the frame ({type(exc).__name__}: {reason})") from None
+        for attempt in range(2):
+            pending = [n for n in range(len(runs)) if layers[n] is None]
+            futures = [
+                self.client.submit(render_run, self.spec, self._data, self.renderer_name, settings, tf, camera, width,
+                                   height, self.layout.brick, ghost, runs[n], workers=[owners[run_blocks[n]]],
+                                   allow_other_workers=True, retries=2, pure=False)
+                for n in pending
+            ]  # fmt: skip
+            index_of = {f.key: n for f, n in zip(futures, pending, strict=True)}
+            try:
+                for future in distributed.as_completed(futures):
+                    n = index_of[future.key]
+                    layers[n] = future.result()
+                    done += len(runs[n])
+                    if progress is not None:
+                        progress(done / max(total_bricks, 1))
+                break
+            except VolrenError:
+                raise
+            except Exception as exc:  # noqa: BLE001 - a worker's failure, whatever it was, on one line
+                for future in futures:
+                    future.cancel()
+                if attempt == 0 and self._data is not None:
+                    # the workers that held the scattered volume may all be gone (a worker that joined after
+                    # the scatter has none): send it again and redo the runs not yet drawn, once
+                    self._data = self._scatter()
+                    continue
+                reason = " ".join(str(exc).split())[:200]
+                raise VolrenError(f"the cluster could not render the frame ({type(exc).__name__}: {reason})") from None
         if progress is not None and not runs:
             progress(1.0)
         t0 = time.perf_counter()
@@ -299,7 +315,11 @@ class ClusterRenderer:
         return image.astype(np.float32), frame
 
     def close(self) -> None:
+        """Release the probe renderer and the workers' copies of the scattered volume."""
         self._probe.release()
+        if self._data is not None:
+            self._data.release()
+            self._data = None
 
 
 def render_on_cluster(
