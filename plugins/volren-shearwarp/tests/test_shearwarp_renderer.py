@@ -87,9 +87,8 @@ def test_strided_slabs_cover_the_slices_once_and_match_their_runs(slices, stride
     every slice interval once; only the back slab may be short."""
     order = np.arange(slices) if forward else np.arange(slices - 1, -1, -1)
     picked, frac = strided_order(order, stride)
-    pairs = slab_pairs(slices, stride, forward)
+    pairs, run_slab = slab_pairs(picked)
     assert picked[0] == order[0] and picked[-1] == order[-1]
-    run_slab = np.arange(-1, len(picked) - 1) if forward else len(picked) - 1 - np.arange(len(picked))
     for m in range(1, len(picked)):
         lower, upper = sorted((picked[m - 1], picked[m]))
         assert tuple(pairs[run_slab[m]]) == (lower, upper)

@@ -80,23 +80,18 @@ class OpacitySupport:
         return int(self.counts[-1]) == 0
 
 
-def slab_pairs(slices: int, stride: int, forward: bool) -> NDArray[np.int64]:
-    """The (lower, upper) slice of each slab when every `stride`-th slice is composited from the
-    front (`forward`: from slice 0, else from the last), sorted by lower slice; the slab at the
-    back end is shorter when stride does not divide slices - 1. Stride 1: (k, k + 1)."""
-    ks = np.arange(0, slices, stride) if forward else np.arange(slices - 1, -1, -stride)[::-1]
-    if ks[0] != 0:
-        ks = np.concatenate([[0], ks])
-    if ks[-1] != slices - 1:
-        ks = np.concatenate([ks, [slices - 1]])
-    return np.ascontiguousarray(np.stack([ks[:-1], ks[1:]], axis=1).astype(np.int64))
-
-
-def pairs_key(slices: int, stride: int, forward: bool) -> tuple[int, int]:
-    """What tells `slab_pairs` apart: (stride, where its short slab is); stride 1 has one layout."""
-    if stride == 1 or (slices - 1) % stride == 0:
-        return stride, 0
-    return stride, 1 if forward else -1
+def slab_pairs(order: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """The slabs of a compositing order (slice indices front to back, every slice or every
+    stride-th): their (lower, upper) slices sorted by lower slice, and for m >= 1 the index in that
+    list of the slab between order[m - 1] and order[m] (entry 0 unused, -1). Why sorted: the runs of
+    an every-slice order are then the same whichever way the order runs."""
+    lower = np.minimum(order[:-1], order[1:])
+    upper = np.maximum(order[:-1], order[1:])
+    rank = np.argsort(lower, kind="stable")
+    pairs = np.ascontiguousarray(np.stack([lower[rank], upper[rank]], axis=1).astype(np.int64))
+    run_slab = np.full(len(order), -1, np.int64)
+    run_slab[1 + rank] = np.arange(len(rank))
+    return pairs, run_slab
 
 
 @dataclass
@@ -105,9 +100,9 @@ class AxisCopy:
 
     axis: int
     values: NDArray[np.float32]
-    runs: dict[tuple, Runs] = field(default_factory=dict)  #: by (radius, `pairs_key`)
-    #: by (radius, `pairs_key`): each block's (lowest, highest) range bin, uint8 (`_block_ranges`), kept
-    #: across TF edits
+    runs: dict[tuple, Runs] = field(default_factory=dict)  #: by (radius, the `slab_pairs` as bytes)
+    #: by (radius, the `slab_pairs` as bytes): each block's (lowest, highest) range bin, uint8
+    #: (`_block_ranges`), kept across TF edits
     ranges: dict[tuple, tuple[NDArray[np.uint8], NDArray[np.uint8]]] = field(default_factory=dict)
     ranges_key: tuple[float, float] | None = None  #: the value range the bins span
 
@@ -270,12 +265,10 @@ def _runs_from_mask(mask, min_gap):
 
 
 def block_ranges(values: NDArray[np.float32], support: OpacitySupport, radius: int,
-                 pairs: NDArray[np.int64] | None = None) -> tuple[NDArray, NDArray]:  # fmt: skip
-    """`_block_ranges` of one axis copy for the slabs `pairs` (default: every slice, `slab_pairs`
-    at stride 1), bins over the support's value range, fixed per volume."""
+                 pairs: NDArray[np.int64]) -> tuple[NDArray, NDArray]:  # fmt: skip
+    """`_block_ranges` of one axis copy for the slabs `pairs` (`slab_pairs`), bins over the
+    support's value range, fixed per volume."""
     nc, nb, na = values.shape
-    if pairs is None:
-        pairs = slab_pairs(nc, 1, True)
     bmin = np.empty((pairs.shape[0], nb - 1, na - 1), np.uint8)
     bmax = np.empty((pairs.shape[0], nb - 1, na - 1), np.uint8)
     bins = support.counts.shape[0] - 1
@@ -321,19 +314,20 @@ class ClassifiedVolume:
             self.copy_ms[axis] = (time.perf_counter() - start) * 1000.0
         return found
 
-    def runs(self, axis: int, support: OpacitySupport, radius: int = 1, stride: int = 1, forward: bool = True) -> Runs:
-        """The runs of `axis` for `support` and `radius`, over the slabs of every `stride`-th slice
-        composited from the front (`slab_pairs`), rebuilt only when the support changed."""
+    def runs(self, axis: int, support: OpacitySupport, radius: int = 1, pairs: NDArray[np.int64] | None = None) -> Runs:
+        """The runs of `axis` for `support` and `radius` over the slabs `pairs` (`slab_pairs` of the
+        compositing order; default every slice), rebuilt only when the support changed."""
         copy = self.copy(axis)
-        slices = copy.values.shape[0]
-        key = (radius, *pairs_key(slices, stride, forward))
+        if pairs is None:
+            pairs = slab_pairs(np.arange(copy.values.shape[0]))[0]
+        key = (radius, pairs.tobytes())
         found = copy.runs.get(key)
         if found is None or found.digest != support.digest:
             if copy.ranges_key != (support.lo, support.hi):
                 copy.ranges.clear()
                 copy.ranges_key = (support.lo, support.hi)
             if key not in copy.ranges:
-                copy.ranges[key] = block_ranges(copy.values, support, radius, slab_pairs(slices, stride, forward))
+                copy.ranges[key] = block_ranges(copy.values, support, radius, pairs)
             found = copy.runs[key] = build_runs(copy.ranges[key], support, radius)
         return found
 

@@ -70,7 +70,7 @@ from volren.renderers.base import (
     QualityLevel,
     RendererBase,
 )
-from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport
+from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport, slab_pairs
 from volren_shearwarp.composite import AVERAGE, MAXIMUM, MINIMUM, composite_slabs, project_slabs
 from volren_shearwarp.factorization import Factorization, WarpMap, factorize
 from volren_shearwarp.tables import (
@@ -412,17 +412,15 @@ class ShearWarpRenderer(RendererBase):
             counters.update(samples=0.0, empty_pixels_skipped=0.0, pixels_terminated=0.0, table_lengths=0.0)
             return np.zeros((height, width, 4), np.float32), counters
         stride = 1 if clipping or settings.jitter else slice_stride(settings.step, spacing_c, volume.mean_spacing, len(order))
-        forward = bool(order[-1] > order[0])
         order, slab_frac = strided_order(order, stride)
         counters.update(slices=float(len(order)), slice_stride=float(stride))
-        # the run index of slab m: slabs are numbered by their lower slice (`classified.slab_pairs`)
-        run_slab = np.arange(-1, len(order) - 1) if forward else len(order) - 1 - np.arange(len(order))
+        pairs, run_slab = slab_pairs(order)  # the runs number slabs by their lower slice
         # stride x whole shears: a camera turning under perspective then meets a few radii, not one per
         # stride-th of a shear (each new radius is a ranges pass, 75 ms on engine)
         radius = max(MIN_RUN_RADIUS, stride * math.ceil(fac.max_shear - 1e-9))
         use_runs = bool(opts["empty_space_skipping"]) and radius <= MAX_RUN_RADIUS * stride
         if use_runs:
-            runs = classified.runs(fac.axis, support, radius, stride, forward)
+            runs = classified.runs(fac.axis, support, radius, pairs)
             offsets, starts, ends = runs.offsets, runs.starts, runs.ends
         else:
             offsets, starts, ends = np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32)

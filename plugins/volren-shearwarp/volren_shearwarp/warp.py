@@ -71,7 +71,7 @@ def empty_taps(inter, empty):
         for p in range(iw):
             along[q, p] = drawn[p] | drawn[p + 1] | drawn[p + 2] | drawn[p + 3]
     for q in prange(ih):
-        above = along[max(q - 1, 0)] if q > 0 else along[q]
+        above = along[q - 1] if q > 0 else along[q]
         below1 = along[min(q + 1, ih - 1)]
         below2 = along[min(q + 2, ih - 1)]
         row = along[q]
