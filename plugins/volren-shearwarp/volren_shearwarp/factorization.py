@@ -63,6 +63,7 @@ class Factorization:
     spacing: NDArray[np.float64]  #: spacing of (a, b, c)
     max_shear: float  #: largest |da/dc|, |db/dc| of any ray through the volume (index units)
     slab_length: float  #: world length between two slices along a ray (parallel), else 0
+    warp: WarpMap  #: output pixel -> intermediate plane, for the final warp (made once per view)
 
     def length_terms(self) -> tuple[NDArray[np.float64], NDArray[np.float64], float, float]:
         """(col_d2, row_d2, dc2, inv_norm): under perspective the slice-to-slice length of the ray
@@ -244,7 +245,7 @@ def factorize(camera: Camera, volume: UniformVolume, width: int, height: int, ov
         alpha_b=np.ascontiguousarray(f * b0 + shift_b), beta_b=np.ascontiguousarray(f * h),
         width=iw, height=ih, scale=scale, origin_ab=(float(a0), float(b0)), plane=plane,
         perspective=perspective, eye=eye, direction=direction, spacing=sp, max_shear=max_shear,
-        slab_length=slab,
+        slab_length=slab, warp=warp,
     )  # fmt: skip
 
 

@@ -72,7 +72,7 @@ from volren.renderers.base import (
 )
 from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport, slab_pairs
 from volren_shearwarp.composite import AVERAGE, MAXIMUM, MINIMUM, composite_slabs, project_slabs
-from volren_shearwarp.factorization import Factorization, WarpMap, factorize
+from volren_shearwarp.factorization import Factorization, factorize
 from volren_shearwarp.tables import (
     GRID_MARGIN,
     LENGTH_RATIO,
@@ -401,7 +401,7 @@ class ShearWarpRenderer(RendererBase):
             rgb, a = tf.sample(value)
             a = np.where(hit, a, 0.0)
             inter = np.concatenate([rgb * a[..., None], a[..., None]], axis=-1).astype(np.float32)
-            image = self._warp(inter, fac, camera, volume, width, height, opts)
+            image = self._warp(inter, fac, width, height, opts)
             counters["samples"] = float(np.count_nonzero(hit))
             return image, counters
 
@@ -517,7 +517,7 @@ class ShearWarpRenderer(RendererBase):
             )  # fmt: skip
 
         self._blocks(progress, len(order), block)
-        image = self._warp(rgba, fac, camera, volume, width, height, opts)
+        image = self._warp(rgba, fac, width, height, opts)
         totals = per_row.sum(axis=0)
         counters.update(samples=float(totals[0]), empty_pixels_skipped=float(totals[1]),
                         pixels_terminated=float(totals[2]), runs=1.0 if use_runs else 0.0)  # fmt: skip
@@ -545,8 +545,9 @@ class ShearWarpRenderer(RendererBase):
         self._slab_ms = spent * 1000.0
 
     @staticmethod
-    def _warp(inter: NDArray[np.float32], fac: Factorization, camera: Camera, volume: UniformVolume,
-              width: int, height: int, opts: Mapping[str, Any]) -> NDArray[np.float32]:  # fmt: skip
-        wm = WarpMap.build(camera, volume, fac.perm, fac.plane, width, height)
+    def _warp(inter: NDArray[np.float32], fac: Factorization, width: int, height: int,
+              opts: Mapping[str, Any]) -> NDArray[np.float32]:  # fmt: skip
+        wm = fac.warp
+        assert (wm.width, wm.height) == (width, height)
         return warp(inter, wm.homography, wm.sign, fac.origin_ab, fac.scale, width, height,
                     opts["warp_filter"] == "cubic")
