@@ -187,6 +187,43 @@ def test_the_reach_is_one_sided_only_where_it_is_cheap_and_exact():
 
 
 @pytest.mark.parametrize("parallel", [False, True])
+def test_the_ray_table_holds_the_cameras_pixel_rays(parallel):
+    """Each pixel's ray against `Camera.pixel_rays` in float64: origin, direction (one shared row
+    under a parallel projection) and where it enters the box; then a renderer switching projection
+    draws what a fresh one does (the table's arrays change shape with it)."""
+    from volren_objectorder.patterns import ray_table
+
+    volume = field((10, 11, 12), spacing=(1.0, 0.8, 1.3))
+    camera = Camera.orbit(volume.bounds, 35, 25, parallel=parallel)
+    width, height = 24, 20
+    rays = ray_table(camera, volume, width, height, 0.5, pixel_offsets("interleaved", width, height, 0))
+    near, directions = camera.pixel_rays(width, height)
+    near, directions = near.reshape(-1, 3), directions.reshape(-1, 3)
+    spacing, origin = np.asarray(volume.spacing), np.asarray(volume.origin)
+    assert rays.direction.shape == ((1, 3) if parallel else (width * height, 3))
+    np.testing.assert_allclose(rays.origin, (near - origin) / spacing, atol=1e-9)
+    np.testing.assert_allclose(np.broadcast_to(rays.world_direction, directions.shape), directions, atol=1e-9)
+    np.testing.assert_allclose(np.broadcast_to(rays.direction, directions.shape), directions / spacing, atol=1e-9)
+    np.testing.assert_allclose(rays.inverse * rays.direction, 1.0, atol=1e-12)
+    upper = (np.asarray(volume.dimensions) - 1.0) * spacing
+    with np.errstate(divide="ignore"):
+        ta, tb = (0.0 - (near - origin)) / directions, (upper - (near - origin)) / directions
+    t_in = np.maximum(np.minimum(ta, tb).max(axis=1), 0.0)
+    hit = rays.count > 0
+    assert hit.sum() > 0.2 * width * height and not hit.all()
+    np.testing.assert_allclose(rays.t0[hit], t_in[hit], atol=1e-9)
+
+    tf = SHELL_TF
+    other = Camera.orbit(volume.bounds, 35, 25, parallel=not parallel)
+    switched = ObjectOrderRenderer()
+    switched.set_volume(volume)
+    switched.set_transfer_function(tf)
+    switched.render(camera, width, height)
+    fresh, _ = draw(volume, tf, other, (width, height))
+    np.testing.assert_array_equal(switched.render(other, width, height), fresh)
+
+
+@pytest.mark.parametrize("parallel", [False, True])
 def test_hidden_volume_removal_skips_cells_and_changes_little(parallel):
     volume = field((24, 24, 24))
     camera = Camera.orbit(volume.bounds, 30, 20, parallel=parallel)

@@ -325,23 +325,24 @@ def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz
 
 
 @njit(cache=True, inline="always")
-def _slab(ro, rd, ri, p, x0, y0, z0, sx, sy, sz, ncx, ncy, ncz):
-    """[tlo, thi) of pixel p's ray in the block of sx x sy x sz cells from cell (x0, y0, z0), the exact
-    slab test in index space; thi <= tlo when the ray misses the block. Each plane's crossing is
-    (q - o) / d from the plane's index q alone, so two blocks sharing a face agree on it and every
-    sample falls in exactly one block."""
+def _slab(ro, rd, ri, p, dp, x0, y0, z0, sx, sy, sz, ncx, ncy, ncz):
+    """[tlo, thi) of pixel p's ray (its direction in row dp of rd and ri: p, or 0 when every ray
+    shares one) in the block of sx x sy x sz cells from cell (x0, y0, z0), the exact slab test in
+    index space; thi <= tlo when the ray misses the block. Each plane's crossing is (q - o) / d from
+    the plane's index q alone, so two blocks sharing a face agree on it and every sample falls in
+    exactly one block."""
     tlo = -math.inf
     thi = math.inf
     for ax in range(3):
         o = ro[p, ax]
         q = float(x0 if ax == 0 else (y0 if ax == 1 else z0))
         q1 = q + (sx if ax == 0 else (sy if ax == 1 else sz))
-        if rd[p, ax] == 0.0:
+        if rd[dp, ax] == 0.0:
             cells = ncx if ax == 0 else (ncy if ax == 1 else ncz)
             if o < q or o > q1 or (o == q1 and q1 < cells):
                 return 0.0, -math.inf
         else:
-            inv = ri[p, ax]
+            inv = ri[dp, ax]
             ta = (q - o) * inv
             tb = (q1 - o) * inv
             if ta > tb:
@@ -622,6 +623,7 @@ def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, stat
     rgba, acc, nextk, finished = state[0], state[1], state[2], state[7]  # and so are the previous samples
     hom, hl, hoff, hcols = occlusion
     c8, g8 = scratch[0], scratch[1]
+    shared = rd.shape[0] == 1  # one direction for every ray (a parallel projection, `RayTable`)
     h = fp[F_H]
     term = fp[F_TERM]
     post_path = mode == COMPOSITE and not pre
@@ -639,7 +641,8 @@ def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, stat
             p = r * width + c
             if finished[p]:
                 continue
-            tlo, thi = _slab(ro, rd, ri, p, x0, y0, z0, sx, sy, sz, ncx, ncy, ncz)
+            dp = 0 if shared else p
+            tlo, thi = _slab(ro, rd, ri, p, dp, x0, y0, z0, sx, sy, sz, ncx, ncy, ncz)
             if not thi > tlo:
                 continue
             ns = rcount[p]
@@ -647,15 +650,15 @@ def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, stat
             first = rfirst[p]
             last = rlast[p]
             kk = _first_sample(t0, first, h, ns, last, nextk[p], tlo)
-            dx = rd[p, 0]
-            dy = rd[p, 1]
-            dz = rd[p, 2]
+            dx = rd[dp, 0]
+            dy = rd[dp, 1]
+            dz = rd[dp, 2]
             ox = ro[p, 0] - x0
             oy = ro[p, 1] - y0
             oz = ro[p, 2] - z0
             hx = hy = hz = 0.0
             if shade:
-                hx, hy, hz = _half_vector(rwd, p, fp)
+                hx, hy, hz = _half_vector(rwd, dp, fp)
             if post_path:
                 kk, taken, sat = _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first,
                                              last, ns, shade, use_post, xs, tab, post, fp, rgba)  # fmt: skip

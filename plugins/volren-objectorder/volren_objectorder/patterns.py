@@ -41,9 +41,11 @@ class RayTable:
     """Per pixel (flattened, row 0 at the top): the ray in index space and its samples."""
 
     origin: NDArray[np.float64]  #: (P, 3) ray origin in grid-index coordinates (x, y, z)
-    direction: NDArray[np.float64]  #: (P, 3) index units per world unit along the ray
-    inverse: NDArray[np.float64]  #: (P, 3) 1 / direction (inf along a zero component): divide-free slab tests
-    world_direction: NDArray[np.float64]  #: (P, 3) unit world direction (shading's view vector)
+    #: (P, 3) index units per world unit along the ray; (1, 3), one row for every pixel, under a parallel
+    #: projection (so are `inverse` and `world_direction`: 9 of a pixel's 15 numbers not written per frame)
+    direction: NDArray[np.float64]
+    inverse: NDArray[np.float64]  #: (P, 3) or (1, 3) 1 / direction (inf along a zero component): divide-free slab tests
+    world_direction: NDArray[np.float64]  #: (P, 3) or (1, 3) unit world direction (shading's view vector)
     t0: NDArray[np.float64]  #: (P,) where the ray enters (world length from the origin)
     count: NDArray[np.int32]  #: (P,) samples (segments) of the ray
     first: NDArray[np.float64]  #: (P,) length of the first segment (all of the ray when count is 1)
@@ -81,38 +83,71 @@ def segments(length, h, phase):
 def _fill_rays(inv, width, height, grid_origin, spacing, upper, view_dir, t_far_eye, h, offsets,
                o_out, d_out, i_out, w_out, t0_out, count_out, first_out, last_out):  # fmt: skip
     """Every pixel's ray as `Camera.pixel_rays` makes it (unproject the pixel centre at NDC depth
-    -1 and 1), clipped to the box [0, upper] (index space) and the clipping planes."""
+    -1 and 1), clipped to the box [0, upper] (index space) and the clipping planes.
+
+    Speed: a row's unprojection is affine in the pixel's x up to the two homogeneous divisions, and
+    each division by a per-frame or per-pixel constant is one reciprocal (16 divisions a pixel were
+    most of a 512 x 512 table's 11 ms)."""
+    inv_sp0, inv_sp1, inv_sp2 = 1.0 / spacing[0], 1.0 / spacing[1], 1.0 / spacing[2]
+    inv_h = 1.0 / h
+    shared = d_out.shape[0] == 1  # a parallel projection: every ray has the view direction, set once
+    if shared:
+        for a in range(3):
+            d = view_dir[a] * (inv_sp0 if a == 0 else (inv_sp1 if a == 1 else inv_sp2))
+            d_out[0, a] = d
+            i_out[0, a] = 1.0 / d if d != 0.0 else math.inf
+            w_out[0, a] = view_dir[a]
     for j in prange(height):
         ny = 1.0 - (j + 0.5) / height * 2.0
-        near = np.empty(3)
-        far = np.empty(3)
+        # numerators and w at depth -1 (near) and 1 (far), as c + slope * nx
+        cn0 = inv[0, 1] * ny - inv[0, 2] + inv[0, 3]
+        cn1 = inv[1, 1] * ny - inv[1, 2] + inv[1, 3]
+        cn2 = inv[2, 1] * ny - inv[2, 2] + inv[2, 3]
+        cnw = inv[3, 1] * ny - inv[3, 2] + inv[3, 3]
+        cf0 = cn0 + 2.0 * inv[0, 2]
+        cf1 = cn1 + 2.0 * inv[1, 2]
+        cf2 = cn2 + 2.0 * inv[2, 2]
+        cfw = cnw + 2.0 * inv[3, 2]
         for i in range(width):
             nx = (i + 0.5) / width * 2.0 - 1.0
-            wn = inv[3, 0] * nx + inv[3, 1] * ny - inv[3, 2] + inv[3, 3]
-            wf = inv[3, 0] * nx + inv[3, 1] * ny + inv[3, 2] + inv[3, 3]
-            for a in range(3):
-                near[a] = (inv[a, 0] * nx + inv[a, 1] * ny - inv[a, 2] + inv[a, 3]) / wn
-                far[a] = (inv[a, 0] * nx + inv[a, 1] * ny + inv[a, 2] + inv[a, 3]) / wf
+            rn = 1.0 / (inv[3, 0] * nx + cnw)
+            rf = 1.0 / (inv[3, 0] * nx + cfw)
+            near0 = (inv[0, 0] * nx + cn0) * rn
+            near1 = (inv[1, 0] * nx + cn1) * rn
+            near2 = (inv[2, 0] * nx + cn2) * rn
             p = j * width + i
-            dx = far[0] - near[0]
-            dy = far[1] - near[1]
-            dz = far[2] - near[2]
-            n = math.sqrt(dx * dx + dy * dy + dz * dz)
-            dx, dy, dz = dx / n, dy / n, dz / n
-            w_out[p, 0], w_out[p, 1], w_out[p, 2] = dx, dy, dz
+            if shared:
+                dx, dy, dz = view_dir[0], view_dir[1], view_dir[2]
+            else:
+                dx = (inv[0, 0] * nx + cf0) * rf - near0
+                dy = (inv[1, 0] * nx + cf1) * rf - near1
+                dz = (inv[2, 0] * nx + cf2) * rf - near2
+                rnorm = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+                dx, dy, dz = dx * rnorm, dy * rnorm, dz * rnorm
+                w_out[p, 0], w_out[p, 1], w_out[p, 2] = dx, dy, dz
             t_in = -math.inf
             t_out = math.inf
             for a in range(3):
-                o = (near[a] - grid_origin[a]) / spacing[a]
-                d = (dx if a == 0 else (dy if a == 1 else dz)) / spacing[a]
+                if a == 0:
+                    o = (near0 - grid_origin[0]) * inv_sp0
+                    d = dx * inv_sp0
+                elif a == 1:
+                    o = (near1 - grid_origin[1]) * inv_sp1
+                    d = dy * inv_sp1
+                else:
+                    o = (near2 - grid_origin[2]) * inv_sp2
+                    d = dz * inv_sp2
                 o_out[p, a] = o
-                d_out[p, a] = d
-                i_out[p, a] = 1.0 / d if d != 0.0 else math.inf
+                if shared:
+                    inv_d = i_out[0, a]
+                else:
+                    d_out[p, a] = d
+                    inv_d = 1.0 / d if d != 0.0 else math.inf
+                    i_out[p, a] = inv_d
                 if d == 0.0:
                     if o < 0.0 or o > upper[a]:
                         t_in = math.inf
                 else:
-                    inv_d = 1.0 / d
                     ta = (0.0 - o) * inv_d
                     tb = (upper[a] - o) * inv_d
                     t_in = max(t_in, min(ta, tb))
@@ -121,7 +156,7 @@ def _fill_rays(inv, width, height, grid_origin, spacing, upper, view_dir, t_far_
             t0 = max(t_in, 0.0)
             t1 = min(t_out, t_far)
             length = t1 - t0 if t1 > t0 else 0.0
-            count, first, last = segments(length, h, (offsets[p] - t0 / h) % 1.0)  # planes from the origin
+            count, first, last = segments(length, h, (offsets[p] - t0 * inv_h) % 1.0)  # planes from the origin
             t0_out[p] = t0 if count > 0 else 0.0
             count_out[p] = count
             first_out[p] = first
@@ -135,11 +170,12 @@ def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h:
     512 x 512) cost a page fault per 4 KB on first touch, a third of a fast frame."""
     inv = np.linalg.inv(camera.projection_matrix(width / height) @ camera.view_matrix())
     p = width * height
-    if reuse is not None and reuse.count.shape[0] == p:
+    per_pixel = 1 if camera.parallel else p  # rows of the direction arrays
+    if reuse is not None and reuse.count.shape[0] == p and reuse.direction.shape[0] == per_pixel:
         o, d, i, w = reuse.origin, reuse.direction, reuse.inverse, reuse.world_direction
         t0, first, last, count = reuse.t0, reuse.first, reuse.last, reuse.count
     else:
-        o, d, i, w = np.empty((p, 3)), np.empty((p, 3)), np.empty((p, 3)), np.empty((p, 3))
+        o, d, i, w = np.empty((p, 3)), np.empty((per_pixel, 3)), np.empty((per_pixel, 3)), np.empty((per_pixel, 3))
         t0, first, last = np.empty(p), np.empty(p), np.empty(p)
         count = np.empty(p, np.int32)
     near, far = camera.clipping_range
@@ -156,14 +192,18 @@ def direction_signs(direction, count):
     (lower) indices along it. One pass, no copies: numpy's masked `any` took 7 ms at 512 x 512,
     this 0.9 ms."""
     ux = uy = uz = dx = dy = dz = False
+    shared = direction.shape[0] == 1  # one direction for every ray (a parallel projection)
     for p in range(count.shape[0]):
         if count[p] > 0:
-            ux |= direction[p, 0] > 0.0
-            uy |= direction[p, 1] > 0.0
-            uz |= direction[p, 2] > 0.0
-            dx |= direction[p, 0] < 0.0
-            dy |= direction[p, 1] < 0.0
-            dz |= direction[p, 2] < 0.0
+            q = 0 if shared else p
+            ux |= direction[q, 0] > 0.0
+            uy |= direction[q, 1] > 0.0
+            uz |= direction[q, 2] > 0.0
+            dx |= direction[q, 0] < 0.0
+            dy |= direction[q, 1] < 0.0
+            dz |= direction[q, 2] < 0.0
+            if shared:
+                break
     return (ux, uy, uz), (dx, dy, dz)
 
 

@@ -23,9 +23,11 @@ def oracle(inter: np.ndarray, hom: np.ndarray, sign: float, a0: float, b0: float
     y = 1.0 - (np.arange(height) + 0.5) / height * 2.0
     x, y = np.meshgrid(x, y)
     hw = hom[2, 0] * x + hom[2, 1] * y + hom[2, 2]
-    p = ((hom[0, 0] * x + hom[0, 1] * y + hom[0, 2]) / hw - a0) * scale
-    q = ((hom[1, 0] * x + hom[1, 1] * y + hom[1, 2]) / hw - b0) * scale
+    with np.errstate(divide="ignore", invalid="ignore"):  # behind the plane's horizon: not seen
+        p = ((hom[0, 0] * x + hom[0, 1] * y + hom[0, 2]) / hw - a0) * scale
+        q = ((hom[1, 0] * x + hom[1, 1] * y + hom[1, 2]) / hw - b0) * scale
     seen = (hw * sign > 0) & (p > -2.0) & (p < iw + 1.0) & (q > -2.0) & (q < ih + 1.0)
+    p, q = np.where(seen, p, 0.0), np.where(seen, q, 0.0)
     p0, q0 = np.floor(p).astype(int), np.floor(q).astype(int)
     wp, wq = _weights(p - p0, cubic), _weights(q - q0, cubic)
     out = np.zeros((height, width, 4))
@@ -40,13 +42,14 @@ def oracle(inter: np.ndarray, hom: np.ndarray, sign: float, a0: float, b0: float
 
 
 @pytest.mark.parametrize("cubic", [True, False])
-@pytest.mark.parametrize("projective", [False, True])
+@pytest.mark.parametrize("projective", [False, True, "horizon"])
 @pytest.mark.parametrize("pattern", ["dense", "sparse", "cluster"])
-def test_the_warp_is_the_oracle_inside_and_at_the_edges(cubic: bool, projective: bool, pattern: str) -> None:
+def test_the_warp_is_the_oracle_inside_and_at_the_edges(cubic: bool, projective: bool | str, pattern: str) -> None:
     """Also on a sparse image (3 % of its pixels drawn, the rest transparent black), where the warp
     skips the pixels whose taps are all empty (`empty_taps`): a tap window one pixel too small
-    would lose the lone pixels' footprints; and on one small drawn patch, whose rim's pixels must
-    keep their taps."""
+    would lose the lone pixels' footprints; on one small drawn patch, whose rim's pixels must keep
+    their taps; and with the plane's horizon inside the frame (pixels whose w has the wrong sign
+    see nothing)."""
     rng = np.random.default_rng(7)
     inter = rng.random((37, 53, 4)).astype(np.float32)
     inter[..., :3] *= inter[..., 3:]
@@ -59,7 +62,9 @@ def test_the_warp_is_the_oracle_inside_and_at_the_edges(cubic: bool, projective:
     turn = 0.4
     hom = np.array([[30 * np.cos(turn), -30 * np.sin(turn), 25.0], [30 * np.sin(turn), 30 * np.cos(turn), 18.0],
                     [0.0, 0.0, 1.0]])  # fmt: skip
-    if projective:
+    if projective == "horizon":
+        hom[2] = (0.2, 1.0, 0.8)  # w <= 0 over the bottom rows of the frame
+    elif projective:
         hom[2, :2] = (0.15, -0.1)
     got = warp(inter, hom, 1.0, (-1.5, 0.5), 1.1, 96, 80, cubic)
     want = oracle(inter, hom, 1.0, -1.5, 0.5, 1.1, 96, 80, cubic)
