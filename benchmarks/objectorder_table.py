@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 from volren_objectorder import ObjectOrderRenderer
 
+from benchmarks.machine_speed import machine_line
 from volren.api import prepared_renderer
 from volren.bench.datasets import shared_datasets
 from volren.model import Camera, RenderSettings
@@ -39,6 +40,7 @@ def main() -> None:
     ds = shared_datasets(Path(os.environ.get("VOLREN_SHARED", "../shared")))
     settings = RenderSettings(step=0.5)
     print("load average (1, 5, 15 min) at the start: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()), flush=True)
+    print(machine_line(), flush=True)
     print(f"{'scene':17s} {'RMSE oo':>8s} {'RMSE slicer':>11s} | {'HVR':3s} {'ms':>7s} {'cells':>8s} {'occluded':>8s} "
           f"{'nodes':>8s} {'samples':>9s} {'Mcells/s':>8s}", flush=True)  # fmt: skip
     for name in names:
@@ -75,6 +77,7 @@ def main() -> None:
             print(f"{'':17s} speedup with hidden volume removal: {rows[1][1] / rows[0][1]:.2f}x", flush=True)
         r.release()
     print("load average (1, 5, 15 min) at the end: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()), flush=True)
+    print(machine_line(), flush=True)
 
 
 if __name__ == "__main__":

@@ -26,6 +26,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from benchmarks.machine_speed import machine_line
 from benchmarks.ratios import ratios
 from volren.cli.main import main as volren_main
 
@@ -79,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     folder = args.out / "plugins"
     lines = [f"Measured {datetime.date.today().isoformat()} by `python -m benchmarks.plugins_report --out {args.out}`.", ""]
 
-    start = load()
+    start, speed = load(), machine_line()
     run_args = ["bench", "run", "--shared", args.shared, "--datasets", args.datasets,
                 "--renderers", ",".join((*OURS, *PEERS)), "--out", str(folder)]  # fmt: skip
     with contextlib.redirect_stdout(io.StringIO()):
@@ -93,7 +94,8 @@ def main(argv: list[str] | None = None) -> int:
         "### Speed at equal or lower error",
         "",
         f"`volren {' '.join(run_args)}` (512x512, median of warm frames with the camera turning; load average "
-        f"{start} at the start, {load()} at the end), then `python -m benchmarks.ratios {folder}/runs.csv RENDERER`. "
+        f"{start} at the start, {load()} at the end; {speed} at the start, {machine_line()} at the end), then "
+        f"`python -m benchmarks.ratios {folder}/runs.csv RENDERER`. "
         "Each cell: peer ms / ours at the peer's fastest setting that ours reaches at equal or lower RMSE "
         "(above 1: ours is faster), with that setting and its time.",
     ]

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.machine_speed import machine_line
 from volren.api import prepared_renderer
 from volren.bench.datasets import shared_datasets
 from volren.io.volume_io import load_volume
@@ -85,7 +86,7 @@ def main() -> None:
     parser.add_argument("--degrees", type=float, default=6.0)
     parser.add_argument("--projections", default="parallel,perspective")
     args = parser.parse_args()
-    print(f"load average at the start: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    print(f"load average at the start: {' '.join(f'{x:.2f}' for x in os.getloadavg())}; {machine_line()}")
     header = " | ".join(c[0] for c in COLUMNS)
     print(f"| dataset | size | transparent | projection | {header} |")
     print("|---|---|---:|---|" + "---:|" * len(COLUMNS))
@@ -98,7 +99,7 @@ def main() -> None:
             cells = " | ".join(f"{s:.3f}" for s in secs)
             print(f"| {name} | {nx}x{ny}x{nz} | {100 * transparent_fraction(volume, tf):.1f}% | {projection} | {cells} |",
                   flush=True)  # fmt: skip
-    print(f"load average at the end: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    print(f"load average at the end: {' '.join(f'{x:.2f}' for x in os.getloadavg())}; {machine_line()}")
 
 
 if __name__ == "__main__":

@@ -35,3 +35,12 @@ def test_table1_columns_time_a_half_turn_for_each_variant():
     for column in shearwarp_table1.COLUMNS:
         for parallel in (True, False):
             assert 0 < shearwarp_table1.frame_seconds(volume, tf, column, parallel, degrees=90.0) < 60
+
+
+def test_the_machine_speed_probe_reports_a_positive_latency_and_bandwidth():
+    from benchmarks import machine_speed
+
+    assert 0.05 < machine_speed.chain_ns(repeats=1) < 1000.0  # 20 GHz .. 1 MHz a link: a real measurement
+    assert 0.01 < machine_speed.fill_gbs(repeats=1) < 10000.0
+    line = machine_speed.machine_line()
+    assert line.startswith("machine speed: ") and "ns a dependent multiply-add" in line
