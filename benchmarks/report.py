@@ -89,7 +89,9 @@ def compose(folder: Path, relative_to: Path, date: datetime.date | None = None, 
         "",
         f"Regenerate every section with `{command or 'python -m benchmarks.report --out ' + rel}`, or some with `--only`.",
         "Times are medians of several frames after a warm-up; errors are DESIGN.md's RMSE over premultiplied",
-        "RGBA against the float64 `reference` renderer at the same view.",
+        "RGBA against the float64 `reference` renderer at the same view. The machine's own speed moves",
+        "2-4x from day to day at the same load (`python -m benchmarks.machine_speed` measures it), so times",
+        "compare only within one run: the speed claims are ratios between renderers timed in the same run.",
     ]
     missing = []
     for name, title, question in SECTIONS:
