@@ -35,6 +35,9 @@ SECTIONS = (
      "same load (`python -m benchmarks.defaults_ab`)"),
     ("plugins.md", "The plugin renderers (shear-warp, object order)",
      "How do the seeds' CPU algorithms compare with VTK and the slicer at equal error, and with their papers' tables?"),
+    ("occlusion_bound.md", "What hidden volume removal could occlude at most",
+     "Of the cells a TF leaves visible, how many lie behind rays that are already opaque, against what "
+     "objectorder's occlusion map skips? (`python -m benchmarks.occlusion_bound`)"),
     ("resampling_floor.md", "What resampling costs against a point-sampled reference",
      "How close can a renderer that resamples its rays (shear-warp's warp) come to `reference`, whose pixels are "
      "point samples, however exact its rays? (`python -m benchmarks.resampling_floor`)"),
