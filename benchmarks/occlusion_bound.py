@@ -141,8 +141,9 @@ def visible_cells(octree: MinMaxOctree, tf: TransferFunction1D) -> np.ndarray:
     return np.ascontiguousarray(cells[:nz, :ny, :nx].astype(bool))
 
 
-def bound(volume: UniformVolume, tf: TransferFunction1D, camera) -> dict[str, float]:
-    """The bound's counts for one view, and what the renderer's occlusion map achieved there."""
+def bound(volume: UniformVolume, tf: TransferFunction1D, camera, termination: float = TERMINATION) -> dict[str, float]:
+    """The bound's counts for one view, and what the renderer's occlusion map achieved there, both
+    with pixels finished at opacity `termination`."""
     h = STEP * volume.characteristic_length
     rays = ray_table(camera, volume, SIZE, SIZE, h, pixel_offsets("interleaved", SIZE, SIZE, 0))
     lo, hi = volume.value_range
@@ -155,11 +156,11 @@ def bound(volume: UniformVolume, tf: TransferFunction1D, camera) -> dict[str, fl
     values = np.ascontiguousarray(volume.values, dtype=np.float64)
     saturation_depths(values, rays.origin, rays.direction, rays.t0, rays.count, rays.first, rays.last, h,
                       np.ascontiguousarray(alpha_lut, dtype=np.float64), lo, (LUT - 1) / (hi - lo),
-                      tf.opacity_unit_distance, TERMINATION, t_sat)  # fmt: skip
+                      tf.opacity_unit_distance, termination, t_sat)  # fmt: skip
     renderer = ObjectOrderRenderer()
     renderer.set_volume(volume)
     renderer.set_transfer_function(tf)
-    renderer.set_settings(RenderSettings(step=STEP))
+    renderer.set_settings(RenderSettings(step=STEP, options={"termination_alpha": termination}))
     renderer.render(camera, SIZE, SIZE)
     counters = renderer.last_frame.counters
     octree = renderer.octree
