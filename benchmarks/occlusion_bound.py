@@ -10,8 +10,8 @@ as much as on the occlusion test, so this measures the bound with the renderer's
    default), to the position of the sample where its opacity first reaches the termination opacity;
 2. every cell the octree's classification leaves visible (the renderer's `cells_visible`): the pixels
    whose centres its eight projected corners' box holds, each ray's entry into the cell (slab test);
-   the cell is *occludable* when every ray that crosses it is opaque before it enters, and *seen*
-   when some ray crosses it at all.
+   the cell is *occludable* when every ray that crosses it (the renderer's own slab test) is opaque
+   before it enters, and *seen* when some ray crosses it at all.
 
 Bound = occludable / seen. Parallel projection, 512x512, as `benchmarks.objectorder_table`.
 
@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 from volren_objectorder import ObjectOrderRenderer
+from volren_objectorder.composite import _slab
 from volren_objectorder.octree import MinMaxOctree, Reach
 from volren_objectorder.patterns import pixel_offsets, ray_table, sample_length, sample_t, screen_matrix
 
@@ -84,7 +85,7 @@ def saturation_depths(values, ro, rd, t0, count, first, last, h, alpha_lut, lo, 
 
 
 @njit(cache=True, parallel=True)
-def cell_states(visible, M, ro, ri, count, t_sat, width, height, state):
+def cell_states(visible, M, ro, rd, ri, count, t_sat, width, height, state):
     """state[z, y, x] for each visible cell: 0 not seen by any ray, 1 seen, 2 occludable."""
     nz, ny, nx = visible.shape
     for z in prange(nz):
@@ -109,17 +110,7 @@ def cell_states(visible, M, ro, ri, count, t_sat, width, height, state):
                         if count[p] == 0:
                             continue
                         q = 0 if ri.shape[0] == 1 else p
-                        tlo, thi = -math.inf, math.inf
-                        for ax in range(3):
-                            o = ro[p, ax]
-                            lo_ = float(x if ax == 0 else (y if ax == 1 else z))
-                            inv = ri[q, ax]
-                            if math.isinf(inv):
-                                if o < lo_ or o > lo_ + 1.0:
-                                    tlo, thi = 0.0, -1.0
-                                continue
-                            ta, tb = (lo_ - o) * inv, (lo_ + 1.0 - o) * inv
-                            tlo, thi = max(tlo, min(ta, tb)), min(thi, max(ta, tb))
+                        tlo, thi = _slab(ro, rd, ri, p, q, x, y, z, 1, 1, 1, nx, ny, nz)  # the renderer's test
                         if thi > tlo:
                             seen = True
                             if tlo < t_sat[p]:
@@ -167,7 +158,8 @@ def bound(volume: UniformVolume, tf: TransferFunction1D, camera, termination: fl
     assert octree is not None
     visible = visible_cells(octree, tf)
     state = np.empty(visible.shape, np.int8)
-    cell_states(visible, screen_matrix(camera, volume, SIZE, SIZE), rays.origin, rays.inverse, rays.count, t_sat,
+    cell_states(visible, screen_matrix(camera, volume, SIZE, SIZE), rays.origin, rays.direction, rays.inverse,
+                rays.count, t_sat,
                 SIZE, SIZE, state)  # fmt: skip
     seen = int(np.count_nonzero(state > 0))
     occludable = int(np.count_nonzero(state == 2))
