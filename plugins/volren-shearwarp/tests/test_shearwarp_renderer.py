@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from volren_shearwarp import ShearWarpRenderer
-from volren_shearwarp.classified import slab_pairs
+from volren_shearwarp.classified import RANGE_BINS, OpacitySupport, block_ranges, slab_pairs
 from volren_shearwarp.factorization import factorize
 from volren_shearwarp.renderer import (
     auto_oversampling,
@@ -150,8 +150,8 @@ def test_downsample_draws_the_coarse_volume_and_keeps_the_full_one(pre):
 @pytest.mark.parametrize("step, azimuth", [(0.5, 35), (1.0, 35), (1.0, 215), (2.0, 215)])
 def test_empty_space_skipping_changes_no_pixel(parallel, step, azimuth):
     """Also with slices skipped (step 1 and 2: slabs of 2 and 4 slices, a short one at the back, the
-    order running both ways). At step 2 the runs' blocks span 4 cells per whole shear each way, which
-    on 16 cells leaves nothing to skip: 31 there."""
+    order running both ways). At step 2 the runs' blocks span 4 cells per unit of shear, which on 16
+    cells leaves little to skip: 31 there."""
     volume = field((16, 16, 16) if step < 2 else (31, 31, 31))
     tf = TransferFunction1D([[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.4, 0.0], [1.6, 0.7], [2.0, 0.0]], 1.0)
     camera = Camera.orbit(volume.bounds, azimuth, 25, parallel=parallel)
@@ -161,6 +161,61 @@ def test_empty_space_skipping_changes_no_pixel(parallel, step, azimuth):
     assert r_on.last_frame.counters["empty_pixels_skipped"] > 0
     assert r_on.last_frame.counters["samples"] < r_off.last_frame.counters["samples"]
     np.testing.assert_array_equal(on, off)
+
+
+@pytest.mark.parametrize("pre", [False, True])
+@pytest.mark.parametrize("step", [0.5, 1.0])
+def test_empty_space_skipping_changes_no_pixel_where_rays_fan_out_both_ways(pre, step):
+    """A wide perspective view whose eye faces the middle of the volume: rays move towards larger
+    and smaller a and b across the slabs, so every row picks the runs' blocks on both sides of its
+    split and rows pick both row blocks (`classified`'s anchored blocks); a narrow TF peak over
+    sparse blobs, so a block on the wrong side would drop a visible segment."""
+    rng = np.random.default_rng(7)
+    values = np.zeros((24, 26, 28), np.float32)
+    for _ in range(40):
+        k, j, i = rng.integers(1, 23), rng.integers(1, 25), rng.integers(1, 27)
+        values[k - 1 : k + 2, j - 1 : j + 2, i - 1 : i + 2] += rng.uniform(0.5, 2.0)
+    volume = UniformVolume(values)
+    tf = TransferFunction1D([[0, 1, 0.6, 0.2], [3, 0.2, 0.5, 1.0]], [[0.9, 0.0], [1.0, 0.8], [1.1, 0.0]], 1.0)
+    centre = np.array([13.5, 12.5, 11.5])
+    camera = Camera(position=tuple(centre + [3.0, 2.0, -24.0]), focal_point=tuple(centre), view_angle=70.0,
+                    clipping_range=(1.0, 80.0))  # fmt: skip
+    fac = factorize(camera, volume, 60, 50, 1.0)
+    assert 1.0 < fac.max_shear <= 3.0
+    assert 0 < fac.eye[0] < 27 and 0 < fac.eye[1] < 25  # the eye faces the slices: shifts of both signs
+    on, r_on = draw(volume, tf, camera, (60, 50), preintegration=pre, step=step,
+                    options={"empty_space_skipping": True})  # fmt: skip
+    off, _ = draw(volume, tf, camera, (60, 50), preintegration=pre, step=step, options={"empty_space_skipping": False})
+    assert r_on.last_frame.counters["empty_pixels_skipped"] > 0 and on[..., 3].max() > 0.1
+    np.testing.assert_array_equal(on, off)
+
+
+@pytest.mark.parametrize("extent", [1, 2, 3])
+def test_block_ranges_are_the_anchored_blocks_vertex_ranges(extent):
+    """`_block_ranges` against a brute-force oracle: block (j, i) of a slab is cells j - extent .. j by
+    i - extent .. i, clipped to the slice, its range over their vertices in both slices, NaN left out."""
+    rng = np.random.default_rng(extent)
+    values = rng.uniform(-1.0, 3.0, (5, 7, 9)).astype(np.float32)
+    values[2, 3, 4] = np.nan
+    values[1, :2, :2] = np.nan  # a slab's corner block with no finite vertex
+    support = OpacitySupport.of(SMOOTH_TF, -1.0, 3.0)
+    pairs = slab_pairs(np.arange(5))[0]
+    bmin, bmax = block_ranges(values, support, extent, pairs)
+    bins = support.counts.shape[0] - 1
+    shift = int(math.log2(bins // RANGE_BINS))
+    nc, nb, na = values.shape
+    assert bmin.shape == (4, nb - 1 + extent, na - 1 + extent)
+    for k, (k0, k1) in enumerate(pairs):
+        for j in range(nb - 1 + extent):
+            for i in range(na - 1 + extent):
+                block = values[[k0, k1], max(j - extent, 0) : min(j + 1, nb - 1) + 1, max(i - extent, 0) : min(i + 1, na - 1) + 1]
+                finite = block[np.isfinite(block)]
+                if finite.size == 0:
+                    assert (bmin[k, j, i], bmax[k, j, i]) == (RANGE_BINS - 1, 0)
+                    continue
+                to_bin = [min(max(int((np.float32(v) + 1.0) * (bins / 4.0)), 0), bins - 1) >> shift
+                          for v in (finite.min(), finite.max())]  # fmt: skip
+                assert (bmin[k, j, i], bmax[k, j, i]) == tuple(to_bin), (k, j, i)
 
 
 @pytest.mark.parametrize("pre", [False, True])

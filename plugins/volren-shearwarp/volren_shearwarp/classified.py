@@ -10,13 +10,19 @@ When a cell is transparent, for pre-integration: a slab's segment runs linearly 
 value (bilinear in one slice) to a back value (bilinear in the slab's other slice: the next, or
 `stride` slices on when the renderer composites every stride-th slice), so its colour is zero only
 when the TF opacity is zero on the whole interval between them. A ray whose front point lies in
-cell (a, b) has its back point within r = ceil(stride x largest shear) cells of it (r = 1 for
-every parallel view at stride 1, since the principal axis has the largest slope), so every value it
-can meet lies between the min and the max of the vertices, in the slab's two slices, of the
-(2r + 1)^2 block of cells around (a, b). The cell is skipped only when the opacity is zero on all of [min, max]: the
-interval, not the union of its cells' ranges, since a segment between two values passes
-through everything in between. Cells with a NaN corner are transparent (DESIGN.md) and add
-nothing to the range.
+cell (a, b) has its back point within e = ceil(stride x largest shear) cells of it, and on the side
+the ray moves to: cells a .. a + e along a where it moves towards larger a (a - e .. a where it
+moves back), the same along b. Every value it can meet therefore lies between the min and the max
+of the vertices, in the slab's two slices, of one block of (e + 1) x (e + 1) cells anchored on that
+side. The runs are over those *anchored* blocks (`_block_ranges`: block j along an axis is cells
+j - e .. j, so the ray moving forward takes block a + e and one moving back block a); the renderer
+knows each ray's direction per frame (the shift along b is fixed per intermediate row, the one
+along a changes sign at most once per row), and picks the block. Why not a block centred on the
+cell, (2e + 1)^2 cells, which needs no direction: it composited 1.2-2.5x as many segments on the
+shared scenes (docs/shearwarp.md, stop 50). A block is skipped only when the
+opacity is zero on all of [min, max]: the interval, not the union of its cells' ranges, since a
+segment between two values passes through everything in between. Cells with a NaN corner are
+transparent (DESIGN.md) and add nothing to the range.
 
 The test reads the TF only through which value bins have nonzero opacity (`OpacitySupport`):
 colour edits, and opacity edits that keep the support, reuse the runs.
@@ -100,8 +106,8 @@ class AxisCopy:
 
     axis: int
     values: NDArray[np.float32]
-    runs: dict[tuple, Runs] = field(default_factory=dict)  #: by (radius, the `slab_pairs` as bytes)
-    #: by (radius, the `slab_pairs` as bytes): each block's (lowest, highest) range bin, uint8
+    runs: dict[tuple, Runs] = field(default_factory=dict)  #: by (extent, the `slab_pairs` as bytes)
+    #: by (extent, the `slab_pairs` as bytes): each block's (lowest, highest) range bin, uint8
     #: (`_block_ranges`), kept across TF edits
     ranges: dict[tuple, tuple[NDArray[np.uint8], NDArray[np.uint8]]] = field(default_factory=dict)
     ranges_key: tuple[float, float] | None = None  #: the value range the bins span
@@ -109,15 +115,16 @@ class AxisCopy:
 
 @dataclass(frozen=True)
 class Runs:
-    """Runs of possibly visible cells: for slab k (the k-th of `slab_pairs`: slices k, k + 1 at
-    stride 1) and cell row b, the runs `starts[i]:ends[i]` (cell indices along a) for i in
-    `offsets[k * (nb - 1) + b]` up to the next."""
+    """Runs of possibly visible blocks: for slab k (the k-th of `slab_pairs`: slices k, k + 1 at
+    stride 1) and block row j, the runs `starts[i]:ends[i]` (block indices along a) for i in
+    `offsets[k * (nb - 1 + extent) + j]` up to the next; block (j, i) is cells j - extent .. j by
+    i - extent .. i (`_block_ranges`)."""
 
     offsets: NDArray[np.int64]
     starts: NDArray[np.int32]
     ends: NDArray[np.int32]
     digest: str
-    radius: int
+    extent: int
     build_ms: float
     visible_cells: int
     total_cells: int
@@ -134,14 +141,15 @@ RANGE_BINS = 256
 
 
 @njit(parallel=True, cache=True)
-def _block_ranges(vol, pairs, lo, scale, bins, radius, bmin, bmax):
-    """bmin, bmax[k, b, a] = the range bins (of RANGE_BINS over [lo, hi]) of the lowest and highest
-    value over the vertices, in both slices of slab k (pairs[k]), of the block of cells within
-    `radius` of (a, b); bmin > bmax where the block has no finite vertex (transparent).
+def _block_ranges(vol, pairs, lo, scale, bins, extent, bmin, bmax):
+    """bmin, bmax[k, j, i] = the range bins (of RANGE_BINS over [lo, hi]) of the lowest and highest
+    value over the vertices, in both slices of slab k (pairs[k]), of the anchored block of cells
+    j - extent .. j by i - extent .. i (clipped to the slice: j and i run to n - 2 + extent);
+    bmin > bmax where the block has no finite vertex (transparent).
 
     Why cached: this is the TF-independent part of classifying a cell, and most of its cost; an
     opacity edit then only compares each block's range with the new support (`_mask_from_ranges`).
-    The range is taken separably (slices, then a, then b: a window of 2 radius + 2 vertices per
+    The range is taken separably (slices, then a, then b: a window of extent + 2 vertices per
     axis), 3x fewer operations than per cell and block. Non-finite vertices are left out, which can
     only widen the range of a block whose cells are transparent anyway (conservative)."""
     nc, nb, na = vol.shape
@@ -168,30 +176,30 @@ def _block_ranges(vol, pairs, lo, scale, bins, radius, bmin, bmax):
                 else:
                     vmin[b, a] = np.inf
                     vmax[b, a] = -np.inf
-        rmin = np.empty((nb, na - 1), np.float32)
-        rmax = np.empty((nb, na - 1), np.float32)
+        rmin = np.empty((nb, na - 1 + extent), np.float32)
+        rmax = np.empty((nb, na - 1 + extent), np.float32)
         for b in range(nb):
-            for a in range(na - 1):
+            for i in range(na - 1 + extent):
                 mn = np.float32(np.inf)
                 mx = np.float32(-np.inf)
-                for a2 in range(max(a - radius, 0), min(a + radius + 1, na - 1) + 1):
+                for a2 in range(max(i - extent, 0), min(i + 1, na - 1) + 1):
                     mn = min(mn, vmin[b, a2])
                     mx = max(mx, vmax[b, a2])
-                rmin[b, a] = mn
-                rmax[b, a] = mx
-        for b in range(nb - 1):
-            for a in range(na - 1):
+                rmin[b, i] = mn
+                rmax[b, i] = mx
+        for j in range(nb - 1 + extent):
+            for i in range(na - 1 + extent):
                 mn = np.float32(np.inf)
                 mx = np.float32(-np.inf)
-                for b2 in range(max(b - radius, 0), min(b + radius + 1, nb - 1) + 1):
-                    mn = min(mn, rmin[b2, a])
-                    mx = max(mx, rmax[b2, a])
+                for b2 in range(max(j - extent, 0), min(j + 1, nb - 1) + 1):
+                    mn = min(mn, rmin[b2, i])
+                    mx = max(mx, rmax[b2, i])
                 if mn > mx:
-                    bmin[k, b, a] = RANGE_BINS - 1
-                    bmax[k, b, a] = 0
+                    bmin[k, j, i] = RANGE_BINS - 1
+                    bmax[k, j, i] = 0
                 else:  # the support's own bins (as `OpacitySupport` bins values), then 2^shift of them per range bin
-                    bmin[k, b, a] = min(max(int((mn - lo) * scale), 0), bins - 1) >> shift
-                    bmax[k, b, a] = min(max(int((mx - lo) * scale), 0), bins - 1) >> shift
+                    bmin[k, j, i] = min(max(int((mn - lo) * scale), 0), bins - 1) >> shift
+                    bmax[k, j, i] = min(max(int((mx - lo) * scale), 0), bins - 1) >> shift
 
 
 @njit(parallel=True, cache=True)
@@ -264,21 +272,21 @@ def _runs_from_mask(mask, min_gap):
     return offsets, starts, ends
 
 
-def block_ranges(values: NDArray[np.float32], support: OpacitySupport, radius: int,
+def block_ranges(values: NDArray[np.float32], support: OpacitySupport, extent: int,
                  pairs: NDArray[np.int64]) -> tuple[NDArray, NDArray]:  # fmt: skip
     """`_block_ranges` of one axis copy for the slabs `pairs` (`slab_pairs`), bins over the
     support's value range, fixed per volume."""
     nc, nb, na = values.shape
-    bmin = np.empty((pairs.shape[0], nb - 1, na - 1), np.uint8)
-    bmax = np.empty((pairs.shape[0], nb - 1, na - 1), np.uint8)
+    bmin = np.empty((pairs.shape[0], nb - 1 + extent, na - 1 + extent), np.uint8)
+    bmax = np.empty((pairs.shape[0], nb - 1 + extent, na - 1 + extent), np.uint8)
     bins = support.counts.shape[0] - 1
-    _block_ranges(values, pairs, support.lo, bins / (support.hi - support.lo), bins, radius, bmin, bmax)
+    _block_ranges(values, pairs, support.lo, bins / (support.hi - support.lo), bins, extent, bmin, bmax)
     return bmin, bmax
 
 
-def build_runs(ranges: tuple[NDArray, NDArray], support: OpacitySupport, radius: int) -> Runs:
-    """The runs of one axis copy for this opacity support, for rays that move at most `radius`
-    cells in the slice plane from one slice to the next, from its cached block ranges."""
+def build_runs(ranges: tuple[NDArray, NDArray], support: OpacitySupport, extent: int) -> Runs:
+    """The runs of one axis copy for this opacity support, for rays that move at most `extent`
+    cells in the slice plane across a slab, from its cached block ranges."""
     start = time.perf_counter()
     bmin, bmax = ranges
     mask = np.empty(bmin.shape, np.uint8)
@@ -286,7 +294,7 @@ def build_runs(ranges: tuple[NDArray, NDArray], support: OpacitySupport, radius:
     offsets, starts, ends = _runs_from_mask(mask, MIN_GAP)
     visible = int(mask.sum(dtype=np.int64))
     ms = (time.perf_counter() - start) * 1000.0
-    return Runs(offsets, starts, ends, support.digest, radius, ms, visible, int(mask.size))
+    return Runs(offsets, starts, ends, support.digest, extent, ms, visible, int(mask.size))
 
 
 @dataclass
@@ -314,21 +322,21 @@ class ClassifiedVolume:
             self.copy_ms[axis] = (time.perf_counter() - start) * 1000.0
         return found
 
-    def runs(self, axis: int, support: OpacitySupport, radius: int = 1, pairs: NDArray[np.int64] | None = None) -> Runs:
-        """The runs of `axis` for `support` and `radius` over the slabs `pairs` (`slab_pairs` of the
+    def runs(self, axis: int, support: OpacitySupport, extent: int = 1, pairs: NDArray[np.int64] | None = None) -> Runs:
+        """The runs of `axis` for `support` and `extent` over the slabs `pairs` (`slab_pairs` of the
         compositing order; default every slice), rebuilt only when the support changed."""
         copy = self.copy(axis)
         if pairs is None:
             pairs = slab_pairs(np.arange(copy.values.shape[0]))[0]
-        key = (radius, pairs.tobytes())
+        key = (extent, pairs.tobytes())
         found = copy.runs.get(key)
         if found is None or found.digest != support.digest:
             if copy.ranges_key != (support.lo, support.hi):
                 copy.ranges.clear()
                 copy.ranges_key = (support.lo, support.hi)
             if key not in copy.ranges:
-                copy.ranges[key] = block_ranges(copy.values, support, radius, pairs)
-            found = copy.runs[key] = build_runs(copy.ranges[key], support, radius)
+                copy.ranges[key] = block_ranges(copy.values, support, extent, pairs)
+            found = copy.runs[key] = build_runs(copy.ranges[key], support, extent)
         return found
 
     @property

@@ -7,10 +7,12 @@ scanline of the image meets one scanline of each slice (the factorization keeps 
 the image row alone), so memory is read a slice scanline at a time.
 
 Per scanline and slab:
-1. Which pixels to visit: the run-length runs of possibly visible cells of the slab's cell row
-   (`classified`), turned into pixel ranges through the pixel -> slice map, and inside them the
-   pixels not yet opaque, found through skip links (VolPack's early ray termination: an opaque
-   pixel points past itself; chains are shortened as they are walked).
+1. Which pixels to visit: the run-length runs of possibly visible blocks of cells (`classified`:
+   each block anchored on the side the ray moves to, so a row takes one row of blocks and splits
+   its pixels where the ray's shift along a changes sign), turned into pixel ranges through the
+   pixel -> slice map, and inside them the pixels not yet opaque, found through skip links
+   (VolPack's early ray termination: an opaque pixel points past itself; chains are shortened as
+   they are walked).
 2. The segment of each ray inside the slab, clipped to the slice rectangle (rays that enter or
    leave through a side face cross part of a slab) and, when a clipping plane cuts the volume,
    to the ray's interval between the near and far planes (values then taken at the cut).
@@ -405,6 +407,29 @@ def _guess(alpha, beta, bound):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _forward_split(af0, afs, ab0, abs_, p_lo, p_hi):
+    """(split, forward_above): the pixels of [p_lo, p_hi) whose ray moves towards larger a across
+    the slab (back a >= front a, in the arithmetic the kernels use: af0 + afs p, ab0 + abs_ p) are
+    those >= split when forward_above, else those < split. The shift is linear in p, so it changes
+    sign at most once (under perspective; never under a parallel projection, abs_ == afs)."""
+    d1 = abs_ - afs
+    if d1 == 0.0:
+        return (p_lo if ab0 >= af0 else p_hi), True
+    p = min(max(_guess(ab0 - af0, d1, 0.0), p_lo), p_hi)
+    if d1 > 0.0:  # forward from some p on: the first forward pixel
+        while p > p_lo and ab0 + abs_ * (p - 1) >= af0 + afs * (p - 1):
+            p -= 1
+        while p < p_hi and not ab0 + abs_ * p >= af0 + afs * p:
+            p += 1
+        return p, True
+    while p > p_lo and not ab0 + abs_ * (p - 1) >= af0 + afs * (p - 1):  # forward up to some p: the first backward pixel
+        p -= 1
+    while p < p_hi and ab0 + abs_ * p >= af0 + afs * p:
+        p += 1
+    return p, False
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, table, table_back, lut, preintegrated,
                      shading, bilinear_lookup, use_termination, term_alpha):  # fmt: skip
     """Blend one segment (front value xf, back value xb, `frac` of a whole segment's length) into
@@ -501,7 +526,7 @@ def composite_slabs(
     vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows,
     rgba, buf_x, buf_d, buf_s, stamp, skip,
     layers, per_pixel_layer, table, table_back, lut, preintegrated, bilinear_lookup, lo, scale,
-    offsets, starts, ends, use_runs, run_slab, slab_frac, use_termination, term_alpha, has_nan,
+    offsets, starts, ends, extent, use_runs, run_slab, slab_frac, use_termination, term_alpha, has_nan,
     shading, light, half, ray_dirs, ka, kd, ks, power, gthr, inv_sp,
     clipping, clip_lo, clip_hi, jitter, offsets_u, buf_len, counters,
 ):  # fmt: skip
@@ -573,24 +598,39 @@ def composite_slabs(
                             _first_past(ab0, abs_, top_a, True, _guess(ab0, abs_, top_a)))  # fmt: skip
                 in_lo = min(max(in_lo, p_lo), p_hi)
                 in_hi = min(max(in_hi, in_lo), p_hi)
+            # runs of anchored blocks (`classified`): the row's block is the front cell row's, moved on by
+            # `extent` where the ray moves towards larger b; along the row, pixels whose ray moves towards
+            # larger a (one side of `split`) take the block `extent` cells on, the others their own cell's
+            first = 0
+            n_runs = 1
+            parts = 1
+            split = 0
+            forward_above = True
             if use_runs:
-                row = min(max(int(math.floor(bf)), 0), nb - 2)
-                first = offsets[slab * (nb - 1) + row]
-                last = offsets[slab * (nb - 1) + row + 1]
-            else:
-                first = 0
-                last = 1
+                jb = int(math.floor(bf)) + (extent if bb >= bf else 0)
+                jb = min(max(jb, 0), nb - 2 + extent)
+                first = offsets[slab * (nb - 1 + extent) + jb]
+                n_runs = offsets[slab * (nb - 1 + extent) + jb + 1] - first
+                parts = 2
+                split, forward_above = _forward_split(af0, afs, ab0, abs_, p_lo, p_hi)
             covered = 0
-            for run in range(first, last):
+            for item in range(parts * n_runs):
                 lo_p = p_lo
                 hi_p = p_hi
                 if use_runs:
+                    forward = item < n_runs
+                    run = first + item % n_runs
+                    if forward == forward_above:
+                        lo_p = max(lo_p, split)
+                    else:
+                        hi_p = min(hi_p, split)
+                    moved = extent if forward else 0  # front cell = block index - moved
                     a_s = starts[run]
                     a_e = ends[run]
                     if a_s > 0:
-                        lo_p = max(lo_p, _first_past(af0, afs, a_s, False, _guess(af0, afs, a_s)))
-                    if a_e < na - 1:
-                        hi_p = min(hi_p, _first_past(af0, afs, a_e, False, _guess(af0, afs, a_e)))
+                        lo_p = max(lo_p, _first_past(af0, afs, a_s - moved, False, _guess(af0, afs, a_s - moved)))
+                    if a_e < na - 1 + extent:
+                        hi_p = min(hi_p, _first_past(af0, afs, a_e - moved, False, _guess(af0, afs, a_e - moved)))
                     if lo_p >= hi_p:
                         continue
                     covered += hi_p - lo_p

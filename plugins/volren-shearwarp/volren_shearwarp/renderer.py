@@ -100,10 +100,7 @@ MAX_SLICE_STRIDE = 8
 #: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
 GRADIENT_EPS = 1e-6
 #: Runs are built for rays moving up to this many cells per slice (steeper views go without).
-MAX_RUN_RADIUS = 3
-#: Runs are built for at least this radius: perspective views turning about an axis cross max shear 1 (a
-#: rebuild of 140 ms on bonsai), and radius 2 composites no more than 1 on bonsai (within 2%).
-MIN_RUN_RADIUS = 2
+MAX_RUN_SHEAR = 3
 #: Under perspective, tables are made for segment lengths up to this many times the axial slab length at once
 #: (rays 60 degrees off the principal axis; bonsai turning about its axes needs up to 2.05).
 TURNING_SPAN = 2.0
@@ -187,6 +184,16 @@ def auto_oversampling(tau: float) -> float:
     (tau 0.36) RMSE 0.0025 at 1 and 0.0032 at one pixel per voxel, with 1.7x fewer segments;
     aneurism's thin vessels (tau 0.92) need about 1.5; opaque TFs 2. Compositing costs the square."""
     return min(max(2.0 * tau, 0.5), 2.0)
+
+
+def run_extent(stride: int, max_shear: float) -> int:
+    """Cells a ray may move in the slice plane across one slab of `stride` slices, at least 1: the
+    size of the runs' blocks (`classified`). Why the margin: at a shear of exactly 1 (a view at 45
+    degrees) rounding may put a back point a hair into the next cell, whose vertex the block must
+    hold. Why no larger minimum: a camera turning through a shear of 1 pays one ranges pass for the
+    new extent (about 200 ms on bonsai, once per axis and extent), and extent 1 composites 9-18 %
+    faster than 2 where it applies (docs/shearwarp.md, stop 50)."""
+    return max(1, math.ceil(stride * max_shear + 1e-6))
 
 
 def auto_table_size(tau: float) -> int:
@@ -415,12 +422,10 @@ class ShearWarpRenderer(RendererBase):
         order, slab_frac = strided_order(order, stride)
         counters.update(slices=float(len(order)), slice_stride=float(stride))
         pairs, run_slab = slab_pairs(order)  # the runs number slabs by their lower slice
-        # stride x whole shears: a camera turning under perspective then meets a few radii, not one per
-        # stride-th of a shear (each new radius is a ranges pass, 75 ms on engine)
-        radius = max(MIN_RUN_RADIUS, stride * math.ceil(fac.max_shear - 1e-9))
-        use_runs = bool(opts["empty_space_skipping"]) and radius <= MAX_RUN_RADIUS * stride
+        extent = run_extent(stride, fac.max_shear)
+        use_runs = bool(opts["empty_space_skipping"]) and fac.max_shear <= MAX_RUN_SHEAR
         if use_runs:
-            runs = classified.runs(fac.axis, support, radius, pairs)
+            runs = classified.runs(fac.axis, support, extent, pairs)
             offsets, starts, ends = runs.offsets, runs.starts, runs.ends
         else:
             offsets, starts, ends = np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32)
@@ -508,7 +513,7 @@ class ShearWarpRenderer(RendererBase):
                 rgba, buf_x, buf_d, buf_s, stamp, skip,
                 layers, per_pixel, table, back, lut, bool(settings.preintegration),
                 opts["lookup"] == "bilinear", float(lo), float(scale),
-                offsets, starts, ends, use_runs, run_slab, slab_frac, bool(opts["early_termination"]),
+                offsets, starts, ends, extent, use_runs, run_slab, slab_frac, bool(opts["early_termination"]),
                 float(opts["termination_alpha"]),
                 has_nan,
                 shading, light, half, ray_dirs, float(settings.ambient), float(settings.diffuse),
