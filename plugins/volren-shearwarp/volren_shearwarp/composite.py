@@ -624,6 +624,8 @@ def composite_slabs(
                         lo_p = max(lo_p, split)
                     else:
                         hi_p = min(hi_p, split)
+                    if lo_p >= hi_p:  # no pixel on this side (every one, under a parallel projection)
+                        continue
                     moved = extent if forward else 0  # front cell = block index - moved
                     a_s = starts[run]
                     a_e = ends[run]
