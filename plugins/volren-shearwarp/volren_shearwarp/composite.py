@@ -407,26 +407,27 @@ def _guess(alpha, beta, bound):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _moves_forward(af0, afs, ab0, abs_, p):
+    """Whether pixel p's ray moves towards larger a across the slab, in the kernels' own arithmetic."""
+    return ab0 + abs_ * p >= af0 + afs * p
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _forward_split(af0, afs, ab0, abs_, p_lo, p_hi):
     """(split, forward_above): the pixels of [p_lo, p_hi) whose ray moves towards larger a across
-    the slab (back a >= front a, in the arithmetic the kernels use: af0 + afs p, ab0 + abs_ p) are
-    those >= split when forward_above, else those < split. The shift is linear in p, so it changes
-    sign at most once (under perspective; never under a parallel projection, abs_ == afs)."""
+    the slab (`_moves_forward`) are those >= split when forward_above, else those < split. The shift
+    is linear in p, so it changes sign at most once (under perspective; never under a parallel
+    projection, abs_ == afs): split is the first pixel on the side that p grows into."""
     d1 = abs_ - afs
     if d1 == 0.0:
         return (p_lo if ab0 >= af0 else p_hi), True
+    above = d1 > 0.0  # whether moving forward is the side above the split
     p = min(max(_guess(ab0 - af0, d1, 0.0), p_lo), p_hi)
-    if d1 > 0.0:  # forward from some p on: the first forward pixel
-        while p > p_lo and ab0 + abs_ * (p - 1) >= af0 + afs * (p - 1):
-            p -= 1
-        while p < p_hi and not ab0 + abs_ * p >= af0 + afs * p:
-            p += 1
-        return p, True
-    while p > p_lo and not ab0 + abs_ * (p - 1) >= af0 + afs * (p - 1):  # forward up to some p: the first backward pixel
+    while p > p_lo and _moves_forward(af0, afs, ab0, abs_, p - 1) == above:
         p -= 1
-    while p < p_hi and ab0 + abs_ * p >= af0 + afs * p:
+    while p < p_hi and _moves_forward(af0, afs, ab0, abs_, p) != above:
         p += 1
-    return p, False
+    return p, above
 
 
 @njit(cache=True, inline="always", error_model="numpy")
