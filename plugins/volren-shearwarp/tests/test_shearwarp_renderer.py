@@ -145,18 +145,45 @@ def test_downsample_draws_the_coarse_volume_and_keeps_the_full_one(pre):
     assert image_error(image, truth).rmse < 0.03  # a draft, coarser than the default's 0.01
 
 
+@pytest.mark.parametrize("pre", [False, True])
+def test_fewer_pixels_per_voxel_draw_a_coarser_draft_of_the_same_image(pre):
+    """`pixels_per_voxel` below 1 narrows the intermediate image by that factor along each axis (about
+    its square of the segments), a smooth field stays near the reference as a draft, and 1 is the
+    default to the bit (skipping stays exact: the skipping tests run at 0.6 and 0.5 too)."""
+    volume = field((24, 26, 28))
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    size = (64, 64)
+    coarse = {"oversampling": 0.25, "pixels_per_voxel": 0.7}
+    full, r_full = draw(volume, SMOOTH_TF, camera, size, preintegration=pre, options={"oversampling": 0.25})
+    draft, r_draft = draw(volume, SMOOTH_TF, camera, size, preintegration=pre, options=coarse)
+    default, _ = draw(volume, SMOOTH_TF, camera, size, preintegration=pre,
+                      options={"oversampling": 0.25, "pixels_per_voxel": 1.0})  # fmt: skip
+    assert np.array_equal(default, full)
+    c_full, c_draft = r_full.last_frame.counters, r_draft.last_frame.counters
+    for side in ("intermediate_width", "intermediate_height"):
+        assert 0.6 < c_draft[side] / c_full[side] < 0.8, (side, c_draft[side], c_full[side])
+    assert 0.35 < c_draft["samples"] / c_full["samples"] < 0.65
+    truth = reference_image(volume, SMOOTH_TF, camera, *size)
+    e_full, e_draft = image_error(full, truth).rmse, image_error(draft, truth).rmse
+    assert e_full < e_draft < min(2 * e_full, 0.03), (e_full, e_draft)  # measured: 0.0175 and 0.0275
+
+
 # ----------------------------------------------------------------------------- skipping
 @pytest.mark.parametrize("parallel", [False, True])
 @pytest.mark.parametrize("step, azimuth", [(0.5, 35), (1.0, 35), (1.0, 215), (2.0, 215)])
-def test_empty_space_skipping_changes_no_pixel(parallel, step, azimuth):
+@pytest.mark.parametrize("pixels_per_voxel", [1.0, 0.6])
+def test_empty_space_skipping_changes_no_pixel(parallel, step, azimuth, pixels_per_voxel):
     """Also with slices skipped (step 1 and 2: slabs of 2 and 4 slices, a short one at the back, the
-    order running both ways). At step 2 the runs' blocks span 4 cells per unit of shear, which on 16
-    cells leaves little to skip: 31 there."""
+    order running both ways), and with intermediate pixels wider than voxels. At step 2 the runs'
+    blocks span 4 cells per unit of shear, which on 16 cells leaves little to skip: 31 there."""
     volume = field((16, 16, 16) if step < 2 else (31, 31, 31))
     tf = TransferFunction1D([[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.4, 0.0], [1.6, 0.7], [2.0, 0.0]], 1.0)
     camera = Camera.orbit(volume.bounds, azimuth, 25, parallel=parallel)
-    on, r_on = draw(volume, tf, camera, preintegration=True, step=step, options={"empty_space_skipping": True})
-    off, r_off = draw(volume, tf, camera, preintegration=True, step=step, options={"empty_space_skipping": False})
+    options = {"oversampling": 0.25, "pixels_per_voxel": pixels_per_voxel}
+    on, r_on = draw(volume, tf, camera, preintegration=True, step=step, options=options | {"empty_space_skipping": True})
+    off, r_off = draw(volume, tf, camera, preintegration=True, step=step,
+                      options=options | {"empty_space_skipping": False})  # fmt: skip
+    assert factorize(camera, volume, 40, 32, 0.25, min_scale=pixels_per_voxel).scale == pixels_per_voxel
     assert r_on.last_frame.counters["slice_stride"] == 2 * step
     assert r_on.last_frame.counters["empty_pixels_skipped"] > 0
     assert r_on.last_frame.counters["samples"] < r_off.last_frame.counters["samples"]
@@ -164,8 +191,8 @@ def test_empty_space_skipping_changes_no_pixel(parallel, step, azimuth):
 
 
 @pytest.mark.parametrize("pre", [False, True])
-@pytest.mark.parametrize("step", [0.5, 1.0])
-def test_empty_space_skipping_changes_no_pixel_where_rays_fan_out_both_ways(pre, step):
+@pytest.mark.parametrize("step, pixels_per_voxel", [(0.5, 1.0), (1.0, 1.0), (0.5, 0.5)])
+def test_empty_space_skipping_changes_no_pixel_where_rays_fan_out_both_ways(pre, step, pixels_per_voxel):
     """A wide perspective view whose eye faces the middle of the volume: rays move towards larger
     and smaller a and b across the slabs, so every row picks the runs' blocks on both sides of its
     split and rows pick both row blocks (`classified`'s anchored blocks); a narrow TF peak over
@@ -183,9 +210,11 @@ def test_empty_space_skipping_changes_no_pixel_where_rays_fan_out_both_ways(pre,
     fac = factorize(camera, volume, 60, 50, 1.0)
     assert 1.0 < fac.max_shear <= 3.0
     assert 0 < fac.eye[0] < 27 and 0 < fac.eye[1] < 25  # the eye faces the slices: shifts of both signs
+    options = {"pixels_per_voxel": pixels_per_voxel, "oversampling": 0.25}
     on, r_on = draw(volume, tf, camera, (60, 50), preintegration=pre, step=step,
-                    options={"empty_space_skipping": True})  # fmt: skip
-    off, _ = draw(volume, tf, camera, (60, 50), preintegration=pre, step=step, options={"empty_space_skipping": False})
+                    options=options | {"empty_space_skipping": True})  # fmt: skip
+    off, _ = draw(volume, tf, camera, (60, 50), preintegration=pre, step=step,
+                  options=options | {"empty_space_skipping": False})  # fmt: skip
     assert r_on.last_frame.counters["empty_pixels_skipped"] > 0 and on[..., 3].max() > 0.1
     np.testing.assert_array_equal(on, off)
 
@@ -429,7 +458,8 @@ def test_an_eye_inside_the_volume_is_refused_in_one_line_under_perspective():
                                      {"early_termination": "yes"}, {"termination_alpha": 2}, {"nope": 1},
                                      {"downsample": 3}, {"downsample": 2.0}, {"downsample": True},
                                      {"jitter_seed": -1}, {"jitter_seed": 1.5}, {"length_ratio": 1.0},
-                                     {"length_ratio": 2}, {"length_ratio": "coarse"}])  # fmt: skip
+                                     {"length_ratio": 2}, {"length_ratio": "coarse"}, {"pixels_per_voxel": 0.1},
+                                     {"pixels_per_voxel": 2}, {"pixels_per_voxel": "half"}])  # fmt: skip
 def test_bad_options_are_one_line_errors(options):
     with pytest.raises(VolrenError) as info:
         ShearWarpRenderer().set_settings(RenderSettings(options=options))

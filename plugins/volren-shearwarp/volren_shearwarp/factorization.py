@@ -167,9 +167,10 @@ def choose_axis(camera: Camera, volume: UniformVolume) -> tuple[int, float]:
 
 
 def factorize(camera: Camera, volume: UniformVolume, width: int, height: int, oversampling: float,
-              max_scale: float = 64.0) -> Factorization:  # fmt: skip
+              max_scale: float = 64.0, min_scale: float = 1.0) -> Factorization:  # fmt: skip
     """The factorization of `camera`'s view of `volume` for a width x height output image, with
-    about `oversampling` intermediate pixels per output pixel (at least one per voxel)."""
+    about `oversampling` intermediate pixels per output pixel and at least `min_scale` per voxel
+    (1: every voxel resolved; below 1 a draft that samples each slice more coarsely than its lattice)."""
     origin, spacing, dims = index_frame(volume)
     c, max_shear = choose_axis(camera, volume)
     perm = PERMS[c]
@@ -211,14 +212,14 @@ def factorize(camera: Camera, volume: UniformVolume, width: int, height: int, ov
 
     # the output pixels' rays on the plane: their extent clips the footprint, their density sets the scale
     warp = WarpMap.build(camera, volume, perm, plane, width, height)
-    scale = 1.0
+    scale = min_scale
     probe = warp.plane_points(np.array([width / 2 - 0.5, width / 2 + 0.5, width / 2 - 0.5]),
                               np.array([height / 2 - 0.5, height / 2 - 0.5, height / 2 + 0.5]))  # fmt: skip
     if probe is not None:
         pa, pb = probe
         step = min(math.hypot(pa[1] - pa[0], pb[1] - pb[0]), math.hypot(pa[2] - pa[0], pb[2] - pb[0]))
         if step > 0 and math.isfinite(step):
-            scale = max(1.0, oversampling / step)
+            scale = max(min_scale, oversampling / step)
     edges = warp.plane_points(np.array([-0.5, width - 0.5, -0.5, width - 0.5]),
                               np.array([-0.5, -0.5, height - 0.5, height - 0.5]))  # fmt: skip
     if edges is not None:  # every corner ray reaches the plane: the view's footprint is a quadrilateral
