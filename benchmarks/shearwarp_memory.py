@@ -2,8 +2,10 @@
 volume (`volren_shearwarp.classified`) holds and costs, per shared uniform dataset (issue 20: "build
 time and memory, the three copies against the raw volume, measured").
 
-Per dataset, with its smooth TF: the raw volume's size; the three float32 axis copies (one per
-principal axis, made when a view first needs that axis) and their ratio to the raw volume; the block
+Per dataset, with its smooth TF: the raw volume's size; the three axis copies (one per principal
+axis, made when a view first needs that axis; in the data's type for 8- and 16-bit integers, where
+the one along z is the volume itself, float32 otherwise): the memory they add and its ratio to the
+raw volume; the block
 ranges cached per copy (two bytes a block, kept across TF edits) and the runs, both for every slice
 at run extent 1 (`run_extent` at step 0.5 for a shear up to 1); each axis's copy time, its ranges
 pass (once per axis and extent: what a camera turning onto a new axis pays) and its runs rebuild
@@ -58,7 +60,8 @@ def _measure(volume: UniformVolume, tf: TransferFunction1D, extent: int) -> dict
         rebuild_ms.append((time.perf_counter() - start) * 1e3)
         ranges_bytes += sum(r.nbytes for r in ranges)
         runs_bytes += runs.nbytes
-    copies = sum(c.values.nbytes for c in classified.copies.values())
+    # the copy along z is the volume itself where its type is kept (`copy_dtype`): no memory of its own
+    copies = sum(c.values.nbytes for c in classified.copies.values() if not np.shares_memory(c.values, volume.values))
     return {"copies": copies, "ranges": ranges_bytes, "runs": runs_bytes, "copy_ms": copy_ms,
             "ranges_ms": ranges_ms, "rebuild_ms": rebuild_ms}  # fmt: skip
 

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from volren_shearwarp import ShearWarpRenderer
 from volren_shearwarp.classified import RANGE_BINS, OpacitySupport, block_ranges, slab_pairs
+from volren_shearwarp.composite import interior_pixels
 from volren_shearwarp.factorization import factorize
 from volren_shearwarp.renderer import (
     auto_oversampling,
@@ -168,6 +169,33 @@ def test_fewer_pixels_per_voxel_draw_a_coarser_draft_of_the_same_image(pre):
     assert e_full < e_draft < min(2 * e_full, 0.03), (e_full, e_draft)  # measured: 0.0175 and 0.0275
 
 
+@pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.uint16])
+def test_integer_volumes_keep_their_type_in_the_axis_copies_and_draw_as_float32_ones(dtype, monkeypatch):
+    """8- and 16-bit data stay in their type in the three copies (a quarter or half of float32's
+    memory), and every path that reads them (fast spans, the general way, gradients for shading,
+    the projections, jitter) draws exactly what float32 copies draw: differences of unsigned values
+    must not wrap around, so the kernels convert each value to float32 first."""
+    import volren_shearwarp.classified as classified
+
+    values = field((14, 16, 18)).values
+    low = 0 if np.dtype(dtype).kind == "u" else -300
+    scaled = np.round(low + (values - values.min()) / np.ptp(values) * (250 - low)).astype(dtype)
+    volume = UniformVolume(scaled)
+    tf = TransferFunction1D([[low, 0.2, 0.3, 1.0], [250, 1.0, 0.8, 0.1]], [[low + 20, 0.0], [250, 0.6]], 20.0)
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    variants = [{"preintegration": True}, {"preintegration": False, "step": 1.0},
+                {"preintegration": True, "shade": True}, {"blend_mode": "maximum"}, {"jitter": True}]  # fmt: skip
+    for settings in variants:
+        kept, renderer = draw(volume, tf, camera, **settings)
+        assert renderer.classified.copy(0).values.dtype == np.dtype(dtype)
+        assert renderer.classified.copy(0).values.nbytes == scaled.nbytes
+        monkeypatch.setattr(classified, "copy_dtype", lambda _: np.dtype(np.float32))
+        as_float, _ = draw(volume, tf, camera, **settings)
+        monkeypatch.undo()
+        assert kept[..., 3].max() > 0.1
+        np.testing.assert_array_equal(kept, as_float, err_msg=str(settings))
+
+
 # ----------------------------------------------------------------------------- skipping
 @pytest.mark.parametrize("parallel", [False, True])
 @pytest.mark.parametrize("step, azimuth", [(0.5, 35), (1.0, 35), (1.0, 215), (2.0, 215)])
@@ -217,6 +245,23 @@ def test_empty_space_skipping_changes_no_pixel_where_rays_fan_out_both_ways(pre,
                   options=options | {"empty_space_skipping": False})  # fmt: skip
     assert r_on.last_frame.counters["empty_pixels_skipped"] > 0 and on[..., 3].max() > 0.1
     np.testing.assert_array_equal(on, off)
+
+
+def test_interior_pixels_keep_both_ends_strictly_inside_the_row():
+    """The fast path reads columns floor(a) and floor(a) + 1 unclamped, so the pixels it takes have
+    both segment ends in [0, top): also where a sample lands exactly on the last column (one
+    intermediate pixel per voxel, integer shifts), which read one past the row before stop 51
+    (found with NUMBA_BOUNDSCHECK=1, skipping off, the CT sample)."""
+    rng = np.random.default_rng(3)
+    top, width = 20.0, 64
+    cases = [(0.0, 1.0, 0.0, 1.0), (-3.0, 1.0, -2.0, 1.0), (0.5, 0.5, 0.25, 0.5), (-7.0, 1.0, -5.0, 1.0)]
+    cases += [tuple(rng.uniform([-10, 0.3, -10, 0.3], [5, 2.0, 5, 2.0])) for _ in range(300)]
+    for af0, afs, ab0, abs_ in cases:
+        lo, hi = interior_pixels(af0, afs, ab0, abs_, top, 0, width)
+        inside = [p for p in range(width) if 0 <= af0 + afs * p < top and 0 <= ab0 + abs_ * p < top]
+        assert list(range(lo, hi)) == inside, (af0, afs, ab0, abs_)
+    # the exact case: pixel 20 samples column 20 == top exactly and must go the general way
+    assert interior_pixels(0.0, 1.0, 0.0, 1.0, top, 0, width) == (0, 20)
 
 
 @pytest.mark.parametrize("extent", [1, 2, 3])

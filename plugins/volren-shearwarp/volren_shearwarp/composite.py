@@ -64,9 +64,16 @@ def bilinear(vol, k, a, b):
     weight is NaN (NaN * 0 is NaN too: a cell with a NaN corner is transparent)."""
     ia, fa = _cell_position(a, vol.shape[2])
     ib, fb = _cell_position(b, vol.shape[1])
-    v0 = vol[k, ib, ia] * (1.0 - fa) + vol[k, ib, ia + 1] * fa
-    v1 = vol[k, ib + 1, ia] * (1.0 - fa) + vol[k, ib + 1, ia + 1] * fa
+    v0 = _at(vol, k, ib, ia) * (1.0 - fa) + _at(vol, k, ib, ia + 1) * fa
+    v1 = _at(vol, k, ib + 1, ia) * (1.0 - fa) + _at(vol, k, ib + 1, ia + 1) * fa
     return v0 * (1.0 - fb) + v1 * fb
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _at(vol, k, b, a):
+    """vol[k, b, a] as float32: the copies may hold 8- or 16-bit integers (`classified.copy_dtype`),
+    whose differences must not wrap around."""
+    return np.float32(vol[k, b, a])
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -76,21 +83,21 @@ def _diff(vol, k, b, a, axis):
     nc, nb, na = vol.shape
     if axis == 0:
         if a == 0:
-            return vol[k, b, 1] - vol[k, b, 0]
+            return _at(vol, k, b, 1) - _at(vol, k, b, 0)
         if a == na - 1:
-            return vol[k, b, na - 1] - vol[k, b, na - 2]
-        return 0.5 * (vol[k, b, a + 1] - vol[k, b, a - 1])
+            return _at(vol, k, b, na - 1) - _at(vol, k, b, na - 2)
+        return 0.5 * (_at(vol, k, b, a + 1) - _at(vol, k, b, a - 1))
     if axis == 1:
         if b == 0:
-            return vol[k, 1, a] - vol[k, 0, a]
+            return _at(vol, k, 1, a) - _at(vol, k, 0, a)
         if b == nb - 1:
-            return vol[k, nb - 1, a] - vol[k, nb - 2, a]
-        return 0.5 * (vol[k, b + 1, a] - vol[k, b - 1, a])
+            return _at(vol, k, nb - 1, a) - _at(vol, k, nb - 2, a)
+        return 0.5 * (_at(vol, k, b + 1, a) - _at(vol, k, b - 1, a))
     if k == 0:
-        return vol[1, b, a] - vol[0, b, a]
+        return _at(vol, 1, b, a) - _at(vol, 0, b, a)
     if k == nc - 1:
-        return vol[nc - 1, b, a] - vol[nc - 2, b, a]
-    return 0.5 * (vol[k + 1, b, a] - vol[k - 1, b, a])
+        return _at(vol, nc - 1, b, a) - _at(vol, nc - 2, b, a)
+    return 0.5 * (_at(vol, k + 1, b, a) - _at(vol, k - 1, b, a))
 
 
 @njit(cache=True, error_model="numpy")
@@ -335,8 +342,10 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
         a = ab0 + abs_ * p
         ia = np.uint32(a)
         fa = np.float32(a - ia)
-        v0 = back0[ia] + (back0[ia + one] - back0[ia]) * fa
-        v1 = back1[ia] + (back1[ia + one] - back1[ia]) * fa
+        b00 = np.float32(back0[ia])  # the copies may hold integers (`classified.copy_dtype`)
+        b10 = np.float32(back1[ia])
+        v0 = b00 + (np.float32(back0[ia + one]) - b00) * fa
+        v1 = b10 + (np.float32(back1[ia + one]) - b10) * fa
         xb = (v0 + (v1 - v0) * wbb - lo32) * sc32
         if stamps[p] == plane:
             xf = values[p]
@@ -344,8 +353,10 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
             a = af0 + afs * p
             ia = np.uint32(a)
             fa = np.float32(a - ia)
-            v0 = front0[ia] + (front0[ia + one] - front0[ia]) * fa
-            v1 = front1[ia] + (front1[ia + one] - front1[ia]) * fa
+            f00 = np.float32(front0[ia])
+            f10 = np.float32(front1[ia])
+            v0 = f00 + (np.float32(front0[ia + one]) - f00) * fa
+            v1 = f10 + (np.float32(front1[ia + one]) - f10) * fa
             xf = (v0 + (v1 - v0) * wbf - lo32) * sc32
         stamps[p] = plane + 1
         values[p] = xb
@@ -404,6 +415,20 @@ def _first_past(alpha, beta, bound, strict, p):
 @njit(cache=True, inline="always", error_model="numpy")
 def _guess(alpha, beta, bound):
     return int(max(min(math.ceil((bound - alpha) / beta), 1 << 30), -(1 << 30)))
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def interior_pixels(af0, afs, ab0, abs_, top_a, p_lo, p_hi):
+    """The pixels [in_lo, in_hi) of [p_lo, p_hi) whose segment's front and back a (af0 + afs p,
+    ab0 + abs_ p) both lie in [0, top_a), in the kernels' own arithmetic: `_fast_span` reads columns
+    floor(a) and floor(a) + 1 unclamped, so a == top_a (a sample exactly on the last column, as at a
+    scale of one intermediate pixel per voxel) would read one past the row, and goes the general way."""
+    in_lo = max(_first_past(af0, afs, 0.0, False, _guess(af0, afs, 0.0)),
+                _first_past(ab0, abs_, 0.0, False, _guess(ab0, abs_, 0.0)))  # fmt: skip
+    in_hi = min(_first_past(af0, afs, top_a, False, _guess(af0, afs, top_a)),
+                _first_past(ab0, abs_, top_a, False, _guess(ab0, abs_, top_a)))  # fmt: skip
+    in_lo = min(max(in_lo, p_lo), p_hi)
+    return in_lo, min(max(in_hi, in_lo), p_hi)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -593,12 +618,7 @@ def composite_slabs(
             in_lo = p_hi
             in_hi = p_hi
             if row_inside and lean and whole == 1.0:
-                in_lo = max(_first_past(af0, afs, 0.0, False, _guess(af0, afs, 0.0)),
-                            _first_past(ab0, abs_, 0.0, False, _guess(ab0, abs_, 0.0)))  # fmt: skip
-                in_hi = min(_first_past(af0, afs, top_a, True, _guess(af0, afs, top_a)),
-                            _first_past(ab0, abs_, top_a, True, _guess(ab0, abs_, top_a)))  # fmt: skip
-                in_lo = min(max(in_lo, p_lo), p_hi)
-                in_hi = min(max(in_hi, in_lo), p_hi)
+                in_lo, in_hi = interior_pixels(af0, afs, ab0, abs_, top_a, p_lo, p_hi)
             # runs of anchored blocks (`classified`): the row's block is the front cell row's, moved on by
             # `extent` where the ray moves towards larger b; along the row, pixels whose ray moves towards
             # larger a (one side of `split`) take the block `extent` cells on, the others their own cell's
