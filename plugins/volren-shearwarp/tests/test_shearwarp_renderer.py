@@ -169,12 +169,12 @@ def test_fewer_pixels_per_voxel_draw_a_coarser_draft_of_the_same_image(pre):
     assert e_full < e_draft < min(2 * e_full, 0.03), (e_full, e_draft)  # measured: 0.0175 and 0.0275
 
 
-@pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.uint16])
-def test_integer_volumes_keep_their_type_in_the_axis_copies_and_draw_as_float32_ones(dtype, monkeypatch):
-    """8- and 16-bit data stay in their type in the three copies (a quarter or half of float32's
-    memory), and every path that reads them (fast spans, the general way, gradients for shading,
-    the projections, jitter) draws exactly what float32 copies draw: differences of unsigned values
-    must not wrap around, so the kernels convert each value to float32 first."""
+@pytest.mark.parametrize("dtype, kept", [(np.uint8, np.uint8), (np.uint16, np.float32), (np.int16, np.float32)])
+def test_8_bit_volumes_keep_their_type_in_the_axis_copies_and_draw_as_float32_ones(dtype, kept, monkeypatch):
+    """uint8 data stays uint8 in the three copies (a quarter of float32's memory), and every path
+    that reads them (fast spans, the general way, gradients for shading, the projections, jitter)
+    draws exactly what float32 copies draw: differences of unsigned values must not wrap around, so
+    the kernels convert each value to float32 first. 16-bit data gets float32 copies (`copy_dtype`)."""
     import volren_shearwarp.classified as classified
 
     values = field((14, 16, 18)).values
@@ -186,14 +186,14 @@ def test_integer_volumes_keep_their_type_in_the_axis_copies_and_draw_as_float32_
     variants = [{"preintegration": True}, {"preintegration": False, "step": 1.0},
                 {"preintegration": True, "shade": True}, {"blend_mode": "maximum"}, {"jitter": True}]  # fmt: skip
     for settings in variants:
-        kept, renderer = draw(volume, tf, camera, **settings)
-        assert renderer.classified.copy(0).values.dtype == np.dtype(dtype)
-        assert renderer.classified.copy(0).values.nbytes == scaled.nbytes
+        image, renderer = draw(volume, tf, camera, **settings)
+        assert renderer.classified.copy(0).values.dtype == np.dtype(kept)
+        assert renderer.classified.copy(0).values.nbytes == scaled.size * np.dtype(kept).itemsize
         monkeypatch.setattr(classified, "copy_dtype", lambda _: np.dtype(np.float32))
         as_float, _ = draw(volume, tf, camera, **settings)
         monkeypatch.undo()
-        assert kept[..., 3].max() > 0.1
-        np.testing.assert_array_equal(kept, as_float, err_msg=str(settings))
+        assert image[..., 3].max() > 0.1
+        np.testing.assert_array_equal(image, as_float, err_msg=str(settings))
 
 
 # ----------------------------------------------------------------------------- skipping

@@ -2,8 +2,8 @@
 the runs of cells that the transfer function may make visible.
 
 Why: shear-warp walks slices in order, so each principal axis needs the volume laid out slice by
-slice with scanlines contiguous (three copies, built lazily; in the data's own type where it is 8-
-or 16-bit integers, float32 otherwise, so NaN survives). Empty
+slice with scanlines contiguous (three copies, built lazily; uint8 data as it is, anything else
+float32, so NaN survives). Empty
 space is skipped by run-length encoding (Lacroute and Levoy 1994): per slab (two adjacent
 slices) and per cell row, the runs of cells where something may show.
 
@@ -101,16 +101,19 @@ def slab_pairs(order: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.
     return pairs, run_slab
 
 
-#: Types the axis copies keep as they are: every value exact in float32, where the kernels convert it.
-INTEGER_COPY_DTYPES = (np.dtype(np.uint8), np.dtype(np.int8), np.dtype(np.uint16), np.dtype(np.int16))
+#: Types the axis copies keep as they are (every value exact in float32, where the kernels convert it).
+#: Why uint8 only: each kept type is one more compilation of the volume kernels at set-up (`volren
+#: prepare`: about 70 s each on this machine's fast days, so int16 and uint16 too took CI from 8 to 12
+#: minutes); 8-bit data gains the most (4x less memory against 2x).
+KEPT_COPY_DTYPES = (np.dtype(np.uint8),)
 
 
 def copy_dtype(dtype: np.dtype) -> np.dtype:
-    """The axis copies' type: 8- and 16-bit integers as they are, anything else float32. Why: the
-    copies are read once per segment and are most of a frame's memory traffic on sparse scenes
-    (aneurism's float32 copy is 64 MB; as uint8, 16 MB stays in cache): 10-18 % less compositing
-    there and 4x less memory for 8-bit data (docs/shearwarp.md, stop 51)."""
-    return np.dtype(dtype) if np.dtype(dtype) in INTEGER_COPY_DTYPES else np.dtype(np.float32)
+    """The axis copies' type: uint8 as it is, anything else float32. Why: the copies are read once
+    per segment and are much of a frame's memory traffic on sparse scenes (aneurism's float32 copy
+    is 64 MB, as uint8 16 MB): 10-18 % less compositing there, and 4x less memory (docs/shearwarp.md,
+    stop 51)."""
+    return np.dtype(dtype) if np.dtype(dtype) in KEPT_COPY_DTYPES else np.dtype(np.float32)
 
 
 @dataclass

@@ -71,8 +71,8 @@ def bilinear(vol, k, a, b):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _at(vol, k, b, a):
-    """vol[k, b, a] as float32: the copies may hold 8- or 16-bit integers (`classified.copy_dtype`),
-    whose differences must not wrap around."""
+    """vol[k, b, a] as float32: the copies may hold uint8 (`classified.copy_dtype`), whose differences
+    must not wrap around."""
     return np.float32(vol[k, b, a])
 
 
