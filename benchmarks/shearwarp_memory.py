@@ -3,9 +3,8 @@ volume (`volren_shearwarp.classified`) holds and costs, per shared uniform datas
 time and memory, the three copies against the raw volume, measured").
 
 Per dataset, with its smooth TF: the raw volume's size; the three axis copies (one per principal
-axis, made when a view first needs that axis; in the data's type for 8- and 16-bit integers, where
-the one along z is the volume itself, float32 otherwise): the memory they add and its ratio to the
-raw volume; the block
+axis, made when a view first needs that axis; uint8 data as it is, where the one along z is the
+volume itself, anything else float32): the memory they add and its ratio to the raw volume; the block
 ranges cached per copy (two bytes a block, kept across TF edits) and the runs, both for every slice
 at run extent 1 (`run_extent` at step 0.5 for a shear up to 1); each axis's copy time, its ranges
 pass (once per axis and extent: what a camera turning onto a new axis pays) and its runs rebuild
@@ -29,10 +28,8 @@ MIB = 1024.0 * 1024.0
 
 
 def _support(volume: UniformVolume, tf: TransferFunction1D) -> OpacitySupport:
-    """The support over the span the renderer uses: the data's range and the TF's together."""
-    vlo, vhi = volume.value_range
-    tlo, thi = tf.value_range
-    return OpacitySupport.of(tf, min(vlo, tlo), max(vhi, thi))
+    """The support over the span the renderer takes it over (`ShearWarpRenderer._render`): the data's range."""
+    return OpacitySupport.of(tf, *volume.value_range)
 
 
 def _edited(tf: TransferFunction1D, volume: UniformVolume) -> TransferFunction1D:

@@ -121,7 +121,7 @@ class AxisCopy:
     """The volume's values laid out for one principal axis: `values[k, b, a]`, in `copy_dtype`."""
 
     axis: int
-    values: NDArray[np.float32]
+    values: NDArray[np.float32] | NDArray[np.uint8]
     runs: dict[tuple, Runs] = field(default_factory=dict)  #: by (extent, the `slab_pairs` as bytes)
     #: by (extent, the `slab_pairs` as bytes): each block's (lowest, highest) range bin, uint8
     #: (`_block_ranges`), kept across TF edits

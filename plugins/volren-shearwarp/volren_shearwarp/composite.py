@@ -342,7 +342,7 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
         a = ab0 + abs_ * p
         ia = np.uint32(a)
         fa = np.float32(a - ia)
-        b00 = np.float32(back0[ia])  # the copies may hold integers (`classified.copy_dtype`)
+        b00 = np.float32(back0[ia])  # the copies may hold uint8 (`classified.copy_dtype`): no wrap-around
         b10 = np.float32(back1[ia])
         v0 = b00 + (np.float32(back0[ia + one]) - b00) * fa
         v1 = b10 + (np.float32(back1[ia + one]) - b10) * fa
