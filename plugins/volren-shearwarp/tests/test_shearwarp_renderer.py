@@ -22,7 +22,7 @@ from volren_shearwarp.renderer import (
 )
 
 from volren.errors import VolrenError
-from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume
+from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.model.downsample import downsample
 from volren.testing import conformance_test, image_error, oracles
 from volren.testing.reference_images import reference_image
@@ -245,6 +245,41 @@ def test_empty_space_skipping_changes_no_pixel_where_rays_fan_out_both_ways(pre,
                   options=options | {"empty_space_skipping": False})  # fmt: skip
     assert r_on.last_frame.counters["empty_pixels_skipped"] > 0 and on[..., 3].max() > 0.1
     np.testing.assert_array_equal(on, off)
+
+
+@pytest.mark.parametrize("settings", [
+    {"preintegration": True}, {"preintegration": False, "step": 1.0}, {"preintegration": True, "shade": True},
+    {"preintegration": True, "step": 0.25, "jitter": True}, {"blend_mode": BlendMode.MAXIMUM},
+    {"blend_mode": BlendMode.AVERAGE},
+])  # fmt: skip
+def test_blocks_of_rows_draw_every_row_as_one_row_at_a_time_does(monkeypatch, settings):
+    """The kernels composite `ROW_BLOCK` intermediate rows together, slab by slab; each pixel's
+    arithmetic is the same whatever the block, so the image and the counters must not change to the
+    bit: blocks of 1 row (row after row), 3 (a short last block: the intermediate image here is 29
+    rows high, not a multiple of 3), 8 (the default) and 64 (one block larger than the image).
+    Opaque blobs make rows terminate early at different slabs; a perspective view under a far plane
+    that cuts the volume takes the clipped path too."""
+    rng = np.random.default_rng(11)
+    values = rng.uniform(0.0, 0.4, (20, 22, 24)).astype(np.float32)
+    values[5:9, 6:12, 4:14] += 2.0
+    volume = UniformVolume(values)
+    tf = TransferFunction1D([[0, 1, 0.6, 0.2], [2.4, 0.2, 0.5, 1.0]], [[0.1, 0.0], [0.4, 0.3], [2.0, 1.0]], 1.0)
+    camera = Camera.orbit(volume.bounds, 30, 20)
+    behind_the_centre = float(np.linalg.norm(np.subtract(camera.position, camera.focal_point))) + 2.0
+    camera = replace(camera, clipping_range=(1.0, behind_the_centre))
+    drawn = {}
+    for rows in (1, 3, 8, 64):
+        monkeypatch.setattr("volren_shearwarp.renderer.ROW_BLOCK", rows)
+        image, renderer = draw(volume, tf, camera, (48, 40), options={"oversampling": 0.75}, **settings)
+        drawn[rows] = image, dict(renderer.last_frame.counters)
+    image, counters = drawn[1]
+    assert counters["intermediate_height"] % 3 != 0 and counters["intermediate_height"] < 64
+    assert image[..., 3].max() > 0.25  # something is drawn (the average of the blobs' opacity is about 0.3)
+    if "blend_mode" not in settings:
+        assert counters["clipped"] == 1.0 and counters["pixels_terminated"] > 0
+    for rows in (3, 8, 64):
+        np.testing.assert_array_equal(drawn[rows][0], image)
+        assert drawn[rows][1] == counters
 
 
 def test_interior_pixels_keep_both_ends_strictly_inside_the_row():

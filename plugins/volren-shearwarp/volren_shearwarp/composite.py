@@ -1,10 +1,13 @@
 """Compositing kernels: slabs between consecutive sample planes, front to back, into the
 intermediate image, one parallel loop over intermediate scanlines.
 
-Why this shape: the intermediate image's scanlines are independent, so each thread takes whole
-scanlines (interleaved, for balance) and walks a block of slabs front to back for each; a
-scanline of the image meets one scanline of each slice (the factorization keeps b a function of
-the image row alone), so memory is read a slice scanline at a time.
+Why this shape: the intermediate image's scanlines are independent, so each thread takes blocks
+of `row_block` consecutive scanlines (handed out dynamically, for balance) and walks the slabs
+front to back, each slab for every row of its block; a scanline of the image meets one scanline
+of each slice (the factorization keeps b a function of the image row alone), and consecutive rows
+meet neighbouring ones, so a block reads each slice's data once, a few scanlines in order (row by
+row, all slabs of a row before the next, the same slice scanline came from memory again for each
+row: on sparse scenes most of the time went there).
 
 Per scanline and slab:
 1. Which pixels to visit: the run-length runs of possibly visible blocks of cells (`classified`:
@@ -554,7 +557,7 @@ def composite_slabs(
     layers, per_pixel_layer, table, table_back, lut, preintegrated, bilinear_lookup, lo, scale,
     offsets, starts, ends, extent, use_runs, run_slab, slab_frac, use_termination, term_alpha, has_nan,
     shading, light, half, ray_dirs, ka, kd, ks, power, gthr, inv_sp,
-    clipping, clip_lo, clip_hi, jitter, offsets_u, buf_len, counters,
+    clipping, clip_lo, clip_hi, jitter, offsets_u, buf_len, counters, row_block,
 ):  # fmt: skip
     """Composite the slabs between order[m - 1] and order[m] for m in [m0, m1) into `rgba`
     (intermediate image, premultiplied RGBA float32), clearing each row's image, stamps and skip
@@ -580,13 +583,16 @@ def composite_slabs(
     top_b = nb - 1.0
     lean = sub == 1 and not shading and not jitter
     m_last = order.shape[0] - 1  # the back slab
-    for r in prange(rows.shape[0]):
-        q = rows[r]
+    for block in prange((rows.shape[0] + row_block - 1) // row_block):
+        r0 = block * row_block
+        r1 = min(r0 + row_block, rows.shape[0])
         if m0 <= 1:
-            rgba[q, :, :] = 0.0
-            stamp[q, :] = -1
-            skip[q, :] = 0
-            counters[q, :] = 0
+            for r in range(r0, r1):
+                q = rows[r]
+                rgba[q, :, :] = 0.0
+                stamp[q, :] = -1
+                skip[q, :] = 0
+                counters[q, :] = 0
         n_comp = 0
         n_empty = 0
         n_term = 0
@@ -594,184 +600,186 @@ def composite_slabs(
         hy = half[1]
         hz = half[2]
         for m in range(max(m0, 1), m1):
-            kf = order[m - 1]
-            kb = order[m]
-            slab = run_slab[m]
-            whole = slab_frac[m]
-            bf = alpha_b[kf] + beta_b[kf] * q
-            bb = alpha_b[kb] + beta_b[kb] * q
-            if max(bf, bb) < 0.0 or min(bf, bb) > top_b:
-                continue
-            row_inside = min(bf, bb) >= 0.0 and max(bf, bb) <= top_b
-            ibf, fbf = _cell_position(bf, nb)
-            ibb, fbb = _cell_position(bb, nb)
-            af0 = alpha_a[kf]
-            afs = beta_a[kf]
-            ab0 = alpha_a[kb]
-            abs_ = beta_a[kb]
-            p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, top_a)
-            p_lo = max(p_lo, 0)
-            p_hi = min(p_hi, width)
-            if p_lo >= p_hi:
-                continue
-            # pixels whose segment has both ends inside the slice rectangle: no clipping
-            in_lo = p_hi
-            in_hi = p_hi
-            if row_inside and lean and whole == 1.0:
-                in_lo, in_hi = interior_pixels(af0, afs, ab0, abs_, top_a, p_lo, p_hi)
-            # runs of anchored blocks (`classified`): the row's block is the front cell row's, moved on by
-            # `extent` where the ray moves towards larger b; along the row, pixels whose ray moves towards
-            # larger a (one side of `split`) take the block `extent` cells on, the others their own cell's
-            first = 0
-            n_runs = 1
-            parts = 1
-            split = 0
-            forward_above = True
-            if use_runs:
-                jb = int(math.floor(bf)) + (extent if bb >= bf else 0)
-                jb = min(max(jb, 0), nb - 2 + extent)
-                first = offsets[slab * (nb - 1 + extent) + jb]
-                n_runs = offsets[slab * (nb - 1 + extent) + jb + 1] - first
-                parts = 2
-                split, forward_above = _forward_split(af0, afs, ab0, abs_, p_lo, p_hi)
-            covered = 0
-            for item in range(parts * n_runs):
-                lo_p = p_lo
-                hi_p = p_hi
+            for r in range(r0, r1):  # the block's rows read neighbouring scanlines of slice kb: fetched once
+                q = rows[r]
+                kf = order[m - 1]
+                kb = order[m]
+                slab = run_slab[m]
+                whole = slab_frac[m]
+                bf = alpha_b[kf] + beta_b[kf] * q
+                bb = alpha_b[kb] + beta_b[kb] * q
+                if max(bf, bb) < 0.0 or min(bf, bb) > top_b:
+                    continue
+                row_inside = min(bf, bb) >= 0.0 and max(bf, bb) <= top_b
+                ibf, fbf = _cell_position(bf, nb)
+                ibb, fbb = _cell_position(bb, nb)
+                af0 = alpha_a[kf]
+                afs = beta_a[kf]
+                ab0 = alpha_a[kb]
+                abs_ = beta_a[kb]
+                p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, top_a)
+                p_lo = max(p_lo, 0)
+                p_hi = min(p_hi, width)
+                if p_lo >= p_hi:
+                    continue
+                # pixels whose segment has both ends inside the slice rectangle: no clipping
+                in_lo = p_hi
+                in_hi = p_hi
+                if row_inside and lean and whole == 1.0:
+                    in_lo, in_hi = interior_pixels(af0, afs, ab0, abs_, top_a, p_lo, p_hi)
+                # runs of anchored blocks (`classified`): the row's block is the front cell row's, moved on by
+                # `extent` where the ray moves towards larger b; along the row, pixels whose ray moves towards
+                # larger a (one side of `split`) take the block `extent` cells on, the others their own cell's
+                first = 0
+                n_runs = 1
+                parts = 1
+                split = 0
+                forward_above = True
                 if use_runs:
-                    forward = item < n_runs
-                    run = first + item % n_runs
-                    if forward == forward_above:
-                        lo_p = max(lo_p, split)
-                    else:
-                        hi_p = min(hi_p, split)
-                    if lo_p >= hi_p:  # no pixel on this side (every one, under a parallel projection)
-                        continue
-                    moved = extent if forward else 0  # front cell = block index - moved
-                    a_s = starts[run]
-                    a_e = ends[run]
-                    if a_s > 0:
-                        lo_p = max(lo_p, _first_past(af0, afs, a_s - moved, False, _guess(af0, afs, a_s - moved)))
-                    if a_e < na - 1 + extent:
-                        hi_p = min(hi_p, _first_past(af0, afs, a_e - moved, False, _guess(af0, afs, a_e - moved)))
-                    if lo_p >= hi_p:
-                        continue
-                    covered += hi_p - lo_p
-                f0 = min(max(in_lo, lo_p), hi_p)
-                f1 = min(max(in_hi, f0), hi_p)
-                if clipping:  # only pixels whose whole slab lies between the planes (an interval: the
-                    # clip limits are monotonic along a row); the others go the general way
-                    while f0 < f1 and not (clip_lo[q, f0] <= m - 1 and clip_hi[q, f0] >= m):
-                        f0 += 1
-                    while f1 > f0 and not (clip_lo[q, f1 - 1] <= m - 1 and clip_hi[q, f1 - 1] >= m):
-                        f1 -= 1
-                if f1 > f0:
-                    c, t = _fast_span(vol, kf, kb, m - 1, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, f0, f1,
-                                      rgba, buf_x, stamp, skip, layers, per_pixel_layer, table, lut, preintegrated,
-                                      bilinear_lookup, lo, scale, use_termination, term_alpha, has_nan)  # fmt: skip
-                    n_comp += c
-                    n_term += t
-                p = lo_p
-                while True:
-                    if use_termination:
-                        p = _next_open(skip, q, p, hi_p)
-                    if f0 <= p < f1:
-                        p = f1  # done by the fast span
-                        continue
-                    if p >= hi_p:
-                        break
-                    af = af0 + afs * p
-                    ab = ab0 + abs_ * p
-                    t0, t1 = _clip(af, ab, top_a, 0.0, 1.0)
-                    t0, t1 = _clip(bf, bb, top_b, t0, t1)
-                    v0 = 0.0
-                    v1 = 1.0
-                    if clipping:  # the near and far planes, as this slab's parameter
-                        v0 = clip_lo[q, p] - (m - 1)
-                        v1 = clip_hi[q, p] - (m - 1)
-                        t0 = max(t0, v0)
-                        t1 = min(t1, v1)
-                    if t1 <= t0:
-                        p += 1
-                        continue
-                    layer = layers[q, p] if per_pixel_layer else layers[0, 0]
-                    if shading and ray_dirs.shape[0] > 1:
-                        hx = light[0] - ray_dirs[q, p, 0]
-                        hy = light[1] - ray_dirs[q, p, 1]
-                        hz = light[2] - ray_dirs[q, p, 2]
-                        hn = math.sqrt(hx * hx + hy * hy + hz * hz)
-                        if hn > 0.0:
-                            hx /= hn
-                            hy /= hn
-                            hz /= hn
-                    if jitter:
-                        c, t = _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, offsets_u[q, p],
-                                               rgba, buf_x, buf_d, buf_s, buf_len, stamp, skip, layer, table,
-                                               table_back, lut, preintegrated, shading, bilinear_lookup, lo, scale,
-                                               inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr, use_termination,
-                                               term_alpha)  # fmt: skip
+                    jb = int(math.floor(bf)) + (extent if bb >= bf else 0)
+                    jb = min(max(jb, 0), nb - 2 + extent)
+                    first = offsets[slab * (nb - 1 + extent) + jb]
+                    n_runs = offsets[slab * (nb - 1 + extent) + jb + 1] - first
+                    parts = 2
+                    split, forward_above = _forward_split(af0, afs, ab0, abs_, p_lo, p_hi)
+                covered = 0
+                for item in range(parts * n_runs):
+                    lo_p = p_lo
+                    hi_p = p_hi
+                    if use_runs:
+                        forward = item < n_runs
+                        run = first + item % n_runs
+                        if forward == forward_above:
+                            lo_p = max(lo_p, split)
+                        else:
+                            hi_p = min(hi_p, split)
+                        if lo_p >= hi_p:  # no pixel on this side (every one, under a parallel projection)
+                            continue
+                        moved = extent if forward else 0  # front cell = block index - moved
+                        a_s = starts[run]
+                        a_e = ends[run]
+                        if a_s > 0:
+                            lo_p = max(lo_p, _first_past(af0, afs, a_s - moved, False, _guess(af0, afs, a_s - moved)))
+                        if a_e < na - 1 + extent:
+                            hi_p = min(hi_p, _first_past(af0, afs, a_e - moved, False, _guess(af0, afs, a_e - moved)))
+                        if lo_p >= hi_p:
+                            continue
+                        covered += hi_p - lo_p
+                    f0 = min(max(in_lo, lo_p), hi_p)
+                    f1 = min(max(in_hi, f0), hi_p)
+                    if clipping:  # only pixels whose whole slab lies between the planes (an interval: the
+                        # clip limits are monotonic along a row); the others go the general way
+                        while f0 < f1 and not (clip_lo[q, f0] <= m - 1 and clip_hi[q, f0] >= m):
+                            f0 += 1
+                        while f1 > f0 and not (clip_lo[q, f1 - 1] <= m - 1 and clip_hi[q, f1 - 1] >= m):
+                            f1 -= 1
+                    if f1 > f0:
+                        c, t = _fast_span(vol, kf, kb, m - 1, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, f0, f1,
+                                          rgba, buf_x, stamp, skip, layers, per_pixel_layer, table, lut, preintegrated,
+                                          bilinear_lookup, lo, scale, use_termination, term_alpha, has_nan)  # fmt: skip
                         n_comp += c
                         n_term += t
-                        p += 1
-                        continue
-                    for j in range(sub):
-                        u0 = max(j * inv_sub, t0)
-                        u1 = min((j + 1) * inv_sub, t1)
-                        if u1 <= u0:
+                    p = lo_p
+                    while True:
+                        if use_termination:
+                            p = _next_open(skip, q, p, hi_p)
+                        if f0 <= p < f1:
+                            p = f1  # done by the fast span
                             continue
-                        frac = (u1 - u0) * sub * whole
-                        plane = (m - 1) * sub + j
-                        w0 = j * inv_sub
-                        w1 = (j + 1) * inv_sub if j + 1 < sub else 1.0
-                        # a plane cutting this segment: its values are taken at the cut
-                        cut_front = v0 > w0
-                        cut_back = v1 < w1
-                        if cut_front:
-                            w0 = v0
-                        if cut_back:
-                            w1 = v1
-                        df = 1.0
-                        sf = 0.0
-                        if stamp[q, p] == plane and not cut_front:
-                            xf = buf_x[q, p]
-                            if shading:
-                                df = buf_d[q, p]
-                                sf = buf_s[q, p]
-                        else:
-                            xf = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), lo, scale)
-                            if shading:
-                                df, sf = _plane_light(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf),
-                                                      inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
-                        xb = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), lo, scale)
-                        db = 1.0
-                        sb = 0.0
-                        if shading:
-                            db, sb = _plane_light(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf),
-                                                  inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
-                            if not cut_back:
-                                buf_d[q, p] = db
-                                buf_s[q, p] = sb
-                        if not cut_back:
-                            stamp[q, p] = plane + 1
-                            buf_x[q, p] = xb
-                        c, t = _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, table,
-                                                table_back, lut, preintegrated, shading, bilinear_lookup,
-                                                use_termination, term_alpha)  # fmt: skip
-                        n_comp += c
-                        if t:
-                            n_term += 1
+                        if p >= hi_p:
                             break
-                    p += 1
-            if use_runs:
-                n_empty += (p_hi - p_lo) - covered
-        counters[q, 0] += n_comp
-        counters[q, 1] += n_empty
-        counters[q, 2] += n_term
+                        af = af0 + afs * p
+                        ab = ab0 + abs_ * p
+                        t0, t1 = _clip(af, ab, top_a, 0.0, 1.0)
+                        t0, t1 = _clip(bf, bb, top_b, t0, t1)
+                        v0 = 0.0
+                        v1 = 1.0
+                        if clipping:  # the near and far planes, as this slab's parameter
+                            v0 = clip_lo[q, p] - (m - 1)
+                            v1 = clip_hi[q, p] - (m - 1)
+                            t0 = max(t0, v0)
+                            t1 = min(t1, v1)
+                        if t1 <= t0:
+                            p += 1
+                            continue
+                        layer = layers[q, p] if per_pixel_layer else layers[0, 0]
+                        if shading and ray_dirs.shape[0] > 1:
+                            hx = light[0] - ray_dirs[q, p, 0]
+                            hy = light[1] - ray_dirs[q, p, 1]
+                            hz = light[2] - ray_dirs[q, p, 2]
+                            hn = math.sqrt(hx * hx + hy * hy + hz * hz)
+                            if hn > 0.0:
+                                hx /= hn
+                                hy /= hn
+                                hz /= hn
+                        if jitter:
+                            c, t = _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, offsets_u[q, p],
+                                                   rgba, buf_x, buf_d, buf_s, buf_len, stamp, skip, layer, table,
+                                                   table_back, lut, preintegrated, shading, bilinear_lookup, lo, scale,
+                                                   inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr, use_termination,
+                                                   term_alpha)  # fmt: skip
+                            n_comp += c
+                            n_term += t
+                            p += 1
+                            continue
+                        for j in range(sub):
+                            u0 = max(j * inv_sub, t0)
+                            u1 = min((j + 1) * inv_sub, t1)
+                            if u1 <= u0:
+                                continue
+                            frac = (u1 - u0) * sub * whole
+                            plane = (m - 1) * sub + j
+                            w0 = j * inv_sub
+                            w1 = (j + 1) * inv_sub if j + 1 < sub else 1.0
+                            # a plane cutting this segment: its values are taken at the cut
+                            cut_front = v0 > w0
+                            cut_back = v1 < w1
+                            if cut_front:
+                                w0 = v0
+                            if cut_back:
+                                w1 = v1
+                            df = 1.0
+                            sf = 0.0
+                            if stamp[q, p] == plane and not cut_front:
+                                xf = buf_x[q, p]
+                                if shading:
+                                    df = buf_d[q, p]
+                                    sf = buf_s[q, p]
+                            else:
+                                xf = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), lo, scale)
+                                if shading:
+                                    df, sf = _plane_light(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf),
+                                                          inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
+                            xb = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), lo, scale)
+                            db = 1.0
+                            sb = 0.0
+                            if shading:
+                                db, sb = _plane_light(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf),
+                                                      inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
+                                if not cut_back:
+                                    buf_d[q, p] = db
+                                    buf_s[q, p] = sb
+                            if not cut_back:
+                                stamp[q, p] = plane + 1
+                                buf_x[q, p] = xb
+                            c, t = _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, table,
+                                                    table_back, lut, preintegrated, shading, bilinear_lookup,
+                                                    use_termination, term_alpha)  # fmt: skip
+                            n_comp += c
+                            if t:
+                                n_term += 1
+                                break
+                        p += 1
+                if use_runs:
+                    n_empty += (p_hi - p_lo) - covered
+        counters[rows[r0], 0] += n_comp  # the block's totals, on its first row
+        counters[rows[r0], 1] += n_empty
+        counters[rows[r0], 2] += n_term
 
 
 @njit(parallel=True, cache=True, error_model="numpy")
 def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows, acc, mode, lengths,
-                  clipping, clip_lo, clip_hi):  # fmt: skip
+                  clipping, clip_lo, clip_hi, row_block):  # fmt: skip
     """Maximum, minimum or length-weighted average of the values along each intermediate ray, over
     the segments inside the volume whose ends are finite: acc[q, p] = (value, weight). With
     `clipping`, only the part of each ray between the near and far planes (as `composite_slabs`),
@@ -779,55 +787,58 @@ def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, row
     nc, nb, na = vol.shape
     width = acc.shape[1]
     inv_sub = 1.0 / sub
-    for r in prange(rows.shape[0]):
-        q = rows[r]
+    for block in prange((rows.shape[0] + row_block - 1) // row_block):
+        r0 = block * row_block
+        r1 = min(r0 + row_block, rows.shape[0])
         for m in range(max(m0, 1), m1):
-            kf = order[m - 1]
-            kb = order[m]
-            bf = alpha_b[kf] + beta_b[kf] * q
-            bb = alpha_b[kb] + beta_b[kb] * q
-            if max(bf, bb) < 0.0 or min(bf, bb) > nb - 1.0:
-                continue
-            af0 = alpha_a[kf]
-            afs = beta_a[kf]
-            ab0 = alpha_a[kb]
-            abs_ = beta_a[kb]
-            p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, na - 1.0)
-            for p in range(max(p_lo, 0), min(p_hi, width)):
-                af = af0 + afs * p
-                ab = ab0 + abs_ * p
-                t0, t1 = _clip(af, ab, na - 1.0, 0.0, 1.0)
-                t0, t1 = _clip(bf, bb, nb - 1.0, t0, t1)
-                v0 = 0.0
-                v1 = 1.0
-                if clipping:
-                    v0 = clip_lo[q, p] - (m - 1)
-                    v1 = clip_hi[q, p] - (m - 1)
-                    t0 = max(t0, v0)
-                    t1 = min(t1, v1)
-                if t1 <= t0:
+            for r in range(r0, r1):
+                q = rows[r]
+                kf = order[m - 1]
+                kb = order[m]
+                bf = alpha_b[kf] + beta_b[kf] * q
+                bb = alpha_b[kb] + beta_b[kb] * q
+                if max(bf, bb) < 0.0 or min(bf, bb) > nb - 1.0:
                     continue
-                for j in range(sub):
-                    u0 = max(j * inv_sub, t0)
-                    u1 = min((j + 1) * inv_sub, t1)
-                    if u1 <= u0:
+                af0 = alpha_a[kf]
+                afs = beta_a[kf]
+                ab0 = alpha_a[kb]
+                abs_ = beta_a[kb]
+                p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, na - 1.0)
+                for p in range(max(p_lo, 0), min(p_hi, width)):
+                    af = af0 + afs * p
+                    ab = ab0 + abs_ * p
+                    t0, t1 = _clip(af, ab, na - 1.0, 0.0, 1.0)
+                    t0, t1 = _clip(bf, bb, nb - 1.0, t0, t1)
+                    v0 = 0.0
+                    v1 = 1.0
+                    if clipping:
+                        v0 = clip_lo[q, p] - (m - 1)
+                        v1 = clip_hi[q, p] - (m - 1)
+                        t0 = max(t0, v0)
+                        t1 = min(t1, v1)
+                    if t1 <= t0:
                         continue
-                    w0 = max(j * inv_sub, v0)
-                    w1 = min((j + 1) * inv_sub if j + 1 < sub else 1.0, v1)
-                    s0 = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), 0.0, 1.0)
-                    s1 = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), 0.0, 1.0)
-                    if s0 != s0 or s1 != s1:
-                        continue
-                    length = (u1 - u0) * lengths[q, p]
-                    if mode == AVERAGE:
-                        acc[q, p, 0] += 0.5 * (s0 + s1) * length
-                        acc[q, p, 1] += length
-                    else:
-                        hi_v = max(s0, s1) if mode == MAXIMUM else min(s0, s1)
-                        if acc[q, p, 1] == 0.0:
-                            acc[q, p, 0] = hi_v
-                        elif mode == MAXIMUM:
-                            acc[q, p, 0] = max(acc[q, p, 0], hi_v)
+                    for j in range(sub):
+                        u0 = max(j * inv_sub, t0)
+                        u1 = min((j + 1) * inv_sub, t1)
+                        if u1 <= u0:
+                            continue
+                        w0 = max(j * inv_sub, v0)
+                        w1 = min((j + 1) * inv_sub if j + 1 < sub else 1.0, v1)
+                        s0 = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), 0.0, 1.0)
+                        s1 = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), 0.0, 1.0)
+                        if s0 != s0 or s1 != s1:
+                            continue
+                        length = (u1 - u0) * lengths[q, p]
+                        if mode == AVERAGE:
+                            acc[q, p, 0] += 0.5 * (s0 + s1) * length
+                            acc[q, p, 1] += length
                         else:
-                            acc[q, p, 0] = min(acc[q, p, 0], hi_v)
-                        acc[q, p, 1] += max(length, 1e-300)
+                            hi_v = max(s0, s1) if mode == MAXIMUM else min(s0, s1)
+                            if acc[q, p, 1] == 0.0:
+                                acc[q, p, 0] = hi_v
+                            elif mode == MAXIMUM:
+                                acc[q, p, 0] = max(acc[q, p, 0], hi_v)
+                            else:
+                                acc[q, p, 0] = min(acc[q, p, 0], hi_v)
+                            acc[q, p, 1] += max(length, 1e-300)
