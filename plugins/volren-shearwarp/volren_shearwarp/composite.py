@@ -205,6 +205,12 @@ def _clip(x0, x1, hi, t0, t1):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _sub_interval(j, inv_sub, t0, t1):
+    """The part [u0, u1] of the slab parameter range [t0, t1] in sub-plane j's segment (empty when u1 <= u0)."""
+    return max(j * inv_sub, t0), min((j + 1) * inv_sub, t1)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _pixel_range(af0, afs, ab0, abs_, hi):
     """Pixels whose segment (front a = af0 + afs p, back a = ab0 + abs_ p) may meet [0, hi]."""
     p_lo = math.ceil(min((0.0 - af0) / afs, (0.0 - ab0) / abs_)) - 1
@@ -723,8 +729,7 @@ def composite_slabs(
                             p += 1
                             continue
                         for j in range(sub):
-                            u0 = max(j * inv_sub, t0)
-                            u1 = min((j + 1) * inv_sub, t1)
+                            u0, u1 = _sub_interval(j, inv_sub, t0, t1)
                             if u1 <= u0:
                                 continue
                             frac = (u1 - u0) * sub * whole
@@ -819,8 +824,7 @@ def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, row
                     if t1 <= t0:
                         continue
                     for j in range(sub):
-                        u0 = max(j * inv_sub, t0)
-                        u1 = min((j + 1) * inv_sub, t1)
+                        u0, u1 = _sub_interval(j, inv_sub, t0, t1)
                         if u1 <= u0:
                             continue
                         w0 = max(j * inv_sub, v0)
