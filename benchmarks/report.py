@@ -35,6 +35,10 @@ SECTIONS = (
      "same load (`python -m benchmarks.defaults_ab`)"),
     ("plugins.md", "The plugin renderers (shear-warp, object order)",
      "How do the seeds' CPU algorithms compare with VTK and the slicer at equal error, and with their papers' tables?"),
+    ("shearwarp_peers.md", "Shear-warp against VTK's fastest mapper and the slicer, one run",
+     "At equal or lower error, how much faster is `shearwarp` than VTK's fixed-point mapper and the slicer, scene by "
+     "scene, timed in one run? (`volren bench run ... --renderers shearwarp,vtk-fixed_point,slicer`, then "
+     "`python -m benchmarks.ratios ... --fragment`)"),
     ("occlusion_bound.md", "What hidden volume removal could occlude at most",
      "Of the cells a TF leaves visible, how many lie behind rays that are already opaque, against what "
      "objectorder's occlusion map skips? (`python -m benchmarks.occlusion_bound`)"),
