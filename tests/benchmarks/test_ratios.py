@@ -15,6 +15,15 @@ ROWS = [
 ]
 
 
+def write_runs(folder, rows):
+    """A runs.csv of `rows` in `folder`, as `volren bench run` writes it (the columns ratios reads)."""
+    path = folder / "runs.csv"
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(ROWS[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
 def test_the_fastest_of_ours_at_or_below_each_peer_error():
     found = ratios.ratios(ROWS, "ours")[("d", "t", "peer")]
     # coarse: our fast setting (5x); exact: only the fine one reaches 0.01 (5x); beyond: none reaches
@@ -22,11 +31,7 @@ def test_the_fastest_of_ours_at_or_below_each_peer_error():
 
 
 def test_the_table(tmp_path, capsys):
-    path = tmp_path / "runs.csv"
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(ROWS[0]))
-        writer.writeheader()
-        writer.writerows(ROWS)
+    path = write_runs(tmp_path, ROWS)
     assert ratios.main([str(path), "ours"]) == 0
     out = capsys.readouterr().out
     assert "| d | t | peer | 5.00 (coarse: 50 ms; ours: fast) | 5.00-5.00 (2 settings) |" in out
@@ -41,11 +46,7 @@ def test_the_fragment_for_benchmarks_md(tmp_path):
         {"dataset": "f", "tf": "t", "renderer": "ours", "settings": "fast", "ms": "10", "rmse": "0.02"},
         {"dataset": "f", "tf": "t", "renderer": "peer", "settings": "exact", "ms": "500", "rmse": "0.001"},
     ]
-    path = tmp_path / "runs.csv"
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(ROWS[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    path = write_runs(tmp_path, rows)
     fragment = tmp_path / "peers.md"
     assert ratios.main([str(path), "ours", "--fragment", str(fragment)]) == 0
     text = fragment.read_text()
@@ -57,11 +58,7 @@ def test_the_fragment_for_benchmarks_md(tmp_path):
 
 
 def test_an_unwritable_fragment_is_a_one_line_error(tmp_path, capsys):
-    path = tmp_path / "runs.csv"
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(ROWS[0]))
-        writer.writeheader()
-        writer.writerows(ROWS)
+    path = write_runs(tmp_path, ROWS)
     assert ratios.main([str(path), "ours", "--fragment", str(tmp_path / "missing" / "peers.md")]) == 1
     err = capsys.readouterr().err.strip()
     assert err.startswith("error: ") and "peers.md: cannot write" in err and "\n" not in err
