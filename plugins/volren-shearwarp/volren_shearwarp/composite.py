@@ -606,12 +606,28 @@ def composite_slabs(
         hy = half[1]
         hz = half[2]
         for m in range(max(m0, 1), m1):
+            # what depends on the slab alone (the pixel -> a maps), once for the block's rows
+            kf = order[m - 1]
+            kb = order[m]
+            slab = run_slab[m]
+            whole = slab_frac[m]
+            af0 = alpha_a[kf]
+            afs = beta_a[kf]
+            ab0 = alpha_a[kb]
+            abs_ = beta_a[kb]
+            p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, top_a)
+            p_lo = max(p_lo, 0)
+            p_hi = min(p_hi, width)
+            if p_lo >= p_hi:
+                continue
+            # pixels whose segment has both ends inside the slice rectangle along a (a row whose ends lie
+            # inside along b takes them without clipping)
+            slab_in_lo = p_hi
+            slab_in_hi = p_hi
+            if lean and whole == 1.0:
+                slab_in_lo, slab_in_hi = interior_pixels(af0, afs, ab0, abs_, top_a, p_lo, p_hi)
             for r in range(r0, r1):  # the block's rows read neighbouring scanlines of slice kb: fetched once
                 q = rows[r]
-                kf = order[m - 1]
-                kb = order[m]
-                slab = run_slab[m]
-                whole = slab_frac[m]
                 bf = alpha_b[kf] + beta_b[kf] * q
                 bb = alpha_b[kb] + beta_b[kb] * q
                 if max(bf, bb) < 0.0 or min(bf, bb) > top_b:
@@ -619,20 +635,8 @@ def composite_slabs(
                 row_inside = min(bf, bb) >= 0.0 and max(bf, bb) <= top_b
                 ibf, fbf = _cell_position(bf, nb)
                 ibb, fbb = _cell_position(bb, nb)
-                af0 = alpha_a[kf]
-                afs = beta_a[kf]
-                ab0 = alpha_a[kb]
-                abs_ = beta_a[kb]
-                p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, top_a)
-                p_lo = max(p_lo, 0)
-                p_hi = min(p_hi, width)
-                if p_lo >= p_hi:
-                    continue
-                # pixels whose segment has both ends inside the slice rectangle: no clipping
-                in_lo = p_hi
-                in_hi = p_hi
-                if row_inside and lean and whole == 1.0:
-                    in_lo, in_hi = interior_pixels(af0, afs, ab0, abs_, top_a, p_lo, p_hi)
+                in_lo = slab_in_lo if row_inside else p_hi
+                in_hi = slab_in_hi if row_inside else p_hi
                 # runs of anchored blocks (`classified`): the row's block is the front cell row's, moved on by
                 # `extent` where the ray moves towards larger b; along the row, pixels whose ray moves towards
                 # larger a (one side of `split`) take the block `extent` cells on, the others their own cell's
@@ -796,19 +800,19 @@ def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, row
         r0 = block * row_block
         r1 = min(r0 + row_block, rows.shape[0])
         for m in range(max(m0, 1), m1):
+            kf = order[m - 1]
+            kb = order[m]
+            af0 = alpha_a[kf]
+            afs = beta_a[kf]
+            ab0 = alpha_a[kb]
+            abs_ = beta_a[kb]
+            p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, na - 1.0)
             for r in range(r0, r1):
                 q = rows[r]
-                kf = order[m - 1]
-                kb = order[m]
                 bf = alpha_b[kf] + beta_b[kf] * q
                 bb = alpha_b[kb] + beta_b[kb] * q
                 if max(bf, bb) < 0.0 or min(bf, bb) > nb - 1.0:
                     continue
-                af0 = alpha_a[kf]
-                afs = beta_a[kf]
-                ab0 = alpha_a[kb]
-                abs_ = beta_a[kb]
-                p_lo, p_hi = _pixel_range(af0, afs, ab0, abs_, na - 1.0)
                 for p in range(max(p_lo, 0), min(p_hi, width)):
                     af = af0 + afs * p
                     ab = ab0 + abs_ * p
