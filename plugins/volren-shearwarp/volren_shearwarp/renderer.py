@@ -238,24 +238,18 @@ def strided_order(order: NDArray[np.int64], stride: int) -> tuple[NDArray[np.int
     return np.ascontiguousarray(picked, dtype=np.int64), frac
 
 
-def _half_pixel_level(preintegrated: bool, step: float) -> QualityLevel:
-    """The quality level at oversampling 0.5 (one intermediate pixel per voxel where voxels cover
-    several output pixels), labelled as the benchmarks and `volren/quality_levels.json` name it."""
-    label = f"{'pre-integrated' if preintegrated else 'post-classified'}, oversampling 0.5"
+def _level(preintegrated: bool, step: float, oversampling: float, pixels_per_voxel: float | None = None) -> QualityLevel:
+    """A quality level at a fixed `oversampling`, for drafts also `pixels_per_voxel` (below one: intermediate
+    pixels wider than voxels, `factorize`'s min_scale), labelled as the benchmarks and
+    `volren/quality_levels.json` name it."""
+    label = f"{'pre-integrated' if preintegrated else 'post-classified'}, oversampling {oversampling:g}"
+    options: dict[str, float] = {"oversampling": oversampling}
+    if pixels_per_voxel is not None:
+        label += f", {pixels_per_voxel:g} pixels per voxel"
+        options["pixels_per_voxel"] = pixels_per_voxel
     if step != 0.5:
         label += f", step {step:g}"
-    return QualityLevel(label, step=step, preintegration=preintegrated, options={"oversampling": 0.5})
-
-
-def _coarse_level(preintegrated: bool, step: float, pixels_per_voxel: float) -> QualityLevel:
-    """A draft level at oversampling 0.25 with at least `pixels_per_voxel` intermediate pixels per voxel
-    (below one: intermediate pixels wider than voxels, `factorize`'s min_scale)."""
-    label = (f"{'pre-integrated' if preintegrated else 'post-classified'}, oversampling 0.25, "
-             f"{pixels_per_voxel:g} pixels per voxel")  # fmt: skip
-    if step != 0.5:
-        label += f", step {step:g}"
-    return QualityLevel(label, step=step, preintegration=preintegrated,
-                        options={"oversampling": 0.25, "pixels_per_voxel": pixels_per_voxel})  # fmt: skip
+    return QualityLevel(label, step=step, preintegration=preintegrated, options=options)
 
 
 def _rows(height: int) -> NDArray[np.int64]:
@@ -289,27 +283,26 @@ class ShearWarpRenderer(RendererBase):
             # intermediate pixels up to twice a voxel's width (`pixels_per_voxel`): 2-4x fewer segments at VTK's step-2
             # error or below on 11 of the 12 shared scenes, where a voxel covers more than an output pixel (stop 51,
             # docs/shearwarp.md; bonsai's smooth and opaque TFs need 0.7 per voxel, aneurism's smooth one 1)
-            _coarse_level(False, 1.0, 0.5),
-            _coarse_level(True, 2.0, 0.5),
-            _coarse_level(True, 1.0, 0.5),
-            _coarse_level(False, 0.5, 0.5),
-            _coarse_level(True, 0.5, 0.5),
-            _coarse_level(False, 1.0, 0.7),
-            _coarse_level(True, 1.0, 0.7),
+            _level(False, step=1.0, oversampling=0.25, pixels_per_voxel=0.5),
+            _level(True, step=2.0, oversampling=0.25, pixels_per_voxel=0.5),
+            _level(True, step=1.0, oversampling=0.25, pixels_per_voxel=0.5),
+            _level(False, step=0.5, oversampling=0.25, pixels_per_voxel=0.5),
+            _level(True, step=0.5, oversampling=0.25, pixels_per_voxel=0.5),
+            _level(False, step=1.0, oversampling=0.25, pixels_per_voxel=0.7),
+            _level(True, step=1.0, oversampling=0.25, pixels_per_voxel=0.7),
             # every 2nd / 4th slice (`slice_stride`): fewer segments, where the data is smooth along the
             # principal axis as accurate as VTK's step 2 (stop 47, docs/shearwarp.md: bonsai smooth 0.0044 at step
             # 1 post-classified against VTK's 0.0069, at 0.6x every slice's time; spiky and opaque TFs at step 2
             # pre-integrated)
-            _half_pixel_level(False, 1.0),
-            _half_pixel_level(True, 2.0),
-            _half_pixel_level(True, 1.0),
+            _level(False, step=1.0, oversampling=0.5),
+            _level(True, step=2.0, oversampling=0.5),
+            _level(True, step=1.0, oversampling=0.5),
             # half an intermediate pixel per output pixel (one per voxel is kept): the classic shear-warp
             # image where voxels cover several pixels, the warp's Catmull-Rom filter doing the rest
-            _half_pixel_level(False, 0.5),
-            _half_pixel_level(True, 0.5),
-            QualityLevel("post-classified, oversampling 1", step=0.5, preintegration=False,
-                         options={"oversampling": 1.0}),
-            QualityLevel("pre-integrated, oversampling 1", step=0.5, preintegration=True, options={"oversampling": 1.0}),
+            _level(False, step=0.5, oversampling=0.5),
+            _level(True, step=0.5, oversampling=0.5),
+            _level(False, step=0.5, oversampling=1.0),
+            _level(True, step=0.5, oversampling=1.0),
             QualityLevel("pre-integrated, oversampling auto (default)", step=0.5, preintegration=True),
             QualityLevel("pre-integrated, oversampling 2, bilinear lookup", step=0.5, preintegration=True,
                          options={"oversampling": 2.0, "lookup": "bilinear"}),
