@@ -309,6 +309,21 @@ def _blend(rgba, q, p, cr, cg, cb, alpha):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _span_sample(row0, row1, a, w, lo32, sc32):
+    """The table coordinate of a fast span's bilinear sample at column a between two slice scanlines,
+    row1 weighted w: float32 throughout, unclamped (the span's pixels lie inside), each value converted
+    first (the copies may hold uint8, `classified.copy_dtype`: no wrap-around)."""
+    ia = np.uint32(a)
+    fa = np.float32(a - ia)
+    one = np.uint32(1)
+    s00 = np.float32(row0[ia])
+    s10 = np.float32(row1[ia])
+    v0 = s00 + (np.float32(row0[ia + one]) - s00) * fa
+    v1 = s10 + (np.float32(row1[ia + one]) - s10) * fa
+    return (v0 + (v1 - v0) * w - lo32) * sc32
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p0, p1, rgba, buf_x, stamp, skip,
                layers, per_pixel_layer, table, lut, preintegrated, bilinear_lookup, lo, scale,
                use_termination, term_alpha, has_nan):  # fmt: skip
@@ -322,7 +337,6 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
     nearest lookups inline, pre-integrated and post-classified (bilinear lookups go through
     `_segment`, cast back to float32): together about 25% less time per segment than the general
     path's helpers."""
-    one = np.uint32(1)
     lo32 = np.float32(lo)
     sc32 = np.float32(scale)
     wbb = np.float32(fbb)
@@ -348,25 +362,11 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
             p = _next_open(skip, q, p, p1)
             if p >= p1:
                 break
-        a = ab0 + abs_ * p
-        ia = np.uint32(a)
-        fa = np.float32(a - ia)
-        b00 = np.float32(back0[ia])  # the copies may hold uint8 (`classified.copy_dtype`): no wrap-around
-        b10 = np.float32(back1[ia])
-        v0 = b00 + (np.float32(back0[ia + one]) - b00) * fa
-        v1 = b10 + (np.float32(back1[ia + one]) - b10) * fa
-        xb = (v0 + (v1 - v0) * wbb - lo32) * sc32
+        xb = _span_sample(back0, back1, ab0 + abs_ * p, wbb, lo32, sc32)
         if stamps[p] == plane:
             xf = values[p]
         else:
-            a = af0 + afs * p
-            ia = np.uint32(a)
-            fa = np.float32(a - ia)
-            f00 = np.float32(front0[ia])
-            f10 = np.float32(front1[ia])
-            v0 = f00 + (np.float32(front0[ia + one]) - f00) * fa
-            v1 = f10 + (np.float32(front1[ia + one]) - f10) * fa
-            xf = (v0 + (v1 - v0) * wbf - lo32) * sc32
+            xf = _span_sample(front0, front1, af0 + afs * p, wbf, lo32, sc32)
         stamps[p] = plane + 1
         values[p] = xb
         if has_nan and (xf != xf or xb != xb):
