@@ -500,7 +500,7 @@ def test_dataset_facts_count_non_finite_values(make):
 
 def test_dataset_facts_of_a_mesh_with_notes(make):
     notes = (
-        "kuhn: dropped 3 cells that are not 3D (3 triangles), reoriented 2 inverted ones",
+        "kuhn: dropped 3 cells that are not 3D (3 triangles), reoriented 2 inverted tetrahedra",
         "kuhn: array 'p' is cell data; averaged it onto the points",
     )
     values = np.arange(12, dtype=np.float64)

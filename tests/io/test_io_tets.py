@@ -77,7 +77,7 @@ def test_mixed_grid_repairs_are_counted_once(tmp_path):
     summary = (
         "mixed.vtu: tetrahedralized 6 hexahedra, 1 wedge, 1 pyramid, "
         "dropped 2 cells that are not 3D (1 line, 1 triangle), "
-        "dropped 1 zero-volume tetrahedron, reoriented 1 inverted one"
+        "dropped 1 zero-volume tetrahedron, reoriented 1 inverted tetrahedron"
     )
     grid.save(tmp_path / "mixed.vtu")
     with pytest.warns(VolrenWarning) as record:
@@ -97,13 +97,13 @@ def test_mixed_grid_repairs_are_counted_once(tmp_path):
 
 
 def test_inverted_cells_are_reoriented():
-    with pytest.warns(VolrenWarning, match="^w: tetrahedralized 1 wedge, reoriented 3 inverted ones$"):
+    with pytest.warns(VolrenWarning, match="^w: tetrahedralized 1 wedge, reoriented 3 inverted tetrahedra$"):
         volume = from_pyvista(merged(examples.cells.Wedge()), name="w")
     assert np.all(signed_volumes(volume.points, volume.tets) > 0)
 
 
 def test_inverted_tet_is_reoriented():
-    with pytest.warns(VolrenWarning, match="^t: reoriented 1 inverted one$"):
+    with pytest.warns(VolrenWarning, match="^t: reoriented 1 inverted tetrahedron$"):
         volume = from_pyvista(merged(single(INVERTED_TET, pv.CellType.TETRA)), name="t")
     assert signed_volumes(volume.points, volume.tets)[0] == pytest.approx(1 / 6)
 

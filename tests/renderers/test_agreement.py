@@ -140,7 +140,7 @@ def mesh_with_inverted_tets() -> TetVolume:
     cells = np.hstack([np.full((len(tets), 1), 4), flipped]).ravel()
     grid = pv.UnstructuredGrid(cells, np.full(len(tets), pv.CellType.TETRA, np.uint8), points)
     grid.point_data["s"] = smooth_field(points)
-    with pytest.warns(VolrenWarning, match="^inverted: reoriented 2 inverted ones$"):
+    with pytest.warns(VolrenWarning, match="^inverted: reoriented 2 inverted tetrahedra$"):
         return from_pyvista(grid, name="inverted")
 
 

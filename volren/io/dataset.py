@@ -255,7 +255,7 @@ def tets_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name
         done.append(f"dropped {n:,} zero-volume tetrahedr{'on' if n == 1 else 'a'}")
     if repaired.reoriented:
         n = repaired.reoriented
-        done.append(f"reoriented {n:,} inverted {'one' if n == 1 else 'ones'}")
+        done.append(f"reoriented {n:,} inverted tetrahedr{'on' if n == 1 else 'a'}")
     repairs = [f"{name}: {', '.join(done)}"] if done else []
     notes = notes + repairs
     volume = TetVolume(cells.points, repaired.tets, values, name=name, notes=tuple(notes + info), scalars=chosen,
