@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from volren.model.default_tf import MAX_PEAK, TARGET_DEPTH, default_transfer_function, volume_histogram
+from volren.model.value_histogram import compute_histogram, value_histogram
 from volren.model.volume import TetVolume, UniformVolume
 
 
@@ -77,3 +78,23 @@ def test_a_meshs_histogram_weighs_points_by_the_volume_of_their_tetrahedra():
         index = min(int(np.searchsorted(histogram.edges, value, side="right")) - 1, bins - 1)  # np.histogram's bin
         assert histogram.counts[index] == pytest.approx(weight)
     assert histogram.counts.sum() == pytest.approx(4 / 6)
+
+
+def test_float32_values_at_the_types_limits_are_binned_and_get_a_tf():
+    """In float32, 3.4e38 minus -3.4e38 overflows: every value must still find its bin."""
+    values = np.full((4, 4, 4), -3.4e38, np.float32)
+    values[1:3] = 0.0
+    values[3] = 3.4e38
+    volume = UniformVolume(values)
+    counts = value_histogram(volume).counts
+    assert (counts[0], counts[len(counts) // 2], counts[-1], counts.sum()) == (16, 32, 16, 64)
+    tf = default_transfer_function(volume)
+    assert tf.value_range == volume.value_range == (float(np.float32(-3.4e38)), float(np.float32(3.4e38)))
+
+
+def test_a_span_beyond_float64s_range_is_binned_exactly():
+    values = np.array([-1.7e308, 0.0, 1e308, 1.7e308])
+    histogram = compute_histogram(values, 4, (-1.7e308, 1.7e308))
+    assert histogram.counts.tolist() == [1, 0, 1, 2]
+    assert histogram.edges[[0, 2, 4]].tolist() == [-1.7e308, 0.0, 1.7e308]
+    np.testing.assert_allclose(histogram.edges, [-1.7e308, -8.5e307, 0.0, 8.5e307, 1.7e308], rtol=1e-15)

@@ -8,6 +8,7 @@ that is closed frees its histogram with it.
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import dataclass
 
@@ -65,10 +66,22 @@ def compute_histogram(values: NDArray, bins: int, value_range: tuple[float, floa
     if np.issubdtype(flat.dtype, np.integer) and flat.dtype.itemsize <= 2 and flat.size:
         counts, edges = _integer_histogram(flat, bins, lo, hi)
     else:
-        if np.issubdtype(flat.dtype, np.floating):
-            flat = flat[np.isfinite(flat)]
-        counts, edges = np.histogram(flat, bins, (lo, hi))
+        counts, edges = _float64_histogram(flat, bins, lo, hi)
     return Histogram(edges.astype(np.float64), counts.astype(np.int64))
+
+
+def _float64_histogram(flat: NDArray, bins: int, lo: float, hi: float) -> tuple[NDArray, NDArray]:
+    """np.histogram of the finite values in float64, a chunk at a time: in float32 the distance
+    of a value near 3.4e38 from the range's start overflows (and its bin index with it). A span
+    beyond float64's own range (-1e308 to 1e308) is binned halved, which is exact."""
+    scale = 1.0 if math.isfinite(hi - lo) else 0.5
+    span = (lo * scale, hi * scale)
+    counts = np.zeros(bins, np.int64)
+    for start in range(0, flat.size, _CHUNK):
+        chunk = flat[start : start + _CHUNK].astype(np.float64)
+        chunk = chunk[np.isfinite(chunk)] * scale
+        counts += np.histogram(chunk, bins, span)[0]
+    return counts, np.histogram_bin_edges(np.empty(0), bins, span) / scale
 
 
 def _integer_histogram(flat: NDArray, bins: int, lo: float, hi: float) -> tuple[NDArray, NDArray]:
