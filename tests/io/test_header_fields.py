@@ -456,19 +456,19 @@ def test_nrrd_ascii_numbers_must_fit_the_type(tmp_path, data, problem):
 
 def test_the_reading_child_is_forked_beside_numpys_blas_threads():
     """numpy's OpenBLAS pool, running since import, is fork-safe: a fresh process reads by fork
-    (a forkserver cost the CLI 0.47 s a command); a thread started later makes it use the server."""
+    (a server cost the CLI 0.47 s a command); a thread started later makes it use the server."""
     import subprocess
     import sys
 
     code = (
         "import threading, time\n"
         "from volren.io import isolation\n"
-        "print(isolation._context()._name)\n"
+        "print(isolation._how_to_read())\n"
         "threading.Thread(target=time.sleep, args=(1,), daemon=True).start()\n"
-        "print(isolation._context()._name)\n"
+        "print(isolation._how_to_read())\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.split() == ["fork", "forkserver"], out
+    assert out.split() == ["fork", "server"], out
 
 
 def test_arrays_come_back_mapped_writable_and_private():
