@@ -153,3 +153,9 @@ def test_a_meshs_bounds_are_its_points_extent_computed_once():
     lo, hi = points.min(axis=0), points.max(axis=0)
     assert volume.bounds == (lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
     assert volume.bounds is volume.bounds
+
+
+def test_the_step_is_measured_in_the_smallest_spacing_so_it_holds_along_the_finest_axis():
+    volume = UniformVolume(np.zeros((4, 4, 4), np.uint8), spacing=(0.5, 0.5, 5.0))
+    assert volume.characteristic_length == 0.5
+    assert volume.mean_spacing == 2.0

@@ -111,7 +111,7 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--step",
         type=step_length,
-        help=f"sample distance in mean voxel spacings / tet edges (at most {MAX_SAMPLES_PER_RAY:,} per ray)",
+        help=f"sample distance in smallest voxel spacings / mean tet edges (at most {MAX_SAMPLES_PER_RAY:,} per ray)",
     )
     p.add_argument("--preintegration", action=argparse.BooleanOptionalAction, help="pre-integrated TF")
     p.add_argument("--shade", action=argparse.BooleanOptionalAction, help="Blinn-Phong shading")

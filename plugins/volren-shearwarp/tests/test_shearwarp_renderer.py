@@ -432,7 +432,7 @@ def test_skipped_slices_keep_the_closed_form_of_a_constant_volume(pre, step):
     for parallel in (False, True):
         camera = Camera.orbit(volume.bounds, 25, 15, zoom=1.3, parallel=parallel)
         fac = factorize(camera, volume, 40, 40, 1.0)
-        stride = slice_stride(step, fac.spacing[2], volume.mean_spacing, len(fac.order))
+        stride = slice_stride(step, fac.spacing[2], volume.characteristic_length, len(fac.order))
         assert stride >= 2 and (len(fac.order) - 1) % stride != 0
         # under perspective each pixel's segment length snaps to a grid (`length_ratio`, 1.02 by default:
         # opacity off by up to 1 % of its optical depth, the two images 0.004 apart here; 20x finer, 0.0002)

@@ -22,9 +22,9 @@ How a frame goes (module per step):
 Sampling: the rays cross every slice along the principal axis (shear-warp's own rate: a bilinear
 sample in a slice is an exact trilinear sample, and pre-integration integrates the segment between
 two of them exactly for data linear along it). `step` below 0.5 adds planes between slices:
-ceil(slice spacing / (2 step mean spacing)) segments per slab (1 at the default 0.5, 2 at 0.25),
+ceil(slice spacing / (2 step smallest spacing)) segments per slab (1 at the default 0.5, 2 at 0.25),
 sampled trilinearly. `step` 1 and above composites every stride-th slice only, stride =
-floor(2 step mean spacing / slice spacing) (`slice_stride`: 2 at step 1, 4 at step 2), one segment
+floor(2 step smallest spacing / slice spacing) (`slice_stride`: 2 at step 1, 4 at step 2), one segment
 from slice to slice with tables for its length: a draft at 1/stride of the segments, like a ray
 caster's longer step (the last slab is shorter where the stride does not divide the slices, and is
 corrected to its length). Blend modes maximum / minimum / average, jitter and a near or far plane
@@ -219,11 +219,11 @@ def auto_table_size(tau: float) -> int:
     return 128 if 2.0 * tau < 1.0 else 256
 
 
-def slice_stride(step: float, slice_spacing: float, mean_spacing: float, slices: int) -> int:
-    """Slices per slab for `step` (in mean spacings; 0.5 is one slice per slab, shear-warp's own
-    rate, see `planes` in `_render`): floor(2 step mean spacing / slice spacing), 1 to
-    MAX_SLICE_STRIDE, and at most slices - 1."""
-    stride = int(math.floor(2.0 * step * mean_spacing / slice_spacing + 1e-9))
+def slice_stride(step: float, slice_spacing: float, unit: float, slices: int) -> int:
+    """Slices per slab for `step` (in units of the smallest spacing, `unit`; 0.5 is one slice per
+    slab on an isotropic grid, shear-warp's own rate, see `planes` in `_render`): floor(2 step unit /
+    slice spacing), 1 to MAX_SLICE_STRIDE, and at most slices - 1."""
+    stride = int(math.floor(2.0 * step * unit / slice_spacing + 1e-9))
     return max(1, min(stride, MAX_SLICE_STRIDE, slices - 1))
 
 
@@ -404,7 +404,8 @@ class ShearWarpRenderer(RendererBase):
         has_nan = classified.has_nan
         values = copy.values
         spacing_c = float(fac.spacing[2])
-        planes = int(min(MAX_PLANES_PER_SLAB, max(1, math.ceil(spacing_c / (2.0 * settings.step * volume.mean_spacing) - 1e-9))))
+        step_length = settings.step * volume.characteristic_length
+        planes = int(min(MAX_PLANES_PER_SLAB, max(1, math.ceil(spacing_c / (2.0 * step_length) - 1e-9))))
         vlo, vhi = full.value_range  # tables and the opacity support span the data's range at every level
         tlo, thi = tf.value_range
         lo, hi = min(vlo, tlo), max(vhi, thi)
@@ -445,7 +446,7 @@ class ShearWarpRenderer(RendererBase):
                 progress(1.0)
             counters.update(samples=0.0, empty_pixels_skipped=0.0, pixels_terminated=0.0, table_lengths=0.0)
             return np.zeros((height, width, 4), np.float32), counters
-        stride = 1 if clipping or settings.jitter else slice_stride(settings.step, spacing_c, volume.mean_spacing, len(order))
+        stride = 1 if clipping or settings.jitter else slice_stride(settings.step, spacing_c, volume.characteristic_length, len(order))
         order, slab_frac = strided_order(order, stride)
         counters.update(slices=float(len(order)), slice_stride=float(stride))
         pairs, run_slab = slab_pairs(order)  # the runs number slabs by their lower slice

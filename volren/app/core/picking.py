@@ -6,7 +6,7 @@ actually shows there under the current TF, with the renderers' own reconstructio
 
 The ray is the renderers' ray through the centre of pixel (x, y) (row 0 at the top), starting on
 the near plane and ending on the far plane (`Camera.pixel_rays`, `kernels.tet_projection.ray_far`). It is
-sampled every `STEP_FRACTION` characteristic lengths (mean voxel spacing or mean tet edge):
+sampled every `STEP_FRACTION` characteristic lengths (smallest voxel spacing or mean tet edge):
 
 - uniform grids: the trilinear interpolant of the values, and the gradient the renderers shade
   with (central differences at the grid points in world units, one-sided at the borders,
@@ -47,7 +47,7 @@ from volren.model.tet_mesh import prepare_mesh
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import TetVolume, UniformVolume, Volume
 
-#: Sample spacing along the ray, in characteristic lengths (mean voxel spacing, mean tet edge).
+#: Sample spacing along the ray, in characteristic lengths (smallest voxel spacing, mean tet edge).
 STEP_FRACTION = 0.25
 #: The accumulated opacity at which a ray counts as having reached the surface it shows.
 OPACITY_THRESHOLD = 0.5

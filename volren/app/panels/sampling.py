@@ -1,6 +1,6 @@
 """The sampling panel: sample distance, pre-integration and jitter.
 
-The step is relative (DESIGN.md: units of the mean voxel spacing or the mean tetrahedron edge), so
+The step is relative (units of the smallest voxel spacing or the mean tetrahedron edge), so
 one value means the same quality on any volume; the panel also shows what it is in world units
 for the loaded volume.
 """
@@ -15,7 +15,7 @@ from volren.app.panels.controls import SettingControl
 from volren.renderers.base import KindSupport
 
 STEP_TIP = (
-    "Distance between samples along a ray, in units of the mean voxel spacing (uniform grids) or "
+    "Distance between samples along a ray, in units of the smallest voxel spacing (uniform grids) or "
     "the mean tetrahedron edge (meshes): smaller is more accurate and slower"
 )
 PREINTEGRATION_TIP = (
@@ -57,7 +57,7 @@ class SamplingPanel(StatePanel):
         settings = self.state.settings
         self.step.refresh()
         volume = self.state.volume
-        unit = "mean voxel spacing" if volume is None or volume.kind == "uniform" else "mean tetrahedron edge"
+        unit = "smallest voxel spacing" if volume is None or volume.kind == "uniform" else "mean tetrahedron edge"
         length = f" = {settings.step * volume.characteristic_length:.4g} world units" if volume else ""
         self.step_length.setText(f"× {unit}{length}")
         with signals_blocked(self.preintegration, self.jitter):

@@ -337,7 +337,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         return 1 if self._settings.preintegration else 0
 
     def _spacing(self) -> float:
-        return float(self._settings.step) * self._uniform_volume().mean_spacing
+        return float(self._settings.step) * self._uniform_volume().characteristic_length
 
     def _options(self) -> SlicerOptions:
         return SlicerOptions.parse(self._settings.options)

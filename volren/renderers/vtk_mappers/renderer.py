@@ -1,7 +1,7 @@
 """VtkRenderer: VTK's volume mappers in an offscreen EGL window, read back as float RGBA.
 
 Reproducibility: automatic sample-distance adjustment is off everywhere, the sample distance is
-`settings.step` times the mean voxel spacing, multisampling is off, and the camera is copied from
+`settings.step` times the smallest voxel spacing, multisampling is off, and the camera is copied from
 our `Camera` (position, focal point, view-up, angle or parallel scale, clipping range), so the
 view and projection matrices are ours exactly. VTK's default headlight lights shaded volumes.
 
