@@ -353,3 +353,35 @@ def test_a_movie_from_inside_the_volume_refuses_up_front_or_goes_to_a_renderer_t
     assert "\n" not in str(info.value) and not path.exists()
     render_movie(replace(scene, renderer="auto"), animation, path)  # auto passes shearwarp over
     assert path.stat().st_size > 0
+
+
+def test_default_and_above_never_interpolate_pixels_even_when_faster_and_within_the_bound():
+    rows = rows_for("vtk-smart", "default", (0.01, 0.01), 300)
+    rows += rows_for("raycast", "step 0.25, refine 8/0.02", (0.005, 0.005), 20)  # fast, accurate, interpolating
+    rows += rows_for("raycast", "step 0.5 (default)", (0.009, 0.01), 100)
+    rows += rows_for("raycast", "step 0.25, pre-integrated", (0.002, 0.002), 200)
+    levels = derive(rows, "test").levels["uniform"]["raycast"]
+    assert levels["draft"].label == levels["interactive"].label == "step 0.25, refine 8/0.02"
+    assert levels["default"].label == "step 0.5 (default)"
+    assert levels["high"].label == levels["exact"].label == "step 0.25, pre-integrated"
+    assert all("image_stride" not in levels[level].options for level in ("default", "high", "exact"))
+
+
+def test_default_keeps_no_more_pixels_off_than_vtks_default_where_counted():
+    rows = [dict(r, off="3") for r in rows_for("vtk-smart", "default", (0.01, 0.01), 300)]
+    # within VTK's RMSE on both scenes, but 40 pixels off by more than 0.1 on one (a dropped vessel)
+    rows += [dict(r, off=o) for r, o in zip(rows_for("slicer", "step 0.5, post", (0.008, 0.009), 50), ("0", "40"))]
+    rows += [dict(r, off="2") for r in rows_for("slicer", "step 0.25, post", (0.009, 0.009), 90)]
+    levels = derive(rows, "test").levels["uniform"]["slicer"]
+    assert levels["draft"].label == "step 0.5, post"  # previews may drop what VTK keeps
+    assert levels["default"].label == "step 0.25, post"
+    # where no configuration keeps the count, the level says it does not meet its bound
+    rows = [r for r in rows if r["settings"] != "step 0.25, post"]
+    assert not derive(rows, "test").levels["uniform"]["slicer"]["default"].meets
+
+
+def test_the_committed_table_samples_every_pixel_at_default_and_above():
+    for kind, renderers in quality.table().levels.items():
+        for name, levels in renderers.items():
+            for level in ("default", "high", "exact"):
+                assert levels[level].options.get("image_stride", 1) == 1, (kind, name, level)

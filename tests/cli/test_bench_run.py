@@ -16,7 +16,7 @@ from volren.cli.main import main
 
 COLUMNS = [
     "dataset", "kind", "tf", "renderer", "settings", "step", "preintegration", "table_size", "table_lengths",
-    "jitter", "skipping", "size", "frames", "ms", "rmse", "max_abs", "psnr", "samples", "cell_steps",
+    "jitter", "skipping", "size", "frames", "ms", "rmse", "max_abs", "psnr", "samples", "cell_steps", "off",
 ]  # fmt: skip
 
 
@@ -38,6 +38,14 @@ def rows(quick_run) -> list[dict]:
         reader = csv.DictReader(stream)
         assert reader.fieldnames == COLUMNS
         return list(reader)
+
+
+def test_every_row_counts_the_pixels_off_beside_its_rmse(rows):
+    for row in rows:
+        off, size = int(row["off"]), int(row["size"])
+        assert 0 <= off <= size * size
+        # a pixel off by more than 0.1 alone makes an RMSE of at least 0.1 / sqrt(4 * pixels)
+        assert float(row["rmse"]) >= off**0.5 * 0.1 / (2 * size)
 
 
 def find(rows: list[dict], renderer: str, settings: str) -> dict:

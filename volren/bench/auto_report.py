@@ -13,6 +13,7 @@ import statistics
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from volren.bench.quality import scene_pair
 from volren.model.settings import RenderSettings
 from volren.quality import LEVELS, QualityTable, base_kind, choose_renderer
 
@@ -93,7 +94,7 @@ def markdown(scenes: list[AutoScene], classes: Mapping[tuple[str, str], str],
     for s in sorted(by_class(scenes), key=lambda s: (base_kind(s.kind), s.scene)):
         if s.level != "default":
             continue
-        key = tuple(s.scene.split("/", 1))
+        key = scene_pair(s.scene)
         cls = classes.get(key, "-")
         feature = features.get(key)
         shown = f" ({feature[0]:.3g}, {feature[1]:.2g})" if feature is not None else ""

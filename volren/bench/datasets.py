@@ -1,4 +1,6 @@
-"""The scenes `volren bench run` measures: the shared datasets with their TFs, and the bundled samples.
+"""The scenes `volren bench run` measures: the shared datasets with their TFs, the bundled samples,
+and the hard procedural scenes (`volren.testing.hard_cases`: thin tubes and sheets, tiny objects,
+noise, steps, anisotropic spacing; `--datasets hard` names them all).
 
 A shared dataset comes with one TF per style in the shared folder's scenes/ (`<dataset>-<style>.json`) and the
 camera of shared/scenes/README.md (`SCENES`); a bundled sample (`volren.samples`)
@@ -74,6 +76,11 @@ class Dataset:
 
         return load_volume(self.path, scalars=self.scalars)
 
+    @property
+    def styles(self) -> tuple[str, ...]:
+        """The TF styles, in `transfer_functions`' order."""
+        return tuple(style for style, _ in self.tf_paths)
+
     def transfer_functions(self) -> Iterator[tuple[str, TransferFunction1D]]:
         for style, path in self.tf_paths:
             yield style, TransferFunction1D.from_dict(json.loads(path.read_text()))
@@ -108,12 +115,49 @@ def sample_datasets() -> dict[str, Dataset]:
     return out
 
 
-def select(names: Iterable[str] | None, shared: Path | None, quick: bool = False) -> list[Dataset]:
-    """The datasets asked for by name; by default every shared one and every sample (--quick: two samples)."""
-    available = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets()}
+@dataclass(frozen=True)
+class HardDataset:
+    """A hard procedural scene (`volren.testing.hard_cases`) as a `Dataset`: built in memory, one TF
+    (style `hard`), its own camera angles."""
+
+    name: str
+    kind: str
+
+    def _case(self):
+        from volren.testing.hard_cases import CASES
+
+        return CASES[self.name]
+
+    def load(self) -> Volume:
+        return self._case().build()
+
+    styles: tuple[str, ...] = ("hard",)
+
+    def transfer_functions(self) -> Iterator[tuple[str, TransferFunction1D]]:
+        yield "hard", self._case().tf()
+
+    def camera(self, bounds, turn: float = 0.0) -> Camera:
+        case = self._case()
+        return Camera.orbit(bounds, case.azimuth + turn, case.elevation, case.zoom)
+
+
+#: The name that stands for every hard scene in --datasets.
+HARD_GROUP = "hard"
+
+
+def hard_datasets() -> dict[str, HardDataset]:
+    from volren.testing.hard_cases import CASES
+
+    return {name: HardDataset(name, case.kind) for name, case in CASES.items()}
+
+
+def select(names: Iterable[str] | None, shared: Path | None, quick: bool = False) -> list[Dataset | HardDataset]:
+    """The datasets asked for by name (`hard`: every hard scene); by default every shared one and
+    every sample (--quick: two samples)."""
+    available = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets(), **hard_datasets()}
     if names is None:
-        names = QUICK_DATASETS if quick else list(available)
-    names = list(names)
+        names = QUICK_DATASETS if quick else [n for n in available if n not in hard_datasets()]
+    names = [n for name in names for n in (hard_datasets() if name == HARD_GROUP else [name])]
     unknown = [n for n in names if n not in available]
     if unknown:
         where = "" if shared is not None else " (no shared folder found: give --shared)"

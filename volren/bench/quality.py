@@ -9,7 +9,17 @@ configuration's error (its `meets` flag false), and `exact` is the most accurate
 The curves of one registered renderer (VTK's mappers are the `vtk` renderer's) compete for that
 renderer's levels. Later files win where two give the same configuration and scene. The same
 choice is also made over the scenes of each TF class ("uniform/smooth", ...), given by the scenes'
-own TFs and volumes (`scene_features`, `volren.quality.tf_class`).
+own TFs and volumes (`scene_features`, `volren.quality.tf_class`). A scene is a dataset and TF at
+one image size: rows at other sizes than `MAIN_SIZE` are scenes of their own ("dataset/tf@128"), so
+a level holds at every size measured.
+
+Two rules hold at `default` and above (`FAITHFUL_LEVELS`), whatever the runs measured:
+- every pixel is sampled: no configuration that interpolates pixels between rays (an option
+  `image_stride` above 1) is eligible, since a feature thinner than the stride between rays that
+  agree is dropped, and a run's scenes cannot show that it never happens;
+- fidelity: where the rows count the pixels off by more than 0.1 (`volren.testing.metrics`), a
+  configuration is eligible only where it has no more such pixels than VTK's default on every
+  scene, since RMSE averages a missing thin feature away.
 """
 
 from __future__ import annotations
@@ -26,6 +36,10 @@ from volren.quality import LEVELS, TF_CLASSES, LevelChoice, QualityTable
 
 #: Each level's bound on RMSE / VTK default's RMSE (None: the most accurate configuration).
 BOUNDS: dict[str, float | None] = {"draft": 4.0, "interactive": 2.0, "default": 1.0, "high": 0.25, "exact": None}
+#: The levels that must sample every pixel and keep VTK default's count of pixels off by more than 0.1.
+FAITHFUL_LEVELS = ("default", "high", "exact")
+#: The image size of the runs' main scenes, named without a size.
+MAIN_SIZE = 512
 #: VTK's default configuration per kind (curve, settings label), the reference for the bounds.
 VTK_DEFAULT = {"uniform": ("vtk-smart", "default"), "tet": ("vtk-raycast", "linear")}
 #: The built-in curves' configurations at each renderer's default settings.
@@ -39,12 +53,24 @@ def read_rows(paths: list[Path]) -> list[dict]:
         try:
             with path.open(newline="", encoding="utf-8") as f:
                 for row in csv.DictReader(f):
-                    rows[row["dataset"], row["tf"], row["renderer"], row["settings"]] = row
+                    rows[scene_of(row), row["renderer"], row["settings"]] = row
         except OSError as exc:
             raise VolrenError(f"{path}: cannot read: {exc.strerror or exc}") from None
         except (KeyError, csv.Error) as exc:
             raise VolrenError(f"{path}: not a `volren bench run` runs.csv ({exc})") from None
     return list(rows.values())
+
+
+def scene_of(row: Mapping[str, str]) -> str:
+    """A row's scene: "dataset/tf", with "@size" where the size is not `MAIN_SIZE`."""
+    size = row.get("size") or str(MAIN_SIZE)
+    return f"{row['dataset']}/{row['tf']}" + ("" if size == str(MAIN_SIZE) else f"@{size}")
+
+
+def scene_pair(scene: str) -> tuple[str, str]:
+    """(dataset, tf) of a scene, whatever its size."""
+    dataset, tf = scene.split("@", 1)[0].split("/", 1)
+    return dataset, tf
 
 
 def _configs(kind: str, curves: set[str]) -> dict[tuple[str, str], sweep.Config]:
@@ -66,7 +92,7 @@ def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], str]
     levels: dict[str, dict[str, dict[str, LevelChoice]]] = {}
     for kind in VTK_DEFAULT:
         kind_rows = [r for r in rows if r.get("kind") == kind and _number(r.get("rmse")) is not None]
-        peer = {(r["dataset"], r["tf"]): float(r["rmse"]) for r in kind_rows if _is_vtk_default(r)}
+        peer = {scene_of(r): (float(r["rmse"]), _number(r.get("off"))) for r in kind_rows if _is_vtk_default(r)}
         if not peer:
             continue
         known = _configs(kind, {r["renderer"] for r in kind_rows})
@@ -74,7 +100,7 @@ def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], str]
         if found:
             levels[kind] = found
         for cls in TF_CLASSES:
-            scenes = {scene for scene in peer if (classes or {}).get(scene) == cls}
+            scenes = {scene for scene in peer if (classes or {}).get(scene_pair(scene)) == cls}
             found = _levels(kind_rows, {s: e for s, e in peer.items() if s in scenes}, known) if scenes else {}
             if found:
                 levels[f"{kind}/{cls}"] = found
@@ -82,10 +108,10 @@ def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], str]
 
 
 def vtk_default_ms(rows: list[dict]) -> dict[str, float]:
-    """"dataset/tf" -> VTK's default configuration's frame time (`VTK_DEFAULT`, per volume kind): the
+    """Scene ("dataset/tf", `scene_of`) -> VTK's default configuration's frame time (`VTK_DEFAULT`, per volume kind): the
     peer of `auto`'s speed ratios. Not the `vtk` renderer's `default` level, which may be a faster
     VTK configuration within the same error."""
-    return {f"{r['dataset']}/{r['tf']}": ms for r in rows if _is_vtk_default(r) and (ms := _number(r.get("ms"))) is not None}
+    return {scene_of(r): ms for r in rows if _is_vtk_default(r) and (ms := _number(r.get("ms"))) is not None}
 
 
 def _is_vtk_default(row: Mapping[str, str]) -> bool:
@@ -93,18 +119,24 @@ def _is_vtk_default(row: Mapping[str, str]) -> bool:
     return VTK_DEFAULT.get(row.get("kind", "")) == (row["renderer"], row["settings"])
 
 
-def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], float],
+def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], tuple[float, float | None]],
             known: Mapping[tuple[str, str], sweep.Config]) -> dict[str, dict[str, LevelChoice]]:  # fmt: skip
-    """renderer -> level -> choice over the scenes of `peer` (scene -> VTK default's RMSE)."""
-    # renderer -> (curve, label) -> scene -> (ms, rmse / peer's)
-    measured: dict[str, dict[tuple[str, str], dict[str, tuple[float, float]]]] = defaultdict(lambda: defaultdict(dict))
+    """renderer -> level -> choice over the scenes of `peer` (scene -> VTK default's RMSE and
+    count of pixels off, None where not counted)."""
+    # renderer -> (curve, label) -> scene -> (ms, rmse / peer's, whether no more pixels off than the peer)
+    measured: dict[str, dict[tuple[str, str], dict[str, tuple[float, float, bool]]]] = defaultdict(
+        lambda: defaultdict(dict))  # fmt: skip
     for r in kind_rows:
         config = known.get((r["renderer"], r["settings"]))
-        scene = (r["dataset"], r["tf"])
+        scene = scene_of(r)
         ms = _number(r.get("ms"))
-        if config is None or scene not in peer or ms is None or peer[scene] <= 0:
+        if config is None or scene not in peer or ms is None or peer[scene][0] <= 0:
             continue
-        measured[config.renderer][config.curve, config.label][f"{scene[0]}/{scene[1]}"] = (ms, float(r["rmse"]) / peer[scene])
+        peer_rmse, peer_off = peer[scene]
+        off = _number(r.get("off"))
+        faithful = peer_off is None or off is None or off <= peer_off
+        measured[config.renderer][config.curve, config.label][scene] = (
+            ms, float(r["rmse"]) / peer_rmse, faithful)  # fmt: skip
     out: dict[str, dict[str, LevelChoice]] = {}
     for renderer, configs in measured.items():
         scenes = set.intersection(*(set(per) for per in configs.values()))
@@ -113,12 +145,15 @@ def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], float],
             continue
         per_level = {}
         own = _own_default(complete)
-        chosen = {"default": _choose(complete, scenes, BOUNDS["default"], own)}
+        faithful = {key: per for key, per in complete.items() if _samples_every_pixel(known[key])}
+        chosen = {"default": _choose(faithful or complete, scenes, BOUNDS["default"], own, fidelity=True)}
         ceiling = sum(complete[chosen["default"]][s][0] for s in scenes)
         for level in LEVELS:
             if level not in chosen:
                 below = LEVELS.index(level) < LEVELS.index("default")
-                chosen[level] = _choose(complete, scenes, BOUNDS[level], own, ceiling if below else math.inf)
+                pool = complete if below else (faithful or complete)
+                chosen[level] = _choose(pool, scenes, BOUNDS[level], own, ceiling if below else math.inf,
+                                        fidelity=not below)  # fmt: skip
         for level in LEVELS:
             key = chosen[level]
             config = known[key]
@@ -128,7 +163,8 @@ def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], float],
                 label=f"{key[0]}: {key[1]}" if key[0] != renderer else key[1],
                 step=settings.step, preintegration=settings.preintegration, options=dict(settings.options),
                 ms={s: per[s][0] for s in sorted(scenes)}, worst_error_ratio=max(per[s][1] for s in scenes),
-                meets=BOUNDS[level] is None or max(per[s][1] for s in scenes) <= BOUNDS[level],
+                meets=(BOUNDS[level] is None or max(per[s][1] for s in scenes) <= BOUNDS[level])
+                and (level not in FAITHFUL_LEVELS or all(per[s][2] for s in scenes)),
             )  # fmt: skip
         out[renderer] = per_level
     return out
@@ -140,10 +176,10 @@ def scene_features(
     """(dataset, tf) -> (`tf_sharpness`, `tf_visible_fraction`) of each scene `bench run` knows (the
     shared datasets when `shared` is given, and the bundled samples), from its TF and its volume's
     value range."""
-    from volren.bench.datasets import sample_datasets, shared_datasets
+    from volren.bench.datasets import hard_datasets, sample_datasets, shared_datasets
     from volren.quality import tf_sharpness, tf_visible_fraction
 
-    datasets = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets()}
+    datasets = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets(), **hard_datasets()}
     out: dict[tuple[str, str], tuple[float, float]] = {}
     wanted = sorted(set(scenes))
     for name in sorted({d for d, _ in wanted}):
@@ -160,10 +196,16 @@ def scene_features(
     return out
 
 
+def _samples_every_pixel(config: sweep.Config) -> bool:
+    """Whether a configuration casts a ray through every pixel (no image-space refinement)."""
+    return int(config.settings().options.get("image_stride", 1)) <= 1
+
+
 def _choose(configs: dict, scenes: set[str], bound: float | None, own: tuple[str, str] | None,
-            ceiling_ms: float = math.inf) -> tuple[str, str]:  # fmt: skip
+            ceiling_ms: float = math.inf, fidelity: bool = False) -> tuple[str, str]:  # fmt: skip
     """The fastest configuration within `bound` on every scene (and, for the levels below
-    `default`, no slower than the default level's choice, `ceiling_ms`). A renderer with none gets
+    `default`, no slower than the default level's choice, `ceiling_ms`; with `fidelity`, with no
+    more pixels off than VTK's default on every scene where counted). A renderer with none gets
     the bound scaled by its own default configuration's error (`own`): its default stays its
     default and its drafts stay faster, instead of its slowest setting being the only one within.
     The most accurate configuration where nothing is within, and for no bound (`exact`)."""
@@ -174,12 +216,16 @@ def _choose(configs: dict, scenes: set[str], bound: float | None, own: tuple[str
     def worst(key) -> float:
         return max(configs[key][s][1] for s in scenes)
 
-    best = min(configs, key=lambda key: (worst(key), total_ms(key)))
+    def faithful(key) -> bool:
+        return not fidelity or all(configs[key][s][2] for s in scenes)
+
+    best = min(configs, key=lambda key: (not faithful(key), worst(key), total_ms(key)))
     if bound is None:
         return best
-    within = [key for key in configs if worst(key) <= bound and total_ms(key) <= ceiling_ms]
+    within = [key for key in configs if worst(key) <= bound and total_ms(key) <= ceiling_ms and faithful(key)]
     if not within and own in configs:
-        within = [key for key in configs if worst(key) <= bound * worst(own) and total_ms(key) <= ceiling_ms]
+        within = [key for key in configs
+                  if worst(key) <= bound * worst(own) and total_ms(key) <= ceiling_ms and faithful(key)]  # fmt: skip
     return min(within, key=total_ms) if within else best
 
 

@@ -3,9 +3,10 @@
 Timing: one warm-up frame at the scene's view (shader compilation, uploads, tables, numba), then
 `frames` timed frames while the camera turns in azimuth steps of `turn` degrees around that view
 (-2, 0, +2, ... for three frames), so no renderer can reuse the last frame's per-view work; the
-time is their median. Error: DESIGN.md's RMSE and max abs of the timed frame at the scene's own
-view (offset 0 is always among the turns) against `reference` at that view, from the on-disk
-reference cache (`volren.testing.reference_images`), so each scene needs one reference image per size, ever.
+time is their median. Error: DESIGN.md's RMSE and max abs, and the count of pixels off by more
+than 0.1 (`off`), of the timed frame at the scene's own view (offset 0 is always among the turns)
+against `reference` at that view, from the on-disk reference cache
+(`volren.testing.reference_images`), so each scene needs one reference image per size, ever.
 Curves in `sweep.ONE_FRAME_CURVES` (VTK's ZSweep) time one frame at the scene's view, with no
 warm-up: at 30-80 s a frame, a warm-up and a median would cost minutes per scene.
 
@@ -36,7 +37,7 @@ from volren.testing.reference_images import reference_image
 
 COLUMNS = (
     "dataset", "kind", "tf", "renderer", "settings", "step", "preintegration", "table_size", "table_lengths",
-    "jitter", "skipping", "size", "frames", "ms", "rmse", "max_abs", "psnr", "samples", "cell_steps",
+    "jitter", "skipping", "size", "frames", "ms", "rmse", "max_abs", "psnr", "samples", "cell_steps", "off",
 )  # fmt: skip
 TURN_DEGREES = 2.0
 
@@ -103,6 +104,7 @@ def measure(
         "psnr": err.psnr,
         "samples": counters.get("samples"),
         "cell_steps": counters.get("cell_steps"),
+        "off": err.off,
     }
 
 

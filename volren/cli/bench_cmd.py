@@ -240,7 +240,7 @@ def run_run(args: argparse.Namespace) -> int:
     def configs(kind: str) -> list:
         return sweep.configs(kind, args.quick, steps, curves)
 
-    total = sum(len(configs(d.kind)) for d in chosen for s, _ in d.tf_paths if styles is None or s in styles)
+    total = sum(len(configs(d.kind)) for d in chosen for s in d.styles if styles is None or s in styles)
     out = Path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)

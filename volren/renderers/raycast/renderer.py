@@ -139,6 +139,7 @@ class RaycastRenderer(RendererBase):
             QualityLevel("step 1, pre-integrated", step=1.0, preintegration=True),
             QualityLevel("step 0.5 (default)", step=0.5, preintegration=False),
             QualityLevel("step 0.5, pre-integrated", step=0.5, preintegration=True),
+            QualityLevel("step 0.25", step=0.25, preintegration=False),
             QualityLevel("step 0.25, pre-integrated", step=0.25, preintegration=True),
             QualityLevel("step 1, refine 8/0.02", step=1.0, preintegration=False,
                          options={"image_stride": 8, "refine_tolerance": 0.02}),
