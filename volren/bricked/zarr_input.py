@@ -14,10 +14,11 @@ placed on the full resolution's bounds, so it does not move with the level drawn
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from volren.bricked.zarr_source import ZarrSource, level_bounds, level_for_view
+from volren.bricked.zarr_source import CACHE_SHARE, ZarrSource, level_bounds, level_for_view
 from volren.errors import VolrenError
 from volren.io import ome_zarr_io
 from volren.io.ome_zarr_io import Multiscale
@@ -38,13 +39,26 @@ class ZarrFrame:
         return f"level {self.level} {how}"
 
 
-class ZarrInput:
-    """An opened OME-Zarr image and the memory allowed for it (default 8 GiB)."""
+def least_memory(image: Multiscale) -> int:
+    """The least memory allowed in which `image` draws with any renderer: its coarsest level read
+    whole (what the scene is set up on) and, streamed, a chunk of any level in the chunk cache
+    (a cache smaller than a chunk keeps nothing, and the memory asked for would mean nothing)."""
+    chunk = max(math.prod(level.chunks) * level.dtype.itemsize for level in image.levels)
+    return max(ome_zarr_io.level_bytes(image.levels[-1]), math.ceil(chunk / CACHE_SHARE))
 
-    def __init__(self, path: str | Path, memory: int | None = None) -> None:
+
+class ZarrInput:
+    """An opened OME-Zarr image and the memory allowed for it (default 8 GiB; `memory_name`: how
+    the caller named it, for the error when it is too little)."""
+
+    def __init__(self, path: str | Path, memory: int | None = None, memory_name: str = "memory") -> None:
         self.path = str(path)
         self.name = self.path.rstrip("/").rsplit("/", 1)[-1] if ome_zarr_io.is_url(path) else Path(path).name
         self.image: Multiscale = ome_zarr_io.open_multiscale(path)
+        if memory is not None and memory < least_memory(self.image):
+            raise VolrenError(f"{self.path}: {memory_name} {ome_zarr_io.human_size(memory)} is too little; this image "
+                              f"needs at least {ome_zarr_io.human_size(least_memory(self.image))} (its coarsest level "
+                              "read whole, and a chunk in the chunk cache)")  # fmt: skip
         self.budget = memory if memory is not None else ome_zarr_io.MAX_IN_MEMORY_BYTES
         self.bounds = level_bounds(self.image.levels[0])
 

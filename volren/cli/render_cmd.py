@@ -211,17 +211,31 @@ def _zarr_level(args: argparse.Namespace, path: str):
 
     args.zarr_input = None
     if not is_ome_zarr(path):
-        flag = "--level" if args.level is not None else "--memory" if args.memory is not None else None
+        flag = _zarr_flag(args)
         if flag:
             raise VolrenError(f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL); {path} is not one")
         return None
     if args.scalars is not None:
         raise VolrenError(f"{path}: an OME-Zarr image holds one field; --scalars does not apply")
     memory = parse_memory(args.memory) if args.memory is not None else None
-    args.zarr_input = ZarrInput(path, memory)
+    args.zarr_input = ZarrInput(path, memory, "--memory")
     if args.level is not None:
         args.zarr_input.check_level(args.level)
     return args.zarr_input.stand_in()
+
+
+def _zarr_flag(args: argparse.Namespace) -> str | None:
+    """The first flag given that applies to an OME-Zarr INPUT only."""
+    return "--level" if args.level is not None else "--memory" if args.memory is not None else None
+
+
+def _check_zarr_flags(args: argparse.Namespace) -> None:
+    """--level and --memory refused where no OME-Zarr INPUT is read (a scene's own volume is read
+    whole, headerless raw data has no levels): silently ignored, they would change nothing."""
+    flag = _zarr_flag(args)
+    if flag and ((args.input is None and args.scene) or args.raw_shape):
+        what = "headerless raw data" if args.raw_shape else "the scene's volume (give the image as INPUT)"
+        raise VolrenError(f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL), not to {what}")
 
 
 def _load_input(args: argparse.Namespace):
@@ -247,6 +261,7 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:
     from volren.api import as_transfer_function
 
     _check_raw_flags(args)
+    _check_zarr_flags(args)
     if args.scene:
         scene = io.load_scene(args.scene, load_volume=args.input is None)
         if args.input is not None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import shutil
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -44,6 +45,9 @@ VOLREN_KEY = "volren"
 NGFF_WRITTEN = "0.4"
 #: A level read into memory whole is refused above this many bytes (ask for a coarser level).
 MAX_IN_MEMORY_BYTES = 8 << 30
+#: Voxels placed farther from the origin are refused: far beyond any instrument's reach, and far
+#: enough inside a float's range that the camera's squares and sums of them stay finite.
+MAX_COORDINATE = 1e100
 
 #: progress(fraction done) while writing.
 Progress = Callable[[float], None]
@@ -61,13 +65,15 @@ def is_url(path: str | Path) -> bool:
     return "://" in str(path)
 
 
-#: Seconds an HTTP(S) read may wait on a server that does not answer: a one-line error, no hang.
+#: Seconds an HTTP(S) read may wait to connect, and then between two packets of an answer, before
+#: a one-line error: no hang on a server that does not answer.
 URL_TIMEOUT_S = 30.0
 
 
 def _store_options(where: str) -> dict[str, Any]:
-    """fsspec options for `where`: a time limit on every HTTP(S) request (aiohttp waits 5 minutes
-    by default, which looks like a hang)."""
+    """fsspec options for `where`: time limits on connecting and on every read of an HTTP(S)
+    answer (aiohttp waits 5 minutes by default, which looks like a hang). A chunk that keeps
+    arriving may take longer than that in all: a slow link is not an error."""
     if not where.lower().startswith(("http://", "https://")):
         return {}
     try:
@@ -75,7 +81,54 @@ def _store_options(where: str) -> dict[str, Any]:
     except ImportError:
         raise VolrenError(f"{where}: reading over HTTP needs aiohttp, which is not installed: {INSTALL_HINT}") from None
 
-    return {"storage_options": {"client_kwargs": {"timeout": aiohttp.ClientTimeout(total=URL_TIMEOUT_S)}}}
+    timeout = aiohttp.ClientTimeout(total=None, connect=URL_TIMEOUT_S, sock_read=URL_TIMEOUT_S)
+    return {"storage_options": {"client_kwargs": {"timeout": timeout}}}
+
+
+def _client_errors() -> tuple[type[BaseException], ...]:
+    """aiohttp's errors (HTTP statuses, redirect loops, answers cut short), when it is installed."""
+    try:
+        import aiohttp
+    except ImportError:
+        return ()
+    return (aiohttp.ClientError,)
+
+
+def _read_errors() -> tuple[type[BaseException], ...]:
+    """What reading an image's metadata raises for bad bytes or a failing store or server."""
+    return (OSError, TimeoutError, KeyError, TypeError, ValueError, *_client_errors())
+
+
+def server_problem(exc: BaseException) -> str | None:
+    """What a server did wrong, in words (None: `exc` is not about a server)."""
+    if isinstance(exc, TimeoutError):
+        return f"the server did not answer within {URL_TIMEOUT_S:g} s"
+    try:
+        import aiohttp
+    except ImportError:
+        return None
+    if isinstance(exc, aiohttp.TooManyRedirects):
+        return "the server redirected too many times (a redirect loop)"
+    if isinstance(exc, aiohttp.ClientResponseError):
+        return f"the server answered HTTP {exc.status} {exc.message or ''}".rstrip()
+    if isinstance(exc, aiohttp.ClientPayloadError):
+        return "the server's answer was cut short"
+    if isinstance(exc, aiohttp.ClientError):
+        return f"the server cannot be reached: {_first_words(exc)}"
+    return None
+
+
+def _first_words(exc: BaseException, limit: int = 200) -> str:
+    """An exception's message on one line, shortened; what it is when it has none (never its class)."""
+    text = " ".join(str(exc).split())[:limit]
+    return text or "no reason given"
+
+
+def read_problem(exc: BaseException) -> str:
+    """Why part of an image cannot be read, in words: a server's failure or the reader's message."""
+    if isinstance(exc, json.JSONDecodeError):
+        return f"its metadata is not valid JSON ({exc.msg} at line {exc.lineno})"
+    return server_problem(exc) or _first_words(exc)
 
 
 def is_ome_zarr(path: str | Path) -> bool:
@@ -99,6 +152,8 @@ class LevelInfo:
     spacing: tuple[float, float, float]
     origin: tuple[float, float, float]
     dtype: np.dtype
+    #: what a brick without a chunk file reads as
+    fill_value: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -115,34 +170,103 @@ class Multiscale:
 
     def array(self, level: int) -> Any:
         """The zarr array of `level` (lazy: nothing is read until it is indexed)."""
-        zarr = require_zarr()
-        return zarr.open_array(f"{self.path.rstrip('/')}/{self.levels[level].key}", mode="r",
-                               **_store_options(self.path))  # fmt: skip
+        key = self.levels[level].key
+        try:
+            return _open_level_array(self.path, key)
+        except VolrenError as exc:
+            raise VolrenError(f"{self.path}: {exc}") from None
+
+
+def _open_level_array(where: str, key: str) -> Any:
+    """The zarr array of the level stored under `key`; one line naming the level when it cannot be opened."""
+    zarr = require_zarr()
+    try:
+        return zarr.open_array(f"{where.rstrip('/')}/{key}", mode="r", **_store_options(where))
+    except (FileNotFoundError, KeyError):
+        raise VolrenError(f"level {key!r} is listed but missing") from None
+    except _read_errors() as exc:
+        raise VolrenError(f"level {key!r} cannot be opened: {read_problem(exc)}") from None
 
 
 def _multiscales(attrs: Mapping[str, Any]) -> tuple[Mapping[str, Any], str]:
     ome = attrs.get("ome")
-    if isinstance(ome, Mapping) and isinstance(ome.get("multiscales"), list):
-        return ome["multiscales"][0], str(ome.get("version", "0.5"))
+    if isinstance(ome, Mapping) and isinstance(ome.get("multiscales"), list) and ome["multiscales"]:
+        found, version = ome["multiscales"][0], str(ome.get("version", "0.5"))
+        if isinstance(found, Mapping):
+            return found, version
     found = attrs.get("multiscales")
     if isinstance(found, list) and found and isinstance(found[0], Mapping):
         return found[0], str(found[0].get("version", ""))
     raise VolrenError("not an OME-Zarr image: no 'multiscales' in the group's attributes")
 
 
+def _axes(meta: Mapping[str, Any]) -> list[str]:
+    """The axis names, the last three of which must be z, y, x."""
+    listed = meta.get("axes", ["z", "y", "x"])
+    if not isinstance(listed, list):
+        raise VolrenError(f"'axes' must be a list of axes, got {_shown(listed)}")
+    axes = [a.get("name") if isinstance(a, Mapping) else a for a in listed]
+    if axes[-3:] != ["z", "y", "x"]:
+        raise VolrenError(f"axes {_shown(axes)}: volren reads volumes whose last three axes are z, y, x")
+    return axes
+
+
+def _shown(value: Any, limit: int = 80) -> str:
+    """A metadata value as the message shows it (shortened)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _numbers(values: Any, axes: int, what: str) -> list[float]:
+    """`axes` finite numbers (bools and text refused: JSON's true is not a scale)."""
+    numeric = isinstance(values, list) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
+    if not numeric or len(values) != axes or not all(math.isfinite(v) for v in values):
+        raise VolrenError(f"its {what} must be a list of {axes} finite numbers, got {_shown(values)}")
+    return [float(v) for v in values]
+
+
 def _transforms(dataset: Mapping[str, Any], axes: int) -> tuple[list[float], list[float]]:
     scale, translation = [1.0] * axes, [0.0] * axes
-    for transform in dataset.get("coordinateTransformations", []):
-        kind = transform.get("type")
-        if kind == "scale":
-            scale = [float(v) for v in transform["scale"]]
-        elif kind == "translation":
-            translation = [float(v) for v in transform["translation"]]
-    if len(scale) != axes or len(translation) != axes or not all(math.isfinite(v) for v in scale + translation):
-        raise VolrenError(f"level {dataset.get('path')!r}: its scale and translation must have {axes} finite numbers")
-    if any(v <= 0 for v in scale):
-        raise VolrenError(f"level {dataset.get('path')!r}: scale must be positive, got {scale}")
+    transforms = dataset.get("coordinateTransformations", [])
+    try:
+        if not isinstance(transforms, list) or not all(isinstance(t, Mapping) for t in transforms):
+            raise VolrenError(f"its coordinateTransformations must be a list of objects, got {_shown(transforms)}")
+        for transform in transforms:
+            kind = transform.get("type")
+            if kind == "scale":
+                scale = _numbers(transform.get("scale"), axes, "scale")
+            elif kind == "translation":
+                translation = _numbers(transform.get("translation"), axes, "translation")
+        if any(v <= 0 for v in scale):
+            raise VolrenError(f"scale must be positive, got {scale}")
+    except VolrenError as exc:
+        raise VolrenError(f"level {dataset.get('path')!r}: {exc}") from None
     return scale, translation
+
+
+def _level(where: str, dataset: Any, axes: list[str]) -> LevelInfo:
+    """One entry of 'datasets': its array opened and checked against the axes and transforms."""
+    if not isinstance(dataset, Mapping) or not isinstance(dataset.get("path"), str | int):
+        raise VolrenError(f"each of 'datasets' must be an object with a 'path', got {_shown(dataset)}")
+    key = str(dataset["path"])
+    array = _open_level_array(where, key)
+    leading = len(axes) - 3
+    if array.ndim != len(axes):
+        raise VolrenError(f"level {key!r} has {array.ndim} axes, the metadata {len(axes)}")
+    extra = [n for n, ax in zip(array.shape[:leading], axes, strict=False) if n != 1]
+    if extra:
+        raise VolrenError(f"axes {axes[:leading]} hold {array.shape[:leading]} entries; volren reads one "
+                          "volume (one time point, one channel)")  # fmt: skip
+    shape, chunks = tuple(array.shape[leading:]), tuple(array.chunks[leading:])
+    if min(shape) < 1 or min(chunks) < 1:
+        raise VolrenError(f"level {key!r}: its shape {shape} and chunk shape {chunks} must have no empty side")
+    scale, translation = _transforms(dataset, len(axes))
+    ends = [t + h * (n - 1) for h, t, n in zip(scale[leading:], translation[leading:], shape, strict=True)]
+    if not all(abs(v) <= MAX_COORDINATE for v in (*translation[leading:], *ends)):
+        raise VolrenError(f"level {key!r}: its scale {scale} and translation {translation} place voxels beyond "
+                          f"+-{MAX_COORDINATE:g}")  # fmt: skip
+    return LevelInfo(key, shape, chunks, tuple(reversed(scale[leading:])), tuple(reversed(translation[leading:])),
+                     np.dtype(array.dtype), _number_or_zero(array.fill_value))  # fmt: skip
 
 
 def open_multiscale(path: str | Path) -> Multiscale:
@@ -151,39 +275,35 @@ def open_multiscale(path: str | Path) -> Multiscale:
     where = str(path)
     try:
         group = zarr.open_group(where, mode="r", **_store_options(where))
-        meta, _version = _multiscales(dict(group.attrs))
-        axes = [a["name"] if isinstance(a, Mapping) else str(a) for a in meta.get("axes", ["z", "y", "x"])]
-        if axes[-3:] != ["z", "y", "x"]:
-            raise VolrenError(f"axes {axes}: volren reads volumes whose last three axes are z, y, x")
-        leading = len(axes) - 3
-        levels = []
-        for dataset in meta.get("datasets", []):
-            key = str(dataset["path"])
-            try:
-                array = zarr.open_array(f"{where.rstrip('/')}/{key}", mode="r", **_store_options(where))
-            except (FileNotFoundError, KeyError, ValueError) as exc:
-                raise VolrenError(f"level {key!r} is listed but missing ({type(exc).__name__})") from None
-            if array.ndim != len(axes):
-                raise VolrenError(f"level {key!r} has {array.ndim} axes, the metadata {len(axes)}")
-            extra = [n for n, ax in zip(array.shape[:leading], axes, strict=False) if n != 1]
-            if extra:
-                raise VolrenError(f"axes {axes[:leading]} hold {array.shape[:leading]} entries; volren reads one "
-                                  "volume (one time point, one channel)")  # fmt: skip
-            scale, translation = _transforms(dataset, len(axes))
-            levels.append(LevelInfo(key, tuple(array.shape[leading:]), tuple(array.chunks[leading:]),
-                                    tuple(reversed(scale[leading:])), tuple(reversed(translation[leading:])),
-                                    np.dtype(array.dtype)))  # fmt: skip
+        attrs = dict(group.attrs)
+        meta, _version = _multiscales(attrs)
+        axes = _axes(meta)
+        datasets = meta.get("datasets", [])
+        if not isinstance(datasets, list):
+            raise VolrenError(f"'datasets' must be a list of levels, got {_shown(datasets)}")
+        levels = [_level(where, dataset, axes) for dataset in datasets]
         if not levels:
             raise VolrenError("the multiscale image lists no levels")
-        ranges = _brick_ranges(dict(group.attrs).get(VOLREN_KEY), levels)
+        ranges = _brick_ranges(attrs.get(VOLREN_KEY), levels)
+        _check_chunk_files(where, levels, ranges)
     except VolrenError as exc:
         raise VolrenError(f"{where}: {exc}") from None
-    except TimeoutError:
-        raise VolrenError(f"{where}: the server did not answer within {URL_TIMEOUT_S:g} s") from None
-    except (OSError, KeyError, TypeError, ValueError, json.JSONDecodeError) as exc:
-        raise VolrenError(f"{where}: not a readable OME-Zarr image ({type(exc).__name__}: "
-                          f"{' '.join(str(exc).split())[:200]})") from None  # fmt: skip
-    return Multiscale(where, str(meta.get("name") or Path(where.rstrip("/")).name), tuple(levels), ranges, leading)
+    except _read_errors() as exc:
+        problem = server_problem(exc)
+        raise VolrenError(f"{where}: {problem or 'not a readable OME-Zarr image: ' + read_problem(exc)}") from None
+    name = meta.get("name")
+    shown = str(name) if isinstance(name, str | int) and str(name) else Path(where.rstrip("/")).name
+    return Multiscale(where, shown, tuple(levels), ranges, len(axes) - 3)
+
+
+def _brick_range(entry: Any) -> tuple[float, float] | None:
+    """One stored brick range: None (no finite value) or [min, max], two finite numbers in order."""
+    if entry is None:
+        return None
+    numeric = isinstance(entry, list) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in entry)
+    if not numeric or len(entry) != 2 or not all(math.isfinite(v) for v in entry) or entry[0] > entry[1]:
+        raise VolrenError(f"a brick range must be null or [min, max], got {_shown(entry)}")
+    return float(entry[0]), float(entry[1])
 
 
 def _brick_ranges(extra: Any, levels: Sequence[LevelInfo]) -> tuple | None:
@@ -200,8 +320,48 @@ def _brick_ranges(extra: Any, levels: Sequence[LevelInfo]) -> tuple | None:
         if not isinstance(ranges, list) or len(ranges) != bricks:
             raise VolrenError(f"level {level.key!r}: its chunk shape {level.chunks} makes {bricks} bricks, the stored "
                               f"ranges are for {len(ranges) if isinstance(ranges, list) else 'no'}")  # fmt: skip
-        out.append(tuple(None if r is None else (float(r[0]), float(r[1])) for r in ranges))
+        try:
+            out.append(tuple(_brick_range(r) for r in ranges))
+        except VolrenError as exc:
+            raise VolrenError(f"'{VOLREN_KEY}.brick_ranges' of level {level.key!r}: {exc}") from None
     return tuple(out)
+
+
+def _check_chunk_files(where: str, levels: Sequence[LevelInfo], ranges: tuple | None) -> None:
+    """A local level without a single chunk file reads as its fill value everywhere: an error
+    when volren's stored ranges say it held other values (its chunks were lost), else a warning
+    (a reader cannot tell an image of fill values from one whose chunks are missing).
+    Over a URL, chunks cannot be listed: nothing is checked."""
+    if is_url(where):
+        return
+    for index, level in enumerate(levels):
+        if _has_chunk_files(Path(where) / level.key):
+            continue
+        fill = level.fill_value
+        stored = [r for r in ranges[index] if r is not None] if ranges is not None else None
+        if stored and any(r != (fill, fill) for r in stored):
+            high = max(r[1] for r in stored)
+            raise VolrenError(f"level {level.key!r} has no chunk files, yet its stored brick ranges reach {high:g}: "
+                              f"its chunks are missing")  # fmt: skip
+        if stored is None:
+            warnings.warn(f"{where}: level {level.key!r} has no chunk files: every value reads as its fill value "
+                          f"{fill:g}", VolrenWarning, stacklevel=3)  # fmt: skip
+
+
+def _has_chunk_files(folder: Path) -> bool:
+    """Whether a local level's folder holds anything but metadata (Zarr v2's dot files, v3's zarr.json)."""
+    try:
+        return any(not entry.name.startswith(".") and entry.name != "zarr.json" for entry in os.scandir(folder))
+    except OSError:
+        return True  # a level kept elsewhere (a link, an archive): nothing to say
+
+
+def _number_or_zero(value: Any) -> float:
+    """A fill value as a number (zarr's default, 0, for none or one that is not a number)."""
+    try:
+        return float(value) if value is not None else 0.0
+    except (TypeError, ValueError):
+        return 0.0
 
 
 def level_bytes(level: LevelInfo) -> int:
@@ -283,8 +443,7 @@ def read_brick(image: Multiscale, level: int, array: Any, index: tuple[int, ...]
         return np.asarray(array[(0,) * image.leading + where])
     except Exception as exc:  # noqa: BLE001 - a codec's error, whatever its type, names the brick
         key = ".".join(str(k) for k in index)
-        raise VolrenError(f"{image.path}: level {info.key!r}, brick {key}: cannot be read ({type(exc).__name__}: "
-                          f"{' '.join(str(exc).split())[:160]})") from None  # fmt: skip
+        raise VolrenError(f"{image.path}: level {info.key!r}, brick {key}: cannot be read: {read_problem(exc)}") from None
 
 
 def _level_bricks(info: LevelInfo) -> Iterator[tuple[tuple[int, ...], tuple[slice, ...]]]:
