@@ -154,7 +154,7 @@ def render(
             raise VolrenError(f"{name} must be finite, got {value}")
     from volren.quality import kind_of, resolve
 
-    on_cluster = bool(cluster or scheduler)
+    on_cluster = cluster is not None or scheduler is not None  # an empty one is refused, not ignored
     bounds = zarr_input.bounds if zarr_input is not None else vol.bounds
     cam = camera or Camera.orbit(bounds, azimuth, elevation, zoom, parallel, width / height)
     # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)

@@ -189,3 +189,107 @@ def test_volren_render_on_a_local_cluster_equals_one_process(tmp_path, capsys):
     capsys.readouterr()
     assert main(["render", str(path), *flags, "--scheduler", "tcp://127.0.0.1:9", "-o", str(tmp_path / "x.png")]) == 1
     assert "cannot reach the dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
+
+
+class _Listener:
+    """A TCP port on 127.0.0.1 where something other than a dask scheduler listens: it accepts,
+    sends `reply` (nothing: it says nothing at all) and keeps the connection open until closed."""
+
+    def __init__(self, reply: bytes) -> None:
+        import socket
+        import threading
+
+        self.reply, self.held = reply, []
+        self.server = socket.socket()
+        self.server.bind(("127.0.0.1", 0))
+        self.server.listen(8)
+        self.server.settimeout(0.2)
+        self.address = f"tcp://127.0.0.1:{self.server.getsockname()[1]}"
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        while not self.stop.is_set():
+            try:
+                connection = self.server.accept()[0]
+            except OSError:
+                continue
+            self.held.append(connection)
+            if self.reply:
+                connection.sendall(self.reply)
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(5)
+        for connection in self.held:
+            connection.close()
+        self.server.close()
+
+
+def render_in_a_thread(argv: list[str], limit: float) -> tuple[bool, int | None]:
+    """`volren ARGV` in a thread: (whether it ended within `limit` s, its status)."""
+    import threading
+
+    from volren.cli.main import main
+
+    status: list[int] = []
+    thread = threading.Thread(target=lambda: status.append(main(argv)), daemon=True)
+    thread.start()
+    thread.join(limit)
+    return not thread.is_alive(), status[0] if status else None
+
+
+@pytest.mark.parametrize("reply", [b"", b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n", b"\0" * 64],
+                         ids=["silent", "http", "zeros"])  # fmt: skip
+def test_a_port_where_no_scheduler_listens_is_one_line_within_the_time_limit(tmp_path, capsys, monkeypatch, reply):
+    """Something else listening (a web server, a service that says nothing, bytes that are not dask's):
+    the greeting is bounded by the connection time limit, and the error names --scheduler."""
+    from volren.bricked import cluster
+    from volren.io import save_volume
+
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT_S", 1.0)
+    save_volume(field_volume(), tmp_path / "field.vti")
+    listener = _Listener(reply)
+    try:
+        argv = ["render", str(tmp_path / "field.vti"), "--size", "12", "--scheduler", listener.address,
+                "-o", str(tmp_path / "x.png")]  # fmt: skip
+        ended, status = render_in_a_thread(argv, limit=20)
+    finally:
+        listener.close()
+    assert ended and status == 1
+    reason = "no answer" if not reply else "what answered is not a dask scheduler"
+    assert capsys.readouterr().err.splitlines() == [
+        f"volren: error: --scheduler: cannot reach the dask scheduler at {listener.address} within 1 s ({reason})"]
+
+
+@pytest.mark.parametrize(("flags", "message"), [
+    (["--cluster", ""], "--cluster takes local or local:N (N worker processes), got ''; for a running cluster give "
+                        "--scheduler ADDRESS"),
+    (["--scheduler", ""], "--scheduler needs the ADDRESS of a running dask scheduler (e.g. tcp://host:8786), got ''"),
+    (["--scheduler", "tls://127.0.0.1:9"], "--scheduler tls://127.0.0.1:9: a TLS scheduler needs the client's "
+     "certificate in dask's configuration (distributed.comm.tls.ca-file, .client.cert and .client.key)"),
+    (["--cluster", "local:1", "--renderer", "vtk"], "renderer vtk does not draw bricks, which a cluster (--cluster, "
+     "--scheduler) needs; these do: reference, slicer"),
+])  # fmt: skip
+def test_cluster_flags_that_cannot_apply_are_refused_naming_them(tmp_path, capsys, flags, message):
+    """An empty --cluster or --scheduler rendered here without a word, TLS without certificates
+    was an internal error, and a renderer that draws no bricks was refused only once the cluster's
+    workers had started, naming neither flag."""
+    from volren.cli.main import main
+    from volren.io import save_volume
+
+    save_volume(field_volume(), tmp_path / "field.vti")
+    argv = ["render", str(tmp_path / "field.vti"), "--size", "12", *flags, "-o", str(tmp_path / "x.png")]
+    assert main(argv) == 1
+    assert capsys.readouterr().err.splitlines() == [f"volren: error: {message}"]
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_an_empty_cluster_or_scheduler_from_python_is_refused_not_ignored():
+    import volren
+
+    for where, message in (({"cluster": ""}, "--cluster takes local or local:N"),
+                           ({"scheduler": ""}, "--scheduler needs the ADDRESS")):  # fmt: skip
+        with pytest.raises(VolrenError, match=message):
+            volren.render(field_volume(), renderer="reference", size=(8, 8), **where)

@@ -20,6 +20,8 @@ Workers keep one renderer and one open source per (source, renderer) in a per-pr
 
 from __future__ import annotations
 
+import asyncio
+import threading
 import time
 import uuid
 from collections.abc import Mapping
@@ -186,14 +188,65 @@ def local_client(workers: int) -> Any:
 
 
 def connect(address: str, timeout: float | None = None) -> Any:
-    """A Client on the scheduler at `address`; one line, within `timeout` s, when it cannot."""
+    """A Client on the scheduler at `address`; one line naming --scheduler, within about
+    `timeout` s, when it cannot."""
     distributed = require_distributed()
     timeout = CONNECT_TIMEOUT_S if timeout is None else timeout
+    if not address.strip():
+        raise VolrenError("--scheduler needs the ADDRESS of a running dask scheduler (e.g. tcp://host:8786), got ''")
+    connection_args = distributed.Security().get_connection_args("client")
+    if address.startswith("tls://") and connection_args["ssl_context"] is None:
+        raise VolrenError(f"--scheduler {address}: a TLS scheduler needs the client's certificate in dask's "
+                          "configuration (distributed.comm.tls.ca-file, .client.cert and .client.key)")  # fmt: skip
+    try:
+        greet_scheduler(address, connection_args, timeout)
+    except Exception as exc:  # noqa: BLE001 - whatever met the greeting (a closed port, garbage, a bad address), one line
+        raise VolrenError(f"--scheduler: cannot reach the dask scheduler at {address} within {timeout:g} s "
+                          f"({_connect_problem(exc)})") from None  # fmt: skip
     try:
         return distributed.Client(address, timeout=f"{timeout}s")
-    except (OSError, TimeoutError, ValueError) as exc:
-        reason = " ".join(str(exc).split())[:160] or type(exc).__name__
-        raise VolrenError(f"cannot reach the dask scheduler at {address} within {timeout:g} s ({reason})") from None
+    except Exception as exc:  # noqa: BLE001 - a scheduler that answered and then refused (versions, TLS), one line
+        reason = " ".join(str(exc).split())[:160] or "no reason given"
+        raise VolrenError(f"--scheduler: the dask scheduler at {address} did not take this client ({reason})") from None
+
+
+def greet_scheduler(address: str, connection_args: Mapping[str, Any], timeout: float) -> None:
+    """Open a connection to `address`, exchange dask's greeting and hang up, all within `timeout` s.
+
+    Why: distributed bounds making the connection but not waiting for the greeting after it, so a
+    port where something else listens (a web server, a service that says nothing) would keep a
+    Client waiting for ever. The greeting runs on an event loop of its own, in a thread, so that it
+    works whether or not the caller runs one (a notebook does)."""
+    from distributed.comm import connect as open_comm
+
+    async def greet() -> None:
+        comm = await asyncio.wait_for(open_comm(address, timeout=timeout, **connection_args), timeout)
+        await comm.close()
+
+    failures: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            asyncio.run(greet())
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            failures.append(exc)
+
+    thread = threading.Thread(target=run, name="volren-scheduler-greeting", daemon=True)
+    thread.start()
+    thread.join(timeout + 1.0)
+    if thread.is_alive():
+        raise TimeoutError
+    if failures:
+        raise failures[0]
+
+
+def _connect_problem(exc: BaseException) -> str:
+    """Why a scheduler could not be reached, in words (never an exception's class)."""
+    if isinstance(exc, TimeoutError):
+        return "no answer"
+    if isinstance(exc, OSError | ValueError):
+        return " ".join(str(exc).split())[:160] or "the connection failed"
+    return "what answered is not a dask scheduler"
 
 
 @dataclass(frozen=True)
@@ -294,8 +347,8 @@ class ClusterRenderer:
                     # the scatter has none): send it again and redo the runs not yet drawn, once
                     self._data = self._scatter()
                     continue
-                reason = " ".join(str(exc).split())[:200]
-                raise VolrenError(f"the cluster could not render the frame ({type(exc).__name__}: {reason})") from None
+                reason = " ".join(str(exc).split())[:200] or "a worker failed without a reason"
+                raise VolrenError(f"the cluster could not render the frame: {reason}") from None
         if progress is not None and not runs:
             progress(1.0)
         t0 = time.perf_counter()
@@ -320,6 +373,21 @@ class ClusterRenderer:
         if self._data is not None:
             self._data.release()
             self._data = None
+
+
+def _check_draws_bricks(renderer: str) -> None:
+    """Before a worker starts (seconds): a renderer that cannot draw a brick alone has no share
+    of a frame to give a worker."""
+    from volren.renderers.registry import registry
+
+    def draws_bricks(name: str) -> bool:
+        support = registry.capabilities(name).kinds.get("uniform")
+        return support is not None and support.regions
+
+    if not draws_bricks(renderer):
+        able = ", ".join(name for name in registry.available() if draws_bricks(name))
+        raise VolrenError(f"renderer {renderer} does not draw bricks, which a cluster (--cluster, --scheduler) needs; "
+                          f"these do: {able}")  # fmt: skip
 
 
 def render_on_cluster(
@@ -352,7 +420,8 @@ def render_on_cluster(
         spec, brick, what = VolumeSpec(volume), VOLUME_BRICK, volume.name
     else:
         raise VolrenError("a cluster renders uniform volumes (bricks); this one is tetrahedral")
-    client = connect(scheduler) if scheduler else local_client(parse_cluster(cluster or "local"))
+    _check_draws_bricks(renderer)
+    client = connect(scheduler) if scheduler is not None else local_client(parse_cluster("local" if cluster is None else cluster))
     cluster_renderer = None
     try:
         cluster_renderer = ClusterRenderer(client, spec, renderer, brick)
@@ -360,7 +429,7 @@ def render_on_cluster(
     finally:
         if cluster_renderer is not None:
             cluster_renderer.close()
-        local = getattr(client, "cluster", None) if not scheduler else None
+        local = getattr(client, "cluster", None) if scheduler is None else None
         client.close()
         if local is not None:
             local.close()

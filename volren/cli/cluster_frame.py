@@ -18,7 +18,8 @@ def add_cluster_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def wants_cluster(args: argparse.Namespace) -> bool:
-    return bool(getattr(args, "cluster", None) or getattr(args, "scheduler", None))
+    """Whether --cluster or --scheduler was given, even empty (refused then, not ignored)."""
+    return getattr(args, "cluster", None) is not None or getattr(args, "scheduler", None) is not None
 
 
 def cluster_frame(args: argparse.Namespace, scene: Scene, camera, progress) -> tuple[Any, Any, str]:
