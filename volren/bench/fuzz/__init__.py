@@ -12,17 +12,20 @@ from __future__ import annotations
 from volren.bench.fuzz.cases import Case
 from volren.bench.fuzz.json_cases import flag_cases, scene_cases, tf_cases
 from volren.bench.fuzz.volume_cases import volume_cases
+from volren.bench.fuzz.zarr_cases import written_by_hand, zarr_cases
 
 
 def corpus(seed: int = 0) -> list[Case]:
     """Every case, in a fixed order; `seed` drives the byte-level randomness."""
-    return [*volume_cases(seed), *tf_cases(), *scene_cases(), *flag_cases()]
+    return [*volume_cases(seed), *tf_cases(), *scene_cases(), *flag_cases(), *zarr_cases()]
 
 
 def quick_corpus(seed: int = 0, every: int = 12) -> list[Case]:
-    """Every `every`-th case plus every valid seed and every case that once crashed or hung."""
+    """Every `every`-th case plus every valid seed, every case that once crashed or hung, and every
+    OME-Zarr case written by hand (a few dozen, each a fault of its own)."""
     cases = corpus(seed)
-    return [c for i, c in enumerate(cases) if i % every == 0 or c.expect == "render" or c.name in REGRESSIONS]
+    return [c for i, c in enumerate(cases)
+            if i % every == 0 or c.expect == "render" or c.name in REGRESSIONS or written_by_hand(c)]  # fmt: skip
 
 
 #: Cases that once crashed, hung or rendered uninitialized memory: always in the quick subset.

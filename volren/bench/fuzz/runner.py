@@ -28,6 +28,7 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Iterable, Iterator
+from contextlib import ExitStack
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -287,6 +288,30 @@ def run_cases(
     """Run every case (twice when it renders), `jobs` children at a time; results in case order."""
     if mode == "fork":
         preload()
+    with ExitStack() as stack:
+        return _run_all(cases, work, jobs, timeout, mode, memory_limit, on_result, _Server(work, stack))
+
+
+class _Server:
+    """The local HTTP server of the cases that read over HTTP (`zarr_cases`), started by the first
+    of them and serving `work`, the folder of every case's folder."""
+
+    def __init__(self, work: Path, stack: ExitStack) -> None:
+        self.work, self.stack, self.base = work, stack, ""
+
+    def case_for(self, case: Case, folder: Path) -> Case:
+        from volren.bench.fuzz.http_server import serving
+        from volren.bench.fuzz.zarr_cases import needs_server, with_server
+
+        if not needs_server(case):
+            return case
+        if not self.base:
+            self.base = self.stack.enter_context(serving(self.work))
+        return with_server(case, self.base, folder)
+
+
+def _run_all(cases: Iterable[Case], work: Path, jobs: int, timeout: float, mode: str, memory_limit: int,
+             on_result: Callable[[Result], None] | None, server: _Server) -> list[Result]:  # fmt: skip
     pending: Iterator[tuple[int, Case]] = iter(enumerate(cases))
     runs: dict[int, list[Run]] = {}
     results: dict[int, Result] = {}
@@ -313,7 +338,7 @@ def run_cases(
                 index, case = nxt
                 attempt = 0
             folder = folder_for(index, case, attempt)
-            child = _start(case, folder, _PERTURB[attempt], mode, timeout, memory_limit)
+            child = _start(server.case_for(case, folder), folder, _PERTURB[attempt], mode, timeout, memory_limit)
             running[child.fd] = (index, case, child, folder)
         if not running:
             break
