@@ -411,7 +411,9 @@ def test_screenshot_at_a_chosen_size_matches_a_direct_render(
     assert error_boxes == []
 
 
-def test_screenshot_errors_are_reported(files_window, fakes, qtbot, tmp_path, error_boxes):
+def test_screenshot_errors_are_reported(files_window, fakes, qtbot, tmp_path, error_boxes, monkeypatch):
+    import volren.io
+
     w = files_window()
     assert not w.screenshots.render(tmp_path / "x.png", 10, 10)
     assert "open a volume first" in error_boxes[-1][1]
@@ -419,11 +421,18 @@ def test_screenshot_errors_are_reported(files_window, fakes, qtbot, tmp_path, er
     assert not w.screenshots.render(tmp_path / "missing" / "dir" / "x.png", 32, 32)
     assert len(error_boxes) == 2 and "x.png" in error_boxes[-1][1] and "\n" not in error_boxes[-1][1]
     taken = tmp_path / "taken.png"
-    taken.mkdir()  # the folder is writable, the file itself cannot be written: fails after rendering
+    taken.mkdir()  # not a file: refused before rendering
+    assert not w.screenshots.render(taken, 32, 32)
+    assert error_boxes[-1][1] == f"{taken}: must be a file, not a folder; choose another path"
+
+    def disk_full(image, path, background) -> None:
+        raise VolrenError(f"{path}: cannot write the PNG: No space left on device")
+
+    monkeypatch.setattr(volren.io, "save_image", disk_full)  # fails after rendering
     with qtbot.waitSignal(w.errorReported, timeout=TIMEOUT_MS) as reported:
-        assert w.screenshots.render(taken, 32, 32)
-    assert reported.args[0] == "Cannot save the screenshot" and "taken.png" in reported.args[1]
-    assert len(error_boxes) == 3
+        assert w.screenshots.render(tmp_path / "full.png", 32, 32)
+    assert reported.args[0] == "Cannot save the screenshot" and "full.png" in reported.args[1]
+    assert len(error_boxes) == 4
 
 
 def test_screenshot_menu_action_uses_the_dialog_choice(files_window, fakes, qtbot, tmp_path, monkeypatch):

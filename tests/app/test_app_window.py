@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import stat
+
 import numpy as np
 import pytest
 from PyQt5.QtCore import QMimeData, QPoint, QPointF, Qt, QUrl
@@ -292,6 +295,12 @@ def test_save_screenshot_writes_a_png_of_the_viewport_size(loaded_window, tmp_pa
 def test_save_screenshot_to_a_bad_place_reports(loaded_window, tmp_path, error_boxes):
     assert not loaded_window.screenshots.save(tmp_path / "missing" / "dir" / "x.png")
     assert len(error_boxes) == 1 and "x.png" in error_boxes[0][1]
+    try:  # a node like /dev/null: Qt wrote into it and said it had saved
+        os.mknod(tmp_path / "null.png", 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    except PermissionError:
+        pytest.skip("this user may not make device nodes")
+    assert not loaded_window.screenshots.save(tmp_path / "null.png")
+    assert error_boxes[1][1] == f"{tmp_path / 'null.png'}: must be a file, not a device; choose another path"
 
 
 def test_in_place_tf_edit_renders_again(loaded_window, qtbot):

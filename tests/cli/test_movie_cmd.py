@@ -11,6 +11,7 @@ import pytest
 from PIL import Image
 
 from volren.cli.main import main
+from volren.errors import VolrenError
 from volren.model.tf_blend import blend_transfer_functions
 from volren.model.transfer_function import TransferFunction1D
 from volren.samples import sample_paths
@@ -198,3 +199,67 @@ def test_a_movie_of_an_ome_zarr_level_larger_than_memory_streams_every_frame(tmp
     for index, azimuth in enumerate((0, 180)):
         assert np.array_equal(frames[index], rendered(tmp_path, *flags, "--azimuth", str(azimuth))), index
     assert "streamed" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("fps, name", [("1e-300", "m.mp4"), ("1e-6", "m.mp4"), ("0.001", "m.gif")])
+def test_an_fps_no_movie_can_have_is_refused_naming_fps(tmp_path, capsys, ml_sample, fps, name):
+    """ffmpeg wrote a 0-byte MP4 at 1e-300 fps and one without video at 1e-6, and the command
+    said it was done; a GIF frame longer than 655 s was a traceback from Pillow."""
+    volume, tf = map(str, ml_sample)
+    argv = ["movie", volume, "--tf", tf, "--renderer", RENDERER, "--size", "8", "--frames", "2", "--fps", fps]
+    with pytest.raises(SystemExit) as exc:
+        main([*argv, "-o", str(tmp_path / name)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exc.value.code == 2 and err[-1] == (f"volren movie: error: argument --fps: expected a number from 0.01 to "
+                                               f"240, got '{fps}' (see volren movie --help)")  # fmt: skip
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("where", ["folder", "unwritable"])
+def test_a_movie_output_that_cannot_be_written_is_one_line_before_rendering(tmp_path, capsys, ml_sample, where):
+    import os
+
+    volume, tf = map(str, ml_sample)
+    if where == "folder":
+        (tmp_path / "m.mp4").mkdir()
+        target, message = tmp_path / "m.mp4", f"{tmp_path / 'm.mp4'}: -o must be a file, not a folder"
+    elif os.geteuid() == 0:  # root writes anywhere but in /proc
+        target, message = Path("/proc/volren-test.mp4"), "/proc/volren-test.mp4: cannot write in the folder /proc"
+    else:
+        (tmp_path / "locked").mkdir(mode=0o500)
+        target, message = tmp_path / "locked" / "m.mp4", "m.mp4: cannot write in the folder"
+    argv = ["movie", volume, "--tf", tf, "--renderer", RENDERER, "--size", "8", "--frames", "2", "-o", str(target)]
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("volren: error: ") and message in err[0], err
+    assert not target.is_file() and not list(tmp_path.rglob("*partial*"))
+
+
+def test_a_movie_the_encoder_did_not_write_is_an_error_and_leaves_no_file(tmp_path, monkeypatch):
+    """ffmpeg can fail without a word to the writer: the movie's frames are counted in the file."""
+    from volren.io.movie_io import MovieWriter, movie_writer
+
+    class SilentlyBroken:
+        def append_data(self, frame: np.ndarray) -> None:
+            pass
+
+        def close(self) -> None:
+            pass
+
+    monkeypatch.setattr(MovieWriter, "_open", lambda self, imageio, tmp: SilentlyBroken())
+    for name in ("m.mp4", "m.gif"):
+        with pytest.raises(VolrenError, match=rf"^{tmp_path / name}: cannot finish the movie: the encoder wrote 0 "
+                                              rf"of its 2 frames$"), movie_writer(tmp_path / name, 10) as writer:  # fmt: skip
+            for _ in range(2):
+                writer.append(np.zeros((8, 8, 3), np.uint8))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_movie_writer_refuses_an_fps_it_cannot_write(tmp_path):
+    """At 0.001 fps a GIF frame lasts 1000 s, over GIF's 655: Pillow failed with a traceback."""
+    from volren.io.movie_io import movie_writer
+
+    with pytest.raises(VolrenError, match=r"^fps must be a number from 0\.01 to 240, got 0\.001$"):
+        with movie_writer(tmp_path / "m.gif", 0.001) as writer:
+            writer.append(np.zeros((8, 8, 3), np.uint8))
+    assert list(tmp_path.iterdir()) == []

@@ -121,3 +121,89 @@ def test_view_refuses_a_screenshot_over_its_input(sample, capsys):
     volume, _ = sample
     assert main(["view", str(volume), "--screenshot", str(volume)]) == 1
     assert "--screenshot would overwrite the input" in one_error_line(capsys)
+
+
+# ------------------------------------------------------------- outputs only where files belong
+def make_node(path, kind: str) -> None:
+    """A FIFO, a folder or (where this user may make one) a device node like /dev/null."""
+    if kind == "FIFO":
+        os.mkfifo(path)
+    elif kind == "folder":
+        path.mkdir()
+    else:
+        try:
+            os.mknod(path, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+        except PermissionError:
+            pytest.skip("this user may not make device nodes")
+
+
+@pytest.mark.usefixtures("opengl")
+@pytest.mark.parametrize("flag, name", [("-o", "out.png"), ("--save-array", "out.npy")])
+@pytest.mark.parametrize("kind, is_kind", [("FIFO", stat.S_ISFIFO), ("folder", stat.S_ISDIR), ("device", stat.S_ISCHR)])
+def test_render_refuses_an_output_that_is_not_a_file_and_leaves_it(sample, tmp_path, capsys, flag, name, kind,
+                                                                    is_kind):  # fmt: skip
+    """A rename replaces whatever has the name: a FIFO or a device (`-o /dev/full`, as root)
+    became a regular file, and the render said it had written it."""
+    volume, tf = sample
+    target = tmp_path / name
+    make_node(target, kind)
+    other = ["--save-array", str(tmp_path / "a.npy")] if flag == "-o" else ["-o", str(tmp_path / "a.png")]
+    assert main(["render", str(volume), "--tf", str(tf), "--size", "8", flag, str(target), *other, "--force"]) == 1
+    assert one_error_line(capsys) == f"volren: error: {target}: {flag} must be a file, not a {kind}; choose another path"
+    assert is_kind(target.lstat().st_mode) and not (tmp_path / "a.png").exists() and leftovers(tmp_path) == []
+
+
+@pytest.mark.usefixtures("opengl")
+def test_writes_go_through_a_link_to_its_file_and_keep_the_link(sample, tmp_path):
+    volume, tf = sample
+    (tmp_path / "files").mkdir()
+    png, npy = tmp_path / "files" / "image.png", tmp_path / "files" / "image.npy"
+    png.write_bytes(b"old")
+    (tmp_path / "out.png").symlink_to(png)
+    (tmp_path / "out.npy").symlink_to(npy)  # to a file not yet there
+    argv = ["render", str(volume), "--tf", str(tf), "--size", "8", "-o", str(tmp_path / "out.png")]
+    assert main([*argv, "--save-array", str(tmp_path / "out.npy")]) == 0
+    assert (tmp_path / "out.png").is_symlink() and (tmp_path / "out.npy").is_symlink()
+    assert png.read_bytes().startswith(b"\x89PNG") and np.load(npy).shape == (8, 8, 4)
+    assert leftovers(tmp_path) == [] and leftovers(tmp_path / "files") == []
+
+
+def test_the_library_writers_refuse_what_is_not_a_file(tmp_path):
+    os.mkfifo(tmp_path / "pipe.png")
+    with pytest.raises(VolrenError, match=r"pipe\.png: must be a file, not a FIFO; choose another path$"):
+        save_image(np.ones((4, 4, 4), np.float32), tmp_path / "pipe.png")
+    assert stat.S_ISFIFO((tmp_path / "pipe.png").lstat().st_mode) and leftovers(tmp_path) == []
+
+
+@pytest.fixture
+def zarr_output(tmp_path):
+    pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
+    volume, _ = sample_paths("marschner_lobb")
+    return volume, tmp_path / "out.zarr"
+
+
+def test_convert_force_refuses_an_output_folder_holding_its_input(zarr_output, capsys):
+    volume, out = zarr_output
+    out.mkdir()
+    inside = shutil.copy(volume, out / "ml.vti")
+    before = open(inside, "rb").read()
+    assert main(["convert", str(inside), str(out), "--force"]) == 1
+    assert one_error_line(capsys) == (f"volren: error: {out}: OUTPUT holds the input {inside}; replacing OUTPUT "
+                                      f"would delete it; choose another folder")  # fmt: skip
+    assert open(inside, "rb").read() == before and sorted(p.name for p in out.iterdir()) == ["ml.vti"]
+
+
+def test_convert_force_writes_through_a_link_to_a_folder(zarr_output, capsys):
+    volume, out = zarr_output
+    real = out.with_name("real.zarr")
+    assert main(["convert", str(volume), str(real)]) == 0
+    out.symlink_to(real)
+    assert main(["convert", str(volume), str(out), "--force", "--levels", "1"]) == 0
+    assert out.is_symlink() and open_levels(real) == 1
+    os.mkfifo(out.with_name("pipe.zarr"))
+    assert main(["convert", str(volume), str(out.with_name("pipe.zarr")), "--force"]) == 1
+    assert "OUTPUT must be a folder, not a FIFO" in capsys.readouterr().err
+
+
+def open_levels(path) -> int:
+    return len(json.loads((path / ".zattrs").read_text())["multiscales"][0]["datasets"])

@@ -43,21 +43,21 @@ def run(args: argparse.Namespace) -> int:
     from volren import io
     from volren.cli.progress import progress_bar
     from volren.io.ome_zarr_io import require_zarr, save_ome_zarr
+    from volren.io.safe_write import output_target, refuse_overwriting_inputs
     from volren.model.volume import UniformVolume
 
     require_zarr()  # before a long load
     output = Path(args.output)
     if output.suffix.lower() != ".zarr":
         raise VolrenError(f"{output}: an OME-Zarr image is a folder named *.zarr")
+    refuse_overwriting_inputs([("OUTPUT", output)], [("input", args.input)], kind="folder")  # even with --force
     if output.exists() and not args.force:
         raise VolrenError(f"{output}: exists; add --force to replace it")
-    if Path(args.input).resolve() == output.resolve():
-        raise VolrenError(f"{output}: is the input; choose another folder")
     volume = io.load_volume(args.input, scalars=args.scalars)
     if not isinstance(volume, UniformVolume):
         raise VolrenError(f"{args.input}: a tetrahedral mesh has no bricks; OME-Zarr holds uniform grids")
     with progress_bar(f"{output.name}") as progress:
-        levels = save_ome_zarr(volume, output, args.chunks, args.levels, progress)
+        levels = save_ome_zarr(volume, output_target(output, "OUTPUT", "folder"), args.chunks, args.levels, progress)
     nx, ny, nz = volume.dimensions
     print(f"{args.input}: {nx}x{ny}x{nz} {volume.values.dtype} -> {output} ({levels} levels, "
           f"{args.chunks}^3 bricks)")  # fmt: skip

@@ -22,7 +22,7 @@ from volren.cli.render_cmd import (
     input_series,
 )
 from volren.errors import VolrenError
-from volren.model.animation import MAX_FPS, MAX_FRAMES, Animation, check_fps, check_frames
+from volren.model.animation import MAX_FPS, MAX_FRAMES, MIN_FPS, Animation, check_fps, check_frames
 
 
 def _frames(text: str) -> int:
@@ -36,7 +36,7 @@ def _fps(text: str) -> float:
     try:
         return check_fps(finite_float(text), "--fps")
     except (argparse.ArgumentTypeError, VolrenError):
-        raise argparse.ArgumentTypeError(f"expected a number above 0 and at most {MAX_FPS:g}, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected a number from {MIN_FPS:g} to {MAX_FPS:g}, got {text!r}") from None
 
 
 def add_parser(sub) -> None:
@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.output:
         raise VolrenError("give -o OUT.mp4 or -o OUT.gif")
-    check_movie_path(args.output)
+    check_movie_path(args.output, "-o")
     if args.lossless and not args.output.lower().endswith(".mp4"):
         raise VolrenError(f"{args.output}: --lossless applies to MP4 movies only (a GIF has 256 colours a frame)")
     inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]

@@ -14,15 +14,17 @@ cancelled movie leaves no half-written file and an old movie of that name intact
 from __future__ import annotations
 
 from collections.abc import Iterator
-from contextlib import contextmanager, suppress
+from contextlib import ExitStack, contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from PIL import Image
 
 from volren.errors import VolrenError, file_error
-from volren.io.safe_write import atomic_target
+from volren.io.safe_write import atomic_target, check_output
+from volren.model.animation import check_fps
 
 #: The movie formats, by file suffix.
 MOVIE_SUFFIXES = (".mp4", ".gif")
@@ -31,15 +33,15 @@ MP4_CRF = 18
 INSTALL_HINT = "pip install 'volren[movie]'"
 
 
-def check_movie_path(path: str | Path) -> Path:
-    """The movie's path, or a one-line error: a known suffix, in a folder that exists, with its
-    encoder installed (checked before anything is rendered)."""
+def check_movie_path(path: str | Path, flag: str | None = None) -> Path:
+    """The movie's path, or a one-line error (naming `flag` where given): a known suffix, a file
+    that can be written (`check_output`), its encoder installed (checked before anything is
+    rendered)."""
     path = Path(path)
     if path.suffix.lower() not in MOVIE_SUFFIXES:
         raise VolrenError(f"{path}: a movie is written as {' or '.join(MOVIE_SUFFIXES)} (by its suffix), "
                           f"not {path.suffix or 'a file without a suffix'}")  # fmt: skip
-    if not path.absolute().parent.is_dir():
-        raise VolrenError(f"{path}: the folder {path.absolute().parent} does not exist")
+    check_output(path, flag)
     _imageio()
     if path.suffix.lower() == ".mp4":
         try:
@@ -68,8 +70,9 @@ class MovieWriter:
     """Appends 8-bit RGB frames, all of one size, to an open movie file (see `movie_writer`)."""
 
     def __init__(self, path: Path, tmp: Path, fps: float, lossless: bool) -> None:
-        self.path, self.fps, self.lossless = path, float(fps), lossless
+        self.path, self.fps, self.lossless = path, check_fps(fps), lossless
         self.frames = 0
+        self._tmp = tmp
         self._shape: tuple[int, ...] | None = None
         self._writer = self._open(_imageio(), tmp)
 
@@ -101,10 +104,29 @@ class MovieWriter:
         self.frames += 1
 
     def close(self) -> None:
+        """Finish the file, and check that it holds the frames given: ffmpeg can fail with no
+        error for the caller (a 0-byte file, a movie with no video)."""
         try:
             self._writer.close()
-        except (OSError, RuntimeError, ValueError) as exc:
+        except (OSError, RuntimeError, ValueError, OverflowError) as exc:  # a GIF frame over 655 s
             raise file_error(self.path, f"cannot finish the movie: {_one_line(exc)}") from None
+        written = self._frames_written()
+        if not (written == self.frames or (self.path.suffix.lower() == ".gif" and 1 <= written <= self.frames)):
+            raise file_error(self.path, f"cannot finish the movie: the encoder wrote {written} of its "
+                                        f"{self.frames} frames")  # fmt: skip
+
+    def _frames_written(self) -> int:
+        """The frames in the finished file (a GIF merges identical consecutive ones); 0 where it
+        cannot be read."""
+        try:
+            if self.path.suffix.lower() == ".gif":
+                with Image.open(self._tmp) as image:
+                    return int(getattr(image, "n_frames", 1))
+            import imageio_ffmpeg
+
+            return int(imageio_ffmpeg.count_frames_and_secs(str(self._tmp))[0])
+        except (OSError, RuntimeError, ValueError):
+            return 0
 
 
 def _one_line(exc: BaseException) -> str:
@@ -116,14 +138,18 @@ def movie_writer(path: str | Path, fps: float, lossless: bool = False) -> Iterat
     """An open movie at `path` (MP4 or GIF, by suffix) at `fps`; complete when the block ends
     normally, and not there at all (an older file of that name kept) when it raises."""
     path = check_movie_path(path)
-    with atomic_target(path) as tmp:
+    with ExitStack() as stack:
+        try:
+            tmp = stack.enter_context(atomic_target(path))
+        except OSError as exc:  # the folder takes no new file
+            raise file_error(path, f"cannot write the movie: {exc.strerror}") from None
         writer = MovieWriter(path, tmp, fps, lossless)
         try:
             yield writer
+            if writer.frames == 0:
+                raise VolrenError(f"{path}: a movie needs at least one frame")
         except BaseException:
             with suppress(VolrenError):  # the block's error is the one to report
                 writer.close()
             raise
         writer.close()
-        if writer.frames == 0:
-            raise VolrenError(f"{path}: a movie needs at least one frame")

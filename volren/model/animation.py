@@ -30,6 +30,9 @@ from volren.model.transfer_function_2d import TransferFunction, transfer_functio
 #: More frames than this is a typo (at 60 fps, 28 minutes), not a movie.
 MAX_FRAMES = 100_000
 MAX_FPS = 240.0
+#: Fewer frames a second than this is a typo (a frame every 100 s), and what ffmpeg (a 0-byte
+#: file below about 1e-6) and GIF (at most 655 s a frame) cannot write.
+MIN_FPS = 0.01
 DEFAULT_FRAMES = 120
 DEFAULT_FPS = 30.0
 
@@ -55,8 +58,8 @@ def check_frames(frames: Any, what: str = "frames") -> int:
 
 
 def check_fps(fps: Any, what: str = "fps") -> float:
-    if isinstance(fps, bool) or not isinstance(fps, int | float) or not (0 < fps <= MAX_FPS):
-        raise VolrenError(f"{what} must be a number above 0 and at most {MAX_FPS:g}, got {fps!r}")
+    if isinstance(fps, bool) or not isinstance(fps, int | float) or not (MIN_FPS <= fps <= MAX_FPS):
+        raise VolrenError(f"{what} must be a number from {MIN_FPS:g} to {MAX_FPS:g}, got {fps!r}")
     return float(fps)
 
 

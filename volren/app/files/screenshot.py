@@ -12,7 +12,6 @@ The PNG holds what the viewport shows: the premultiplied frame over the view's b
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -27,6 +26,7 @@ from volren.app.core.state import ViewState
 from volren.app.files.background_job import BackgroundJobs
 from volren.app.rendering.render_service import RendererFactory, _registry_factory
 from volren.errors import VolrenError
+from volren.io.safe_write import check_output
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
@@ -71,11 +71,7 @@ class ScreenshotJob:
 
 def check_writable(path: PathArg) -> None:
     """Fail before rendering (which may take long) when the PNG cannot go there."""
-    folder = Path(path).absolute().parent
-    if not folder.is_dir():
-        raise VolrenError(f"{path}: the folder {folder} does not exist")
-    if not os.access(folder, os.W_OK):
-        raise VolrenError(f"{path}: cannot write in {folder}")
+    check_output(path)
 
 
 @contextmanager

@@ -45,6 +45,11 @@ class ScreenshotActions(FileJobActions):
     def save(self, path: PathArg, whole_window: bool = False) -> bool:
         """Write the viewport (or the whole window) as shown, as PNG; reports and returns False on
         failure. `render` renders at a chosen size instead."""
+        try:
+            check_writable(path)  # Qt would write into a device, or wait on a FIFO for a reader
+        except VolrenError as exc:
+            self._report_error(ERROR_TITLE, str(exc))
+            return False
         pixmap = (self._window if whole_window else self._viewport).grab()
         if not pixmap.save(str(path), "PNG"):
             self._report_error(ERROR_TITLE, f"{path}: cannot write a PNG file there")
