@@ -141,8 +141,8 @@ def render(
     blend_mode, options, ...) and win over the level's.
 
     An OME-Zarr path draws as `volren render` does (`volren.bricked.zarr_input`): the `level`
-    given or the one the view needs, read whole within `memory` (bytes or "2GB"; default 8 GB) or
-    streamed brick by brick. `cluster` ("local" or "local:N") or `scheduler` (an address) draws
+    given, else the full resolution (the level the view needs at quality draft and interactive),
+    read whole within `memory` (bytes or "2GB"; default 8 GB) or streamed brick by brick. `cluster` ("local" or "local:N") or `scheduler` (an address) draws
     the bricks on a dask.distributed cluster (`volren.bricked.cluster`).
     """
     zarr_input = _zarr_input(volume, memory, level)
@@ -166,11 +166,11 @@ def render(
         from volren.bricked.cluster import render_on_cluster
 
         image, _, _ = render_on_cluster(cluster, scheduler, zarr_input or vol, renderer, render_settings, transfer,
-                                        cam, width, height, level, progress)  # fmt: skip
+                                        cam, width, height, level, progress, quality)  # fmt: skip
         return image
     source = None
     if zarr_input is not None:
-        frame = zarr_input.frame(renderer, cam, width, height, level)
+        frame = zarr_input.frame(renderer, cam, width, height, level, quality)
         vol, source = frame.volume or vol, frame.source
     with prepared_renderer(renderer, vol, transfer, render_settings) as r:
         if source is not None:

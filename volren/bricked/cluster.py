@@ -41,6 +41,7 @@ from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import UniformVolume
+from volren.quality import DEFAULT_LEVEL
 from volren.renderers.base import ProgressCallback
 
 #: Seconds the client waits for a scheduler to answer before a one-line error.
@@ -402,16 +403,18 @@ def render_on_cluster(
     height: int,
     level: int | None = None,
     progress: ProgressCallback | None = None,
+    quality: str = DEFAULT_LEVEL,
 ) -> tuple[NDArray[np.float32], ClusterFrame, str]:
     """One frame on a new LocalCluster (`cluster`: "local" or "local:N") or the running cluster
-    at `scheduler`, of `volume`: a `ZarrInput` (its `level`, else the level of detail the view
-    needs) or a `UniformVolume`. Returns the image, what the frame did, and what was drawn."""
+    at `scheduler`, of `volume`: a `ZarrInput` (its `level`, else the level `quality` draws:
+    `zarr_source.level_at_quality`) or a `UniformVolume`. Returns the image, what the frame did,
+    and what was drawn."""
     from volren.bricked.zarr_input import ZarrInput
-    from volren.bricked.zarr_source import level_for_view
+    from volren.bricked.zarr_source import level_at_quality
 
     if isinstance(volume, ZarrInput):
         if level is None:
-            level = level_for_view(volume.image.levels, camera, width, height)
+            level = level_at_quality(volume.image.levels, camera, width, height, quality)
         volume.check_level(level)
         spec: ZarrSpec | VolumeSpec = ZarrSpec(volume.path, level, volume.budget)
         brick = int(min(volume.image.levels[level].chunks))

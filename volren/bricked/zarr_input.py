@@ -1,9 +1,10 @@
 """How `volren render` and `volren.render` draw an OME-Zarr image: which level, and whether it is
 read whole into memory or streamed brick by brick within the memory allowed.
 
-- A renderer that draws bricks (regions) gets the level of detail the view needs (`--level`
-  overrides it): the coarsest level whose voxels look no larger than a pixel. A level that fits in
-  the memory allowed is read whole (one frame, fastest); a larger one is streamed: bricks in
+- A renderer that draws bricks (regions) gets the full resolution (level 0) at quality default,
+  high and exact, and at draft and interactive (previews) the level of detail the view needs: the
+  coarsest level whose voxels look no larger than a pixel (`--level` overrides both). A level that
+  fits in the memory allowed is read whole (one frame, fastest); a larger one is streamed: bricks in
   visibility order through a chunk cache of that size, transparent bricks never read.
 - Any other renderer gets the finest level that fits in the memory allowed, read whole, with a
   one-line warning when that is not the full resolution.
@@ -18,12 +19,13 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from volren.bricked.zarr_source import CACHE_SHARE, ZarrSource, level_bounds, level_for_view
+from volren.bricked.zarr_source import CACHE_SHARE, ZarrSource, level_at_quality, level_bounds
 from volren.errors import VolrenError
 from volren.io import ome_zarr_io
 from volren.io.ome_zarr_io import Multiscale
 from volren.model.camera import Camera
 from volren.model.volume import UniformVolume
+from volren.quality import DEFAULT_LEVEL
 
 
 @dataclass(frozen=True)
@@ -70,8 +72,10 @@ class ZarrInput:
         if not 0 <= level < len(self.image.levels):
             raise VolrenError(f"{self.path}: no level {level}; the image has levels 0 to {len(self.image.levels) - 1}")
 
-    def frame(self, renderer: str, camera: Camera, width: int, height: int, level: int | None = None) -> ZarrFrame:
-        """How `renderer` draws this image for `camera` at `width` x `height`."""
+    def frame(self, renderer: str, camera: Camera, width: int, height: int, level: int | None = None,
+              quality: str = DEFAULT_LEVEL) -> ZarrFrame:  # fmt: skip
+        """How `renderer` draws this image for `camera` at `width` x `height` at `quality` (which
+        picks the level when `level` is None: `level_at_quality`)."""
         from volren.renderers.registry import registry
 
         support = registry.capabilities(renderer).kinds.get("uniform")
@@ -84,7 +88,7 @@ class ZarrInput:
             return ZarrFrame(level if level is not None else 0,
                              volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))  # fmt: skip
         if level is None:
-            level = level_for_view(self.image.levels, camera, width, height)
+            level = level_at_quality(self.image.levels, camera, width, height, quality)
         size = ome_zarr_io.level_bytes(self.image.levels[level])
         if size <= min(self.budget, ome_zarr_io.MAX_IN_MEMORY_BYTES):
             return ZarrFrame(level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))

@@ -18,11 +18,15 @@ from volren.io import ome_zarr_io
 from volren.io.ome_zarr_io import LevelInfo, Multiscale
 from volren.model.bricks import BrickGrid
 from volren.model.camera import Camera
+from volren.quality import DEFAULT_LEVEL
 
 #: The share of the memory allowed that the chunk cache may fill: the rest is for the process
 #: itself (Python, the renderer's GL driver: about 0.4 GiB) and the frame's images (measured with
 #: `volren bench scale`: 2048^3 uint16 at --memory 2GB peaked at 1.9 GiB resident).
 CACHE_SHARE = 0.75
+#: The quality levels that preview: with no level named they draw the coarsest level the view
+#: needs (`level_for_view`); every other level draws the full resolution.
+PREVIEW_QUALITIES = ("draft", "interactive")
 
 
 class ZarrSource:
@@ -157,3 +161,15 @@ def level_for_view(levels: Sequence[LevelInfo], camera: Camera, width: int, heig
         if max(levels[level].spacing) <= pixels * world_per_pixel:
             return level
     return 0
+
+
+def level_at_quality(levels: Sequence[LevelInfo], camera: Camera, width: int, height: int,
+                     quality: str = DEFAULT_LEVEL) -> int:  # fmt: skip
+    """The level a frame at `quality` draws when none is named: the full resolution (0), except
+    for a preview (`PREVIEW_QUALITIES`), which draws the coarsest level the view needs.
+
+    Why not the view's level at every quality: a 2x2x2 block mean spreads a feature thinner than
+    the coarser voxel over its neighbours, which can drop it below the TF's threshold however
+    small the pixels are (a one-voxel bright tube vanishes); no pixel-size rule keeps it.
+    """
+    return level_for_view(levels, camera, width, height) if quality in PREVIEW_QUALITIES else 0

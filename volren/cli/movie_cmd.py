@@ -20,6 +20,7 @@ from volren.cli.render_cmd import (
     explained,
     finite_float,
     input_series,
+    quality_asked,
 )
 from volren.errors import VolrenError
 from volren.model.animation import MAX_FPS, MAX_FRAMES, MIN_FPS, Animation, check_fps, check_frames
@@ -123,7 +124,8 @@ def _zarr_level_for_movie(args: argparse.Namespace, scene):
     if zarr_input is None:
         return scene, None
     width, height = scene.size
-    frame = zarr_input.frame(scene.renderer, scene.resolved_camera(zarr_input.bounds), width, height, args.level)
+    frame = zarr_input.frame(scene.renderer, scene.resolved_camera(zarr_input.bounds), width, height, args.level,
+                             quality_asked(args, scene))  # fmt: skip
     if frame.volume is None:
         return scene, frame.source
     return scene.with_volume(frame.volume), None

@@ -96,8 +96,8 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
                         "(default 0)")  # fmt: skip
     p.add_argument("--level", type=int, metavar="N",
                    help="for an OME-Zarr INPUT: the pyramid level to render, 0 the full resolution (default: with a "
-                        "renderer that draws bricks, the coarsest whose voxels look no larger than a pixel; with "
-                        "another, the finest that fits in --memory)")  # fmt: skip
+                        "renderer that draws bricks, 0, or at --quality draft and interactive the coarsest whose "
+                        "voxels look no larger than a pixel; with another, the finest that fits in --memory)")  # fmt: skip
     p.add_argument("--memory", metavar="SIZE",
                    help="for an OME-Zarr INPUT: the most it may take in memory, e.g. 2GB (default 8GB); a larger "
                         "level streams brick by brick within it (renderers that draw bricks)")  # fmt: skip
@@ -339,6 +339,12 @@ def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | No
     return replace(scene, renderer=renderer, settings=settings), why
 
 
+def quality_asked(args: argparse.Namespace, scene: Scene) -> str:
+    """The quality level the frame is drawn at: the flag, the scene file's, else `default` (which
+    pyramid level of an OME-Zarr INPUT is drawn depends on it: `ZarrInput.frame`)."""
+    return str(args.quality or scene.extra.get("quality") or DEFAULT_LEVEL)
+
+
 def check_outputs(outputs, inputs, force: bool) -> None:
     """Outputs never name the same file; without --force, none is an input either."""
     from volren.io.safe_write import refuse_overwriting_inputs
@@ -435,7 +441,7 @@ def _local_frame(args: argparse.Namespace, scene: Scene, camera, clock: StageClo
     source, drawn = None, ""
     if zarr_input is not None:
         with clock.stage("load"):
-            frame = zarr_input.frame(scene.renderer, camera, width, height, args.level)
+            frame = zarr_input.frame(scene.renderer, camera, width, height, args.level, quality_asked(args, scene))
         scene = scene.with_volume(frame.volume) if frame.volume is not None else scene
         source = frame.source
         drawn = f" ({zarr_input.name} {frame.describe()})"
