@@ -4,10 +4,12 @@ read whole into memory or streamed brick by brick within the memory allowed.
 - A renderer that draws bricks (regions) gets the full resolution (level 0) at quality default,
   high and exact, and at draft and interactive (previews) the level of detail the view needs: the
   coarsest level whose voxels look no larger than a pixel (`--level` overrides both). A level that
-  fits in the memory allowed is read whole (one frame, fastest); a larger one is streamed: bricks in
-  visibility order through a chunk cache of that size, transparent bricks never read.
-- Any other renderer gets the finest level that fits in the memory allowed, read whole, with a
-  one-line warning when that is not the full resolution.
+  fits in the memory allowed, counting the renderer's own copies of it (`RENDERER_COPY_BYTES`: a
+  uint16 level drawn by the slicer takes 16x its bytes), is read whole (one frame, fastest); a
+  larger one is streamed: bricks in visibility order through a chunk cache of that size,
+  transparent bricks never read.
+- Any other renderer gets the finest level that fits in the memory allowed with its copies, read
+  whole, with a one-line warning when that is not the full resolution.
 
 The scene is set up (default TF, checks) on the coarsest level, which is small; the camera is
 placed on the full resolution's bounds, so it does not move with the level drawn.
@@ -41,6 +43,21 @@ class ZarrFrame:
         return f"level {self.level} {how}"
 
 
+#: Bytes a voxel that each renderer's own copies of a level read whole take at their peak, beyond
+#: the level's values: what reading a level whole costs on top of its bytes. Measured with
+#: tracemalloc and peak resident memory, drawing a 256^3 (slicer, reference) or 128^3 uint16 level
+#: (2026-12-06): slicer 12 (its float32 texture, normalised through a float64 copy), 30 shaded or
+#: with a 2D TF (gradients too); objectorder 18; reference 8 (float64); shearwarp 7; raycast 5;
+#: vtk 2, 4 shaded.
+RENDERER_COPY_BYTES = {"slicer": 30, "objectorder": 18, "reference": 8, "shearwarp": 8, "raycast": 6, "vtk": 4}
+#: A renderer not measured is taken to copy as much as the one that copies most.
+MOST_COPY_BYTES = max(RENDERER_COPY_BYTES.values())
+
+
+def renderer_copy_bytes(renderer: str) -> int:
+    return RENDERER_COPY_BYTES.get(renderer, MOST_COPY_BYTES)
+
+
 def least_memory(image: Multiscale) -> int:
     """The least memory allowed in which `image` draws with any renderer: its coarsest level read
     whole (what the scene is set up on) and, streamed, a chunk of any level in the chunk cache
@@ -62,6 +79,7 @@ class ZarrInput:
                               f"needs at least {ome_zarr_io.human_size(least_memory(self.image))} (its coarsest level "
                               "read whole, and a chunk in the chunk cache)")  # fmt: skip
         self.budget = memory if memory is not None else ome_zarr_io.MAX_IN_MEMORY_BYTES
+        self.memory_name = memory_name
         self.bounds = level_bounds(self.image.levels[0])
 
     def stand_in(self) -> UniformVolume:
@@ -72,6 +90,18 @@ class ZarrInput:
         if not 0 <= level < len(self.image.levels):
             raise VolrenError(f"{self.path}: no level {level}; the image has levels 0 to {len(self.image.levels) - 1}")
 
+    def _finest_drawn_within_budget(self, renderer: str, copies: int) -> int:
+        """For a renderer that does not stream bricks: the finest level that it draws within the
+        memory allowed, counting its copies (`finest_level_said`); one line when none does."""
+        level = ome_zarr_io.finest_level_said(self.image, self.budget, self.name,
+                                              f" (renderer {renderer} does not stream bricks)", copies)  # fmt: skip
+        if level is None:
+            drawn = ome_zarr_io.human_size(ome_zarr_io.level_bytes(self.image.levels[-1], copies))
+            raise VolrenError(f"{self.path}: {self.memory_name} {ome_zarr_io.human_size(self.budget)} is too little for "
+                              f"renderer {renderer}, which does not stream bricks: it takes {drawn} to draw even the "
+                              "coarsest level")  # fmt: skip
+        return level
+
     def frame(self, renderer: str, camera: Camera, width: int, height: int, level: int | None = None,
               quality: str = DEFAULT_LEVEL) -> ZarrFrame:  # fmt: skip
         """How `renderer` draws this image for `camera` at `width` x `height` at `quality` (which
@@ -81,15 +111,14 @@ class ZarrInput:
         support = registry.capabilities(renderer).kinds.get("uniform")
         if level is not None:
             self.check_level(level)
+        copies = renderer_copy_bytes(renderer)
         if support is None or not support.regions:
             if level is None:
-                level = ome_zarr_io.finest_level_said(self.image, self.budget, self.name,
-                                                      f" (renderer {renderer} does not stream bricks)")  # fmt: skip
-            return ZarrFrame(level if level is not None else 0,
-                             volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))  # fmt: skip
+                level = self._finest_drawn_within_budget(renderer, copies)
+            return ZarrFrame(level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))
         if level is None:
             level = level_at_quality(self.image.levels, camera, width, height, quality)
-        size = ome_zarr_io.level_bytes(self.image.levels[level])
-        if size <= min(self.budget, ome_zarr_io.MAX_IN_MEMORY_BYTES):
+        drawn = ome_zarr_io.level_bytes(self.image.levels[level], copies)
+        if drawn <= min(self.budget, ome_zarr_io.MAX_IN_MEMORY_BYTES):
             return ZarrFrame(level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))
         return ZarrFrame(level, source=ZarrSource(self.image, level, self.budget))

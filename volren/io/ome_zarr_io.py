@@ -364,22 +364,26 @@ def _number_or_zero(value: Any) -> float:
         return 0.0
 
 
-def level_bytes(level: LevelInfo) -> int:
-    return math.prod(level.shape) * level.dtype.itemsize
+def level_bytes(level: LevelInfo, copies_per_voxel: int = 0) -> int:
+    """The bytes of a level's values, and of `copies_per_voxel` more bytes a voxel (what a
+    renderer's own copies of a level read whole take: `zarr_input.renderer_copy_bytes`)."""
+    return math.prod(level.shape) * (level.dtype.itemsize + copies_per_voxel)
 
 
-def finest_level_within(image: Multiscale, budget: int) -> int | None:
-    """The finest level whose values take at most `budget` bytes (None: not even the coarsest)."""
-    return next((k for k, level in enumerate(image.levels) if level_bytes(level) <= budget), None)
+def finest_level_within(image: Multiscale, budget: int, copies_per_voxel: int = 0) -> int | None:
+    """The finest level whose values (and copies, `level_bytes`) take at most `budget` bytes
+    (None: not even the coarsest)."""
+    return next((k for k, level in enumerate(image.levels) if level_bytes(level, copies_per_voxel) <= budget), None)
 
 
-def finest_level_said(image: Multiscale, budget: int, name: str, why: str = "") -> int | None:
+def finest_level_said(image: Multiscale, budget: int, name: str, why: str = "", copies_per_voxel: int = 0) -> int | None:
     """`finest_level_within`, with a one-line warning (naming `name`, and `why` after it) when
     that is not the full resolution."""
-    level = finest_level_within(image, budget)
+    level = finest_level_within(image, budget, copies_per_voxel)
     if level:
         whole = human_size(level_bytes(image.levels[0]))
-        warnings.warn(f"{name}: its full resolution is {whole}, more than the {human_size(budget)} allowed; "
+        drawn = f" ({human_size(level_bytes(image.levels[0], copies_per_voxel))} drawn)" if copies_per_voxel else ""
+        warnings.warn(f"{name}: its full resolution is {whole}{drawn}, more than the {human_size(budget)} allowed; "
                       f"rendering level {level}, the finest that fits{why}", VolrenWarning, stacklevel=3)  # fmt: skip
     return level
 
