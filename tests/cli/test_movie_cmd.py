@@ -263,3 +263,22 @@ def test_the_movie_writer_refuses_an_fps_it_cannot_write(tmp_path):
         with movie_writer(tmp_path / "m.gif", 0.001) as writer:
             writer.append(np.zeros((8, 8, 3), np.uint8))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_gif_faster_than_it_can_play_is_refused_before_the_first_frame(tmp_path, capsys, ml_sample):
+    """A GIF's frames last whole hundredths of a second: at 240 fps Pillow wrote delays of 0, which
+    browsers play at 10 fps, and the command said 240."""
+    from volren.io.movie_io import GIF_MAX_FPS, movie_writer
+
+    volume, tf = map(str, ml_sample)
+    argv = ["movie", volume, "--tf", tf, "--renderer", RENDERER, "--size", "8", "--frames", "2"]
+    assert main([*argv, "--fps", "240", "-o", str(tmp_path / "m.gif")]) == 1
+    assert capsys.readouterr().err.splitlines() == [
+        f"volren: error: {tmp_path / 'm.gif'}: a GIF plays at most 50 frames a second (its frames last whole "
+        "hundredths of a second, 2 at least in browsers); for 240 fps write an MP4"]
+    assert list(tmp_path.iterdir()) == []
+    with movie_writer(tmp_path / "m.gif", GIF_MAX_FPS) as writer:
+        for value in (0, 255):
+            writer.append(np.full((8, 8, 3), value, np.uint8))
+    with Image.open(tmp_path / "m.gif") as gif:
+        assert gif.n_frames == 2 and gif.info["duration"] == 1000 / GIF_MAX_FPS

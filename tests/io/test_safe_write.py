@@ -207,3 +207,20 @@ def test_convert_force_writes_through_a_link_to_a_folder(zarr_output, capsys):
 
 def open_levels(path) -> int:
     return len(json.loads((path / ".zattrs").read_text())["multiscales"][0]["datasets"])
+
+
+@pytest.mark.parametrize("flag, name", [("-o", "out.png"), ("--save-array", "out.npy")])
+def test_render_checks_the_folder_a_link_leads_to_before_rendering(sample, tmp_path, capsys, monkeypatch, flag,
+                                                                    name):  # fmt: skip
+    """Only the link's own folder was checked: a link into a missing folder failed once the frame
+    was drawn, with Python's errno text and the temporary file's path."""
+    import volren.cli.render_cmd as render_cmd
+
+    volume, tf = sample
+    monkeypatch.setattr(render_cmd, "build_scene", lambda args: pytest.fail("loaded before the outputs were checked"))
+    link = tmp_path / name
+    link.symlink_to(tmp_path / "gone" / name)
+    other = ["--save-array", str(tmp_path / "a.npy")] if flag == "-o" else ["-o", str(tmp_path / "a.png")]
+    assert main(["render", str(volume), "--tf", str(tf), "--size", "8", flag, str(link), *other]) == 1
+    assert one_error_line(capsys) == f"volren: error: {link}: the folder {tmp_path / 'gone'} does not exist"
+    assert link.is_symlink() and not (tmp_path / "gone").exists()

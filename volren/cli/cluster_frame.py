@@ -22,6 +22,15 @@ def wants_cluster(args: argparse.Namespace) -> bool:
     return getattr(args, "cluster", None) is not None or getattr(args, "scheduler", None) is not None
 
 
+def check_cluster_flag(args: argparse.Namespace) -> None:
+    """A --cluster value that names no cluster, refused before the input is read (which can take
+    minutes) rather than after."""
+    if getattr(args, "cluster", None) is not None:
+        from volren.bricked.cluster import parse_cluster
+
+        parse_cluster(args.cluster)
+
+
 def cluster_frame(args: argparse.Namespace, scene: Scene, camera, progress) -> tuple[Any, Any, str]:
     """The frame on the cluster the flags name: (image, FrameStats, what was drawn, for the line)."""
     from volren.bricked.cluster import render_on_cluster

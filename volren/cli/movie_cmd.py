@@ -79,7 +79,7 @@ def animation_of(args: argparse.Namespace, scene_movie: object, steps: int | Non
 
 def run(args: argparse.Namespace) -> int:
     from volren.cli.progress import frame_bar
-    from volren.io.movie_io import check_movie_path
+    from volren.io.movie_io import check_movie_fps, check_movie_path
     from volren.movie import render_movie
 
     if not args.output:
@@ -99,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
         animation = animation_of(args, scene.extra.get("movie"), len(series) if series is not None else None)
     except VolrenError as exc:
         raise VolrenError(f"{args.scene}: {exc}" if args.scene else str(exc)) from None
+    check_movie_fps(args.output, animation.fps)
     width, height = scene.size
     scene, source = _zarr_level_for_movie(args, scene)
     zarr_bounds = args.zarr_input.bounds if getattr(args, "zarr_input", None) is not None else None

@@ -15,7 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from volren.cli.cluster_frame import add_cluster_arguments, cluster_frame, wants_cluster
+from volren.cli.cluster_frame import add_cluster_arguments, check_cluster_flag, cluster_frame, wants_cluster
 from volren.cli.stage_clock import StageClock
 from volren.errors import VolrenError
 from volren.model.camera import check_zoom
@@ -69,6 +69,17 @@ def image_size(text: str) -> tuple[int, int]:
     return width, height
 
 
+def memory_size(text: str) -> int:
+    """An argparse type for --memory: its bytes ("2GB", "512MB", ...). Read only once the image
+    was open, a size that is none was an error naming no flag."""
+    from volren.io.ome_zarr_io import parse_memory
+
+    try:
+        return parse_memory(text)
+    except VolrenError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("render", help="render a volume offscreen to a PNG")
     p.add_argument("-o", "--output", help="PNG file to write")
@@ -98,7 +109,7 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
                    help="for an OME-Zarr INPUT: the pyramid level to render, 0 the full resolution (default: with a "
                         "renderer that draws bricks, 0, or at --quality draft and interactive the coarsest whose "
                         "voxels look no larger than a pixel; with another, the finest that fits in --memory)")  # fmt: skip
-    p.add_argument("--memory", metavar="SIZE",
+    p.add_argument("--memory", type=memory_size, metavar="SIZE",
                    help="for an OME-Zarr INPUT: the most it may take in memory, e.g. 2GB (default 8GB); a larger "
                         "level streams brick by brick within it (renderers that draw bricks)")  # fmt: skip
     p.add_argument("--scalars", help="the array to render: NAME, or NAME:magnitude / NAME:x (y, z, 0, 1, ...) for a "
@@ -207,7 +218,7 @@ def _zarr_level(args: argparse.Namespace, path: str):
     known: `volren.bricked.zarr_input`); the flags refused for other inputs (None then: load INPUT
     as any volume)."""
     from volren.bricked.zarr_input import ZarrInput
-    from volren.io.ome_zarr_io import is_ome_zarr, parse_memory
+    from volren.io.ome_zarr_io import is_ome_zarr
 
     args.zarr_input = None
     if not is_ome_zarr(path):
@@ -217,8 +228,7 @@ def _zarr_level(args: argparse.Namespace, path: str):
         return None
     if args.scalars is not None:
         raise VolrenError(f"{path}: an OME-Zarr image holds one field; --scalars does not apply")
-    memory = parse_memory(args.memory) if args.memory is not None else None
-    args.zarr_input = ZarrInput(path, memory, "--memory")
+    args.zarr_input = ZarrInput(path, args.memory, "--memory")
     if args.level is not None:
         args.zarr_input.check_level(args.level)
     return args.zarr_input.stand_in()
@@ -387,17 +397,19 @@ def explained(exc: VolrenError, args: argparse.Namespace, scene: Scene, why: str
 def run(args: argparse.Namespace) -> int:
     from volren import io
     from volren.cli.progress import progress_bar
+    from volren.io.safe_write import check_output
 
     if args.output == "" or args.save_array == "":
         raise VolrenError(f"{'-o' if args.output == '' else '--save-array'} needs a file name, got ''")
     if not args.output and not args.save_array:
         raise VolrenError("give -o OUT.png (and/or --save-array OUT.npy)")
-    for target in (args.output, args.save_array):
-        if target and not Path(target).parent.exists():
-            raise VolrenError(f"{target}: the folder {Path(target).parent} does not exist")
     outputs = (("-o", args.output), ("--save-array", args.save_array))
+    for flag, target in outputs:
+        if target:
+            check_output(target, flag)  # the folder a link leads to, too: before the render, not after
     inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
     check_outputs(outputs, inputs, args.force)  # before the (maybe long) load
+    check_cluster_flag(args)
     clock = StageClock()
     with clock.stage("load"):
         scene, why = build_scene(args)

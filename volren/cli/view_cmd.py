@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from volren.cli.render_cmd import memory_size
 from volren.extras import require
 
 
@@ -15,8 +16,9 @@ def add_parser(sub) -> None:
     p.add_argument("--scalars", help="name of the point array to render")
     p.add_argument("--renderer", help="renderer to start with (default auto: the fastest measured renderer that draws "
                    "the volume; a scene file's renderer when it names one)")
-    p.add_argument("--memory", metavar="SIZE", help="for an OME-Zarr INPUT: the most its levels may take in memory, "
-                   "e.g. 2GB (default 8GB); the app opens the coarsest level and refines up to the finest within it")
+    p.add_argument("--memory", type=memory_size, metavar="SIZE",
+                   help="for an OME-Zarr INPUT: the most its levels may take in memory, e.g. 2GB (default 8GB); the "
+                        "app opens the coarsest level and refines up to the finest within it")  # fmt: skip
     p.add_argument(
         "--screenshot",
         metavar="OUT.png",
@@ -26,11 +28,9 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from volren.io.ome_zarr_io import parse_memory
     from volren.io.safe_write import refuse_overwriting_inputs
 
     refuse_overwriting_inputs([("--screenshot", args.screenshot)], [("input", args.input), ("--tf file", args.tf)])
-    memory = parse_memory(args.memory) if args.memory is not None else None
     require("app", "volren view")
     app_main = importlib.import_module("volren.app.main")
     return app_main.run(
@@ -39,6 +39,6 @@ def run(args: argparse.Namespace) -> int:
         scalars=args.scalars,
         renderer=args.renderer,
         screenshot=args.screenshot,
-        memory=memory,
+        memory=args.memory,
         traceback=args.traceback,
     )

@@ -31,6 +31,9 @@ MOVIE_SUFFIXES = (".mp4", ".gif")
 #: H.264's constant rate factor for the default MP4: 18 is "visually lossless".
 MP4_CRF = 18
 INSTALL_HINT = "pip install 'volren[movie]'"
+#: The most frames a second a GIF plays at: its frames last whole hundredths of a second, Pillow
+#: writes a shorter frame as 0, and browsers show a frame of 0 or 1 hundredths for 10 of them.
+GIF_MAX_FPS = 50.0
 
 
 def check_movie_path(path: str | Path, flag: str | None = None) -> Path:
@@ -52,6 +55,16 @@ def check_movie_path(path: str | Path, flag: str | None = None) -> Path:
     return path
 
 
+def check_movie_fps(path: str | Path, fps: float) -> float:
+    """`fps`, or a one-line error naming `path` where its format cannot play that many frames a
+    second (`check_fps`'s range, and at most GIF_MAX_FPS for a GIF)."""
+    fps = check_fps(fps)
+    if Path(path).suffix.lower() == ".gif" and fps > GIF_MAX_FPS:
+        raise VolrenError(f"{path}: a GIF plays at most {GIF_MAX_FPS:g} frames a second (its frames last whole "
+                          f"hundredths of a second, 2 at least in browsers); for {fps:g} fps write an MP4")  # fmt: skip
+    return fps
+
+
 def _imageio() -> Any:
     try:
         import imageio.v2 as imageio
@@ -70,7 +83,7 @@ class MovieWriter:
     """Appends 8-bit RGB frames, all of one size, to an open movie file (see `movie_writer`)."""
 
     def __init__(self, path: Path, tmp: Path, fps: float, lossless: bool) -> None:
-        self.path, self.fps, self.lossless = path, check_fps(fps), lossless
+        self.path, self.fps, self.lossless = path, check_movie_fps(path, fps), lossless
         self.frames = 0
         self._tmp = tmp
         self._shape: tuple[int, ...] | None = None
