@@ -28,7 +28,7 @@ def table(results: list[Result]) -> str:
 def markdown(results: list[Result], command: str, seconds: float) -> str:
     bad = failures(results)
     out = [
-        "# Fuzz suite: malformed input through `volren render`",
+        "# Fuzz suite: malformed input through `volren`",
         "",
         f"Made by `{command}` in {seconds:.0f} s. Failures are the classes {', '.join(FAILURES)}; "
         "`error` is a clean one-line error naming the file or flag, `render` a valid image "

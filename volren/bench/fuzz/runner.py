@@ -6,16 +6,19 @@ PyVista once and loading the ray caster's kernels (`preload`), so a case costs i
 `exec` runs `python -m volren.cli.main` afresh, exactly as a user would. Either way the child is
 its own process: a crash, an abort or a hang is seen from outside.
 
-A rendered case runs twice with glibc's malloc perturbation set to two different bytes
-(`mallopt(M_PERTURB)` in a forked child, `MALLOC_PERTURB_` in a fresh one): memory a reader
-allocated and never filled then holds different bytes in the two runs, so an image drawn from
-uninitialized memory differs between them instead of passing by luck.
+A case's `patches` apply in a forked child only (a fresh interpreter runs as a user would).
+
+A rendered case that saves an image runs twice with glibc's malloc perturbation set to two
+different bytes (`mallopt(M_PERTURB)` in a forked child, `MALLOC_PERTURB_` in a fresh one): memory
+a reader allocated and never filled then holds different bytes in the two runs, so an image drawn
+from uninitialized memory differs between them instead of passing by luck.
 """
 
 from __future__ import annotations
 
 import ctypes
 import faulthandler
+import importlib
 import logging
 import os
 import re
@@ -23,6 +26,7 @@ import resource
 import select
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import time
@@ -42,6 +46,7 @@ FAILURES = (
     "hang",
     "traceback",
     "internal-error",
+    "bad-output",
     "several-lines",
     "unnamed",
     "bad-pixels",
@@ -67,6 +72,7 @@ class Run:
     seconds: float
     timed_out: bool = False
     image: np.ndarray | None = None
+    bad_output: str = ""  # what the command did to its files that it must not (`Case.after`)
 
 
 @dataclass
@@ -109,6 +115,8 @@ def _child_main(case: Case, folder: Path, perturb: int, memory_limit: int) -> No
             warnings.simplefilter("ignore", category)
         from volren.cli.main import main
 
+        for module, attribute, value in case.patches:
+            setattr(importlib.import_module(module), attribute, value)
         try:
             code = int(main(list(case.argv)) or 0)
         except SystemExit as exc:
@@ -152,7 +160,7 @@ def _start(case: Case, folder: Path, perturb: int, mode: str, timeout: float, me
     return _Child(proc.pid, os.pidfd_open(proc.pid), deadline, proc)
 
 
-def _finish(child: _Child, folder: Path, kill: bool) -> Run:
+def _finish(case: Case, child: _Child, folder: Path, kill: bool) -> Run:
     if kill:
         try:
             os.killpg(child.pid, signal.SIGKILL)
@@ -164,12 +172,33 @@ def _finish(child: _Child, folder: Path, kill: bool) -> Run:
     seconds = time.perf_counter() - child.start
     read = lambda name: (folder / name).read_bytes().decode("utf-8", "replace")  # noqa: E731
     image = None
-    if code == 0 and (folder / "out.npy").is_file():
+    if code == 0 and case.array and (folder / case.array).is_file():
         try:
-            image = np.load(folder / "out.npy", allow_pickle=False)
+            image = np.load(folder / case.array, allow_pickle=False)
         except (ValueError, OSError):
             image = None
-    return Run(code, read("stdout.txt"), read("stderr.txt"), seconds, kill, image)
+    return Run(code, read("stdout.txt"), read("stderr.txt"), seconds, kill, image, _bad_output(case, folder, code == 0))
+
+
+def _bad_output(case: Case, folder: Path, succeeded: bool) -> str:
+    """The first of `case.after` that does not hold once the command ended, in words; "" if all do."""
+    for check, rel in case.after:
+        path = folder / rel
+        if check == "link" and not path.is_symlink():
+            return f"{rel} is no longer a symbolic link"
+        if check == "fifo" and not (path.exists() and stat.S_ISFIFO(path.lstat().st_mode)):
+            return f"{rel} is no longer a FIFO"
+        if check == "kept" and not (path.is_file() and path.read_bytes() == case.files[rel]):
+            return f"{rel} was changed or removed"
+        if check == "written" and succeeded and not _written(path, case.files.get(rel)):
+            return f"{rel} was not written, yet the command succeeded"
+    return ""
+
+
+def _written(path: Path, laid_out: bytes | None) -> bool:
+    if path.is_dir():
+        return any(path.iterdir())
+    return path.is_file() and path.stat().st_size > 0 and path.read_bytes() != laid_out
 
 
 # ---------------------------------------------------------------------------------- classifying
@@ -202,6 +231,8 @@ def classify_run(case: Case, run: Run) -> tuple[str, str]:
         return "traceback", text.strip().splitlines()[-1][:200]
     if run.returncode == 3 or "internal error" in run.stderr:
         return "internal-error", run.stderr.strip()[:200]
+    if run.bad_output:
+        return "bad-output", run.bad_output
     lines = [line for line in run.stderr.splitlines() if line.strip()]
     stray = [line for line in lines if not _OURS.match(line)]
     errors = [line for line in lines if _OURS.match(line) and ": error:" in line]
@@ -219,7 +250,7 @@ def classify_run(case: Case, run: Run) -> tuple[str, str]:
         if not any(name in message for name in case.culprits()):
             return "unnamed", message[:200]
         return "error", message[:200]
-    problem = _bad_pixels(run.image)
+    problem = _bad_pixels(run.image) if case.array else ""
     if problem:
         return "bad-pixels", problem
     warned = any(": warning:" in line for line in lines)
@@ -352,10 +383,10 @@ def _run_all(cases: Iterable[Case], work: Path, jobs: int, timeout: float, mode:
             if fd not in ready and not late:
                 continue
             del running[fd]
-            run = _finish(child, folder, kill=late and fd not in ready)
+            run = _finish(case, child, folder, kill=late and fd not in ready)
             runs.setdefault(index, []).append(run)
             first = classify_run(case, run)[0]
-            if len(runs[index]) == 1 and first.startswith("render"):
+            if len(runs[index]) == 1 and first.startswith("render") and case.array:
                 second.append((index, case))
                 continue
             results[index] = classify(case, runs[index])
