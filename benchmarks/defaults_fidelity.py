@@ -89,8 +89,8 @@ def scene_rows(dataset, sizes: Iterable[int]) -> Iterable[Row]:
 def measure(args: argparse.Namespace) -> int:
     shared = shared_folder(args.shared, required=False)
     datasets = select(args.datasets.split(","), shared)
-    command = (f"python -m benchmarks.defaults_fidelity --datasets {args.datasets} "
-               f"--sizes {','.join(map(str, args.sizes))}")  # fmt: skip
+    command = (f"python -m benchmarks.defaults_fidelity{' --shared ' + args.shared if args.shared else ''} "
+               f"--datasets {args.datasets} --sizes {','.join(map(str, args.sizes))}")  # fmt: skip
     lines = [f"Measured {datetime.date.today()} by `{command}`: per scene and image size, `auto` at quality "
              "`default` (a render with no options) and VTK's default against `reference` at the scene's view.",
              "", f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}", "", *HEADER]  # fmt: skip

@@ -30,6 +30,9 @@ SECTIONS = (
     ("quality.md", "Fast by default: `auto` at each quality level against VTK's default",
      "What does a render with no options (or with `--quality LEVEL`) get, against VTK's default, scene by scene? "
      "(`volren bench quality ... --markdown`)"),
+    ("defaults_fidelity.md", "No options on hard scenes, at every image size",
+     "Does a render with no options keep what VTK's default keeps: thin tubes and sheets, specks, noise, steps, "
+     "anisotropic grids, from 128^2 to 1024^2 (RMSE and pixels off by more than 0.1)?"),
     ("defaults_ab.md", "No options against VTK's default, frames interleaved",
      "The same question as the table above, each scene's two renderers drawing alternately so that both see the "
      "same load (`python -m benchmarks.defaults_ab`)"),

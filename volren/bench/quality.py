@@ -36,6 +36,9 @@ from volren.quality import LEVELS, TF_CLASSES, LevelChoice, QualityTable
 
 #: Each level's bound on RMSE / VTK default's RMSE (None: the most accurate configuration).
 BOUNDS: dict[str, float | None] = {"draft": 4.0, "interactive": 2.0, "default": 1.0, "high": 0.25, "exact": None}
+#: The fraction of its bound a level is chosen within: `default` promises at most VTK's error and
+#: is chosen at 0.9 of it, a margin for scenes no run measured.
+MARGINS: dict[str, float] = {"default": 0.9}
 #: The levels that must sample every pixel and keep VTK default's count of pixels off by more than 0.1.
 FAITHFUL_LEVELS = ("default", "high", "exact")
 #: The image size of the runs' main scenes, named without a size.
@@ -139,21 +142,21 @@ def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], tuple[float, f
             ms, float(r["rmse"]) / peer_rmse, faithful)  # fmt: skip
     out: dict[str, dict[str, LevelChoice]] = {}
     for renderer, configs in measured.items():
-        scenes = set.intersection(*(set(per) for per in configs.values()))
-        complete = {key: per for key, per in configs.items() if set(per) >= scenes and scenes}
+        scenes, complete = _covered(configs)
         if not complete:
             continue
         per_level = {}
         own = _own_default(complete)
         faithful = {key: per for key, per in complete.items() if _samples_every_pixel(known[key])}
-        chosen = {"default": _choose(faithful or complete, scenes, BOUNDS["default"], own, fidelity=True)}
+        chosen = {"default": _choose(faithful or complete, scenes, BOUNDS["default"], own, fidelity=True,
+                                     margin=MARGINS["default"])}  # fmt: skip
         ceiling = sum(complete[chosen["default"]][s][0] for s in scenes)
         for level in LEVELS:
             if level not in chosen:
                 below = LEVELS.index(level) < LEVELS.index("default")
                 pool = complete if below else (faithful or complete)
                 chosen[level] = _choose(pool, scenes, BOUNDS[level], own, ceiling if below else math.inf,
-                                        fidelity=not below)  # fmt: skip
+                                        fidelity=not below, margin=MARGINS.get(level, 1.0))  # fmt: skip
         for level in LEVELS:
             key = chosen[level]
             config = known[key]
@@ -196,14 +199,27 @@ def scene_features(
     return out
 
 
+def _covered(configs: Mapping[tuple[str, str], Mapping[str, tuple]]) -> tuple[set[str], dict]:
+    """(scenes, the configurations measured on all of them): every scene any configuration was
+    measured on, so that a scene set added by a later run (the hard scenes, another size) binds
+    every level; a configuration missing from some scene (a level added since a run) is left out.
+    Where no configuration covers them all, the scenes every configuration shares."""
+    scenes = set.union(*(set(per) for per in configs.values()))
+    complete = {key: per for key, per in configs.items() if set(per) >= scenes}
+    if not complete:
+        scenes = set.intersection(*(set(per) for per in configs.values()))
+        complete = {key: per for key, per in configs.items() if scenes}
+    return scenes, complete
+
+
 def _samples_every_pixel(config: sweep.Config) -> bool:
     """Whether a configuration casts a ray through every pixel (no image-space refinement)."""
     return int(config.settings().options.get("image_stride", 1)) <= 1
 
 
 def _choose(configs: dict, scenes: set[str], bound: float | None, own: tuple[str, str] | None,
-            ceiling_ms: float = math.inf, fidelity: bool = False) -> tuple[str, str]:  # fmt: skip
-    """The fastest configuration within `bound` on every scene (and, for the levels below
+            ceiling_ms: float = math.inf, fidelity: bool = False, margin: float = 1.0) -> tuple[str, str]:  # fmt: skip
+    """The fastest configuration within `margin` times `bound` on every scene (and, for the levels below
     `default`, no slower than the default level's choice, `ceiling_ms`; with `fidelity`, with no
     more pixels off than VTK's default on every scene where counted). A renderer with none gets
     the bound scaled by its own default configuration's error (`own`): its default stays its
@@ -222,7 +238,8 @@ def _choose(configs: dict, scenes: set[str], bound: float | None, own: tuple[str
     best = min(configs, key=lambda key: (not faithful(key), worst(key), total_ms(key)))
     if bound is None:
         return best
-    within = [key for key in configs if worst(key) <= bound and total_ms(key) <= ceiling_ms and faithful(key)]
+    within = [key for key in configs
+              if worst(key) <= bound * margin and total_ms(key) <= ceiling_ms and faithful(key)]  # fmt: skip
     if not within and own in configs:
         within = [key for key in configs
                   if worst(key) <= bound * worst(own) and total_ms(key) <= ceiling_ms and faithful(key)]  # fmt: skip

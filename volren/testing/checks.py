@@ -399,6 +399,56 @@ def check_shading(ctx: CheckContext) -> list[Measurement]:
     return out
 
 
+def _default_level(renderer: type[Renderer], kind: str) -> RenderSettings:
+    """What a renderer draws at quality `default` on a scene of this kind: the measured level
+    (`volren.quality`), or, for a renderer with no measurements (which `auto` never picks), the
+    most accurate level of its declared quality axis, or its defaults."""
+    from volren.quality import table
+
+    choice = table().choice(renderer.name, kind, "default")
+    if choice is not None:
+        return choice.apply(RenderSettings())
+    axis = renderer.capabilities.quality  # fast to accurate
+    return axis[-1].apply() if axis else RenderSettings()
+
+
+#: The sheet check's tilts: the view direction's sideways component against the sheet's normal
+#: (oblique, so that no renderer's samples fall in phase with the lattice on every ray).
+THIN_TILTS = (0.3, 0.7)
+
+
+def check_thin(ctx: CheckContext) -> list[Measurement]:
+    """A sheet one lattice spacing thin (one layer of points at 1, the rest 0) under a TF visible
+    only above 0.5, seen obliquely in parallel projection at the renderer's `default` quality
+    level for the scene (`_default_level`): no pixel may be off by more than 0.1 (`volren.testing.metrics`) from the
+    closed-form opacity, equal on every ray (`oracles.tent_sheet_alpha`). What a step too long or
+    pixels interpolated between rays drop is a thin feature like this one."""
+    from volren.quality import kind_of
+
+    out = []
+    colour = (0.9, 0.8, 0.3)
+    tf = TransferFunction1D([[0.0, *colour]], [[0.0, 0.0], [0.5, 0.0], [1.0, 0.9]], opacity_unit_distance=1.0)
+    layer = 3.0
+    for kind in ctx.kinds():
+        volume = lattice_volume(kind, lambda x, y, z: np.where(np.isclose(z, layer), 1.0, 0.0), (11, 11, 7))
+        renderer = ctx.renderer()
+        settings = _default_level(type(renderer), kind_of(volume, tf))
+        b = np.asarray(volume.bounds)
+        centre = np.array([(b[0] + b[1]) / 2.0, (b[2] + b[3]) / 2.0, layer])
+        for tilt in THIN_TILTS:
+            direction = np.array([tilt, 0.45 * tilt, -1.0])
+            direction /= np.linalg.norm(direction)
+            camera = Camera(position=tuple(centre - 30.0 * direction), focal_point=tuple(centre),
+                            view_up=(0.0, 1.0, 0.0), parallel=True, parallel_scale=2.5, clipping_range=(1.0, 100.0))  # fmt: skip
+            n = 24
+            image = ctx.draw(renderer, volume, tf, camera, n, n, settings)
+            alpha = oracles.tent_sheet_alpha(tf, 2.0, float(direction[2]))
+            expected = np.broadcast_to([colour[0] * alpha, colour[1] * alpha, colour[2] * alpha, alpha], image.shape)
+            off = image_error(image, expected).off
+            out.append(Measurement("thin", f"{kind}, tilt {tilt:g}", "pixels off by > 0.1", off, 0))
+    return out
+
+
 class _Cancel(Exception):
     """Raised by the kit's progress callback to cancel a frame."""
 
@@ -643,6 +693,6 @@ class Check:
 CHECKS: Sequence[Check] = tuple(
     Check(fn.__name__.removeprefix("check_"), fn)
     for fn in (check_output, check_empty, check_box, check_clip, check_ramp, check_projection, check_nan, check_point,
-               check_step, check_shading, check_eye_inside, check_progress, check_cancel, check_release,
+               check_step, check_thin, check_shading, check_eye_inside, check_progress, check_cancel, check_release,
                check_capabilities, check_bricks)
 )  # fmt: skip

@@ -183,6 +183,26 @@ def _noise_tf() -> TransferFunction1D:
     })  # fmt: skip
 
 
+def _shell_tf() -> TransferFunction1D:
+    """Two narrow peaks (a band TF): thin shells where the blob crosses 100 and 180, through the noise."""
+    return TransferFunction1D.from_dict({
+        "version": 1, "range": [0, 255],
+        "color": [[0, 0.9, 0.5, 0.2], [140, 0.3, 0.8, 0.9], [255, 1.0, 1.0, 1.0]],
+        "opacity": [[0, 0.0], [96, 0.0], [100, 0.7], [104, 0.0], [176, 0.0], [180, 0.9], [184, 0.0]],
+        "opacity_unit_distance": 1.0,
+    })  # fmt: skip
+
+
+def _wall_tf() -> TransferFunction1D:
+    """One narrow peak at half the tubes' value (a band TF): the walls of every tube as thin shells."""
+    return TransferFunction1D.from_dict({
+        "version": 1, "range": [0, 255],
+        "color": [[0, 1.0, 0.9, 0.6], [255, 1.0, 0.9, 0.6]],
+        "opacity": [[0, 0.0], [118, 0.0], [128, 0.8], [138, 0.0]],
+        "opacity_unit_distance": 1.0,
+    })  # fmt: skip
+
+
 def steps() -> Volume:
     """Nested solids with hard (not antialiased) faces: a box of 100, a ball of 200, a rod of 255,
     and a one-voxel-thick plate of 160: values that jump between neighbouring voxels."""
@@ -255,6 +275,8 @@ CASES: dict[str, HardCase] = {case.name: case for case in (
     HardCase("hard_sheets", "oblique discs 0.5-3 voxels thick", sheets, _sheet_tf, azimuth=60.0, elevation=35.0),
     HardCase("hard_specks", "tiny bright balls, radii 0.3-1.5 voxels, in fog", specks, _speck_tf),
     HardCase("hard_noise", "a smooth blob under white noise", noise, _noise_tf),
+    HardCase("hard_shells", "thin iso-shells of a blob under noise (band TF)", noise, _shell_tf, azimuth=50.0),
+    HardCase("hard_walls", "the walls of tubes 0.5-3 voxels thick (band TF)", tubes, _wall_tf, elevation=40.0),
     HardCase("hard_steps", "nested solids with hard faces, a one-voxel plate", steps, _steps_tf, azimuth=20.0),
     HardCase("hard_anisotropic", "tubes on a 1:1:10 grid", anisotropic, _vessel_tf, elevation=50.0),
     HardCase("hard_tet_struts", "oblique struts in a tetrahedral mesh", tet_struts, _vessel_tf, kind="tet"),

@@ -162,3 +162,14 @@ def midpoint_march(volume: UniformVolume, tf: TransferFunction1D, camera: Camera
             out[p, 3] += tr * alpha
             tr *= 1 - alpha
     return out.reshape(h_px, w, 4)
+
+
+def tent_sheet_alpha(tf: TransferFunction1D, thickness: float, cos_angle: float) -> float:
+    """Opacity of a ray crossing a sheet whose value falls linearly from 1 on its mid-plane to 0 at
+    `thickness` / 2 either side (one layer of lattice points at 1, interpolated trilinearly or per
+    tetrahedron), at `cos_angle` to the sheet's normal: 1 - exp(-(thickness / cos) * mean over
+    [0, 1] of the extinction tau(v)), the mean taken in float64 over 400,001 points."""
+    v = np.linspace(0.0, 1.0, 400_001)
+    _, alpha = tf.sample(v)
+    tau = -np.log1p(-np.minimum(np.asarray(alpha, np.float64), 1.0 - 1e-6)) / tf.opacity_unit_distance
+    return float(1.0 - np.exp(-thickness / abs(cos_angle) * np.trapezoid(tau, v)))
