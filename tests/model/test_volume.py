@@ -159,3 +159,14 @@ def test_the_step_is_measured_in_the_smallest_spacing_so_it_holds_along_the_fine
     volume = UniformVolume(np.zeros((4, 4, 4), np.uint8), spacing=(0.5, 0.5, 5.0))
     assert volume.characteristic_length == 0.5
     assert volume.mean_spacing == 2.0
+
+
+def test_a_grid_too_anisotropic_for_its_smallest_spacing_keeps_every_level_drawable():
+    from volren.model.settings import MAX_SAMPLES_PER_RAY, check_step, samples_per_ray
+    from volren.model.volume import FINEST_LEVEL_STEP
+
+    slices = UniformVolume(np.zeros((4, 16, 16), np.uint8), spacing=(1.0, 1.0, 99999.0))
+    unit = slices.characteristic_length
+    assert unit > 1.0
+    assert samples_per_ray(FINEST_LEVEL_STEP, slices.bounds, unit) == pytest.approx(MAX_SAMPLES_PER_RAY)
+    check_step(0.5, slices.bounds, unit)  # the default step is drawable

@@ -14,6 +14,7 @@ not at all), and a cell is one piece of the domain however often a file lists it
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import ClassVar, Literal, TypeAlias
@@ -22,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.model.settings import MAX_SAMPLES_PER_RAY
 from volren.model.tet_repair import repeated_tets
 
 VolumeKind: TypeAlias = Literal["uniform", "tet"]
@@ -82,6 +84,11 @@ def _as_triple(value, what: str) -> tuple[float, float, float]:
     if arr.size != 3 or not np.all(np.isfinite(arr)):
         raise VolrenError(f"{what} must be three finite numbers, got {value!r}")
     return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
+#: The shortest step, in characteristic lengths, that a quality level takes (raycast's error target
+#: stops at 1/8 of step 2; every level's finest is 0.25).
+FINEST_LEVEL_STEP = 0.25
 
 
 @dataclass(frozen=True, eq=False)
@@ -168,8 +175,13 @@ class UniformVolume:
     def characteristic_length(self) -> float:
         """Length that `RenderSettings.step` is measured in: the smallest spacing, so that a step
         holds along the finest axis (in mean spacings, step 0.5 on a 0.5 x 0.5 x 5 grid is two x-y
-        voxels and drops what is thinner; VTK's mappers likewise sample by the smallest spacing)."""
-        return min(self.spacing)
+        voxels and drops what is thinner). On a grid so anisotropic that the finest steps any
+        quality level takes (`FINEST_LEVEL_STEP`) would exceed `MAX_SAMPLES_PER_RAY` across it (slices
+        1e5 times farther apart than their pixels), the length those samples need instead, so that
+        every level stays drawable."""
+        b = self.bounds
+        diagonal = math.hypot(b[1] - b[0], b[3] - b[2], b[5] - b[4])
+        return max(min(self.spacing), diagonal / (FINEST_LEVEL_STEP * MAX_SAMPLES_PER_RAY))
 
     def __repr__(self) -> str:
         nx, ny, nz = self.dimensions
