@@ -11,11 +11,7 @@ from volren.testing.runner import renderer_factory
 NAMES = registry.names()
 #: Checks a renderer is known to fail, and why: the kit is right, the renderer is not (yet). Strict, so
 #: a fix shows up as an unexpected pass and the entry goes.
-KNOWN_FAILURES = {
-    ("vtk", "clip"): "the uniform GPU mapper clips at whole samples (RMSE up to 0.083 against its declared 0.07); "
-                     "on tetrahedra, where VTK's mappers draw wrong images (RMSE 0.40-0.43), such views are "
-                     "refused (clipping=False) and the kit holds that",
-}  # fmt: skip
+KNOWN_FAILURES: dict[tuple[str, str], str] = {}
 
 
 @pytest.mark.parametrize("check", CHECKS, ids=[c.name for c in CHECKS])
