@@ -81,6 +81,11 @@ def test_an_opacity_unit_distance_of_true_is_not_a_number(tmp_path):
         ('"just a string"', "a transfer function must be a JSON object, got str"),
         ({"version": 1, "opacity": [[0, 1]]}, "missing 'color' list"),
         ({"version": 1, "color": "red", "opacity": [[0, 1]]}, "colour points must be numbers"),
+        ({"version": 1, "color": [[0, "1", "0.5", "0"]], "opacity": [[0, 1]]}, "colour points must be numbers, got '1'"),
+        ({"version": 1, "color": [[0, 1, 1, 1]], "opacity": [[0, False], [1, True]]},
+         "opacity points must be numbers, got False"),
+        ({"version": 1, "color": [[0, 1, 1], [1, 1, 1, 1]], "opacity": [[0, 1]]},
+         "colour points must be a non-empty list of 4-tuples"),
         (
             {"version": 1, "color": [[0, 1, 1]], "opacity": [[0, 1]]},
             "colour points must be a non-empty list of 4-tuples",
@@ -255,3 +260,67 @@ def test_preset_by_name(tmp_path):
 )
 def test_malformed_presets(tmp_path, preset, fragment):
     fails(write(tmp_path / "bad.json", [preset]), fragment)
+
+
+def smooth_preset(n: int, space: str = "RGB") -> dict:
+    """n nodes of smoothly varying colour and opacity (opacity with ParaView's midpoints and sharpness)."""
+    x = np.linspace(1.0, 1000.0, n)
+    t = (x - 1.0) / 999.0
+    rgb = np.column_stack([x, 0.5 + 0.5 * np.sin(6 * t), t, 1 - t])
+    points = np.column_stack([x, t**2, np.full(n, 0.3), np.full(n, 0.2)])
+    return {"Name": "big", "ColorSpace": space, "RGBPoints": rgb.ravel().tolist(), "Points": points.ravel().tolist()}
+
+
+def test_a_large_preset_matches_vtk_through_all_its_nodes(tmp_path):
+    preset = smooth_preset(1500, "Lab")
+    preset["RGBPoints"][4 * 7 : 4 * 8] = [preset["RGBPoints"][4 * 6], 0.0, 1.0, 0.0]  # two nodes at one x: VTK keeps the last
+    tf = load_transfer_function(write(tmp_path / "big.json", preset))
+    assert_matches_vtk(tf, *vtk_functions(preset["RGBPoints"], preset["Points"], "Lab"), 0.0, 1001.0)
+
+
+def test_a_large_preset_is_evaluated_by_small_vtk_functions(tmp_path, monkeypatch):
+    """VTK sorts all nodes of a function on each insertion and scans them on each evaluation: one
+    function through all of a preset's nodes made loading quadratic (20,000 nodes took minutes)."""
+    from volren.io import _pv
+
+    sizes = []
+
+    def counting(build):
+        def wrapped(nodes, *args):
+            sizes.append(len(nodes))
+            return build(nodes, *args)
+
+        return wrapped
+
+    monkeypatch.setattr(_pv, "color_table", counting(_pv.color_table))
+    monkeypatch.setattr(_pv, "opacity_table", counting(_pv.opacity_table))
+    load_transfer_function(write(tmp_path / "big.json", smooth_preset(1000)))
+    assert sizes and max(sizes) <= 70
+
+
+def test_a_preset_that_needs_too_many_points_is_refused_naming_the_file(tmp_path, monkeypatch):
+    from volren.io import paraview_presets
+
+    monkeypatch.setattr(paraview_presets, "MAX_POINTS", 300, raising=False)
+    rng = np.random.default_rng(1)
+    x = np.sort(rng.uniform(0, 1, 40))
+    wild = {"Name": "wild", "ColorSpace": "Lab", "RGBPoints": np.column_stack([x, rng.uniform(0, 1, (40, 3))]).ravel().tolist()}
+    fails(write(tmp_path / "wild.json", wild), "preset 'wild': its colour map needs more than 300 points")
+    fails(write(tmp_path / "long.json", smooth_preset(301)), "preset 'big': 'RGBPoints' has 301 points; a transfer function has at most 300")
+
+
+def test_a_lab_ciede2000_preset_of_many_points_is_refused(tmp_path):
+    """VTK takes about 0.1 s per CIEDE2000 segment on every evaluation."""
+    fails(write(tmp_path / "c.json", smooth_preset(65, "Lab/CIEDE2000")), "65 RGBPoints in the Lab/CIEDE2000 colour space")
+
+
+def test_nodes_on_straight_lines_are_dropped():
+    from volren.io.paraview_presets import _drop_collinear, simplify_polyline
+
+    x = np.linspace(0.0, 1.0, 5001)
+    assert _drop_collinear(x, np.column_stack([x, 1 - x])).tolist() == [0, 5000]
+    bent = np.column_stack([np.exp(2 * x), x])
+    bent[1::2] = 0.5 * (bent[:-1:2] + bent[2::2])  # every other node on the chord of its neighbours
+    kept = _drop_collinear(x, bent)
+    assert kept.tolist() == list(range(0, 5001, 2))
+    np.testing.assert_array_equal(kept, simplify_polyline(x, bent, 1e-12))

@@ -33,11 +33,28 @@ TF_FORMAT_VERSION = 1
 MAX_POINTS = 100_000
 
 
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
+
+
+def _check_numbers(data: ArrayLike, what: str) -> None:
+    """Refuse anything but numbers (or lists of them): np.array(..., float) would turn the
+    strings ("0.5") and booleans of a hand-written file into numbers without a word."""
+    if isinstance(data, np.ndarray) and data.dtype.kind in "iuf":
+        return
+    rows = data if isinstance(data, list | tuple | np.ndarray) else [data]
+    for row in rows:
+        for value in row if isinstance(row, list | tuple | np.ndarray) else [row]:
+            if not _is_number(value):
+                raise VolrenError(f"{what} points must be numbers, got {value!r}")
+
+
 def _points(data: ArrayLike, width: int, what: str) -> NDArray[np.float64]:
+    _check_numbers(data, what)
     try:
         arr = np.array(data, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise VolrenError(f"{what} points must be numbers: {exc}") from None
+    except ValueError:  # rows of different lengths
+        raise VolrenError(f"{what} points must be a non-empty list of {width}-tuples") from None
     if arr.ndim == 1 and arr.size % width == 0 and arr.size:
         arr = arr.reshape(-1, width)
     if arr.ndim != 2 or arr.shape[1] != width or len(arr) == 0:
