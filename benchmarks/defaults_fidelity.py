@@ -68,13 +68,16 @@ def describe(name: str, settings: RenderSettings) -> str:
     return text
 
 
-def scene_rows(dataset, sizes: Iterable[int]) -> Iterable[Row]:
-    """Each TF of the dataset at each size: `auto` at `default` and VTK's default against `reference`."""
+def scene_rows(dataset, sizes: Iterable[int], styles: set[str] | None = None) -> Iterable[Row]:
+    """Each TF of the dataset (of `styles`, when given) at each size: `auto` at `default` and VTK's
+    default against `reference`."""
     volume = dataset.load()
     camera = dataset.camera(volume.bounds)
     curve, label = VTK_DEFAULT[dataset.kind]
     peer = _configs(dataset.kind, {curve})[(curve, label)]
     for style, tf in dataset.transfer_functions():
+        if styles is not None and style not in styles:
+            continue
         name, settings, _ = resolve(kind_of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
                                     cameras=(camera,), bounds=volume.bounds)  # fmt: skip
         for size in sizes:
@@ -90,7 +93,8 @@ def measure(args: argparse.Namespace) -> int:
     shared = shared_folder(args.shared, required=False)
     datasets = select(args.datasets.split(","), shared)
     command = (f"python -m benchmarks.defaults_fidelity{' --shared ' + args.shared if args.shared else ''} "
-               f"--datasets {args.datasets} --sizes {','.join(map(str, args.sizes))}")  # fmt: skip
+               f"--datasets {args.datasets}{' --tfs ' + args.tfs if args.tfs else ''} "
+               f"--sizes {','.join(map(str, args.sizes))}")  # fmt: skip
     lines = [f"Measured {datetime.date.today()} by `{command}`: per scene and image size, `auto` at quality "
              "`default` (a render with no options) and VTK's default against `reference` at the scene's view.",
              "", f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}", "", *HEADER]  # fmt: skip
@@ -98,7 +102,7 @@ def measure(args: argparse.Namespace) -> int:
         print(line, flush=True)
     rows = []
     for dataset in datasets:
-        for row in scene_rows(dataset, args.sizes):
+        for row in scene_rows(dataset, args.sizes, set(args.tfs.split(",")) if args.tfs else None):
             rows.append(row)
             lines.append(row.markdown())
             print(lines[-1], flush=True)
@@ -115,6 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     parser.add_argument("--datasets", default="hard",
                         help="comma-separated datasets; `hard` is every hard scene (default hard)")  # fmt: skip
+    parser.add_argument("--tfs", help="comma-separated TF styles to keep, e.g. spiky (default: all)")
     parser.add_argument("--sizes", type=int_list(16), default=[128, 256, 512, 1024],
                         help="image sides in pixels (default 128,256,512,1024)")  # fmt: skip
     parser.add_argument("--out", help="also write the table to this Markdown file (BENCHMARKS.md's fragment: "
