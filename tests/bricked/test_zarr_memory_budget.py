@@ -57,3 +57,22 @@ def test_a_renderer_that_cannot_stream_draws_the_finest_level_whose_copies_fit(f
     assert main(["render", str(field_zarr), *flags, "--memory", "10KiB", "-o", str(tmp_path / "x.png")]) == 1
     assert ("field.zarr: --memory 10.0 KiB is too little for renderer shearwarp, which does not stream bricks: it takes "
             "17.1 KiB to draw even the coarsest level\n") in capsys.readouterr().err  # fmt: skip
+
+
+def test_a_streamed_level_leaves_room_beside_its_chunk_cache_for_the_brick_being_drawn(tmp_path):
+    """The chunk cache takes its share of --memory less what drawing one brick takes: the brick's
+    voxels with two ghost layers a side, at the values' bytes and the renderer's copies', twice."""
+    from volren.bricked.zarr_input import ZarrInput
+    from volren.bricked.zarr_source import CACHE_SHARE
+    from volren.model.camera import Camera
+
+    values = np.zeros((40, 40, 40), dtype=np.uint16)
+    values[::3] = 1000
+    path = tmp_path / "slabs.zarr"
+    ome_zarr_io.save_ome_zarr(UniformVolume(values, name="slabs"), path, chunk=16, levels=2)
+    budget = 512 << 10
+    zarr_input = ZarrInput(path, budget)
+    frame = zarr_input.frame("reference", Camera.orbit(zarr_input.bounds), 16, 16, level=0)
+    assert frame.source is not None  # 40^3 x (2 + 8) bytes drawn whole: more than 512 KiB
+    brick = 2 * 20**3 * (2 + RENDERER_COPY_BYTES["reference"])
+    assert frame.source.cache.budget == int(budget * CACHE_SHARE) - brick

@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from volren.bricked.zarr_source import CACHE_SHARE, ZarrSource, level_at_quality, level_bounds
+from volren.bricked.zarr_source import CACHE_SHARE, ZarrSource, brick_reserve, level_at_quality, level_bounds
 from volren.errors import VolrenError
 from volren.io import ome_zarr_io
 from volren.io.ome_zarr_io import Multiscale
@@ -121,4 +121,5 @@ class ZarrInput:
         drawn = ome_zarr_io.level_bytes(self.image.levels[level], copies)
         if drawn <= min(self.budget, ome_zarr_io.MAX_IN_MEMORY_BYTES):
             return ZarrFrame(level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))
-        return ZarrFrame(level, source=ZarrSource(self.image, level, self.budget))
+        reserve = brick_reserve(self.image.levels[level], copies)
+        return ZarrFrame(level, source=ZarrSource(self.image, level, self.budget, reserve))
