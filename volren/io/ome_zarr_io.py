@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from volren.bricked.chunk_cache import release_free_heap
 from volren.errors import VolrenError, VolrenWarning
 from volren.model.pyramid import (
     DEFAULT_CHUNK,
@@ -500,6 +501,7 @@ def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float]
                 if below is None:
                     brick = np.asarray(values[where])
                 else:  # the block means of the 2x larger block below (its odd last samples left out)
+                    release_free_heap()  # the last block's pages, which a fragmented heap would keep
                     brick = block_mean(np.asarray(below[tuple(slice(2 * w.start, 2 * w.stop) for w in where)]))
                 array[where] = brick
                 level_ranges.append(value_range(brick))
