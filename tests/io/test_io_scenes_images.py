@@ -174,3 +174,12 @@ def test_npy_round_trip_and_bad_images(tmp_path):
         save_image(image, tmp_path / "no-such-folder" / "x.png")
     with pytest.raises(VolrenError, match="cannot write"):
         save_array(image, tmp_path / "no-such-folder" / "x.npy")
+
+
+def test_a_scene_camera_with_a_zero_view_up_is_refused_naming_the_file(tmp_path):
+    scene = {"version": 1, "transfer_function": TransferFunction1D.ramp(0, 1).to_dict(),
+             "camera": {"position": [0, 0, 5], "focal_point": [0, 0, 0], "view_up": [0, 0, 0]}}  # fmt: skip
+    path = tmp_path / "up.json"
+    path.write_text(json.dumps(scene))
+    with pytest.raises(VolrenError, match=r"^.*up\.json: camera view up is the zero vector"):
+        load_scene(path, load_volume=False)

@@ -134,3 +134,22 @@ def test_round_trip_and_validation():
         Camera.from_dict({"positoin": [0, 0, 1]})
     with pytest.raises(VolrenError, match="bounds"):
         Camera().reset((0, 1, 0, float("nan"), 0, 1))
+
+
+@pytest.mark.parametrize(
+    "fields, message",
+    [
+        ({"view_up": [0, 0, 0]}, "camera view up is the zero vector"),
+        ({"view_up": [0, 0, 2]}, "camera view up [0.0, 0.0, 2.0] is along the view direction"),
+        ({"position": [1e200, 0, 5]}, "camera position [1e+200, 0.0, 5.0] lies beyond 1e+18 from the origin"),
+        ({"focal_point": [0, -1e19, 0]}, "camera focal point [0.0, -1e+19, 0.0] lies beyond 1e+18"),
+        ({"view_up": ["0", "1", "0"]}, "camera view up must be 3 numbers, got ['0', '1', '0']"),
+        ({"view_angle": "30"}, "camera view angle must be a number, got '30'"),
+        ({"parallel": 1}, "camera parallel must be true or false, got 1"),
+        ({"clipping_range": [0.1, True]}, "camera clipping range must be 2 numbers"),
+    ],
+)
+def test_camera_dicts_that_draw_nothing_sensible_are_refused(fields, message):
+    with pytest.raises(VolrenError) as info:
+        Camera.from_dict({"position": [0, 0, 5], "focal_point": [0, 0, 0], **fields})
+    assert message in str(info.value)

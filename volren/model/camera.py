@@ -34,6 +34,11 @@ NEAR_CLIPPING_PLANE_TOLERANCE = 0.001
 #: times over, and VTK's float32 projection loses the data altogether (blank images at 1e300).
 MIN_ZOOM = 1e-6
 MAX_ZOOM = 1e6
+#: Camera positions and focal points beyond this in any coordinate are typos (1e200), not places:
+#: the renderers work in float32, where the square of a distance overflows beyond 1.8e19.
+MAX_COORDINATE = 1e18
+#: The fields of a camera dict that are lists of numbers, and their lengths.
+_VECTOR_FIELDS = {"position": 3, "focal_point": 3, "view_up": 3, "clipping_range": 2}
 
 
 def check_zoom(zoom: float, parallel: bool, view_angle: float = 30.0, name: str = "camera zoom") -> None:
@@ -57,6 +62,25 @@ def _vec(value: Sequence[float], what: str) -> Vec3:
     if arr.size != 3 or not np.all(np.isfinite(arr)):
         raise VolrenError(f"camera {what} must be three finite numbers, got {value!r}")
     return (float(arr[0]), float(arr[1]), float(arr[2]))
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(value, bool)
+
+
+def _field_from_json(key: str, value: Any) -> Any:
+    """One field of a camera dict, checked for its type: numbers where numbers belong (float()
+    would take the string "1e2" and the boolean true without a word)."""
+    if key == "parallel":
+        if not isinstance(value, bool):
+            raise VolrenError(f"camera parallel must be true or false, got {value!r}")
+        return value
+    count = _VECTOR_FIELDS.get(key)
+    items = value if count else [value]
+    if not isinstance(items, list | tuple) or len(items) != (count or 1) or not all(map(_is_number, items)):
+        raise VolrenError(f"camera {key.replace('_', ' ')} must be {f'{count} numbers' if count else 'a number'}, "
+                          f"got {value!r}")  # fmt: skip
+    return tuple(float(v) for v in items) if count else float(value)
 
 
 def _normalized(v: NDArray) -> NDArray:
@@ -111,6 +135,11 @@ class Camera:
         object.__setattr__(self, "position", _vec(self.position, "position"))
         object.__setattr__(self, "focal_point", _vec(self.focal_point, "focal point"))
         object.__setattr__(self, "view_up", _vec(self.view_up, "view up"))
+        for what, point in (("position", self.position), ("focal point", self.focal_point)):
+            if max(map(abs, point)) > MAX_COORDINATE:
+                raise VolrenError(f"camera {what} {list(point)} lies beyond {MAX_COORDINATE:g} from the origin")
+        if self.view_up == (0.0, 0.0, 0.0):
+            raise VolrenError("camera view up is the zero vector; give the direction that is up in the image")
         if np.allclose(self.position, self.focal_point):
             raise VolrenError("camera position and focal point coincide")
         if not (0.0 < self.view_angle < 180.0):
@@ -352,11 +381,10 @@ class Camera:
         unknown = set(data) - known
         if unknown:
             raise VolrenError(f"unknown camera keys {sorted(unknown)}; expected some of {sorted(known)}")
-        kwargs = dict(data)
-        for key in ("position", "focal_point", "view_up", "clipping_range"):
-            if key in kwargs:
-                kwargs[key] = tuple(kwargs[key])
-        try:
-            return cls(**kwargs)
-        except (TypeError, ValueError) as exc:
-            raise VolrenError(f"bad camera: {exc}") from None
+        camera = cls(**{key: _field_from_json(key, value) for key, value in data.items()})
+        if math.hypot(*_cross3(_unit3(camera.view_up), camera.direction)) < 1e-9:
+            raise VolrenError(
+                f"camera view up {list(camera.view_up)} is along the view direction, so no direction in the "
+                "image is up; give one across it"
+            )
+        return camera
