@@ -267,8 +267,8 @@ def test_auto_passes_over_a_renderer_that_cannot_draw_the_view():
 
 
 def band_scene():
-    """A 12^3 grid of values 0..99 and a band TF (a peak at 50): `auto` draws it with shearwarp
-    from outside."""
+    """A 12^3 grid of values 0..99 and a band TF (a peak at 50): `auto` at `interactive` draws it
+    with shearwarp from outside."""
     from volren.model import TransferFunction1D, UniformVolume
 
     values = np.fromfunction(lambda z, y, x: (x + 2 * y + 3 * z) % 100, (12, 12, 12)).astype(np.float32)
@@ -283,11 +283,11 @@ def test_the_api_renders_from_inside_the_volume_with_auto_where_its_first_choice
 
     volume, band = band_scene()
     kind = quality.scene_kind("uniform", band, volume.value_range)
-    assert kind == "uniform/band" and quality.resolve(kind, 1, "auto", None, RenderSettings())[0] == "shearwarp"
+    assert kind == "uniform/band" and quality.resolve(kind, 1, "auto", "interactive", RenderSettings())[0] == "shearwarp"
     inside = Camera(position=(5.0, 5.0, 5.0), focal_point=(11.0, 11.0, 11.0), clipping_range=(0.01, 50.0))
     with pytest.raises(VolrenError, match="inside"):
         volren.render(volume, band, renderer="shearwarp", camera=inside, size=(24, 24))
-    image = volren.render(volume, band, camera=inside, size=(24, 24))  # auto: another renderer draws it
+    image = volren.render(volume, band, camera=inside, size=(24, 24), quality="interactive")  # another draws it
     assert np.isfinite(image).all() and image[..., 3].max() > 0.05
 
 
@@ -304,13 +304,15 @@ def test_the_cli_renders_from_inside_the_volume_with_auto_and_names_the_renderer
              "camera": inside.to_dict(), "size": [24, 24]}  # fmt: skip
     scene_path = tmp_path / "scene.json"
     scene_path.write_text(json.dumps(scene))
-    assert main(["render", "--scene", str(scene_path), "--save-array", str(tmp_path / "in.npy")]) == 0
+    assert main(["render", "--scene", str(scene_path), "--quality", "interactive",
+                 "--save-array", str(tmp_path / "in.npy")]) == 0
     line = capsys.readouterr().out
     assert line.split(" ", 1)[0] != "shearwarp" and "(auto:" in line
     assert np.load(tmp_path / "in.npy")[..., 3].max() > 0.05
     scene["camera"] = {"azimuth": 30, "elevation": 20}  # from outside, the band TF's choice draws it
     scene_path.write_text(json.dumps(scene))
-    assert main(["render", "--scene", str(scene_path), "--quality", "default", "--save-array", str(tmp_path / "out.npy")]) == 0
+    assert main(["render", "--scene", str(scene_path), "--quality", "interactive",
+                 "--save-array", str(tmp_path / "out.npy")]) == 0
     assert capsys.readouterr().out.startswith("shearwarp (auto:")
 
 
