@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import gzip
 import os
 import struct
 import subprocess
 import sys
 import textwrap
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -105,6 +107,42 @@ def test_corrupt_compressed_data(tmp_path, small):
     data[start : start + 200] = b"A" * 200
     (tmp_path / "z.vti").write_bytes(bytes(data))
     fails(tmp_path / "z.vti", "corrupt")
+
+
+def test_nrrd_gzip_data_that_is_not_gzip(tmp_path):
+    """VTK's reader passes bytes that are not gzip through as they are: raw data under 'encoding:
+    gzip' rendered as if the header said raw, and a zlib stream became garbage."""
+    values = (np.arange(4 * 5 * 6) % 251).astype(np.uint8).tobytes()
+    header = b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 5 6\nencoding: gzip\n"
+    (tmp_path / "raw.nrrd").write_bytes(header + b"\n" + values)
+    fails(tmp_path / "raw.nrrd", "the header says 'encoding: gzip' but the data is not gzip", "but 00 01")
+    (tmp_path / "zlib.nrrd").write_bytes(header + b"\n" + zlib.compress(values))
+    fails(tmp_path / "zlib.nrrd", "the data is not gzip (it does not start with gzip's bytes 1f 8b but 78 9c)")
+    (tmp_path / "d.raw").write_bytes(values)
+    (tmp_path / "d.nhdr").write_bytes(header + b"data file: d.raw\n")
+    fails(tmp_path / "d.nhdr", "the data in d.raw is not gzip")
+    (tmp_path / "gz.nrrd").write_bytes(header + b"\n" + gzip.compress(values))
+    assert load_volume(tmp_path / "gz.nrrd").values.tobytes() == values
+
+
+@pytest.mark.parametrize("mode, compressor", [("Ascii", "None"), ("Binary", "None"), ("Binary", "ZLib"),
+                                              ("Appended", "None"), ("Appended", "LZ4")])  # fmt: skip
+def test_vti_extent_smaller_than_its_data(tmp_path, mode, compressor):
+    """VTK's reader takes the first values that fit the Extent, laid out on its smaller grid."""
+    from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
+
+    img = pv.ImageData(dimensions=(5, 4, 3))
+    img.point_data["s"] = np.arange(60, dtype=np.int16)
+    writer = vtkXMLImageDataWriter()
+    writer.SetInputData(img)
+    writer.SetFileName(str(tmp_path / "v.vti"))
+    getattr(writer, f"SetDataModeTo{mode}")()
+    getattr(writer, f"SetCompressorTypeTo{compressor}")()
+    writer.Write()
+    assert load_volume(tmp_path / "v.vti").values.shape == (3, 4, 5)
+    text = (tmp_path / "v.vti").read_bytes().replace(b'Extent="0 4 0 3 0 2"', b'Extent="0 4 0 2 0 2"')
+    (tmp_path / "v.vti").write_bytes(text)
+    fails(tmp_path / "v.vti", "data array 's' holds 60 values, more than the 45 points x 1 of its piece's Extent")
 
 
 # ------------------------------------------------------------------------------------ truncation

@@ -11,7 +11,10 @@ Quirks of vtkNrrdReader (VTK 9.7), each handled here:
 - for raw data in a left-handed 'space' (LAS) it flips the rows, and gzip data it never
   byte-swaps (big-endian gzip comes back garbled): both are undone. (Its gzip path does not flip
   LAS rows.)
-- for ASCII data it returns unfilled memory: volren parses ASCII data itself (`read`).
+- for ASCII data it returns unfilled memory: volren parses ASCII data itself (`read`);
+- for gzip data it reads whatever is there through zlib's gzread, which passes bytes that are not
+  gzip through as they are and turns a zlib stream into garbage: gzip data must start with gzip's
+  magic bytes.
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ _TYPES = {
 }  # fmt: skip
 _TYPE_SIZES = {name: size for size, names in _TYPES.items() for name in names}
 _RAW = ("raw",)
+_GZIP = ("gzip", "gz")
+_GZIP_MAGIC = b"\x1f\x8b"
 _TEXT = ("ascii", "text", "txt")
 _HEADER_LIMIT = 1 << 20
 _SPATIAL_KINDS = ("domain", "space", "time", "none", "???")
@@ -178,7 +183,7 @@ def inspect(path: Path) -> Inspection:
         # VTK flips its rows: our y, or our z when it took our x for vector components
         facts["flip_axis"] = 0 if facts["unsplit"] else 1
     facts["swap_bytes"] = (
-        encoding in ("gzip", "gz") and fields.get("endian") == "big" and _TYPE_SIZES[type_name] > 1
+        encoding in _GZIP and fields.get("endian") == "big" and _TYPE_SIZES[type_name] > 1
     )
     layout = DataLayout(dims, type_name, nbytes)
     data_name = fields.get("datafile", "")
@@ -188,7 +193,10 @@ def inspect(path: Path) -> Inspection:
         )
     if encoding in _TEXT:
         return _text_inspection(path, fields, dims, facts, layout, origin, header_end)
-    if encoding not in _RAW or data_name.upper().startswith("LIST") or " " in data_name:
+    one_data_file = not data_name.upper().startswith("LIST") and " " not in data_name
+    if encoding in _GZIP and one_data_file:
+        _check_gzip_start(path, fields, data_name, header_end)
+    if encoding not in _RAW or not one_data_file:
         return Inspection("nrrd", path, layout, facts)  # compressed: VTK reports short data
     try:
         skip, line_skip = int(fields.get("byteskip", "0") or 0), int(fields.get("lineskip", "0") or 0)
@@ -198,6 +206,26 @@ def inspect(path: Path) -> Inspection:
         return Inspection("nrrd", path, layout, facts)
     data_file, offset = (path.parent / data_name, skip) if data_name else (path, header_end + skip)
     return Inspection("nrrd", path, DataLayout(dims, type_name, nbytes, data_file, offset, nbytes), facts)
+
+
+def _check_gzip_start(path: Path, fields: dict[str, str], data_name: str, header_end: int) -> None:
+    """Data declared gzip must start (after its line skip) with gzip's magic bytes."""
+    data_file, offset = (path.parent / data_name, 0) if data_name else (path, header_end)
+    if not data_file.is_file():
+        raise file_error(path, f"the data file {data_name!r} named in the header is missing")
+    try:
+        line_skip = int(fields.get("lineskip", "0") or 0)
+    except ValueError:
+        raise file_error(path, "malformed NRRD header: byte skip and line skip must be integers") from None
+    with open(data_file, "rb") as f:
+        f.seek(offset)
+        for _ in range(line_skip):
+            f.readline()
+        start = f.read(len(_GZIP_MAGIC))
+    if start != _GZIP_MAGIC:
+        where = f" in {data_file.name}" if data_name else ""
+        raise file_error(path, f"the header says 'encoding: gzip' but the data{where} is not gzip (it does not "
+                               f"start with gzip's bytes 1f 8b but {start.hex(' ') or 'nothing'})")  # fmt: skip
 
 
 def _text_dtype(type_name: str) -> np.dtype:

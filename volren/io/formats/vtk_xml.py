@@ -2,12 +2,18 @@
 
 The readers report truncation, but cryptically, and a WholeExtent larger than memory aborts the
 process with std::bad_alloc; so the extent, the piece sizes and the closing tag are checked here.
+A .vti data array longer than its piece's extent is read in part without a word (the first
+values, laid out on the smaller grid), so the lengths the arrays declare are checked too.
 """
 
 from __future__ import annotations
 
+import base64
+import mmap
 import re
 from pathlib import Path
+
+import numpy as np
 
 from volren.errors import file_error
 from volren.io.formats.base import FileFormat, Inspection, read_head
@@ -95,6 +101,110 @@ def _bytes_per_item(head: str) -> int:
     return max(total, 1)
 
 
+_TAGS = re.compile(rb"<(/?)(Piece|PointData|CellData|DataArray|AppendedData)\b([^>]*)>")
+_SPACE = re.compile(rb"\s*")
+_WORDS_CHUNK = 1 << 24
+
+
+def _extent_counts(extent: str | None) -> tuple[int, int] | None:
+    """(points, cells) of a piece's Extent, None when it is not six integers."""
+    try:
+        e = [int(v) for v in (extent or "").split()]
+    except ValueError:
+        return None
+    if len(e) != 6:
+        return None
+    sizes = [e[2 * a + 1] - e[2 * a] for a in range(3)]
+    return product(n + 1 for n in sizes), product(max(n, 1) for n in sizes)
+
+
+def _check_array_lengths(path: Path, head: str) -> None:
+    """Refuse a point or cell data array that holds more values than its piece's Extent has
+    points or cells (times its components)."""
+    root = re.search(r"<VTKFile\b[^>]*>", head)
+    tag = root.group(0) if root else ""
+    header = (8 if _attr(tag, "header_type") == "UInt64" else 4, ">" if _attr(tag, "byte_order") == "BigEndian" else "<",
+              _attr(tag, "compressor") is not None)  # fmt: skip
+    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+        arrays, appended = [], None
+        counts, section = None, ""
+        for m in _TAGS.finditer(data):
+            closing, name, attributes = m.group(1), m.group(2).decode(), m.group(3).decode("latin-1")
+            if name == "AppendedData":
+                appended = (m.end(), _attr(attributes, "encoding") or "raw")
+                break
+            if name == "Piece" and not closing:
+                counts = _extent_counts(_attr(attributes, "Extent"))
+            elif name in ("PointData", "CellData"):
+                section = "" if closing else name
+            elif name == "DataArray" and section and counts is not None:
+                arrays.append((attributes, counts[section == "CellData"], section, m.end()))
+        for attributes, count, section, start in arrays:
+            stored = _stored_values(data, attributes, start, appended, header)
+            components = int(_attr(attributes, "NumberOfComponents") or 1)
+            if stored is not None and stored > count * components:
+                items = "points" if section == "PointData" else "cells"
+                raise file_error(
+                    path, f"data array {_attr(attributes, 'Name') or '(unnamed)'!r} holds {stored:,} values, more than "
+                    f"the {count:,} {items} x {components} of its piece's Extent: the Extent is smaller than the data"
+                )  # fmt: skip
+
+
+def _stored_values(data: mmap.mmap, attributes: str, start: int, appended: tuple[int, str] | None,
+                   header: tuple[int, str, bool]) -> int | None:  # fmt: skip
+    """How many values a data array holds by its own account (None when that cannot be told:
+    the reader's checks then speak)."""
+    kind, layout = _attr(attributes, "type"), _attr(attributes, "format") or "ascii"
+    size = _TYPE_SIZES.get(kind or "")
+    if size is None or kind in ("Bit", "String"):
+        return None
+    if layout == "ascii":
+        return _count_words(data, start, data.find(b"<", start))
+    if layout == "binary":
+        position, encoding = start, "base64"
+    elif appended is not None and (_attr(attributes, "offset") or "").isdigit():
+        underscore = data.find(b"_", appended[0])
+        position, encoding = underscore + 1 + int(_attr(attributes, "offset") or 0), appended[1]
+    else:
+        return None
+    stored = _stored_bytes(data, position, encoding, header)
+    return None if stored is None else stored // size
+
+
+def _stored_bytes(data: mmap.mmap, position: int, encoding: str, header: tuple[int, str, bool]) -> int | None:
+    """The bytes of values a binary array's header declares (uncompressed: one integer; compressed:
+    the block count, block size and last block's size)."""
+    int_size, order, compressed = header
+    need = int_size * (3 if compressed else 1)
+    if encoding == "base64":
+        position = _SPACE.match(data, position).end()
+        try:
+            raw = base64.b64decode(data[position : position - (-need // 3) * 4])
+        except ValueError:
+            return None
+    else:
+        raw = data[position : position + need]
+    if len(raw) < need:
+        return None
+    ints = [int(v) for v in np.frombuffer(raw[:need], dtype=f"{order}u{int_size}")]
+    if not compressed:
+        return ints[0]
+    blocks, block, last = ints
+    return blocks * block if last == 0 or blocks == 0 else (blocks - 1) * block + last
+
+
+def _count_words(data: mmap.mmap, start: int, end: int) -> int:
+    """Whitespace-separated words between two offsets, a chunk at a time."""
+    words, after_space = 0, True
+    for chunk_start in range(start, max(end, start), _WORDS_CHUNK):
+        chunk = np.frombuffer(data[chunk_start : min(chunk_start + _WORDS_CHUNK, end)], np.uint8)
+        space = np.isin(chunk, (32, 9, 10, 13))
+        starts = ~space & np.concatenate([[after_space], space[:-1]])
+        words += int(starts.sum())
+        after_space = bool(space[-1])
+    return words
+
+
 def inspect_vti(path: Path) -> Inspection:
     head = _check_xml(path, "ImageData")
     tag = re.search(r"<ImageData\b[^>]*>", head)
@@ -117,6 +227,7 @@ def inspect_vti(path: Path) -> Inspection:
         inside = len(p) == 6 and all(e[2 * a] <= p[2 * a] <= p[2 * a + 1] <= e[2 * a + 1] for a in range(3))
         if not inside:
             raise file_error(path, f"a <Piece> Extent {text!r} is not inside the WholeExtent {extent!r}")
+    _check_array_lengths(path, head)
     per_point = _bytes_per_item(head)
     layout = DataLayout(dims, f"grid of {per_point}-byte points", product(dims) * per_point)
     spacing = parse_numbers(path, "Spacing", _attr(tag.group(0), "Spacing")) if tag else None
