@@ -166,11 +166,39 @@ def test_raw_flags_on_a_file_with_a_header_are_refused_not_ignored(tmp_path, cap
 
 def test_headerless_raw_without_a_shape_names_the_flags(tmp_path, capsys):
     raw = tmp_path / "d.raw"
-    raw.write_bytes(bytes(64))
+    raw.write_bytes(bytes(60))
     assert main(["render", str(raw), "-o", str(tmp_path / "x.png")]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--raw-shape NX,NY,NZ" in err[0] and "--raw-dtype" in err[0] and "shape=" not in err[0]
-    assert main(["render", str(raw), "--raw-shape", "4,4,4", "-o", str(tmp_path / "x.png"), "--size", "8"]) == 0
+    assert main(["render", str(raw), "--raw-shape", "5,4,3", "-o", str(tmp_path / "x.png"), "--size", "8"]) == 0
+
+
+def test_headerless_raw_without_a_shape_is_offered_the_cube_its_size_holds(tmp_path, capsys):
+    raw = tmp_path / "d.raw"
+    raw.write_bytes(bytes(2 * 12**3))
+    assert main(["render", str(raw), "-o", str(tmp_path / "x.png")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"volren: error: {raw}: headerless raw data of 3,456 bytes: a 12^3 int16 volume? give --raw-shape "
+                   "12,12,12 --raw-dtype int16 (and --raw-spacing, --raw-byte-order as needed)"]  # fmt: skip
+
+
+def test_convert_takes_the_raw_flags_render_takes(tmp_path, capsys, ml_sample):
+    pytest.importorskip("zarr")
+    from volren.io import load_volume
+
+    values = np.arange(6 * 5 * 4, dtype=">i2").reshape(6, 5, 4)  # z, y, x
+    raw = tmp_path / "d.raw"
+    raw.write_bytes(values.tobytes())
+    flags = ["--raw-shape", "4,5,6", "--raw-dtype", "short", "--raw-byte-order", "big", "--raw-spacing", "1,2,3"]
+    assert main(["convert", str(raw), str(tmp_path / "d.zarr"), *flags]) == 0
+    volume = load_volume(tmp_path / "d.zarr")
+    np.testing.assert_array_equal(volume.values, values.astype(np.int16))
+    assert volume.spacing == (1.0, 2.0, 3.0)
+    capsys.readouterr()
+    assert main(["convert", str(raw), str(tmp_path / "e.zarr")]) == 1
+    assert "headerless raw data (240 bytes): give --raw-shape NX,NY,NZ" in capsys.readouterr().err
+    assert main(["convert", str(ml_sample[0]), str(tmp_path / "f.zarr"), "--raw-dtype", "uchar"]) == 1
+    assert "--raw-dtype describes headerless raw data only" in capsys.readouterr().err
 
 
 def test_timings_print_each_stage_and_the_renderers_own_parts(tmp_path, capsys):

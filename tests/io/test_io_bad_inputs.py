@@ -293,7 +293,16 @@ def test_header_dimensions_larger_than_the_data(tmp_path, small):
 
 def test_raw_sizes(tmp_path):
     (tmp_path / "v.raw").write_bytes(bytes(200))
-    fails(tmp_path / "v.raw", "headerless raw data: give shape=(nx, ny, nz) and dtype=")
+    fails(tmp_path / "v.raw", "headerless raw data (200 bytes): give shape=(nx, ny, nz) and dtype=")
+    (tmp_path / "cube.raw").write_bytes(bytes(2 * 16**3))
+    fails(tmp_path / "cube.raw", "headerless raw data of 8,192 bytes: a 16^3 int16 volume? give shape=(16, 16, 16), "
+                                 "dtype='int16'")  # fmt: skip
+    (tmp_path / "cube.raw").write_bytes(bytes(256**3))
+    fails(tmp_path / "cube.raw", "16,777,216 bytes: a 256^3 uint8 volume (or 128^3 float64)? give shape=(256, 256, 256)")
+    for alias, dtype in (("uchar", np.uint8), ("MET_SHORT", np.int16), ("float", np.float32), ("unsigned short", np.uint16)):
+        assert load_volume(tmp_path / "v.raw", shape=(5, 5, 8 // np.dtype(dtype).itemsize), dtype=alias).values.dtype == dtype
+    fails(tmp_path / "v.raw", "unknown dtype 'quad'; give one of uint8, int8, uint16, int16, uint32, int32, uint64, int64, "
+                              "float32, float64 (or a C, NRRD or MetaImage name", shape=(5, 5, 8), dtype="quad")  # fmt: skip
     fails(
         tmp_path / "v.raw",
         "dimensions do not match the data: shape 10x10x10 of int16 needs 2,000 bytes",

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 
+from volren.cli.raw_flags import add_raw_arguments, check_raw_flags, raw_load_arguments
 from volren.errors import VolrenError
 
 
@@ -40,6 +41,7 @@ def add_parser(sub) -> None:
                    help="levels of the pyramid (default: down to one brick)")  # fmt: skip
     p.add_argument("--scalars", help="the array to convert (as volren render --scalars)")
     p.add_argument("--force", action="store_true", help="replace OUTPUT if it exists")
+    add_raw_arguments(p)
     p.add_argument("--memory", metavar="SIZE",
                    help="the most the conversion may hold in memory, e.g. 2GB (default: no limit); raw NRRD and "
                         "uncompressed MetaImage inputs are streamed within it, others are read whole or refused")  # fmt: skip
@@ -58,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from volren.io.ome_zarr_io import parse_memory, require_zarr
     from volren.io.safe_write import refuse_overwriting_inputs
 
+    check_raw_flags(args, "convert")
     require_zarr()  # before a long load
     output = Path(args.output)
     if output.suffix.lower() != ".zarr":
@@ -84,7 +87,8 @@ def _mapped_input(args: argparse.Namespace):
     from volren.io.ome_zarr_io import is_ome_zarr
 
     path = Path(args.input)
-    if args.scalars is not None or is_ome_zarr(args.input) or not path.is_file() or path.stat().st_size == 0:
+    if args.scalars is not None or args.raw_shape or is_ome_zarr(args.input) or not path.is_file() \
+            or path.stat().st_size == 0:
         return None  # the whole read's checks and messages apply
     return open_mapped(path)
 
@@ -131,14 +135,14 @@ def _convert_whole(args: argparse.Namespace, output, memory: int | None):
     from volren.io.safe_write import output_target
     from volren.model.volume import UniformVolume
 
-    size = _values_bytes(args.input)
+    size = None if args.raw_shape else _values_bytes(args.input)
     if size is not None:
         print(f"volren: warning: {args.input}: read whole, {human_size(size)} of values (raw NRRD and "
               "uncompressed MetaImage are streamed instead)", file=sys.stderr)  # fmt: skip
         if memory is not None and size * WHOLE_READ_COPIES > memory:
             raise VolrenError(f"{args.input}: read whole it takes about {human_size(size * WHOLE_READ_COPIES)}, more "
                               f"than --memory {human_size(memory)}; write it as raw NRRD, which is streamed")  # fmt: skip
-    volume = io.load_volume(args.input, scalars=args.scalars)
+    volume = io.load_volume(args.input, scalars=args.scalars, **raw_load_arguments(args))
     if not isinstance(volume, UniformVolume):
         raise VolrenError(f"{args.input}: a tetrahedral mesh has no bricks; OME-Zarr holds uniform grids")
     with progress_bar(f"{output.name}") as progress:

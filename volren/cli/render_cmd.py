@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from volren.cli.cluster_frame import add_cluster_arguments, check_cluster_flag, cluster_frame, wants_cluster
+from volren.cli.raw_flags import add_raw_arguments, check_raw_flags, raw_load_arguments
 from volren.cli.stage_clock import StageClock
 from volren.errors import VolrenError
 from volren.model.camera import check_zoom
@@ -130,21 +131,7 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--option", action="append", default=[], metavar="KEY=VALUE", help="renderer-specific option"
     )
-    raw = p.add_argument_group("headerless raw input")
-    raw.add_argument("--raw-shape", help="NX,NY,NZ (needed for headerless raw data, and only for it)")
-    raw.add_argument("--raw-dtype", help="numpy dtype, e.g. uint8, int16, float32 (default uint8)")
-    raw.add_argument("--raw-byte-order", choices=["little", "big"], help="default little")
-    raw.add_argument("--raw-spacing", help="SX,SY,SZ (default 1,1,1)")
-
-
-def _triple(text: str, what: str, kind=float) -> tuple:
-    try:
-        values = tuple(kind(v) for v in text.replace("x", ",").split(","))
-    except ValueError:
-        values = ()
-    if len(values) != 3:
-        raise VolrenError(f"{what} must be three comma-separated numbers, got {text!r}")
-    return values
+    add_raw_arguments(p)
 
 
 def parse_options(items: list[str]) -> dict[str, Any]:
@@ -159,34 +146,6 @@ def parse_options(items: list[str]) -> dict[str, Any]:
         except json.JSONDecodeError:
             options[key] = value
     return options
-
-
-_RAW_DETAILS = ("--raw-dtype", "--raw-byte-order", "--raw-spacing")
-
-
-def _check_raw_flags(args: argparse.Namespace) -> None:
-    """The raw flags describe headerless data: needed there (by their own names) and refused
-    elsewhere, so that none is silently ignored."""
-    from volren.io.formats import find_format
-
-    given = [flag for flag in _RAW_DETAILS if getattr(args, flag[2:].replace("-", "_")) is not None]
-    if args.raw_shape or args.input is None:
-        if given and args.input is None:
-            raise VolrenError(f"{given[0]} describes a headerless raw INPUT; this render has none")
-        return
-    path = Path(args.input)
-    from volren.io.series_io import is_series
-
-    if is_series(path):
-        if given:
-            raise VolrenError(f"{path}: {given[0]} describes headerless raw data; a time series' steps have headers")
-        return
-    if path.is_file() and find_format(path) is None:
-        raise VolrenError(f"{path}: headerless raw data: give --raw-shape NX,NY,NZ (and --raw-dtype if it is "
-                          "not uint8, --raw-spacing, --raw-byte-order)")
-    if given:
-        raise VolrenError(f"{path}: {given[0]} describes headerless raw data only (it needs --raw-shape); "
-                          f"this file's header says how it is laid out")
 
 
 def input_series(args: argparse.Namespace):
@@ -251,14 +210,7 @@ def _check_zarr_flags(args: argparse.Namespace) -> None:
 def _load_input(args: argparse.Namespace):
     from volren import io
 
-    kwargs: dict[str, Any] = {"scalars": args.scalars}
-    if args.raw_shape:
-        kwargs.update(
-            shape=_triple(args.raw_shape, "--raw-shape", int),
-            dtype=args.raw_dtype or "uint8",
-            byte_order=args.raw_byte_order or "little",
-            spacing=_triple(args.raw_spacing or "1,1,1", "--raw-spacing"),
-        )
+    kwargs: dict[str, Any] = {"scalars": args.scalars, **raw_load_arguments(args)}
     path = _step_path(args)
     zarr_level = None if args.raw_shape else _zarr_level(args, path)
     return zarr_level if zarr_level is not None else io.load_volume(path, **kwargs)
@@ -270,7 +222,7 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:
     from volren import io
     from volren.api import as_transfer_function
 
-    _check_raw_flags(args)
+    check_raw_flags(args, "render")
     _check_zarr_flags(args)
     if args.scene:
         scene = io.load_scene(args.scene, load_volume=args.input is None)

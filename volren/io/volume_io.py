@@ -19,7 +19,7 @@ from volren.io import _pv, reader_messages
 from volren.io.dataset import grid_from_view, tets_from_view, volume_from_grid
 from volren.io.formats import SUPPORTED, find_format
 from volren.io.formats.geometry import signed_as_declared
-from volren.io.formats.raw import load_raw
+from volren.io.formats.raw import headerless_problem, load_raw
 from volren.io.isolation import run_isolated
 from volren.io.limits import check_layout
 from volren.model.volume import TetVolume, UniformVolume
@@ -113,7 +113,7 @@ def read_with_header(path: Path, scalars: str | None = None) -> UniformVolume | 
     `load_volume`."""
     fmt = find_format(path)
     if fmt is None:
-        raise file_error(path, "headerless raw data: give shape=(nx, ny, nz) and dtype= to read it")
+        raise file_error(path, headerless_problem(path, flags=False))
     inspection = fmt.inspect(path)
     name = inspection.target.name  # a DICOM series is named after its folder
     if inspection.layout is not None:

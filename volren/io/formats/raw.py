@@ -17,6 +17,58 @@ from volren.io.formats.base import Grid
 from volren.io.limits import check_memory, product
 
 _BYTE_ORDERS = {"little": "<", "big": ">", "native": "="}
+_NUMPY_NAMES = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "uint64", "int64", "float32", "float64")
+#: The C, NRRD and MetaImage names people copy from headers, by their numpy name: C's 'float' and
+#: 'int' have 4 bytes, where numpy alone would read 8.
+_HEADER_NAMES = {
+    "uchar": "uint8", "unsigned char": "uint8", "signed char": "int8", "char": "int8", "ushort": "uint16",
+    "unsigned short": "uint16", "short": "int16", "uint": "uint32", "unsigned int": "uint32", "int": "int32",
+    "ulonglong": "uint64", "longlong": "int64", "float": "float32", "double": "float64",
+    "met_uchar": "uint8", "met_char": "int8", "met_ushort": "uint16", "met_short": "int16", "met_uint": "uint32",
+    "met_int": "int32", "met_ulong": "uint32", "met_long": "int32", "met_ulong_long": "uint64",
+    "met_long_long": "int64", "met_float": "float32", "met_double": "float64",
+}  # fmt: skip
+#: The type a cube of samples is guessed to have, by bytes per sample.
+_GUESSED_TYPES = {1: "uint8", 2: "int16", 4: "float32", 8: "float64"}
+
+
+def cube_guesses(n_bytes: int) -> list[tuple[int, str]]:
+    """(side, dtype) of each cube of samples `n_bytes` could hold, one per sample size, sides of
+    4 or more: what a headerless file's size suggests when nothing else is known."""
+    guesses = []
+    for size, name in _GUESSED_TYPES.items():
+        side = round((n_bytes / size) ** (1 / 3)) if n_bytes % size == 0 else 0
+        if side >= 4 and side**3 * size == n_bytes:
+            guesses.append((side, name))
+    return guesses
+
+
+def headerless_problem(path: Path, flags: bool) -> str:
+    """What to say of a file without a header: its size, the cube it may hold, and how to say
+    what it holds (the command's flags, or `load_volume`'s arguments)."""
+    n_bytes = path.stat().st_size
+    guesses = cube_guesses(n_bytes)
+    if not guesses:
+        how = ("--raw-shape NX,NY,NZ (and --raw-dtype if it is not uint8, --raw-spacing, --raw-byte-order)" if flags
+               else "shape=(nx, ny, nz) and dtype=")  # fmt: skip
+        return f"headerless raw data ({n_bytes:,} bytes): give {how} to read it"
+    (side, dtype), others = guesses[0], [f"{n}^3 {t}" for n, t in guesses[1:]]
+    maybe = f"a {side}^3 {dtype} volume" + (f" (or {', '.join(others)})" if others else "")
+    how = (f"--raw-shape {side},{side},{side} --raw-dtype {dtype} (and --raw-spacing, --raw-byte-order as needed)"
+           if flags else f"shape=({side}, {side}, {side}), dtype={dtype!r}")  # fmt: skip
+    return f"headerless raw data of {n_bytes:,} bytes: {maybe}? give {how}"
+
+
+def parse_dtype(path: Path, dtype: DTypeLike) -> np.dtype:
+    """A numpy dtype from numpy's names or a header's ('uchar', 'MET_SHORT', ...)."""
+    name = " ".join(dtype.lower().split()) if isinstance(dtype, str) else dtype
+    try:
+        return np.dtype(_HEADER_NAMES.get(name, name) if isinstance(name, str) else name)
+    except (TypeError, ValueError):
+        raise file_error(
+            path, f"unknown dtype {dtype!r}; give one of {', '.join(_NUMPY_NAMES)} (or a C, NRRD or MetaImage name "
+            "such as uchar, short, float, MET_USHORT)"
+        ) from None  # fmt: skip
 
 
 def _shape(path: Path, shape: Sequence[int]) -> tuple[int, int, int]:
@@ -41,10 +93,7 @@ def _dtype(path: Path, dtype: DTypeLike | None, byte_order: str, n_values: int, 
             f"headerless raw data needs dtype= (the file holds {n_bytes:,} bytes for {n_values:,} "
             f"samples, {per:g} each)",
         )
-    try:
-        dt = np.dtype(dtype)
-    except TypeError:
-        raise file_error(path, f"unknown dtype {dtype!r}") from None
+    dt = parse_dtype(path, dtype)
     if dt.kind not in "biuf":
         raise file_error(path, f"dtype must be a numeric type, got {dt}")
     return dt.newbyteorder(_BYTE_ORDERS[byte_order]) if dt.itemsize > 1 else dt
