@@ -238,7 +238,16 @@ def test_nrrd_left_handed_space_keeps_file_order(tmp_path, nx, encoding):
     header = f"NRRD0004\ntype: short\ndimension: 3\nsizes: {nx} 5 4\nspace: left-anterior-superior\n"
     header += f"space directions: (1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: {encoding}\n\n"
     (tmp_path / "las.nrrd").write_bytes(header.encode() + data)
-    np.testing.assert_array_equal(load_volume(tmp_path / "las.nrrd").values, values)
+    if encoding == "raw":  # VTK's reader mirrors these rows (volren undoes it): say that VTK's tools differ
+        axis = "y" if nx > 9 else "z"
+        note = f"las.nrrd: drawn in the file's own order; VTK, ParaView and PyVista mirror its left-handed space " \
+               f"'left-anterior-superior' in {axis}"  # fmt: skip
+        with pytest.warns(VolrenWarning) as record:
+            volume = load_volume(tmp_path / "las.nrrd")
+        assert [str(w.message) for w in record] == [note]
+    else:
+        volume = load_volume(tmp_path / "las.nrrd")
+    np.testing.assert_array_equal(volume.values, values)
 
 
 def test_nifti_value_scaling_is_applied(tmp_path, values_int16):

@@ -182,6 +182,7 @@ def inspect(path: Path) -> Inspection:
     if encoding in _RAW and fields.get("space", "").lower() in _LEFT_HANDED:
         # VTK flips its rows: our y, or our z when it took our x for vector components
         facts["flip_axis"] = 0 if facts["unsplit"] else 1
+        facts["left_handed_space"] = fields["space"]
     facts["swap_bytes"] = (
         encoding in _GZIP and fields.get("endian") == "big" and _TYPE_SIZES[type_name] > 1
     )
@@ -320,11 +321,19 @@ def adjust(grid: Grid, result: ReadResult, inspection: Inspection) -> Grid:
     """Undo VTK's row flip and missing byte swap; pass the ignored rotation on to be reported."""
     if "flip_axis" in inspection.facts:
         grid.values = np.ascontiguousarray(np.flip(grid.values, axis=inspection.facts["flip_axis"]))
+        grid.notes.append(_mirrored_note(inspection))
     if inspection.facts.get("swap_bytes"):
         grid.values = grid.values.byteswap()
     grid.direction = inspection.facts.get("direction")
     grid.space = inspection.facts.get("space")
     return grid
+
+
+def _mirrored_note(inspection: Inspection) -> str:
+    """Say that VTK-based tools show this file mirrored: volren keeps the file's own order."""
+    axis = "z" if inspection.facts["flip_axis"] == 0 else "y"
+    return (f"{inspection.target.name}: drawn in the file's own order; VTK, ParaView and PyVista mirror its "
+            f"left-handed space {inspection.facts['left_handed_space']!r} in {axis}")  # fmt: skip
 
 
 NRRD = FileFormat("NRRD", (".nrrd", ".nhdr"), inspect, check_output, adjust, read, array_name="ImageFile")
