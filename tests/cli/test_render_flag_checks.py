@@ -31,3 +31,17 @@ def test_a_cluster_of_no_workers_is_refused_before_the_input_is_read(tmp_path, c
     assert main(argv) == 1
     assert capsys.readouterr().err.splitlines() == [
         "volren: error: --cluster local:N needs N in 1..256 worker processes, got '0'"]
+
+
+@pytest.mark.parametrize(("command", "overhead", "copies"), [
+    ("render", "about 370 MiB", "counts with the renderer's float copies"),
+    ("convert", "about 170 MiB", "read whole (about 3x their values)"),
+])  # fmt: skip
+def test_memory_help_says_the_peak_is_the_fixed_overhead_plus_memory(capsys, command, overhead, copies):
+    """The budget's rule, measured in docs/bricked.md: the help said only what --memory bounds, so
+    a user who gave it their machine's free memory was over by the interpreter and libraries."""
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    memory = help_text[help_text.rindex("--memory SIZE"):]
+    assert overhead in memory and copies in memory and "its peak is about that plus SIZE" in memory

@@ -111,8 +111,11 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
                         "renderer that draws bricks, 0, or at --quality draft and interactive the coarsest whose "
                         "voxels look no larger than a pixel; with another, the finest that fits in --memory)")  # fmt: skip
     p.add_argument("--memory", type=memory_size, metavar="SIZE",
-                   help="for an OME-Zarr INPUT: the most it may take in memory, e.g. 2GB (default 8GB); a larger "
-                        "level streams brick by brick within it (renderers that draw bricks)")  # fmt: skip
+                   help="for an OME-Zarr INPUT: the most its data may take in memory, e.g. 2GB (default 8GB): a "
+                        "level read whole counts with the renderer's float copies of it (a uint16 level drawn by the "
+                        "slicer takes 16x its bytes), a larger one streams brick by brick within it (renderers that "
+                        "draw bricks). The command's fixed overhead comes on top (interpreter, libraries, GL: about "
+                        "370 MiB with the slicer): its peak is about that plus SIZE")  # fmt: skip
     p.add_argument("--scalars", help="the array to render: NAME, or NAME:magnitude / NAME:x (y, z, 0, 1, ...) for a "
                    "vector's length or one component (a vector shows its magnitude by default)")
     p.add_argument("--size", type=image_size, help="image size W or WxH (default 512)")
