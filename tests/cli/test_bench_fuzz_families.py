@@ -104,3 +104,16 @@ def test_the_runner_checks_the_files_after_each_command_and_applies_patches(tmp_
         ("render", ""),
         ("error", "volren: error: v.vti: waited 0.25 s"),
     ]
+
+
+def test_every_convert_case_including_the_sweeps_finds_no_failures():
+    """The convert family in full (the sweeps of bad --chunks and --levels run in full only), in a
+    fresh process as `volren bench fuzz` runs: huge --chunks and --levels were refused by the
+    writer naming neither flag, and raw data given the --raw-* flags that convert now takes was
+    still expected to be refused."""
+    import subprocess
+
+    done = subprocess.run([sys.executable, "-m", "volren.cli.main", "bench", "fuzz", "--only", f"{CONVERT}/"],
+                          capture_output=True, text=True, timeout=300)  # fmt: skip
+    summary = [line for line in done.stdout.splitlines() if " cases in " in line]
+    assert summary and summary[-1].endswith(": 0 failures"), done.stdout[-3000:] + done.stderr[-2000:]

@@ -173,7 +173,7 @@ def test_volren_convert_writes_the_pyramid_and_refuses_what_it_cannot(tmp_path, 
     for argv, message in (
         ([str(source), str(out)], "exists; add --force"),
         ([str(source), str(tmp_path / "cells.ome")], "a folder named *.zarr"),
-        ([str(source), str(out), "--force", "--levels", "9"], "level 4 would have fewer than 2 samples"),
+        ([str(source), str(out), "--force", "--levels", "9"], "--levels 9 is too many: its 37x30x21 grid has at most 4"),
     ):
         assert main(["convert", *argv]) == 1
         assert message in capsys.readouterr().err

@@ -29,13 +29,26 @@ def _positive(text: str) -> int:
     return value
 
 
+def _chunk_side(text: str) -> int:
+    """--chunks: a brick side the pyramid writer takes, refused as a usage error before the load."""
+    from volren.model.pyramid import MAX_CHUNK, MIN_CHUNK
+
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not MIN_CHUNK <= value <= MAX_CHUNK:
+        raise argparse.ArgumentTypeError(f"expected {MIN_CHUNK} to {MAX_CHUNK} samples a side, got {text!r}")
+    return value
+
+
 def add_parser(sub) -> None:
     from volren.model.pyramid import DEFAULT_CHUNK
 
     p = sub.add_parser("convert", help="write a volume as a bricked multiresolution OME-Zarr image")
     p.add_argument("input", help="volume file or DICOM folder (a uniform grid)")
     p.add_argument("output", help="the OME-Zarr folder to write, e.g. volume.zarr")
-    p.add_argument("--chunks", type=_positive, default=DEFAULT_CHUNK, metavar="N",
+    p.add_argument("--chunks", type=_chunk_side, default=DEFAULT_CHUNK, metavar="N",
                    help=f"bricks of N^3 samples (default {DEFAULT_CHUNK})")  # fmt: skip
     p.add_argument("--levels", type=_positive, metavar="N",
                    help="levels of the pyramid (default: down to one brick)")  # fmt: skip
@@ -60,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from volren.io.ome_zarr_io import parse_memory, require_zarr
-    from volren.io.safe_write import refuse_overwriting_inputs
+    from volren.io.safe_write import check_output, refuse_overwriting_inputs
 
     check_raw_flags(args, "convert")
     require_zarr()  # before a long load
@@ -70,6 +83,7 @@ def run(args: argparse.Namespace) -> int:
     refuse_overwriting_inputs([("OUTPUT", output)], [("input", args.input)], kind="folder")  # even with --force
     if output.exists() and not args.force:
         raise VolrenError(f"{output}: exists; add --force to replace it")
+    check_output(output, "OUTPUT", kind="folder")  # the folder a link leads to, too: before the load
     memory = parse_memory(args.memory) if args.memory is not None else None
     mapped = _mapped_input(args)
     if mapped is not None:
@@ -110,6 +124,7 @@ def _convert_streamed(args: argparse.Namespace, mapped, output, memory: int | No
         raise VolrenError(f"{args.input}: --memory {human_size(memory)} is too little to convert it in {args.chunks}^3 "
                           f"bricks, which takes {human_size(needed)} (a row of bricks, and the block means of a "
                           "coarser brick); give more, or smaller --chunks")  # fmt: skip
+    _check_levels(args, mapped.shape)
     values = BrickRows(mapped, args.chunks)
     with progress_bar(f"{output.name}") as progress:
         levels = write_pyramid(values, mapped.spacing, mapped.origin, mapped.name,
@@ -118,6 +133,17 @@ def _convert_streamed(args: argparse.Namespace, mapped, output, memory: int | No
         warnings.warn(f"{mapped.name}: {values.nonfinite:,} values are NaN or Inf; they render transparent",
                       VolrenWarning, stacklevel=2)  # fmt: skip
     return mapped.shape, mapped.dtype, levels
+
+
+def _check_levels(args: argparse.Namespace, shape: tuple[int, ...]) -> None:
+    """Refuse a --levels the input's (z, y, x) `shape` cannot have, before a brick is written."""
+    from volren.model.pyramid import max_levels
+
+    most = max_levels(shape)
+    if args.levels is not None and args.levels > most:
+        nz, ny, nx = shape
+        raise VolrenError(f"{args.input}: --levels {args.levels} is too many: its {nx}x{ny}x{nz} grid has at most "
+                          f"{most} levels (each halves it, down to 2 samples an axis)")  # fmt: skip
 
 
 def _streaming_bytes(mapped, chunk: int) -> int:
@@ -147,6 +173,7 @@ def _convert_whole(args: argparse.Namespace, output, memory: int | None):
     volume = io.load_volume(args.input, scalars=args.scalars, **raw_load_arguments(args))
     if not isinstance(volume, UniformVolume):
         raise VolrenError(f"{args.input}: a tetrahedral mesh has no bricks; OME-Zarr holds uniform grids")
+    _check_levels(args, volume.values.shape)
     with progress_bar(f"{output.name}") as progress:
         levels = save_ome_zarr(volume, output_target(output, "OUTPUT", "folder"), args.chunks, args.levels, progress)
     return volume.values.shape, volume.values.dtype, levels

@@ -30,6 +30,8 @@ from volren.bricked.chunk_cache import release_free_heap
 from volren.errors import VolrenError, VolrenWarning
 from volren.model.pyramid import (
     DEFAULT_CHUNK,
+    MAX_CHUNK,
+    MIN_CHUNK,
     block_mean,
     brick_slices,
     coarser_placement,
@@ -475,8 +477,8 @@ def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float]
     the level below as written (2x2x2 block means, `model.pyramid`)."""
     zarr = require_zarr()
     path = Path(path)
-    if not (isinstance(chunk, int) and 2 <= chunk <= 1024):
-        raise VolrenError(f"{path}: bricks must be 2 to 1024 samples a side, got {chunk!r}")
+    if not (isinstance(chunk, int) and MIN_CHUNK <= chunk <= MAX_CHUNK):
+        raise VolrenError(f"{path}: bricks must be {MIN_CHUNK} to {MAX_CHUNK} samples a side, got {chunk!r}")
     shape = tuple(int(n) for n in values.shape)
     count = levels if levels is not None else default_levels(shape, chunk)
     if not path.absolute().parent.is_dir():

@@ -64,11 +64,11 @@ def output_target(path: str | os.PathLike, flag: str | None = None, kind: str = 
     return target
 
 
-def check_output(path: str | os.PathLike, flag: str | None = None) -> None:
-    """Fail before a long render where the file `path` cannot be written: something other than a
-    file has its name (`output_target`), its folder does not exist, or the folder takes no new
-    file (tried with a temporary one: os.access says yes to root on a read-only mount)."""
-    folder = output_target(path, flag).parent
+def check_output(path: str | os.PathLike, flag: str | None = None, kind: str = "file") -> None:
+    """Fail before a long render or load where the `kind` `path` cannot be written: something else
+    has its name (`output_target`), its folder does not exist, or the folder takes no new file
+    (tried with a temporary one: os.access says yes to root on a read-only mount)."""
+    folder = output_target(path, flag, kind).parent
     if not folder.is_dir():
         raise VolrenError(f"{path}: the folder {folder} does not exist")
     try:

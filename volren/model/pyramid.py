@@ -22,6 +22,8 @@ from volren.errors import VolrenError
 
 #: Bricks of 64^3 samples: 512 KiB of uint16, small enough to stream, large enough to render.
 DEFAULT_CHUNK = 64
+#: Bricks from 2^3 samples (a coarser level needs 2 a side) to 1024^3 (8 GiB of float64 means).
+MIN_CHUNK, MAX_CHUNK = 2, 1024
 
 
 def block_mean(values: NDArray) -> NDArray:
@@ -40,6 +42,15 @@ def default_levels(shape: tuple[int, ...], chunk: int) -> int:
     """Levels until the coarsest fits in one brick (or an axis would drop below 2 samples)."""
     levels, dims = 1, list(shape)
     while max(dims) > chunk and min(dims) >= 4:
+        dims = [n // 2 for n in dims]
+        levels += 1
+    return levels
+
+
+def max_levels(shape: tuple[int, ...]) -> int:
+    """The most levels `shape` has (`level_shapes`): each halves it while every axis keeps 2 samples."""
+    levels, dims = 1, list(shape)
+    while min(dims) >= 4:
         dims = [n // 2 for n in dims]
         levels += 1
     return levels

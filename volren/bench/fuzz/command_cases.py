@@ -37,7 +37,8 @@ def _convert(what: str, files: dict[str, bytes], argv: tuple[str, ...], expect: 
 
 def convert_cases(volume: dict[str, bytes], image: dict[str, bytes]) -> Iterator[Case]:
     """Inputs that are not volumes, outputs over, inside and holding the input (with and without
-    --force), the flags convert does not take, outputs not named *.zarr, bad --chunks, --levels."""
+    --force), a headerless raw file with and without the --raw-* flags, outputs not named *.zarr,
+    bad --chunks, --levels."""
     zattrs = f"{IMAGE}/.zattrs"
     yield _convert("valid", volume, (VOLUME, "out.zarr"), "render", after=(("written", "out.zarr"), ("kept", VOLUME)))
     yield _convert("valid-from-ome-zarr", image, (IMAGE, "out.zarr"), "any",
@@ -62,7 +63,8 @@ def convert_cases(volume: dict[str, bytes], image: dict[str, bytes]) -> Iterator
                        "any" if force else "error", names=("out.zarr",), after=(("kept", VOLUME),))
     raw = next(s for s in seeds() if s.name == "raw")
     yield _convert("raw-without-shape", dict(raw.files), (raw.target, "out.zarr"), names=(raw.target,))
-    yield _convert("raw-flags", dict(raw.files), (raw.target, "out.zarr", *raw.flags), names=raw.flags)
+    yield _convert("raw-flags", dict(raw.files), (raw.target, "out.zarr", *raw.flags), "render",
+                   after=(("written", "out.zarr"), ("kept", raw.target)))  # convert takes render's --raw-* flags
     for output in ("out.vti", "out", ".zarr", "out.zarr.zip"):
         yield _convert(f"output-named-{output}", volume, (VOLUME, output), names=(output,), after=(("kept", VOLUME),))
     yield _convert("output-named-OUT.ZARR", volume, (VOLUME, "OUT.ZARR"), "any", after=(("written", "OUT.ZARR"),))
