@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from volren import quality
 from volren.cli.main import main
 from volren.errors import VolrenError
 from volren.model.tf_blend import blend_transfer_functions
@@ -85,7 +86,11 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     assert len(frames) == 3
     middle_tf = tmp_path / "middle.json"
     middle_tf.write_text(json.dumps(blend_transfer_functions(tf, bright, 0.5).to_dict()))
-    flags = [str(volume), "--renderer", RENDERER, "--size", "32"]
+    # the movie keeps the quality level of its first TF's class (smooth) for every frame; the bright
+    # TF alone is a sharp one, whose level differs, so the frames are compared at the movie's settings
+    level = quality.table().choice(RENDERER, "uniform/smooth", "default")
+    flags = [str(volume), "--renderer", RENDERER, "--size", "32", "--step", f"{level.step:g}",
+             *(f"--option={k}={v}" for k, v in level.options.items())]
     expected = [
         rendered(tmp_path, *flags, "--tf", str(tf_path), "--azimuth", "0", "--elevation", "10"),
         rendered(tmp_path, *flags, "--tf", str(middle_tf), "--azimuth", "30", "--elevation", "20"),

@@ -18,6 +18,9 @@ UNIFORM = {
     "ironProt.vtk": ((68, 68, 68), (1, 1, 1), np.uint8),
     "HeadMRVolume.mhd": ((48, 62, 42), (4, 4, 4), np.uint8),
     "neghip.slc": ((66, 66, 66), (1, 1, 1), np.uint8),
+    "iguana.vti": ((210, 256, 179), (0.1018, 0.1018, 0.1018), np.uint8),
+    "hydrogen.vti": ((64, 64, 64), (1, 1, 1), np.float32),
+    "fuel.vti": ((64, 33, 32), (1, 1, 1), np.uint8),
 }
 # file: (scalars, points, tets in the file, value range or None)
 TETS = {
@@ -25,6 +28,7 @@ TETS = {
     "post_small_tets.vtk": ("Pressure", 2288, 8750, None),
     "bluntfin_tets.vtu": ("Density", 40960, 187395, (0.193, 4.977)),
     "oxygen_post_tets.vtu": ("VelocityMagnitude", 109744, 513375, (0.0, 1.391)),
+    "cth_tets.vtu": ("Material Fraction", 274625, 1310720, (0.0, 1.0)),
 }
 BLUNTFIN_ZERO_VOLUME = 77
 

@@ -180,8 +180,9 @@ def test_the_reach_is_one_sided_only_where_it_is_cheap_and_exact():
     assert oblique != Reach.both_ways((1, 1, 1)) and all(sum(w) == 1 for w in oblique.window)
     assert all(sum(r) == 2 for r in oblique.rim)  # the rim on the face each axis's rays leave through
     flat = UniformVolume(volume.values, spacing=(1.0, 1.0, 0.01))
-    assert reach(flat, Camera.orbit(flat.bounds, 35, 25, parallel=True), 0.5) == Reach.both_ways(
-        tuple(int(np.ceil(0.5 * flat.characteristic_length / s - 1e-9)) for s in flat.spacing))
+    # step 2 (in the smallest spacing) spans two cells along z
+    assert reach(flat, Camera.orbit(flat.bounds, 35, 25, parallel=True), 2.0) == Reach.both_ways(
+        tuple(int(np.ceil(2.0 * flat.characteristic_length / s - 1e-9)) for s in flat.spacing))
     far = reach(volume, distant_camera_cut_by_far_plane(volume.bounds, 0.45, True), 0.5)
     assert far == Reach.both_ways((1, 1, 1))
 

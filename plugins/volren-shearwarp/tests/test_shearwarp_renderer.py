@@ -427,7 +427,7 @@ def test_skipped_slices_keep_the_closed_form_of_a_constant_volume(pre, step):
     """Every stride-th slice (2, 3, 4 of 6 slices here): each segment spans stride slices and takes the
     table for that length, and the short last slab (the stride divides no slice count here) is
     corrected to its length, so a constant volume draws what every slice draws, both projections."""
-    volume = UniformVolume(np.full((6, 7, 8), 1.0, np.float32), spacing=(0.9, 1.1, 1.0))
+    volume = UniformVolume(np.full((6, 7, 8), 1.0, np.float32), spacing=(1.0, 1.1, 1.0))
     tf = TransferFunction1D.constant(0.3, (0.4, 0.7, 0.2), opacity_unit_distance=0.8)
     for parallel in (False, True):
         camera = Camera.orbit(volume.bounds, 25, 15, zoom=1.3, parallel=parallel)
