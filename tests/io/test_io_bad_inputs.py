@@ -320,7 +320,9 @@ def test_raw_sizes(tmp_path):
     fails(
         tmp_path / "v.raw", "byte_order must be one of", shape=(10, 5, 2), dtype="int16", byte_order="middle"
     )
-    fails(tmp_path / "v.raw", "shape must be three positive integers", shape=(10, 20), dtype="int16")
+    fails(tmp_path / "v.raw", "shape must be three whole numbers from 1 to 2,147,483,647", shape=(10, 20), dtype="int16")
+    fails(tmp_path / "v.raw", "shape must be three whole numbers", shape=(10, 20, 1.5), dtype="int16")
+    fails(tmp_path / "v.raw", "shape must be three whole numbers", shape=(10, 20, 10**400), dtype="int16")
     with pytest.raises(
         VolrenError, match=r"dtype= describe headerless raw data only; give shape=\(nx, ny, nz\)"
     ):

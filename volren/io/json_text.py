@@ -2,6 +2,11 @@
 
 ParaView writes presets with trailing commas (`[1, 2, ],`), which strict JSON refuses; they are
 removed before parsing, keeping every newline so that line numbers in errors stay right.
+
+JSON integers may have any number of digits, and Python reads them all; volren's numbers are
+float64, and an integer beyond its range (1.8e308) failed every float conversion with an
+exception of its own. Such an integer is read as infinity, as "1e400" is, which every check of a
+number already refuses with its own message.
 """
 
 from __future__ import annotations
@@ -21,6 +26,8 @@ from volren.io.safe_write import write_atomically
 MAX_DEPTH = 64
 #: Largest JSON file read (a TF or scene is kilobytes; a TF at its point limit a few MB).
 MAX_BYTES = 64 * 2**20
+#: Integers of fewer digits lie within float64's range (1.8e308); longer ones are read as floats.
+_INT_DIGITS = 300
 
 _STRING = re.compile(r'"(?:[^"\\]|\\.)*"', re.S)
 _TRAILING_COMMA = re.compile(r'("(?:[^"\\]|\\.)*")|,(\s*[\]}])', re.S)
@@ -37,6 +44,11 @@ def nesting_depth(text: str) -> int:
     codes = np.frombuffer(brackets, np.uint8)
     steps = np.isin(codes, (ord("["), ord("{"))).astype(np.int64) - np.isin(codes, (ord("]"), ord("}")))
     return int(np.cumsum(steps).max(initial=0))
+
+
+def _integer(text: str) -> int | float:
+    """A JSON integer; a longer one as a float (beyond float64's range, the infinity of its sign)."""
+    return int(text) if len(text.lstrip("-")) < _INT_DIGITS else float(text)
 
 
 def read_json(path: Path, lenient: bool = True) -> Any:
@@ -63,7 +75,7 @@ def read_json(path: Path, lenient: bool = True) -> Any:
     if depth > MAX_DEPTH:
         raise file_error(path, f"arrays and objects nest {depth} deep; volren reads at most {MAX_DEPTH}")
     try:
-        return json.loads(strip_trailing_commas(text) if lenient else text)
+        return json.loads(strip_trailing_commas(text) if lenient else text, parse_int=_integer)
     except json.JSONDecodeError as exc:
         raise file_error(path, f"invalid JSON at line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
 

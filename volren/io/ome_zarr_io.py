@@ -220,10 +220,18 @@ def _shown(value: Any, limit: int = 80) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+def _finite(value: int | float) -> bool:
+    """math.isfinite, False for an integer beyond float64 (JSON's integers have any size)."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 def _numbers(values: Any, axes: int, what: str) -> list[float]:
     """`axes` finite numbers (bools and text refused: JSON's true is not a scale)."""
     numeric = isinstance(values, list) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
-    if not numeric or len(values) != axes or not all(math.isfinite(v) for v in values):
+    if not numeric or len(values) != axes or not all(_finite(v) for v in values):
         raise VolrenError(f"its {what} must be a list of {axes} finite numbers, got {_shown(values)}")
     return [float(v) for v in values]
 
@@ -304,7 +312,7 @@ def _brick_range(entry: Any) -> tuple[float, float] | None:
     if entry is None:
         return None
     numeric = isinstance(entry, list) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in entry)
-    if not numeric or len(entry) != 2 or not all(math.isfinite(v) for v in entry) or entry[0] > entry[1]:
+    if not numeric or len(entry) != 2 or not all(_finite(v) for v in entry) or entry[0] > entry[1]:
         raise VolrenError(f"a brick range must be null or [min, max], got {_shown(entry)}")
     return float(entry[0]), float(entry[1])
 

@@ -33,6 +33,14 @@ _RAW_DEFAULTS = {
 }
 
 
+def _as_tuple(value: object) -> object:
+    """A sequence as a tuple (to compare with a default), anything else as it is."""
+    try:
+        return tuple(value)  # type: ignore[call-overload]
+    except TypeError:
+        return value
+
+
 def _existing(path: Path) -> None:
     if not path.exists():
         raise file_error(path, "no such file or folder")
@@ -98,8 +106,8 @@ def load_volume(
     given = {
         "dtype": dtype,
         "byte_order": byte_order,
-        "spacing": tuple(spacing),
-        "origin": tuple(origin),
+        "spacing": _as_tuple(spacing),
+        "origin": _as_tuple(origin),
         "header_bytes": header_bytes,
     }
     if given != _RAW_DEFAULTS:

@@ -80,7 +80,10 @@ def _field_from_json(key: str, value: Any) -> Any:
     if not isinstance(items, list | tuple) or len(items) != (count or 1) or not all(map(_is_number, items)):
         raise VolrenError(f"camera {key.replace('_', ' ')} must be {f'{count} numbers' if count else 'a number'}, "
                           f"got {value!r}")  # fmt: skip
-    return tuple(float(v) for v in items) if count else float(value)
+    try:
+        return tuple(float(v) for v in items) if count else float(value)
+    except OverflowError:  # an integer beyond float64
+        raise VolrenError(f"camera {key.replace('_', ' ')} must be finite") from None
 
 
 def _normalized(v: NDArray) -> NDArray:

@@ -55,6 +55,8 @@ def _points(data: ArrayLike, width: int, what: str) -> NDArray[np.float64]:
         arr = np.array(data, dtype=np.float64)
     except ValueError:  # rows of different lengths
         raise VolrenError(f"{what} points must be a non-empty list of {width}-tuples") from None
+    except OverflowError:  # an integer beyond float64's range
+        raise VolrenError(f"{what} points hold a number beyond float64's range (1.8e308)") from None
     if arr.ndim == 1 and arr.size % width == 0 and arr.size:
         arr = arr.reshape(-1, width)
     if arr.ndim != 2 or arr.shape[1] != width or len(arr) == 0:
@@ -116,7 +118,7 @@ class TransferFunction1D(Versioned):
             raise VolrenError(f"opacity_unit_distance must be a number, got {value!r}")
         try:
             unit = float(value)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise VolrenError(f"opacity_unit_distance must be a number, got {value!r}") from None
         if not math.isfinite(unit) or unit <= 0:
             raise VolrenError(f"opacity_unit_distance must be positive and finite, got {value!r}")

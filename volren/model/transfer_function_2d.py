@@ -71,7 +71,10 @@ _KNOWN_KEYS = {"version", "kind", "value_range", "gradient_range", "widgets", "o
 def _number(value: Any, what: str) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
         raise VolrenError(f"{what} must be a number, got {value!r}")
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond float64
+        number = math.inf
     if not math.isfinite(number):
         raise VolrenError(f"{what} must be finite, got {value!r}")
     return number

@@ -71,18 +71,30 @@ def parse_dtype(path: Path, dtype: DTypeLike) -> np.dtype:
         ) from None  # fmt: skip
 
 
+#: Most samples along one axis: VTK's extents are 32-bit integers.
+MAX_SIDE = 2**31 - 1
+
+
+def _is_whole(n: object) -> bool:
+    """An integer, or a float without a fraction (int() would drop one without a word)."""
+    if isinstance(n, bool | np.bool_):
+        return False
+    return isinstance(n, int | np.integer) or (isinstance(n, float | np.floating) and float(n).is_integer())
+
+
 def _shape(path: Path, shape: Sequence[int]) -> tuple[int, int, int]:
     try:
-        dims = tuple(int(n) for n in shape)
-    except (TypeError, ValueError):
-        raise file_error(path, f"shape must be three integers (nx, ny, nz), got {shape!r}") from None
-    if len(dims) != 3 or min(dims) <= 0:
-        raise file_error(path, f"shape must be three positive integers (nx, ny, nz), got {shape!r}")
-    return dims  # type: ignore[return-value]
+        items = list(shape)
+    except TypeError:
+        items = []
+    if len(items) != 3 or not all(_is_whole(n) and 0 < n <= MAX_SIDE for n in items):
+        shown = repr(shape) if len(repr(shape)) <= 60 else repr(shape)[:57] + "..."
+        raise file_error(path, f"shape must be three whole numbers from 1 to {MAX_SIDE:,} (nx, ny, nz), got {shown}")
+    return tuple(int(n) for n in items)  # type: ignore[return-value]
 
 
 def _dtype(path: Path, dtype: DTypeLike | None, byte_order: str, n_values: int, n_bytes: int) -> np.dtype:
-    if byte_order not in _BYTE_ORDERS:
+    if not isinstance(byte_order, str) or byte_order not in _BYTE_ORDERS:
         raise file_error(path, f"byte_order must be one of {sorted(_BYTE_ORDERS)}, got {byte_order!r}")
     if dtype is None:
         if n_bytes == n_values:  # one byte per sample can only be uint8 (int8 must be asked for)
@@ -110,7 +122,7 @@ def load_raw(
 ) -> Grid:
     """values[k, j, i] from x-fastest samples after `header_bytes` bytes."""
     nx, ny, nz = _shape(path, shape)
-    if not isinstance(header_bytes, int) or header_bytes < 0:
+    if isinstance(header_bytes, bool) or not isinstance(header_bytes, int) or header_bytes < 0:
         raise file_error(path, f"header_bytes must be a non-negative integer, got {header_bytes!r}")
     n_values = product((nx, ny, nz))
     size = path.stat().st_size
@@ -132,6 +144,6 @@ def load_raw(
     try:
         sx, sy, sz = (float(v) for v in spacing)
         ox, oy, oz = (float(v) for v in origin)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise VolrenError(f"{path}: spacing and origin must be three numbers each") from None
     return Grid(values, (sx, sy, sz), (ox, oy, oz))
