@@ -106,3 +106,20 @@ def _warn_and_double(value: int) -> int:
 
     warnings.warn("a note", VolrenWarning, stacklevel=1)
     return 2 * value
+
+
+@pytest.mark.usefixtures("server_path")
+def test_the_server_reads_a_relative_path_in_the_callers_folder_and_environment(tmp_path, monkeypatch):
+    """A server started in one folder serves a caller that moved to another since, and sees the
+    environment the caller has now (a cache folder set after the server started)."""
+    volume, _ = sample_paths("marschner_lobb")
+    load_volume(volume)  # the server starts here, in this folder
+    (tmp_path / "here.vti").write_bytes(open(volume, "rb").read())
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("VOLREN_ISOLATION_PROBE", "set after the server started")
+    assert load_volume("here.vti").dimensions == load_volume(volume).dimensions
+    assert isolation.run_isolated("x", _environment, "VOLREN_ISOLATION_PROBE") == "set after the server started"
+
+
+def _environment(name: str) -> str | None:
+    return os.environ.get(name)

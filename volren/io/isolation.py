@@ -158,7 +158,7 @@ def run_isolated(path: object, load: Callable[..., Any], *args: Any, **kwargs: A
     if how == "fork":
         message = _run_forked(path, functools.partial(load, *args, **kwargs))
     else:
-        message = _run_in_server(path, pickle.dumps((load, args, kwargs), protocol=5))
+        message = _run_in_server(path, pickle.dumps((load, args, kwargs, os.getcwd(), dict(os.environ)), protocol=5))
     status, packed, notes = message
     value = _unpack(*packed)
     for text, category in dict.fromkeys(notes):  # once each: the child recorded every repeat
@@ -222,7 +222,12 @@ def _serve() -> None:
 
 
 def _unpickled_call(request: bytes) -> Any:
-    load, args, kwargs = pickle.loads(request)
+    """The caller's load, in the caller's working folder and environment (the server was started
+    in another's: a relative path or a cache variable set since must mean what it means there)."""
+    load, args, kwargs, cwd, environ = pickle.loads(request)
+    os.chdir(cwd)
+    os.environ.clear()
+    os.environ.update(environ)
     return load(*args, **kwargs)
 
 
