@@ -50,6 +50,9 @@ def test_parse_size(size, expected):
         ({"size": (0, 4)}, "image size"),
         ({"stpe": 0.5}, "unknown render settings"),
         ({"azimuth": float("nan")}, "azimuth must be finite"),
+        # integers beyond a float's range: not convertible, so not finite (was an OverflowError)
+        ({"zoom": 10**400}, "zoom must be finite"),
+        ({"step": 10**400}, "render setting step must be finite and positive"),
         ({"renderer": "nope"}, "unknown renderer"),
     ],
 )

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -15,7 +14,7 @@ from numpy.typing import NDArray
 from volren.errors import VolrenError, VolrenWarning
 from volren.model.camera import Camera
 from volren.model.default_tf import default_transfer_function
-from volren.model.settings import RenderSettings, check_step
+from volren.model.settings import RenderSettings, check_step, is_finite
 from volren.model.tf_coverage import coverage_problem
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import (
@@ -150,8 +149,8 @@ def render(
     transfer = as_transfer_function(tf, vol)
     width, height = parse_size(size)
     for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
-        if not math.isfinite(value):
-            raise VolrenError(f"{name} must be finite, got {value}")
+        if not is_finite(value):
+            raise VolrenError(f"{name} must be finite, got {value!r:.40}")
     from volren.quality import kind_of, resolve
 
     on_cluster = cluster is not None or scheduler is not None  # an empty one is refused, not ignored

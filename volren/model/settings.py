@@ -68,9 +68,9 @@ class RenderSettings:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise VolrenError(f"render setting {name} must be a number, got {value!r}")
-            if not math.isfinite(value) or value < 0 or (name == "step" and value == 0):
+            if not is_finite(value) or value < 0 or (name == "step" and value == 0):
                 bound = "positive" if name == "step" else ">= 0"
-                raise VolrenError(f"render setting {name} must be finite and {bound}, got {value!r}")
+                raise VolrenError(f"render setting {name} must be finite and {bound}, got {value!r:.40}")
         if self.step > MAX_STEP:
             raise VolrenError(
                 f"render setting step must be at most {MAX_STEP:g} (in voxel lengths), got {self.step!r}"
@@ -104,6 +104,15 @@ def _round_up(x: float, digits: int = 3) -> float:
     """`x` rounded up to `digits` significant digits: a least step that, printed, is still enough."""
     unit = 10.0 ** (math.floor(math.log10(x)) - digits + 1)
     return math.ceil(x / unit) * unit
+
+
+def is_finite(value: float) -> bool:
+    """math.isfinite, False also for an integer too large for a float (10**400), which
+    math.isfinite cannot convert."""
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
 
 
 def samples_per_ray(step: float, bounds: Sequence[float], unit: float) -> float:
