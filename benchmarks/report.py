@@ -33,9 +33,9 @@ SECTIONS = (
     ("defaults_fidelity.md", "No options on hard scenes, at every image size",
      "Does a render with no options keep what VTK's default keeps: thin tubes and sheets, specks, noise, steps, "
      "anisotropic grids, from 128^2 to 1024^2 (RMSE and pixels off by more than 0.1)?"),
-    ("defaults_fidelity_shared.md", "No options on the shared scenes at sizes the table was not chosen on",
-     "The same question on the shared scenes at 128^2 and 256^2 (the table was chosen at 512^2 on them): "
-     "held-out sizes."),
+    ("defaults_fidelity_shared.md", "No options on the shared scenes, 128^2 to 512^2",
+     "The same question on the shared scenes and samples (the table was chosen at 512^2 on them, so 128^2 and "
+     "256^2 are held out)."),
     ("defaults_ab.md", "No options against VTK's default, frames interleaved",
      "The same question as the table above, each scene's two renderers drawing alternately so that both see the "
      "same load (`python -m benchmarks.defaults_ab`)"),
