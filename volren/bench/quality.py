@@ -122,7 +122,7 @@ def _is_vtk_default(row: Mapping[str, str]) -> bool:
     return VTK_DEFAULT.get(row.get("kind", "")) == (row["renderer"], row["settings"])
 
 
-def _levels(kind_rows: list[dict], peer: Mapping[tuple[str, str], tuple[float, float | None]],
+def _levels(kind_rows: list[dict], peer: Mapping[str, tuple[float, float | None]],
             known: Mapping[tuple[str, str], sweep.Config]) -> dict[str, dict[str, LevelChoice]]:  # fmt: skip
     """renderer -> level -> choice over the scenes of `peer` (scene -> VTK default's RMSE and
     count of pixels off, None where not counted)."""
