@@ -122,6 +122,7 @@ class HardDataset:
 
     name: str
     kind: str
+    styles: tuple[str, ...] = ("hard",)
 
     def _case(self):
         from volren.testing.hard_cases import CASES
@@ -130,8 +131,6 @@ class HardDataset:
 
     def load(self) -> Volume:
         return self._case().build()
-
-    styles: tuple[str, ...] = ("hard",)
 
     def transfer_functions(self) -> Iterator[tuple[str, TransferFunction1D]]:
         yield "hard", self._case().tf()
@@ -154,10 +153,11 @@ def hard_datasets() -> dict[str, HardDataset]:
 def select(names: Iterable[str] | None, shared: Path | None, quick: bool = False) -> list[Dataset | HardDataset]:
     """The datasets asked for by name (`hard`: every hard scene); by default every shared one and
     every sample (--quick: two samples)."""
-    available = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets(), **hard_datasets()}
+    hard = hard_datasets()
+    available = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets(), **hard}
     if names is None:
-        names = QUICK_DATASETS if quick else [n for n in available if n not in hard_datasets()]
-    names = [n for name in names for n in (hard_datasets() if name == HARD_GROUP else [name])]
+        names = QUICK_DATASETS if quick else [n for n in available if n not in hard]
+    names = [n for name in names for n in (hard if name == HARD_GROUP else [name])]
     unknown = [n for n in names if n not in available]
     if unknown:
         where = "" if shared is not None else " (no shared folder found: give --shared)"
