@@ -10,11 +10,14 @@ import pytest
 from tests.renderers.analytic import box_path_lengths, homogeneous_image, rmse
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.default_tf import default_transfer_function
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import TetVolume, UniformVolume
 from volren.renderers import opengl
 from volren.renderers.registry import registry
+from volren.testing.metrics import image_error
+from volren.testing.reference_images import reference_image
 
 pytestmark = [pytest.mark.vtk, pytest.mark.usefixtures("opengl")]
 
@@ -105,6 +108,28 @@ def test_nan_voxels_are_transparent(vtk_renderer):
     # The box spans columns 7..24; x <= 7 (columns 7..15) is finite and visible, the NaN half
     # (x >= 8, columns 17..24) adds nothing.
     assert np.all(image[16, 8:14, 3] > 0.5) and np.all(image[16, 17:, 3] == 0.0)
+
+
+@pytest.mark.parametrize("mapper", ["gpu", "fixed_point"])
+@pytest.mark.parametrize("with_nan", [False, True])
+def test_float32_data_out_to_the_type_limits_matches_the_reference(vtk_renderer, tmp_path, mapper, with_nan):
+    """VTK's float32 arithmetic over such a span drew blank frames; the default TF spans it all."""
+    big = np.finfo(np.float32).max
+    values = np.random.default_rng(0).random((16, 16, 16), dtype=np.float32)
+    values[:, :, :5] = big
+    values[0, 0, 0] = -big
+    if with_nan:  # the sentinel goes a data range further down
+        values[8, 8, 8] = np.nan
+    volume = UniformVolume(values)
+    tf = default_transfer_function(volume)
+    camera = Camera.orbit(volume.bounds, 30, 20, 1.0)
+    vtk_renderer.set_volume(volume)
+    vtk_renderer.set_transfer_function(tf)
+    vtk_renderer.set_settings(RenderSettings(options={"mapper": mapper}))
+    reference = reference_image(volume, tf, camera, 32, 32, folder=tmp_path)
+    error = image_error(vtk_renderer.render(camera, 32, 32), reference)
+    assert reference[..., 3].mean() > 0.15  # a blank frame is far off
+    assert error.rmse <= vtk_renderer.capabilities.kinds["uniform"].accuracy.rmse, error
 
 
 def test_render_is_repeatable_and_follows_tf_edits(vtk_renderer):

@@ -51,8 +51,11 @@ from volren.renderers.vtk_mappers.convert import FINITE_NAME, image_data, unstru
 from volren.renderers.vtk_mappers.transfer import (
     masked_function,
     replace_nonfinite,
+    scaled_tf,
+    scaled_values,
     uniform_functions,
     unstructured_functions,
+    vtk_scale,
 )
 from volren.vtk_messages import vtk_messages
 
@@ -178,6 +181,7 @@ class VtkRenderer(RendererBase):
         self._property: Any = None
         self._dataset: Any = None
         self._sentinel: float | None = None
+        self._scale = 1.0  # VTK gets the grid's values times this (transfer.vtk_scale)
         self._mapper: Any = None
         self._mapper_key: tuple | None = None
         self._tf_key: tuple | None = None
@@ -227,12 +231,20 @@ class VtkRenderer(RendererBase):
             return
         volume = self._volume
         if isinstance(volume, UniformVolume):
-            values, self._sentinel = replace_nonfinite(volume.values, volume.value_range)
+            self._scale = vtk_scale(volume.value_range)
+            values = scaled_values(volume.values, self._scale)
+            values, self._sentinel = replace_nonfinite(values, self._scalar_range())
             self._dataset = image_data(volume, values)
         else:
             assert isinstance(volume, TetVolume)
             self._sentinel = None  # cells with a non-finite corner are left out
+            self._scale = 1.0
             self._dataset = unstructured_grid(volume)
+
+    def _scalar_range(self) -> tuple[float, float]:
+        """The finite data range in the units VTK gets."""
+        lo, hi = self._volume.value_range
+        return lo * self._scale, hi * self._scale
 
     def _resolve_auto(self) -> str:
         """vtkSmartVolumeMapper's choice: GPU ray casting if this context supports it."""
@@ -288,13 +300,14 @@ class VtkRenderer(RendererBase):
         key = (tf.version, self._sentinel, h if masked else None)
         if key != self._tf_key:
             build = unstructured_functions if self._volume.kind == "tet" else uniform_functions
-            lo, hi = self._volume.value_range
-            color, opacity = build(tf, lo, self._sentinel)
+            lo, hi = self._scalar_range()
+            vtk_tf = scaled_tf(tf, self._scale)
+            color, opacity = build(vtk_tf, lo, self._sentinel)
             prop.SetColor(color)
             prop.SetScalarOpacity(opacity)
             prop.SetScalarOpacityUnitDistance(tf.opacity_unit_distance)
             if masked:
-                prop.SetTransferFunction2D(masked_function(tf, (self._sentinel, hi), h))
+                prop.SetTransferFunction2D(masked_function(vtk_tf, (self._sentinel, hi), h))
             self._tf_key = key
         if masked:
             prop.SetTransferFunctionModeTo2D()
