@@ -3,6 +3,7 @@ off the GUI thread, neighbours ahead, and each keeps the TF, camera and settings
 
 from __future__ import annotations
 
+import json
 import threading
 from pathlib import Path
 
@@ -248,3 +249,37 @@ def test_a_scripted_screenshot_of_an_ome_zarr_image_waits_for_its_finest_level(m
     shot = tmp_path / "shot.png"
     assert _screenshot(w, path, None, None, "fake", shot, timeout_s=60, traceback=False) == 0
     assert shot.is_file() and w.state.volume.dimensions == (28, 24, 20)
+
+
+# ------------------------------------------------------------------------------------- scenes
+@pytest.mark.parametrize("opened", ["run.pvd", "steps"])
+def test_a_scene_saved_on_a_step_reopens_the_series_at_that_step(make_window, ini, fake_renderers, qtbot, tmp_path,
+                                                                 error_boxes, opened):  # fmt: skip
+    """Save Scene on step 3 of 4 of a .pvd or a folder: the scene names the series and the step
+    (the volume path still that step's file), and opening it shows the whole series at that step."""
+    (tmp_path / "steps").mkdir()
+    paths = write_steps(tmp_path / "steps", 4)
+    write_pvd(tmp_path / "run.pvd", [(0.1 * k, f"steps/{p.name}") for k, p in enumerate(paths)])
+    w = make_window(settings=ini)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
+        w.files.open_input(tmp_path / opened, renderer="fake")
+    w.time.show_step(2)
+    qtbot.waitUntil(lambda: w.time.shown_step == 2, timeout=TIMEOUT_MS)
+    scene = tmp_path / "scenes" / "run-step.json"
+    scene.parent.mkdir()
+    assert w.scenes.save(scene)
+    saved = json.loads(scene.read_text())
+    assert saved["time_series"] == {"path": f"../{opened}", "step": 2}
+    assert saved["volume"]["path"] == "../steps/step_2.vti"  # what readers without series support read
+
+    other = make_window(settings=ini)
+    with qtbot.waitSignal(other.fullFrameShown, timeout=TIMEOUT_MS):
+        other.files.open_input(scene)
+    time = other.time
+    assert time.isVisible() and time.series.source == tmp_path / opened and time.series.steps == tuple(paths)
+    assert time.shown_step == 2 and time.slider.value() == 2 and time.slider.maximum() == 3
+    assert time.label.text().startswith("step 3 of 4") and float(other.state.volume.values.min()) == 2.0
+    assert other.scenes.volume_path == str(paths[2])
+    time.show_step(3)
+    qtbot.waitUntil(lambda: time.shown_step == 3, timeout=TIMEOUT_MS)
+    assert float(other.state.volume.values.min()) == 3.0 and error_boxes == []

@@ -13,6 +13,7 @@ import pytest
 from PIL import Image
 
 from volren.cli.main import main
+from volren.model.transfer_function import TransferFunction1D
 from volren.renderers.registry import registry
 from volren.samples import sample_paths
 
@@ -76,6 +77,25 @@ def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
     assert main(["render", str(volume), "--tf", str(tf), "--size", "24", "--azimuth", "30", "--renderer", "vtk",
                  "--elevation", "20", "--zoom", "1.2", "--save-array", str(direct)]) == 0
     assert np.array_equal(a, np.load(direct))
+    capsys.readouterr()
+
+
+def test_a_scene_naming_a_time_series_renders_its_step(tmp_path, capsys):
+    """A scene's "time_series" (what the app saves on a step of a series) names the volume: the
+    step's file of the series, as `volren render SERIES --time-step N` draws it."""
+    from tests.app.test_time_series import write_pvd, write_steps
+
+    steps = write_steps(tmp_path, 3)
+    pvd = write_pvd(tmp_path / "run.pvd", [(k, p.name) for k, p in enumerate(steps)])
+    tf = TransferFunction1D.ramp(0, 3, 0.8).to_dict()
+    scene_path = tmp_path / "scene.json"
+    scene_path.write_text(json.dumps({"version": 1, "time_series": {"path": "run.pvd", "step": 2},
+                                      "transfer_function": tf, "renderer": "vtk", "quality": "default", "size": [16, 16]}))  # fmt: skip
+    (tmp_path / "tf.json").write_text(json.dumps(tf))
+    assert main(["render", "--scene", str(scene_path), "--save-array", str(tmp_path / "scene.npy")]) == 0
+    assert main(["render", str(pvd), "--time-step", "2", "--tf", str(tmp_path / "tf.json"), "--renderer", "vtk",
+                 "--size", "16", "--save-array", str(tmp_path / "step.npy")]) == 0  # fmt: skip
+    np.testing.assert_array_equal(np.load(tmp_path / "scene.npy"), np.load(tmp_path / "step.npy"))
     capsys.readouterr()
 
 

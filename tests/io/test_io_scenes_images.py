@@ -123,6 +123,51 @@ def test_scene_errors_name_the_inner_file_too(project):
         load_scene(path)
 
 
+@pytest.fixture
+def series(project):
+    """series/t0.vti ... t2.vti, whose values are the step number plus a ramp below 1."""
+    (project / "series").mkdir()
+    for step in range(3):
+        img = pv.ImageData(dimensions=(3, 3, 3))
+        img.point_data["density"] = step + np.arange(27, dtype=np.float32) / 27
+        img.save(project / "series" / f"t{step}.vti")
+    return project / "series"
+
+
+def test_a_scene_on_a_time_series_reads_its_step_from_the_series_and_saves_it_relative(project, series):
+    """The series and step decide the volume ("volume.path" is for readers without series), and
+    both paths are written relative to the scene, so the folder can move."""
+    path = project / "scenes" / "t.json"
+    path.write_text(json.dumps({"version": 1, "time_series": {"path": "../series", "step": 2},
+                                "volume": {"path": "../series/t0.vti"}, "transfer_function": TF}))  # fmt: skip
+    scene = load_scene(path)
+    assert scene.volume_path == str(series / "t2.vti") and scene.volume.value_range[0] == 2.0
+    assert scene.extra["time_series"] == {"path": str(series), "step": 2}
+    save_scene(scene, project / "again.json")
+    saved = json.loads((project / "again.json").read_text())
+    assert saved["time_series"] == {"path": "series", "step": 2} and saved["volume"]["path"] == "series/t2.vti"
+
+
+@pytest.mark.parametrize(
+    "entry, fragment",
+    [
+        ("../series", "'time_series' must be an object with a 'path'"),
+        ({"path": "../series"}, "and a 'step' (an integer from 0)"),
+        ({"path": "../series", "step": -1}, "and a 'step' (an integer from 0)"),
+        ({"path": "../series", "step": True}, "and a 'step' (an integer from 0)"),
+        ({"path": "../series", "step": 3}, "time series step 3: series has steps 0 to 2"),
+        ({"path": "../gone.pvd", "step": 0}, "gone.pvd: no such file or folder"),
+    ],
+)
+def test_a_bad_time_series_in_a_scene_is_one_line_naming_the_scene(project, series, entry, fragment):
+    path = project / "scenes" / "bad.json"
+    path.write_text(json.dumps({"version": 1, "time_series": entry, "transfer_function": TF}))
+    with pytest.raises(VolrenError) as info:
+        load_scene(path, load_volume=False)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ") and fragment in message and "\n" not in message, message
+
+
 # ------------------------------------------------------------------------------------- images
 
 

@@ -3,7 +3,8 @@
 A scene refers to its volume by path, and may refer to its transfer function by path instead of
 holding it inline; both are resolved against the scene file's folder, so a folder of scenes and
 data can be moved as a whole. Saving writes the volume path relative to the scene's folder and
-the transfer function inline.
+the transfer function inline. A scene saved on a step of a time series names the series too
+(`TIME_SERIES_KEY`, relative in the same way): its step's file is the volume read.
 """
 
 from __future__ import annotations
@@ -14,9 +15,10 @@ from pathlib import Path
 
 from volren.errors import VolrenError, file_error
 from volren.io.json_text import read_json, write_json
+from volren.io.series_io import TimeSeries, load_series
 from volren.io.tf_io import load_transfer_function
 from volren.io.volume_io import load_volume as _load_volume
-from volren.model.scene import Scene
+from volren.model.scene import TIME_SERIES_KEY, Scene
 
 
 def _resolve(folder: Path, relative: str) -> str:
@@ -39,6 +41,7 @@ def load_scene(path: str | Path, load_volume: bool = True) -> Scene:
         except VolrenError as exc:
             raise file_error(path, f"transfer function: {exc}") from None
     _inline_keyframe_tfs(data, folder, path)
+    _volume_from_series(data, folder, path)
     volume = data.get("volume")
     if isinstance(volume, Mapping) and isinstance(volume.get("path"), str):
         data["volume"] = {**volume, "path": _resolve(folder, volume["path"])}
@@ -72,17 +75,60 @@ def _inline_keyframe_tfs(data: dict, folder: Path, path: Path) -> None:
     data["movie"] = {**movie, "keyframes": inlined}
 
 
+def _is_step(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def _volume_from_series(data: dict, folder: Path, path: Path) -> None:
+    """A scene saved on a time series: the series resolved against the scene's folder and
+    checked, and its step's file made the scene's volume (errors name the scene file)."""
+    entry = data.get(TIME_SERIES_KEY)
+    if entry is None:
+        return
+    if not isinstance(entry, Mapping) or not isinstance(entry.get("path"), str) or not _is_step(entry.get("step")):
+        raise file_error(path, f"'{TIME_SERIES_KEY}' must be an object with a 'path' (a .pvd file or a folder of "
+                               "volume files) and a 'step' (an integer from 0)")  # fmt: skip
+    try:
+        series = load_series(_resolve(folder, entry["path"]))
+    except VolrenError as exc:
+        raise file_error(path, f"time series: {exc}") from None
+    step = entry["step"]
+    if step >= len(series):
+        raise file_error(path, f"time series step {step}: {series.source.name} has steps 0 to {len(series) - 1}")
+    data[TIME_SERIES_KEY] = {**entry, "path": str(series.source)}
+    volume = data.get("volume") or {}
+    if isinstance(volume, Mapping):  # anything else is `Scene.from_dict`'s to report
+        data["volume"] = {**volume, "path": str(series.steps[step])}
+
+
+def scene_time_series(scene: Scene) -> tuple[TimeSeries, int] | None:
+    """The time series a scene read by `load_scene` was saved on, and its step (None: no series)."""
+    entry = scene.extra.get(TIME_SERIES_KEY)
+    if entry is None:
+        return None
+    return load_series(entry["path"]), entry["step"]
+
+
+def _relative(target: str, folder: Path) -> str:
+    """`target` relative to `folder` (absolute on another drive), with forward slashes."""
+    target = os.path.abspath(target)
+    try:
+        relative = os.path.relpath(target, os.path.abspath(folder))
+    except ValueError:  # another drive (Windows): keep it absolute
+        relative = target
+    return Path(relative).as_posix()
+
+
 def save_scene(scene: Scene, path: str | Path) -> None:
-    """Write a scene; the volume path relative to the scene file's folder when possible."""
+    """Write a scene; the volume and time-series paths relative to the scene file's folder when
+    possible."""
     path = Path(path)
     if not isinstance(scene, Scene):
         raise VolrenError(f"{path}: expected a Scene to save, got {type(scene).__name__}")
     data = scene.to_dict()
     if scene.volume_path is not None:
-        volume = os.path.abspath(scene.volume_path)
-        try:
-            relative = os.path.relpath(volume, os.path.abspath(path.parent))
-        except ValueError:  # another drive (Windows): keep it absolute
-            relative = volume
-        data["volume"] = {**data["volume"], "path": Path(relative).as_posix()}
+        data["volume"] = {**data["volume"], "path": _relative(scene.volume_path, path.parent)}
+    series = data.get(TIME_SERIES_KEY)
+    if isinstance(series, Mapping) and isinstance(series.get("path"), str):
+        data[TIME_SERIES_KEY] = {**series, "path": _relative(series["path"], path.parent)}
     write_json(data, path)

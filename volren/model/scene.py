@@ -19,6 +19,11 @@ from volren.model.transfer_function_2d import TransferFunction, transfer_functio
 from volren.model.volume import Volume
 
 SCENE_FORMAT_VERSION = 1
+#: A scene saved on a step of a time series names the series and the step shown:
+#: `"time_series": {"path": "run.pvd", "step": 2}` (a .pvd file or a folder of volume files, the
+#: step from 0). "volume.path" is still that step's file, for readers that know no series; volren
+#: reads the step from the series (`volren.io.scene_io`). Kept in `Scene.extra`.
+TIME_SERIES_KEY = "time_series"
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,8 @@ between stages.
 
 Scenes carry two optional keys of the app's own besides DESIGN.md's fields, `crop` (six numbers)
 and `background` (r, g, b in [0, 1]); `Scene` keeps unknown keys in `extra`, so other readers
-ignore them.
+ignore them. A scene saved on a step of a time series names the series and the step
+(`volren.model.scene.TIME_SERIES_KEY`): it reopens as that series, at that step.
 """
 
 from __future__ import annotations
@@ -28,15 +29,18 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from volren.errors import VolrenError, file_error
 from volren.model.camera import Camera
 from volren.model.crop import Box, check_box
-from volren.model.scene import OrbitView, Scene
+from volren.model.scene import TIME_SERIES_KEY, OrbitView, Scene
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import TetVolume, Volume
+
+if TYPE_CHECKING:
+    from volren.io.series_io import TimeSeries
 
 DEFAULT_SAMPLE = "marschner_lobb"
 
@@ -59,7 +63,8 @@ class LoadedInput:
     """What one file (or the default sample) contributes; `volume is None` for a TF-only file.
 
     `volume_path` is the file the volume came from (absolute; None for a volume made in memory),
-    so that a scene saved later can refer to it; `source` is only its name for titles.
+    so that a scene saved later can refer to it; `source` is only its name for titles. A scene
+    saved on a time series gives the `series` and the `step` its volume is.
     """
 
     volume: Volume | None
@@ -72,6 +77,8 @@ class LoadedInput:
     scalars: str | None = None
     crop: Box | None = None
     background: RGB | None = None
+    series: TimeSeries | None = None
+    step: int = 0
 
     def resolve_camera(self, aspect: float) -> Camera | None:
         """The explicit camera, or the orbit description fitted to the viewport; None: app default."""
@@ -178,6 +185,7 @@ def _load_scene(path: Path, override: TransferFunction | None, progress: Progres
     except VolrenError as exc:  # worded as volren.io.load_scene words it
         raise file_error(path, f"volume: {exc}") from None
     prepare_for_rendering(volume, progress)
+    series, step = io.scene_time_series(scene) or (None, 0)
     return LoadedInput(
         volume,
         override or scene.transfer_function,
@@ -189,6 +197,8 @@ def _load_scene(path: Path, override: TransferFunction | None, progress: Progres
         scalars=scene.scalars,
         crop=crop,
         background=background,
+        series=series,
+        step=step,
     )
 
 
@@ -229,14 +239,17 @@ def view_scene(
     scalars: str | None = None,
     crop: Box | None = None,
     background: RGB | None = None,
+    time_series: tuple[PathArg, int] | None = None,
 ) -> Scene:
     """The `Scene` of what the app shows, for `volren.io.save_scene`; `load_input` reads it back
-    (crop and background included)."""
+    (crop, background and the time series with its step included)."""
     extra: dict[str, Any] = {}
     if crop is not None:
         extra[CROP_KEY] = list(crop)
     if background is not None:
         extra[BACKGROUND_KEY] = list(background)
+    if time_series is not None:
+        extra[TIME_SERIES_KEY] = {"path": os.fspath(time_series[0]), "step": time_series[1]}
     return Scene(
         os.fspath(volume_path),
         transfer_function,

@@ -29,7 +29,7 @@ from volren.app.window.scene_actions import SceneActions
 from volren.app.window.time_control import TimeControl
 from volren.errors import VolrenError
 from volren.io.ome_zarr_io import MAX_IN_MEMORY_BYTES, is_ome_zarr
-from volren.io.series_io import is_series, load_series
+from volren.io.series_io import TimeSeries, is_series, load_series
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.quality import AUTO, at_level, kind_of, level_of
@@ -320,7 +320,8 @@ class FileActions(QObject):
             elif not context.get("keep_view"):
                 self.refiner.cancel()
             if self._time is not None:
-                self._time.set_series(context.get("series"), loaded.volume, loaded.scalars, context.get("step", 0))
+                series, step = _series_shown(loaded, context)
+                self._time.set_series(series, loaded.volume, loaded.scalars, step)
         if opened is not None and not (context or {}).get("keep_view"):
             self.recent.add(opened)
         self.loadFinished.emit(True)
@@ -347,3 +348,10 @@ class FileActions(QObject):
         """Stop the running load at its next stage and wait for it (and for a level being read)."""
         self.refiner.shutdown(timeout_ms)
         self.loader.shutdown(timeout_ms)
+
+
+def _series_shown(loaded: LoadedInput, context: dict[str, Any]) -> tuple[TimeSeries | None, int]:
+    """The time series a load shows and its step: the one opened, or the one its scene was saved on."""
+    if context.get("series") is not None:
+        return context["series"], context.get("step", 0)
+    return loaded.series, loaded.step

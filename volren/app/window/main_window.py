@@ -93,12 +93,12 @@ class MainWindow(QMainWindow):
             self.state, registry, self.viewport, status_bar, self.report_error, self
         )
         self.quality = QualityControl(self.state, self)
-        self.scenes = SceneActions(self, self.state, self.viewport, recent, self.report_error)
+        self.time = TimeControl(self, self.state, self.report_error)
+        self.addToolBar(Qt.BottomToolBarArea, self.time)
+        self.scenes = SceneActions(self, self.state, self.viewport, recent, self.report_error, self.time)
         self.screenshots = ScreenshotActions(self, self.state, self.viewport, renderer_factory, self.report_error,
                                              recent.folder)  # fmt: skip
         self.movies = MovieActions(self, self.state, self.viewport, renderer_factory, self.report_error, recent.folder)
-        self.time = TimeControl(self, self.state, self.report_error)
-        self.addToolBar(Qt.BottomToolBarArea, self.time)
         self.files = FileActions(
             self, self.state, self.viewport, self.renderers, self.scenes, recent, load, self.report_error, self.time
         )

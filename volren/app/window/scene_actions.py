@@ -2,7 +2,9 @@
 
 A scene refers to its volume by path, so this part remembers which file (and scalars) the shown
 volume came from (`remember_volume_file`, told by the opening part). A volume made in memory has
-no file: it is written beside the scene first, as `<scene>.volume.vti` (or .vtu).
+no file: it is written beside the scene first, as `<scene>.volume.vti` (or .vtu). A step of a time
+series is saved with its series (the .pvd or folder opened) and the step's number, so the scene
+reopens the series at that step.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from volren.app.core.state import ViewState
 from volren.app.files.recent_files import RecentFiles
 from volren.app.files.screenshot import check_writable
 from volren.app.rendering.viewport import Viewport
+from volren.app.window.time_control import TimeControl
 from volren.errors import VolrenError
 
 SCENE_FILTER = "Scenes (*.json);;All files (*)"
@@ -33,12 +36,15 @@ class SceneActions:
         viewport: Viewport,
         recent: RecentFiles,
         report_error: Callable[[str, str], None],
+        time: TimeControl | None = None,
     ) -> None:
+        """`time`: the time toolbar, whose series and step a scene saved on a time series names."""
         self._window = window
         self._state = state
         self._viewport = viewport
         self._recent = recent
         self._report_error = report_error
+        self._time = time
         self._volume_path: str | None = None
         self._volume_scalars: str | None = None
         self.save_action = QAction(
@@ -77,6 +83,7 @@ class SceneActions:
                 scalars=self._volume_scalars,
                 crop=s.crop,
                 background=s.background,
+                time_series=self._series_step(),
             )
             io.save_scene(scene, path)
         except (VolrenError, OSError) as exc:
@@ -85,6 +92,13 @@ class SceneActions:
         self._recent.add(path)
         self._window.statusBar().showMessage(f"Saved scene {path}", 5000)
         return True
+
+    def _series_step(self) -> tuple[str, int] | None:
+        """The time series shown (the .pvd or folder opened) and the step on screen; None without one."""
+        time = self._time
+        if time is None or time.series is None or time.shown_step is None:
+            return None
+        return str(time.series.source), time.shown_step
 
     def _write_volume_beside(self, scene_path: Path) -> str:
         from volren import io
