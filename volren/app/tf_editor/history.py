@@ -43,11 +43,17 @@ class _TFChange(QUndoCommand):
         self._history._apply(self._before)
 
 
+#: TF JSON keys as the editors name them (the JSON says "color", the editors "colour").
+_UI_WORDS = {"color": "colour"}
+
+
 def _label(before: dict[str, Any] | None, after: dict[str, Any]) -> str:
+    """The Edit menu's "Undo ..." text, in the editors' words."""
     if before is None or before.get("kind") != after.get("kind"):
         return "new transfer function"
     changed = sorted(k for k in after if before.get(k) != after.get(k))
-    return "edit " + (", ".join(k.replace("_", " ") for k in changed) if changed else "transfer function")
+    words = (_UI_WORDS.get(k, k.replace("_", " ")) for k in changed)
+    return "edit " + (", ".join(words) if changed else "transfer function")
 
 
 class TFHistory(QObject):
