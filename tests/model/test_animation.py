@@ -146,9 +146,33 @@ def test_from_dict_reads_a_scene_movie():
         ({"keyframes": [{"time": 0, "camera": {}, "zoom": 1}]}, "keyframe 0: unknown keys"),
         ({"keyframes": [{"time": 0, "transfer_function": {"kind": "3d"}}]}, "keyframe 0: unknown transfer-function"),
         ({"speed": 1}, "unknown keys \\['speed'\\]"),
+        ({"frames": 10**400}, "movie: frames must be a whole number"),
+        ({"fps": -(10**400)}, "movie: fps must be a number from 0.01 to 240"),
+        ({"orbit": 10**400}, "movie: 'orbit' must be a finite number"),
+        ({"keyframes": [{"time": 10**400, "camera": {}}]}, "keyframe 0: 'time' must be a number in \\[0, 1\\]"),
+        ({"keyframes": [{"time": 0, "camera": {"azimuth": 10**400}}]}, "keyframe 0: camera azimuth must be a finite"),
+        ({"keyframes": [{"time": 0, "camera": {"elevation": -(10**400)}}]}, "keyframe 0: camera elevation must be"),
+        ({"keyframes": [{"time": 0, "camera": {"zoom": 10**400}}]}, "keyframe 0: camera zoom must be a finite"),
     ],
 )
 def test_from_dict_errors_are_one_line_naming_the_part(data, message):
     with pytest.raises(VolrenError, match=message) as exc:
         Animation.from_dict(data)
     assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize(
+    "fields, message",
+    [
+        ({"frames": 10**400}, "frames must be a whole number"),
+        ({"fps": 10**400}, "fps must be a number from 0.01 to 240"),
+        ({"orbit_degrees": -(10**400)}, "orbit_degrees must be a finite number"),
+        ({"orbit_degrees": "90"}, "orbit_degrees must be a finite number"),
+        ({"camera_keys": (CameraKey(10**400, OrbitView()),)}, "keyframe time must be a number in \\[0, 1\\]"),
+        ({"tf_keys": (TFKey(-(10**400), TransferFunction1D.ramp(0, 1)),)}, "keyframe time must be a number in"),
+    ],
+)
+def test_numbers_beyond_a_float_given_to_animation_are_one_line_errors(fields, message):
+    with pytest.raises(VolrenError, match=message) as exc:
+        Animation(**fields)
+    assert "\n" not in str(exc.value) and len(str(exc.value)) < 150

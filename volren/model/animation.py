@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.scene import OrbitView, camera_from_dict
+from volren.model.settings import is_finite
 from volren.model.tf_blend import blend_transfer_functions
 from volren.model.transfer_function_2d import TransferFunction, transfer_function_from_dict
 
@@ -53,19 +54,19 @@ class TFKey:
 
 def check_frames(frames: Any, what: str = "frames") -> int:
     if isinstance(frames, bool) or not isinstance(frames, int | np.integer) or not 1 <= frames <= MAX_FRAMES:
-        raise VolrenError(f"{what} must be a whole number from 1 to {MAX_FRAMES:,}, got {frames!r}")
+        raise VolrenError(f"{what} must be a whole number from 1 to {MAX_FRAMES:,}, got {frames!r:.40}")
     return int(frames)
 
 
 def check_fps(fps: Any, what: str = "fps") -> float:
     if isinstance(fps, bool) or not isinstance(fps, int | float) or not (MIN_FPS <= fps <= MAX_FPS):
-        raise VolrenError(f"{what} must be a number from {MIN_FPS:g} to {MAX_FPS:g}, got {fps!r}")
+        raise VolrenError(f"{what} must be a number from {MIN_FPS:g} to {MAX_FPS:g}, got {fps!r:.40}")
     return float(fps)
 
 
-def _check_time(value: Any) -> float:
+def _check_time(value: Any, what: str = "'time'") -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value <= 1:
-        raise VolrenError(f"'time' must be a number in [0, 1] (a fraction of the movie), got {value!r}")
+        raise VolrenError(f"{what} must be a number in [0, 1] (a fraction of the movie), got {value!r:.40}")
     return float(value)
 
 
@@ -131,8 +132,9 @@ class Animation:
     def __post_init__(self) -> None:
         check_frames(self.frames)
         check_fps(self.fps)
-        if not math.isfinite(self.orbit_degrees):
-            raise VolrenError(f"orbit degrees must be a finite number, got {self.orbit_degrees!r}")
+        _orbit(self.orbit_degrees, "orbit_degrees")
+        for key in (*self.camera_keys, *self.tf_keys):
+            _check_time(key.time, "keyframe time")
         views = {isinstance(key.view, OrbitView) for key in self.camera_keys}
         if len(views) > 1:
             raise VolrenError("camera keyframes must all be orbit views (azimuth, elevation, zoom) or all explicit "
@@ -237,7 +239,7 @@ class Animation:
         )
 
 
-def _orbit(value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise VolrenError(f"'orbit' must be a finite number of degrees, got {value!r}")
+def _orbit(value: Any, what: str = "'orbit'") -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not is_finite(value):
+        raise VolrenError(f"{what} must be a finite number of degrees, got {value!r:.40}")
     return float(value)

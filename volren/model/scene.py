@@ -6,7 +6,6 @@ transfer function is stored inline. Reading and writing files is `volren.io.scen
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -14,7 +13,7 @@ from typing import Any
 from volren.errors import VolrenError
 from volren.model.camera import Camera, check_zoom
 from volren.model.file_version import check_format_version
-from volren.model.settings import RenderSettings
+from volren.model.settings import RenderSettings, is_finite
 from volren.model.transfer_function_2d import TransferFunction, transfer_function_from_dict
 from volren.model.volume import Volume
 
@@ -38,8 +37,8 @@ class OrbitView:
     def __post_init__(self) -> None:
         for name in ("azimuth", "elevation", "zoom"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-                raise VolrenError(f"camera {name} must be a finite number, got {value!r}")
+            if isinstance(value, bool) or not isinstance(value, int | float) or not is_finite(value):
+                raise VolrenError(f"camera {name} must be a finite number, got {value!r:.40}")
         if not isinstance(self.parallel, bool):
             raise VolrenError(f"camera parallel must be true or false, got {self.parallel!r}")
         check_zoom(self.zoom, self.parallel)
