@@ -5,6 +5,7 @@ them whole makes; other inputs are read whole, saying so, and refused when --mem
 from __future__ import annotations
 
 import gzip
+import json
 import tracemalloc
 import warnings
 
@@ -182,3 +183,55 @@ def test_a_file_shorter_than_its_header_says_is_one_line(tmp_path, no_whole_read
     path.write_bytes(nrrd_header(values, "uint16") + b"\n" + values.tobytes()[:-10])
     with pytest.raises(VolrenError, match="truncated"):
         open_mapped(path)
+
+
+RAW_INPUTS = {  # name: (values, --raw-dtype, --raw-byte-order, the NRRD type of the same values)
+    "uint16": (field("<u2"), "ushort", "little", "uint16"),
+    "big-endian float32 with NaN": (np.where(field("f4") > 100, np.nan, field("f4")).astype(">f4"), "float32", "big",
+                                    "float"),
+    "int8 (kept as int16)": (field("i1") - 100, "int8", "little", "signed char"),
+}
+
+
+@pytest.mark.filterwarnings("default::volren.errors.VolrenWarning")
+@pytest.mark.parametrize("name", RAW_INPUTS)
+def test_a_headerless_raw_input_streams_into_the_pyramid_of_its_nrrd(tmp_path, name, monkeypatch):
+    from volren import io
+    from volren.cli.main import main
+    from volren.io import volume_io
+
+    values, dtype, byte_order, nrrd_type = RAW_INPUTS[name]
+    nrrd = write_nrrd(tmp_path / "d.nrrd", values, nrrd_type, "spacings: 0.5 0.75 2\n")
+    raw = tmp_path / "d.raw"
+    raw.write_bytes(values.tobytes())
+    assert main(["convert", str(nrrd), str(tmp_path / "nrrd.zarr"), "--chunks", "8"]) == 0
+    monkeypatch.setattr(io, "load_volume", lambda *a, **k: pytest.fail("read whole"))
+    monkeypatch.setattr(volume_io, "read_with_header", lambda *a, **k: pytest.fail("read whole"))
+    nz, ny, nx = SHAPE
+    assert main(["convert", str(raw), str(tmp_path / "raw.zarr"), "--chunks", "8", "--raw-shape", f"{nx},{ny},{nz}",
+                 "--raw-dtype", dtype, "--raw-byte-order", byte_order, "--raw-spacing", "0.5,0.75,2"]) == 0  # fmt: skip
+    expected, expected_attrs = read_pyramid(tmp_path / "nrrd.zarr")
+    got, got_attrs = read_pyramid(tmp_path / "raw.zarr")
+    assert len(got) == len(expected) == 3
+    for a, b in zip(got, expected, strict=True):
+        assert a.dtype == b.dtype
+        np.testing.assert_array_equal(a, b)
+    assert json.dumps(got_attrs) == json.dumps(expected_attrs).replace("d.nrrd", "d.raw")  # placement and brick ranges
+
+
+def test_a_headerless_raw_input_of_the_wrong_size_is_one_line(tmp_path, capsys, no_whole_read):
+    from volren.cli.main import main
+
+    raw = tmp_path / "d.raw"
+    raw.write_bytes(field("<u2").tobytes()[:-2])
+    nz, ny, nx = SHAPE
+    assert main(["convert", str(raw), str(tmp_path / "d.zarr"), "--raw-shape", f"{nx},{ny},{nz}",
+                 "--raw-dtype", "uint16"]) == 1  # fmt: skip
+    assert capsys.readouterr().err == (f"volren: error: {raw}: dimensions do not match the data: shape {nx}x{ny}x{nz} "
+                                       f"of uint16 needs {values_bytes(SHAPE, 2):,} bytes after a 0-byte header, the "
+                                       f"file holds {values_bytes(SHAPE, 2) - 2:,}\n")  # fmt: skip
+    assert not (tmp_path / "d.zarr").exists()
+
+
+def values_bytes(shape, itemsize: int) -> int:
+    return int(np.prod(shape)) * itemsize

@@ -4,9 +4,10 @@ The pyramid's levels are 2x2x2 block means down to one brick (or --levels of the
 value range stored beside NGFF's metadata (`volren.io.ome_zarr_io`), so that renderers can skip
 bricks a TF leaves transparent without reading them. A progress bar counts the bricks written.
 
-Memory: an input whose values lie uncompressed in its file (raw NRRD, uncompressed MetaImage) is
-streamed, a row of bricks at a time (`volren.io.mapped_input`), and each coarser level is made
-brick by brick from the one below as written, so a volume larger than memory converts. Any other
+Memory: an input whose values lie uncompressed in its file (raw NRRD, uncompressed MetaImage,
+headerless raw data) is streamed, a row of bricks at a time (`volren.io.mapped_input`), and each
+coarser level is made brick by brick from the one below as written, so a volume larger than memory
+converts. Any other
 input is read whole, which one line says with its size; with --memory it is refused when reading
 it whole would take more.
 """
@@ -56,9 +57,9 @@ def add_parser(sub) -> None:
     p.add_argument("--force", action="store_true", help="replace OUTPUT if it exists")
     add_raw_arguments(p)
     p.add_argument("--memory", metavar="SIZE",
-                   help="the most the conversion's data may take in memory, e.g. 2GB (default: no limit): raw NRRD "
-                        "and uncompressed MetaImage inputs are streamed within it, others are read whole (about 3x "
-                        "their values) or refused. The command's fixed overhead comes on top (interpreter, "
+                   help="the most the conversion's data may take in memory, e.g. 2GB (default: no limit): raw NRRD, "
+                        "uncompressed MetaImage and headerless raw inputs are streamed within it, others are read "
+                        "whole (about 3x their values) or refused. The command's fixed overhead comes on top (interpreter, "
                         "libraries: about 170 MiB): its peak is about that plus SIZE")  # fmt: skip
     p.set_defaults(run=run)
 
@@ -99,13 +100,14 @@ def _mapped_input(args: argparse.Namespace):
     """The input as a `MappedVolume` when it can be streamed (None: it is read whole)."""
     from pathlib import Path
 
-    from volren.io.mapped_input import open_mapped
+    from volren.io.mapped_input import open_mapped, open_raw
     from volren.io.ome_zarr_io import is_ome_zarr
 
     path = Path(args.input)
-    if args.scalars is not None or args.raw_shape or is_ome_zarr(args.input) or not path.is_file() \
-            or path.stat().st_size == 0:
+    if args.scalars is not None or is_ome_zarr(args.input) or not path.is_file() or path.stat().st_size == 0:
         return None  # the whole read's checks and messages apply
+    if args.raw_shape:
+        return open_raw(path, **raw_load_arguments(args))
     return open_mapped(path)
 
 

@@ -2,24 +2,27 @@
 streams into a pyramid, so that a volume larger than memory converts.
 
 Which inputs: those whose values lie uncompressed on disk, x fastest, at an offset the header
-gives (NRRD with raw encoding, MetaImage with uncompressed data), on an axis-aligned grid with
-positive spacings and one scalar field. Anything else (a rotated or mirrored grid, compressed or
+gives (NRRD with raw encoding, MetaImage with uncompressed data) or the caller does (headerless
+raw data, `open_raw`), on an axis-aligned grid with positive spacings and one scalar field. Anything else (a rotated or mirrored grid, compressed or
 text data, other formats) is read whole by `load_volume`, whose readers know those cases: the
 grid `open_mapped` describes is exactly the one `load_volume` makes (the tests compare pyramids).
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import DTypeLike, NDArray
 
 from volren.bricked.chunk_cache import release_free_heap
 from volren.io.formats import find_format
 from volren.io.formats.base import is_identity
 from volren.io.formats.geometry import parse_numbers
+from volren.io.formats.raw import check_raw_size, raw_layout
 from volren.io.limits import check_layout
 from volren.model.volume import normalize_dtype
 
@@ -76,6 +79,35 @@ def open_mapped(path: Path) -> MappedVolume | None:
     stored, spacing, origin = geometry
     nx, ny, nz = layout.shape
     return MappedVolume(path.name, layout.data_file, layout.data_offset, stored, (nz, ny, nx), spacing, origin)
+
+
+def open_raw(
+    path: Path,
+    shape: Sequence[int],
+    dtype: DTypeLike | None = None,
+    byte_order: str = "little",
+    spacing: Sequence[float] = (1.0, 1.0, 1.0),
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
+    header_bytes: int = 0,
+) -> MappedVolume | None:
+    """Headerless raw data (`load_volume`'s arguments for it) as a `MappedVolume`, checked as
+    `load_raw` checks it, memory aside; None for a grid the reader must place (a spacing not
+    positive, a placement not finite)."""
+    (nx, ny, nz), stored = raw_layout(path, shape, dtype, byte_order, header_bytes)
+    check_raw_size(path, (nx, ny, nz), stored, header_bytes)
+    spacing_xyz, origin_xyz = _finite_triple(spacing), _finite_triple(origin)
+    if spacing_xyz is None or origin_xyz is None or min(spacing_xyz) <= 0:
+        return None
+    return MappedVolume(path.name, path, header_bytes, stored, (nz, ny, nx), spacing_xyz, origin_xyz)
+
+
+def _finite_triple(values: Sequence[float]) -> Triple | None:
+    """Three finite numbers as floats, or None (then the whole read's checks speak)."""
+    try:
+        triple = tuple(float(v) for v in values)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return triple if len(triple) == 3 and all(map(math.isfinite, triple)) else None  # type: ignore[return-value]
 
 
 def _nrrd_geometry(path: Path, facts: dict) -> tuple[np.dtype, Triple, Triple] | None:

@@ -111,6 +111,32 @@ def _dtype(path: Path, dtype: DTypeLike | None, byte_order: str, n_values: int, 
     return dt.newbyteorder(_BYTE_ORDERS[byte_order]) if dt.itemsize > 1 else dt
 
 
+def raw_layout(
+    path: Path, shape: Sequence[int], dtype: DTypeLike | None, byte_order: str, header_bytes: int
+) -> tuple[tuple[int, int, int], np.dtype]:
+    """(nx, ny, nz) and the stored dtype (byte order included) of headerless raw data, checked;
+    whether the file holds them is `check_raw_size`'s."""
+    nx, ny, nz = _shape(path, shape)
+    if isinstance(header_bytes, bool) or not isinstance(header_bytes, int) or header_bytes < 0:
+        raise file_error(path, f"header_bytes must be a non-negative integer, got {header_bytes!r}")
+    dt = _dtype(path, dtype, byte_order, product((nx, ny, nz)), path.stat().st_size - header_bytes)
+    return (nx, ny, nz), dt
+
+
+def check_raw_size(path: Path, shape: tuple[int, int, int], dt: np.dtype, header_bytes: int) -> None:
+    """Refuse a file that does not hold exactly the samples `shape` of `dt` after the header:
+    without a header, the size is the one check on a guess of shape or dtype."""
+    nx, ny, nz = shape
+    expected = product(shape) * dt.itemsize
+    have = path.stat().st_size - header_bytes
+    if have != expected:
+        raise file_error(
+            path,
+            f"dimensions do not match the data: shape {nx}x{ny}x{nz} of {dt.newbyteorder('=')} needs "
+            f"{expected:,} bytes after a {header_bytes:,}-byte header, the file holds {have:,}",
+        )
+
+
 def load_raw(
     path: Path,
     shape: Sequence[int],
@@ -121,21 +147,10 @@ def load_raw(
     header_bytes: int = 0,
 ) -> Grid:
     """values[k, j, i] from x-fastest samples after `header_bytes` bytes."""
-    nx, ny, nz = _shape(path, shape)
-    if isinstance(header_bytes, bool) or not isinstance(header_bytes, int) or header_bytes < 0:
-        raise file_error(path, f"header_bytes must be a non-negative integer, got {header_bytes!r}")
+    (nx, ny, nz), dt = raw_layout(path, shape, dtype, byte_order, header_bytes)
     n_values = product((nx, ny, nz))
-    size = path.stat().st_size
-    dt = _dtype(path, dtype, byte_order, n_values, size - header_bytes)
-    expected = n_values * dt.itemsize
-    check_memory(path, f"shape {nx}x{ny}x{nz} {dt.newbyteorder('=')}", expected)
-    if size - header_bytes != expected:
-        raise file_error(
-            path,
-            f"dimensions do not match the data: shape {nx}x{ny}x{nz} of {dt.newbyteorder('=')} needs "
-            f"{expected:,} bytes after a {header_bytes:,}-byte header, the file holds "
-            f"{size - header_bytes:,}",
-        )
+    check_memory(path, f"shape {nx}x{ny}x{nz} {dt.newbyteorder('=')}", n_values * dt.itemsize)
+    check_raw_size(path, (nx, ny, nz), dt, header_bytes)
     try:
         values = np.fromfile(path, dtype=dt, count=n_values, offset=header_bytes)
     except (OSError, ValueError) as exc:
