@@ -12,7 +12,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from PyQt5.QtCore import Qt
-from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QDockWidget, QGroupBox, QScrollArea, QVBoxLayout, QWidget
 
 from volren.app.core.state import Change
@@ -26,6 +25,7 @@ from volren.app.panels import (
 )
 from volren.app.tf_editor.history import TFHistory
 from volren.app.tf_editor.panel import TransferFunctionPanel
+from volren.app.window.field_undo import FieldUndoKeys, set_undo_shortcuts
 from volren.renderers.base import KindSupport
 
 if TYPE_CHECKING:
@@ -92,9 +92,11 @@ class Docks:
         self.settings_dock.raise_()
 
         self.undo_action = self.history.stack.createUndoAction(window, "&Undo")
-        self.undo_action.setShortcut(QKeySequence.Undo)
         self.redo_action = self.history.stack.createRedoAction(window, "&Redo")
-        self.redo_action.setShortcut(QKeySequence.Redo)
+        set_undo_shortcuts(self.undo_action, self.redo_action)
+        #: Ctrl+Z in a number field undoes the app's edit once the value typed is entered.
+        self.field_undo = FieldUndoKeys(self.undo_action, self.redo_action, window)
+        self.field_undo.watch((self.tf_dock, self.settings_dock, self.dataset_dock))
         edit_menu = window.menuBar().addMenu("&Edit")
         edit_menu.addAction(self.undo_action)
         edit_menu.addAction(self.redo_action)
