@@ -213,13 +213,18 @@ def test_the_app_refines_only_up_to_the_memory_allowed(make_window, ini, fake_re
     """`volren view x.zarr --memory SIZE`: the refinement stops at the finest level within SIZE,
     and an image whose coarsest level is larger says so in one line."""
     pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
+    from volren.bricked.zarr_input import renderer_copy_bytes
     from volren.io.ome_zarr_io import save_ome_zarr
 
     full = UniformVolume(np.arange(20 * 24 * 28, dtype=np.uint16).reshape(20, 24, 28), name="c")
     path = tmp_path / "cells.zarr"
     save_ome_zarr(full, path, chunk=8, levels=3)
     w = make_window(settings=ini)
-    w.files.zarr_memory = 14 * 12 * 10 * 2  # level 1 (uint16) fits, level 0 does not
+    # level 1 drawn fits: its uint16 values and the copies of a renderer not measured (the most), as
+    # `volren render` counts them; level 0 does not, though its values alone would
+    drawn_per_voxel = 2 + renderer_copy_bytes("fake")
+    w.files.zarr_memory = 14 * 12 * 10 * drawn_per_voxel
+    assert 28 * 24 * 20 * 2 <= w.files.zarr_memory < 28 * 24 * 20 * drawn_per_voxel
     shown = []
     w.state.subscribe(lambda change: shown.append(w.state.volume.dimensions) if change.what == "volume" else None)
     with qtbot.waitSignal(w.files.loadFinished, timeout=TIMEOUT_MS):
@@ -231,7 +236,8 @@ def test_the_app_refines_only_up_to_the_memory_allowed(make_window, ini, fake_re
     w.files.open_input(path, renderer="fake")
     qtbot.waitUntil(lambda: len(error_boxes) == 1, timeout=TIMEOUT_MS)
     title, text = error_boxes[0]
-    assert title == "Cannot open" and "even the coarsest level (420 bytes) is more than the memory allowed" in text
+    assert title == "Cannot open" and ("even the coarsest level takes 6.6 KiB drawn by renderer fake (its values and "
+                                       "the renderer's copies), more than the memory allowed (100 bytes)") in text
     assert w.state.volume.dimensions == (14, 12, 10)  # what was shown stays
 
 

@@ -59,6 +59,20 @@ def test_a_renderer_that_cannot_stream_draws_the_finest_level_whose_copies_fit(f
             "17.1 KiB to draw even the coarsest level\n") in capsys.readouterr().err  # fmt: skip
 
 
+def test_the_level_read_whole_is_the_finest_whose_values_and_renderer_copies_fit(field_zarr):
+    """One count for `volren render` (a renderer that does not stream) and `volren view`."""
+    from volren.bricked.zarr_input import MOST_COPY_BYTES, finest_level_read_whole
+
+    image = ome_zarr_io.open_multiscale(field_zarr)
+    budget = 128 * 1024
+    voxels = [int(np.prod(level.shape)) for level in image.levels]
+    assert voxels[0] * (2 + RENDERER_COPY_BYTES["raycast"]) <= budget < voxels[0] * (2 + RENDERER_COPY_BYTES["slicer"])
+    assert finest_level_read_whole(image, budget, "raycast") == 0
+    assert finest_level_read_whole(image, budget, "slicer") == 1
+    assert finest_level_read_whole(image, budget, "auto") == 1  # not chosen yet: the most copies
+    assert finest_level_read_whole(image, voxels[1] * (2 + MOST_COPY_BYTES) - 1, "slicer") is None
+
+
 def test_a_streamed_level_leaves_room_beside_its_chunk_cache_for_the_brick_being_drawn(tmp_path):
     """The chunk cache takes its share of --memory less what drawing one brick takes: the brick's
     voxels with two ghost layers a side, at the values' bytes and the renderer's copies', twice."""

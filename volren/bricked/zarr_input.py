@@ -55,7 +55,16 @@ MOST_COPY_BYTES = max(RENDERER_COPY_BYTES.values())
 
 
 def renderer_copy_bytes(renderer: str) -> int:
+    """`RENDERER_COPY_BYTES` of `renderer`; the most for one not measured, or `auto` not yet chosen."""
     return RENDERER_COPY_BYTES.get(renderer, MOST_COPY_BYTES)
+
+
+def finest_level_read_whole(image: Multiscale, budget: int, renderer: str) -> int | None:
+    """The finest level `renderer` draws read whole within `budget` bytes, its copies of the level
+    counted (`renderer_copy_bytes`); None when not even the coarsest fits. The level `volren
+    render` draws with a renderer that does not stream bricks, and `volren view` refines up to
+    (the app reads every level whole)."""
+    return ome_zarr_io.finest_level_within(image, budget, renderer_copy_bytes(renderer))
 
 
 def least_memory(image: Multiscale) -> int:

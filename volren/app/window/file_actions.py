@@ -150,7 +150,7 @@ class FileActions(QObject):
         raw, refine = None, None
         if path is not None and series is None and is_ome_zarr(path):
             try:
-                raw, refine = self._coarse_first(path)
+                raw, refine = self._coarse_first(path, renderer)
             except VolrenError as exc:
                 self._report_error("Cannot open", str(exc))
                 return
@@ -166,17 +166,27 @@ class FileActions(QObject):
         context = {"path": path, "renderer": renderer, "series": series, "step": 0, "refine": refine}
         self.loader.start(series.steps[0] if series else path, tf, scalars, context=context, raw=raw)
 
-    def _coarse_first(self, path: PathArg) -> tuple[dict[str, int] | None, tuple[str, list[int]] | None]:
+    def _coarse_first(
+        self, path: PathArg, renderer: str | None
+    ) -> tuple[dict[str, int] | None, tuple[str, list[int]] | None]:
         """For an OME-Zarr image: read the coarsest level now and the finer ones after
-        (`LevelRefiner`), down to the finest within `zarr_memory`; (reader options, refinement)."""
-        from volren.io.ome_zarr_io import finest_level_within, human_size, level_bytes, open_multiscale
+        (`LevelRefiner`), down to the finest that the renderer drawing it takes within `zarr_memory`,
+        its copies counted as `volren render` counts them (`renderer` when requested, else the one
+        shown, or `auto`: not chosen yet, so counted as the one that copies most); (reader options,
+        refinement)."""
+        from volren.bricked.zarr_input import finest_level_read_whole, renderer_copy_bytes
+        from volren.io.ome_zarr_io import human_size, level_bytes, open_multiscale
 
+        following_auto = self._state.volume is None or self._renderers.auto
+        drawing = renderer or (AUTO if following_auto else self._state.renderer)
         image = open_multiscale(path)
-        finest = finest_level_within(image, self.zarr_memory)
+        finest = finest_level_read_whole(image, self.zarr_memory, drawing)
         coarsest = len(image.levels) - 1
         if finest is None:
-            raise VolrenError(f"{path}: even the coarsest level ({human_size(level_bytes(image.levels[-1]))}) is more "
-                              f"than the memory allowed ({human_size(self.zarr_memory)})")  # fmt: skip
+            drawn = human_size(level_bytes(image.levels[-1], renderer_copy_bytes(drawing)))
+            raise VolrenError(f"{path}: even the coarsest level takes {drawn} drawn by renderer {drawing} (its values "
+                              f"and the renderer's copies), more than the memory allowed "
+                              f"({human_size(self.zarr_memory)})")  # fmt: skip
         if finest >= coarsest:
             return {"level": coarsest}, None  # one level to read
         return {"level": coarsest}, (str(path), list(range(coarsest - 1, finest - 1, -1)))
