@@ -66,7 +66,7 @@ def test_a_tf_edit_in_the_real_window_changes_the_frame_on_screen():
     assert report["points_added"] == 1
     assert report["changed_fraction"] > 0.02, report
     assert report["frame_matches_screen"], report
-    assert report["round_trip"] == [2, True, True], report  # seeded 2D boxes, then the edited 1D TF back
+    assert report["round_trip"] == [2, True, True], report  # the 1D TF as a 2D band, then the edited 1D TF back
     enabled, tooltip, dims, _status = report["mesh_2d"]
     assert not enabled and "No renderer draws 2D transfer functions on tetrahedral volumes" in tooltip and dims == 1
 

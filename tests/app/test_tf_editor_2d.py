@@ -15,6 +15,7 @@ from volren.app.core.joint_histogram import joint_histogram, suggested_gradient_
 from volren.app.core.state import Change, ViewState, default_camera
 from volren.app.tf_editor.history import TFHistory
 from volren.app.tf_editor.two_d.editor import DEFAULT_OPACITY, TransferFunction2DEditor
+from volren.model.colormaps import VIRIDIS, color_stops
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
 from volren.model.volume import UniformVolume
@@ -296,33 +297,59 @@ def test_a_new_volume_recomputes_the_histogram(editor, state):
 
 
 # ---------------------------------------------------------------------------- 1D -> 2D
-def test_with_a_1d_tf_the_button_makes_a_2d_one(qtbot, editor, state, history):
-    old = TransferFunction1D.ramp(0.0, 1.7, opacity_unit_distance=0.3)
-    state.load(state.volume, old, state.camera)  # a fresh scene: no 2D TF of this volume to return to
+VIRIDIS_RAMP = TransferFunction1D(color_stops(VIRIDIS, 0.2, 1.5), [[0.2, 0.0], [1.5, 0.8]], 0.3)
+
+
+def use_2d(qtbot, editor, state, tf_1d: TransferFunction1D) -> TransferFunction2D:
+    """Load `tf_1d` in a fresh scene (no 2D TF of this volume to return to) and click the button."""
+    state.load(state.volume, tf_1d, state.camera)
     assert editor.use_2d_button.isVisibleTo(editor) and not editor.canvas.isVisibleTo(editor)
     assert editor.use_2d_button.isEnabled()
     qtbot.mouseClick(editor.use_2d_button, Qt.LeftButton)
-    tf = state.transfer_function
-    assert isinstance(tf, TransferFunction2D)
+    assert isinstance(state.transfer_function, TransferFunction2D)
+    return state.transfer_function
+
+
+def test_with_a_1d_tf_the_button_makes_a_2d_one_that_draws_the_same(qtbot, editor, state, history):
+    tf = use_2d(qtbot, editor, state, VIRIDIS_RAMP)
     assert tf.value_range == state.volume.value_range
     gmax = suggested_gradient_max(state.volume)
     assert tf.gradient_range == (0.0, gmax)
     assert tf.opacity_unit_distance == 0.3
-    # seeded from the 1D TF (issue 23): a box per stretch between its opacity points, over every
-    # gradient, with its colour and opacity at the stretch's middle
+    # colour and opacity along value as the 1D TF's, at every gradient magnitude: not a flat box
+    # of the ramp's middle colour and opacity
+    table = tf.table(n_values=181, n_gradients=9)
+    lut = VIRIDIS_RAMP.to_lut(181, tf.value_range)
+    assert np.abs(table - lut[None]).max() <= 1e-6
+    assert [w.type for w in tf.widgets] == ["1d"]
     lo, hi = tf.value_range
-    edges = sorted({lo, hi, *(x for x in old.opacity_points[:, 0] if lo < x < hi)})
-    assert [w.type for w in tf.widgets] == ["box"] * (len(edges) - 1)
-    for widget, a, b in zip(tf.widgets, edges[:-1], edges[1:], strict=True):
-        assert tuple(widget.value_range) == (a, b) and tuple(widget.gradient_range) == (0.0, gmax)
-        rgb, alpha = old.sample([(a + b) / 2])
-        assert widget.opacity == pytest.approx(alpha[0]) and tuple(widget.color) == pytest.approx(tuple(rgb[0]))
-        for g in (0.0, 0.5 * gmax, gmax):
-            _, a2 = tf.sample([(a + b) / 2], [g])
-            assert a2[0] == pytest.approx(alpha[0])
+    assert geometry.outline(tf.widgets[0]) == [(lo, 0.0), (hi, 0.0), (hi, gmax), (lo, gmax)]  # a full band
     assert editor.canvas.isVisibleTo(editor) and editor.canvas.transfer_function is tf
     history.undo()
     assert state.transfer_function.dims == 1
+
+
+def test_the_2d_tfs_band_drags_as_a_whole(qtbot, editor, state, history):
+    tf = use_2d(qtbot, editor, state, VIRIDIS_RAMP)
+    canvas = editor.canvas
+    band = tf.widgets[0]
+    start = canvas.to_pixel(0.9, 0.3 * tf.gradient_range[1]).toPoint()
+    end = start + QPoint(-30, -20)
+    ds, dg = np.subtract(canvas.to_data(end), canvas.to_data(start))
+    drag(qtbot, canvas, start, end)
+    moved = tf.widgets[0]
+    assert moved.type == "1d" and ds < 0 < dg
+    np.testing.assert_allclose(np.array(moved.color_points), np.array(band.color_points) + [ds, 0, 0, 0], rtol=1e-12)
+    np.testing.assert_allclose(np.array(moved.opacity_points), np.array(band.opacity_points) + [ds, 0], rtol=1e-12)
+    np.testing.assert_allclose(moved.gradient_range, np.add(band.gradient_range, dg), rtol=1e-12)
+    assert history.stack.count() == 2  # the switch to 2D, then the drag
+    editor.select(0)
+    handle = canvas.handle_pixel(0, "right")
+    drag(qtbot, canvas, handle, handle + QPoint(-40, 0))
+    stretched = tf.widgets[0]
+    s_lo, s_hi = stretched.opacity_points[0][0], stretched.opacity_points[-1][0]
+    assert s_lo == pytest.approx(moved.opacity_points[0][0], rel=1e-12)
+    assert s_hi == pytest.approx(canvas.to_data(handle + QPoint(-40, 0))[0], rel=1e-12)
 
 
 def test_switching_to_2d_and_back_keeps_both_tfs(qtbot, editor, state):
@@ -399,3 +426,20 @@ def test_hit_testing_follows_the_drawn_outlines():
         assert all(geometry.contains(widget, s, g) for s, g in geometry.outline(widget))
     radii = [((s - 0.9) / 0.2) ** 2 + ((g - 1.0) / 0.4) ** 2 for s, g in geometry.outline(GAUSSIAN)]
     np.testing.assert_allclose(radii, 1.0)
+
+
+def test_a_1d_band_moves_and_resizes_like_a_box():
+    band = TFWidget("1d", (1.0, 1.0, 1.0), 1.0, gradient_range=(0.5, 1.5),
+                    color_points=[[0.2, 1, 0, 0], [1.0, 0, 0, 1]], opacity_points=[[0.4, 0], [0.6, 1]])  # fmt: skip
+    assert geometry.contains(band, 0.2, 0.5) and geometry.contains(band, 1.0, 1.5)
+    assert not geometry.contains(band, 0.19, 1.0) and not geometry.contains(band, 0.5, 0.49)
+    moved = geometry.moved(band, 0.1, -5.0)  # the band stops at g = 0, keeping its height
+    assert moved.gradient_range == (0.0, 1.0)
+    np.testing.assert_allclose(moved.color_points, [[0.3, 1, 0, 0], [1.1, 0, 0, 1]], rtol=1e-15)
+    np.testing.assert_allclose(moved.opacity_points, [[0.5, 0], [0.7, 1]], rtol=1e-15)
+    # the left edge from 0.2 to 0.6: the points' span [0.2, 1] becomes [0.6, 1], linearly
+    narrowed = geometry.resized(band, "left", 0.6, 3.0, (0.01, 0.01))
+    np.testing.assert_allclose(narrowed.opacity_points, [[0.7, 0], [0.8, 1]], rtol=1e-15)
+    assert narrowed.gradient_range == (0.5, 1.5) and narrowed.color_points[0][0] == 0.6
+    lowered = geometry.resized(band, "bottom", 0.0, -1.0, (0.01, 0.01))
+    assert lowered.gradient_range == (0.0, 1.5) and lowered.opacity_points == band.opacity_points

@@ -176,3 +176,15 @@ def test_numbers_beyond_a_float_given_to_animation_are_one_line_errors(fields, m
     with pytest.raises(VolrenError, match=message) as exc:
         Animation(**fields)
     assert "\n" not in str(exc.value) and len(str(exc.value)) < 150
+
+
+def test_blended_1d_widgets_draw_the_blend_of_their_1d_tfs():
+    a = _tf1d([[0.1, 0.0], [0.5, 0.9], [0.5, 0.2], [0.8, 0.0]], [[0, 1, 0, 0], [1, 0, 0, 1]], 1.0)
+    b = _tf1d([[0.3, 0.6], [0.9, 0.1]], [[0.2, 0, 1, 0]], 1.0)
+    mix_1d = blend_transfer_functions(a, b, 0.25)
+    widgets = [TransferFunction2D((0, 1), (0, 2), [TFWidget.from_1d(tf, (0, 2))]) for tf in (a, b)]
+    mix_2d = blend_transfer_functions(*widgets, 0.25)
+    s = np.concatenate([np.linspace(-0.5, 1.5, 81), [0.5 - 1e-9, 0.5 + 1e-9]])
+    rgb, alpha = mix_2d.sample(s, 1.0)
+    np.testing.assert_allclose(alpha, mix_1d.sample(s)[1], atol=1e-12, rtol=0)
+    np.testing.assert_allclose(rgb, mix_1d.sample(s)[0], atol=1e-12, rtol=0)

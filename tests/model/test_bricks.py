@@ -379,3 +379,15 @@ def test_bad_volume_kind_and_mask():
         grid.stats(np.ones((1, 1, 1), bool))
     with pytest.raises(VolrenError, match="threshold"):
         grid.visible(TransferFunction1D.constant(1.0), threshold=float("nan"))
+
+
+def test_a_2d_tf_of_one_1d_widget_bounds_bricks_as_its_1d_tf():
+    """A 1d widget over the whole gradient axis is its 1D TF at every gradient: same bound."""
+    from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
+
+    values = np.random.default_rng(5).random((9, 9, 9))
+    grid = BrickGrid.from_array(values, 4)
+    tf = TransferFunction1D([[0, 1, 1, 1]], [[0.2, 0.0], [0.5, 0.8], [0.55, 0.1], [0.9, 0.0]])
+    tf2 = TransferFunction2D((0.0, 1.0), (0.0, 3.0), [TFWidget.from_1d(tf, (0.0, 3.0))])
+    np.testing.assert_allclose(grid.max_opacity(tf2, pad=0.01), grid.max_opacity(tf, pad=0.01), atol=1e-15, rtol=0)
+    assert grid.max_opacity(tf).max() > 0.5

@@ -294,3 +294,84 @@ def test_bad_dicts(change, fragment):
     with pytest.raises(VolrenError) as info:
         transfer_function_from_dict(data)
     assert fragment in str(info.value), str(info.value)
+
+
+# ------------------------------------------------------------------------------- 1d widgets
+STEPPED = TransferFunction1D(
+    [[0.0, 1.0, 0.0, 0.0], [8.0, 0.0, 1.0, 0.0], [8.0, 0.0, 0.0, 1.0], [16.0, 1.0, 1.0, 1.0]],
+    [[2.0, 0.0], [6.0, 0.7], [12.0, 0.2], [12.0, 0.9], [14.0, 0.0]],
+)
+ONE_D = TFWidget("1d", (0.5, 1.0, 0.8), 0.6, gradient_range=(1.0, 3.0),
+                 color_points=STEPPED.color_points, opacity_points=STEPPED.opacity_points)  # fmt: skip
+
+
+def test_a_1d_widget_is_its_1d_tf_scaled_and_tinted_inside_its_band():
+    s = np.linspace(-3.0, 19.0, 221)  # steps, kinks and both constant ends
+    rgb, alpha = STEPPED.sample(s)
+    for g, inside in ((1.0, True), (2.0, True), (3.0, True), (0.999, False), (3.001, False)):
+        np.testing.assert_array_equal(ONE_D.opacity_at(s, g), 0.6 * alpha if inside else 0.0)
+    np.testing.assert_array_equal(ONE_D.color_at(s), rgb * (0.5, 1.0, 0.8))
+    tf = TransferFunction2D((-3.0, 19.0), (0.0, 5.0), [ONE_D])
+    got_rgb, got_alpha = tf.sample(s, 2.0)
+    np.testing.assert_allclose(got_alpha, 0.6 * alpha, atol=1e-15, rtol=0)
+    # its colour also where it is transparent (as a 1D TF has one), none outside its band
+    np.testing.assert_allclose(got_rgb, rgb * (0.5, 1.0, 0.8), atol=1e-15, rtol=0)
+    assert np.all(tf.sample(s, 4.0)[0] == 0.0)
+
+
+def test_a_1d_widget_combines_with_the_others_as_widgets_do():
+    box = TFWidget.box((4.0, 10.0), (0.0, 5.0), BLUE, 0.5)
+    tf = TransferFunction2D((0.0, 16.0), (0.0, 5.0), [ONE_D, box])
+    s = np.array([1.0, 5.0, 7.0, 9.0, 13.0])
+    a1, a2 = ONE_D.opacity_at(s, 2.0), box.opacity_at(s, 2.0)
+    c1 = ONE_D.color_at(s)
+    rgb, alpha = tf.sample(s, 2.0)
+    np.testing.assert_allclose(alpha, 1 - (1 - a1) * (1 - a2), atol=1e-15)
+    weight = np.where(a1 + a2 > 0, a1 + a2, 1.0)[:, None]
+    expected = np.where((a1 + a2 > 0)[:, None], (a1[:, None] * c1 + a2[:, None] * BLUE) / weight, c1)
+    np.testing.assert_allclose(rgb, expected, atol=1e-15)
+
+
+def test_from_1d_draws_the_1d_tf_at_every_gradient():
+    tf = TransferFunction2D((-3.0, 19.0), (0.0, 5.0), [TFWidget.from_1d(STEPPED, (0.0, 5.0))], 2.0)
+    lut = STEPPED.to_lut(111, (-3.0, 19.0))
+    table = tf.table(111, 6)
+    assert np.abs(table - lut[None]).max() <= 1e-7
+
+
+def test_a_1d_widget_round_trips_through_json_and_validates():
+    tf = TransferFunction2D((0.0, 16.0), (0.0, 5.0), [ONE_D, TFWidget.box((1, 2), (0, 1), RED, 0.5)])
+    data = tf.to_dict()
+    assert data["widgets"][0] == {
+        "type": "1d", "color_points": STEPPED.color_points.tolist(), "opacity_points": STEPPED.opacity_points.tolist(),
+        "gradient_range": [1.0, 3.0], "color": [0.5, 1.0, 0.8], "opacity": 0.6,
+    }  # fmt: skip
+    assert transfer_function_from_dict(data) == tf and transfer_function_from_dict(data).to_dict() == data
+    back = TFWidget.from_dict(data["widgets"][0])
+    assert back == ONE_D and hash(back) == hash(ONE_D)
+
+
+@pytest.mark.parametrize(
+    "change, fragment",
+    [
+        ({"opacity_points": [[0, "a"]]}, "widget 0: 1d widget: opacity points must be numbers"),
+        ({"color_points": []}, "widget 0: 1d widget: colour points must be a non-empty list of 4-tuples"),
+        ({"opacity_points": [[0, 1.5]]}, "widget 0: 1d widget: opacity values must lie in [0, 1]"),
+        ({"gradient_range": [-1, 2]}, "widget 0: 1d widget: gradient_range must not start below 0"),
+        ({"opacity_points": None}, "widget 0: 1d widget: missing 'opacity_points'"),
+        ({"value_range": [0, 1]}, None),  # another type's key: kept, not used
+    ],
+)
+def test_bad_1d_widgets_are_one_line_saying_what(change, fragment):
+    data = TransferFunction2D((0.0, 16.0), (0.0, 5.0), [ONE_D]).to_dict()
+    data["widgets"][0].update(change)
+    data["widgets"][0] = {k: v for k, v in data["widgets"][0].items() if v is not None}
+    if fragment is None:
+        assert transfer_function_from_dict(data).widgets[0].extra == change
+        return
+    with pytest.raises(VolrenError) as info:
+        transfer_function_from_dict(data)
+    assert fragment in str(info.value) and "\n" not in str(info.value), str(info.value)
+    with pytest.raises(VolrenError, match="1d widget: 'center' does not apply"):
+        TFWidget("1d", RED, 1.0, center=(0, 0), gradient_range=(0, 1), color_points=[[0, 1, 1, 1]],
+                 opacity_points=[[0, 1]])  # fmt: skip

@@ -19,6 +19,7 @@ from tests.renderers.test_reference import (
     optical_depth_linear_opacity,
     render,
 )
+from volren.app.core.tf_seeding import seeded_2d
 from volren.errors import VolrenError
 from volren.model import (
     Camera,
@@ -29,8 +30,10 @@ from volren.model import (
     TransferFunction2D,
     UniformVolume,
 )
+from volren.model.colormaps import VIRIDIS, color_stops
 from volren.renderers.reference import ReferenceRenderer
 from volren.renderers.reference.tf2d import eval_tf2d, pack_tf2d
+from volren.samples import marschner_lobb
 from volren.testing.oracles import box_path_lengths
 from volren.testing.reference_images import reference_image, scene_key
 
@@ -61,7 +64,39 @@ def test_kernel_evaluation_matches_the_model():
     np.testing.assert_allclose(got[:, 3], alpha, atol=1e-15, rtol=0)
 
 
+def test_kernel_evaluates_1d_widgets_as_the_model():
+    stepped = TransferFunction1D([[0, 1, 0, 0], [0.5, 0, 1, 0], [0.5, 0, 0, 1], [1.5, 1, 1, 1]],
+                                 [[0.2, 0], [0.6, 0.7], [1.2, 0.1]])  # fmt: skip
+    tinted = TFWidget("1d", (0.5, 0.8, 1.0), 0.7, gradient_range=(1.0, 3.0), color_points=[[0, 0.2, 0.3, 0.4]],
+                      opacity_points=[[0.3, 0], [0.9, 1]])  # fmt: skip
+    gaussian = TFWidget.gaussian((0.5, 1.0), (0.3, 0.7), (0.9, 0.2, 0.1), 0.6)
+    tf = TransferFunction2D((-1.0, 2.0), (0.0, 3.0), [gaussian, TFWidget.from_1d(stepped, (0.5, 2.0)), tinted])
+    packed = pack_tf2d(tf)
+    rng = np.random.default_rng(1)
+    s = np.concatenate([rng.uniform(-2, 3, 600), [0.1, 5.0, 0.5, 1.2]])
+    g = np.concatenate([rng.uniform(-1, 4, 600), [0.7, 2.5, 1.0, 0.2]])  # transparent points in bands too
+    rgb, alpha = tf.sample(s, g)
+    got = np.array([eval_tf2d(packed, a, b) for a, b in zip(s, g)])
+    np.testing.assert_allclose(got[:, :3], rgb, atol=1e-15, rtol=0)
+    np.testing.assert_allclose(got[:, 3], alpha, atol=1e-15, rtol=0)
+
+
 # ----------------------------------------------------------------------- (a) value-only 2D TFs
+@pytest.mark.parametrize("shade", [False, True])
+def test_the_2d_tf_made_from_a_1d_tf_renders_the_1d_image(shade):
+    """What the editor's "Use a 2D transfer function" makes of a viridis ramp draws what the ramp
+    draws: both converge to the reference's tolerance (1e-5 per ray), so they agree to about it."""
+    vol = marschner_lobb(17)
+    lo, hi = vol.value_range
+    tf1 = TransferFunction1D(color_stops(VIRIDIS, lo, hi), [[lo, 0.0], [lo + 0.1 * (hi - lo), 0.0], [hi, 0.6]], 0.1)
+    tf2 = seeded_2d(tf1, (lo, hi), 1.0)  # gradients above 1 clamp to the top of the band
+    cam = Camera.orbit(vol.bounds, 30, 20)
+    img1, _ = render(vol, tf1, cam, 24, shade=shade)
+    img2, r2 = render(vol, tf2, cam, 24, shade=shade)
+    assert r2.last_frame.counters["unconverged_rays"] == 0 and img1[..., 3].max() > 0.9
+    assert np.sqrt(np.mean((img2 - img1) ** 2)) < 3e-6 and np.abs(img2 - img1).max() < 2e-5
+
+
 def two_boxes(gmax: float) -> tuple[TransferFunction2D, TransferFunction1D]:
     """Two boxes over every gradient, and the 1D TF with the same steps in value."""
     tf2 = TransferFunction2D(

@@ -374,6 +374,9 @@ def _max_opacity_2d(tf, lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDA
         elif widget.type == "gaussian":
             (s0, g0), _ = widget.center, widget.width
             peak = widget.opacity_at(np.clip(s0, s_lo, s_hi), min(g0, g_max))
+        elif widget.type == "1d":  # the same over its gradient band: its 1D TF's maximum
+            in_reach = widget.gradient_range[0] <= g_max
+            peak = widget.opacity * max_opacity_between(widget.profile(), s_lo, s_hi) * in_reach
         else:  # triangle: widest at the top of its gradient range (or of the TF's)
             peak = widget.opacity_at(np.clip(widget.value, s_lo, s_hi), min(widget.gradient_max, g_max))
         transmit *= 1.0 - peak

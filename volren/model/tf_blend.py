@@ -51,11 +51,18 @@ def _mix(a, b, weight: float):
     return (1 - weight) * a + weight * b
 
 
+def _blend_field(a, b, weight: float):
+    """A geometry field blended: numbers and pairs linearly, a 1d widget's points as 1D TFs blend."""
+    if isinstance(a, tuple) and isinstance(a[0], tuple):
+        return _blend_points(np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64), weight)
+    return _mix(a, b, weight)
+
+
 def _blend_widgets(a: TFWidget, b: TFWidget, weight: float, index: int) -> TFWidget:
     if a.type != b.type:
         raise VolrenError(f"cannot blend 2D transfer functions: widget {index} is a {a.type} in one and a {b.type} "
                           "in the other")  # fmt: skip
-    fields = {key: _mix(getattr(a, key), getattr(b, key), weight) for key in a.geometry}
+    fields = {key: _blend_field(getattr(a, key), getattr(b, key), weight) for key in a.geometry}
     return TFWidget(a.type, _mix(a.color, b.color, weight), _mix(a.opacity, b.opacity, weight), **fields)
 
 

@@ -18,11 +18,21 @@ The TF is a list of widgets, each an opacity bump a_i(s, g) (peak `opacity`) wit
               a_i = a (1 - |s - s0| / h(g))   for 0 < g <= gm and |s - s0| <= h(g)
               a_i = a                          for g = 0 and s = s0 (the apex)
               a_i = 0                          elsewhere (g < 0, g > gm, or outside the edges)
+    1d        a 1D TF as a band over gradient magnitude: color_points [[x, r, g, b], ...] and
+              opacity_points [[x, a], ...] (a 1D TF's colour and opacity, piecewise linear,
+              constant beyond the ends: c_p(s), a_p(s)), gradient_range [g_lo, g_hi] (closed):
+              a_i = a a_p(s)   for g_lo <= g <= g_hi, 0 outside
+              c_i = c c_p(s)   (componentwise; its `color` c tints the points' colours)
+              With color [1, 1, 1], opacity 1 and the band over [0, gmax] it draws exactly what
+              that 1D TF draws (`from_1d`), which is how the editor turns a 1D TF into a 2D one.
 
 Widgets combine per point (a contract the GPU renderer and the reference share):
 
     a = 1 - prod_i (1 - a_i)                          (independent absorbers)
-    c = sum_i a_i c_i / sum_i a_i                     (0 where every a_i is 0)
+    c = sum_i a_i c_i / sum_i a_i                     where some a_i > 0;
+        the mean c_i of the 1d widgets whose band holds g where every a_i is 0 (as a 1D TF
+        has a colour where it is transparent, so colour tables match the 1D TF's there too);
+        0 where there is none
 
 The TF is defined on the rectangle value_range x gradient_range = [lo, hi] x [0, gmax] and is
 constant beyond its edges, like a 1D TF beyond its end points: `sample` evaluates the widgets at
@@ -49,7 +59,7 @@ from volren.model.file_version import check_format_version
 from volren.model.transfer_function import MAX_OPACITY, TF_FORMAT_VERSION, TransferFunction1D
 from volren.model.versioned import Versioned
 
-WIDGET_TYPES = ("gaussian", "triangle", "box")
+WIDGET_TYPES = ("gaussian", "triangle", "box", "1d")
 
 #: The geometry keys of each widget type, in the order of its dataclass fields.
 GEOMETRY_KEYS: Mapping[str, tuple[str, ...]] = MappingProxyType(
@@ -57,9 +67,16 @@ GEOMETRY_KEYS: Mapping[str, tuple[str, ...]] = MappingProxyType(
         "gaussian": ("center", "width"),
         "triangle": ("value", "half_width", "gradient_max"),
         "box": ("value_range", "gradient_range"),
+        "1d": ("color_points", "opacity_points", "gradient_range"),
     }
 )
-_ALL_GEOMETRY = ("center", "width", "value", "half_width", "gradient_max", "value_range", "gradient_range")
+_ALL_GEOMETRY = (
+    "center", "width", "value", "half_width", "gradient_max", "value_range", "gradient_range", "color_points",
+    "opacity_points",
+)  # fmt: skip
+#: The keys whose values are lists of control points, not numbers or [lo, hi] pairs.
+_POINT_KEYS = ("color_points", "opacity_points")
+_EXPECTED_TYPES = "gaussian, triangle, box or 1d"
 _WIDGET_KEYS = {"type", "color", "opacity", *_ALL_GEOMETRY}
 #: Most widgets a 2D TF may have: renderers evaluate every widget at every sample (or texel), so
 #: the cost grows with their number; hand-made 2D TFs have a handful.
@@ -102,7 +119,7 @@ def _interval(value: Any, what: str, non_negative: bool = False) -> tuple[float,
 class TFWidget:
     """One widget of a 2D TF: an opacity bump over (value, gradient magnitude) in one colour.
 
-    Build one with `TFWidget.gaussian`, `TFWidget.box` or `TFWidget.triangle` (or the
+    Build one with `TFWidget.gaussian`, `TFWidget.box`, `TFWidget.triangle` or `TFWidget.from_1d` (or the
     constructor with the geometry fields of its `type`; the others stay None). Geometry is in
     data-value and gradient-magnitude (value per world unit) units; the formulas are in the
     module docstring. `extra` holds JSON keys this version does not know (kept on round trip,
@@ -124,8 +141,12 @@ class TFWidget:
     gradient_max: float | None = None
     #: box: [lo, hi] in value
     value_range: tuple[float, float] | None = None
-    #: box: [lo, hi] in gradient magnitude, 0 <= lo < hi
+    #: box and 1d: [lo, hi] in gradient magnitude, 0 <= lo < hi
     gradient_range: tuple[float, float] | None = None
+    #: 1d: a 1D TF's colour points ((x, r, g, b), ...), sorted by x
+    color_points: tuple[tuple[float, ...], ...] | None = None
+    #: 1d: a 1D TF's opacity points ((x, a), ...), sorted by x
+    opacity_points: tuple[tuple[float, ...], ...] | None = None
     extra: Mapping[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     # ------------------------------------------------------------------------ constructors
@@ -145,9 +166,17 @@ class TFWidget:
     ) -> TFWidget:
         return cls("triangle", color, opacity, value=value, half_width=half_width, gradient_max=gradient_max)  # type: ignore[arg-type]
 
+    @classmethod
+    def from_1d(cls, tf: TransferFunction1D, gradient_range: ArrayLike) -> TFWidget:
+        """The 1D TF `tf` as a band over `gradient_range`: within it, what `tf` draws."""
+        return cls(
+            "1d", (1.0, 1.0, 1.0), 1.0, gradient_range=gradient_range,  # type: ignore[arg-type]
+            color_points=tf.color_points, opacity_points=tf.opacity_points,  # type: ignore[arg-type]
+        )  # fmt: skip
+
     def __post_init__(self) -> None:
         if self.type not in WIDGET_TYPES:
-            raise VolrenError(f"unknown widget type {self.type!r} (expected gaussian, triangle or box)")
+            raise VolrenError(f"unknown widget type {self.type!r} (expected {_EXPECTED_TYPES})")
         label = f"{self.type} widget"
         set_ = object.__setattr__
         rgb = _numbers(self.color, 3, f"{label}: color")
@@ -179,6 +208,11 @@ class TFWidget:
         elif self.type == "box":
             set_(self, "value_range", _interval(self.value_range, f"{label}: value_range"))
             set_(self, "gradient_range", _interval(self.gradient_range, f"{label}: gradient_range", True))
+        elif self.type == "1d":
+            profile = self._checked_profile(label)
+            set_(self, "color_points", tuple(tuple(p) for p in profile.color_points.tolist()))
+            set_(self, "opacity_points", tuple(tuple(p) for p in profile.opacity_points.tolist()))
+            set_(self, "gradient_range", _interval(self.gradient_range, f"{label}: gradient_range", True))
         else:
             set_(self, "value", _number(self.value, f"{label}: value"))
             for key in ("half_width", "gradient_max"):
@@ -188,6 +222,13 @@ class TFWidget:
                 set_(self, key, number)
         set_(self, "extra", dict(self.extra))
 
+    def _checked_profile(self, label: str) -> TransferFunction1D:
+        """A 1d widget's points as a 1D TF: checked and sorted by the 1D TF's own rules."""
+        try:
+            return TransferFunction1D(self.color_points, self.opacity_points)  # type: ignore[arg-type]
+        except VolrenError as exc:
+            raise VolrenError(f"{label}: {exc}") from None
+
     # ------------------------------------------------------------------------------ values
     @property
     def geometry(self) -> dict[str, Any]:
@@ -195,8 +236,33 @@ class TFWidget:
         out: dict[str, Any] = {}
         for key in GEOMETRY_KEYS[self.type]:
             value = getattr(self, key)
-            out[key] = list(value) if isinstance(value, tuple) else value
+            if key in _POINT_KEYS:
+                out[key] = [list(point) for point in value]
+            else:
+                out[key] = list(value) if isinstance(value, tuple) else value
         return out
+
+    def profile(self) -> TransferFunction1D:
+        """A 1d widget's points as a new 1D TF (c_p and a_p of the module docstring)."""
+        if self.type != "1d":
+            raise VolrenError(f"a {self.type} widget has no 1D profile")
+        return TransferFunction1D(self.color_points, self.opacity_points)  # type: ignore[arg-type]
+
+    def color_at(self, values: ArrayLike) -> NDArray[np.float64]:
+        """c_i(s), (..., 3): the widget's colour, which only a 1d widget varies with the value."""
+        s = np.asarray(values, dtype=np.float64)
+        if self.type != "1d":
+            return np.broadcast_to(np.asarray(self.color), s.shape + (3,))
+        rgb, _ = self.profile().sample(s)
+        return rgb * np.asarray(self.color)
+
+    def in_band(self, gradients: ArrayLike) -> NDArray[np.bool_]:
+        """Where a 1d widget's gradient band holds g (False for the other types)."""
+        g = np.asarray(gradients, dtype=np.float64)
+        if self.type != "1d":
+            return np.zeros(g.shape, dtype=bool)
+        g_lo, g_hi = self.gradient_range  # type: ignore[misc]
+        return (g >= g_lo) & (g <= g_hi)
 
     def opacity_at(self, values: ArrayLike, gradients: ArrayLike) -> NDArray[np.float64]:
         """a_i(s, g) (not clamped to any range), broadcast over `values` and `gradients`."""
@@ -211,6 +277,9 @@ class TFWidget:
             (s_lo, s_hi), (g_lo, g_hi) = self.value_range, self.gradient_range  # type: ignore[misc]
             inside = (s >= s_lo) & (s <= s_hi) & (g >= g_lo) & (g <= g_hi)
             return np.where(inside, peak, 0.0)
+        if self.type == "1d":
+            _, alpha = self.profile().sample(s)
+            return np.where(self.in_band(g), peak * alpha, 0.0)
         s0, w, gm = self.value, self.half_width, self.gradient_max
         d = np.abs(s - s0)  # type: ignore[operator]
         h = w * g / gm  # type: ignore[operator]
@@ -232,9 +301,9 @@ class TFWidget:
             raise VolrenError(f"must be a JSON object, got {type(data).__name__}")
         kind = data.get("type")
         if kind is None:
-            raise VolrenError("missing 'type' (gaussian, triangle or box)")
+            raise VolrenError(f"missing 'type' ({_EXPECTED_TYPES})")
         if kind not in WIDGET_TYPES:
-            raise VolrenError(f"unknown type {kind!r} (expected gaussian, triangle or box)")
+            raise VolrenError(f"unknown type {kind!r} (expected {_EXPECTED_TYPES})")
         for key in ("color", "opacity", *GEOMETRY_KEYS[kind]):
             if key not in data:
                 raise VolrenError(f"{kind} widget: missing {key!r}")
@@ -242,6 +311,11 @@ class TFWidget:
         geometry = {key: data[key] for key in GEOMETRY_KEYS[kind]}
         extra = {k: v for k, v in data.items() if k not in own}
         return cls(kind, data["color"], data["opacity"], extra=extra, **geometry)
+
+
+def _nonzero(total: NDArray[np.float64]) -> NDArray[np.float64]:
+    """`total` (...) as a divisor (..., 1), 1 where it is 0 (where the numerator is 0 too)."""
+    return np.where(total > 0, total, 1.0)[..., None]
 
 
 class TransferFunction2D(Versioned):
@@ -376,14 +450,19 @@ class TransferFunction2D(Versioned):
         transmit = np.ones(s.shape)
         weight = np.zeros(s.shape)
         rgb = np.zeros(s.shape + (3,))
+        bands = np.zeros(s.shape)  # 1d widgets whose band holds g, and the sum of their colours
+        band_rgb = np.zeros(s.shape + (3,))
         for widget in self._widgets:
             a = widget.opacity_at(s, g)
+            color = widget.color_at(s)
             transmit *= 1.0 - a
             weight += a
-            rgb += a[..., None] * np.asarray(widget.color)
+            rgb += a[..., None] * color
+            in_band = widget.in_band(g)
+            bands += in_band
+            band_rgb += in_band[..., None] * color
         alpha = np.where(bad, 0.0, np.clip(1.0 - transmit, 0.0, 1.0))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rgb = np.where((weight > 0)[..., None], rgb / np.where(weight > 0, weight, 1.0)[..., None], 0.0)
+        rgb = np.where((weight > 0)[..., None], rgb / _nonzero(weight), band_rgb / _nonzero(bands))
         rgb = np.clip(rgb, 0.0, 1.0)
         rgb[bad] = 0.0
         return rgb, alpha

@@ -13,6 +13,10 @@ What is drawn and dragged (s = data value, g = gradient magnitude):
 - triangle: apex (s0, 0), top corners (s0 -+ w, gm); the top corners set the half-width and the
   height, the top edge's midpoint the height only. The apex stays on g = 0 (the model's
   triangle has no other apex), so moving it changes the value only.
+- 1d (a 1D TF as a band over gradient magnitude): the rectangle from its first to its last
+  control point in value over its gradient band, handled like a box: a move shifts every point
+  and the band, a left or right handle stretches the points linearly over the new value span,
+  the top and bottom handles move the band's edges.
 
 Sizes never fall below the `minimum` the caller passes (a small fraction of the axes), and
 nothing moves below g = 0.
@@ -21,6 +25,7 @@ nothing moves below g = 0.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -38,13 +43,19 @@ _BOX_HANDLES = ("bottom_left", "bottom", "bottom_right", "right", "top_right", "
 _TRIANGLE_HANDLES = ("top_left", "top", "top_right")
 
 
+def _point_span(widget: TFWidget) -> Point:
+    """(first, last) control-point value of a 1d widget, colour and opacity points together."""
+    xs = [p[0] for p in widget.color_points] + [p[0] for p in widget.opacity_points]  # type: ignore[union-attr]
+    return (min(xs), max(xs))
+
+
 def center(widget: TFWidget) -> Point:
-    """The point a move drags: the Gaussian's peak, the box's centre, the triangle's centroid."""
+    """The point a move drags: the Gaussian's peak, the box's (or 1d band's) centre, the triangle's centroid."""
     if widget.type == "gaussian":
         return widget.center  # type: ignore[return-value]
-    if widget.type == "box":
-        (s0, s1), (g0, g1) = widget.value_range, widget.gradient_range  # type: ignore[misc]
-        return (0.5 * (s0 + s1), 0.5 * (g0 + g1))
+    if widget.type in ("box", "1d"):
+        s_lo, s_hi, g_lo, g_hi = _extent(widget)
+        return (0.5 * (s_lo + s_hi), 0.5 * (g_lo + g_hi))
     return (widget.value, 2.0 * widget.gradient_max / 3.0)  # type: ignore[operator, return-value]
 
 
@@ -57,6 +68,8 @@ def _extent(widget: TFWidget) -> tuple[float, float, float, float]:
     if widget.type == "box":
         (s0, s1), (g0, g1) = widget.value_range, widget.gradient_range  # type: ignore[misc]
         return (s0, s1, g0, g1)
+    if widget.type == "1d":
+        return (*_point_span(widget), *widget.gradient_range)  # type: ignore[return-value, misc]
     s0, w, gm = widget.value, widget.half_width, widget.gradient_max
     return (s0 - w, s0 + w, 0.0, gm)  # type: ignore[operator, return-value]
 
@@ -69,7 +82,7 @@ def outline(widget: TFWidget) -> list[Point]:
         e = GAUSSIAN_EXTENT
         return [(s0 + e * ws * math.cos(a), g0 + e * wg * math.sin(a)) for a in angles]
     s_lo, s_hi, g_lo, g_hi = _extent(widget)
-    if widget.type == "box":
+    if widget.type in ("box", "1d"):
         return [(s_lo, g_lo), (s_hi, g_lo), (s_hi, g_hi), (s_lo, g_hi)]
     return [(widget.value, 0.0), (s_hi, g_hi), (s_lo, g_hi)]  # type: ignore[list-item]
 
@@ -99,7 +112,7 @@ def contains(widget: TFWidget, s: float, g: float) -> bool:
         e = GAUSSIAN_EXTENT
         return ((s - s0) / (e * ws)) ** 2 + ((g - g0) / (e * wg)) ** 2 <= 1.0
     s_lo, s_hi, g_lo, g_hi = _extent(widget)
-    if widget.type == "box":
+    if widget.type in ("box", "1d"):
         return s_lo <= s <= s_hi and g_lo <= g <= g_hi
     w, gm = widget.half_width, widget.gradient_max
     return 0.0 <= g <= gm and abs(s - widget.value) <= w * g / gm  # type: ignore[operator]
@@ -114,7 +127,30 @@ def moved(widget: TFWidget, ds: float, dg: float) -> TFWidget:
         (s0, s1), (g0, g1) = widget.value_range, widget.gradient_range  # type: ignore[misc]
         dg = max(dg, -g0)
         return replace(widget, value_range=(s0 + ds, s1 + ds), gradient_range=(g0 + dg, g1 + dg))
+    if widget.type == "1d":
+        g0, g1 = widget.gradient_range  # type: ignore[misc]
+        dg = max(dg, -g0)
+        return _points_mapped(replace(widget, gradient_range=(g0 + dg, g1 + dg)), lambda x: x + ds)
     return replace(widget, value=widget.value + ds)  # type: ignore[operator]
+
+
+def _points_mapped(widget: TFWidget, new_x: Callable[[float], float]) -> TFWidget:
+    """A 1d widget with every control point's value x moved to new_x(x), colours and opacities kept."""
+    return replace(
+        widget,
+        color_points=[(new_x(x), *rest) for x, *rest in widget.color_points],  # type: ignore[union-attr]
+        opacity_points=[(new_x(x), *rest) for x, *rest in widget.opacity_points],  # type: ignore[union-attr]
+    )
+
+
+def _resized_band(widget: TFWidget, handle: str, s: float, g: float, minimum: Point) -> TFWidget:
+    """A 1d widget's resize: its value span as a box's, its points stretched linearly onto it."""
+    old_lo, old_hi, g_lo, g_hi = _extent(widget)
+    as_box = resized(TFWidget.box((old_lo, max(old_hi, old_lo + minimum[0])), (g_lo, g_hi), widget.color, 0.0),
+                     handle, s, g, minimum)  # fmt: skip
+    (new_lo, new_hi), band = as_box.value_range, as_box.gradient_range  # type: ignore[misc]
+    scale = (new_hi - new_lo) / (old_hi - old_lo) if old_hi > old_lo else 0.0
+    return _points_mapped(replace(widget, gradient_range=band), lambda x: new_lo + (x - old_lo) * scale)
 
 
 def resized(widget: TFWidget, handle: str, s: float, g: float, minimum: Point) -> TFWidget:
@@ -122,6 +158,8 @@ def resized(widget: TFWidget, handle: str, s: float, g: float, minimum: Point) -
     min_s, min_g = minimum
     if handle not in handles(widget):
         raise ValueError(f"a {widget.type} widget has no handle {handle!r}")
+    if widget.type == "1d":
+        return _resized_band(widget, handle, s, g, minimum)
     horizontal = "left" in handle or "right" in handle
     vertical = "top" in handle or "bottom" in handle
     if widget.type == "gaussian":

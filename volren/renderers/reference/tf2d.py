@@ -7,7 +7,8 @@ refinement instead, with the same exact-exponential pieces and the same converge
 leaves the 1D path (`ray_integral`, `uniform.render_uniform`) untouched.
 
 The TF is evaluated exactly as `TransferFunction2D.sample` defines it (`eval_tf2d`: the widget
-formulas, clamping to the TF's rectangle, a = 1 - prod(1 - a_i), c = sum a_i c_i / sum a_i), at
+formulas, a 1d widget's points as `tf_eval.interp` evaluates a 1D TF's, clamping to the TF's
+rectangle, a = 1 - prod(1 - a_i), c = sum a_i c_i / sum a_i), at
 s = the trilinear interpolant and g = |grad s|, where grad s is exactly the gradient the shading
 uses: central differences at the grid points in world units (one-sided at the borders),
 interpolated trilinearly like the scalars (`uniform.build_intervals` with its gradient cubics on).
@@ -15,8 +16,9 @@ Non-finite s or g (next to NaN voxels) is transparent, like `sample`.
 
 Per ray (composite only; the capabilities offer no other blend mode with a 2D TF):
 1. Cuts, per interval (cell): critical points of s and crossings of the value edges of the box
-   widgets and of the triangles' centre lines s = s0 (exact roots, `ray_integral._interval_cuts`);
-   crossings of |grad s| with the box widgets' gradient edges and the triangles' gradient_max
+   widgets, of the triangles' centre lines s = s0 and of the 1d widgets' control points (exact
+   roots, `ray_integral._interval_cuts`); crossings of |grad s| with the box and 1d widgets'
+   gradient edges and the triangles' gradient_max
    (the opacity jumps there), and with the no-shading threshold when shading (the colour jumps
    there); crossings of the triangles' edges |s - s0| = (w / gm) |grad s|; and, when the TF has
    a Gaussian or a triangle, the critical points of |grad s|. Along the interval |grad s|^2 and
@@ -30,8 +32,8 @@ Per ray (composite only; the capabilities offer no other blend mode with a 2D TF
    to 6 standard deviations) meets the piece's span of (s, g) (exact, from its ends: both are
    monotone), s changes by at most FRACTION of the widget's value scale and g by at most
    FRACTION of its gradient scale (Gaussian: its standard deviations; triangle: its half-width
-   at the piece's largest g, at least 1/64 of half_width, and gradient_max; box: none, it is
-   constant between cuts), and when shading the normal turns by at most SHADING_TURN; at most
+   at the piece's largest g, at least 1/64 of half_width, and gradient_max; box and 1d: none,
+   they are constant and linear in s between cuts), and when shading the normal turns by at most SHADING_TURN; at most
    MAX_SUBDIVISION sub-pieces (hits counted).
 3. Level L bisects every level-0 sub-piece L times (as in the 1D path).
 4. A sub-piece of length l: tau from the TF at its midpoint, x = tau l, alpha = 1 - exp(-x),
@@ -54,6 +56,7 @@ from numba import njit, prange
 
 from volren.kernels.box_clipping import clip_box
 from volren.kernels.shading import half_vector, shade
+from volren.kernels.tf_eval import interp
 from volren.model.preintegration.segment_math import emission_centre
 from volren.model.transfer_function import MAX_OPACITY
 from volren.model.transfer_function_2d import TransferFunction2D
@@ -71,28 +74,29 @@ from volren.renderers.reference.ray_integral import (
 )
 from volren.renderers.reference.uniform import build_intervals
 
-GAUSSIAN, TRIANGLE, BOX = 0, 1, 2
-_TYPES = {"gaussian": GAUSSIAN, "triangle": TRIANGLE, "box": BOX}
+GAUSSIAN, TRIANGLE, BOX, PROFILE = 0, 1, 2, 3
+_TYPES = {"gaussian": GAUSSIAN, "triangle": TRIANGLE, "box": BOX, "1d": PROFILE}
 #: A Gaussian counts as present within this many standard deviations (exp(-18) ~ 1.5e-8).
 GAUSSIAN_REACH = 6.0
 #: A triangle's value scale near its apex is at least this fraction of its half_width.
 TRIANGLE_MIN_SCALE = 1.0 / 64.0
 
-PackedTF2D = tuple  # (types, params, rgb, peak, rect, unit, value_cuts, gradient_cuts, support)
+PackedTF2D = tuple  # (types, params, rgb, peak, rect, unit, value_cuts, gradient_cuts, support, *profiles)
 
 
 def pack_tf2d(tf: TransferFunction2D) -> PackedTF2D:
     """The TF as arrays for the kernels:
 
-    types (n,) int64        GAUSSIAN, TRIANGLE or BOX per widget
+    types (n,) int64        GAUSSIAN, TRIANGLE, BOX or PROFILE (1d) per widget
     params (n, 4)           gaussian (s0, g0, ws, wg); triangle (s0, w, gm, 0);
-                            box (s_lo, s_hi, g_lo, g_hi)
-    rgb (n, 3), peak (n,)   colour and peak opacity
+                            box (s_lo, s_hi, g_lo, g_hi); 1d (g_lo, g_hi, 0, 0)
+    rgb (n, 3), peak (n,)   colour and peak opacity (a 1d widget's tint and opacity scale)
     rect (3,)               (lo, hi, gmax): the TF's rectangle, inputs are clamped to it
     unit                    opacity_unit_distance
     value_cuts              sorted box value edges and triangle centres inside (lo, hi)
     gradient_cuts           sorted box gradient edges and triangle tops inside (0, gmax)
     support (n, 4)          (s_min, s_max, g_min, g_max) outside which a widget is ~0
+    *profiles               the 1d widgets' points (six arrays, `_pack_profiles`)
     """
     widgets = tf.widgets
     n = len(widgets)
@@ -120,11 +124,17 @@ def pack_tf2d(tf: TransferFunction2D) -> PackedTF2D:
             support[i] = (s0 - hw, s0 + hw, 0.0, gm)  # type: ignore[operator]
             vcuts.append(s0)  # type: ignore[arg-type]  # a kink along the centre line
             gcuts.append(gm)  # type: ignore[arg-type]
-        else:
+        elif w.type == "box":
             (s_lo, s_hi), (g_lo, g_hi) = w.value_range, w.gradient_range  # type: ignore[misc]
             params[i] = (s_lo, s_hi, g_lo, g_hi)
             support[i] = (s_lo, s_hi, g_lo, g_hi)
             vcuts += [s_lo, s_hi]
+            gcuts += [g_lo, g_hi]
+        else:  # 1d: its kinks in value, its band's edges in gradient
+            g_lo, g_hi = w.gradient_range  # type: ignore[misc]
+            params[i] = (g_lo, g_hi, 0.0, 0.0)
+            support[i] = (-math.inf, math.inf, g_lo, g_hi)
+            vcuts += w.profile().breakpoints().tolist()
             gcuts += [g_lo, g_hi]
     value_cuts = np.unique(np.asarray([v for v in vcuts if lo < v < hi], dtype=np.float64))
     gradient_cuts = np.unique(np.asarray([g for g in gcuts if 0.0 < g < gmax], dtype=np.float64))
@@ -139,7 +149,40 @@ def pack_tf2d(tf: TransferFunction2D) -> PackedTF2D:
         value_cuts,
         gradient_cuts,
         support,
+        *_pack_profiles(widgets),
     )
+
+
+def _pack_profiles(widgets) -> tuple:
+    """The 1d widgets' points, all widgets' in one array each (empty for the other types):
+    (color_start (n + 1,), color_x, color_rgb (., 3), opacity_start (n + 1,), opacity_x, opacity_a);
+    widget i's colour points are rows color_start[i]:color_start[i + 1]."""
+    color = [np.asarray(w.color_points if w.type == "1d" else np.zeros((0, 4))) for w in widgets]
+    opacity = [np.asarray(w.opacity_points if w.type == "1d" else np.zeros((0, 2))) for w in widgets]
+    color_all = np.concatenate([np.zeros((0, 4)), *color]).astype(np.float64)
+    opacity_all = np.concatenate([np.zeros((0, 2)), *opacity]).astype(np.float64)
+    return (
+        np.cumsum([0] + [len(c) for c in color]).astype(np.int64),
+        np.ascontiguousarray(color_all[:, 0]),
+        np.ascontiguousarray(color_all[:, 1:4]),
+        np.cumsum([0] + [len(o) for o in opacity]).astype(np.int64),
+        np.ascontiguousarray(opacity_all[:, 0]),
+        np.ascontiguousarray(opacity_all[:, 1]),
+    )
+
+
+@njit(cache=True)
+def _profile_opacity(tf, i, s):
+    """a_p(s) of 1d widget i (tf[9:15]: `_pack_profiles`)."""
+    lo, hi = tf[12][i], tf[12][i + 1]
+    return min(max(interp(tf[13][lo:hi], tf[14][lo:hi], s), 0.0), 1.0)
+
+
+@njit(cache=True)
+def _profile_color(tf, i, s, channel):
+    """One channel of c_p(s) of 1d widget i."""
+    lo, hi = tf[9][i], tf[9][i + 1]
+    return min(max(interp(tf[10][lo:hi], tf[11][lo:hi, channel], s), 0.0), 1.0)
 
 
 @njit(cache=True)
@@ -179,19 +222,40 @@ def eval_tf2d(tf, s, g):
     r = 0.0
     gr = 0.0
     b = 0.0
+    bands = 0  # 1d widgets whose band holds g, and the sum of their colours
+    band_r = 0.0
+    band_g = 0.0
+    band_b = 0.0
     for i in range(types.shape[0]):
-        a = widget_opacity(types[i], params[i], peak[i], s, g)
+        wr, wg, wb = rgb[i, 0], rgb[i, 1], rgb[i, 2]
+        if types[i] == PROFILE:
+            a = 0.0
+            if params[i, 0] <= g <= params[i, 1]:
+                a = peak[i] * _profile_opacity(tf, i, s)
+                wr *= _profile_color(tf, i, s, 0)
+                wg *= _profile_color(tf, i, s, 1)
+                wb *= _profile_color(tf, i, s, 2)
+                bands += 1
+                band_r += wr
+                band_g += wg
+                band_b += wb
+        else:
+            a = widget_opacity(types[i], params[i], peak[i], s, g)
         if a > 0.0:
             transmit *= 1.0 - a
             weight += a
-            r += a * rgb[i, 0]
-            gr += a * rgb[i, 1]
-            b += a * rgb[i, 2]
+            r += a * wr
+            gr += a * wg
+            b += a * wb
     alpha = min(max(1.0 - transmit, 0.0), 1.0)
     if weight > 0.0:
         r = min(max(r / weight, 0.0), 1.0)
         gr = min(max(gr / weight, 0.0), 1.0)
         b = min(max(b / weight, 0.0), 1.0)
+    elif bands > 0:
+        r = min(max(band_r / bands, 0.0), 1.0)
+        gr = min(max(band_g / bands, 0.0), 1.0)
+        b = min(max(band_b / bands, 0.0), 1.0)
     return r, gr, b, alpha
 
 
@@ -311,7 +375,7 @@ def _interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
     gcuts = tf[7]
     smooth = False  # a Gaussian or a triangle: cut where |grad s| turns, too
     for i in range(tf[0].shape[0]):
-        if tf[0][i] != BOX:
+        if tf[0][i] == GAUSSIAN or tf[0][i] == TRIANGLE:
             smooth = True
     if gcuts.shape[0] > 0 or shading or smooth:
         h2 = np.empty(7)
@@ -388,7 +452,7 @@ def _subdivision(tf, s0, s1, g0, gm, g1):
     q = 1.0
     for i in range(types.shape[0]):
         kind = types[i]
-        if kind == BOX:
+        if kind == BOX or kind == PROFILE:
             continue
         if shi < support[i, 0] or slo > support[i, 1] or ghi < support[i, 2] or glo > support[i, 3]:
             continue

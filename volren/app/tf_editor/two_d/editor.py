@@ -8,8 +8,8 @@ that object in place (the state announces each edit, `TFHistory` makes it undoab
 state gets another TF object (undo, a file opened, a new volume) it simply shows the new one. It
 never keeps a copy of the TF, so there is nothing to get out of step, and syncing its controls
 never writes back (their signals are blocked meanwhile). With a 1D TF it offers to start a 2D one
-over the volume's value range and robust gradient range (`core.joint_histogram`), holding one
-boundary-emphasis triangle.
+over the volume's value range and robust gradient range (`core.joint_histogram`) that draws what
+the 1D TF draws (`core.tf_seeding`).
 
 Dual-domain picking: the main window passes `core.picking.pick`'s (value, gradient magnitude) to
 `place_widget_at`, which adds a small Gaussian there and selects it.
@@ -59,7 +59,7 @@ _MESSAGE_1D = (
     "The transfer function is 1D. A 2D transfer function assigns colour and opacity over value and "
     "gradient magnitude, which separates the boundaries between materials from the materials."
 )
-_USE_2D_TIP = "Switch to a 2D transfer function that draws what the 1D one draws (boxes over every gradient magnitude)"
+_USE_2D_TIP = "Switch to a 2D transfer function that draws what the 1D one draws (a band over every gradient magnitude)"
 _MESSAGE_NO_VOLUME = "Open a volume to edit a 2D transfer function over its values and gradient magnitudes."
 
 
@@ -314,8 +314,8 @@ class TransferFunction2DEditor(QWidget):
 
     def use_2d_transfer_function(self) -> None:
         """Replace the 1D TF with a 2D one: the 2D TF this volume had before, or one seeded from
-        the 1D TF (`seeded_2d`: what it drew, as boxes over every gradient magnitude) over the
-        volume's value and robust gradient ranges."""
+        the 1D TF (`seeded_2d`: what it drew, as one 1d widget over every gradient magnitude) over
+        the volume's value and robust gradient ranges."""
         volume = self._state.volume
         if volume is None or self._two_d_reason(volume.kind) is not None:
             return

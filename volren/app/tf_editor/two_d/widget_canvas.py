@@ -24,7 +24,17 @@ from dataclasses import dataclass
 
 import numpy as np
 from PyQt5.QtCore import QEvent, QPoint, QPointF, QRectF, QSize, Qt, pyqtSignal
-from PyQt5.QtGui import QColor, QImage, QKeyEvent, QMouseEvent, QPainter, QPaintEvent, QPen, QPolygonF
+from PyQt5.QtGui import (
+    QColor,
+    QImage,
+    QKeyEvent,
+    QLinearGradient,
+    QMouseEvent,
+    QPainter,
+    QPaintEvent,
+    QPen,
+    QPolygonF,
+)
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 from volren.app.core import tf_widget_geometry as geometry
@@ -39,6 +49,8 @@ HANDLE_RADIUS = 6.0
 MARGINS = (6.0, 6.0, 6.0, 18.0)
 #: The smallest widget size a resize leaves, as a fraction of each axis.
 MIN_SIZE_FRACTION = 1e-3
+#: Most colour stops a 1d widget's fill has (a 1D TF may have thousands of points).
+BAND_STOPS = 256
 
 _BACKGROUND = QColor(28, 28, 32)
 _EMPTY_PLOT = QColor(12, 12, 14)
@@ -350,8 +362,11 @@ class TFWidgetCanvas(QWidget):
         self._paint_readout(painter, plot)
 
     def _paint_widget(self, painter: QPainter, widget: TFWidget, selected: bool) -> None:
-        r, g, b = widget.color
-        painter.setBrush(QColor.fromRgbF(r, g, b, widget.opacity))
+        if widget.type == "1d":
+            painter.setBrush(self._band_brush(widget))
+        else:
+            r, g, b = widget.color
+            painter.setBrush(QColor.fromRgbF(r, g, b, widget.opacity))
         painter.setPen(QPen(_SELECTED if selected else _OUTLINE, 2.0 if selected else 1.0))
         painter.drawPolygon(QPolygonF([self.to_pixel(s, gm) for s, gm in geometry.outline(widget)]))
         if selected:
@@ -361,6 +376,19 @@ class TFWidgetCanvas(QWidget):
             for s, gm in geometry.handles(widget).values():
                 p = self.to_pixel(s, gm)
                 painter.drawRect(QRectF(p.x() - half, p.y() - half, 2 * half, 2 * half))
+
+    def _band_brush(self, widget: TFWidget) -> QLinearGradient:
+        """A 1d widget's fill: its colour and opacity along value, as the other widgets show theirs."""
+        xs = widget.profile().breakpoints()
+        if len(xs) > BAND_STOPS:
+            xs = np.linspace(xs[0], xs[-1], BAND_STOPS)
+        rgb = widget.color_at(xs)
+        alpha = widget.opacity_at(xs, widget.gradient_range[0])  # type: ignore[index]
+        gradient = QLinearGradient(self.to_pixel(xs[0], 0.0), self.to_pixel(xs[-1], 0.0))
+        span = xs[-1] - xs[0]
+        for x, (r, g, b), a in zip(xs, rgb, alpha, strict=True):
+            gradient.setColorAt((x - xs[0]) / span if span > 0 else 0.0, QColor.fromRgbF(r, g, b, a))
+        return gradient
 
     def _paint_labels(self, painter: QPainter, plot: QRectF) -> None:
         lo, hi, gmax = self._axes()
