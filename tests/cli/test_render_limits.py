@@ -111,6 +111,8 @@ def _ramp(lo: float, hi: float, floor: float = 0.0) -> TransferFunction1D:
     [
         (_ramp(1000, 2000), ["opacity is 0", "[1000, 2000]", "[0, 1]"]),
         (TransferFunction1D([[0, 1, 1, 1]], [[-5, 0], [0.5, 0], [0.7, 0], [9, 0]]), ["opacity is 0"]),
+        # a step down at the range's bottom: its other side holds values below the data's
+        (TransferFunction1D([[0, 1, 1, 1]], [[-1, 0.3], [0, 0.3], [0, 0], [1, 0]]), ["opacity is 0"]),
         (_ramp(1000, 2000, floor=0.5), ["misses", "[1000, 2000]", "[0, 1]"]),
         (_ramp(-3, -1, floor=0.2), ["misses"]),
         (TransferFunction2D((0, 1), (0, 1), []), ["no widget"]),
@@ -128,6 +130,10 @@ def test_coverage_problems_name_both_ranges(tf, words):
         _ramp(0, 1),
         _ramp(-10, 0.5),  # visible over half the data
         TransferFunction1D([[0, 1, 1, 1]], [[0.2, 0], [0.3, 0.4], [0.4, 0]]),  # a peak inside only
+        # a ramp that drops to 0 at once (a step: two points at 0.75), as oxygen's default TF: it was
+        # called black because the TF sampled at the step gives the side after it
+        TransferFunction1D([[0, 1, 1, 1]], [[0, 0], [0.07, 0], [0.75, 0.2], [0.75, 0], [1, 0]]),
+        TransferFunction1D([[0, 1, 1, 1]], [[0, 0], [1, 0.2], [1, 0]]),  # the step at the range's top
         TransferFunction1D.constant(0.3),  # one control point: constant on purpose
         TransferFunction1D([[5, 1, 1, 1]], [[5, 0.3]]),
     ],

@@ -17,11 +17,15 @@ def _range_text(lo: float, hi: float) -> str:
 
 def max_opacity_over(tf: TransferFunction1D, lo: float, hi: float) -> float:
     """The largest opacity of `tf` over the data values [lo, hi]: exact, since the opacity is
-    piecewise linear and so peaks at an end of the range or at a control point inside it."""
-    xs = tf.opacity_points[:, 0]
-    inside = xs[(xs > lo) & (xs < hi)]
-    _, alpha = tf.sample(np.concatenate([[lo, hi], inside]))
-    return float(alpha.max())
+    piecewise linear and so peaks at an end of the range or at a control point inside it. A
+    control point's own opacity counts, not the TF sampled at its value: at a step (two points at
+    one value) sampling gives one side only, and a peak that drops to 0 at once would be missed.
+    A point at `lo` counts only through the sample there: its other side holds values below `lo`."""
+    points = tf.opacity_points
+    xs = points[:, 0]
+    inside = points[(xs > lo) & (xs <= hi), 1]
+    _, alpha = tf.sample(np.array([lo, hi], dtype=np.float64))
+    return float(max(alpha.max(), inside.max(initial=0.0)))
 
 
 def coverage_problem(tf: TransferFunction, data_range: tuple[float, float]) -> str | None:
