@@ -8,7 +8,7 @@ from typing import ClassVar
 
 import numpy as np
 import pytest
-from PyQt5.QtWidgets import QDialogButtonBox, QMessageBox, QPushButton
+from PyQt5.QtWidgets import QDialog, QDialogButtonBox, QMessageBox, QPushButton
 
 from tests.app.test_app_files import TIMEOUT_MS, good_volume, show
 from volren.app.files import movie_dialog
@@ -112,8 +112,8 @@ def test_the_menu_action_uses_the_dialog_choice(movie_window, qtbot, tmp_path, m
     w = movie_window
     asked = []
 
-    def ask(parent, path, size):
-        asked.append((path, size))
+    def ask(parent, path, fields):
+        asked.append((path, (fields.width, fields.height)))
         if len(asked) > 1:
             return None  # cancelled: nothing starts
         return movie_dialog.MovieChoice(str(tmp_path / "menu.gif"), 24, 18, Animation(frames=3, fps=5))
@@ -131,7 +131,7 @@ def test_the_menu_action_uses_the_dialog_choice(movie_window, qtbot, tmp_path, m
 
 
 def test_the_dialog_fields_make_the_choice(qtbot, tmp_path):
-    dialog = movie_dialog.MovieDialog(None, str(tmp_path / "film"), (320, 200))
+    dialog = movie_dialog.MovieDialog(None, str(tmp_path / "film"), movie_dialog.MovieFields(320, 200))
     qtbot.addWidget(dialog)
     assert (dialog.width_box.value(), dialog.height_box.value()) == (320, 200)
     dialog.frames_box.setValue(90)
@@ -147,6 +147,48 @@ def test_the_dialog_fields_make_the_choice(qtbot, tmp_path):
     assert not dialog.lossless.isEnabled() and not dialog.choice().lossless
     dialog.path_edit.setText("  ")
     assert not dialog.buttons.button(QDialogButtonBox.Save).isEnabled()
+
+
+def test_the_dialog_offers_the_last_movies_fields_again_now_and_in_a_later_session(movie_window, make_window, ini,
+                                                                                  qtbot, tmp_path, monkeypatch):  # fmt: skip
+    """The real dialog (only its modal loop replaced): the first time the viewport's size and the
+    defaults; after a movie, that movie's fields, in this window and in a new one (the settings)."""
+    shown, answers = [], []
+
+    def exec_(dialog):
+        shown.append((dialog.width_box.value(), dialog.height_box.value(), dialog.frames_box.value(),
+                      dialog.fps_box.value(), dialog.orbit_box.value(), dialog.lossless.isChecked()))  # fmt: skip
+        return answers.pop(0)(dialog)
+
+    def make_a_movie(dialog):
+        dialog.path_edit.setText(str(tmp_path / "first.mp4"))
+        for box, value in ((dialog.width_box, 24), (dialog.height_box, 18), (dialog.frames_box, 3),
+                           (dialog.fps_box, 5.0), (dialog.orbit_box, 90.0)):  # fmt: skip
+            box.setValue(value)
+        dialog.lossless.setChecked(True)
+        return QDialog.Accepted
+
+    monkeypatch.setattr(movie_dialog.MovieDialog, "exec_", exec_)
+    answers.append(make_a_movie)
+    with qtbot.waitSignal(movie_window.movies.saved, timeout=TIMEOUT_MS):
+        movie_window.movies.action.trigger()
+    assert shown[0] == (*movie_window.viewport.pixel_size(), 120, 30.0, 360.0, False)
+    answers.append(lambda dialog: QDialog.Rejected)
+    movie_window.movies.action.trigger()
+    later = make_window(settings=ini)
+    show(later, qtbot, good_volume(), renderer="fake_camera")
+    answers.append(lambda dialog: QDialog.Rejected)
+    later.movies.action.trigger()
+    assert shown[1] == shown[2] == (24, 18, 3, 5.0, 90.0, True) and not later.movies.exporter.busy
+
+
+@pytest.mark.parametrize("stored", [None, "", "not json", "[]", '{"width": 24}', '{"width": 24, "height": "18"}',
+                                    '{"width": 24, "height": 18, "fps": NaN}', '{"width": 24, "height": 18, "x": 1}',
+                                    '{"width": true, "height": 18}', '{"width": 24, "height": 18, "lossless": 1}'])  # fmt: skip
+def test_stored_movie_fields_that_do_not_fit_give_the_defaults(stored):
+    assert movie_dialog.MovieFields.from_json(stored) is None
+    fields = movie_dialog.MovieFields(24, 18, 3, 5.0, -90.0, True)
+    assert movie_dialog.MovieFields.from_json(fields.to_json()) == fields
 
 
 @pytest.mark.parametrize("answer, closes", [(QMessageBox.No, False), (QMessageBox.Yes, True)])

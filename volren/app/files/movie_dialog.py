@@ -1,12 +1,15 @@
 """The Export Movie dialog: where to (MP4 or GIF), frame size, frames, speed and how far to orbit.
 
 `ask_movie` is looked up on this module at call time, so tests (and headless runs) can replace
-the modal dialog.
+the modal dialog. The dialog opens with `MovieFields`: the ones of the last movie, which
+`MovieActions` keeps for the session and in the app's settings.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+import math
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from PyQt5.QtWidgets import (
@@ -29,6 +32,38 @@ from volren.model.animation import DEFAULT_FPS, DEFAULT_FRAMES, MAX_FPS, MAX_FRA
 from volren.renderers.base import MAX_IMAGE_SIDE
 
 MOVIE_FILTER = "Movies (*.mp4 *.gif);;MP4 video (*.mp4);;GIF animation (*.gif)"
+#: The orbit's range in the dialog, degrees (ten turns either way).
+MAX_ORBIT = 3600.0
+
+
+@dataclass(frozen=True)
+class MovieFields:
+    """What the dialog holds besides the file: offered again the next time it opens."""
+
+    width: int
+    height: int
+    frames: int = DEFAULT_FRAMES
+    fps: float = DEFAULT_FPS
+    orbit: float = 360.0
+    lossless: bool = False
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self))
+
+    @classmethod
+    def from_json(cls, text: object) -> MovieFields | None:
+        """The fields stored by `to_json`; None for anything else (an older or hand-edited store),
+        as the dialog's defaults are better than an error about a preference."""
+        try:
+            data = json.loads(text)  # type: ignore[arg-type]
+            fields = cls(**data)
+        except (TypeError, ValueError):
+            return None
+        ints = (fields.width, fields.height, fields.frames)
+        numbers = (fields.fps, fields.orbit)
+        if not all(type(v) is int for v in ints) or not all(type(v) in (int, float) and math.isfinite(v) for v in numbers):
+            return None
+        return fields if isinstance(fields.lossless, bool) else None
 
 
 @dataclass(frozen=True)
@@ -41,6 +76,11 @@ class MovieChoice:
     animation: Animation
     lossless: bool = False
 
+    def fields(self) -> MovieFields:
+        """The dialog's fields that made this choice."""
+        a = self.animation
+        return MovieFields(self.width, self.height, a.frames, a.fps, a.orbit_degrees, self.lossless)
+
 
 def movie_path(path: str) -> str:
     """`path`, with ".mp4" added when its suffix is not a movie's (what the file will hold)."""
@@ -48,10 +88,10 @@ def movie_path(path: str) -> str:
 
 
 class MovieDialog(QDialog):
-    """File, frame size (default: the viewport's pixels), number of frames, frames per second and
-    the orbit's angle, with the movie's length shown as they change."""
+    """File, frame size, number of frames, frames per second, the orbit's angle and lossless,
+    starting from `fields`, with the movie's length shown as they change."""
 
-    def __init__(self, parent: QWidget | None, path: str, size: tuple[int, int]) -> None:
+    def __init__(self, parent: QWidget | None, path: str, fields: MovieFields) -> None:
         super().__init__(parent)
         self.setWindowTitle("Export movie")
         self.path_edit = QLineEdit(path, self)
@@ -61,24 +101,25 @@ class MovieDialog(QDialog):
         path_row.addWidget(self.path_edit, 1)
         path_row.addWidget(browse)
 
-        self.width_box, self.height_box = (self._spin(1, MAX_IMAGE_SIDE, v) for v in size)
+        self.width_box, self.height_box = (self._spin(1, MAX_IMAGE_SIDE, v) for v in (fields.width, fields.height))
         size_row = QHBoxLayout()
         size_row.addWidget(self.width_box)
         size_row.addWidget(QLabel("x", self))
         size_row.addWidget(self.height_box)
         size_row.addWidget(QLabel("pixels", self), 1)
-        self.frames_box = self._spin(1, MAX_FRAMES, DEFAULT_FRAMES)
+        self.frames_box = self._spin(1, MAX_FRAMES, fields.frames)
         self.fps_box = QDoubleSpinBox(self)
         self.fps_box.setRange(1.0, MAX_FPS)
         self.fps_box.setDecimals(1)
-        self.fps_box.setValue(DEFAULT_FPS)
+        self.fps_box.setValue(fields.fps)
         self.orbit_box = QDoubleSpinBox(self)
-        self.orbit_box.setRange(-3600.0, 3600.0)
+        self.orbit_box.setRange(-MAX_ORBIT, MAX_ORBIT)
         self.orbit_box.setDecimals(1)
         self.orbit_box.setSuffix("°")
-        self.orbit_box.setValue(360.0)
+        self.orbit_box.setValue(fields.orbit)
         self.orbit_box.setToolTip("How far the camera turns about the view's up axis; whole turns loop")
         self.lossless = QCheckBox("Lossless (exact frames; larger, and not every player takes it)", self)
+        self.lossless.setChecked(fields.lossless)
         self.length_label = QLabel(self)
         for box in (self.frames_box, self.fps_box):
             box.valueChanged.connect(self._update_length)
@@ -128,9 +169,9 @@ class MovieDialog(QDialog):
         return MovieChoice(path, self.width_box.value(), self.height_box.value(), animation, lossless)
 
 
-def ask_movie(parent: QWidget | None, path: str, size: tuple[int, int]) -> MovieChoice | None:
+def ask_movie(parent: QWidget | None, path: str, fields: MovieFields) -> MovieChoice | None:
     """Run the movie dialog; None when cancelled. Looked up at call time so tests can patch it."""
-    dialog = MovieDialog(parent, path, size)
+    dialog = MovieDialog(parent, path, fields)
     try:
         return dialog.choice() if dialog.exec_() == QDialog.Accepted else None
     finally:

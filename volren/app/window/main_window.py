@@ -34,7 +34,7 @@ from volren.app.core.view_directions import (
     look_along,
 )
 from volren.app.files.load_task import LoadFunction
-from volren.app.files.recent_files import RecentFiles
+from volren.app.files.recent_files import RecentFiles, app_settings
 from volren.app.rendering.render_service import Frame, RendererFactory, RenderService, _registry_factory
 from volren.app.rendering.scheduling import FrameScheduler
 from volren.app.rendering.viewport import Viewport
@@ -75,7 +75,8 @@ class MainWindow(QMainWindow):
         load: LoadFunction = load_input,
         settings: QSettings | None = None,
     ) -> None:
-        """`settings` keeps the recent files (default: the app's QSettings; tests pass their own)."""
+        """`settings` keeps the recent files and the dialogs' last choices (default: the app's
+        QSettings; tests pass their own)."""
         super().__init__(parent)
         self.state = state or ViewState()
         self.registry = registry
@@ -88,6 +89,7 @@ class MainWindow(QMainWindow):
         self.service = RenderService(self, renderer_factory)
         self.scheduler = FrameScheduler(self.state, self.service, self.viewport.pixel_size, self, registry=registry)
         status_bar = self.statusBar()
+        settings = settings if settings is not None else app_settings()
         recent = RecentFiles(settings, parent=self)
         self.renderers = RendererControl(
             self.state, registry, self.viewport, status_bar, self.report_error, self
@@ -98,7 +100,8 @@ class MainWindow(QMainWindow):
         self.scenes = SceneActions(self, self.state, self.viewport, recent, self.report_error, self.time)
         self.screenshots = ScreenshotActions(self, self.state, self.viewport, renderer_factory, self.report_error,
                                              recent.folder)  # fmt: skip
-        self.movies = MovieActions(self, self.state, self.viewport, renderer_factory, self.report_error, recent.folder)
+        self.movies = MovieActions(self, self.state, self.viewport, renderer_factory, self.report_error, recent.folder,
+                                   settings)  # fmt: skip
         self.files = FileActions(
             self, self.state, self.viewport, self.renderers, self.scenes, recent, load, self.report_error, self.time
         )

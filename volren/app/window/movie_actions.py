@@ -1,10 +1,15 @@
 """File > Export Movie: an orbit of the view rendered into MP4 or GIF in the background, with a
-progress dialog that counts frames and can cancel (`volren.app.files.movie_export`)."""
+progress dialog that counts frames and can cancel (`volren.app.files.movie_export`).
+
+The dialog opens with the last movie's frame size, frames, speed, orbit and lossless (kept in the
+app's settings, so across sessions too); the first time, with the viewport's size and defaults.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 
+from PyQt5.QtCore import QSettings
 from PyQt5.QtWidgets import QAction, QMainWindow
 
 from volren.app.core.loading import PathArg
@@ -18,6 +23,8 @@ from volren.errors import VolrenError
 from volren.model.animation import Animation
 
 ERROR_TITLE = "Cannot export the movie"
+#: Where the app's settings keep the last movie's dialog fields (`MovieFields.to_json`).
+FIELDS_KEY = "dialogs/movie"
 
 
 class MovieActions(FileJobActions):
@@ -31,12 +38,16 @@ class MovieActions(FileJobActions):
         renderer_factory: RendererFactory,
         report_error: Callable[[str, str], None],
         folder: Callable[[], str] | None = None,
+        settings: QSettings | None = None,
     ) -> None:
-        """`folder()`: where the person works now (the first movie is proposed there)."""
+        """`folder()`: where the person works now (the first movie is proposed there);
+        `settings`: where the last movie's dialog fields are kept (None: for this session only)."""
         self.exporter = MovieExporter(renderer_factory)
         super().__init__(window, self.exporter, ERROR_TITLE, "volren.mp4", report_error, folder)
         self._state = state
         self._viewport = viewport
+        self._settings = settings
+        self._fields = movie_dialog.MovieFields.from_json(settings.value(FIELDS_KEY)) if settings is not None else None
         self._frames = 0
         self.action = QAction("Export &Movie…", window, triggered=self._dialog)
         self.action.setToolTip("Render an orbit of the view into an MP4 or GIF movie")
@@ -55,11 +66,21 @@ class MovieActions(FileJobActions):
         self.exporter.start(job)
         return True
 
+    def dialog_fields(self) -> movie_dialog.MovieFields:
+        """What the dialog opens with: the last movie's fields, else the viewport's size and defaults."""
+        return self._fields or movie_dialog.MovieFields(*self._viewport.pixel_size())
+
+    def _remember(self, fields: movie_dialog.MovieFields) -> None:
+        self._fields = fields
+        if self._settings is not None:
+            self._settings.setValue(FIELDS_KEY, fields.to_json())
+
     def _dialog(self) -> None:
-        choice = movie_dialog.ask_movie(self._window, self._proposed_path(), self._viewport.pixel_size())
+        choice = movie_dialog.ask_movie(self._window, self._proposed_path(), self.dialog_fields())
         if choice is None:
             return
         self._path = choice.path
+        self._remember(choice.fields())
         self.export(choice.path, choice.width, choice.height, choice.animation, choice.lossless)
 
     def _on_progress(self, fraction: float) -> None:
