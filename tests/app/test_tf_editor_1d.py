@@ -550,6 +550,29 @@ def test_tissue_presets_fit_the_data_ct_ones_only_on_hounsfield_units(make_edito
     assert "CT lung: CT presets are in Hounsfield units" in errors[0]
 
 
+def test_the_shift_sliders_travel_is_half_the_data_range_each_way_in_steps_of_a_thousandth(make_editor, qtbot):
+    """The whole slider spans the data range (half of it each way), so a pixel of a drag is a
+    fraction of a percent; the arrow keys move a thousandth of the range, Page Up/Down a hundredth."""
+    state = _ct_state()  # -1000..1000 HU
+    editor = make_editor(state)
+    editor.apply_tissue_preset("CT soft tissue")
+    preset = state.transfer_function.copy()
+    slider = editor.shift_slider
+
+    def moved() -> float:
+        return float(state.transfer_function.opacity_points[0, 0] - preset.opacity_points[0, 0])
+
+    slider.setFocus()
+    qtbot.keyClick(slider, Qt.Key_Right)
+    assert moved() == pytest.approx(2.0) and editor.shift_label.text() == "+2"
+    qtbot.keyClick(slider, Qt.Key_PageUp)
+    assert moved() == pytest.approx(22.0)
+    qtbot.keyClick(slider, Qt.Key_End)
+    assert moved() == pytest.approx(1000.0) and editor.shift_label.text() == "+1000"
+    qtbot.keyClick(slider, Qt.Key_Home)
+    assert moved() == pytest.approx(-1000.0) and (slider.minimum(), slider.maximum()) == (-500, 500)
+
+
 def test_the_shift_slider_slides_the_whole_tf_and_a_drag_is_one_undo_step(make_editor, qtbot):
     state = _ct_state()
     history = TFHistory(state)
@@ -558,7 +581,7 @@ def test_the_shift_slider_slides_the_whole_tf_and_a_drag_is_one_undo_step(make_e
         editor.apply_tissue_preset("CT soft tissue")
         preset = state.transfer_function.copy()
         step = editor.shift_step()
-        assert step == pytest.approx(2000 / 200)  # the phantom spans -1000..1000 HU
+        assert step == pytest.approx(2000 / 1000)  # the phantom spans -1000..1000 HU
         slider = editor.shift_slider
         recorded = history.stack.count()
         slider.sliderPressed.emit()
@@ -570,7 +593,7 @@ def test_the_shift_slider_slides_the_whole_tf_and_a_drag_is_one_undo_step(make_e
         np.testing.assert_allclose(tf.color_points[:, 0], preset.color_points[:, 0] + 15 * step)
         np.testing.assert_array_equal(tf.opacity_points[:, 1], preset.opacity_points[:, 1])
         assert history.stack.count() == recorded + 1  # the drag is one step
-        assert slider.value() == 15 and editor.shift_label.text() == "+150"  # kept after the release
+        assert slider.value() == 15 and editor.shift_label.text() == "+30"  # kept after the release
         slider.setValue(-5)  # a keyboard step: from the same base
         np.testing.assert_allclose(state.transfer_function.opacity_points[:, 0], preset.opacity_points[:, 0] - 5 * step)
         state.transfer_function.set_opacity_unit_distance(2.0)  # another edit: the slider starts from here

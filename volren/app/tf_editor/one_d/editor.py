@@ -66,8 +66,11 @@ PRESET_PLACEHOLDER = "Colour map…"
 #: The colour-map box's last entry: opens the preset browser.
 BROWSE_ITEM = "Browse colour maps…"
 TISSUE_PLACEHOLDER = "Tissue preset…"
-#: The shift slider's steps on each side of 0; it reaches one data range either way.
-SHIFT_STEPS = 200
+#: The shift slider's step, a fraction of the data range, and its steps each way: half the range
+#: each way in thousandths, so the whole slider spans the range once (one range each way in 200ths
+#: moved a narrow preset off its tissue with a few pixels of drag). Page Up/Down move 10 steps.
+SHIFT_STEP = 0.001
+SHIFT_STEPS = 500
 #: How long the view must rest (ms) before the histogram is binned afresh over a zoomed view.
 REBIN_DELAY_MS = 150
 
@@ -146,6 +149,7 @@ class TransferFunction1DEditor(QWidget):
         self.tissue_box.currentIndexChanged.connect(self._on_tissue_chosen)
         self.shift_slider = QSlider(Qt.Horizontal, self)
         self.shift_slider.setRange(-SHIFT_STEPS, SHIFT_STEPS)
+        self.shift_slider.setPageStep(10)
         self.shift_slider.setToolTip("Slide the whole transfer function (colours and opacity) along the value axis")
         self.shift_slider.valueChanged.connect(self._on_shift_moved)
         self.shift_slider.sliderPressed.connect(self._state.begin_interaction)
@@ -484,12 +488,12 @@ class TransferFunction1DEditor(QWidget):
         return True
 
     def shift_step(self) -> float:
-        """The value one step of the shift slider moves the TF: a 200th of the data range."""
+        """The value one step of the shift slider moves the TF: a thousandth of the data range."""
         volume = self._state.volume
         if volume is None:
             return 0.0
         lo, hi = volume.value_range
-        return (hi - lo) / SHIFT_STEPS
+        return (hi - lo) * SHIFT_STEP
 
     def shift_to(self, offset: float) -> None:
         """Slide the TF so that it lies `offset` from where it was when the slider was last at 0
