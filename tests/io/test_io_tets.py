@@ -108,6 +108,18 @@ def test_inverted_tet_is_reoriented():
     assert signed_volumes(volume.points, volume.tets)[0] == pytest.approx(1 / 6)
 
 
+def test_cells_folded_over_a_neighbour_are_reported():
+    points = [*TET, [0.1, 0.1, 0.1]]  # the second cell's apex lies on the first one's side
+    grid = pv.UnstructuredGrid(np.array([4, 0, 1, 2, 3, 4, 1, 2, 3, 4]), np.full(2, pv.CellType.TETRA, np.uint8),
+                               np.array(points, dtype=float))  # fmt: skip
+    grid.point_data["s"] = np.arange(5, dtype=np.float32)
+    with pytest.warns(VolrenWarning) as record:
+        volume = from_pyvista(grid, name="fold")
+    fold_note = "fold: 2 tetrahedra fold over a neighbour (a tangled mesh)"
+    assert [str(w.message) for w in record] == ["fold: reoriented 1 inverted tetrahedron", fold_note]
+    assert fold_note in volume.notes
+
+
 def test_flat_tets_alone_are_an_error():
     with pytest.raises(VolrenError, match="^flat: all 1 tetrahedra have zero volume$"):
         from_pyvista(merged(single(FLAT_TET, pv.CellType.TETRA)), name="flat")

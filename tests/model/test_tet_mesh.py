@@ -11,6 +11,7 @@ import pytest
 from tests.session_policy import SHARED_MISSING
 from volren.model import tet_mesh
 from volren.model.tet_mesh import FACE_VERTICES, PreparedMesh, build_mesh, prepare_mesh
+from volren.model.tet_repair import repair_tets
 from volren.model.volume import TetVolume
 
 CUBE = np.array([[i, j, k] for k in (0, 1) for j in (0, 1) for i in (0, 1)], dtype=np.float64)  # i + 2j + 4k
@@ -260,6 +261,52 @@ def test_a_face_shared_by_three_tets_is_counted_and_left_unmatched():
     assert mesh.n_boundary == 12
     check_adjacency(mesh)
     check_planes(mesh)
+
+
+FOLD_POINTS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1], [0, 0, 0]], dtype=np.float64)
+FOLD_TETS = np.array([[0, 1, 2, 3], [1, 2, 3, 4]])  # apex 4 lies across face 1-2-3 from point 0
+
+
+def test_a_cell_pushed_through_its_neighbours_face_folds_over_it():
+    points = FOLD_POINTS.copy()
+    assert not tet_mesh.folded_cells(points, FOLD_TETS).any()
+    assert not tet_mesh.folded_cells(points, FOLD_TETS[:, [1, 0, 2, 3]]).any()  # every cell inverted
+    points[4] = [0.1, 0.1, 0.1]  # on point 0's side now: cell 1 lies inside cell 0
+    assert tet_mesh.folded_cells(points, FOLD_TETS).tolist() == [True, True]
+    repaired = repair_tets(points, FOLD_TETS)  # reorienting does not undo a fold
+    assert repaired.reoriented == 1
+    assert tet_mesh.folded_cells(points, repaired.tets).tolist() == [True, True]
+
+
+def test_only_a_face_of_two_distinct_cells_with_volume_can_fold():
+    points = np.vstack([FOLD_POINTS, [[0.5, 0.5, 0.0]]])  # point 6 lies on face 1-2-3's plane
+    points[4] = [0.1, 0.1, 0.1]
+    for tets in (
+        [[0, 1, 2, 3], [5, 1, 2, 4]],  # point 5 repeats point 0 unmerged: no face is shared
+        [[0, 1, 2, 3], [1, 2, 3, 4], [1, 2, 3, 5]],  # face 1-2-3 of three cells matches none
+        [[0, 1, 2, 3], [3, 2, 1, 0]],  # a repeated cell, not a fold
+        [[0, 1, 2, 3], [1, 2, 3, 6]],  # a flat cell has no sides
+    ):
+        assert not tet_mesh.folded_cells(points, np.array(tets)).any()
+
+
+@pytest.mark.parametrize("order", [(0, 1, 2, 3), (1, 0, 2, 3)], ids=["as built", "every cell inverted"])
+def test_a_point_pushed_through_a_face_folds_the_cells_around_the_flipped_ones(order):
+    """A conforming mesh folds exactly at the faces between cells whose orientation the move flipped
+    and cells it did not."""
+    points, tets = grid_mesh()
+    tets = tets[:, order]
+    assert not tet_mesh.folded_cells(points, tets).any()
+    before = np.sign(signed_volumes(points, tets))
+    pushed = 1 * 4 * 6 + 1 * 6 + 1  # point (1, 1, 1) of the 5x4x6-point grid
+    cell = np.flatnonzero((tets == pushed).any(axis=1))[0]
+    face = points[tets[cell][tets[cell] != pushed]]
+    points[pushed] += 1.5 * (face.mean(axis=0) - points[pushed])  # through the opposite face
+    flipped = np.sign(signed_volumes(points, tets)) != before
+    neighbors = build_mesh(points, tets, np.zeros(len(points))).neighbors
+    across = np.where(neighbors >= 0, flipped[neighbors], flipped[:, None])
+    expected = np.any(across != flipped[:, None], axis=1)
+    assert 2 <= np.count_nonzero(flipped) and np.array_equal(tet_mesh.folded_cells(points, tets), expected)
 
 
 def test_result_is_read_only_float64_and_int32():

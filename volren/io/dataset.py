@@ -18,7 +18,8 @@ from volren.errors import VolrenError, VolrenWarning
 from volren.io import _pv
 from volren.io.formats.base import Grid, is_identity
 from volren.model.anatomy import patient_axes
-from volren.model.tet_repair import repair_tets
+from volren.model.tet_mesh import folded_cells
+from volren.model.tet_repair import merged_duplicates, repair_tets
 from volren.model.volume import TetVolume, UniformVolume, Volume, merged_tets_note
 
 _CELL_NAMES = {
@@ -257,11 +258,20 @@ def tets_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name
         n = repaired.reoriented
         done.append(f"reoriented {n:,} inverted tetrahedr{'on' if n == 1 else 'a'}")
     repairs = [f"{name}: {', '.join(done)}"] if done else []
-    notes = notes + repairs
+    notes = notes + repairs + _folds_note(cells.points, repaired.tets, values, name)
     volume = TetVolume(cells.points, repaired.tets, values, name=name, notes=tuple(notes + info), scalars=chosen,
                        arrays=choices)  # fmt: skip
     _report(volume, notes)
     return volume
+
+
+def _folds_note(points: NDArray, tets: NDArray, values: NDArray, name: str) -> list[str]:
+    """The note on tetrahedra that fold over a neighbour, which reorienting does not undo: where
+    cells overlap, renderers that walk from cell to cell and those that integrate every cell differ."""
+    n = int(np.count_nonzero(folded_cells(points, merged_duplicates(points, values)[tets])))
+    if not n:
+        return []
+    return [f"{name}: {n:,} tetrahedr{'on folds' if n == 1 else 'a fold'} over a neighbour (a tangled mesh)"]
 
 
 # ------------------------------------------------------------------------------------ pyvista

@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
-from volren.model.tet_repair import flat_cells, merged_duplicates
+from volren.model.tet_repair import flat_cells, merged_duplicates, signed_volumes
 from volren.model.volume import TetVolume
 
 #: Local vertex indices of face f (opposite vertex f), ordered so that the right-hand normal points
@@ -198,6 +198,36 @@ def _match_faces(lo: NDArray, mid: NDArray, hi: NDArray, n_points: int) -> tuple
     first, second = order[pair_starts], order[pair_starts + 1]
     same_tet = first // 4 == second // 4  # a degenerate tet repeating one of its own faces
     return first[~same_tet], second[~same_tet], int(np.count_nonzero(lengths > 2))
+
+
+def folded_cells(points: NDArray, tets: NDArray) -> NDArray[np.bool_]:
+    """Which tetrahedra fold over a neighbour: they share a face whose two opposite vertices lie on
+    the same side of its plane, so the two cells overlap (a tangled mesh).
+
+    Why: reorienting an inverted cell fixes its vertex order, not where it lies, and a ray that
+    walks from cell to cell across such a face runs backwards. The side of a cell's opposite vertex
+    is its signed volume's sign times the parity of the face's vertex order in it (`FACE_VERTICES`)
+    against the sorted order both cells share, so the test costs one determinant per cell and does
+    not depend on vertex order (a mesh listed inverted throughout has no folds); the sign is exact
+    for cells that are not flat, whose |6V| exceeds the determinant's rounding by far (one of zero
+    volume folds nothing). Faces match
+    by point index (merge repeated points first where they should match); a face of three cells
+    matches none, and two copies of one cell are a repetition (`tet_repair.repeated_tets`)."""
+    tets = np.asarray(tets, dtype=np.int64)
+    folded = np.zeros(len(tets), dtype=bool)
+    if len(tets) < 2:
+        return folded
+    faces = tets[:, FACE_VERTICES].reshape(-1, 3)  # row 4t + f
+    a, b, c = faces[:, 0], faces[:, 1], faces[:, 2]
+    first, second, _ = _match_faces(*_sort3(a, b, c), len(points))
+    odd = (a > b) ^ (a > c) ^ (b > c)  # the face's order is an odd permutation of its sorted order
+    volumes = np.repeat(signed_volumes(points, tets), 4)
+    side = (volumes > 0) ^ odd
+    fold = (side[first] == side[second]) & (tets[first // 4, first % 4] != tets[second // 4, second % 4])
+    fold &= (volumes[first] != 0) & (volumes[second] != 0)  # a flat cell has no sides
+    folded[first[fold] // 4] = True
+    folded[second[fold] // 4] = True
+    return folded
 
 
 def build_mesh(points: NDArray, tets: NDArray, values: NDArray) -> PreparedMesh:
