@@ -3,6 +3,15 @@
 Non-finite values (see `transfer`): a grid with some gets the point array `finite` beside its
 scalars; a mesh loses the tetrahedra that have one as a corner, and the value at such points,
 which no remaining cell interpolates, becomes the finite minimum so that VTK sees no NaN.
+
+Folded cells (`detached`): the unstructured ray caster walks from cell to cell across shared
+faces, and across a face where a cell folds over its neighbour (a tangled mesh: the two cells
+overlap) the walk runs backwards; its negative segment lengths drew bright and dark streaks.
+Given their own copies of their points, folded cells share no face: every face of theirs is
+boundary, where VTK starts a walk from its depth-sorted list of boundary crossings, so the
+overlapping cells are integrated one after another, as `reference` does. Measured on a lattice
+with its centre pushed through a face (6 cells inverted, 18 folded; 64x64): alpha up to 0.992
+where `reference` has at most 0.937, RMSE 0.056 before; 0.015 after, the unfolded lattice's.
 """
 
 from __future__ import annotations
@@ -10,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from volren.model.tet_mesh import folded_cells
 from volren.model.volume import TetVolume, UniformVolume
 from volren.renderers.vtk_mappers._vtk import (
     VTK_TETRA,
@@ -54,13 +64,29 @@ def finite_cells(volume: TetVolume) -> tuple[NDArray, NDArray]:
     return volume.tets[finite[volume.tets].all(axis=1)], values
 
 
-def unstructured_grid(volume: TetVolume) -> vtkUnstructuredGrid:
-    """vtkUnstructuredGrid of VTK_TETRA cells, those with a non-finite corner left out."""
+def detached(
+    points: NDArray, tets: NDArray, values: NDArray, cells: NDArray[np.bool_]
+) -> tuple[NDArray, NDArray, NDArray]:
+    """The mesh with `cells` given their own copies of their points, so that they share no face
+    (module docstring: folded cells)."""
+    corners = tets[cells].reshape(-1)
+    if len(corners) == 0:
+        return points, tets, values
+    tets = tets.copy()
+    tets[cells] = len(points) + np.arange(len(corners)).reshape(-1, 4)
+    return np.concatenate([points, points[corners]]), tets, np.concatenate([values, values[corners]])
+
+
+def unstructured_grid(volume: TetVolume, detach_folds: bool = False) -> vtkUnstructuredGrid:
+    """vtkUnstructuredGrid of VTK_TETRA cells, those with a non-finite corner left out; with
+    `detach_folds`, the cells that fold over a neighbour share no face (`detached`)."""
     tets, values = finite_cells(volume)
+    points = volume.points
+    if detach_folds:
+        points, tets, values = detached(points, tets, values, folded_cells(points, tets))
     grid = vtkUnstructuredGrid()
-    points = numpy_to_vtk(volume.points, deep=True)
     vtk_points = vtkPoints()
-    vtk_points.SetData(points)
+    vtk_points.SetData(numpy_to_vtk(points, deep=True))
     grid.SetPoints(vtk_points)
     n = len(tets)
     offsets = numpy_to_vtkIdTypeArray(np.arange(0, 4 * n + 1, 4, dtype=np.int64), deep=True)

@@ -22,7 +22,8 @@ along an axis of a lattice mesh, the pixels on the image diagonal lie in the cub
 faces and came out up to 0.95 wrong: 19 pixels of 64x64), so its rays are moved a further
 thousandth of a pixel, by different amounts along x and y (RAY_NUDGE_PX), off every such plane;
 vtkOpenGLProjectedTetrahedraMapper draws its first frame wrong, so a new one renders a warm-up
-frame first.
+frame first. The ray caster walks backwards across faces where a cell folds over its neighbour
+(a tangled mesh), so it gets such cells detached (`convert.detached`).
 """
 
 from __future__ import annotations
@@ -180,6 +181,7 @@ class VtkRenderer(RendererBase):
         self._actor: Any = None
         self._property: Any = None
         self._dataset: Any = None
+        self._dataset_detaches_folds = False
         self._sentinel: float | None = None
         self._scale = 1.0  # VTK gets the grid's values times this (transfer.vtk_scale)
         self._mapper: Any = None
@@ -226,9 +228,15 @@ class VtkRenderer(RendererBase):
         renderer.AddVolume(self._actor)
         self._window, self._vtk_renderer = window, renderer
 
+    def _walks_cells(self) -> bool:
+        """Whether the mapper walks from cell to cell across shared faces (the unstructured ray caster)."""
+        return self._volume.kind == "tet" and self.mapper_name() == "raycast"
+
     def _ensure_dataset(self) -> None:
-        if self._dataset is not None:
+        detach_folds = self._walks_cells()
+        if self._dataset is not None and detach_folds == self._dataset_detaches_folds:
             return
+        self._dataset_detaches_folds = detach_folds
         volume = self._volume
         if isinstance(volume, UniformVolume):
             self._scale = vtk_scale(volume.value_range)
@@ -239,7 +247,7 @@ class VtkRenderer(RendererBase):
             assert isinstance(volume, TetVolume)
             self._sentinel = None  # cells with a non-finite corner are left out
             self._scale = 1.0
-            self._dataset = unstructured_grid(volume)
+            self._dataset = unstructured_grid(volume, detach_folds)
 
     def _scalar_range(self) -> tuple[float, float]:
         """The finite data range in the units VTK gets."""
