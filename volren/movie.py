@@ -1,8 +1,10 @@
 """Movies: a scene rendered frame by frame along an `Animation` and written as MP4 or GIF.
 
 One renderer is prepared once and kept for every frame; it is given a new TF only on frames
-whose TF differs (so a movie without TF keyframes builds its tables once). Each frame is what
-`volren render` gives for the same camera, converted to 8 bits exactly as its PNG is
+whose TF differs (so a movie without TF keyframes builds its tables once), and new settings only
+where that TF's class (`volren.quality.kind_of`: smooth, sharp, band) asks for others: at a
+quality level, each frame is drawn with the level's settings for its own TF's class. Each frame
+is what `volren render` gives for the same camera and TF, converted to 8 bits exactly as its PNG is
 (`volren.io.image_io.to_png_pixels`), so a lossless movie decodes to those PNGs' pixels.
 """
 
@@ -21,9 +23,10 @@ from volren.io.image_io import to_png_pixels
 from volren.io.movie_io import movie_writer
 from volren.model.animation import Animation, View
 from volren.model.scene import Scene
+from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
-from volren.quality import AUTO, kind_of, resolve
+from volren.quality import AUTO, at_level, kind_of, resolve
 from volren.renderers.base import FrameStats, ProgressCallback, Renderer, render_frame
 
 if TYPE_CHECKING:
@@ -51,11 +54,14 @@ def render_movie(
     steps: Sequence[str | Path] | None = None,
     source: BrickSource | None = None,
     bounds: Sequence[float] | None = None,
+    level: str | None = None,
 ) -> MovieResult:
     """Render `scene` (with its volume loaded) along `animation` into `path` (.mp4 or .gif), the
     frames over `background`. A scene's renderer `auto` becomes the fastest measured one at
-    quality `default`, with the scene's settings as they are. `progress(fraction of the movie)`
-    may raise to stop: then no file is left (and an older one of that name is kept).
+    quality `default`, with the scene's settings as they are. `level`: the quality level the
+    scene's settings are at, so that frames whose TF is of another class get that level's
+    settings for it (`record_movie`). `progress(fraction of the movie)` may raise to stop: then
+    no file is left (and an older one of that name is kept).
 
     `steps`: the files of a time series (the scene's volume is the first): the movie runs through
     them in order, spread evenly over its frames, each read when its first frame comes, with the
@@ -80,7 +86,8 @@ def render_movie(
 
             draw = functools.partial(render_streamed, source=source)
         return record_movie(renderer, animation, scene.camera, scene.transfer_function, bounds or scene.volume.bounds,
-                            scene.size, path, background, lossless, progress, scene.renderer, volumes, draw)  # fmt: skip
+                            scene.size, path, background, lossless, progress, scene.renderer, volumes, draw,
+                            level)  # fmt: skip
 
 
 def _check_views(renderer: Renderer, animation: Animation, start_view: View, bounds: Sequence[float], aspect: float,
@@ -101,6 +108,25 @@ def _check_views(renderer: Renderer, animation: Animation, start_view: View, bou
 
 #: draw(renderer, tf=, camera=, width=, height=, progress=) -> (image, FrameStats): one frame.
 FrameDrawer = Callable[..., tuple[Any, FrameStats]]
+#: settings(volume, tf) -> the settings a frame showing `volume` with `tf` is drawn with.
+SettingsByClass = Callable[[Volume, TransferFunction], RenderSettings]
+
+
+def _settings_by_class(renderer: Renderer, name: str | None, level: str | None,
+                       start_tf: TransferFunction) -> SettingsByClass | None:  # fmt: skip
+    """At quality `level`, each frame's settings: the level's for its own TF's class. None (the
+    renderer's settings for every frame) without a level, or where the settings are not exactly the
+    level's for `start_tf`'s class: settings the user gave stay as they are."""
+    volume, settings = getattr(renderer, "volume", None), getattr(renderer, "settings", None)
+    if level is None or name is None or volume is None or settings is None:
+        return None
+    if at_level(name, kind_of(volume, start_tf), level, settings) != settings:
+        return None
+
+    def settings_of(frame_volume: Volume, tf: TransferFunction) -> RenderSettings:
+        return at_level(name, kind_of(frame_volume, tf), level, settings) or settings
+
+    return settings_of
 
 
 def _step_volumes(steps: Sequence[str | Path], frames: int, scalars: str | None) -> Callable[[int], Volume | None]:
@@ -133,16 +159,21 @@ def record_movie(
     label: str | None = None,
     volumes: Callable[[int], Volume | None] | None = None,
     draw: FrameDrawer | None = None,
+    level: str | None = None,
 ) -> MovieResult:
     """The movie from a renderer that holds the volume, settings and `start_tf` (the app brings its
     own): the orbit starts at `start_view`; TF keyframes replace `start_tf` where they are;
     `volumes(i)`, where given, is the volume frame i shows when it is another than the frame
     before's (a time series); `draw`, where given, draws each frame instead of the renderer alone
-    (`streamed_frames`)."""
+    (`streamed_frames`). `level`: the quality level the renderer's settings are at for
+    `start_tf`'s class (`label` names the renderer); a frame whose TF is of another class gets
+    the level's settings for that class (`_settings_by_class`)."""
     width, height = size
     frames = animation.frames
     times: list[float] = []
     tf = start_tf
+    settings_of = _settings_by_class(renderer, label or getattr(renderer, "name", None), level, start_tf)
+    settings = getattr(renderer, "settings", None)
     if draw is None:
         _check_views(renderer, animation, start_view, bounds, width / height, label)
     with movie_writer(path, animation.fps, lossless) as writer:
@@ -151,6 +182,11 @@ def record_movie(
             if volume is not None:
                 renderer.set_volume(volume)
             frame_tf = animation.transfer_function(index, start_tf)
+            if settings_of is not None and (frame_tf is not tf or volume is not None):
+                frame_settings = settings_of(renderer.volume, frame_tf)  # type: ignore[attr-defined]
+                if frame_settings != settings:  # only where the class changes: no new tables between
+                    renderer.set_settings(frame_settings)
+                    settings = frame_settings
             if frame_tf is not tf:
                 renderer.set_transfer_function(frame_tf)
                 tf = frame_tf

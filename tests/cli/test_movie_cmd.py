@@ -13,6 +13,8 @@ from PIL import Image
 from volren import quality
 from volren.cli.main import main
 from volren.errors import VolrenError
+from volren.io import load_volume
+from volren.model.settings import RenderSettings
 from volren.model.tf_blend import blend_transfer_functions
 from volren.model.transfer_function import TransferFunction1D
 from volren.samples import sample_paths
@@ -35,6 +37,14 @@ def rendered(tmp_path: Path, *args: str) -> np.ndarray:
     png = tmp_path / "frame.png"
     assert main(["render", *args, "-o", str(png), "--force"]) == 0
     return np.asarray(Image.open(png).convert("RGB"))
+
+
+def keyed_tfs(ml_sample) -> tuple[TransferFunction1D, TransferFunction1D]:
+    """The sample's smooth TF, and the same with thrice the opacity: a sharp one."""
+    tf = TransferFunction1D.from_dict(json.loads(Path(ml_sample[1]).read_text()))
+    bright = tf.copy()
+    bright.set_opacity_points(np.clip(tf.opacity_points * [1, 3], 0, 1))
+    return tf, bright
 
 
 def test_lossless_mp4_holds_exactly_the_rendered_orbit(tmp_path, capsys, ml_sample):
@@ -70,9 +80,7 @@ def test_default_mp4_and_gif_decode_to_the_frames_within_their_codecs_loss(tmp_p
 
 def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     volume, tf_path = ml_sample
-    tf = TransferFunction1D.from_dict(json.loads(Path(tf_path).read_text()))
-    bright = tf.copy()
-    bright.set_opacity_points(np.clip(tf.opacity_points * [1, 3], 0, 1))
+    tf, bright = keyed_tfs(ml_sample)
     (tmp_path / "bright.json").write_text(json.dumps(bright.to_dict()))
     scene = {"version": 1, "volume": {"path": str(volume)}, "transfer_function": tf.to_dict(), "renderer": RENDERER,
              "quality": "default", "size": [32, 32], "movie": {"frames": 3, "fps": 5, "keyframes": [
@@ -86,11 +94,13 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     assert len(frames) == 3
     middle_tf = tmp_path / "middle.json"
     middle_tf.write_text(json.dumps(blend_transfer_functions(tf, bright, 0.5).to_dict()))
-    # the movie keeps the quality level of its first TF's class (smooth) for every frame; the bright
-    # TF alone is a sharp one, whose level differs, so the frames are compared at the movie's settings
-    level = quality.table().choice(RENDERER, "uniform/smooth", "default")
-    flags = [str(volume), "--renderer", RENDERER, "--size", "32", "--step", f"{level.step:g}",
-             *(f"--option={k}={v}" for k, v in level.options.items())]
+    # each frame is drawn at the level's settings for its own TF's class, as `volren render` draws
+    # that TF: the first two are smooth, the bright one alone is sharp, whose settings differ
+    kinds = [quality.kind_of(load_volume(volume), t) for t in (tf, blend_transfer_functions(tf, bright, 0.5), bright)]
+    assert kinds == ["uniform/smooth", "uniform/smooth", "uniform/sharp"]
+    smooth, sharp = (quality.table().choice(RENDERER, kind, "default") for kind in kinds[1:])
+    assert (smooth.step, smooth.options) != (sharp.step, sharp.options)
+    flags = [str(volume), "--renderer", RENDERER, "--size", "32", "--quality", "default"]
     expected = [
         rendered(tmp_path, *flags, "--tf", str(tf_path), "--azimuth", "0", "--elevation", "10"),
         rendered(tmp_path, *flags, "--tf", str(middle_tf), "--azimuth", "30", "--elevation", "20"),
@@ -98,6 +108,30 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     ]
     for index, image in enumerate(expected):
         assert np.array_equal(frames[index], image), index
+
+
+@pytest.mark.parametrize("explicit", [False, True])
+def test_a_movie_at_a_level_draws_each_frame_at_its_tf_class_settings(tmp_path, ml_sample, monkeypatch, explicit):
+    """The sharp part of a smooth-to-sharp movie gets the sharp level's settings, set once where the
+    class changes; settings that are not a level's (the user's) stay for every frame."""
+    from volren.model.animation import Animation, TFKey
+    from volren.model.scene import Scene
+    from volren.movie import render_movie
+    from volren.renderers.base import RendererBase
+
+    volume = load_volume(ml_sample[0])
+    smooth_tf, sharp_tf = keyed_tfs(ml_sample)
+    smooth, sharp = (quality.at_level(RENDERER, quality.kind_of(volume, t), "default", RenderSettings())
+                     for t in (smooth_tf, sharp_tf))  # fmt: skip
+    assert smooth != sharp and quality.kind_of(volume, sharp_tf) == "uniform/sharp"
+    start = smooth.with_(step=0.3) if explicit else smooth
+    drawn: list = []
+    set_settings = RendererBase.set_settings
+    monkeypatch.setattr(RendererBase, "set_settings", lambda self, s: (drawn.append(s), set_settings(self, s)))
+    scene = Scene(str(ml_sample[0]), smooth_tf, volume=volume, renderer=RENDERER, settings=start, size=(16, 16))
+    animation = Animation(frames=5, tf_keys=(TFKey(0.0, smooth_tf), TFKey(1.0, sharp_tf)))
+    render_movie(scene, animation, tmp_path / "m.gif", level="default")
+    assert drawn == ([start] if explicit else [smooth, sharp])  # prepared with the scene's; then the sharp frame's
 
 
 @pytest.mark.parametrize(

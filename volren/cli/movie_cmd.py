@@ -3,6 +3,8 @@
 It takes every flag of `volren render` (the same scene, renderer, quality and camera: frame i
 of the default orbit is `volren render --azimuth A + 360 i / N`); a scene file's "movie" object
 adds keyframed cameras and TFs (`volren.model.animation`). --frames, --fps and --orbit override it.
+At a quality level, a frame whose TF is of another class (smooth, sharp) than the first gets the
+level's settings for its class, as `volren render` draws that TF.
 A time series INPUT (a .pvd, or a folder of volume files) runs through its steps instead: one
 frame a step at 10 a second, the camera still (--orbit turns it meanwhile).
 """
@@ -21,6 +23,7 @@ from volren.cli.render_cmd import (
     finite_float,
     input_series,
     quality_asked,
+    settings_level,
 )
 from volren.errors import VolrenError
 from volren.model.animation import MAX_FPS, MAX_FRAMES, MIN_FPS, Animation, check_fps, check_frames
@@ -107,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         with frame_bar(f"{scene.renderer} {width}x{height}", animation.frames) as progress:
             result = render_movie(scene, animation, args.output, lossless=args.lossless, progress=progress,
                                   steps=series.steps if series is not None else None, source=source,
-                                  bounds=zarr_bounds)  # fmt: skip
+                                  bounds=zarr_bounds, level=settings_level(args, scene))  # fmt: skip
     except VolrenError as exc:
         raise explained(exc, args, scene, why) from None
     chosen_by = f" (auto: {why})" if why else ""

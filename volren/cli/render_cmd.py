@@ -294,14 +294,20 @@ def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | No
 
     if scene.volume is None:
         return scene, None
-    named = args.quality or scene.extra.get("quality")
-    level = str(named) if named is not None else (None if args.scene else DEFAULT_LEVEL)
+    level = settings_level(args, scene)
     zarr_input = getattr(args, "zarr_input", None)
     bricks = zarr_input is not None or wants_cluster(args)
     bounds = zarr_input.bounds if zarr_input is not None else scene.volume.bounds
     renderer, settings, why = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, scene.renderer, level,
                                       scene.settings, bricks, cameras=(scene.resolved_camera(bounds),), bounds=bounds)  # fmt: skip
     return replace(scene, renderer=renderer, settings=settings), why
+
+
+def settings_level(args: argparse.Namespace, scene: Scene) -> str | None:
+    """The quality level whose settings the scene gets: the flag, the scene file's "quality", or
+    `default` for a render without a scene file; None for a scene file's own settings."""
+    named = args.quality or scene.extra.get("quality")
+    return str(named) if named is not None else (None if args.scene else DEFAULT_LEVEL)
 
 
 def quality_asked(args: argparse.Namespace, scene: Scene) -> str:
