@@ -250,13 +250,18 @@ def settings_for(renderer: str, kind: str, level: str, settings: RenderSettings,
     return choice.apply(settings) if choice is not None else settings
 
 
-def level_of(renderer: str, kind: str, settings: RenderSettings, quality: QualityTable | None = None) -> str | None:
+def level_of(renderer: str, kind: str, settings: RenderSettings, quality: QualityTable | None = None,
+             prefer: str | None = None) -> str | None:  # fmt: skip
     """The first level whose measured settings `settings` are for `renderer` on this scene kind, else
     on another class of its volume kind (a TF edited into the other class keeps its level), or None
-    (custom settings)."""
+    (custom settings). `prefer` (the level the person chose) comes first: several levels can have
+    the same settings (VTK's on meshes), and the first of them is not necessarily the one chosen."""
     quality = quality or table()
     kinds = [kind] + [k for k in quality.siblings(kind) if k != kind]
-    return next((level for k in kinds for level in LEVELS
+    pairs = [(k, level) for k in kinds for level in LEVELS]
+    if prefer in LEVELS:
+        pairs = [(k, prefer) for k in kinds] + pairs
+    return next((level for k, level in pairs
                  if (c := quality.choice(renderer, k, level)) is not None and c.matches(settings)), None)  # fmt: skip
 
 

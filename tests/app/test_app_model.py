@@ -160,10 +160,18 @@ def test_frame_cost_fits_fixed_and_per_pixel_parts_from_full_frames_and_the_late
     assert cost.model() == (0.0, 47.0 / 81_000)
 
 
-def test_pick_renderer_keeps_current_else_prefers_vtk():
+def test_pick_renderer_keeps_current_else_takes_the_measured_choice():
     opts = [RendererOption("reference", None), RendererOption("vtk", None), RendererOption("slicer", "no tets")]
-    assert pick_renderer(opts, "reference") == "reference"
-    assert pick_renderer(opts, "slicer") == "vtk"
+    asked = []
+
+    def measured(usable):
+        asked.append(usable)
+        return "vtk"
+
+    assert pick_renderer(opts, "reference", measured) == "reference" and asked == []
+    assert pick_renderer(opts, "slicer", measured) == "vtk" and asked == [["reference", "vtk"]]
+    assert pick_renderer(opts, "slicer", lambda usable: None) == "reference"  # nothing measured: the first usable
+    assert pick_renderer(opts, "slicer", lambda usable: "slicer") == "reference"  # never an unusable one
     assert pick_renderer([RendererOption("a", "x"), RendererOption("b", None)], "a") == "b"
     assert pick_renderer([RendererOption("a", "x")], "a") is None
 

@@ -234,10 +234,17 @@ def test_a_renderer_that_cannot_draw_a_view_from_inside_gives_way_to_one_that_ca
 
 
 def test_requested_renderer_that_cannot_draw_is_an_error(make_window, fake_renderers, sample, qtbot, error_boxes):
+    """The error says so, and the renderer drawing instead is `auto`'s measured choice (it was a
+    fixed preference for vtk, the slowest renderer on the shared scenes)."""
+    from volren.quality import DEFAULT_LEVEL, choose_renderer, kind_of
+
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
         w.files.apply_loaded(sample, "fake_tet_only")
-    assert blocker.args[0].renderer == "vtk"
+    usable = [o.name for o in w.renderers.options() if o.enabled]
+    measured, _ = choose_renderer(kind_of(sample.volume, sample.transfer_function), DEFAULT_LEVEL, 1,
+                                  w.state.settings, usable, can_draw=set(usable).__contains__)  # fmt: skip
+    assert blocker.args[0].renderer == measured and measured != "vtk"
     assert len(error_boxes) == 1 and "fake_tet_only does not render uniform volumes" in error_boxes[0][1]
 
 
@@ -400,6 +407,35 @@ def test_the_first_volume_gets_the_auto_renderer_and_the_status_bar_says_why(mak
     assert error_boxes == []
 
 
+def test_a_volume_of_the_other_kind_gets_auto_and_a_renderer_picked_by_hand_stays(make_window, sample, qtbot,
+                                                                                  error_boxes):  # fmt: skip
+    """Opening a mesh from a window showing a grid took vtk (a fixed preference: the slowest
+    renderer, and the least accurate there); it takes `auto`'s measured choice, as the first
+    volume does. A renderer the person picked stays for the next volume it can draw."""
+    from volren.quality import DEFAULT_LEVEL, choose_renderer, kind_of
+    from volren.samples import hollow_cylinder
+
+    def auto_choice(loaded: LoadedInput) -> str:
+        usable = [o.name for o in w.renderers.options() if o.enabled]
+        kind = kind_of(loaded.volume, loaded.transfer_function)
+        return choose_renderer(kind, DEFAULT_LEVEL, 1, w.state.settings, usable, can_draw=set(usable).__contains__)[0]
+
+    mesh = hollow_cylinder()
+    tets = LoadedInput(mesh, TransferFunction1D.ramp(*mesh.value_range, 0.6), source="hollow_cylinder")
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.files.apply_loaded(tets)
+    assert w.state.renderer == blocker.args[0].renderer == auto_choice(tets) != "vtk"
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.renderers.chooser.rendererChosen.emit("vtk")  # picked by hand
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample)
+    assert w.state.renderer == "vtk" != auto_choice(sample) and not w.renderers.auto
+    assert error_boxes == []
+
+
 def test_a_long_renderer_set_up_says_preparing_until_the_frame(make_window, fake_renderers, sample, qtbot):
     """A set-up over 0.3 s (the slow fake takes 0.8 s to take the volume) shows "preparing" in the
     frame label, and the frame's numbers replace it; a quick renderer never shows it."""
@@ -472,25 +508,36 @@ def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_fo
 
 
 def test_the_first_volume_opens_at_the_app_level_and_a_switch_keeps_the_level(make_window, sample, qtbot, monkeypatch):
-    """Issue 22: what the app shows with no options is the `interactive` level's measured settings
-    (the CLI's is `default`: the app draws a still frame after every gesture); switching renderer
-    gives the new renderer's settings at the same level, and custom settings stay custom."""
-    use_levels(monkeypatch, {"slicer": {"interactive": level(0.5, True, {"table_size": 128}),
+    """What the app shows with no options is the `default` level's measured settings, as the CLI's
+    (its previews are at `interactive`); switching renderer gives the new renderer's settings at the
+    level chosen, even through a renderer whose levels are all equal (the box showed the first of
+    them, draft, and the next renderer got draft's settings); custom settings stay custom; the frame
+    label names the level drawn."""
+    use_levels(monkeypatch, {"slicer": {"default": level(0.5, True, {"table_size": 128}),
                                         "draft": level(2.0, False, {"table_size": 64})},
-                             "vtk": {"interactive": level(0.75)}})  # fmt: skip
+                             "vtk": {name: level(0.75) for name in ("draft", "interactive", "default")}})  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "slicer")
     s = w.state.settings
     assert (s.step, s.preintegration, dict(s.options)) == (0.5, True, {"table_size": 128})
-    assert w.quality.chooser.currentText() == "interactive"
+    assert w.quality.chooser.currentText() == "default" and "slicer (default)" in w.renderers.frame_label.text()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.renderers.switch("vtk")
     s = w.state.settings
     assert (w.state.renderer, s.step, s.preintegration, dict(s.options)) == ("vtk", 0.75, False, {})
-    assert w.quality.chooser.currentText() == "interactive" and w.docks.sampling.step.spin.value() == 0.75
+    assert w.quality.chooser.currentText() == "default" and w.docks.sampling.step.spin.value() == 0.75
+    assert "vtk (default)" in w.renderers.frame_label.text()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.state.set_settings(s.with_(step=0.3))  # custom now
+        w.renderers.switch("slicer")  # back at slicer's default, not at draft
+    s = w.state.settings
+    assert (s.step, s.preintegration, dict(s.options)) == (0.5, True, {"table_size": 128})
+    assert w.quality.chooser.currentText() == "default"
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.renderers.switch("vtk")
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.state.set_settings(w.state.settings.with_(step=0.3))  # custom now
+    assert "vtk (custom)" in w.renderers.frame_label.text()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.renderers.switch("slicer")
     s = w.state.settings
@@ -513,11 +560,9 @@ def test_previews_use_the_interactive_level_and_a_tf_drag_the_renderers_drag_opt
     use_levels(monkeypatch, {"fake_drag": {"default": level(0.25, options=table_256),
                                            "interactive": level(0.5, options=table_256)}})  # fmt: skip
     w = make_window()
-    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.files.apply_loaded(sample, "fake_drag")
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
-        w.quality.chooser.activated.emit(w.quality.chooser.findText("default"))
-    assert blocker.args[0].settings.step == 0.25  # the default level
+        w.files.apply_loaded(sample, "fake_drag")
+    assert blocker.args[0].settings.step == 0.25  # the app opens at the default level
 
     labels = []
 
@@ -563,9 +608,8 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
                                            "interactive": level(0.5, options=table_256)}})  # fmt: skip
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.files.apply_loaded(sample, "fake_drag")
-    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        w.quality.chooser.activated.emit(w.quality.chooser.findText("default"))
+        w.files.apply_loaded(sample, "fake_drag")  # at the default level
+    assert w.quality.chooser.currentText() == "default"
     frames = []
     w.frameShown.connect(frames.append)
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
@@ -640,7 +684,7 @@ def test_previews_are_drawn_by_the_fastest_measured_renderer_and_the_label_says_
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as still:
         w.state.end_interaction()
     assert (frames[0].full, frames[0].renderer, frames[0].settings.step) == (False, "fake", 1.0)
-    assert labels[0].startswith("fake  |") and "preview" in labels[0]
+    assert labels[0].startswith("fake (interactive)  |") and "preview" in labels[0]
     assert (still.args[0].renderer, still.args[0].settings.step) == ("fake_drag", 0.5)
     assert w.state.renderer == "fake_drag"
 

@@ -146,6 +146,10 @@ class Capabilities:
     #: table), added by the app to its preview frames while a TF is dragged; the still frame after
     #: the drag uses the user's settings. Empty: TF changes are cheap already.
     tf_drag_options: Mapping[str, Any] = field(default_factory=dict)
+    #: Options the app sets on every still frame (the frame after a gesture, a screenshot, a
+    #: movie): image-space refinement off, so a still frame samples every pixel and never
+    #: interpolates across a feature thinner than the refinement's stride (previews may).
+    still_frame_options: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def volume_kinds(self) -> frozenset[str]:

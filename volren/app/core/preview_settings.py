@@ -1,5 +1,5 @@
 """What preview frames draw with: a cheaper renderer and settings than the still frame, chosen
-from measurements.
+from measurements; and what still frames draw with (`still_settings`).
 
 Why: a preview (a frame while the mouse drags) must come within the frame budget at a useful
 size; the still frame that follows has the user's quality. As in ParaView's and VTK's
@@ -35,6 +35,16 @@ def preview_settings(renderer: str, kind: str, settings: RenderSettings,
     if tf_drag_options:
         settings = settings.with_(options={**settings.options, **tf_drag_options})
     return settings
+
+
+def still_settings(settings: RenderSettings, capabilities: Capabilities | None) -> RenderSettings:
+    """The settings a still frame (after a gesture, a screenshot, a movie) draws with: `settings`
+    with the renderer's `still_frame_options` (image-space refinement off: every pixel sampled),
+    so a still frame is never tiled whatever the level; previews keep the level's refinement."""
+    extra = capabilities.still_frame_options if capabilities is not None else {}
+    if all(settings.options.get(key, value) == value for key, value in extra.items()):
+        return settings
+    return settings.with_(options={**settings.options, **extra})
 
 
 def preview_choice(renderer: str, kind: str, tf_dims: int, settings: RenderSettings, names: Iterable[str],

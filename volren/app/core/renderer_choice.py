@@ -3,20 +3,19 @@
 The chooser lists every registered renderer so people see what exists; the ones that cannot draw
 the loaded volume (or failed to import) are disabled with the reason. The app never leaves a
 volume without a usable renderer: `pick_renderer` keeps the current one when it can, else takes
-a compatible one in a fixed order of preference.
+the one `auto` measures fastest among those that can (`volren.quality.choose_renderer`), as for
+the first volume.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from volren.model.settings import RenderSettings
 from volren.renderers.registry import RendererRegistry
 from volren.renderers.registry import registry as default_registry
-
-#: Fast interactive renderers first; `reference` is exact but slow.
-PREFERENCE = ("vtk", "slicer", "tetra")
 
 
 @dataclass(frozen=True)
@@ -59,12 +58,14 @@ def renderer_options(
     return options, [str(w.message) for w in caught]
 
 
-def pick_renderer(options: list[RendererOption], current: str | None) -> str | None:
-    """`current` when it is usable, else the first usable one in PREFERENCE order, else any."""
+def pick_renderer(options: list[RendererOption], current: str | None,
+                  measured: Callable[[list[str]], str | None] | None = None) -> str | None:  # fmt: skip
+    """`current` when it is usable, else the one `measured` picks among the usable ones (auto's
+    measured choice), else the first usable one, else None."""
     usable = [o.name for o in options if o.enabled]
     if current in usable:
         return current
-    for name in PREFERENCE:
-        if name in usable:
-            return name
+    chosen = measured(usable) if measured is not None and usable else None
+    if chosen in usable:
+        return chosen
     return usable[0] if usable else None

@@ -75,6 +75,10 @@ class ViewState:
         self._interaction_depth = 0
         #: What is loaded, for titles and messages (a file name or "sample ...").
         self.source = ""
+        #: The quality level the person chose (or the app opened at), None for custom settings:
+        #: kept beside the settings because several levels can have equal settings, and the one
+        #: chosen is the one to show and to carry to another renderer (`volren.quality.level_of`).
+        self.quality_level: str | None = None
 
     # ------------------------------------------------------------------ observation
     def subscribe(self, listener: Listener) -> Callable[[], None]:
@@ -171,16 +175,28 @@ class ViewState:
         settings: RenderSettings | None = None,
         source: str = "",
         renderer: str | None = None,
+        crop: Box | None = None,
+        background: tuple[float, float, float] | None = None,
     ) -> None:
         """Replace the whole scene at once (one "volume" change, so one new frame).
 
-        The renderer changes in the same step, so no frame is requested from a renderer that
-        cannot draw the new volume, nor from the new renderer with the old volume. The crop box
-        is cleared: it belongs to the old volume's bounds.
+        The renderer, the crop box and the background change in the same step, so no frame is
+        drawn of a mix of old and new (the new volume uncropped, then cropped). The old crop box
+        is cleared: it belongs to the old volume's bounds. A `crop` that leaves nothing to draw
+        raises a VolrenError before anything changes.
         """
+        cropped = None
+        if crop is not None:
+            crop = check_box(crop)
+            if covers(crop, volume.bounds):
+                crop = None
+            else:
+                cropped = (volume, crop, crop_volume(volume, crop))
         self._volume = volume
-        self._crop = None
-        self._cropped = None
+        self._crop = crop
+        self._cropped = cropped
+        if background is not None:
+            self._background = (float(background[0]), float(background[1]), float(background[2]))
         self._replaced = {}  # the old volume's TFs do not fit the new one
         self._hook_tf(tf)
         self._camera = camera

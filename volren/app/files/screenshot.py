@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from PyQt5.QtCore import QObject
 
 from volren.app.core.loading import PathArg
+from volren.app.core.preview_settings import still_settings
 from volren.app.core.state import ViewState
 from volren.app.files.background_job import BackgroundJobs
 from volren.app.rendering.render_service import RendererFactory, _registry_factory
@@ -79,7 +80,7 @@ def job_renderer(job: ScreenshotJob, factory: RendererFactory = _registry_factor
     """A renderer made for `job` (its settings, volume and TF), released at the end of the block."""
     renderer = factory(job.renderer)
     try:
-        renderer.set_settings(job.settings)
+        renderer.set_settings(still_settings(job.settings, renderer.capabilities))
         renderer.set_volume(job.volume)
         renderer.set_transfer_function(job.tf)
         yield renderer

@@ -21,7 +21,7 @@ from collections.abc import Callable
 from PyQt5.QtCore import QObject, QTimer
 
 from volren.app.core.frame_sizes import FrameCost, adaptive_preview_scale, preview_size
-from volren.app.core.preview_settings import preview_choice
+from volren.app.core.preview_settings import preview_choice, still_settings
 from volren.app.core.state import Change, ViewState
 from volren.app.rendering.render_service import Frame, RenderRequest, RenderService
 from volren.model.settings import RenderSettings
@@ -211,7 +211,6 @@ class FrameScheduler(QObject):
 
     def _request(self, full: bool) -> int | None:
         s = self._state
-        self._pending_final = None  # a newer request replaces a refinement under way
         width, height = self._viewport_size()
         if s.volume is None or s.transfer_function is None or s.camera is None or width < 1 or height < 1:
             return None
@@ -220,17 +219,19 @@ class FrameScheduler(QObject):
         tf = s.transfer_function
         renderer, settings = s.renderer, s.settings
         if full:
+            settings = still_settings(settings, self._capabilities(renderer))
             # a gesture that rested before it ended asks twice for the same full frame: once when input
             # went quiet, again on release; the second would redraw what is already on screen
             key = (s.renderer, id(volume), id(tf), tf.version, s.settings, s.camera, width, height, s.background)
             if key == self._last_full:
-                return None
+                return None  # and a refinement under way for it still ends in its still frame
             self._last_full = key
         else:
             self._last_full = None  # a preview replaces what is on screen: the next full frame is needed
             preview = renderer, settings = self.preview()
             width, height = preview_size(width, height, self.current_preview_scale(preview))
         self._requested_any = True
+        self._pending_final = None  # this request replaces a refinement under way
         request = (renderer, volume, s.transfer_function, settings, s.camera, width, height, full, s.background)
         if full:
             coarse = self.preview(tf_dragged=False)

@@ -30,9 +30,8 @@ from volren.app.window.time_control import TimeControl
 from volren.errors import VolrenError
 from volren.io.ome_zarr_io import MAX_IN_MEMORY_BYTES, is_ome_zarr
 from volren.io.series_io import TimeSeries, is_series, load_series
-from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
-from volren.quality import AUTO, at_level, kind_of, level_of
+from volren.quality import AUTO, DEFAULT_LEVEL, at_level, kind_of, level_of
 
 OPEN_FILTER = (
     "Volumes, time series and scenes (*.vti *.vtk *.vtu *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw "
@@ -41,12 +40,12 @@ OPEN_FILTER = (
 )
 
 
-#: The level the app opens at. Not the command line's `default`: in the app a still frame follows
-#: every gesture, and `default` measured 2.4 s a still frame of bonsai at 800x600 with objectorder
-#: (its one configuration that is as accurate as VTK on every shared scene, step 0.25 pre-integrated,
-#: which only ironProt needs) against 0.45 s at `interactive` (RMSE within 1.65x VTK default's on
-#: the shared scenes, 0.12x on bonsai). The Quality box offers the others.
-APP_LEVEL = "interactive"
+#: The level the app opens at: the command line's `default`, the level that keeps every thin
+#: structure (at most VTK's error and pixels off on every measured scene, `docs/bench/quality.md`).
+#: Gestures are previewed at `interactive` (`preview_settings`); still frames never refine in image
+#: space (`still_settings`), and at that a bonsai still frame at 947x896 cost no more at `default`
+#: than at `interactive` (raycast 1.8 s against 2.0 s on this 2-core machine under load).
+APP_LEVEL = DEFAULT_LEVEL
 
 
 class FileActions(QObject):
@@ -223,7 +222,9 @@ class FileActions(QObject):
         state, volume = self._state, loaded.volume
         assert volume is not None
         tf = self._tf_by_field.get((loaded.volume_path, volume.scalars)) or loaded.transfer_function
-        return replace(loaded, camera=state.camera, settings=state.settings, renderer=state.renderer,
+        renderer = None if self._renderers.auto else state.renderer  # `auto` chooses again for the new field
+        settings = None if self._level_shown() is not None else state.settings  # the level, for the renderer drawing
+        return replace(loaded, camera=state.camera, settings=settings, renderer=renderer,
                        transfer_function=tf, crop=state.crop, background=state.background)  # fmt: skip
 
     def ask_raw_layout(self, path: PathArg) -> dict[str, Any] | None:
@@ -245,39 +246,40 @@ class FileActions(QObject):
         state, volume = self._state, loaded.volume
         assert volume is not None and loaded.transfer_function is not None
         settings = loaded.settings or state.settings
-        # the first volume shown gets `auto` unless something names a renderer; later ones keep the user's
-        wanted = requested_renderer or loaded.renderer or (AUTO if state.volume is None else state.renderer)
+        # `auto` unless something names a renderer or the person picked one (kept where it can draw)
+        following_auto = state.volume is None or self._renderers.auto
+        wanted = requested_renderer or loaded.renderer or (AUTO if following_auto else state.renderer)
         renderer, notes = self._renderers.choose_for(
             volume, loaded.transfer_function, settings, wanted, requested_renderer
         )
         if loaded.settings is None:
-            settings = self._at_level(renderer, kind_of(volume, loaded.transfer_function), settings)
+            level = self._level_shown()
+            kind = kind_of(volume, loaded.transfer_function)
+            settings = (at_level(renderer, kind, level, settings) if level is not None else None) or settings
+            state.quality_level = level
+        else:  # a scene's own settings, as they are: whichever level they are
+            state.quality_level = None
         aspect = self._viewport.aspect()
         camera = loaded.resolve_camera(aspect) or default_camera(volume, aspect)
         self._scenes.remember_volume_file(loaded.volume_path, loaded.scalars)
-        state.load(volume, loaded.transfer_function, camera, settings, loaded.source, renderer=renderer)
-        self._apply_view_extras(loaded)
+        try:
+            state.load(volume, loaded.transfer_function, camera, settings, loaded.source, renderer=renderer,
+                       crop=loaded.crop, background=loaded.background)  # fmt: skip
+        except VolrenError as exc:  # the crop box leaves nothing of this volume: show it whole
+            self._report_error("Cannot crop", f"{loaded.source}: {exc}")
+            state.load(volume, loaded.transfer_function, camera, settings, loaded.source, renderer=renderer,
+                       background=loaded.background)  # fmt: skip
         if notes:
             self._window.statusBar().showMessage("; ".join(notes), 15000)
 
-    def _at_level(self, renderer: str, kind: str, settings: RenderSettings) -> RenderSettings:
-        """`settings` at the quality level shown (APP_LEVEL for the first volume), measured for
-        the renderer and volume kind about to be shown; unchanged for custom settings or where
-        nothing was measured. A scene file's own settings are kept as they are."""
+    def _level_shown(self) -> str | None:
+        """The quality level the next volume opens at: APP_LEVEL for the first, else the level
+        shown now (None: custom settings, kept as they are)."""
         state = self._state
-        level = APP_LEVEL if state.volume is None else level_of(state.renderer, kind_of(state.volume, state.transfer_function),
-                                                                state.settings)  # fmt: skip
-        return at_level(renderer, kind, level, settings) or settings
-
-    def _apply_view_extras(self, loaded: LoadedInput) -> None:
-        """A scene's crop box and background (state.load just cleared the crop of the old volume)."""
-        if loaded.background is not None:
-            self._state.set_background(loaded.background)
-        if loaded.crop is not None:
-            try:
-                self._state.set_crop(loaded.crop)
-            except VolrenError as exc:
-                self._report_error("Cannot crop", f"{loaded.source}: {exc}")
+        if state.volume is None:
+            return APP_LEVEL
+        kind = kind_of(state.volume, state.transfer_function)
+        return level_of(state.renderer, kind, state.settings, prefer=state.quality_level)
 
     # ------------------------------------------------------------------ the loader's answers
     def _on_busy(self, busy: bool) -> None:

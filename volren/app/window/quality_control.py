@@ -49,16 +49,22 @@ class QualityControl:
     def refresh(self) -> None:
         """Enable the levels measured for the renderer and volume shown; show which one the settings are."""
         model = self.chooser.model()
-        current = CUSTOM
         for row, level in enumerate(LEVELS, start=1):
             choice = self._choice(level)
             item = model.item(row)
             item.setEnabled(choice is not None)
             item.setToolTip(level_tooltip(level, choice) if choice is not None else
                             f"no measurements of {self._state.renderer} at {level} on this kind of volume")  # fmt: skip
-            if choice is not None and current == CUSTOM and choice.matches(self._state.settings):
-                current = level
-        self.chooser.setCurrentIndex(self.chooser.findText(current))
+        self.chooser.setCurrentIndex(self.chooser.findText(self.shown_level() or CUSTOM))
+
+    def shown_level(self) -> str | None:
+        """The level the settings are: the one chosen when its settings are still the ones in use
+        (levels can have equal settings), else the first that matches; None for custom settings."""
+        state = self._state
+        if state.volume is None:
+            return None
+        kind = quality.kind_of(state.volume, state.transfer_function)
+        return quality.level_of(state.renderer, kind, state.settings, prefer=state.quality_level)
 
     def _chosen(self, index: int) -> None:
         level = self.chooser.itemText(index)
@@ -68,6 +74,7 @@ class QualityControl:
             return
         self._applying = True
         try:
+            self._state.quality_level = level
             self._state.set_settings(choice.replace(self._state.settings))
         finally:
             self._applying = False

@@ -59,10 +59,18 @@ class RendererControl:
         self._failure_key: tuple[Any, ...] | None = None
         self._shown_tf_dims = 1
         self._preparing: tuple[int, str] | None = None  # (serial, renderer) set up with no frame yet
+        #: The renderer follows `auto`'s measured choice for each volume shown (another file, a
+        #: dropped one, a series, another array), until the person picks one in the chooser.
+        self.auto = True
         self.chooser = RendererChooser(parent)
-        self.chooser.rendererChosen.connect(self.switch)
+        self.chooser.rendererChosen.connect(self._picked)
         #: "vtk  |  800 x 600  |  12.3 ms", or how far a slow frame is.
         self.frame_label = QLabel("", parent)
+
+    def _picked(self, name: str) -> None:
+        """The person chose a renderer: it stays for later volumes wherever it can draw them."""
+        self.auto = False
+        self.switch(name)
 
     def switch(self, name: str) -> None:
         """Make `name` the renderer, dropping renderer options it does not have; settings at a
@@ -74,7 +82,7 @@ class RendererControl:
         state, settings = self._state, None
         if state.volume is not None:
             kind = kind_of(state.volume, state.transfer_function)
-            level = level_of(state.renderer, kind, state.settings)
+            level = level_of(state.renderer, kind, state.settings, prefer=state.quality_level)
             settings = at_level(name, kind, level, state.settings)
         state.set_renderer(name, option_names, settings)
 
@@ -106,6 +114,7 @@ class RendererControl:
         memory of the last failure, so it is reported again.
         """
         options, notes = renderer_options(volume.kind, settings, self._registry, tf.dims)
+        self.auto = wanted == AUTO
         if wanted == AUTO:  # the fastest measured renderer that draws this (volren.quality)
             drawable = {o.name for o in options if o.reason is None}
             try:
@@ -115,7 +124,7 @@ class RendererControl:
             except VolrenError as exc:
                 self._report_error("Renderer unavailable", str(exc))
                 return next(iter(sorted(drawable)), "vtk"), notes
-        chosen = pick_renderer(options, wanted)
+        chosen = pick_renderer(options, wanted, self._measured(volume, tf, settings))
         if chosen != wanted:
             reason = next((o.reason for o in options if o.name == wanted), None)
             text = renderer_message(wanted, reason)
@@ -126,6 +135,19 @@ class RendererControl:
                 notes.append(text)
         self._failure_key = None
         return chosen or wanted, notes
+
+    @staticmethod
+    def _measured(volume: Volume, tf: TransferFunction, settings: RenderSettings) -> Callable[[list[str]], str | None]:
+        """`auto`'s measured choice among the usable renderers for this scene (None: none measured)."""
+
+        def fastest(usable: list[str]) -> str | None:
+            try:
+                return choose_renderer(kind_of(volume, tf), DEFAULT_LEVEL, tf.dims, settings, usable,
+                                       can_draw=set(usable).__contains__)[0]  # fmt: skip
+            except VolrenError:
+                return None
+
+        return fastest
 
     # ------------------------------------------------------------------ state
     def on_state_change(self, change: Change) -> None:
@@ -151,7 +173,9 @@ class RendererControl:
         if state.volume is None:
             return
         options = self.options()
-        chosen = pick_renderer(options, state.renderer)
+        assert state.transfer_function is not None
+        chosen = pick_renderer(options, state.renderer, self._measured(state.volume, state.transfer_function,
+                                                                       state.settings))  # fmt: skip
         if chosen is not None and chosen != state.renderer:
             reason = next((o.reason for o in options if o.name == state.renderer), None)
             self._status_bar.showMessage(f"{renderer_message(state.renderer, reason)}; using {chosen}", 15000)
@@ -167,8 +191,20 @@ class RendererControl:
         cheaper = frame.settings is not None and frame.settings != self._state.settings
         quality = "" if frame.full else (", preview at lower quality" if cheaper else ", preview")
         self.frame_label.setText(
-            f"{frame.renderer}  |  {frame.width} x {frame.height}{quality}  |  {frame.ms:.1f} ms"
+            f"{frame.renderer} ({self._level_drawn(frame)})  |  {frame.width} x {frame.height}{quality}  |  "
+            f"{frame.ms:.1f} ms"
         )
+
+    def _level_drawn(self, frame: Frame) -> str:
+        """The quality level a frame was drawn at (the chosen one where levels have equal
+        settings), or "custom"."""
+        state = self._state
+        if frame.settings is None or state.volume is None:
+            return "custom"
+        kind = kind_of(state.volume, state.transfer_function)
+        if frame.full and frame.renderer == state.renderer:  # the state's settings (image refinement off)
+            return level_of(state.renderer, kind, state.settings, prefer=state.quality_level) or "custom"
+        return level_of(frame.renderer, kind, frame.settings) or "custom"
 
     def preparing(self, serial: int, renderer: str) -> None:
         """A new renderer or volume is being set up: after PREPARING_AFTER_S without a frame or

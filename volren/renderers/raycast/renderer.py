@@ -134,6 +134,7 @@ class RaycastRenderer(RendererBase):
         "adaptive image refinement, the step chosen from an error target",
         # a TF drag's previews march at the level's coarsest step instead of estimating the error per edit
         tf_drag_options={"target_error": 0.0},
+        still_frame_options={"image_stride": 1},  # the app refines images in previews only
         quality=(
             QualityLevel("step 1", step=1.0, preintegration=False),
             QualityLevel("step 1, pre-integrated", step=1.0, preintegration=True),

@@ -88,6 +88,7 @@ class TetraRenderer(RendererBase):
             )
         },
         backend="cpu/opengl",
+        still_frame_options={"image_stride": 1},  # the app refines images in previews only
         summary="cell-to-cell ray casting through tetrahedra (numba, or compute shaders on a GPU) with 3D "
         "pre-integration tables",
         quality=(
