@@ -103,3 +103,35 @@ def test_a_crop_error_is_reported_in_one_line(loaded_window, error_boxes):
     w = loaded_window
     w.docks.crop.errorOccurred.emit("Cannot crop", "crop box: xmin 2 is above xmax 1")
     assert error_boxes == [("Cannot crop", "crop box: xmin 2 is above xmax 1")]
+
+
+def test_the_docks_show_their_whole_width_at_the_default_window_size(make_window, ini, fake_renderers, qtbot):
+    """At the app's default size no dock scrolls sideways: the TF editor (either tab), the
+    rendering settings (taller than the dock: its vertical scroll bar takes room too) and the
+    dataset facts of a volume with a long file name, long array names and a long note."""
+    from volren.app.core.loading import LoadedInput
+    from volren.app.main import DEFAULT_WINDOW_SIZE
+    from volren.model.transfer_function import TransferFunction1D
+    from volren.model.volume import UniformVolume
+
+    name = "ct_abdomen_patient_000042_series_0003_reconstructed_0.625mm.nrrd"
+    arrays = ("density_after_the_second_correction_pass", "density_after_the_second_correction_pass:magnitude")
+    values = np.arange(6 * 7 * 8, dtype=np.float32).reshape(8, 7, 6)
+    volume = UniformVolume(values, spacing=(0.625, 0.625, 0.625), origin=(-123.4567, -98.7654, 1234.5678), name=name,
+                           notes=(f"{name}: 12,345 cells of a kind volren does not draw were dropped",),
+                           scalars=arrays[0], arrays=arrays)  # fmt: skip
+    w = make_window(settings=ini)
+    w.resize(*DEFAULT_WINDOW_SIZE)
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(LoadedInput(volume, TransferFunction1D.ramp(0.0, 335.0), source=name), "fake")
+    docks = w.docks
+    for dock, show in ((docks.tf_dock, lambda: docks.tf_panel.tabs.setCurrentIndex(0)),
+                       (docks.tf_dock, lambda: docks.tf_panel.tabs.setCurrentIndex(1)),
+                       (docks.settings_dock, docks.settings_dock.raise_),
+                       (docks.dataset_dock, docks.dataset_dock.raise_)):  # fmt: skip
+        show()
+        qtbot.wait(50)
+        scroll = dock.widget()
+        needed, shown = scroll.widget().minimumSizeHint().width(), scroll.viewport().width()
+        assert needed <= shown and not scroll.horizontalScrollBar().isVisible(), (dock.windowTitle(), needed, shown)
+    assert docks.dataset.facts()["Name"] == name  # shown whole where it fits, in full in its tooltip

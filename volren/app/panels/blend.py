@@ -37,6 +37,8 @@ class BlendPanel(StatePanel):
         self._support: KindSupport | None = None
         self._shown_tf_dims = 1
         self.combo = QComboBox(self)
+        self.combo.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLengthWithIcon)  # the dock is narrow
+        self.combo.setMinimumContentsLength(10)
         for mode in BlendMode:
             self.combo.addItem(LABELS[mode][0], mode.value)
         self.combo.activated.connect(self._on_activated)

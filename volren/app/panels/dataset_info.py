@@ -5,13 +5,18 @@ The notes a load leaves on the volume (cells dropped or split into tetrahedra, t
 repaired, values converted, NaNs found; see `volren.io.dataset`) are listed one per line: they
 are why a rendering may not look like the file in another program, so they stay in view instead
 of vanishing with the status-bar message.
+
+Nothing a file holds widens the dock: facts wrap (a label above its value when the dock is
+narrow), names too long for it are elided in the middle (whole in their tooltips), and the
+array chooser is as wide as the dock.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from PyQt5.QtCore import Qt, pyqtSignal
+from PyQt5.QtCore import QSize, Qt, pyqtSignal
+from PyQt5.QtGui import QPainter, QPaintEvent
 from PyQt5.QtWidgets import QComboBox, QFormLayout, QLabel, QListWidget, QVBoxLayout, QWidget
 
 from volren.app.core.state import ViewState
@@ -19,6 +24,38 @@ from volren.app.panels.base import StatePanel
 from volren.model.volume import UniformVolume, Volume
 
 NO_VOLUME = "No volume"
+#: The facts that are names (no spaces to wrap at): elided in the middle instead.
+NAME_FACTS = frozenset({"Name", "Array"})
+#: The fewest characters an elided name or the array chooser shows.
+MIN_NAME_CHARS = 12
+
+
+class ElidedLabel(QLabel):
+    """One line showing as much of its text as fits, the middle elided (a file name keeps its
+    start and its suffix); the whole text is its tooltip and what `text()` gives."""
+
+    def __init__(self, text: str, parent: QWidget | None = None) -> None:
+        super().__init__(text, parent)
+        self.setToolTip(text)
+
+    def minimumSizeHint(self) -> QSize:
+        hint = super().minimumSizeHint()
+        return QSize(min(hint.width(), self.fontMetrics().averageCharWidth() * MIN_NAME_CHARS), hint.height())
+
+    def paintEvent(self, event: QPaintEvent) -> None:
+        rect = self.contentsRect()
+        shown = self.fontMetrics().elidedText(self.text(), Qt.ElideMiddle, rect.width())
+        QPainter(self).drawText(rect, int(self.alignment()), shown)
+
+
+def _fact_label(label: str, text: str, parent: QWidget) -> QLabel:
+    """A fact's value: a name elided, anything else wrapped at its spaces and selectable."""
+    if label in NAME_FACTS:
+        return ElidedLabel(text, parent)
+    value = QLabel(text, parent)
+    value.setWordWrap(True)
+    value.setTextInteractionFlags(Qt.TextSelectableByMouse)
+    return value
 
 
 def _num(value: float) -> str:
@@ -89,11 +126,15 @@ class DatasetInfoPanel(StatePanel):
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(state, parent)
         self.array_box = QComboBox(self)
+        self.array_box.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLengthWithIcon)  # long names
+        self.array_box.setMinimumContentsLength(MIN_NAME_CHARS)
         self.array_box.activated.connect(self._array_activated)
         array_row = QFormLayout()
+        array_row.setRowWrapPolicy(QFormLayout.WrapLongRows)
         array_row.addRow("Show array", self.array_box)
         self.empty = QLabel(NO_VOLUME, self)
         self.form = QFormLayout()
+        self.form.setRowWrapPolicy(QFormLayout.WrapLongRows)
         self.notes_label = QLabel("Notes", self)
         self.notes_list = QListWidget(self)
         self.notes_list.setToolTip("What loading changed or ignored (also reported as warnings)")
@@ -131,6 +172,7 @@ class DatasetInfoPanel(StatePanel):
             choices.insert(0, volume.scalars)
         for choice in choices:
             box.addItem(array_label(choice), choice)
+            box.setItemData(box.count() - 1, array_label(choice), Qt.ToolTipRole)
         if volume is not None and volume.scalars in choices:
             box.setCurrentIndex(choices.index(volume.scalars))
         box.blockSignals(False)
@@ -158,8 +200,7 @@ class DatasetInfoPanel(StatePanel):
             self.notes_list.hide()
             return
         for label, text in volume_facts(volume, self.state.render_volume):
-            value = QLabel(text, self)
-            value.setTextInteractionFlags(Qt.TextSelectableByMouse)
+            value = _fact_label(label, text, self)
             self.form.addRow(label, value)
             self._values[label] = value
         self.notes_list.addItems(list(volume.notes))

@@ -34,6 +34,7 @@ class ColorEntry(QWidget):
         self._shown = 0.0  # the value box as refresh() left it
         self.value = QDoubleSpinBox(self)
         self.value.setDecimals(6)
+        self.value.setMinimumWidth(60)  # its hint fits the widest allowed value; the dock must fit ~300 px
         self.value.setToolTip("Data value of the selected colour stop (between its neighbours)")
         self.color_button = QPushButton(self)
         self.color_button.setToolTip("Colour of the selected stop: click to pick it (RGB, HSV or #hex)")

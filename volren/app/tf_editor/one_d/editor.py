@@ -242,7 +242,6 @@ class TransferFunction1DEditor(QWidget):
         view.addWidget(self.zoom_tf_button)
         view.addWidget(self.zoom_all_button)
         view.addStretch(1)
-        view.addWidget(self.log_check)
         one.addLayout(view)
         one.addWidget(self.curve, 1)
         one.addWidget(self.color_bar)
@@ -267,7 +266,8 @@ class TransferFunction1DEditor(QWidget):
         self.pages.addWidget(self.page_1d)
         self.pages.addWidget(self.page_2d)
 
-        files = QHBoxLayout()
+        files = QHBoxLayout()  # with the histogram's log switch: the View row has no room for it
+        files.addWidget(self.log_check)
         files.addStretch(1)
         files.addWidget(self.open_button)
         files.addWidget(self.save_button)

@@ -25,6 +25,7 @@ class PointEntry(QWidget):
         self._shown = (0.0, 0.0)  # (value, opacity) boxes as refresh() left them
         self.value = QDoubleSpinBox(self)
         self.value.setDecimals(6)
+        self.value.setMinimumWidth(60)  # its hint fits the widest allowed value; the dock must fit ~300 px
         self.value.setToolTip("Data value of the selected opacity point (between its neighbours)")
         self.opacity = QDoubleSpinBox(self)
         self.opacity.setDecimals(3)

@@ -142,6 +142,7 @@ class TransferFunction2DEditor(QWidget):
         self.fit_gradient_button.setToolTip("Gradient axis to the data's 99.5th percentile")
         self.fit_gradient_button.clicked.connect(self.fit_gradient_max)
         self.gradient_max_spin.setMaximumWidth(120)  # its range would size it for 16 digits
+        self.gradient_max_spin.setMinimumWidth(60)
         properties = QHBoxLayout()
         properties.addWidget(self.color_button)
         properties.addWidget(QLabel("Opacity", page))
