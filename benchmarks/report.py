@@ -113,11 +113,42 @@ def compose(folder: Path, relative_to: Path, date: datetime.date | None = None, 
             missing.append(name)
             continue
         text = path.read_text(encoding="utf-8").strip()
-        text = _relink(text, rel)
+        text = _nested_headings(_relink(text, rel))
         lines += ["", f"## {title}", "", f"*{question}*", "", text]
     if missing:
         lines += ["", f"Not in this run: {', '.join(missing)}."]
     return "\n".join(lines) + "\n"
+
+
+#: Fragments' headings start at this level: below the report's title (#) and its sections (##).
+FRAGMENT_HEADING_LEVEL = 3
+
+
+def _nested_headings(text: str) -> str:
+    """A fragment's headings moved down so that its shallowest is `FRAGMENT_HEADING_LEVEL`: a
+    fragment written as a page of its own (`# Run time against error`) would otherwise put a
+    second title in BENCHMARKS.md and its subsections beside the report's sections."""
+    lines = text.split("\n")
+    headings = _heading_levels(lines)
+    if not headings:
+        return text
+    shift = max(0, FRAGMENT_HEADING_LEVEL - min(level for _, level in headings))
+    for i, level in headings:
+        lines[i] = "#" * (min(level + shift, 6) - level) + lines[i]
+    return "\n".join(lines)
+
+
+def _heading_levels(lines: list[str]) -> list[tuple[int, int]]:
+    """(line index, level) of each Markdown heading outside fenced code blocks."""
+    import re
+
+    found, fenced = [], False
+    for i, line in enumerate(lines):
+        if line.startswith("```"):
+            fenced = not fenced
+        elif not fenced and (match := re.match(r"(#{1,6}) ", line)):
+            found.append((i, len(match.group(1))))
+    return found
 
 
 def _relink(text: str, rel: str) -> str:
