@@ -18,11 +18,13 @@ checks what a renderer returns, so a renderer that follows the Protocol without 
 from __future__ import annotations
 
 import math
+import threading
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from types import MappingProxyType
+from typing import Any, ClassVar, Literal, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -62,6 +64,167 @@ def clipping_planes_cut(camera: Camera, bounds: Sequence[float]) -> bool:
     margin = EYE_INSIDE_MARGIN * max(d1 - d0, float(np.max(np.subtract(bounds[1::2], bounds[0::2]))))
     near, far = camera.clipping_range
     return bool(d0 + margin < near < d1 - margin or d0 + margin < far < d1 - margin)
+
+
+OptionKind = Literal["bool", "int", "float", "str", "choice"]
+OPTION_KINDS: tuple[OptionKind, ...] = ("bool", "int", "float", "str", "choice")
+#: The longest shown form of a refused value in an error message.
+SHOWN_VALUE_CHARS = 60
+
+
+@dataclass(frozen=True)
+class OptionRule:
+    """A rule beyond an option's kind and range (a power of two, "0 or at least 16"), and the words
+    that say which values pass it, for error messages and help."""
+
+    test: Callable[[Any], bool]
+    allowed: str
+
+
+@dataclass(frozen=True)
+class OptionSpec:
+    """One renderer option, declared once: parsing, validation, the error messages and the help
+    text (`option_help`, the CLI's `volren renderers`) all come from it.
+
+    `kind` is what a given value must be: bool (true/false only), int (not a bool, not 2.0), float
+    (an int or a float, finite, returned as float), str, or choice (one of `choices`, of the same
+    type). `low` and `high` bound ints and floats (inclusive; `low_exclusive` makes low open);
+    `words` are strings accepted as they are besides the kind's values ('auto': chosen per frame);
+    `rule` adds a test the range cannot say. A default of None means "chosen by the renderer"
+    (by volume kind, say) and is never a value a caller may give.
+    """
+
+    name: str
+    default: Any
+    kind: OptionKind
+    help: str
+    low: float | None = None
+    high: float | None = None
+    low_exclusive: bool = False
+    choices: tuple[Any, ...] = ()
+    words: tuple[str, ...] = ()
+    rule: OptionRule | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in OPTION_KINDS:
+            raise VolrenError(f"option {self.name}: kind must be one of {', '.join(OPTION_KINDS)}, got {self.kind!r}")
+        if (self.kind == "choice") != bool(self.choices):
+            raise VolrenError(f"option {self.name}: choices go with kind 'choice' and only with it")
+        if self.low_exclusive and self.kind != "float":
+            raise VolrenError(f"option {self.name}: only a float option has an exclusive low bound")
+        if self.default is not None and not self._accepts(self.default):
+            raise VolrenError(f"option {self.name}: the default {self.default!r} is not {self.allowed()}")
+
+    def _accepts(self, value: Any) -> bool:
+        """Whether `value` parses to itself."""
+        try:
+            return bool(self.parse(value, "") == value)
+        except VolrenError:
+            return False
+
+    def allowed(self) -> str:
+        """The values this option accepts, in words: "an integer in 16..4096"."""
+        text = self.rule.allowed if self.rule is not None else self._kind_text()
+        return " or ".join([*(repr(w) for w in self.words), text])
+
+    def _kind_text(self) -> str:
+        if self.kind == "bool":
+            return "true or false"
+        if self.kind == "str":
+            return "a string"
+        if self.kind == "choice":
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        return ("an integer" if self.kind == "int" else "a number") + self._range_text()
+
+    def _range_text(self) -> str:
+        """" in 16..4096", " in (0, 1]", " >= 0", or "" for no bounds."""
+        lo, hi = self.low, self.high
+        if lo is not None and hi is not None:
+            if self.kind == "int":
+                return f" in {lo}..{hi}"
+            return f" in {'(' if self.low_exclusive else '['}{lo:g}, {hi:g}]"
+        if lo is not None:
+            return f" {'>' if self.low_exclusive else '>='} {lo:g}"
+        return "" if hi is None else f" <= {hi:g}"
+
+    def parse(self, value: Any, renderer: str) -> Any:
+        """`value` as this option's kind (an int given to a float option becomes a float), or a
+        one-line VolrenError naming the renderer and the option and saying what is allowed."""
+        if isinstance(value, str) and value in self.words:
+            return value
+        parsed = self._parse_kind(value)
+        if parsed is _REFUSED or (self.rule is not None and not self.rule.test(parsed)):
+            where = f"renderer {renderer}: " if renderer else ""
+            raise VolrenError(f"{where}option {self.name} must be {self.allowed()}, got {_shown(value)}")
+        return parsed
+
+    def _parse_kind(self, value: Any) -> Any:
+        if self.kind == "bool":
+            return value if isinstance(value, bool) else _REFUSED
+        if self.kind == "str":
+            return value if isinstance(value, str) else _REFUSED
+        if self.kind == "choice":
+            return value if any(type(value) is type(c) and value == c for c in self.choices) else _REFUSED
+        number = int | float if self.kind == "float" else int
+        if isinstance(value, bool) or not isinstance(value, number) or not self._in_range(value):
+            return _REFUSED
+        if self.kind == "int":
+            return value
+        try:
+            as_float = float(value)
+        except OverflowError:  # an int beyond the float range
+            return _REFUSED
+        return as_float if math.isfinite(as_float) else _REFUSED
+
+    def _in_range(self, value: float) -> bool:
+        """Exact comparison (ints of any size against float bounds); NaN is in no range."""
+        if value != value:
+            return False
+        if self.low is not None and (value <= self.low if self.low_exclusive else value < self.low):
+            return False
+        return self.high is None or value <= self.high
+
+    def describe(self) -> str:
+        """The help line: what it does, what it accepts, its default."""
+        default = "" if self.default is None else f"; default {_shown_default(self.default)}"
+        return f"{self.help} ({self.allowed()}{default})"
+
+
+#: What `OptionSpec._parse_kind` returns for a value of the wrong kind or out of range.
+_REFUSED = object()
+
+
+def _shown(value: Any) -> str:
+    """A refused value as an error message shows it: repr, cut short (a huge int has its digits
+    counted, since Python refuses to write ints of over 4300 digits)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 128:
+        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+    text = repr(value)
+    return text if len(text) <= SHOWN_VALUE_CHARS else text[: SHOWN_VALUE_CHARS - 3] + "..."
+
+
+def _shown_default(value: Any) -> str:
+    """A default as the CLI's `--option KEY=VALUE` takes it (JSON): true, 256, auto."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def option_help_of(specs: Sequence[OptionSpec]) -> dict[str, str]:
+    """The `option_help` mapping derived from a renderer's option specs: name -> help line."""
+    return {spec.name: spec.describe() for spec in specs}
+
+
+def parse_options(renderer: str, specs: Sequence[OptionSpec], options: Mapping[str, Any]) -> dict[str, Any]:
+    """Every declared option: the given value parsed (`OptionSpec.parse`) or the default; an
+    option not declared is a one-line VolrenError listing the valid ones."""
+    known = {spec.name: spec for spec in specs}
+    unknown = [key for key in options if key not in known]
+    if unknown:
+        valid = ", ".join(sorted(known)) or "none"
+        raise VolrenError(f"renderer {renderer} has no option(s) {sorted(map(str, unknown))}; valid: {valid}")
+    return {name: spec.parse(options[name], renderer) if name in options else spec.default
+            for name, spec in known.items()}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -257,6 +420,14 @@ class Renderer(Protocol):
     def release(self) -> None: ...
 
 
+#: One renderer at a time works in a process (a frame, or the set-up after a new volume, TF or
+#: settings). The kernels release the interpreter's lock (numba `nogil`), so the app's GUI thread
+#: runs while a frame is drawn; but numba's `workqueue` threading layer (used where neither TBB nor
+#: OpenMP loads) aborts the process when two threads launch parallel kernels at once (the app's
+#: render thread and a screenshot or movie job), and two frames at once gain nothing on shared cores.
+_ONE_AT_A_TIME = threading.RLock()
+
+
 class RendererBase(ABC):
     """State keeping, validation and timing shared by renderers; subclasses implement `_render`.
 
@@ -267,10 +438,26 @@ class RendererBase(ABC):
     name: ClassVar[str] = ""
     capabilities: ClassVar[Capabilities]
 
+    #: The renderer's options (RenderSettings.options), declared once; `set_settings` parses them
+    #: and `opts` holds the parsed values.
+    options: ClassVar[tuple[OptionSpec, ...]] = ()
+    #: Derived from `options` for every subclass: name -> help line.
+    option_help: ClassVar[Mapping[str, str]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "option_help" in vars(cls) and not cls.options:  # TRANSITIONAL: until every renderer declares options
+            return
+        if "option_help" in vars(cls):
+            raise VolrenError(f"renderer class {cls.__name__} sets option_help: declare `options` (OptionSpec) "
+                              "instead, option_help is derived from them")  # fmt: skip
+        cls.option_help = MappingProxyType(option_help_of(cls.options))
+
     def __init__(self) -> None:
         self._volume: Volume | None = None
         self._tf: TransferFunction | None = None
         self._settings = RenderSettings()
+        self._opts = self._parse_options(self._settings.options)
         self._region: Region | None = None
         self._released = False
         self.last_frame: FrameStats | None = None
@@ -292,13 +479,19 @@ class RendererBase(ABC):
     def region(self) -> Region | None:
         return self._region
 
+    @property
+    def opts(self) -> Mapping[str, Any]:
+        """The current settings' options, parsed: every declared option, defaults filled in."""
+        return self._opts
+
     def set_volume(self, volume: Volume) -> None:
         self._check_alive()
         reason = self.capabilities.unsupported_reason(volume.kind)
         if reason:
             raise VolrenError(f"renderer {self.name} {reason}")
         self._volume = volume
-        self._volume_changed()
+        with _ONE_AT_A_TIME:
+            self._volume_changed()
 
     def set_transfer_function(self, tf: TransferFunction) -> None:
         """Use `tf` (a TransferFunction1D or TransferFunction2D); a TF of a dimension this renderer
@@ -317,13 +510,15 @@ class RendererBase(ABC):
         if reason:
             raise VolrenError(f"renderer {self.name} {reason}")
         self._tf = tf
-        self._tf_changed()
+        with _ONE_AT_A_TIME:
+            self._tf_changed()
 
     def set_settings(self, settings: RenderSettings) -> None:
         self._check_alive()
-        self._check_options(settings.options)
-        self._settings = settings
-        self._settings_changed()
+        opts = self._parse_options(settings.options)
+        self._settings, self._opts = settings, opts
+        with _ONE_AT_A_TIME:
+            self._settings_changed()
 
     def set_region(self, region: Region | None) -> None:
         """Draw only `region`'s share of the whole volume (the volume is then the brick's
@@ -336,7 +531,8 @@ class RendererBase(ABC):
             if not any(support.regions for support in self.capabilities.kinds.values()):
                 raise VolrenError(f"renderer {self.name} does not draw bricks (regions)")
         self._region = region
-        self._region_changed()
+        with _ONE_AT_A_TIME:
+            self._region_changed()
 
     def _whole_value_range(self) -> tuple[float, float]:
         """The value range that normalisations and thresholds use: the whole volume's while a
@@ -351,10 +547,15 @@ class RendererBase(ABC):
         covers trilinear values and central-difference gradients at points inside the box."""
         return 1
 
-    #: Renderer-specific option names and their meaning (RenderSettings.options).
-    option_help: ClassVar[Mapping[str, str]] = {}
+    def _parse_options(self, options: Mapping[str, Any]) -> Mapping[str, Any]:
+        """`options` parsed against `self.options` (`parse_options`), read-only. A renderer with a
+        rule across options (two valid values it cannot draw together) extends this."""
+        if not self.options:  # TRANSITIONAL: a renderer parsing its own options
+            self._check_options(options)
+            return MappingProxyType(dict(options))
+        return MappingProxyType(parse_options(self.name, self.options, options))
 
-    def _check_options(self, options: Mapping[str, Any]) -> None:
+    def _check_options(self, options: Mapping[str, Any]) -> None:  # TRANSITIONAL
         unknown = set(options) - set(self.option_help)
         if unknown:
             valid = ", ".join(sorted(self.option_help)) or "none"
@@ -391,9 +592,10 @@ class RendererBase(ABC):
             raise VolrenError(f"renderer {self.name} {reason}")
         if self._region is not None:
             self._check_region(self._region)
-        start = time.perf_counter()
-        image, counters = self._render(camera, width, height, progress)
-        ms = (time.perf_counter() - start) * 1000.0
+        with _ONE_AT_A_TIME:
+            start = time.perf_counter()
+            image, counters = self._render(camera, width, height, progress)
+            ms = (time.perf_counter() - start) * 1000.0
         if image.shape != (height, width, 4) or image.dtype != np.float32:
             raise RuntimeError(
                 f"renderer {self.name} returned {image.dtype} {image.shape}, expected float32 {(height, width, 4)}"
