@@ -92,13 +92,13 @@ def test_a_value_equal_to_a_choice_of_another_type_is_refused():
 
 def test_the_help_line_is_derived_from_the_spec():
     help_ = option_help_of(SPECS)
-    assert help_["size"] == "table entries (an integer in 16..4096; default 256)"
-    assert help_["skip"] == "skip empty bricks (true or false; default true)"
-    assert help_["oversampling"] == "pixels per pixel ('auto' or a number in [0.25, 8]; default auto)"
-    assert help_["alpha"] == "opacity that stops a ray (a number in (0, 1]; default 0.999)"
-    assert help_["stride"] == "ray spacing (1, 2, 4, 8, 16, 32 or 64; default 1)"
+    assert help_["size"] == "table entries [an integer in 16..4096; default 256]"
+    assert help_["skip"] == "skip empty bricks [true or false; default true]"
+    assert help_["oversampling"] == "pixels per pixel ['auto' or a number in [0.25, 8]; default auto]"
+    assert help_["alpha"] == "opacity that stops a ray [a number in (0, 1]; default 0.999]"
+    assert help_["stride"] == "ray spacing [1, 2, 4, 8, 16, 32 or 64; default 1]"
     assert OptionSpec("mapper", None, "choice", "the mapper", choices=("a", "b")).describe() == \
-        "the mapper (one of 'a', 'b')"
+        "the mapper [one of 'a', 'b']"
 
 
 @pytest.mark.parametrize(

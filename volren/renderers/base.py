@@ -187,7 +187,7 @@ class OptionSpec:
     def describe(self) -> str:
         """The help line: what it does, what it accepts, its default."""
         default = "" if self.default is None else f"; default {_shown_default(self.default)}"
-        return f"{self.help} ({self.allowed()}{default})"
+        return f"{self.help} [{self.allowed()}{default}]"
 
 
 #: What `OptionSpec._parse_kind` returns for a value of the wrong kind or out of range.
