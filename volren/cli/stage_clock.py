@@ -1,6 +1,6 @@
 """Wall time of a command's stages (`volren render --timings`): where a one-shot render spends it.
 
-Why: a one-shot render's wall time is mostly not the frame (issue 22: imports, loading, mesh
+Why: a one-shot render's wall time is mostly not the frame (imports, loading, mesh
 preparation, tables); the stages show which to cut. Start-up is counted from the process's start
 (Linux: /proc) to the command's first line, so it covers the interpreter and the imports.
 """

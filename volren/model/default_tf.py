@@ -1,6 +1,6 @@
 """What a volume looks like before anyone edits its TF, derived from its value histogram.
 
-Two failures of a fixed ramp (issue 23): CT data, where air fills most of the volume at the bottom
+Two failures of a fixed ramp: CT data, where air fills most of the volume at the bottom
 of the range, turned into fog; and flow meshes, where the fast outer flow fills most of the domain
 at the top of the range, hid the wake behind an opaque shell. So:
 

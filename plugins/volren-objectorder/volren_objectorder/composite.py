@@ -5,11 +5,11 @@ Why one kernel per band: a band's pixels are written by nobody else, so bands ru
 and visits only the nodes whose footprint meets its rows (the top levels are walked by every
 band, a few hundred nodes). Inside a leaf cell its eight corners (and, when shading, their
 central-difference gradients) are loaded once and shared by every ray of its footprint, the point
-of object order (the seed's section 3). Where cells are small on screen (an octree node one level
+of object order (Mora et al. 2002, section 3). Where cells are small on screen (an octree node one level
 above them covers at most `block_pixels` pixels) and none of a node's pixels is finished, its 2 x 2
 x 2 cells, at least 4 of them visible, are drawn as one block (`_block`, compositing only): one footprint, one load of their 27 grid points, one
 slab test per pixel for all of them, the same samples (bonsai's smooth TF at step 1, 512x512: 1.4-1.5x
-faster); elsewhere cell by cell, each cell's footprint against the occlusion map as the seed does.
+faster); elsewhere cell by cell, each cell's footprint against the occlusion map as Mora et al. do.
 
 Per pixel of a cell's footprint: the exact slab test gives the ray's interval [tlo, thi) in the
 cell; the pixel's depth indicator (`nextk`, its next sample) is moved past samples of skipped cells

@@ -1,7 +1,7 @@
 """The hierarchical occlusion map: which screen regions no longer let anything through.
 
-Why: object order has no early ray termination of its own; the seed (section 4.2, after Zhang et
-al.'s HOMs) keeps a pyramid over the image, updated as pixels saturate, and skips an octree node
+Why: object order has no early ray termination of its own; Mora et al. (section 4.2, after Zhang et
+al.'s HOMs) keep a pyramid over the image, updated as pixels saturate, and skips an octree node
 whose footprint lies on saturated pixels only. Here level m counts the *finished* pixels of each
 2^m x 2^m block of one band of rows: a pixel is finished when its opacity reached the termination
 opacity, or when its ray has no sample left (rays that miss the volume are finished from the

@@ -1,7 +1,7 @@
 """The min-max octree over the grid's cells, classified per transfer function.
 
 Why: object order pays for every cell it visits, so transparent regions must be skipped whole,
-and the classification must follow TF edits at interactive rates (the seed's section 4.1). The
+and the classification must follow TF edits at interactive rates (Mora et al. 2002, section 4.1). The
 tree is implicit, a pyramid: level 0 holds one node per cell (the box between eight neighbouring
 samples), level l one node per 2^l x 2^l x 2^l cells; node (l, i, j, k) has the children
 (l - 1, 2i + a, 2j + b, 2k + c) that exist. Built once per volume: the min and max of each cell's

@@ -1,6 +1,6 @@
 """Ray-cell patterns and depth indicators: what each pixel's ray needs to be sampled cell by cell.
 
-Why: the seed precomputes, per view, templates of the rays crossing a cell (its Fig. 2) and keeps
+Why: Mora et al. precompute, per view, templates of the rays crossing a cell (their Fig. 2) and keep
 per pixel a *depth indicator*, the position of the ray's next sample, so that the samples of a ray
 are evenly spaced across cells visited one at a time. Templates are exact only for a parallel
 projection, and approximate there (16^2 template rays, a 4-bit indicator). Here every pixel keeps
@@ -19,7 +19,7 @@ march (samples midway between its sample planes), second order in h: sampling a 
 middle (1/4 or 3/4 of the way) is first order and costs RMSE on smooth TFs, and boundaries counted
 from each ray's entry instead of shared planes cost it on opaque ones (engine: 0.043 against 0.038).
 Phases: `midpoint` (0), `interleaved` (0 and 1/2 on a checkerboard: neighbouring pixels sample half
-a step apart, the seed's Fig. 3d), `random` (seeded).
+a step apart, Mora et al.'s Fig. 3d), `random` (seeded).
 """
 
 from __future__ import annotations

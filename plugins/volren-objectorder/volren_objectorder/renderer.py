@@ -18,7 +18,7 @@ How a frame goes (module per step):
 Perspective is exact too: each pixel keeps its own ray (no shared templates), and the octree's
 child order is taken per node from the side of its split planes the eye is on.
 
-Counters (the seed's Table 1): cells (leaf cells neither transparent nor occluded), cells_occluded
+Counters (Mora et al.'s Table 1): cells (leaf cells neither transparent nor occluded), cells_occluded
 (non-transparent cells under skipped nodes), occluded_ratio, nodes (octree nodes visited),
 nodes_occluded, samples, cells_visible (non-transparent cells in the volume), pixels_saturated,
 rays, bands. Node and cell counts are per band of rows, each node counted by the band holding the

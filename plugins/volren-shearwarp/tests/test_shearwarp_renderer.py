@@ -285,7 +285,7 @@ def test_blocks_of_rows_draw_every_row_as_one_row_at_a_time_does(monkeypatch, se
 def test_interior_pixels_keep_both_ends_strictly_inside_the_row():
     """The fast path reads columns floor(a) and floor(a) + 1 unclamped, so the pixels it takes have
     both segment ends in [0, top): also where a sample lands exactly on the last column (one
-    intermediate pixel per voxel, integer shifts), which read one past the row before stop 51
+    intermediate pixel per voxel, integer shifts), where it once read one past the row
     (found with NUMBA_BOUNDSCHECK=1, skipping off, the CT sample)."""
     rng = np.random.default_rng(3)
     top, width = 20.0, 64
@@ -378,7 +378,7 @@ def test_a_colour_edit_reuses_the_runs_and_an_opacity_edit_rebuilds_them():
 @pytest.mark.parametrize("pre", [False, True])
 @pytest.mark.parametrize("parallel", [True, False])
 def test_opacity_correction_off_draws_each_slab_as_one_unit_distance(pre, parallel):
-    """The seed's NC variant: every slab gets the TF's opacity as it is, whatever its length (here
+    """The NC variant of Schulze et al.'s Table 1: every slab gets the TF's opacity as it is, whatever its length (here
     spacing 0.5 against d_u 1: 31 slabs of half a unit). On, the closed form 1 - (1 - a)^(L / d_u)."""
     a = 0.05
     volume = UniformVolume(np.full((32, 32, 32), 2.0, np.float32), spacing=(0.5, 0.5, 0.5))

@@ -20,7 +20,7 @@ j - e .. j, so the ray moving forward takes block a + e and one moving back bloc
 knows each ray's direction per frame (the shift along b is fixed per intermediate row, the one
 along a changes sign at most once per row), and picks the block. Why not a block centred on the
 cell, (2e + 1)^2 cells, which needs no direction: it composited 1.2-2.5x as many segments on the
-shared scenes (docs/shearwarp.md, stop 50). A block is skipped only when the
+shared scenes (docs/shearwarp.md). A block is skipped only when the
 opacity is zero on all of [min, max]: the interval, not the union of its cells' ranges, since a
 segment between two values passes through everything in between. Cells with a NaN corner are
 transparent (DESIGN.md) and add nothing to the range.
@@ -111,8 +111,8 @@ KEPT_COPY_DTYPES = (np.dtype(np.uint8),)
 def copy_dtype(dtype: np.dtype) -> np.dtype:
     """The axis copies' type: uint8 as it is, anything else float32. Why: the copies are read once
     per segment and are much of a frame's memory traffic on sparse scenes (aneurism's float32 copy
-    is 64 MB, as uint8 16 MB): 10-18 % less compositing there, and 4x less memory (docs/shearwarp.md,
-    stop 51)."""
+    is 64 MB, as uint8 16 MB): 10-18 % less compositing there, and 4x less memory
+    (docs/shearwarp.md)."""
     return np.dtype(dtype) if np.dtype(dtype) in KEPT_COPY_DTYPES else np.dtype(np.float32)
 
 

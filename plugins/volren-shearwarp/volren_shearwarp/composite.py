@@ -22,7 +22,7 @@ Per scanline and slab:
 3. `sub` sub-planes per slab (the render setting `step`): plane w in [0, 1) between slices kf and
    kb is sampled by interpolating bilinear samples of both slices at the ray's point, which is
    trilinear interpolation; w = 0 is a bilinear sample of one slice. The value at the back of a
-   segment is kept in a buffer on the intermediate grid (the 003 seed's intermediate-image-sized
+   segment is kept in a buffer on the intermediate grid (Schulze et al.'s intermediate-image-sized
    buffer slice) with the plane it belongs to, and is the next segment's front value; a pixel
    skipped in between recomputes it.
 4. Pre-integrated: one lookup in the table for this pixel's segment length, by the front and back
@@ -475,7 +475,7 @@ def _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, tabl
                                  bilinear_lookup)  # fmt: skip
     if alpha <= 0.0:
         return 1, 0
-    if frac < 1.0:  # a partial segment: the seed's opacity and colour correction
+    if frac < 1.0:  # a partial segment: Schulze et al.'s opacity and colour correction
         corrected = -math.expm1(frac * math.log1p(-min(alpha, 1.0 - 1e-7)))
         factor = corrected / alpha
         cr *= factor

@@ -88,7 +88,7 @@ from volren_shearwarp.warp import warp
 #: Intermediate rows a thread composites together, slab by slab (the kernels' `row_block`). Why: neighbouring
 #: rows meet neighbouring scanlines of each slice, so a block reads a slice's data once, in order, where row
 #: after row (all slabs of one row, then the next) fetched each slice scanline again for every row once the
-#: row's other slices had pushed it out of the cache. Stop 52, docs/shearwarp.md: turning frames 1.09-1.20x
+#: row's other slices had pushed it out of the cache. docs/shearwarp.md: turning frames 1.09-1.20x
 #: faster on aneurism smooth, bonsai smooth and opaque and engine opaque, the others unchanged, the same
 #: images to the bit; 16 rows measured the same, 1 (row after row) and 96 slower.
 ROW_BLOCK = 8
@@ -205,7 +205,7 @@ def run_extent(stride: int, max_shear: float) -> int:
     degrees) rounding may put a back point a hair into the next cell, whose vertex the block must
     hold. Why no larger minimum: a camera turning through a shear of 1 pays one ranges pass for the
     new extent (about 200 ms on bonsai, once per axis and extent), and extent 1 composites 9-18 %
-    faster than 2 where it applies (docs/shearwarp.md, stop 50)."""
+    faster than 2 where it applies (docs/shearwarp.md)."""
     return max(1, math.ceil(stride * max_shear + 1e-6))
 
 
@@ -281,8 +281,8 @@ class ShearWarpRenderer(RendererBase):
         summary="shear-warp (numba): RLE empty-space skipping, early termination, pre-integration, 2D warp",
         quality=(
             # intermediate pixels up to twice a voxel's width (`pixels_per_voxel`): 2-4x fewer segments at VTK's step-2
-            # error or below on 11 of the 12 shared scenes, where a voxel covers more than an output pixel (stop 51,
-            # docs/shearwarp.md; bonsai's smooth and opaque TFs need 0.7 per voxel, aneurism's smooth one 1)
+            # error or below on 11 of the 12 shared scenes, where a voxel covers more than an output pixel
+            # (docs/shearwarp.md; bonsai's smooth and opaque TFs need 0.7 per voxel, aneurism's smooth one 1)
             _level(False, step=1.0, oversampling=0.25, pixels_per_voxel=0.5),
             _level(True, step=2.0, oversampling=0.25, pixels_per_voxel=0.5),
             _level(True, step=1.0, oversampling=0.25, pixels_per_voxel=0.5),
@@ -291,7 +291,7 @@ class ShearWarpRenderer(RendererBase):
             _level(False, step=1.0, oversampling=0.25, pixels_per_voxel=0.7),
             _level(True, step=1.0, oversampling=0.25, pixels_per_voxel=0.7),
             # every 2nd / 4th slice (`slice_stride`): fewer segments, where the data is smooth along the
-            # principal axis as accurate as VTK's step 2 (stop 47, docs/shearwarp.md: bonsai smooth 0.0044 at step
+            # principal axis as accurate as VTK's step 2 (docs/shearwarp.md: bonsai smooth 0.0044 at step
             # 1 post-classified against VTK's 0.0069, at 0.6x every slice's time; spiky and opaque TFs at step 2
             # pre-integrated)
             _level(False, step=1.0, oversampling=0.5),

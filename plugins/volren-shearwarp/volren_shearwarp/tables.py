@@ -68,7 +68,7 @@ def slot_bounds(id_lo: int, id_hi: int, reference: float, inv_norm: float, ratio
 def post_lut(tf: TransferFunction1D, n: int, lo: float, hi: float, length: float) -> NDArray[np.float32]:
     """(n, 4): colour (not premultiplied) and the opacity of half a segment of `length` at the
     table's values s_k = lo + (hi - lo) k / (n - 1): each sample stands for half of the segment on
-    either side (the seed's opacity correction, 1 - (1 - a)^(d / d_u))."""
+    either side (Schulze et al.'s opacity correction, 1 - (1 - a)^(d / d_u))."""
     values = lo + (hi - lo) * np.arange(n) / (n - 1)
     rgb, a = tf.sample(values)
     a = np.minimum(a, 1.0 - 1e-6)

@@ -90,8 +90,8 @@ def warp_image(inter, hom, sign, a0, b0, scale, cubic, out, empty):
     no-NaN assumption holds), which lets the compiler keep a tap's four channels in one vector
     register: 6.5 -> 3.9 ms for a 512 x 512 frame on this 2-core machine (docs/shearwarp.md); and
     none at all where they are all transparent (`empty`): 4.4 -> 2.7 ms on engine's opaque TF, 4.9
-    -> 2.3 ms on aneurism's (63 % and 84 % of the intermediate image empty; stop 47, scratch, the
-    mask included)."""
+    -> 2.3 ms on aneurism's (63 % and 84 % of the intermediate image empty; measured on a scratch
+    build, the mask included)."""
     height, width = out.shape[0], out.shape[1]
     ih, iw = inter.shape[0], inter.shape[1]
     for j in prange(height):

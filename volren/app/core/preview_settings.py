@@ -5,8 +5,8 @@ Why: a preview (a frame while the mouse drags) must come within the frame budget
 size; the still frame that follows has the user's quality. As in ParaView's and VTK's
 level-of-detail rendering, previews of a scene at a measured quality level use the `interactive`
 level's settings (`volren.quality`, measured by `volren bench run`) of the renderer measured
-fastest at that level that can draw the scene (issue 22: "the fastest renderer for previews and
-the chosen one for the still frame, saying so": the frame label names it), and while a transfer
+fastest at that level that can draw the scene (the fastest renderer for previews and
+the chosen one for the still frame; the frame label says which drew it), and while a transfer
 function is dragged, that renderer's `Capabilities.tf_drag_options` (options that make a new TF
 cheap to apply, e.g. a smaller pre-integration table). Custom settings are previewed as they are,
 by the user's renderer: the user chose them.

@@ -1,7 +1,7 @@
 """What the bytes of a headerless raw file are: shape, sample type, byte order, spacing, header.
 
 Why a dialog: a `.raw` file says nothing about itself, so the Open dialog listed it but could not
-open it (issue 23). As `volren render --raw-shape ...` does on the command line, the user says what
+open it. As `volren render --raw-shape ...` does on the command line, the user says what
 it holds; the dialog proposes a cube that fits the file's size, shows how many bytes the answer
 needs against what the file holds, and accepts only an answer that matches exactly.
 """

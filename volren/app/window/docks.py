@@ -121,7 +121,7 @@ class Docks:
     def keep_viewport_share(self) -> None:
         """After a resize, narrow the side docks so that together they take at most
         DOCKS_MAX_SHARE of the window's width (docks kept their width while the window shrank:
-        at 900x600 the viewport was 169 px wide, issue 23)."""
+        at 900x600 the viewport was 169 px wide)."""
         window = self.window
         docks = [d for d in (self.tf_dock, self.settings_dock) if d.isVisible() and not d.isFloating()]
         if not docks:

@@ -3,7 +3,7 @@ run for a moment, counts the seconds until the job reports a fraction, and Cance
 `FileJobActions` is what the File menu's job actions share around it.
 
 Why the clock: a QProgressDialog shows itself only from setValue, and a renderer that reports no
-progress never calls it: a 20 s screenshot gave no feedback at all (issue 23).
+progress never calls it: a 20 s screenshot gave no feedback at all.
 """
 
 from __future__ import annotations

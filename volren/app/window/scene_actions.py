@@ -112,7 +112,7 @@ class SceneActions:
 
     def suggested_path(self) -> str:
         """Where Save Scene proposes to write: named after the volume, in the folder the person
-        last opened or saved in (issue 23: not next to the data, which may be read-only or shared)."""
+        last opened or saved in (not next to the data, which may be read-only or shared)."""
         name = Path(self._volume_path).with_suffix(".json").name if self._volume_path else "scene.json"
         folder = self._recent.folder() or (str(Path(self._volume_path).parent) if self._volume_path else "")
         return str(Path(folder) / name) if folder else name

@@ -7,7 +7,7 @@ model exactly as the slicer and objectorder do (the midpoint rule on planes shar
 neighbouring pixels half a step apart): raycast and objectorder agree to float precision at the
 same step. Pre-integrated segments run from plane to plane, objectorder's from sample to
 sample, and the slicer's between its slices, so the three differ by the discretisation (up to 0.04
-max on a sharp TF at step 0.5, stop 41).
+max on a sharp TF at step 0.5).
 Maximum, minimum and average march
 the same samples (and, for the extremes, every grid-plane crossing). No shading: the capabilities say
 so, and `auto` picks another renderer for shaded scenes.

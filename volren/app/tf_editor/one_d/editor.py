@@ -10,7 +10,7 @@ one. Errors (a bad file) leave as `errorOccurred(title, one_line)` for the windo
 The value axis spans the TF's range and the data's, so both the histogram and every control
 point are in view; it stays put during a drag so the point under the mouse does not slide. That
 span is also where points may go (the canvases' `limits`). The view can zoom in on a part of it
-(issue 23: a TF's detail is often a few per cent of a CT's range): the mouse wheel over the curve
+(a TF's detail is often a few per cent of a CT's range): the mouse wheel over the curve
 or the colour bar zooms about the value under the cursor, "TF range" shows just the TF's range and
 "Whole range" all of it again. Zoomed, the histogram is binned afresh over the view (after the
 wheel rests: binning a big volume takes a moment), the points outside stay where they are, and a

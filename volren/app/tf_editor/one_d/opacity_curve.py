@@ -46,7 +46,7 @@ class OpacityCurve(PointCanvas):
         self._histogram: Histogram | None = None
         self._histogram_layer: tuple[tuple, QPixmap] | None = None  # (what it shows, the bars drawn)
         # log by default: on CT and MR one value (air, background) holds 80-97 % of the voxels,
-        # and linear counts drew an empty box (issue 23)
+        # and linear counts drew an empty box
         self._log_counts = True
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(2 * MARGIN + 40, TOP + BOTTOM + 40)

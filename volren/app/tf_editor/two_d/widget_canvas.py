@@ -13,7 +13,7 @@ and one undo step. Every drag position is computed from the widget as it was at 
 rounding never accumulates.
 
 While the mouse is over the plot, a readout in its top-right corner says what is under it
-(issue 23, as ParaView and Slicer show it): the value and gradient magnitude of that pixel, the
+(as ParaView and Slicer show it): the value and gradient magnitude of that pixel, the
 joint histogram's count in that bin and the TF's opacity there. It goes when the mouse leaves.
 """
 
