@@ -9,7 +9,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from volren.errors import VolrenError
-from volren.kernels.image_refinement import check_stride, check_tolerance, refine_image
+from volren.kernels.image_refinement import (
+    STRIDE_RULE,
+    check_stride,
+    check_tolerance,
+    is_stride,
+    refine_image,
+)
+from volren.renderers.base import OptionSpec
 
 
 class Caster:
@@ -143,8 +150,20 @@ def test_progress_reports_each_level():
     assert seen == [1.0]
 
 
-@pytest.mark.parametrize("stride", [0, 3, 128, 2.0, True, "4"])
+@pytest.mark.parametrize("stride", [0, 3, 128, 2.0, True, "4", 2**64])
 def test_bad_strides(stride):
+    spec = OptionSpec("image_stride", 1, "int", "rays every so many pixels", rule=STRIDE_RULE)
+    with pytest.raises(VolrenError, match="option image_stride must be 1, 2, 4, 8, 16, 32 or 64"):
+        spec.parse(stride, "demo")
+
+
+@pytest.mark.parametrize("stride", [1, 2, 4, 8, 16, 32, 64])
+def test_strides_are_powers_of_two_up_to_64(stride):
+    assert is_stride(stride)
+
+
+@pytest.mark.parametrize("stride", [0, 3, 128, 2.0, True, "4"])
+def test_bad_strides_checked(stride):
     with pytest.raises(VolrenError, match="image_stride"):
         check_stride(stride)
 

@@ -22,17 +22,27 @@ from numba import njit
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
-from volren.renderers.base import ProgressCallback
+from volren.renderers.base import OptionRule, ProgressCallback
 
 #: cast(pixel indices, sorted, row-major) -> (n, 4) premultiplied RGBA of those pixels.
 CastRays = Callable[[NDArray[np.int64]], NDArray[np.floating]]
 
 
+def is_stride(stride: object) -> bool:
+    """Whether `stride` is a power of two from 1 to 64 (an int, not a bool): the block sizes the
+    refinement halves down to single pixels."""
+    return not isinstance(stride, bool) and isinstance(stride, int) and 1 <= stride <= 64 and not stride & (stride - 1)
+
+
+#: The rule of a renderer's image_stride option (its OptionSpec).
+STRIDE_RULE = OptionRule(is_stride, "1, 2, 4, 8, 16, 32 or 64")
+
+
 def check_stride(stride: object, name: str = "option image_stride") -> int:
     """The stride as an int: a power of two from 1 to 64, else an error naming the option."""
-    if isinstance(stride, bool) or not isinstance(stride, int) or stride < 1 or stride > 64 or stride & (stride - 1):
+    if not is_stride(stride):
         raise VolrenError(f"{name} must be 1, 2, 4, 8, 16, 32 or 64, got {stride!r}")
-    return stride
+    return stride  # type: ignore[return-value]
 
 
 def check_tolerance(tolerance: object, name: str = "option refine_tolerance") -> float:

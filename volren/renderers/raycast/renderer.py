@@ -23,9 +23,9 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.errors import VolrenError
-from volren.kernels.image_refinement import check_stride, check_tolerance, refine_image
+from volren.kernels.image_refinement import STRIDE_RULE, refine_image
 from volren.kernels.row_blocks import parallel_chunk_size
+from volren.kernels.sample_placement import pixel_phases
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.bricks import BrickGrid
 from volren.model.preintegration import preintegrate
@@ -34,6 +34,7 @@ from volren.renderers.base import (
     Accuracy,
     Capabilities,
     KindSupport,
+    OptionSpec,
     ProgressCallback,
     QualityLevel,
     RendererBase,
@@ -43,58 +44,37 @@ from volren.renderers.raycast.occupancy import empty_distance
 from volren.renderers.raycast.step_choice import largest_step_within, sample_size
 
 OFFSET_MODES = ("interleaved", "midpoint")
-OPTIONS: dict[str, tuple[Any, str]] = {
-    "brick_size": (4, "cells per brick edge for empty-space skipping (1 to 64)"),
-    "empty_space_skipping": (True, "skip bricks the TF makes transparent (true/false; the image is the same)"),
-    "termination_alpha": (0.999, "opacity at which a ray stops (0.5 to 1; 1 never stops early)"),
-    "depth_offsets": ("interleaved", "where each pixel's segments start: 'interleaved' (phase 0 and 1/2 of a step on "
-                                     "a checkerboard) or 'midpoint' (all on the same planes); the jitter setting "
-                                     "gives seeded random phases"),
-    "jitter_seed": (0, "seed of the random phases (an integer >= 0)"),
-    "table_size": (256, "entries per axis of the pre-integration table (16 to 4096)"),
-    "classification_table": (4096, "entries of the post-classification table (16 to 65536)"),
-    "image_stride": (1, "1: a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, rays every "
-                        "`image_stride` pixels first, more only where neighbouring rays differ by more than "
-                        "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; "
-                        "features thinner than the stride between rays that agree are missed; composite only)"),
-    "refine_tolerance": (0.02, "with image_stride > 1: the largest difference in any premultiplied RGBA channel "
-                               "between a block's corner rays that is interpolated instead of cast (0 to 1)"),
-    "target_error": (0.0, "0: march at the settings' step; above 0 (composite only): the largest step of step x "
-                          "2^(-k/8), k = 0..24, whose RMSE over the image's root mean square (0.01: 1 %), "
-                          "estimated on the rays of a ~64x64 image of the view against a march 16x finer than "
-                          "step, is at most this; chosen at the first frame of a TF and volume (0 to 1)"),
-}  # fmt: skip
+OPTIONS: tuple[OptionSpec, ...] = (
+    OptionSpec("brick_size", 4, "int", "cells per brick edge for empty-space skipping", low=1, high=64),
+    OptionSpec("empty_space_skipping", True, "bool", "skip bricks the TF makes transparent (the image is the same)"),
+    OptionSpec("termination_alpha", 0.999, "float", "opacity at which a ray stops (1 never stops early)",
+               low=0.5, high=1.0),
+    OptionSpec("depth_offsets", "interleaved", "choice",
+               "where each pixel's segments start: 'interleaved' (phase 0 and 1/2 of a step on a checkerboard) or "
+               "'midpoint' (all on the same planes); the jitter setting gives seeded random phases",
+               choices=OFFSET_MODES),
+    OptionSpec("jitter_seed", 0, "int", "seed of the random phases", low=0, high=2**63 - 1),
+    OptionSpec("table_size", 256, "int", "entries per axis of the pre-integration table", low=16, high=4096),
+    OptionSpec("classification_table", 4096, "int", "entries of the post-classification table", low=16, high=65536),
+    OptionSpec("image_stride", 1, "int",
+               "1: a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, rays every "
+               "`image_stride` pixels first, more only where neighbouring rays differ by more than "
+               "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features "
+               "thinner than the stride between rays that agree are missed; composite only)",
+               rule=STRIDE_RULE),
+    OptionSpec("refine_tolerance", 0.02, "float",
+               "with image_stride > 1: the largest difference in any premultiplied RGBA channel between a block's "
+               "corner rays that is interpolated instead of cast", low=0.0, high=1.0),
+    OptionSpec("target_error", 0.0, "float",
+               "0: march at the settings' step; above 0 (composite only): the largest step of step x 2^(-k/8), "
+               "k = 0..24, whose RMSE over the image's root mean square (0.01: 1 %), estimated on the rays of a "
+               "~64x64 image of the view against a march 16x finer than step, is at most this; chosen at the "
+               "first frame of a TF and volume", low=0.0, high=1.0),
+)
 #: Tiles per progress call.
 TILES_PER_CALL = 1024
 #: Pixels handed to a thread at a time when adaptive refinement asks for scattered pixels.
 PIXEL_CHUNK = 16
-
-
-def read_options(options: Mapping[str, Any]) -> dict[str, Any]:
-    """The options with defaults filled in, or a one-line VolrenError for a bad value."""
-    out = {name: default for name, (default, _) in OPTIONS.items()}
-    out.update(options)
-
-    def fail(name: str, what: str) -> None:
-        raise VolrenError(f"renderer raycast: option {name} must be {what}, got {out[name]!r}")
-
-    if not isinstance(out["empty_space_skipping"], bool):
-        fail("empty_space_skipping", "true or false")
-    t = out["termination_alpha"]
-    if isinstance(t, bool) or not isinstance(t, int | float) or not (0.5 <= t <= 1.0):
-        fail("termination_alpha", "a number in [0.5, 1]")
-    out["termination_alpha"] = float(t)
-    if out["depth_offsets"] not in OFFSET_MODES:
-        fail("depth_offsets", "one of " + ", ".join(repr(m) for m in OFFSET_MODES))
-    for name, lo, hi in (("brick_size", 1, 64), ("jitter_seed", 0, 2**63 - 1), ("table_size", 16, 4096),
-                         ("classification_table", 16, 65536)):  # fmt: skip
-        v = out[name]
-        if isinstance(v, bool) or not isinstance(v, int) or not (lo <= v <= hi):
-            fail(name, f"an integer in {lo}..{hi}")
-    check_stride(out["image_stride"], "renderer raycast: option image_stride")
-    check_tolerance(out["refine_tolerance"], "renderer raycast: option refine_tolerance")
-    out["target_error"] = check_tolerance(out["target_error"], "renderer raycast: option target_error")
-    return out
 
 
 def _march_listed(args: tuple, pixels: NDArray[np.int64]) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
@@ -103,16 +83,6 @@ def _march_listed(args: tuple, pixels: NDArray[np.int64]) -> tuple[NDArray[np.fl
     counts = np.zeros((len(pixels), 2), np.int64)
     K.march_pixels(*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
     return rgba, counts
-
-
-def pixel_phases(mode: str, width: int, height: int, seed: int) -> NDArray[np.float64]:
-    """The phase in [0, 1) of every pixel's segment boundaries (row-major, row 0 at the top)."""
-    if mode == "midpoint":
-        return np.zeros(width * height)
-    if mode == "interleaved":
-        jj, ii = np.mgrid[0:height, 0:width]
-        return np.where((ii + jj) % 2 == 0, 0.0, 0.5).reshape(-1)
-    return np.random.default_rng(seed).random(width * height)
 
 
 class RaycastRenderer(RendererBase):
@@ -159,7 +129,7 @@ class RaycastRenderer(RendererBase):
             QualityLevel("error 0.2 %", step=2.0, preintegration=False, options={"target_error": 0.002}),
         ),
     )
-    option_help: ClassVar[Mapping[str, str]] = {name: text for name, (_, text) in OPTIONS.items()}
+    options: ClassVar[tuple[OptionSpec, ...]] = OPTIONS
 
     def __init__(self) -> None:
         super().__init__()
@@ -177,10 +147,6 @@ class RaycastRenderer(RendererBase):
         self._grid = None
         self._empty = None
         self._step = None
-
-    def _check_options(self, options: Mapping[str, Any]) -> None:
-        super()._check_options(options)
-        read_options(options)
 
     def release(self) -> None:
         self._values = self._grid = self._empty = self._phases = None
@@ -214,7 +180,7 @@ class RaycastRenderer(RendererBase):
         assert isinstance(volume, UniformVolume) and isinstance(tf, TransferFunction1D)
         assert self._values is not None
         settings = self.settings
-        opts = read_options(settings.options)
+        opts = self.opts
         check_step(settings.step, volume.bounds, volume.characteristic_length)
         h = float(settings.step * volume.characteristic_length)
         mode = settings.blend_mode
