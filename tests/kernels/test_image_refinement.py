@@ -9,13 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from volren.errors import VolrenError
-from volren.kernels.image_refinement import (
-    STRIDE_RULE,
-    check_stride,
-    check_tolerance,
-    is_stride,
-    refine_image,
-)
+from volren.kernels.image_refinement import STRIDE_RULE, is_stride, refine_image
 from volren.renderers.base import OptionSpec
 
 
@@ -161,19 +155,3 @@ def test_bad_strides(stride):
 def test_strides_are_powers_of_two_up_to_64(stride):
     assert is_stride(stride)
 
-
-@pytest.mark.parametrize("stride", [0, 3, 128, 2.0, True, "4"])
-def test_bad_strides_checked(stride):
-    with pytest.raises(VolrenError, match="image_stride"):
-        check_stride(stride)
-
-
-@pytest.mark.parametrize("tolerance", [-0.01, 1.5, True, "0.1", None])
-def test_bad_tolerances(tolerance):
-    with pytest.raises(VolrenError, match=r"refine_tolerance must lie in \[0, 1\]"):
-        check_tolerance(tolerance)
-
-
-@pytest.mark.parametrize("tolerance", [0, 0.05, 1])
-def test_tolerances_in_range_are_floats(tolerance):
-    assert check_tolerance(tolerance) == float(tolerance) and isinstance(check_tolerance(tolerance), float)

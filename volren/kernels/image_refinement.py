@@ -21,7 +21,6 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from volren.errors import VolrenError
 from volren.renderers.base import OptionRule, ProgressCallback
 
 #: cast(pixel indices, sorted, row-major) -> (n, 4) premultiplied RGBA of those pixels.
@@ -36,21 +35,6 @@ def is_stride(stride: object) -> bool:
 
 #: The rule of a renderer's image_stride option (its OptionSpec).
 STRIDE_RULE = OptionRule(is_stride, "1, 2, 4, 8, 16, 32 or 64")
-
-
-def check_stride(stride: object, name: str = "option image_stride") -> int:
-    """The stride as an int: a power of two from 1 to 64, else an error naming the option."""
-    if not is_stride(stride):
-        raise VolrenError(f"{name} must be 1, 2, 4, 8, 16, 32 or 64, got {stride!r}")
-    return stride  # type: ignore[return-value]
-
-
-def check_tolerance(tolerance: object, name: str = "option refine_tolerance") -> float:
-    """The tolerance as a float in [0, 1] (a difference of premultiplied channels), else an error
-    naming the option."""
-    if isinstance(tolerance, bool) or not isinstance(tolerance, int | float) or not 0.0 <= tolerance <= 1.0:
-        raise VolrenError(f"{name} must lie in [0, 1], got {tolerance!r}")
-    return float(tolerance)
 
 
 def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance: float,

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.kernels.camera_rays import image_rays, pixel_rays
-from volren.kernels.image_refinement import check_stride, check_tolerance, refine_image
+from volren.kernels.image_refinement import STRIDE_RULE, refine_image
 from volren.kernels.row_blocks import parallel_chunk_size, run_in_row_blocks
 from volren.kernels.shading import shade_params
 from volren.kernels.tet_planes import packed_face_planes
@@ -41,6 +41,7 @@ from volren.renderers.base import (
     Accuracy,
     Capabilities,
     KindSupport,
+    OptionSpec,
     ProgressCallback,
     QualityLevel,
     RendererBase,
@@ -102,23 +103,27 @@ class TetraRenderer(RendererBase):
         # refining where neighbours differ by 0.1 (the draft level's) instead of 0.05: 95 -> 65 ms
         tf_drag_options={"table_size": 64, "table_lengths": 8, "refine_tolerance": 0.1},
     )
-    option_help: ClassVar[Mapping[str, str]] = {
-        "table_size": "value entries per axis of the 3D table (default 256)",
-        "table_lengths": "segment-length layers of the 3D table (default 32)",
-        "termination_alpha": "opacity at which a ray stops (default 0.999; 1 never stops early)",
-        "max_steps": "most cells one walk may take before it is cut and counted (default 100000)",
-        "skip_transparent": "skip cells whose value range the TF maps to zero opacity: composite rays jump "
-        "from a transparent run to the next visible cell (default true; false walks and integrates every "
-        "cell, for comparison)",
-        "backend": "auto (default): the GL compute-shader walk on a hardware GPU, else numba on the CPU; "
-        "cpu; gl (OpenGL 4.3 compute shaders, also on Mesa llvmpipe)",
-        "image_stride": "1 (default): a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, "
-        "rays every `image_stride` pixels first, more only where neighbouring rays differ by more than "
-        "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features thinner "
-        "than the stride between rays that agree are missed; cpu backend)",
-        "refine_tolerance": "with image_stride > 1: the largest difference in any premultiplied RGBA channel "
-        "between a block's corner rays that is interpolated instead of cast (default 0.02)",
-    }
+    options: ClassVar[tuple[OptionSpec, ...]] = (
+        OptionSpec("table_size", 256, "int", "value entries per axis of the 3D table", low=2),
+        OptionSpec("table_lengths", 32, "int", "segment-length layers of the 3D table", low=1),
+        OptionSpec("termination_alpha", 0.999, "float", "opacity at which a ray stops (1 never stops early)",
+                   low=0.0, high=1.0, low_exclusive=True),
+        OptionSpec("max_steps", 100_000, "int", "most cells one walk may take before it is cut and counted", low=1),
+        OptionSpec("skip_transparent", True, "bool",
+                   "skip cells whose value range the TF maps to zero opacity: composite rays jump from a "
+                   "transparent run to the next visible cell (false walks and integrates every cell, for comparison)"),
+        OptionSpec("backend", "auto", "choice",
+                   "auto: the GL compute-shader walk on a hardware GPU, else numba on the CPU; cpu; gl (OpenGL 4.3 "
+                   "compute shaders, also on Mesa llvmpipe)", choices=("auto", "cpu", "gl")),
+        OptionSpec("image_stride", 1, "int",
+                   "1: a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, rays every "
+                   "`image_stride` pixels first, more only where neighbouring rays differ by more than "
+                   "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features "
+                   "thinner than the stride between rays that agree are missed; cpu backend)", rule=STRIDE_RULE),
+        OptionSpec("refine_tolerance", 0.02, "float",
+                   "with image_stride > 1: the largest difference in any premultiplied RGBA channel between a "
+                   "block's corner rays that is interpolated instead of cast", low=0.0, high=1.0),
+    )
 
     def __init__(self) -> None:
         super().__init__()
@@ -220,33 +225,12 @@ class TetraRenderer(RendererBase):
             near_cells[cut[0]] = cut[1]
         return faces, near_cells
 
-    def _options(self) -> dict[str, Any]:
-        o = dict(self._settings.options)
-        opts = {
-            "table_size": o.get("table_size", 256),
-            "table_lengths": o.get("table_lengths", 32),
-            "termination_alpha": o.get("termination_alpha", 0.999),
-            "max_steps": o.get("max_steps", 100_000),
-            "backend": o.get("backend", "auto"),
-            "skip_transparent": o.get("skip_transparent", True),
-            "image_stride": o.get("image_stride", 1),
-            "refine_tolerance": o.get("refine_tolerance", 0.02),
-        }
-        if opts["backend"] not in ("auto", "cpu", "gl"):
-            raise VolrenError(f"tetra option backend must be auto, cpu or gl, got {opts['backend']!r}")
-        if not isinstance(opts["skip_transparent"], bool):
-            raise VolrenError(f"tetra option skip_transparent must be true or false, got {opts['skip_transparent']!r}")
-        check_stride(opts["image_stride"], "tetra option image_stride")
+    def _parse_options(self, options: Mapping[str, Any]) -> Mapping[str, Any]:
+        """The options parsed; adaptive refinement runs on the cpu backend only."""
+        opts = super()._parse_options(options)
         if opts["backend"] == "gl" and opts["image_stride"] > 1:
-            raise VolrenError("tetra option image_stride > 1 runs on the cpu backend only (backend=cpu or auto)")
-        check_tolerance(opts["refine_tolerance"], "tetra option refine_tolerance")
-        for name, low in (("table_size", 2), ("table_lengths", 1), ("max_steps", 1)):
-            v = opts[name]
-            if isinstance(v, bool) or not isinstance(v, int) or v < low:
-                raise VolrenError(f"tetra option {name} must be an integer >= {low}, got {v!r}")
-        a = opts["termination_alpha"]
-        if isinstance(a, bool) or not isinstance(a, int | float) or not 0.0 < a <= 1.0:
-            raise VolrenError(f"tetra option termination_alpha must lie in (0, 1], got {a!r}")
+            raise VolrenError("renderer tetra: option image_stride > 1 runs on the cpu backend only (backend=cpu "
+                              "or auto)")  # fmt: skip
         return opts
 
     def _cell_value_ranges(self) -> tuple[NDArray, NDArray]:
@@ -280,7 +264,7 @@ class TetraRenderer(RendererBase):
         return self._table
 
     # ------------------------------------------------------------------------------ render
-    def _uses_gl(self, opts: dict[str, Any]) -> bool:
+    def _uses_gl(self, opts: Mapping[str, Any]) -> bool:
         """The GL walk when asked for, or on `auto` with a ray per pixel and a
         hardware GPU (on Mesa llvmpipe numba keeps float64, progress per block of rows and adaptive
         refinement: `docs/tetra-benchmark.md`)."""
@@ -291,7 +275,7 @@ class TetraRenderer(RendererBase):
     def _render(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
-        opts = self._options()
+        opts = self.opts
         start = time.perf_counter()
         mesh, (tets, neighbors, fields, packed, usable) = self._prepare()
         prepared = time.perf_counter()
