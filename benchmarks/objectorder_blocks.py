@@ -1,6 +1,6 @@
 """`python -m benchmarks.objectorder_blocks`: objectorder with its cells drawn in blocks and cell by cell.
 
-Why: since stop 45 the object-order renderer draws the 2 x 2 x 2 cells under an octree node as one
+Why: the object-order renderer draws the 2 x 2 x 2 cells under an octree node as one
 block where they are small on screen and none of the node's pixels is finished (option
 `block_pixels`, 0: cell by cell). Both ways take the same samples; this measures what blocks save,
 frames of the two interleaved in one process so that both see the same load: 512x512, each scene's

@@ -1,5 +1,5 @@
 """`objectorder` on the shared uniform scenes, parallel projection: RMSE against `reference` next to
-the slicer's post-classified march at the same step, and the seed's Table 1 counters and the median
+the slicer's post-classified march at the same step, and Mora et al.'s Table 1 counters and the median
 of warm 512x512 frames (camera turning 2 degrees of azimuth per frame) with hidden volume removal
 on and off.
 

@@ -1,8 +1,8 @@
 """The most any hidden volume removal could occlude: per scene, the non-transparent cells all of whose
 rays are already opaque where they enter the cell, against what `objectorder`'s occlusion map occludes.
 
-Why: the 004 seed's Table 1 reports the ratio of occluded cells, and issue 21 asks for >= 70 % on the
-opaque TFs. Whether a scene can reach that depends on the data (how deep the visible surfaces are)
+Why: Mora, Jessel and Caubet's Table 1 reports the ratio of occluded cells, and objectorder's target is
+>= 70 % on the opaque TFs. Whether a scene can reach that depends on the data (how deep the visible surfaces are)
 as much as on the occlusion test, so this measures the bound with the renderer's own rays and samples:
 
 1. every pixel's ray (`patterns.ray_table`, the renderer's step and interleaved offsets) marched in

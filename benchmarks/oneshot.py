@@ -1,7 +1,7 @@
 """`python -m benchmarks.oneshot`: a one-shot `volren render`, stage by stage, first run against the next.
 
-Why: issue 22 asks that a fresh install's first render of a bundled sample be at most 3 s slower
-than the second, and that a one-shot render's wall time be cut stage by stage. Each case runs
+Why: the target is that a fresh install's first render of a bundled sample be at most 3 s slower
+than the second, and a one-shot render's wall time cut stage by stage. Each case runs
 `volren render --timings` in a new process (what a user's shell does), `runs` times in a row:
 the first with an empty mesh cache (`VOLREN_MESH_CACHE` in a new folder: a mesh never seen
 before), the others with what the first stored. The numba kernels' cache is what `volren

@@ -1,7 +1,7 @@
 """The plugin renderers' section of BENCHMARKS.md (`plugins.md`): shearwarp, objectorder (and the built-in
 CPU ray caster raycast) against
-VTK's mappers and the slicer at equal or lower error, the 003 seed's Table 1 for shearwarp and the
-004 seed's Table 1 counters for objectorder, each with the command that made it.
+VTK's mappers and the slicer at equal or lower error, Schulze et al.'s Table 1 for shearwarp and
+Mora, Jessel and Caubet's Table 1 counters for objectorder, each with the command that made it.
 
     python -m benchmarks.plugins_report [--out docs/bench] [--shared DIR] [--datasets ...]
 
@@ -104,11 +104,11 @@ def main(argv: list[str] | None = None) -> int:
 
     table1 = ["benchmarks.shearwarp_table1", "--shared", args.shared]
     text = module_output(table1, args.shared)
-    lines += ["", "### The 003 seed's Table 1 (shearwarp, seconds per frame)", "", f"`python -m {' '.join(table1)}`", ""]
+    lines += ["", "### Schulze et al.'s Table 1 (shearwarp, seconds per frame)", "", f"`python -m {' '.join(table1)}`", ""]
     for line in text.splitlines():  # the table as Markdown, the load lines as paragraphs around it
         lines += [line] if line.startswith("|") else ["", line, ""]
     counters = ["benchmarks.objectorder_table", args.datasets, "smooth,spiky,opaque", "256", "5"]
-    lines += ["", "### The 004 seed's Table 1 (objectorder: counters, hidden volume removal on and off)", "",
+    lines += ["", "### Mora et al.'s Table 1 (objectorder: counters, hidden volume removal on and off)", "",
               f"`VOLREN_SHARED={args.shared} python -m {' '.join(counters)}`", "",
               "```", module_output(counters, args.shared), "```"]  # fmt: skip
     (args.out / "plugins.md").write_text("\n".join(lines) + "\n", encoding="utf-8")

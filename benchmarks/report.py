@@ -40,7 +40,7 @@ SECTIONS = (
      "The same question as the table above, each scene's two renderers drawing alternately so that both see the "
      "same load (`python -m benchmarks.defaults_ab`)"),
     ("plugins.md", "The plugin renderers (shear-warp, object order)",
-     "How do the seeds' CPU algorithms compare with VTK and the slicer at equal error, and with their papers' tables?"),
+     "How do the papers' CPU algorithms compare with VTK and the slicer at equal error, and with the papers' tables?"),
     ("shearwarp_peers.md", "Shear-warp against VTK's fastest mapper and the slicer, one run",
      "At equal or lower error, how much faster is `shearwarp` than VTK's fixed-point mapper and the slicer, scene by "
      "scene, timed in one run? (`volren bench run ... --renderers shearwarp,vtk-fixed_point,slicer`, then "

@@ -1,6 +1,6 @@
 """`python -m benchmarks.resampling_floor`: the error that resampling alone costs, scene by scene.
 
-Why: shear-warp (issue 20) composites rays through the intermediate image's pixel centres and
+Why: shear-warp composites rays through the intermediate image's pixel centres and
 resamples the result in its warp; `reference` and DESIGN.md's error metric take one ray through
 each output pixel's centre. Where an image holds detail at the pixel scale (the aneurism's thin
 opaque vessels) no resampling method can match a point-sampled reference, however exact its rays.

@@ -1,6 +1,6 @@
 """`python -m benchmarks.shearwarp_memory [DATASETS] [--shared DIR]`: what shear-warp's classified
-volume (`volren_shearwarp.classified`) holds and costs, per shared uniform dataset (issue 20: "build
-time and memory, the three copies against the raw volume, measured").
+volume (`volren_shearwarp.classified`) holds and costs, per shared uniform dataset (its build
+time and memory, the three copies against the raw volume).
 
 Per dataset, with its smooth TF: the raw volume's size; the three axis copies (one per principal
 axis, made when a view first needs that axis; uint8 data as it is, where the one along z is the

@@ -1,14 +1,14 @@
-"""The 003 seed's Table 1 (Schulze et al.) for `shearwarp`: seconds per 512x512 frame of the
+"""Table 1 of Schulze, Kraus, Lang and Ertl 2003 for `shearwarp`: seconds per 512x512 frame of the
 standard shear-warp (post-classified, no opacity correction) against pre-integration with nearest
 and bilinear table lookup, each with opacity correction off (NC) and on (OC).
 
     python -m benchmarks.shearwarp_table1 [--shared DIR] [--datasets engine,bonsai,HeadMRVolume]
                                          [--degrees 6] [--projections parallel,perspective]
 
-The seed's protocol: the opacity a linear ramp from 0 to 1 over the data range (grey), the volume
-turned 180 degrees about its vertical axis in steps (the seed: 2 degrees; `--degrees`), the mean
-frame time; one intermediate pixel per voxel (`oversampling` 1), as the seed's intermediate image.
-The seed's slice-buffer column (SB against IB) has no counterpart: this renderer keeps one
+The paper's protocol: the opacity a linear ramp from 0 to 1 over the data range (grey), the volume
+turned 180 degrees about its vertical axis in steps (the paper: 2 degrees; `--degrees`), the mean
+frame time; one intermediate pixel per voxel (`oversampling` 1), as the paper's intermediate image.
+The paper's slice-buffer column (SB against IB) has no counterpart: this renderer keeps one
 intermediate-image-sized buffer (IB). Under perspective, opacity correction means a table per
 pixel's segment length (the seed measured parallel projection only). The machine's load average
 is printed at the start and the end (timings share the cores with whatever else runs).
@@ -30,7 +30,7 @@ from volren.bench.datasets import shared_datasets
 from volren.io.volume_io import load_volume
 from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume
 
-#: (column, preintegration, lookup, opacity correction), the seed's order.
+#: (column, preintegration, lookup, opacity correction), the paper's order.
 COLUMNS = (
     ("standard", False, "nearest", False),
     ("post OC", False, "nearest", True),

@@ -4,7 +4,7 @@ For each shared dataset: the time `save_ome_zarr` takes to write its pyramid (64
 time `load_level` takes to read each level back, and, per level, a warm frame's time with the
 renderer `auto` picks at quality `default` and the frame's RMSE against the full-resolution
 frame, both at 512x512, median of `--repeats` frames. The ratio column is the full level's frame
-time over that level's: what drawing a coarser level (issue 24's level of detail) saves.
+time over that level's: what drawing a coarser level (the level of detail a view needs) saves.
 
     .venv/bin/python -m benchmarks.zarr_levels --shared ../shared
 """

@@ -19,9 +19,10 @@ def test_benchmarks_md_collects_the_fragments_and_relinks_plots(tmp_path):
     assert "Not in this run: skip.md, quality.md, defaults_fidelity.md, defaults_fidelity_shared.md, defaults_ab.md, plugins.md, shearwarp_peers.md, occlusion_bound.md, resampling_floor.md, app.md, first_preview.md, zarr_levels.md, scale.md, oneshot.md, gpu.md." in text
 
 
-def test_fragment_headings_nest_under_their_section(tmp_path):
+def test_fragment_headings_nest_under_their_section(tmp_path, monkeypatch):
     """A fragment written as a page of its own (an H1 title, H2 parts) must not give BENCHMARKS.md
     a second title: its headings move below the section's, code blocks left alone."""
+    monkeypatch.setattr(report, "machine", lambda: "a test machine")  # no GL context for the header
     out = tmp_path / "bench"
     out.mkdir()
     (out / "summary.md").write_text("# Run time against error\n\nratio\n\n## bonsai\n\n```sh\n# a comment\n```\n")
