@@ -43,9 +43,9 @@ class BlendMode(StrEnum):
 class RenderSettings:
     """Quality and appearance settings; renderer-specific extras go in `options`.
 
-    `step` is the sample distance in units of the volume's characteristic length: the mean voxel
-    spacing for uniform grids, the mean tetrahedron edge for meshes. Shading parameters follow
-    vtkVolumeProperty (and its defaults).
+    `step` is the sample distance in units of the volume's characteristic length: the smallest
+    voxel spacing for uniform grids (`UniformVolume.characteristic_length`), the mean tetrahedron
+    edge for meshes. Shading parameters follow vtkVolumeProperty (and its defaults).
     """
 
     step: float = 0.5
