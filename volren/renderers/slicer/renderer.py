@@ -26,7 +26,6 @@ from __future__ import annotations
 import contextlib
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -42,6 +41,7 @@ from volren.renderers.base import (
     Accuracy,
     Capabilities,
     KindSupport,
+    OptionSpec,
     ProgressCallback,
     QualityLevel,
     RendererBase,
@@ -64,42 +64,6 @@ _LOCAL_SIZE = 8
 #: Lanes of the march path's work counters (march.comp.glsl), 4 uint32 each.
 _STAT_LANES = 1024
 _COUNTER_BYTES = 16 * _STAT_LANES
-
-
-@dataclass(frozen=True)
-class SlicerOptions:
-    """RenderSettings.options of the slicer, checked."""
-
-    path: str = "march"
-    table_size: int = 512
-    empty_space_skipping: bool = True
-    early_termination: bool = True
-    termination_alpha: float = 0.999
-    brick_size: int = 8
-    jitter_seed: int = 1
-    termination_interval: int = 16
-    volume_format: str = "float"
-
-    @classmethod
-    def parse(cls, options: Mapping[str, Any]) -> SlicerOptions:
-        out = cls(**dict(options))
-        if out.path not in PATHS:
-            raise VolrenError(f"slicer option path must be one of {', '.join(PATHS)}, got {out.path!r}")
-        for name, low in (("table_size", 2), ("brick_size", 1), ("jitter_seed", 1), ("termination_interval", 1)):
-            value = getattr(out, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < low:
-                raise VolrenError(f"slicer option {name} must be an integer >= {low}, got {value!r}")
-        if out.volume_format not in ("float", "native"):
-            raise VolrenError(f"slicer option volume_format must be float or native, got {out.volume_format!r}")
-        if out.table_size > 4096:
-            raise VolrenError(f"slicer option table_size must be at most 4096, got {out.table_size}")
-        for name in ("empty_space_skipping", "early_termination"):
-            if not isinstance(getattr(out, name), bool):
-                raise VolrenError(f"slicer option {name} must be true or false, got {getattr(out, name)!r}")
-        alpha = out.termination_alpha
-        if isinstance(alpha, bool) or not isinstance(alpha, int | float) or not (0.0 < alpha <= 1.0):
-            raise VolrenError(f"slicer option termination_alpha must lie in (0, 1], got {alpha!r}")
-        return out
 
 
 class SlicerRenderer(GLObjectOwner, RendererBase):
@@ -129,19 +93,22 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             QualityLevel("step 0.25, pre-integrated", step=0.25, preintegration=True),
         ),
     )
-    option_help: ClassVar[Mapping[str, str]] = {
-        "path": "march (default): a compute shader walks the slice planes per pixel, with early "
-        "termination and brick skipping; slices: the planes as blended polygons",
-        "table_size": "entries per axis of the pre-integration table (default 512)",
-        "empty_space_skipping": "skip bricks whose values map to zero opacity (default true)",
-        "early_termination": "stop a ray once its opacity reaches termination_alpha (default true)",
-        "termination_alpha": "opacity at which early termination stops a ray (default 0.999)",
-        "brick_size": "cells per brick edge for empty-space skipping (default 8)",
-        "jitter_seed": "seed of the per-pixel jitter when jitter is on (default 1)",
-        "termination_interval": "slices between early-termination passes in the slices path (default 16)",
-        "volume_format": "float (default): the volume as normalised float32; native: 8-bit data as an 8-bit "
-        "texture (a quarter of the memory; Mesa llvmpipe then rounds every interpolated value)",
-    }
+    options: ClassVar[tuple[OptionSpec, ...]] = (
+        OptionSpec("path", "march", "choice", "march: a compute shader walks the slice planes per pixel, with early "
+                   "termination and brick skipping; slices: the planes as blended polygons", choices=PATHS),
+        OptionSpec("table_size", 512, "int", "entries per axis of the pre-integration table", low=2, high=4096),
+        OptionSpec("empty_space_skipping", True, "bool", "skip bricks whose values map to zero opacity"),
+        OptionSpec("early_termination", True, "bool", "stop a ray once its opacity reaches termination_alpha"),
+        OptionSpec("termination_alpha", 0.999, "float", "opacity at which early termination stops a ray",
+                   low=0.0, high=1.0, low_exclusive=True),
+        OptionSpec("brick_size", 8, "int", "cells per brick edge for empty-space skipping", low=1),
+        OptionSpec("jitter_seed", 1, "int", "seed of the per-pixel jitter when jitter is on", low=1),
+        OptionSpec("termination_interval", 16, "int", "slices between early-termination passes in the slices path",
+                   low=1),
+        OptionSpec("volume_format", "float", "choice", "float: the volume as normalised float32; native: 8-bit data "
+                   "as an 8-bit texture (a quarter of the memory; Mesa llvmpipe then rounds every interpolated value)",
+                   choices=("float", "native")),
+    )
 
     def __init__(self) -> None:
         super().__init__()
@@ -239,8 +206,8 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         assert isinstance(volume, UniformVolume)
         return volume
 
-    def _ensure_volume(self, opts: SlicerOptions) -> textures.VolumeTexture:
-        native = opts.volume_format == "native"
+    def _ensure_volume(self, opts: Mapping[str, Any]) -> textures.VolumeTexture:
+        native = opts["volume_format"] == "native"
         if self._volume_tex is not None and (self._volume_info is None or (self._volume_info.dtype == "f1") != (
             native and self._uniform_volume().values.dtype == np.uint8
         )):
@@ -339,27 +306,24 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     def _spacing(self) -> float:
         return float(self._settings.step) * self._uniform_volume().characteristic_length
 
-    def _options(self) -> SlicerOptions:
-        return SlicerOptions.parse(self._settings.options)
-
     def _skip_reach(self, spacing: float, brick: int, min_cosine: float) -> int:
         """Bricks a segment can reach beyond its own: a segment is at most one plane spacing
         along the view axis, so spacing / cos(angle of the ray) long."""
         volume = self._uniform_volume()
         return max(1, math.ceil(spacing / min_cosine / (brick * min(volume.spacing))))
 
-    def _brick_mask(self, opts: SlicerOptions, spacing: float, min_cosine: float) -> dict[str, float]:
+    def _brick_mask(self, opts: Mapping[str, Any], spacing: float, min_cosine: float) -> dict[str, float]:
         """Classify the bricks for the current TF (dilated so that pre-integrated segments
         reaching into a neighbour are covered) and upload the mask when it changed."""
         volume = self._uniform_volume()
-        if self._bricks is None or self._bricks.brick != opts.brick_size:
-            self._bricks = BrickGrid.from_volume(volume, opts.brick_size)
+        if self._bricks is None or self._bricks.brick != opts["brick_size"]:
+            self._bricks = BrickGrid.from_volume(volume, opts["brick_size"])
             self._mask_state = None
         grid = self._bricks
         tf = self._tf
         assert tf is not None
-        reach = self._skip_reach(spacing, opts.brick_size, min_cosine)
-        key = (tf.version, opts.brick_size, reach)
+        reach = self._skip_reach(spacing, opts["brick_size"], min_cosine)
+        key = (tf.version, opts["brick_size"], reach)
         if self._mask_state is None or self._mask_state[0] != key:
             self._mask_state = (key, grid.dilated(reach).visible(tf))
         visible = self._mask_state[1]
@@ -367,14 +331,14 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         stats = grid.stats(visible)
         return {"bricks": stats.n_bricks, "bricks_empty": stats.n_bricks - stats.n_visible}
 
-    def _defines(self, opts: SlicerOptions) -> dict[str, int]:
+    def _defines(self, opts: Mapping[str, Any]) -> dict[str, int]:
         s = self._settings
         composite = s.blend_mode == BlendMode.COMPOSITE
         return {
             "CLASSIFY": self._mode() if composite else 0,
             "SHADE": int(s.shade and composite),
             "BLEND": _BLEND_CODES[s.blend_mode],
-            "SKIP": int(opts.empty_space_skipping and composite),
+            "SKIP": int(opts["empty_space_skipping"] and composite),
             "NONFINITE": int(self._uniform_volume().nonfinite_count > 0),
             "REGION": int(self._region is not None),
         }
@@ -383,7 +347,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         if name in program:
             program[name].value = value
 
-    def _bind(self, program: Any, defines: Mapping[str, int], camera: Camera, opts: SlicerOptions) -> int:
+    def _bind(self, program: Any, defines: Mapping[str, int], camera: Camera, opts: Mapping[str, Any]) -> int:
         """Set the uniforms and textures both paths share; returns the next free texture unit."""
         volume = self._uniform_volume()
         info = self._ensure_volume(opts)
@@ -412,14 +376,14 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         self._set(program, "u_view_dir", tuple(view_dir))
         self._set(program, "u_plane_base", float(view_dir @ box_min))
         self._set(program, "u_spacing", spacing)
-        self._set(program, "u_jitter_seed", int(opts.jitter_seed) if s.jitter else 0)
+        self._set(program, "u_jitter_seed", int(opts["jitter_seed"]) if s.jitter else 0)
         self._set(program, "u_light", tuple(-view_dir))
         if region is not None:
             self._set(program, "u_owner_min", region.owner_min)
             self._set(program, "u_owner_max", region.owner_max)
         lo, hi = info.lo, info.hi
         mode = defines["CLASSIFY"]
-        n = opts.table_size
+        n = opts["table_size"]
         if mode == 0:
             tex = self._table("post", (tf.version, lo, hi), lambda: textures.post_tf_table(tf, lo, hi))
             tex.use(location=unit)
@@ -478,7 +442,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             self._mask_tex.use(location=unit)
             self._set(program, "u_brick_mask", unit)
             self._set(program, "u_brick_origin", tuple(float(v) for v in volume.origin))
-            self._set(program, "u_brick_size", tuple(float(opts.brick_size * h) for h in volume.spacing))
+            self._set(program, "u_brick_size", tuple(float(opts["brick_size"] * h) for h in volume.spacing))
             bz, by, bx = grid_bricks.shape
             self._set(program, "u_brick_count", (bx, by, bz))
             unit += 1
@@ -499,8 +463,8 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     def _render_current(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
-        opts = self._options()
-        if self._region is not None and opts.path != "march":
+        opts = self.opts
+        if self._region is not None and opts["path"] != "march":
             raise VolrenError("slicer: drawing a brick of a bricked volume needs the option path=march")
         if self._settings.preintegration and getattr(self._tf, "dims", 1) == 2:
             raise VolrenError("slicer: pre-integration needs a 1D transfer function; switch it off for 2D TFs")
@@ -510,7 +474,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         if defines["SKIP"]:
             counters.update(self._brick_mask(opts, self._spacing(), self._min_cosine(camera, width, height)))
         world_to_clip = camera.projection_matrix(width / height) @ camera.view_matrix()
-        if opts.path == "march":
+        if opts["path"] == "march":
             raw = self._march(defines, camera, opts, width, height, world_to_clip, counters)
         else:
             raw = self._slices(defines, camera, opts, width, height, world_to_clip, counters)
@@ -533,8 +497,8 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         self._bind(program, defines, camera, opts)
         program["u_clip_to_world"].write(mat4_bytes(np.linalg.inv(world_to_clip)))
         # A brick's layer stopping at its own opacity would leave out what the whole render keeps.
-        early = opts.early_termination and self._region is None
-        termination = opts.termination_alpha if early else 2.0
+        early = opts["early_termination"] and self._region is None
+        termination = opts["termination_alpha"] if early else 2.0
         self._set(program, "u_termination", float(termination))
         image = self._target("march", width, height)
         image.bind_to_image(0, read=False, write=True)
@@ -623,13 +587,13 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         if n_slices:
             vbo = ctx.buffer(np.ascontiguousarray(vertices, dtype=np.float32).tobytes())
             vao = ctx.vertex_array(program, [(vbo, "3f", "in_position")])
-            early = composite and opts.early_termination
-            batch = opts.termination_interval if early else n_slices
+            early = composite and opts["early_termination"]
+            batch = opts["termination_interval"] if early else n_slices
             term = self._program("terminate", {}) if early else None
             if term is not None:
                 colour.use(location=15)
                 term["u_accumulated"].value = 15
-                term["u_termination"].value = float(opts.termination_alpha)
+                term["u_termination"].value = float(opts["termination_alpha"])
                 term_vao = ctx.vertex_array(term, [])
             for first in range(0, n_slices, batch):
                 last = min(first + batch, n_slices)
