@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Mapping
 from typing import ClassVar
 
 import numpy as np
@@ -31,7 +30,6 @@ class NanRenderer(ReferenceRenderer):
 
     name: ClassVar[str] = "stress-nan"
     capabilities: ClassVar[Capabilities] = Capabilities({"uniform": KindSupport(preintegration=True)})
-    option_help: ClassVar[Mapping[str, str]] = {}
 
     def _render(self, camera, width, height, progress):
         image, counters = super()._render(camera, width, height, progress)

@@ -24,16 +24,15 @@ candidates (pixel-list entries) and flat_or_nonfinite_tets.
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Mapping
 from dataclasses import replace
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.errors import VolrenError, VolrenWarning
+from volren.errors import VolrenWarning
 from volren.kernels.row_blocks import run_in_row_blocks
 from volren.kernels.shading import shade_params
 from volren.kernels.tet_projection import bin_rows, projected_boxes, ray_far
@@ -46,6 +45,7 @@ from volren.renderers.base import (
     Accuracy,
     Capabilities,
     KindSupport,
+    OptionSpec,
     ProgressCallback,
     QualityLevel,
     RendererBase,
@@ -99,10 +99,12 @@ class ReferenceRenderer(RendererBase):
             QualityLevel("tolerance 1e-5 (default)"),
         ),
     )
-    option_help: ClassVar[Mapping[str, str]] = {
-        "tolerance": f"per-ray convergence tolerance, max abs RGBA change between levels (default {DEFAULT_TOLERANCE})",
-        "max_levels": f"most refinement levels per ray, each halving the step (>= 2, default {DEFAULT_MAX_LEVELS})",
-    }
+    options: ClassVar[tuple[OptionSpec, ...]] = (
+        OptionSpec("tolerance", DEFAULT_TOLERANCE, "float",
+                   "per-ray convergence tolerance, max abs RGBA change between levels", low=0.0, low_exclusive=True),
+        OptionSpec("max_levels", DEFAULT_MAX_LEVELS, "int", "most refinement levels per ray, each halving the step",
+                   low=2, high=24),
+    )
 
     def __init__(self) -> None:
         super().__init__()
@@ -113,20 +115,6 @@ class ReferenceRenderer(RendererBase):
     # ------------------------------------------------------------------------- state
     def _volume_changed(self) -> None:
         self._prepared = None
-
-    def _check_options(self, options: Mapping[str, Any]) -> None:
-        super()._check_options(options)
-        self._read_options(options)
-
-    @staticmethod
-    def _read_options(options: Mapping[str, Any]) -> tuple[float, int]:
-        tol = options.get("tolerance", DEFAULT_TOLERANCE)
-        levels = options.get("max_levels", DEFAULT_MAX_LEVELS)
-        if isinstance(tol, bool) or not isinstance(tol, int | float) or not (math.isfinite(tol) and tol > 0):
-            raise VolrenError(f"renderer reference: option tolerance must be a positive number, got {tol!r}")
-        if isinstance(levels, bool) or not isinstance(levels, int) or not (2 <= levels <= 24):
-            raise VolrenError(f"renderer reference: option max_levels must be an integer in 2..24, got {levels!r}")
-        return float(tol), int(levels)
 
     def _prepare(self) -> tuple:
         if self._prepared is None:
@@ -153,7 +141,7 @@ class ReferenceRenderer(RendererBase):
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         vol = self._volume
         settings = self._settings
-        tol, max_levels = self._read_options(settings.options)
+        tol, max_levels = self.opts["tolerance"], self.opts["max_levels"]
         mode = _MODES[settings.blend_mode]
         two_d = self._tf.dims == 2
         tf = pack_tf2d(self._tf) if two_d else pack_tf(self._tf)
