@@ -152,7 +152,6 @@ def test_unsupported_requests_are_clear_errors(vtk_renderer):
         (RenderSettings(blend_mode="maximum"), "no maximum blend mode for tet"),
         (RenderSettings(shade=True), "no shading for tet"),
         (RenderSettings(options={"mapper": "gpu"}), "cannot draw tet volumes"),
-        (RenderSettings(options={"mapper": "nope"}), "unknown vtk mapper"),
         (RenderSettings(preintegration=True, options={"mapper": "projected"}), "no pre-integration"),
     ]:
         vtk_renderer.set_settings(settings)
@@ -160,6 +159,8 @@ def test_unsupported_requests_are_clear_errors(vtk_renderer):
             vtk_renderer.render(camera, 8, 8)
     with pytest.raises(VolrenError, match="has no option"):
         vtk_renderer.set_settings(RenderSettings(options={"colour": 1}))
+    with pytest.raises(VolrenError, match="renderer vtk: option mapper must be one of 'auto', 'smart'"):
+        vtk_renderer.set_settings(RenderSettings(options={"mapper": "nope"}))
     with pytest.raises(VolrenError, match="image size"):
         vtk_renderer.render(camera, 0, 8)
 

@@ -42,6 +42,7 @@ from volren.renderers.base import (
     Accuracy,
     Capabilities,
     KindSupport,
+    OptionSpec,
     ProgressCallback,
     QualityLevel,
     RendererBase,
@@ -169,10 +170,12 @@ class VtkRenderer(RendererBase):
         backend="vtk",
         summary="VTK: vtkSmartVolumeMapper on grids, vtkUnstructuredGridVolumeRayCastMapper on tetrahedra",
     )
-    option_help: ClassVar[Mapping[str, str]] = {
-        "mapper": "uniform: auto (default: gpu where supported, else fixed_point), smart (VTK's own "
-        "sample distance), gpu, fixed_point; tetrahedra: raycast (default), zsweep, projected",
-    }
+    options: ClassVar[tuple[OptionSpec, ...]] = (
+        # None: the volume kind's default (DEFAULT_MAPPER)
+        OptionSpec("mapper", None, "choice", "uniform: auto (default: gpu where supported, else fixed_point), smart "
+                   "(VTK's own sample distance), gpu, fixed_point; tetrahedra: raycast (default), zsweep, projected",
+                   choices=tuple(MAPPERS)),
+    )
 
     def __init__(self) -> None:
         super().__init__()
@@ -199,9 +202,7 @@ class VtkRenderer(RendererBase):
     def mapper_name(self) -> str:
         """The VTK mapper this renderer uses for the current volume and options."""
         kind = self._volume.kind if self._volume is not None else "uniform"
-        name = str(self._settings.options.get("mapper", DEFAULT_MAPPER[kind]))
-        if name not in MAPPERS:
-            raise VolrenError(f"unknown vtk mapper {name!r}; choose one of {', '.join(MAPPERS)}")
+        name = self.opts["mapper"] or DEFAULT_MAPPER[kind]
         if MAPPERS[name][0] != kind:
             valid = ", ".join(n for n, (k, _, _) in MAPPERS.items() if k == kind)
             raise VolrenError(f"vtk mapper {name!r} cannot draw {kind} volumes; choose one of {valid}")
