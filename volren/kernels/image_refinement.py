@@ -62,6 +62,8 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
             _scatter(image, index, rgba)
             cast_count += int(index.size)
 
+    x0: NDArray[np.int64]
+    y0: NDArray[np.int64]
     x0, y0 = np.meshgrid(np.arange(0, max(width - 1, 1), stride, dtype=np.int64),
                          np.arange(0, max(height - 1, 1), stride, dtype=np.int64))
     x0, y0 = x0.ravel(), y0.ravel()

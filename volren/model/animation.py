@@ -133,7 +133,8 @@ class Animation:
         check_frames(self.frames)
         check_fps(self.fps)
         _orbit(self.orbit_degrees, "orbit_degrees")
-        for key in (*self.camera_keys, *self.tf_keys):
+        keys: tuple[CameraKey | TFKey, ...] = (*self.camera_keys, *self.tf_keys)
+        for key in keys:
             _check_time(key.time, "keyframe time")
         views = {isinstance(key.view, OrbitView) for key in self.camera_keys}
         if len(views) > 1:

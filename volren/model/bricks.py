@@ -20,6 +20,7 @@ Arrays are indexed ``[bk, bj, bi]`` (z, y, x) like `UniformVolume.values`; coord
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -78,7 +79,7 @@ class BrickGrid:
         vmax: NDArray[np.float64],
         has_nonfinite: NDArray[np.bool_],
         brick: int,
-        dimensions: tuple[int, int, int],
+        dimensions: Sequence[int],
         spacing: tuple[float, float, float] = (1.0, 1.0, 1.0),
         origin: tuple[float, float, float] = (0.0, 0.0, 0.0),
     ) -> None:

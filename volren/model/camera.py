@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -91,7 +91,7 @@ def _normalized(v: NDArray) -> NDArray:
     return v / n if n > 0 else v
 
 
-def _cross3(a: Sequence[float], b: Sequence[float]) -> Vec3:
+def _cross3(a: Sequence[float] | NDArray[np.float64], b: Sequence[float] | NDArray[np.float64]) -> Vec3:
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
@@ -101,7 +101,7 @@ def _unit3(v: Vec3) -> Vec3:
     return (v[0] / n, v[1] / n, v[2] / n) if n > 0 else v
 
 
-def rotation_matrix(angle_deg: float, axis: Sequence[float]) -> NDArray[np.float64]:
+def rotation_matrix(angle_deg: float, axis: ArrayLike) -> NDArray[np.float64]:
     """3x3 rotation by `angle_deg` about `axis` (right-hand rule), as vtkTransform.RotateWXYZ."""
     x, y, z = _normalized(np.asarray(axis, dtype=np.float64))
     a = math.radians(angle_deg)
@@ -174,7 +174,7 @@ class Camera:
         """(sideways, orthogonal up, view-plane normal): the rows of the view rotation. In plain
         floats: numpy's cross product of two 3-vectors costs ~80 us, and renderers ask for the view
         matrix every frame (it was 0.2 ms of a 10 ms shear-warp frame)."""
-        vpn = _unit3(tuple(p - f for p, f in zip(self.position, self.focal_point, strict=True)))
+        vpn = _unit3(cast(Vec3, tuple(p - f for p, f in zip(self.position, self.focal_point, strict=True))))
         side = _unit3(_cross3(self.view_up, vpn))
         up = _cross3(vpn, side)
         return np.array(side), np.array(up), np.array(vpn)

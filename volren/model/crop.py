@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import cast
 
 import numpy as np
 
@@ -75,7 +76,7 @@ def _crop_uniform(volume: UniformVolume, box: Box) -> UniformVolume:
     return UniformVolume(
         volume.values[sz, sy, sx],
         spacing=volume.spacing,
-        origin=tuple(origin),
+        origin=cast(tuple[float, float, float], tuple(origin)),
         name=volume.name,
     )
 

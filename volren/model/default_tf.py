@@ -24,6 +24,7 @@ the same in every renderer.
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -85,7 +86,7 @@ def _peak_opacity(volume: Volume, shape: list[list[float]], edges: NDArray, coun
     """The peak whose mean extinction over the histogram, times the samples across the volume,
     is TARGET_DEPTH (bisection: the depth grows with the peak)."""
     b = volume.bounds
-    samples = np.mean([b[1] - b[0], b[3] - b[2], b[5] - b[4]]) / volume.characteristic_length
+    samples = cast(float, np.mean([b[1] - b[0], b[3] - b[2], b[5] - b[4]])) / volume.characteristic_length
     centres = 0.5 * (edges[:-1] + edges[1:])
     xs, ys = np.array(shape).T
     weights = counts / max(counts.sum(), 1)

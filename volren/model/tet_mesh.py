@@ -365,7 +365,7 @@ def content_key(volume: TetVolume) -> str:
     for name in ("points", "tets", "values"):
         array = np.ascontiguousarray(getattr(volume, name))
         digest.update(f"|{name}:{array.dtype.str}:{array.shape}|".encode())
-        digest.update(memoryview(array).cast("B"))
+        digest.update(memoryview(array).cast("B"))  # type: ignore[arg-type]  # numpy types the buffer protocol from Python 3.12
     return digest.hexdigest()
 
 

@@ -195,7 +195,7 @@ class TransferFunction1D(Versioned):
         bad = ~np.isfinite(v)
         flat = np.where(bad, 0.0, v).reshape(-1)
         rgb = np.stack([np.interp(flat, self._color[:, 0], self._color[:, c]) for c in (1, 2, 3)], axis=-1)
-        alpha = np.interp(flat, self._opacity[:, 0], self._opacity[:, 1])
+        alpha: NDArray[np.float64] = np.interp(flat, self._opacity[:, 0], self._opacity[:, 1])
         # np.interp may round a hair outside [0, 1] between nearly coincident points.
         rgb = np.clip(rgb, 0.0, 1.0).reshape(v.shape + (3,))
         alpha = np.clip(alpha, 0.0, 1.0).reshape(v.shape)

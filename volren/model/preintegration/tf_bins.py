@@ -129,7 +129,7 @@ def tf_bins(tf: TransferFunction1D, lo: float, hi: float, count: int) -> TFBins:
         # last of them is the one that actually spans the atom
         owner = np.clip(np.searchsorted(edges, x0, side="right") - 1, 0, count - 1)
         share = (x1 - x0) / bin_width[owner]  # fractions of a bin: no overflow for huge ranges
-        tau = np.bincount(owner, weights=share * m0, minlength=count)
+        tau = np.bincount(owner, weights=share * m0, minlength=count)  # type: ignore[assignment]  # float with weights; numpy's stubs say int
         q = np.stack([np.bincount(owner, weights=share * m1[:, c], minlength=count) for c in range(3)], axis=1)
     unit = tf.opacity_unit_distance
     tau /= unit
