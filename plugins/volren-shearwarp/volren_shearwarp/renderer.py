@@ -59,7 +59,6 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.errors import VolrenError
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.downsample import FACTORS as DOWNSAMPLE_FACTORS
 from volren.model.downsample import downsample
@@ -67,6 +66,7 @@ from volren.renderers.base import (
     Accuracy,
     Capabilities,
     KindSupport,
+    OptionSpec,
     ProgressCallback,
     QualityLevel,
     RendererBase,
@@ -115,70 +115,41 @@ TURNING_SPAN = 2.0
 #: A pool holding more lengths than this is started afresh.
 MAX_POOL_LENGTHS = 512
 
-OPTIONS: dict[str, tuple[Any, str]] = {
-    "oversampling": ("auto", "intermediate-image pixels per output pixel along each axis (0.25 to 8, at least "
-                             "`pixels_per_voxel` per voxel is kept), or 'auto': from the TF's sharpness "
-                             "(`auto_oversampling`), 0.5 for a translucent TF up to 2 for one that makes a voxel opaque"),
-    "pixels_per_voxel": (1.0, "the fewest intermediate-image pixels per voxel along each axis (0.25 to 1): 1 resolves "
-                              "every voxel; below 1 a draft that samples each slice more coarsely than its voxels "
-                              "(as VTK's image sample distance casts fewer rays than pixels), at about its square of "
-                              "the compositing: on translucent TFs where a voxel covers more than one output pixel"),
-    "table_size": ("auto", "entries per axis of the pre-integration table / classification LUT (16 to 4096), or "
-                           "'auto': 128 for a translucent TF, 256 otherwise (`auto_table_size`)"),
-    "lookup": ("nearest", "table lookup: 'nearest' or 'bilinear' (the seed's two variants; nearest by default: "
-                          "3x cheaper, RMSE within 0.0005 of bilinear on the shared scenes at 256 entries)"),
-    "warp_filter": ("cubic", "the warp's resampling of the intermediate image: 'cubic' (Catmull-Rom) or 'bilinear'"),
-    "empty_space_skipping": (True, "skip the runs of cells the TF makes transparent (true/false)"),
-    "early_termination": (True, "stop compositing pixels once opaque (true/false)"),
-    "termination_alpha": (0.995, "opacity at which a pixel counts as opaque (0.5 to 1)"),
-    "opacity_correction": (True, "correct each segment's opacity (and colour) to its length, 1 - (1 - a)^(d / d_u) "
-                                 "(true/false; false draws every slab as if d_u long: the seed's 'NC' column, for "
-                                 "measuring what the correction costs, not for use)"),
-    "length_ratio": (LENGTH_RATIO, "under perspective, the ratio between neighbouring segment lengths that get their "
-                                   "own table (1.001 to 1.25): a segment's opacity is off by at most (ratio - 1) / 2 "
-                                   "of its optical depth; coarser makes fewer tables per TF"),
-    "jitter_seed": (0, "seed of the per-pixel sample offsets drawn with the `jitter` setting (an integer >= 0)"),
-    "downsample": (1, "render a copy of the volume reduced this many times along each axis (1, 2, 4 or 8; "
-                      "`volren.model.downsample`): a draft at about 1/factor^3 of the compositing"),
-}
+OPTIONS: tuple[OptionSpec, ...] = (
+    OptionSpec("oversampling", "auto", "float",
+               "intermediate-image pixels per output pixel along each axis (at least `pixels_per_voxel` per voxel "
+               "is kept), or 'auto': from the TF's sharpness (`auto_oversampling`), 0.5 for a translucent TF up to "
+               "2 for one that makes a voxel opaque", low=0.25, high=8.0, words=("auto",)),
+    OptionSpec("pixels_per_voxel", 1.0, "float",
+               "the fewest intermediate-image pixels per voxel along each axis: 1 resolves every voxel; below 1 a "
+               "draft that samples each slice more coarsely than its voxels (as VTK's image sample distance casts "
+               "fewer rays than pixels), at about its square of the compositing: on translucent TFs where a voxel "
+               "covers more than one output pixel", low=0.25, high=1.0),
+    OptionSpec("table_size", "auto", "int",
+               "entries per axis of the pre-integration table / classification LUT, or 'auto': 128 for a "
+               "translucent TF, 256 otherwise (`auto_table_size`)", low=16, high=4096, words=("auto",)),
+    OptionSpec("lookup", "nearest", "choice",
+               "table lookup (the seed's two variants; nearest: 3x cheaper, RMSE within 0.0005 of bilinear on the "
+               "shared scenes at 256 entries)", choices=("nearest", "bilinear")),
+    OptionSpec("warp_filter", "cubic", "choice", "the warp's resampling of the intermediate image: 'cubic' "
+               "(Catmull-Rom) or 'bilinear'", choices=("cubic", "bilinear")),
+    OptionSpec("empty_space_skipping", True, "bool", "skip the runs of cells the TF makes transparent"),
+    OptionSpec("early_termination", True, "bool", "stop compositing pixels once opaque"),
+    OptionSpec("termination_alpha", 0.995, "float", "opacity at which a pixel counts as opaque", low=0.5, high=1.0),
+    OptionSpec("opacity_correction", True, "bool",
+               "correct each segment's opacity (and colour) to its length, 1 - (1 - a)^(d / d_u) (false draws every "
+               "slab as if d_u long: the seed's 'NC' column, for measuring what the correction costs, not for use)"),
+    OptionSpec("length_ratio", LENGTH_RATIO, "float",
+               "under perspective, the ratio between neighbouring segment lengths that get their own table: a "
+               "segment's opacity is off by at most (ratio - 1) / 2 of its optical depth; coarser makes fewer "
+               "tables per TF", low=1.001, high=1.25),
+    OptionSpec("jitter_seed", 0, "int", "seed of the per-pixel sample offsets drawn with the `jitter` setting", low=0),
+    OptionSpec("downsample", 1, "choice",
+               "render a copy of the volume reduced this many times along each axis (`volren.model.downsample`): a "
+               "draft at about 1/factor^3 of the compositing", choices=tuple(DOWNSAMPLE_FACTORS)),
+)
 
 _MODES = {BlendMode.MAXIMUM: MAXIMUM, BlendMode.MINIMUM: MINIMUM, BlendMode.AVERAGE: AVERAGE}
-
-
-def _read_options(options: Mapping[str, Any]) -> dict[str, Any]:
-    """The options with defaults filled in, or a one-line VolrenError for a bad value."""
-    out = {name: default for name, (default, _) in OPTIONS.items()}
-    out.update(options)
-
-    def number(name: str, lo: float, hi: float) -> float:
-        value = out[name]
-        if isinstance(value, bool) or not isinstance(value, int | float) or not (lo <= value <= hi):
-            raise VolrenError(f"renderer shearwarp: option {name} must be a number in [{lo:g}, {hi:g}], got {value!r}")
-        return float(value)
-
-    if out["oversampling"] != "auto":
-        out["oversampling"] = number("oversampling", 0.25, 8.0)
-    out["termination_alpha"] = number("termination_alpha", 0.5, 1.0)
-    out["pixels_per_voxel"] = number("pixels_per_voxel", 0.25, 1.0)
-    out["length_ratio"] = number("length_ratio", 1.001, 1.25)
-    size = out["table_size"]
-    if size != "auto" and (isinstance(size, bool) or not isinstance(size, int) or not (16 <= size <= 4096)):
-        raise VolrenError(f"renderer shearwarp: option table_size must be 'auto' or an integer in 16..4096, got {size!r}")
-    if out["lookup"] not in ("bilinear", "nearest"):
-        raise VolrenError(f"renderer shearwarp: option lookup must be 'bilinear' or 'nearest', got {out['lookup']!r}")
-    if out["warp_filter"] not in ("cubic", "bilinear"):
-        raise VolrenError(f"renderer shearwarp: option warp_filter must be 'cubic' or 'bilinear', got {out['warp_filter']!r}")
-    seed = out["jitter_seed"]
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise VolrenError(f"renderer shearwarp: option jitter_seed must be an integer >= 0, got {seed!r}")
-    factor = out["downsample"]
-    if isinstance(factor, bool) or not isinstance(factor, int) or factor not in DOWNSAMPLE_FACTORS:
-        raise VolrenError(f"renderer shearwarp: option downsample must be one of "
-                          f"{', '.join(map(str, DOWNSAMPLE_FACTORS))}, got {out['downsample']!r}")
-    for name in ("empty_space_skipping", "early_termination", "opacity_correction"):
-        if not isinstance(out[name], bool):
-            raise VolrenError(f"renderer shearwarp: option {name} must be true or false, got {out[name]!r}")
-    return out
 
 
 def voxel_optical_depth(tf: TransferFunction1D, mean_spacing: float) -> float:
@@ -313,7 +284,7 @@ class ShearWarpRenderer(RendererBase):
         # entries; its 19 lengths' tables took 13-17 ms of those, 5 lengths at ratio 1.1 took 3-4 ms (cProfile)
         tf_drag_options={"table_size": 64, "length_ratio": 1.1},
     )  # fmt: skip
-    option_help: ClassVar[Mapping[str, str]] = {name: text for name, (_, text) in OPTIONS.items()}
+    options: ClassVar[tuple[OptionSpec, ...]] = OPTIONS
 
     def __init__(self) -> None:
         super().__init__()
@@ -343,10 +314,6 @@ class ShearWarpRenderer(RendererBase):
             coarse = downsample(volume, factor)
             self._coarse[factor] = (coarse, ClassifiedVolume(coarse))
         return self._coarse[factor]
-
-    def _check_options(self, options: Mapping[str, Any]) -> None:
-        super()._check_options(options)
-        _read_options(options)
 
     def release(self) -> None:
         self._classified = None
@@ -391,7 +358,7 @@ class ShearWarpRenderer(RendererBase):
         tf = self.transfer_function
         assert isinstance(tf, TransferFunction1D)
         settings = self.settings
-        opts = _read_options(settings.options)
+        opts = self.opts
         full = self.volume
         assert isinstance(full, UniformVolume)
         volume, classified = self._level(int(opts["downsample"]))
