@@ -35,7 +35,6 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.errors import VolrenError
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.preintegration import lighting_tables, preintegrate
 from volren.model.settings import check_step
@@ -43,6 +42,8 @@ from volren.renderers.base import (
     Accuracy,
     Capabilities,
     KindSupport,
+    OptionRule,
+    OptionSpec,
     ProgressCallback,
     QualityLevel,
     RendererBase,
@@ -61,57 +62,37 @@ from volren_objectorder.patterns import (
 #: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
 GRADIENT_EPS = 1e-6
 
-OPTIONS: dict[str, tuple[Any, str]] = {
-    "octree_skipping": (True, "skip octree nodes the TF makes transparent (true/false; the image is the same, "
-                              "except where a pre-integration table too coarse for the TF leaks opacity into "
-                              "values the TF makes transparent: skipped, that leak is left out)"),
-    "hidden_volume_removal": (True, "stop pixels at termination_alpha and skip octree nodes whose footprint lies on "
-                                    "finished pixels (hierarchical occlusion map; true/false; composite only)"),
-    "termination_alpha": (0.999, "opacity at which a pixel counts as opaque (0.5 to 1)"),
-    "depth_offsets": ("interleaved", "where each pixel's sample segments start, each sampled at its middle: "
-                                     "'interleaved' (phase 0 and 1/2 of a step on a checkerboard, the seed's), "
-                                     "'midpoint' (all on the same planes), 'random' (seeded; also the jitter setting)"),
-    "jitter_seed": (0, "seed of the random depth offsets (an integer >= 0)"),
-    "table_size": (256, "entries per axis of the pre-integration table (16 to 4096)"),
-    "classification_table": (4096, "entries of the post-classification table, colour and opacity per full step "
-                                   "(0: classify every sample exactly, a search and an exp and a log each; or 16 "
-                                   "to 65536)"),
-    "band_rows": (32, "image rows per parallel band (1 to 4096; smaller bands are used for small images)"),
-    "block_pixels": (36, "draw the 2 x 2 x 2 cells under an octree node as one block (one footprint, one load of "
-                         "their 27 grid points, one slab test per pixel) when its footprint has at most this "
-                         "many pixels, none of them finished, and 4 of its cells or more are visible; compositing only; the image is the same (0 to "
-                         "65536; 0: cell by cell)"),
-}  # fmt: skip
+#: 0 (classify every sample exactly) or a table of 16 entries or more.
+CLASSIFICATION_TABLE_RULE = OptionRule(lambda n: n == 0 or 16 <= n <= 65536, "0 or an integer in 16..65536")
+OPTIONS: tuple[OptionSpec, ...] = (
+    OptionSpec("octree_skipping", True, "bool",
+               "skip octree nodes the TF makes transparent (the image is the same, except where a pre-integration "
+               "table too coarse for the TF leaks opacity into values the TF makes transparent: skipped, that leak "
+               "is left out)"),
+    OptionSpec("hidden_volume_removal", True, "bool",
+               "stop pixels at termination_alpha and skip octree nodes whose footprint lies on finished pixels "
+               "(hierarchical occlusion map; composite only)"),
+    OptionSpec("termination_alpha", 0.999, "float", "opacity at which a pixel counts as opaque", low=0.5, high=1.0),
+    OptionSpec("depth_offsets", "interleaved", "choice",
+               "where each pixel's sample segments start, each sampled at its middle: 'interleaved' (phase 0 and 1/2 "
+               "of a step on a checkerboard, the seed's), 'midpoint' (all on the same planes), 'random' (seeded; "
+               "also the jitter setting)", choices=OFFSET_MODES),
+    OptionSpec("jitter_seed", 0, "int", "seed of the random depth offsets", low=0, high=2**63 - 1),
+    OptionSpec("table_size", 256, "int", "entries per axis of the pre-integration table", low=16, high=4096),
+    OptionSpec("classification_table", 4096, "int",
+               "entries of the post-classification table, colour and opacity per full step (0: classify every "
+               "sample exactly, a search and an exp and a log each)", rule=CLASSIFICATION_TABLE_RULE),
+    OptionSpec("band_rows", 32, "int", "image rows per parallel band (smaller bands are used for small images)",
+               low=1, high=4096),
+    OptionSpec("block_pixels", 36, "int",
+               "draw the 2 x 2 x 2 cells under an octree node as one block (one footprint, one load of their 27 grid "
+               "points, one slab test per pixel) when its footprint has at most this many pixels, none of them "
+               "finished, and 4 of its cells or more are visible; compositing only; the image is the same (0: cell "
+               "by cell)", low=0, high=65536),
+)
 
 _MODES = {BlendMode.COMPOSITE: K.COMPOSITE, BlendMode.MAXIMUM: K.MAXIMUM, BlendMode.MINIMUM: K.MINIMUM,
           BlendMode.AVERAGE: K.AVERAGE}  # fmt: skip
-
-
-def read_options(options: Mapping[str, Any]) -> dict[str, Any]:
-    """The options with defaults filled in, or a one-line VolrenError for a bad value."""
-    out = {name: default for name, (default, _) in OPTIONS.items()}
-    out.update(options)
-
-    def fail(name: str, what: str) -> None:
-        raise VolrenError(f"renderer objectorder: option {name} must be {what}, got {out[name]!r}")
-
-    for name in ("octree_skipping", "hidden_volume_removal"):
-        if not isinstance(out[name], bool):
-            fail(name, "true or false")
-    t = out["termination_alpha"]
-    if isinstance(t, bool) or not isinstance(t, int | float) or not (0.5 <= t <= 1.0):
-        fail("termination_alpha", "a number in [0.5, 1]")
-    out["termination_alpha"] = float(t)
-    if out["depth_offsets"] not in OFFSET_MODES:
-        fail("depth_offsets", "one of " + ", ".join(repr(m) for m in OFFSET_MODES))
-    for name, lo, hi in (("jitter_seed", 0, 2**63 - 1), ("table_size", 16, 4096), ("band_rows", 1, 4096),
-                         ("classification_table", 0, 65536), ("block_pixels", 0, 65536)):  # fmt: skip
-        v = out[name]
-        if isinstance(v, bool) or not isinstance(v, int) or not (lo <= v <= hi):
-            fail(name, f"an integer in {lo}..{hi}")
-    if 0 < out["classification_table"] < 16:
-        fail("classification_table", "0 or an integer in 16..65536")
-    return out
 
 
 def segment_reach(camera: Camera, volume: UniformVolume, rays: RayTable, h: float) -> Reach:
@@ -173,7 +154,7 @@ class ObjectOrderRenderer(RendererBase):
             QualityLevel("step 0.25, pre-integrated", step=0.25, preintegration=True),
         ),
     )
-    option_help: ClassVar[Mapping[str, str]] = {name: text for name, (_, text) in OPTIONS.items()}
+    options: ClassVar[tuple[OptionSpec, ...]] = OPTIONS
 
     def __init__(self) -> None:
         super().__init__()
@@ -187,10 +168,6 @@ class ObjectOrderRenderer(RendererBase):
         volume = self.volume
         assert isinstance(volume, UniformVolume)
         self._octree = MinMaxOctree(volume)
-
-    def _check_options(self, options: Mapping[str, Any]) -> None:
-        super()._check_options(options)
-        read_options(options)
 
     def release(self) -> None:
         self._octree = None
@@ -237,7 +214,7 @@ class ObjectOrderRenderer(RendererBase):
         assert isinstance(volume, UniformVolume) and isinstance(tf, TransferFunction1D)
         assert self._octree is not None
         settings = self.settings
-        opts = read_options(settings.options)
+        opts = self.opts
         check_step(settings.step, volume.bounds, volume.characteristic_length)
         h = float(settings.step * volume.characteristic_length)
         mode = _MODES[settings.blend_mode]
