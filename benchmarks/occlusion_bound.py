@@ -30,11 +30,12 @@ from numba import njit, prange
 from volren_objectorder import ObjectOrderRenderer
 from volren_objectorder.composite import _slab
 from volren_objectorder.octree import MinMaxOctree, Reach
-from volren_objectorder.patterns import pixel_offsets, ray_table, sample_length, sample_t, screen_matrix
+from volren_objectorder.patterns import ray_table, sample_t, screen_matrix
 
 from benchmarks.machine_speed import machine_line
 from benchmarks.objectorder_table import parallel_camera
 from volren.bench.datasets import shared_datasets
+from volren.kernels.sample_placement import pixel_phases, segment_length
 from volren.model import RenderSettings, TransferFunction1D, UniformVolume
 
 SIZE = 512
@@ -76,7 +77,7 @@ def saturation_depths(values, ro, rd, t0, count, first, last, h, alpha_lut, lo, 
             x = min(max((s - lo) * scale, 0.0), alpha_lut.shape[0] - 1.0)
             i = min(int(x), alpha_lut.shape[0] - 2)
             opacity = alpha_lut[i] * (1 - (x - i)) + alpha_lut[i + 1] * (x - i)
-            length = sample_length(first[p], h, count[p], last[p], k)
+            length = segment_length(first[p], last[p], h, count[p], k)
             alpha = 1.0 - (1.0 - min(opacity, 1.0 - 1e-12)) ** (length / unit)
             a += (1.0 - a) * alpha
             if a >= term:
@@ -136,7 +137,7 @@ def bound(volume: UniformVolume, tf: TransferFunction1D, camera, termination: fl
     """The bound's counts for one view, and what the renderer's occlusion map achieved there, both
     with pixels finished at opacity `termination`."""
     h = STEP * volume.characteristic_length
-    rays = ray_table(camera, volume, SIZE, SIZE, h, pixel_offsets("interleaved", SIZE, SIZE, 0))
+    rays = ray_table(camera, volume, SIZE, SIZE, h, pixel_phases("interleaved", SIZE, SIZE, 0))
     lo, hi = volume.value_range
     tlo, thi = tf.value_range
     lo, hi = min(lo, tlo), max(hi, thi)

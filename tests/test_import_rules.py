@@ -87,6 +87,24 @@ def test_kernels_need_only_the_model_and_the_contract():
     assert found == []
 
 
+PLUGINS = PACKAGE.parent / "plugins"
+#: What a plugin may import of volren: what a third party builds on (the model, the renderer contract
+#: and its error type) and the kernels that hold the optical model every renderer shares.
+PLUGIN_ALLOWED = ("volren.model", "volren.kernels", "volren.renderers.base", "volren.errors")
+
+
+def test_plugins_import_only_the_contract_the_model_and_the_kernels():
+    found = []
+    paths = sorted(PLUGINS.glob("*/volren_*/**/*.py"))
+    for path in paths:
+        for name in imported_modules(path):
+            ours = name == "volren" or name.startswith("volren.")
+            if ours and not any(name == a or name.startswith(a + ".") for a in PLUGIN_ALLOWED):
+                found.append(f"{path.relative_to(PLUGINS)} imports {name}")
+    assert len(paths) >= 10
+    assert found == []
+
+
 @pytest.mark.parametrize(
     "subpackage, forbidden",
     [

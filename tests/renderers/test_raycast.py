@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from volren.errors import VolrenError
+from volren.kernels.sample_placement import pixel_phases
 from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.renderers.raycast import RaycastRenderer
 from volren.renderers.raycast import march as K
 from volren.renderers.raycast.occupancy import empty_distance
-from volren.renderers.raycast.renderer import pixel_phases
 from volren.testing import image_error, oracles
 from volren.testing.reference_images import reference_image
 

@@ -7,7 +7,8 @@ internals; what several of them need lives here, neutral, and is tested on its o
 - `row_blocks`: a frame rendered in blocks of rows, with progress after each;
 - `image_refinement`: image-space adaptive refinement (rays on a coarse grid, more where needed);
 - `tf_eval`: exact evaluation of a 1D transfer function inside kernels (`pack_tf`);
-- `shading`: the Blinn-Phong headlight of DESIGN.md's optical model;
+- `shading`: the Blinn-Phong headlight of DESIGN.md's optical model and its no-shading threshold;
+- `sample_placement`: a ray caster's midpoint rule (segments cut at a per-pixel phase);
 - `tet_projection`: tetrahedra projected to pixel boxes and binned per pixel;
 - `tet_clipping`: a ray clipped against one tetrahedron's face planes, exact at shared faces;
 - `box_clipping`: a ray clipped to a box (slab test).

@@ -23,6 +23,9 @@ not changed by shading; the shaded colour replaces c in the emission q = c * tau
 
 `light_setup` gives the per-frame (L) and `half_vector` the per-ray (H) vectors; `shade` applies
 the formula to one sample. `ShadeParams` is the tuple (on, ka, kd, ks, p, gthr, lx, ly, lz).
+Every CPU renderer lights through `blinn_phong_factors` (those that pre-integrate colour apply its
+two factors to table entries rather than to one colour) and takes its no-shading threshold from
+`gradient_threshold`, so that one optical model holds for all of them.
 """
 
 from __future__ import annotations
@@ -39,10 +42,16 @@ from volren.model.settings import RenderSettings
 GRADIENT_EPS = 1e-6
 
 
+def gradient_threshold(span: float, length: float) -> float:
+    """|grad s| at or below which a sample is not shaded, for the value-range span and the
+    volume's characteristic length (world units)."""
+    return GRADIENT_EPS * float(span) / float(length)
+
+
 def shade_params(settings: RenderSettings, camera: Camera, span: float, length: float) -> tuple:
     """(on, ka, kd, ks, p, gthr, lx, ly, lz) for the kernels."""
     light = -np.asarray(camera.direction, dtype=np.float64)
-    gthr = GRADIENT_EPS * float(span) / float(length)
+    gthr = gradient_threshold(span, length)
     return (
         bool(settings.shade),
         float(settings.ambient),
@@ -56,16 +65,22 @@ def shade_params(settings: RenderSettings, camera: Camera, span: float, length: 
     )
 
 
-@njit(cache=True)
-def half_vector(sp, dx, dy, dz):
+@njit(cache=True, inline="always")
+def headlight_half_vector(lx, ly, lz, dx, dy, dz):
     """H = normalize(L + V) with V = -d for a ray of unit direction d."""
-    hx = sp[6] - dx
-    hy = sp[7] - dy
-    hz = sp[8] - dz
+    hx = lx - dx
+    hy = ly - dy
+    hz = lz - dz
     n = math.sqrt(hx * hx + hy * hy + hz * hz)
     if n > 0.0:
         return hx / n, hy / n, hz / n
     return 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def half_vector(sp, dx, dy, dz):
+    """`headlight_half_vector` with the light of the tuple `sp`."""
+    return headlight_half_vector(sp[6], sp[7], sp[8], dx, dy, dz)
 
 
 @njit(cache=True)
@@ -77,22 +92,28 @@ def _clamp01(x):
     return x
 
 
-@njit(cache=True)
-def shade(sp, r, g, b, gx, gy, gz, hx, hy, hz):
-    """Shaded colour of TF colour (r, g, b) at a sample with gradient (gx, gy, gz)."""
+@njit(cache=True, inline="always")
+def blinn_phong_factors(gx, gy, gz, gthr, lx, ly, lz, hx, hy, hz, ka, kd, ks, power):
+    """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz), light L and half vector
+    H: the shaded colour is c * diffuse + specular; (1, 0) where |g| <= gthr or is not finite."""
     mag = math.sqrt(gx * gx + gy * gy + gz * gz)
-    if not (mag > sp[5]) or not math.isfinite(mag):
-        return r, g, b
+    if not (mag > gthr) or not math.isfinite(mag):
+        return 1.0, 0.0
     nx = -gx / mag
     ny = -gy / mag
     nz = -gz / mag
-    ndl = nx * sp[6] + ny * sp[7] + nz * sp[8]
-    if ndl < 0.0:
+    ndl = nx * lx + ny * ly + nz * lz
+    if ndl < 0.0:  # two-sided lighting
         nx = -nx
         ny = -ny
         nz = -nz
         ndl = -ndl
     ndh = nx * hx + ny * hy + nz * hz
-    spec = sp[3] * max(ndh, 0.0) ** sp[4]
-    k = sp[1] + sp[2] * ndl
+    return ka + kd * ndl, ks * max(ndh, 0.0) ** power
+
+
+@njit(cache=True)
+def shade(sp, r, g, b, gx, gy, gz, hx, hy, hz):
+    """Shaded colour of TF colour (r, g, b) at a sample with gradient (gx, gy, gz)."""
+    k, spec = blinn_phong_factors(gx, gy, gz, sp[5], sp[6], sp[7], sp[8], hx, hy, hz, sp[1], sp[2], sp[3], sp[4])
     return _clamp01(r * k + spec), _clamp01(g * k + spec), _clamp01(b * k + spec)

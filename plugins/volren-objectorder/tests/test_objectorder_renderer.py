@@ -7,9 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from volren_objectorder import ObjectOrderRenderer
-from volren_objectorder.patterns import pixel_offsets
 
 from volren.errors import VolrenError
+from volren.kernels.sample_placement import pixel_phases
 from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.model.crop import crop_volume
 from volren.testing import conformance_test, image_error, oracles
@@ -54,7 +54,7 @@ def test_the_samples_are_a_ray_casters(parallel, offsets):
     image, _ = draw(volume, SHELL_TF, camera, (w, h), step=0.37,
                     options={"depth_offsets": offsets, "jitter_seed": 3, "hidden_volume_removal": False,
                              "classification_table": 0})  # fmt: skip
-    expected = oracles.midpoint_march(volume, SHELL_TF, camera, w, h, 0.37, pixel_offsets(offsets, w, h, 3))
+    expected = oracles.midpoint_march(volume, SHELL_TF, camera, w, h, 0.37, pixel_phases(offsets, w, h, 3))
     assert expected[..., 3].max() > 0.3
     np.testing.assert_allclose(image, expected, atol=2e-6)
 
@@ -167,12 +167,12 @@ def test_the_reach_is_one_sided_only_where_it_is_cheap_and_exact():
     both ways everywhere when a step spans more than a cell (the rim's boxes would grow with the
     step cubed) or the far plane cuts the volume."""
     from volren_objectorder.octree import Reach
-    from volren_objectorder.patterns import pixel_offsets, ray_table
+    from volren_objectorder.patterns import ray_table
     from volren_objectorder.renderer import segment_reach
 
     def reach(volume, camera, step):
         h = step * volume.characteristic_length
-        rays = ray_table(camera, volume, 24, 20, h, pixel_offsets("interleaved", 24, 20, 0))
+        rays = ray_table(camera, volume, 24, 20, h, pixel_phases("interleaved", 24, 20, 0))
         return segment_reach(camera, volume, rays, h)
 
     volume = field((10, 11, 12))
@@ -197,7 +197,7 @@ def test_the_ray_table_holds_the_cameras_pixel_rays(parallel):
     volume = field((10, 11, 12), spacing=(1.0, 0.8, 1.3))
     camera = Camera.orbit(volume.bounds, 35, 25, parallel=parallel)
     width, height = 24, 20
-    rays = ray_table(camera, volume, width, height, 0.5, pixel_offsets("interleaved", width, height, 0))
+    rays = ray_table(camera, volume, width, height, 0.5, pixel_phases("interleaved", width, height, 0))
     near, directions = camera.pixel_rays(width, height)
     near, directions = near.reshape(-1, 3), directions.reshape(-1, 3)
     spacing, origin = np.asarray(volume.spacing), np.asarray(volume.origin)

@@ -32,9 +32,11 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from volren.kernels.sample_placement import segment_length
+from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
 from volren_objectorder.occlusion import hom_covered, hom_finish, hom_init, hom_layout
 from volren_objectorder.octree import bracket
-from volren_objectorder.patterns import ray_end, sample_length, sample_t
+from volren_objectorder.patterns import ray_end, sample_t
 from volren_objectorder.traversal import child_order_mask, footprint, footprint_affine
 
 COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
@@ -179,19 +181,9 @@ def _locate(vol, px, py, pz):
 
 @njit(cache=True)
 def _light(gx, gy, gz, hx, hy, hz, fp):
-    """(diffuse factor, specular term) of Blinn-Phong with a headlight (two-sided, DESIGN.md);
-    (1, 0) where the gradient is about zero or not finite: no shading there."""
-    mag = math.sqrt(gx * gx + gy * gy + gz * gz)
-    if not (mag > fp[F_GTHR]) or not math.isfinite(mag):
-        return 1.0, 0.0
-    nx = -gx / mag
-    ny = -gy / mag
-    nz = -gz / mag
-    ndl = nx * fp[F_LX] + ny * fp[F_LY] + nz * fp[F_LZ]
-    if ndl < 0.0:
-        nx, ny, nz, ndl = -nx, -ny, -nz, -ndl
-    ndh = nx * hx + ny * hy + nz * hz
-    return fp[F_KA] + fp[F_KD] * ndl, fp[F_KS] * max(ndh, 0.0) ** fp[F_P]
+    """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz), with the lighting of `fp`."""
+    return blinn_phong_factors(gx, gy, gz, fp[F_GTHR], fp[F_LX], fp[F_LY], fp[F_LZ], hx, hy, hz, fp[F_KA], fp[F_KD],
+                               fp[F_KS], fp[F_P])  # fmt: skip
 
 
 @njit(cache=True, inline="always")
@@ -371,13 +363,7 @@ def _first_sample(t0, first, h, ns, last, k0, tlo):
 @njit(cache=True, inline="always")
 def _half_vector(rwd, p, fp):
     """Blinn-Phong's half vector of pixel p's view direction and the headlight."""
-    hx = fp[F_LX] - rwd[p, 0]
-    hy = fp[F_LY] - rwd[p, 1]
-    hz = fp[F_LZ] - rwd[p, 2]
-    hn = math.sqrt(hx * hx + hy * hy + hz * hz)
-    if hn > 0.0:
-        hx, hy, hz = hx / hn, hy / hn, hz / hn
-    return hx, hy, hz
+    return headlight_half_vector(fp[F_LX], fp[F_LY], fp[F_LZ], rwd[p, 0], rwd[p, 1], rwd[p, 2])
 
 
 @njit(cache=True, inline="always")
@@ -445,7 +431,7 @@ def _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0,
         if not np.isfinite(s):  # a cell of the block with a non-finite corner: transparent
             kk += 1
             continue
-        cr, cg, cb, ca = _post_rgba(xs, tab, post, use_post, s, sample_length(first, h, ns, last, kk), shade, fd,
+        cr, cg, cb, ca = _post_rgba(xs, tab, post, use_post, s, segment_length(first, last, h, ns, kk), shade, fd,
                                      sp, fp)  # fmt: skip
         if ca > 0.0:
             tr = 1.0 - a
@@ -554,7 +540,7 @@ def _pixel_project(p, kk, tlo, thi, mode, c8, ox, oy, oz, dx, dy, dz, t0, first,
         if t >= thi:
             break
         s = _trilinear_at(c8, 0, _clamp01(ox + t * dx), _clamp01(oy + t * dy), _clamp01(oz + t * dz))
-        length = sample_length(first, h, ns, last, kk)
+        length = segment_length(first, last, h, ns, kk)
         taken += 1
         if mode == AVERAGE:
             acc[p, 0] += s * length

@@ -35,6 +35,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from volren.kernels.sample_placement import pixel_phases
+from volren.kernels.shading import gradient_threshold
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.preintegration import lighting_tables, preintegrate
 from volren.model.settings import check_step
@@ -54,13 +56,9 @@ from volren_objectorder.patterns import (
     OFFSET_MODES,
     RayTable,
     direction_signs,
-    pixel_offsets,
     ray_table,
     screen_matrix,
 )
-
-#: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
-GRADIENT_EPS = 1e-6
 
 #: 0 (classify every sample exactly) or a table of 16 entries or more.
 CLASSIFICATION_TABLE_RULE = OptionRule(lambda n: n == 0 or 16 <= n <= 65536, "0 or an integer in 16..65536")
@@ -187,7 +185,7 @@ class ObjectOrderRenderer(RendererBase):
         """The pixels' phases, kept while the mode and image size stay (a frame's worth of numpy)."""
         key = (mode, width, height, seed)
         if self._phases is None or self._phases[0] != key:
-            self._phases = (key, pixel_offsets(mode, width, height, seed))
+            self._phases = (key, pixel_phases(mode, width, height, seed))
         return self._phases[1]
 
     @property
@@ -263,7 +261,7 @@ class ObjectOrderRenderer(RendererBase):
         fp = np.zeros(K.N_F)
         fp[K.F_H], fp[K.F_DU], fp[K.F_LO], fp[K.F_SCALE] = h, tf.opacity_unit_distance, lo, (n - 1) / (hi - lo)
         fp[K.F_KA], fp[K.F_KD], fp[K.F_KS], fp[K.F_P] = settings.ambient, settings.diffuse, settings.specular, settings.specular_power
-        fp[K.F_GTHR] = GRADIENT_EPS * (vhi - vlo) / volume.characteristic_length
+        fp[K.F_GTHR] = gradient_threshold(vhi - vlo, volume.characteristic_length)
         fp[K.F_TERM] = opts["termination_alpha"] if hvr else 2.0
         fp[K.F_LX:K.F_LZ + 1] = light
         fp[K.F_ISX:K.F_ISZ + 1] = 1.0 / spacing

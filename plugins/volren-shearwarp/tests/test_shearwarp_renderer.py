@@ -4,6 +4,7 @@ input (thin, constant, NaN, anisotropic volumes, axis-aligned and diagonal views
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import replace
 
@@ -22,6 +23,7 @@ from volren_shearwarp.renderer import (
 )
 
 from volren.errors import VolrenError
+from volren.kernels.shading import gradient_threshold
 from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.model.downsample import downsample
 from volren.testing import conformance_test, image_error, oracles
@@ -556,6 +558,25 @@ def test_shading_and_lookups_render(pre, lookup):
                          options={"lookup": lookup})  # fmt: skip
     assert np.abs(lit - plain).max() > 0.02
     assert renderer.last_frame.counters["planes_per_slab"] == 2
+
+
+def test_shading_takes_every_renderers_threshold_on_an_anisotropic_grid(monkeypatch):
+    """No shading where |grad s| <= `gradient_threshold` of the value span per characteristic length
+    (the smallest spacing), as in the other renderers: not per mean spacing."""
+    import volren_shearwarp.renderer as module
+
+    real = module.composite_slabs
+    thresholds = []
+
+    def spy(*args, **kwargs):
+        thresholds.append(inspect.signature(real.py_func).bind(*args, **kwargs).arguments["gthr"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(module, "composite_slabs", spy)
+    volume = field(spacing=(1.0, 0.5, 4.0))
+    draw(volume, SMOOTH_TF, Camera.orbit(volume.bounds, 30, 20), shade=True)
+    lo, hi = volume.value_range
+    assert thresholds and set(thresholds) == {gradient_threshold(hi - lo, volume.characteristic_length)}
 
 
 def test_a_fast_frame_is_one_block_and_can_still_be_cancelled():

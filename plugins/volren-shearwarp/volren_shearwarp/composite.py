@@ -49,6 +49,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
+
 #: Modes of `project_slabs`.
 MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
 
@@ -129,26 +131,6 @@ def gradient(vol, k, a, b, inv_sp):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _lighting(gx, gy, gz, light, hx, hy, hz, ka, kd, ks, power, gthr):
-    """(diffuse factor, specular term) of Blinn-Phong with a headlight, two-sided (DESIGN.md);
-    (1, 0) where the gradient is about zero (no shading)."""
-    mag = math.sqrt(gx * gx + gy * gy + gz * gz)
-    if not (mag > gthr) or not math.isfinite(mag):
-        return 1.0, 0.0
-    nx = -gx / mag
-    ny = -gy / mag
-    nz = -gz / mag
-    ndl = nx * light[0] + ny * light[1] + nz * light[2]
-    if ndl < 0.0:
-        nx = -nx
-        ny = -ny
-        nz = -nz
-        ndl = -ndl
-    ndh = nx * hx + ny * hy + nz * hz
-    return ka + kd * ndl, ks * max(ndh, 0.0) ** power
-
-
-@njit(cache=True, inline="always", error_model="numpy")
 def _plane_value(vol, kf, kb, w, a, b, lo, scale):
     """Table coordinate of the value at plane w (0 = slice kf, 1 = slice kb) and in-plane (a, b)."""
     if w == 0.0:
@@ -172,7 +154,7 @@ def _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, po
         gx = (1.0 - w) * fx + w * bx
         gy = (1.0 - w) * fy + w * by
         gz = (1.0 - w) * fz + w * bz
-    return _lighting(gx, gy, gz, light, hx, hy, hz, ka, kd, ks, power, gthr)
+    return blinn_phong_factors(gx, gy, gz, gthr, light[0], light[1], light[2], hx, hy, hz, ka, kd, ks, power)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -714,14 +696,8 @@ def composite_slabs(
                             continue
                         layer = layers[q, p] if per_pixel_layer else layers[0, 0]
                         if shading and ray_dirs.shape[0] > 1:
-                            hx = light[0] - ray_dirs[q, p, 0]
-                            hy = light[1] - ray_dirs[q, p, 1]
-                            hz = light[2] - ray_dirs[q, p, 2]
-                            hn = math.sqrt(hx * hx + hy * hy + hz * hz)
-                            if hn > 0.0:
-                                hx /= hn
-                                hy /= hn
-                                hz /= hn
+                            hx, hy, hz = headlight_half_vector(light[0], light[1], light[2], ray_dirs[q, p, 0],
+                                                               ray_dirs[q, p, 1], ray_dirs[q, p, 2])
                         if jitter:
                             c, t = _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, offsets_u[q, p],
                                                    rgba, buf_x, buf_d, buf_s, buf_len, stamp, skip, layer, table,

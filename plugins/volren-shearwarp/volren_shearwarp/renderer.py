@@ -59,6 +59,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from volren.kernels.shading import gradient_threshold
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.downsample import FACTORS as DOWNSAMPLE_FACTORS
 from volren.model.downsample import downsample
@@ -105,8 +106,6 @@ MAX_BLOCKS, FIRST_BLOCKS = 16, 4
 MAX_PLANES_PER_SLAB = 256
 #: Most slices a slab may span (`slice_stride`).
 MAX_SLICE_STRIDE = 8
-#: |grad s| below this fraction of (value span / mean spacing) counts as zero (DESIGN.md).
-GRADIENT_EPS = 1e-6
 #: Runs are built for rays moving up to this many cells per slice (steeper views go without).
 MAX_RUN_SHEAR = 3
 #: Under perspective, tables are made for segment lengths up to this many times the axial slab length at once
@@ -482,7 +481,7 @@ class ShearWarpRenderer(RendererBase):
             ray_dirs[..., 2] = dc
             ray_dirs /= np.linalg.norm(ray_dirs, axis=-1, keepdims=True)
         span = vhi - vlo
-        gthr = GRADIENT_EPS * span / volume.mean_spacing
+        gthr = gradient_threshold(span, volume.characteristic_length)
 
         shape = (fac.height, fac.width)
         rgba = self._scratch("rgba", shape + (4,), np.float32)

@@ -6,12 +6,13 @@ samples in it; an image-order march pays per sample only, and a ray stops as soo
 Empty space is skipped per brick of cells (`occupancy`): a 3D DDA walks the bricks along the ray,
 and from a brick with empty bricks all around it jumps out of the whole empty box at once.
 
-Sample positions are a ray caster's midpoint rule (the slicer's and objectorder's): the ray, clipped
-to the grid's box and the far plane, is cut into segments of the step h at t = (phase + j) h from
-its origin on the near plane (under a parallel projection, planes shared by all pixels; the first
-and last segments cut by the box). Post-classified, each segment is sampled at its middle and its
-opacity corrected to its length; pre-integrated, each segment is looked up by the values at its two
-ends (the back value carried to the next segment), shorter segments corrected to their length.
+Sample positions are a ray caster's midpoint rule (`volren.kernels.sample_placement`, shared with
+objectorder): the ray, clipped to the grid's box and the far plane, is cut into segments of the step
+h at t = (phase + j) h from its origin on the near plane (under a parallel projection, planes shared
+by all pixels; the first and last segments cut by the box). Post-classified, each segment is
+sampled at its middle and its opacity corrected to its length; pre-integrated, each segment is
+looked up by the values at its two ends (the back value carried to the next segment), shorter
+segments corrected to their length.
 A segment whose key point (the middle; pre-integrated, the front, with bricks classified over the
 cells a segment can reach from them too) lies in an empty brick adds nothing and is skipped. Non-finite values add
 nothing either.
@@ -22,6 +23,8 @@ from __future__ import annotations
 import math
 
 from numba import njit, prange
+
+from volren.kernels.sample_placement import ray_segment, ray_segments
 
 #: numba's fast-math flags that keep non-finite values visible (they add nothing): fused multiply-add,
 #: reciprocals, signed zeros, approximate functions took 13-15 % off a frame on the smooth TFs of
@@ -36,30 +39,6 @@ MAX_RUN = 64
 # the float parameters
 F_H, F_LO, F_SCALE, F_TERM = range(4)
 N_F = 4
-
-
-@njit(cache=True, inline="always", fastmath=FAST)
-def _segments(length, h, phase):
-    """(count, first, last): the segments of a ray `length` long cut at phase + j steps from its start."""
-    if not length > 1e-9 * h:
-        return 0, 0.0, 0.0
-    first = phase * h if phase > 0.0 else h
-    if length <= first + 1e-9 * h:
-        return 1, length, length
-    rest = length - first
-    full = math.floor(rest / h)
-    rem = rest - full * h
-    if rem > 1e-9 * h:
-        return int(full) + 2, first, rem
-    return int(full) + 1, first, h
-
-
-@njit(cache=True, inline="always", fastmath=FAST)
-def _segment(t0, first, last, h, ns, k):
-    """(start, length) of segment k of a ray: the first and last are cut by the box, the rest are h."""
-    if k == 0:
-        return t0, first
-    return t0 + first + (k - 1) * h, (last if k == ns - 1 else h)
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
@@ -95,7 +74,7 @@ def _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, l
     sampled = kb - ka
     for kk in range(ka, kb):
         if kk == 0 or kk == ns - 1:
-            tk, lk = _segment(t0, first, last, h, ns, kk)
+            tk, lk = ray_segment(t0, first, last, h, ns, kk)
             tm = tk + 0.5 * lk
         else:
             lk = h
@@ -301,7 +280,7 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
     first = 0.0
     last = 0.0
     if not miss and t1 > t0:
-        ns, first, last = _segments(t1 - t0, h, (phase - t0 / h) % 1.0)
+        ns, first, last = ray_segments(t1 - t0, h, (phase - t0 / h) % 1.0)
     k = 0  # the next segment
     sb = 0.0  # pre-integrated: the value at segment k's front, when `have_front`
     have_front = False
@@ -309,7 +288,7 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
     rb = 0
     while k < ns:
         # (re)start the brick walk at segment k's key point
-        tk, lk = _segment(t0, first, last, h, ns, k)
+        tk, lk = ray_segment(t0, first, last, h, ns, k)
         tkey = tk if pre else tk + 0.5 * lk
         bi = min(max(int(ox + tkey * dx), 0), nx - 2)
         bj = min(max(int(oy + tkey * dy), 0), ny - 2)
@@ -360,7 +339,7 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
                     k = kn
             elif d == 0:
                 while k < ns:
-                    tk, lk = _segment(t0, first, last, h, ns, k)
+                    tk, lk = ray_segment(t0, first, last, h, ns, k)
                     if (tk if pre else tk + 0.5 * lk) >= te:
                         break
                     if pre:
@@ -511,9 +490,9 @@ def project(vol, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, 
             value = -math.inf if mode == MAXIMUM else (math.inf if mode == MINIMUM else 0.0)
             weight = 0.0
             if not miss and t1 > t0:
-                ns, first, last = _segments(t1 - t0, h, (phases[p] - t0 / h) % 1.0)
+                ns, first, last = ray_segments(t1 - t0, h, (phases[p] - t0 / h) % 1.0)
                 for k in range(ns):
-                    tk, lk = _segment(t0, first, last, h, ns, k)
+                    tk, lk = ray_segment(t0, first, last, h, ns, k)
                     tm = tk + 0.5 * lk
                     s = _value(vol, ox + tm * dx, oy + tm * dy, oz + tm * dz)
                     if not math.isfinite(s):

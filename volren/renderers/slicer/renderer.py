@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.kernels.shading import gradient_threshold
 from volren.model.bricks import BrickGrid
 from volren.model.camera import Camera
 from volren.model.settings import BlendMode
@@ -52,9 +53,6 @@ from volren.renderers.slicer import textures
 from volren.renderers.slicer.proxy_geometry import slice_polygons, triangle_fan
 
 SHADER_DIR = Path(__file__).resolve().parent / "shaders"
-#: |grad s| below this fraction of (value span / characteristic length) counts as no gradient
-#: (DESIGN.md, the reference's threshold).
-GRADIENT_EPS = 1e-6
 PATHS = ("march", "slices")
 #: (values, gradient magnitudes) of the 2D TF texture.
 TF2D_TABLE_SIZE = (512, 256)
@@ -435,7 +433,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             self._set(program, "u_specular_power", float(s.specular_power))
             value_lo, value_hi = self._whole_value_range()
             span = float(value_hi - value_lo)
-            self._set(program, "u_gradient_threshold", GRADIENT_EPS * span / volume.characteristic_length)
+            self._set(program, "u_gradient_threshold", gradient_threshold(span, volume.characteristic_length))
         if defines["SKIP"]:
             grid_bricks = self._bricks
             assert grid_bricks is not None

@@ -33,6 +33,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
+
 COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
 #: Entries kept per ray (more are counted and ignored; meshes with this many boundary crossings
 #: along one ray are not seen in practice).
@@ -131,22 +133,6 @@ def _exit(t, ox, oy, oz, dx, dy, dz, planes, on_plane):
 
 
 @njit(cache=True)
-def _shade_factors(gx, gy, gz, sp, hx, hy, hz):
-    """(diffuse factor, specular term) for a cell's constant gradient; (1, 0) without one."""
-    mag = math.sqrt(gx * gx + gy * gy + gz * gz)
-    if not (mag > sp[5]) or not math.isfinite(mag):
-        return 1.0, 0.0
-    nx = -gx / mag
-    ny = -gy / mag
-    nz = -gz / mag
-    ndl = nx * sp[6] + ny * sp[7] + nz * sp[8]
-    if ndl < 0.0:
-        nx, ny, nz, ndl = -nx, -ny, -nz, -ndl
-    ndh = max(nx * hx + ny * hy + nz * hz, 0.0)
-    return sp[1] + sp[2] * ndl, sp[3] * ndh ** sp[4]
-
-
-@njit(cache=True)
 def _entries(q, ox, oy, oz, dx, dy, dz, tmax, offsets, cand, planes, tvals, grads, corner, boundary, on_plane, ts, ids,
              svals):
     """Entries of ray q into the mesh, sorted by t: (count, dropped). A candidate cell is an
@@ -234,12 +220,7 @@ def cast_rays(
             stats[q, 3] = dropped
             if count == 0:
                 continue
-            hx = sp[6] - dx
-            hy = sp[7] - dy
-            hz = sp[8] - dz
-            hn = math.sqrt(hx * hx + hy * hy + hz * hz)
-            if hn > 0.0:
-                hx, hy, hz = hx / hn, hy / hn, hz / hn
+            hx, hy, hz = headlight_half_vector(sp[6], sp[7], sp[8], dx, dy, dz)
             cr = 0.0
             cg = 0.0
             cb = 0.0
@@ -292,7 +273,9 @@ def cast_rays(
                             r, g, b, a = integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_in, s_out,
                                                            length)
                             if sp[0]:
-                                diffuse, specular = _shade_factors(grads[t, 0], grads[t, 1], grads[t, 2], sp, hx, hy, hz)
+                                diffuse, specular = blinn_phong_factors(grads[t, 0], grads[t, 1], grads[t, 2], sp[5], sp[6],
+                                                                        sp[7], sp[8], hx, hy, hz, sp[1], sp[2], sp[3],
+                                                                        sp[4])  # fmt: skip
                                 r = min(r * diffuse + specular * a, a)
                                 g = min(g * diffuse + specular * a, a)
                                 b = min(b * diffuse + specular * a, a)
