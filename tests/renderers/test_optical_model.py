@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import os
 import pkgutil
 from pathlib import Path
 
@@ -60,3 +61,20 @@ def test_renderer_modules_hold_the_kernels_own_objects(module_name):
     for name, shared in SHARED.items():
         if hasattr(module, name):
             assert getattr(module, name) is shared, f"{module_name}.{name} is not the kernel's"
+
+
+@pytest.mark.parametrize("package", ["volren.renderers.raycast", "volren.renderers.tetra", "volren_objectorder",
+                                     "volren_shearwarp"])  # fmt: skip
+def test_renderers_calling_the_kernels_drop_their_stale_numba_cache(package):
+    """numba checks only a kernel's own source: after an edit to `volren.kernels`, a renderer must not
+    keep running the copy it inlined from its cache."""
+    module = importlib.import_module(package)
+    stale = Path(module.__file__).parent / "__pycache__" / "stale-probe.nbi"
+    stale.parent.mkdir(exist_ok=True)
+    stale.touch()
+    os.utime(stale, (0, 0))
+    try:
+        importlib.reload(module)
+        assert not stale.exists()
+    finally:
+        stale.unlink(missing_ok=True)

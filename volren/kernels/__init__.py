@@ -15,6 +15,21 @@ internals; what several of them need lives here, neutral, and is tested on its o
 
 The tetrahedra's face planes themselves are part of the one mesh preparation,
 `volren.model.tet_mesh.prepare_mesh` (`PreparedMesh.planes`). Each renderer keeps its own
-integrator. Kernels import only `volren.model`, `volren.errors` and the contract in
-`volren.renderers.base` (tested in tests/test_import_rules.py).
+integrator. Kernels import only `volren.model`, `volren.errors`, `volren.numba_cache` and the
+contract in `volren.renderers.base` (tested in tests/test_import_rules.py).
+
+numba's on-disk cache checks only the source of the function it compiled, so a renderer package
+whose kernels call (and inline) these calls `drop_stale_cache_of` from its ``__init__``.
 """
+
+from pathlib import Path
+
+from volren.numba_cache import drop_stale_cache
+
+KERNELS_DIR = Path(__file__).resolve().parent
+
+
+def drop_stale_cache_of(package_dir: str | Path) -> None:
+    """Drop the numba cache files of a package whose kernels call these, when they are older than
+    its sources or ours: its cached machine code holds the copies of our kernels it inlined."""
+    drop_stale_cache(package_dir, KERNELS_DIR)

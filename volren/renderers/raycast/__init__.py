@@ -1,5 +1,11 @@
 """`raycast`: an image-order ray caster on the CPU (numba) for uniform grids."""
 
-from volren.renderers.raycast.renderer import RaycastRenderer
+from pathlib import Path
+
+from volren.kernels import drop_stale_cache_of
+
+drop_stale_cache_of(Path(__file__).parent)
+
+from volren.renderers.raycast.renderer import RaycastRenderer  # noqa: E402
 
 __all__ = ["RaycastRenderer"]
