@@ -3,8 +3,9 @@
 DESIGN.md's emission-absorption model integrated in float64 along each pixel ray, refined until
 two successive levels agree to a tolerance. Modules: `ray_integral` (the adaptive per-ray
 quadrature and exact max / min / average: the reference's own integrator, shared with no other
-renderer), `uniform` (trilinear grids), `tets` (tetrahedral meshes), `tf2d` (2D transfer
-functions on grids), `segment` (one linear segment's integral, the oracle of pre-integration
+renderer), `tf2d` (its quadrature of 2D transfer functions on grids), `refinement` (the levels
+around either quadrature and the rule that stops them), `uniform` (trilinear grids), `tets`
+(tetrahedral meshes), `segment` (one linear segment's integral, the oracle of pre-integration
 tables) and `renderer` (the `ReferenceRenderer` class). What it shares with other renderers (TF
 evaluation, shading, projection, clipping) is in `volren.kernels`, and the tetrahedra's face
 planes come from `volren.model.tet_mesh`.

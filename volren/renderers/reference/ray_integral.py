@@ -1,4 +1,4 @@
-"""The per-ray integrator shared by the uniform and tetrahedral paths.
+"""The per-ray integrator of 1D TFs, shared by the uniform and tetrahedral paths.
 
 Why: both volume kinds reduce a pixel ray to the same thing, a front-to-back list of intervals
 [ta, tb] on which the reconstructed scalar is a smooth polynomial of the ray parameter: a cubic
@@ -38,11 +38,8 @@ Composite (emission-absorption, premultiplied RGBA over black, front to back):
      first-order error at every opaque surface.
    Both are exact for homogeneous pieces, like the plain midpoint rule in this form.
 5. A ray stops early only when T < 1e-9 (negligible against any sensible tolerance).
-6. Levels are computed until the change between two successive ones is below `tol` (max abs over
-   the four channels) and the change before it below ASYMPTOTIC_RATIO * tol (level 1, having
-   none before it, must change by less than tol / ASYMPTOTIC_RATIO), so two coarse levels
-   agreeing by accident do not stop a ray; at most `max_levels` levels. The finest level
-   computed is the result.
+6. Levels are computed until two successive ones agree (`refinement.integrate_ray`, which sorts
+   the cuts of step 1 and runs the levels of this module's quadrature and of `tf2d`'s).
 
 Maximum / minimum / average need no refinement: the extremes of a cubic on an interval (its ends
 and the roots of its derivative) and its integral have closed forms, so the max, min and
@@ -58,7 +55,7 @@ import math
 import numpy as np
 from numba import njit
 
-from volren.kernels.shading import half_vector, shade
+from volren.kernels.shading import shade
 from volren.kernels.tf_eval import (
     color,
     interval_width,
@@ -81,9 +78,6 @@ SHADING_TURN = 0.25
 #: With shading, |grad s| is checked at this many + 1 points per interval for crossings of the
 #: no-shading threshold (the shaded colour jumps there, so the crossings become cuts).
 SWITCH_CHECKS = 8
-#: A level counts as converged when its change is below tol and the previous change was below
-#: this times tol (an h^2 sequence shrinks its changes by 4 per level); see integrate_ray.
-ASYMPTOTIC_RATIO = 4.0
 #: Transmittance below which a ray stops.
 MIN_TRANSMITTANCE = 1e-9
 
@@ -258,29 +252,16 @@ def _shading_switches(gk, length, thr2, out):
 
 
 @njit(cache=True)
-def compute_cuts(ta, tb, P, G, m, tf_cuts, shading, thr):
-    """CSR of the sorted cut points of every interval: (offsets (m + 1), cuts)."""
-    offsets = np.zeros(m + 1, np.int64)
-    empty = np.empty(0)
-    thr2 = thr * thr
-    for k in range(m):
-        length = tb[k] - ta[k]
-        count = 0
-        if length > 0.0:
-            count = _interval_cuts(P[k], length, tf_cuts, empty)
-            if shading:
-                count += _shading_switches(G[k], length, thr2, empty)
-        offsets[k + 1] = offsets[k] + count
-    cuts = np.empty(offsets[m])
-    for k in range(m):
-        length = tb[k] - ta[k]
-        if length > 0.0:
-            part = cuts[offsets[k] : offsets[k + 1]]
-            n = _interval_cuts(P[k], length, tf_cuts, part)
-            if shading and n < part.shape[0]:
-                _shading_switches(G[k], length, thr2, part[n:])
-                part.sort()
-    return offsets, cuts
+def interval_cuts_1d(c, G, k, length, tf_cuts, shading, thr2, out):
+    """The cut points of interval k (cubic c; gradient cubics G[k] when shading), sorted, into out
+    when it holds them all; returns their count (`refinement.compute_cuts`)."""
+    n = _interval_cuts(c, length, tf_cuts, out)
+    if shading:
+        switches = _shading_switches(G[k], length, thr2, out[n:] if n < out.shape[0] else out[:0])
+        if switches > 0:
+            out.sort()
+        n += switches
+    return n
 
 
 @njit(cache=True)
@@ -432,38 +413,14 @@ def _project(ta, tb, P, m, mode):
 
 
 @njit(cache=True)
-def integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, sp, dx, dy, dz):
-    """RGBA of one ray and its statistics: (r, g, b, a, samples, level, converged, cap_hits)."""
-    if m == 0:
+def project_ray(ta, tb, P, m, mode, tf):
+    """RGBA of one ray in a maximum, minimum or average mode, as `refinement.integrate_ray` gives it."""
+    v, found = _project(ta, tb, P, m, mode)
+    if not found or not math.isfinite(v):
         return 0.0, 0.0, 0.0, 0.0, 0, 0, True, 0
-    if mode != COMPOSITE:
-        v, found = _project(ta, tb, P, m, mode)
-        if not found or not math.isfinite(v):
-            return 0.0, 0.0, 0.0, 0.0, 0, 0, True, 0
-        a = opacity(tf, v)
-        r, g, b = color(tf, v)
-        return r * a, g * a, b * a, a, 1, 0, True, 0
-    hx, hy, hz = half_vector(sp, dx, dy, dz)
-    offsets, cuts = compute_cuts(ta, tb, P, G, m, tf[6], sp[0], sp[5])
-    pr, pg, pb, pa, samples, caps = _composite_level(ta, tb, P, G, m, offsets, cuts, h0, 0, tf, sp, hx, hy, hz)
-    last = math.inf
-    for level in range(1, max_levels):
-        cr, cg, cb, ca, n, c = _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz)
-        samples += n
-        caps += c
-        diff = max(abs(cr - pr), abs(cg - pg), abs(cb - pb), abs(ca - pa))
-        pr, pg, pb, pa = cr, cg, cb, ca
-        # Converged: the change is below tol and the change before it was consistent with the
-        # asymptotic h^2 ratio; level 1 has no change before it, so it must be below
-        # tol / ASYMPTOTIC_RATIO. Guards against two coarse levels agreeing by accident.
-        if level == 1:
-            done = diff < tol / ASYMPTOTIC_RATIO
-        else:
-            done = diff < tol and last < ASYMPTOTIC_RATIO * tol
-        if done:
-            return pr, pg, pb, pa, samples, level, True, caps
-        last = diff
-    return pr, pg, pb, pa, samples, max_levels - 1, False, caps
+    a = opacity(tf, v)
+    r, g, b = color(tf, v)
+    return r * a, g * a, b * a, a, 1, 0, True, 0
 
 
 @njit(cache=True)

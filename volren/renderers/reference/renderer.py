@@ -6,10 +6,10 @@ so it favours accuracy over speed, and says so when it could not reach its toler
 How: one ray per pixel centre (`Camera.pixel_rays`: origins on the near plane), clipped to the far
 plane as well. Uniform grids go through `uniform.render_uniform` (trilinear, per-cell cubics), meshes
 through `tets.render_tets` (screen-space binning, exact ray-tetrahedron clipping); both hand their
-per-ray intervals to `ray_integral.integrate_ray`, which refines each ray until two successive
-levels agree to `tolerance` (see that module for the quadrature). A 2D TF (uniform grids,
-composite) goes through `tf2d.render_uniform_2d` instead, which refines by the same rule (see
-that module: the 2D TF is sampled, not cut into linear pieces). The image is processed in blocks
+per-ray intervals to `refinement.integrate_ray`, which refines each ray until two successive
+levels agree to `tolerance` (see `ray_integral` for the quadrature). A 2D TF (uniform grids,
+composite) is refined by the same rule with `tf2d`'s quadrature instead (the 2D TF is sampled,
+not cut into linear pieces). The image is processed in blocks
 of rows, one parallel numba kernel call per block, with `progress` called after each block.
 
 RenderSettings.jitter is ignored (the reference is deterministic) and preintegration is not
@@ -52,7 +52,7 @@ from volren.renderers.base import (
 )
 from volren.renderers.reference.ray_integral import AVERAGE, COMPOSITE, MAXIMUM, MINIMUM
 from volren.renderers.reference.tets import render_tets
-from volren.renderers.reference.tf2d import pack_tf2d, render_uniform_2d
+from volren.renderers.reference.tf2d import pack_tf2d
 from volren.renderers.reference.uniform import render_uniform
 
 DEFAULT_TOLERANCE = 1e-5
@@ -166,20 +166,13 @@ class ReferenceRenderer(RendererBase):
             if region is not None:  # the brick's own box: the integral is exact, so cutting it there is too
                 blo, bhi = region.box
 
-        if isinstance(vol, UniformVolume) and two_d:
-
-            def kernel(a: int, b: int) -> None:
-                render_uniform_2d(
-                    origins[a:b], dirs[a:b], tfar[a:b], values, org, sp, blo, bhi,
-                    tf, spar, h0, tol, max_levels, out[a:b], stats[a:b],
-                )  # fmt: skip
-
-        elif isinstance(vol, UniformVolume):
+        if isinstance(vol, UniformVolume):
+            tf_1d, tf_2d = (None, tf) if two_d else (tf, None)
 
             def kernel(a: int, b: int) -> None:
                 render_uniform(
                     origins[a:b], dirs[a:b], tfar[a:b], values, org, sp, blo, bhi,
-                    tf, spar, mode, h0, tol, max_levels, out[a:b], stats[a:b],
+                    tf_1d, tf_2d, spar, mode, h0, tol, max_levels, out[a:b], stats[a:b],
                 )  # fmt: skip
 
         else:

@@ -14,7 +14,8 @@ from numpy.typing import ArrayLike, NDArray
 from volren.errors import VolrenError
 from volren.kernels.tf_eval import pack_tf
 from volren.model.transfer_function import TransferFunction1D
-from volren.renderers.reference.ray_integral import COMPOSITE, integrate_ray
+from volren.renderers.reference.ray_integral import COMPOSITE
+from volren.renderers.reference.refinement import integrate_ray
 
 #: Shading off (the other entries are unused then).
 _NO_SHADING = (False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
@@ -39,7 +40,7 @@ def segment_rgba(
     for k, (front, back) in enumerate(zip(fronts, backs, strict=True)):
         poly = np.array([[front, (back - front) / length, 0.0, 0.0]])
         r, g, b, a, _, _, converged, _ = integrate_ray(
-            ta, tb, poly, shading, 1, COMPOSITE, length / 4, tol, max_levels, packed, _NO_SHADING, 0.0, 0.0, 1.0
+            ta, tb, poly, shading, 1, COMPOSITE, length / 4, tol, max_levels, packed, None, _NO_SHADING, 0.0, 0.0, 1.0
         )
         if not converged:
             raise VolrenError(f"the segment integral from {front} to {back} did not converge to {tol}")

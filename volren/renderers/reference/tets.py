@@ -15,7 +15,7 @@ How:
    faces, and exactly one cell owns a ray lying in a face), giving an interval with the value at
    its entry and the slope ds/dt = grad s . d.
 4. The intervals are sorted by entry (stable, so ties keep mesh order), and
-   `ray_integral.integrate_ray` integrates them front to back; gaps (outside a non-convex mesh)
+   `refinement.integrate_ray` integrates them front to back; gaps (outside a non-convex mesh)
    contribute nothing.
 """
 
@@ -25,7 +25,8 @@ import numpy as np
 from numba import njit, prange
 
 from volren.kernels.tet_clipping import clip_tet
-from volren.renderers.reference.ray_integral import integrate_ray, store_pixel
+from volren.renderers.reference.ray_integral import store_pixel
+from volren.renderers.reference.refinement import integrate_ray
 
 
 @njit(parallel=True, cache=True)
@@ -80,5 +81,5 @@ def render_tets(
                 G[e, 0, 0] = grads[t, 0]
                 G[e, 1, 0] = grads[t, 1]
                 G[e, 2, 0] = grads[t, 2]
-        result = integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, spar, dx, dy, dz)
+        result = integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, None, spar, dx, dy, dz)
         store_pixel(out, stats, q, result, m)

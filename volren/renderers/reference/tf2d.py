@@ -3,8 +3,9 @@
 Why: a 2D TF's integrand along a ray is not piecewise linear in s (widgets are Gaussian,
 triangular or box-shaped over (s, |grad s|), and |grad s| varies along the ray on its own), so the
 1D path's exact cuts and exact mean extinction do not apply. This module integrates it by
-refinement instead, with the same exact-exponential pieces and the same convergence rule, and
-leaves the 1D path (`ray_integral`, `uniform.render_uniform`) untouched.
+refinement instead, with the same exact-exponential pieces, inside the 1D path's scaffolding
+(`refinement.integrate_ray`: the cuts' table, the levels and the rule that stops them; the rays'
+intervals come from `uniform.render_uniform`), and leaves the 1D quadrature (`ray_integral`) as it is.
 
 The TF is evaluated exactly as `TransferFunction2D.sample` defines it (`eval_tf2d`: the widget
 formulas, a 1d widget's points as `tf_eval.interp` evaluates a 1D TF's, clamping to the TF's
@@ -41,10 +42,9 @@ Per ray (composite only; the capabilities offer no other blend mode with a 2D TF
    (the midpoint's colour where the TF is transparent at u_e), C += T alpha c, T *= exp(-x).
    Exact for homogeneous pieces; second order where the integrand is smooth.
 5. Stop when T < MIN_TRANSMITTANCE; levels until two successive ones agree by the 1D path's rule
-   (`ray_integral.integrate_ray`: change < tol after a change < ASYMPTOTIC_RATIO tol; level 1
-   must change by less than tol / ASYMPTOTIC_RATIO), with the change between two levels measured
-   per channel as the sum over the intervals of the change of each interval's share of the
-   pixel, so changes in different cells cannot cancel and stop a ray early by accident.
+   (`refinement.integrate_ray`), with the change between two levels measured per channel as the
+   sum over the intervals of the change of each interval's share of the pixel (`share_change`),
+   so changes in different cells cannot cancel and stop a ray early by accident.
 """
 
 from __future__ import annotations
@@ -52,16 +52,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from volren.kernels.box_clipping import clip_box
-from volren.kernels.shading import half_vector, shade
+from volren.kernels.shading import shade
 from volren.kernels.tf_eval import interp
 from volren.model.preintegration.segment_math import emission_centre
 from volren.model.transfer_function import MAX_OPACITY
 from volren.model.transfer_function_2d import TransferFunction2D
 from volren.renderers.reference.ray_integral import (
-    ASYMPTOTIC_RATIO,
     FRACTION,
     MAX_SUBDIVISION,
     MIN_TRANSMITTANCE,
@@ -70,9 +68,7 @@ from volren.renderers.reference.ray_integral import (
     _normal_turn,
     cubic,
     next_boundary,
-    store_pixel,
 )
-from volren.renderers.reference.uniform import build_intervals
 
 GAUSSIAN, TRIANGLE, BOX, PROFILE = 0, 1, 2, 3
 _TYPES = {"gaussian": GAUSSIAN, "triangle": TRIANGLE, "box": BOX, "1d": PROFILE}
@@ -368,9 +364,9 @@ def _poly_crossings(poly, length, level, out):
 
 
 @njit(cache=True)
-def _interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
-    """Cut points of one interval (see the module docstring), unsorted, `length` among them;
-    fills out when long enough, returns the count."""
+def interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
+    """Cut points of one interval (see the module docstring), `length` among them, sorted into out
+    when it holds them all; returns their count (`refinement.compute_cuts`)."""
     n = _interval_cuts(c, length, tf[6], out)
     gcuts = tf[7]
     smooth = False  # a Gaussian or a triangle: cut where |grad s| turns, too
@@ -404,29 +400,8 @@ def _interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
                         cb = c[b] - p[0] if b == 0 else c[b]
                         edge[a + b] += ca * cb
                 n += _poly_crossings(edge, length, 0.0, out[n:] if n < out.shape[0] else out[:0])
+    out.sort()
     return n
-
-
-@njit(cache=True)
-def compute_cuts_2d(ta, tb, P, G, m, tf, shading, thr):
-    """CSR of the sorted cut points of every interval: (offsets (m + 1), cuts)."""
-    offsets = np.zeros(m + 1, np.int64)
-    empty = np.empty(0)
-    thr2 = thr * thr
-    for k in range(m):
-        length = tb[k] - ta[k]
-        count = 0
-        if length > 0.0:
-            count = _interval_cuts_2d(P[k], G[k], length, tf, shading, thr2, empty)
-        offsets[k + 1] = offsets[k] + count
-    cuts = np.empty(offsets[m])
-    for k in range(m):
-        length = tb[k] - ta[k]
-        if length > 0.0:
-            part = cuts[offsets[k] : offsets[k + 1]]
-            _interval_cuts_2d(P[k], G[k], length, tf, shading, thr2, part)
-            part.sort()
-    return offsets, cuts
 
 
 @njit(cache=True)
@@ -551,65 +526,14 @@ def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, h
 
 
 @njit(cache=True)
-def integrate_ray_2d(ta, tb, P, G, m, h0, tol, max_levels, tf, sp, dx, dy, dz):
-    """Composite RGBA of one ray with a 2D TF and its statistics, as `ray_integral.integrate_ray`."""
-    if m == 0:
-        return 0.0, 0.0, 0.0, 0.0, 0, 0, True, 0
-    hx, hy, hz = half_vector(sp, dx, dy, dz)
-    offsets, cuts = compute_cuts_2d(ta, tb, P, G, m, tf, sp[0], sp[5])
-    prev = np.zeros((m, 4))
-    parts = np.zeros((m, 4))
-    pr = pg = pb = pa = 0.0
-    samples = 0
-    caps = 0
-    last = math.inf
-    for level in range(max_levels):
-        pr, pg, pb, pa, n, c = _composite_level_2d(
-            ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz, parts
-        )
-        samples += n
-        caps += c
-        # the change between levels, summed over the intervals without cancellation
-        diff = 0.0
-        for ch in range(4):
-            change = 0.0
-            for k in range(m):
-                change += abs(parts[k, ch] - prev[k, ch])
-            diff = max(diff, change)
-        prev, parts = parts, prev
-        if level == 0:
-            continue
-        if level == 1:
-            done = diff < tol / ASYMPTOTIC_RATIO
-        else:
-            done = diff < tol and last < ASYMPTOTIC_RATIO * tol
-        if done:
-            return pr, pg, pb, pa, samples, level, True, caps
-        last = diff
-    return pr, pg, pb, pa, samples, max_levels - 1, False, caps
-
-
-@njit(parallel=True, cache=True)
-def render_uniform_2d(orig, dirs, tfar, V, org, sp, lo, hi, tf, spar, h0, tol, max_levels, out, stats):
-    """One block of rays with a 2D TF (composite): out (n, 4) float64 RGBA; stats as
-    `uniform.render_uniform`."""
-    n = orig.shape[0]
-    nz, ny, nx = V.shape
-    cap = nx + ny + nz + 4
-    for p in prange(n):
-        ox, oy, oz = orig[p, 0], orig[p, 1], orig[p, 2]
-        dx, dy, dz = dirs[p, 0], dirs[p, 1], dirs[p, 2]
-        t0, t1 = clip_box(ox, oy, oz, dx, dy, dz, lo, hi, 0.0, tfar[p])
-        for c in range(4):
-            out[p, c] = 0.0
-        for c in range(5):
-            stats[p, c] = 0
-        if not (t1 > t0):
-            continue
-        ta = np.empty(cap)
-        tb = np.empty(cap)
-        P = np.empty((cap, 4))
-        G = np.empty((cap, 3, 4))
-        m = build_intervals(ox, oy, oz, dx, dy, dz, t0, t1, V, org, sp, True, ta, tb, P, G)
-        result = integrate_ray_2d(ta, tb, P, G, m, h0, tol, max_levels, tf, spar, dx, dy, dz)
-        store_pixel(out, stats, p, result, m)
+def share_change(shares, before, m):
+    """The change between two levels' interval shares (r, g, b, a) of the pixel: per channel the sum
+    over the intervals of the change of each share, so that changes in different cells cannot
+    cancel; the largest over the channels."""
+    change = 0.0
+    for ch in range(4):
+        total = 0.0
+        for k in range(m):
+            total += abs(shares[k, ch] - before[k, ch])
+        change = max(change, total)
+    return change

@@ -17,7 +17,8 @@ How, per pixel ray (origin on the near plane, unit direction d):
    average as well.
 4. When shading, the gradient at the eight corners (central differences in world units, one-sided
    at the borders) is interpolated the same way: three more cubics.
-5. `ray_integral.integrate_ray` does the adaptive quadrature (or the exact max / min / average).
+5. `refinement.integrate_ray` does the adaptive quadrature (or the exact max / min / average), with
+   a 1D TF (`ray_integral`) or a 2D one (`tf2d`, which needs the gradient cubics always).
 
 Cell boundaries are the only places where the trilinear interpolant has kinks, so splitting the
 ray there keeps the quadrature at second order everywhere. The kernel is
@@ -32,7 +33,8 @@ import numpy as np
 from numba import njit, prange
 
 from volren.kernels.box_clipping import clip_box
-from volren.renderers.reference.ray_integral import integrate_ray, store_pixel
+from volren.renderers.reference.ray_integral import store_pixel
+from volren.renderers.reference.refinement import integrate_ray
 
 
 @njit(cache=True)
@@ -175,13 +177,15 @@ def build_intervals(ox, oy, oz, dx, dy, dz, t_in, t_out, V, org, sp, shading, ta
 
 
 @njit(parallel=True, cache=True)
-def render_uniform(orig, dirs, tfar, V, org, sp, lo, hi, tf, spar, mode, h0, tol, max_levels, out, stats):
+def render_uniform(orig, dirs, tfar, V, org, sp, lo, hi, tf, tf2d, spar, mode, h0, tol, max_levels, out, stats):
     """One block of rays: out (n, 4) float64 RGBA; stats (n, 5) = samples, level, unconverged,
-    subdivision cap hits, intervals."""
+    subdivision cap hits, intervals. One of `tf` (1D) and `tf2d` (2D, composite) is None."""
     n = orig.shape[0]
     nz, ny, nx = V.shape
     cap = nx + ny + nz + 4
-    shading = spar[0]
+    gradients = spar[0]  # shading
+    if tf2d is not None:
+        gradients = True  # |grad s| is the 2D TF's second axis
     for p in prange(n):
         ox, oy, oz = orig[p, 0], orig[p, 1], orig[p, 2]
         dx, dy, dz = dirs[p, 0], dirs[p, 1], dirs[p, 2]
@@ -195,7 +199,7 @@ def render_uniform(orig, dirs, tfar, V, org, sp, lo, hi, tf, spar, mode, h0, tol
         ta = np.empty(cap)
         tb = np.empty(cap)
         P = np.empty((cap, 4))
-        G = np.empty((cap if shading else 0, 3, 4))
-        m = build_intervals(ox, oy, oz, dx, dy, dz, t0, t1, V, org, sp, shading, ta, tb, P, G)
-        result = integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, spar, dx, dy, dz)
+        G = np.empty((cap if gradients else 0, 3, 4))
+        m = build_intervals(ox, oy, oz, dx, dy, dz, t0, t1, V, org, sp, gradients, ta, tb, P, G)
+        result = integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, tf2d, spar, dx, dy, dz)
         store_pixel(out, stats, p, result, m)
