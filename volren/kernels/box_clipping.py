@@ -5,7 +5,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def clip_box(ox, oy, oz, dx, dy, dz, lo, hi, tmin, tmax):
     """Slab test: the parameter range of the ray inside the closed box [lo, hi], within [tmin, tmax]."""
     t0 = tmin

@@ -37,7 +37,7 @@ def image_rays(camera: Camera, width: int, height: int) -> tuple[NDArray[np.floa
     return pixel_rays(camera, width, height, pixels % width, pixels // width)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _unproject_pixels(inv, xs, ys, width, height, origins, directions):  # pragma: no cover - numba
     """Each pixel centre in normalized device coordinates, through `inv` (the inverse of
     projection @ view) at depth -1 (the origin) and +1 (a point the direction aims at)."""

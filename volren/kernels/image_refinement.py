@@ -92,7 +92,7 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
     return image, cast_count
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _new_pixels(xs, ys, spacing, count, width, height, done, wanted):
     """The pixels of a count x count lattice `spacing` apart at each (x, y) (clamped to the image)
     not cast yet, sorted, each once; marked done. `wanted` is all False on entry and on return (a
@@ -119,7 +119,7 @@ def _new_pixels(xs, ys, spacing, count, width, height, done, wanted):
     return index
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _scatter(image, index, rgba):
     """image[index] = rgba."""
     for q in range(index.shape[0]):
@@ -127,7 +127,7 @@ def _scatter(image, index, rgba):
             image[index[q], ch] = rgba[q, ch]
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _split(image, width, xa, ya, xb, yb, tolerance):
     """Which blocks split: their corners differ by more than `tolerance` in some channel, or some
     corner rays see nothing (alpha 0) and others do (a silhouette is followed down to pixels)."""
@@ -146,7 +146,7 @@ def _split(image, width, xa, ya, xb, yb, tolerance):
     return split
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _fill(image, done, width, xa, ya, xb, yb):
     """Bilinear interpolation between each block's four corner pixels into its pixels not cast."""
     for k in range(xa.shape[0]):

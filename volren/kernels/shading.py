@@ -65,7 +65,7 @@ def shade_params(settings: RenderSettings, camera: Camera, span: float, length: 
     )
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def headlight_half_vector(lx, ly, lz, dx, dy, dz):
     """H = normalize(L + V) with V = -d for a ray of unit direction d."""
     hx = lx - dx
@@ -77,13 +77,13 @@ def headlight_half_vector(lx, ly, lz, dx, dy, dz):
     return 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def half_vector(sp, dx, dy, dz):
     """`headlight_half_vector` with the light of the tuple `sp`."""
     return headlight_half_vector(sp[6], sp[7], sp[8], dx, dy, dz)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _clamp01(x):
     if x < 0.0:
         return 0.0
@@ -92,7 +92,7 @@ def _clamp01(x):
     return x
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def blinn_phong_factors(gx, gy, gz, gthr, lx, ly, lz, hx, hy, hz, ka, kd, ks, power):
     """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz), light L and half vector
     H: the shaded colour is c * diffuse + specular; (1, 0) where |g| <= gthr or is not finite."""
@@ -112,7 +112,7 @@ def blinn_phong_factors(gx, gy, gz, gthr, lx, ly, lz, hx, hy, hz, ka, kd, ks, po
     return ka + kd * ndl, ks * max(ndh, 0.0) ** power
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def shade(sp, r, g, b, gx, gy, gz, hx, hy, hz):
     """Shaded colour of TF colour (r, g, b) at a sample with gradient (gx, gy, gz)."""
     k, spec = blinn_phong_factors(gx, gy, gz, sp[5], sp[6], sp[7], sp[8], hx, hy, hz, sp[1], sp[2], sp[3], sp[4])

@@ -19,7 +19,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def clip_tet(t, ox, oy, oz, dx, dy, dz, tmax, normals, anchors, sigma, tvals):
     """(hit, t0, t1, s(t0)) of a ray against tetrahedron t; see the module docstring."""
     tlo = 0.0

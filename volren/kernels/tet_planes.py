@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 _FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]], dtype=np.int64)
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def _packed(points, tets, faces, out):
     for t in prange(tets.shape[0]):
         for f in range(4):

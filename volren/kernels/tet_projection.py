@@ -38,7 +38,7 @@ def pixel_coordinates(camera, width: int, height: int, points: np.ndarray) -> tu
     return px, py, w
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _pixel_coordinates(points, m, width, height, px, py, pw):
     for i in range(points.shape[0]):
         x, y, z = points[i, 0], points[i, 1], points[i, 2]
@@ -59,7 +59,7 @@ def projected_boxes(camera, width: int, height: int, points: np.ndarray, tets: n
     return tet_boxes(px, py, w, np.ascontiguousarray(depth), tets, ok, width, height, near, far)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def tet_boxes(px, py, pw, depth, tets, ok, width, height, near, far):
     """Pixel bounding box (x0, x1, y0, y1) of every tetrahedron's projection; x0 = -1: none.
 
@@ -110,7 +110,7 @@ def tet_boxes(px, py, pw, depth, tets, ok, width, height, near, far):
     return boxes
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def bin_rows(boxes, width, row0, row1):
     """CSR lists of candidate tetrahedra for the pixels of rows row0 .. row1 - 1 (row-major,
     pixel index relative to the first pixel of row0): (offsets, tetrahedron ids)."""

@@ -57,13 +57,13 @@ def pack_tf(tf: TransferFunction1D) -> PackedTF:
     return (cx, crgb, ox, oa, bp, float(tf.opacity_unit_distance), cuts)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def find_interval(xs, s):
     """k with xs[k] <= s < xs[k+1]; requires xs[0] <= s < xs[-1]."""
     return np.searchsorted(xs, s, side="right") - 1
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def interp(xs, ys, s):
     """Piecewise-linear ys(xs) at s, constant beyond the ends."""
     n = xs.shape[0]
@@ -76,12 +76,12 @@ def interp(xs, ys, s):
     return ys[k] + (ys[k + 1] - ys[k]) * w
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def opacity(tf, s):
     return interp(tf[2], tf[3], s)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def opacity_line(tf, s):
     """(x0, a0, slope): the linear piece of the opacity that holds s, a(x) = a0 + slope (x - x0)."""
     xs = tf[2]
@@ -95,7 +95,7 @@ def opacity_line(tf, s):
     return xs[k], ys[k], (ys[k + 1] - ys[k]) / (xs[k + 1] - xs[k])
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def color(tf, s):
     """(r, g, b) at s, not premultiplied."""
     xs = tf[0]
@@ -114,7 +114,7 @@ def color(tf, s):
     )
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def mean_extinction(aa, ab, unit):
     """Mean of tau over a span where the opacity is linear from aa to ab (exact)."""
     aa = min(aa, MAX_OPACITY)
@@ -133,7 +133,7 @@ def mean_extinction(aa, ab, unit):
     return mean / unit
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def interval_width(tf, s):
     """Width of the breakpoint interval holding s (the TF is linear across it); +inf outside."""
     bp = tf[4]

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from volren.model.transfer_function import TransferFunction1D
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def _visible(xs, positive_before, gap_positive, lo, hi, out):
     for q in prange(lo.shape[0]):
         a, b = lo[q], hi[q]

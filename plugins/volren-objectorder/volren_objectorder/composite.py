@@ -53,7 +53,7 @@ S_NODES, S_CELLS, S_OCCLUDED_CELLS, S_OCCLUDED_NODES, S_SAMPLES, S_SATURATED = r
 N_STATS = 6
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def tf_lookup(xs, tab, s):
     """Colour and opacity of the piecewise-linear TF (rows of `tab` at `xs`) at s."""
     a, b, f = bracket(xs, s)
@@ -61,7 +61,7 @@ def tf_lookup(xs, tab, s):
             tab[a, 2] + f * (tab[b, 2] - tab[a, 2]), tab[a, 3] + f * (tab[b, 3] - tab[a, 3]))  # fmt: skip
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _point_gradient(vol, x, y, z, fp):
     """Central differences at grid point (x, y, z) in world units, one-sided at the borders."""
     nz, ny, nx = vol.shape
@@ -86,7 +86,7 @@ def _point_gradient(vol, x, y, z, fp):
     return gx, gy, gz
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _load_block(vol, x0, y0, z0, sx, sy, sz, shade, fp, cb, gb):
     """The grid points of the block of sx x sy x sz cells from (x0, y0, z0), point (x0 + a, y0 + b,
     z0 + c) at cb[9 c + 3 b + a], and, when shading, their gradients."""
@@ -112,12 +112,12 @@ def _load_block(vol, x0, y0, z0, sx, sy, sz, shade, fp, cb, gb):
                     gb[n, 2] = gz
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _clamp02(x):
     return 0.0 if x < 0.0 else (2.0 if x > 2.0 else x)
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _sub_cell(blk, fx, fy, fz):
     """The cell of block `blk` = (visible cells' bits, sx, sy, sz) holding block-local (fx, fy, fz) in
     [0, 2]^3: (its bit, x + 2 y + 4 z as in the octree's leaf bytes; the index of its first grid point
@@ -128,7 +128,7 @@ def _sub_cell(blk, fx, fy, fz):
     return ix + 2 * iy + 4 * iz, iz * 9 + iy * 3 + ix, fx - ix, fy - iy, fz - iz
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _locate_in(blk, x, y, z):
     """The sample at block-local (x, y, z) in block `blk` = (visible cells' bits, sx, sy, sz, size):
     (whether the TF leaves its cell visible, the index of the cell's first grid point among the
@@ -141,7 +141,7 @@ def _locate_in(blk, x, y, z):
     return (blk[0] >> bit) & 1 != 0, base, fx, fy, fz
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _trilinear_at(cb, b, fx, fy, fz):
     """Trilinear value at (fx, fy, fz) in [0, 1]^3 of the block's cell whose first grid point is cb[b]."""
     x00 = cb[b] + fx * (cb[b + 1] - cb[b])
@@ -153,7 +153,7 @@ def _trilinear_at(cb, b, fx, fy, fz):
     return y0 + fz * (y1 - y0)
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _trilinear_at_g(gb, comp, b, fx, fy, fz):
     x00 = gb[b, comp] + fx * (gb[b + 1, comp] - gb[b, comp])
     x10 = gb[b + 3, comp] + fx * (gb[b + 4, comp] - gb[b + 3, comp])
@@ -164,12 +164,12 @@ def _trilinear_at_g(gb, comp, b, fx, fy, fz):
     return y0 + fz * (y1 - y0)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _clamp01(x):
     return 0.0 if x < 0.0 else (1.0 if x > 1.0 else x)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _locate(vol, px, py, pz):
     """The cell holding index point (px, py, pz) and the point's local coordinates in it."""
     nz, ny, nx = vol.shape
@@ -179,14 +179,14 @@ def _locate(vol, px, py, pz):
     return i, j, k, _clamp01(px - i), _clamp01(py - j), _clamp01(pz - k)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _light(gx, gy, gz, hx, hy, hz, fp):
     """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz), with the lighting of `fp`."""
     return blinn_phong_factors(gx, gy, gz, fp[F_GTHR], fp[F_LX], fp[F_LY], fp[F_LZ], hx, hy, hz, fp[F_KA], fp[F_KD],
                                fp[F_KS], fp[F_P])  # fmt: skip
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _over(rgba, p, r, g, b, a):
     """Front-to-back over of premultiplied (r, g, b, a) into pixel p."""
     t = 1.0 - rgba[p, 3]
@@ -196,7 +196,7 @@ def _over(rgba, p, r, g, b, a):
     rgba[p, 3] += t * a
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _post(rgba, p, xs, tab, s, length, fd, sp, fp):
     """A post-classified piece of `length` at value s, shaded with (fd, sp)."""
     if length <= 0.0:
@@ -211,7 +211,7 @@ def _post(rgba, p, xs, tab, s, length, fd, sp, fp):
     _over(rgba, p, r * alpha, g * alpha, b * alpha, alpha)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _post_table(rgba, p, post, s, fd, sp, fp):
     """A post-classified full step at value s from `post`, the TF sampled evenly with the opacity
     already corrected to the step h: a lookup instead of a search over the breakpoints and an exp
@@ -229,7 +229,7 @@ def _post_table(rgba, p, post, s, fd, sp, fp):
     _over(rgba, p, r * alpha, g * alpha, b * alpha, alpha)
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _bilinear(table, fi, fj, c):
     n = table.shape[0]
     i0 = min(int(fi), n - 2)
@@ -240,7 +240,7 @@ def _bilinear(table, fi, fj, c):
             + wi * ((1.0 - wj) * table[i0 + 1, j0, c] + wj * table[i0 + 1, j0 + 1, c]))  # fmt: skip
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _segment(rgba, p, sf, sb, length, fd_f, sp_f, fd_b, sp_b, shade, table, front, back, fp):
     """A pre-integrated segment from value sf (front) to sb (back), `length` long; lit by
     interpolated pre-integrated lighting (Lum et al.) when shading."""
@@ -273,7 +273,7 @@ def _segment(rgba, p, sf, sb, length, fd_f, sp_f, fd_b, sp_b, shade, table, fron
     _over(rgba, p, min(max(r, 0.0), a), min(max(g, 0.0), a), min(max(b, 0.0), a), a)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _fetch(vol, px, py, pz, fp, cb, gb):
     """The trilinear value at index point (px, py, pz); NaN when a corner of its cell is not finite
     (a NaN or an infinity reaches the interpolated value whatever the weights; cb: scratch for the
@@ -283,7 +283,7 @@ def _fetch(vol, px, py, pz, fp, cb, gb):
     return _trilinear_at(cb, 0, fx, fy, fz)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _fetch_light(vol, px, py, pz, hx, hy, hz, fp, cb, gb):
     """The lighting (diffuse factor, specular term) at index point (px, py, pz) (cb, gb: scratch)."""
     i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
@@ -292,7 +292,7 @@ def _fetch_light(vol, px, py, pz, hx, hy, hz, fp, cb, gb):
                   _trilinear_at_g(gb, 2, 0, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz, shade, table, front, back, fp,
           e8, eg8):  # fmt: skip
     """The pre-integrated piece between a ray's end point at `te` (its entry or exit on the box) and
@@ -316,7 +316,7 @@ def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz
         _segment(rgba, p, s, se, length, fd, sp, fde, spe, shade, table, front, back, fp)
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _slab(ro, rd, ri, p, dp, x0, y0, z0, sx, sy, sz, ncx, ncy, ncz):
     """[tlo, thi) of pixel p's ray (its direction in row dp of rd and ri: p, or 0 when every ray
     shares one) in the block of sx x sy x sz cells from cell (x0, y0, z0), the exact slab test in
@@ -344,7 +344,7 @@ def _slab(ro, rd, ri, p, dp, x0, y0, z0, sx, sy, sz, ncx, ncy, ncz):
     return tlo, thi
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _first_sample(t0, first, h, ns, last, k0, tlo):
     """The ray's first sample at or after tlo, starting from its depth indicator k0 (the samples of
     cells skipped since, transparent or occluded, are passed by a guess and a short walk)."""
@@ -360,13 +360,13 @@ def _first_sample(t0, first, h, ns, last, k0, tlo):
     return kk
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _half_vector(rwd, p, fp):
     """Blinn-Phong's half vector of pixel p's view direction and the headlight."""
     return headlight_half_vector(fp[F_LX], fp[F_LY], fp[F_LZ], rwd[p, 0], rwd[p, 1], rwd[p, 2])
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _post_rgba(xs, tab, post, use_post, s, length, shaded, fd, sp, fp):
     """Premultiplied (r, g, b, alpha) of a post-classified piece of `length` at value s, shaded with
     (fd, sp) when `shaded`: from the table for a full step (`_post_table`), exactly otherwise (`_post`)."""
@@ -399,7 +399,7 @@ def _post_rgba(xs, tab, post, use_post, s, length, shaded, fd, sp, fp):
     return r * alpha, g * alpha, b * alpha, alpha
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, shade, use_post,
                 xs, tab, post, fp, rgba):  # fmt: skip
     """Composite, post-classified: pixel p's samples kk.. with t < thi in the current cell, front to
@@ -450,7 +450,7 @@ def _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0,
     return kk, taken, saturated
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, fp,
                rays, tables, state, scratch):  # fmt: skip
     """Composite, pre-integrated: pixel p's samples kk.. with t < thi in the current cell, each closing
@@ -515,7 +515,7 @@ def _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, 
     return kk, taken, 0
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _pixel_project(p, kk, tlo, thi, mode, c8, ox, oy, oz, dx, dy, dz, t0, first, last, ns, fp, acc):
     """Maximum, minimum and average: pixel p's samples kk.. with t < thi in the current cell (t >= tlo;
     the cell's grid points in `c8` as `_load_block` lays them out). Returns (next sample, samples
@@ -555,7 +555,7 @@ def _pixel_project(p, kk, tlo, thi, mode, c8, ox, oy, oz, dx, dy, dz, t0, first,
     return kk, taken, 0
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _finished_pixel(finished, q0, q1, c0, c1, width):
     """Whether a pixel of rows q0..q1, columns c0..c1 is finished (opaque, or its ray done)."""
     for r in range(q0, q1 + 1):
@@ -565,7 +565,7 @@ def _finished_pixel(finished, q0, q1, c0, c1, width):
     return False
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1):
     """(c0, c1, q0, q1, own): the columns and the band's rows (q0 > q1: none) of node (lv, i, j, k)'s
     footprint, and 1 when the band holds its middle row (it counts the node)."""
@@ -588,7 +588,7 @@ def _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1
     return c0, c1, max(fr0, r0), min(fr1, r1 - 1), 1 if (mid >= r0 and mid < r1) else 0
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch, fp,
            mode, pre, shade, hvr, use_post, ncx, ncy, ncz):  # fmt: skip
     """The block of up to size^3 leaf cells from cell (x0, y0, z0), `cells` = bits + 256 size: size 1
@@ -663,7 +663,7 @@ def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, stat
     return n_samples, n_saturated
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                 ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                 rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
@@ -686,7 +686,7 @@ def render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, 
                hom, hl, hoff, hcols, stack, c8, g8, e8, eg8)  # fmt: skip
 
 
-@njit(cache=True, _nrt=False)
+@njit(nogil=True, cache=True, _nrt=False)
 def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats,
@@ -796,7 +796,7 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, p
     stats[S_SATURATED] += n_saturated
 
 
-@njit(cache=True, parallel=True)
+@njit(nogil=True, cache=True, parallel=True)
 def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
                  ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
                  rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
@@ -810,7 +810,7 @@ def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, 
                     rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats[b])  # fmt: skip
 
 
-@njit(cache=True, parallel=True)
+@njit(nogil=True, cache=True, parallel=True)
 def finish(rgba, out):
     """The composited pixels as the image: clamped to [0, 1], colour at most opacity, float32, in
     one parallel pass (numpy takes four passes over the float64 pixels)."""

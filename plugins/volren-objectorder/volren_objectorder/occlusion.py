@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def hom_layout(rows: int, cols: int):
     """(levels, offsets, block columns per level, size) for a rows x cols band."""
     levels = 1
@@ -38,7 +38,7 @@ def hom_layout(rows: int, cols: int):
     return levels, offsets, ncols, offsets[levels]
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def hom_init(hom, levels, offsets, ncols, rows, cols):
     """Every block starts with its pixels outside the band counted as finished."""
     for m in range(levels):
@@ -51,14 +51,14 @@ def hom_init(hom, levels, offsets, ncols, rows, cols):
                 hom[offsets[m] + br * ncols[m] + bc] = size * size - h * w
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def hom_finish(hom, levels, offsets, ncols, r, c):
     """Pixel (r, c) of the band (band-local row) is finished: count it at every level."""
     for m in range(levels):
         hom[offsets[m] + (r >> m) * ncols[m] + (c >> m)] += 1
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def hom_covered(hom, levels, offsets, ncols, r0, r1, c0, c1):
     """True when every pixel of rows r0..r1, columns c0..c1 (inclusive, band-local) is finished."""
     m = 0

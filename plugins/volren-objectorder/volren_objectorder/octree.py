@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 from volren.model import TransferFunction1D, UniformVolume
 
 
-@njit(cache=True, parallel=True)
+@njit(nogil=True, cache=True, parallel=True)
 def _cell_ranges(values, lo, hi):
     """Min and max of each cell's eight corners; +inf / -inf for a cell with a non-finite corner."""
     nz, ny, nx = values.shape
@@ -56,7 +56,7 @@ def _cell_ranges(values, lo, hi):
                 hi[k, j, i] = mx
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def bracket(xs, s):
     """(a, b, f): the control points a <= b around s of the ascending `xs` and the weight of b, so
     that a piecewise-linear function is v[a] + f (v[b] - v[a]) there (constant beyond the ends;
@@ -78,14 +78,14 @@ def bracket(xs, s):
     return a, b, (s - xs[a]) / w if w > 0.0 else 1.0
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _opacity_at(xs, alphas, s):
     """The piecewise-linear opacity at s (constant beyond the end points)."""
     a, b, f = bracket(xs, s)
     return alphas[a] + f * (alphas[b] - alphas[a])
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _visible_on(xs, alphas, a, b):
     """Whether the piecewise-linear opacity is non-zero somewhere on [a, b]: at an end, or at a
     control point inside (where its largest value on the interval lies otherwise)."""
@@ -97,7 +97,7 @@ def _visible_on(xs, alphas, a, b):
     return False
 
 
-@njit(cache=True, parallel=True)
+@njit(nogil=True, cache=True, parallel=True)
 def _classify(own_lo, own_hi, lo, hi, xs, alphas, out):
     """out[cell] = 1 where the opacity is non-zero somewhere on [lo, hi] (the cell's range, or its
     dilated one); a cell that is itself empty (a non-finite corner) is 0 whatever its neighbours."""
@@ -113,7 +113,7 @@ def _classify(own_lo, own_hi, lo, hi, xs, alphas, out):
                 out[k, j, i] = 1 if _visible_on(xs, alphas, a, b) else 0
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _reduce_counts(child, cshape, parent, pshape):
     """parent node = sum of its (up to eight) children's visible-cell counts."""
     for k in range(pshape[0]):
@@ -129,7 +129,7 @@ def _reduce_counts(child, cshape, parent, pshape):
                 parent[(k * pshape[1] + j) * pshape[2] + i] = s
 
 
-@njit(cache=True, parallel=True)
+@njit(nogil=True, cache=True, parallel=True)
 def _pack_leaves(level0, out):
     """out[node] = bit (x = 1, y = 2, z = 4 of the child) set for each visible cell under a level-1
     node: a walk reads one byte per node for its eight leaves instead of eight int32 counts on
@@ -149,7 +149,7 @@ def _pack_leaves(level0, out):
                 out[k, j, i] = bits
 
 
-@njit(cache=True, parallel=True)
+@njit(nogil=True, cache=True, parallel=True)
 def _window_pass(src, dst, axis, below, above, take_max):
     """dst = the min (max) of src over a window from `below` cells under each element to `above`
     cells over it along array axis `axis` (one loop nest per axis, so that the innermost loop runs
@@ -193,7 +193,7 @@ def _dilate(a: NDArray, window: Window, take_max: bool) -> NDArray:
     return out
 
 
-@njit(cache=True, parallel=True)
+@njit(nogil=True, cache=True, parallel=True)
 def _classify_rim(own_lo, own_hi, rim, radius, xs, alphas, out):
     """out[cell] = 1 also where the opacity is non-zero somewhere on the range of the box of
     +-radius cells around a cell of the rim: the cells within rim[axis] = (low, high) cells of a

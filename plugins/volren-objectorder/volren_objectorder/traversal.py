@@ -19,7 +19,7 @@ import math
 from numba import njit
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def child_order_mask(level, i, j, k, perspective, eye, direction):
     """Bits (x = 1, y = 2, z = 4) of the child nearest the eye for node (level, i, j, k)."""
     mask = 0
@@ -41,7 +41,7 @@ def child_order_mask(level, i, j, k, perspective, eye, direction):
     return mask
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def footprint(M, x0, y0, z0, x1, y1, z1, width, height):
     """(c0, c1, r0, r1), the inclusive pixel rectangle whose centres the box [x0, x1] x [y0, y1] x
     [z0, z1] (grid-index coordinates) may cover; c0 > c1 or r0 > r1 when it is off screen."""
@@ -65,7 +65,7 @@ def footprint(M, x0, y0, z0, x1, y1, z1, width, height):
     return pixel_rect(umin, umax, vmin, vmax, width, height)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def footprint_affine(M, x0, y0, z0, x1, y1, z1, width, height):
     """`footprint` under a parallel projection (W = 1): the map is affine, so the rectangle is the
     low corner's image widened by each edge's image on its own side, 6 products instead of 24 and
@@ -89,7 +89,7 @@ def footprint_affine(M, x0, y0, z0, x1, y1, z1, width, height):
     return pixel_rect(umin, umax, vmin, vmax, width, height)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def pixel_rect(umin, umax, vmin, vmax, width, height):
     """(c0, c1, r0, r1): the pixels whose centres lie in [umin, umax] x [vmin, vmax] (a hair wider)."""
     eps = 1e-6

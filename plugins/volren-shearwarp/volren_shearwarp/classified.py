@@ -156,7 +156,7 @@ class Runs:
 RANGE_BINS = 256
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def _block_ranges(vol, pairs, lo, scale, bins, extent, bmin, bmax):
     """bmin, bmax[k, j, i] = the range bins (of RANGE_BINS over [lo, hi]) of the lowest and highest
     value over the vertices, in both slices of slab k (pairs[k]), of the anchored block of cells
@@ -218,7 +218,7 @@ def _block_ranges(vol, pairs, lo, scale, bins, extent, bmin, bmax):
                     bmax[k, j, i] = min(max(int((mx - lo) * scale), 0), bins - 1) >> shift
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def _mask_from_ranges(bmin, bmax, counts, mask):
     """mask = 1 where a block's range bins hold a bin with nonzero opacity (`counts`: prefix counts
     over the range bins)."""
@@ -242,7 +242,7 @@ def range_counts(support: OpacitySupport) -> NDArray[np.int32]:
     return counts
 
 
-@njit(cache=True, inline="always")
+@njit(nogil=True, cache=True, inline="always")
 def _row_runs(mask, k, b, min_gap, starts, ends, at):
     """The runs of row (k, b) of `mask`, gaps shorter than `min_gap` cells bridged; written at
     `at` when starts has room, counted either way."""
@@ -272,7 +272,7 @@ def _row_runs(mask, k, b, min_gap, starts, ends, at):
     return count
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def _runs_from_mask(mask, min_gap):
     nk, nb, na = mask.shape
     per_row = np.zeros(nk * nb, np.int64)

@@ -55,7 +55,7 @@ from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
 MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _cell_position(x, n):
     """(cell index, weight in it) of coordinate x along an axis of n samples, clamped to the axis."""
     x = min(max(x, 0.0), n - 1.0)
@@ -63,7 +63,7 @@ def _cell_position(x, n):
     return i, x - i
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def bilinear(vol, k, a, b):
     """Bilinear sample of slice k at in-plane (a, b), clamped to the slice; NaN where a corner with
     weight is NaN (NaN * 0 is NaN too: a cell with a NaN corner is transparent)."""
@@ -74,14 +74,14 @@ def bilinear(vol, k, a, b):
     return v0 * (1.0 - fb) + v1 * fb
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _at(vol, k, b, a):
     """vol[k, b, a] as float32: the copies may hold uint8 (`classified.copy_dtype`), whose differences
     must not wrap around."""
     return np.float32(vol[k, b, a])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _diff(vol, k, b, a, axis):
     """Central difference along axis (0 = a, 1 = b, 2 = c) at grid point (k, b, a), in index units;
     one-sided at the borders (the reference's rule)."""
@@ -105,7 +105,7 @@ def _diff(vol, k, b, a, axis):
     return 0.5 * (_at(vol, k + 1, b, a) - _at(vol, k - 1, b, a))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(nogil=True, cache=True, error_model="numpy")
 def gradient(vol, k, a, b, inv_sp):
     """World-unit gradient (along a, b, c) at in-plane (a, b) of slice k: central differences at the
     grid points, interpolated bilinearly like the values."""
@@ -130,7 +130,7 @@ def gradient(vol, k, a, b, inv_sp):
     return out0, out1, out2
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _plane_value(vol, kf, kb, w, a, b, lo, scale):
     """Table coordinate of the value at plane w (0 = slice kf, 1 = slice kb) and in-plane (a, b)."""
     if w == 0.0:
@@ -142,7 +142,7 @@ def _plane_value(vol, kf, kb, w, a, b, lo, scale):
     return (s - lo) * scale
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr):
     if w == 0.0:
         gx, gy, gz = gradient(vol, kf, a, b, inv_sp)
@@ -157,7 +157,7 @@ def _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, po
     return blinn_phong_factors(gx, gy, gz, gthr, light[0], light[1], light[2], hx, hy, hz, ka, kd, ks, power)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _next_open(skip, q, p, end):
     """The first pixel >= p of row q that is not opaque (or `end`), shortening the skip links walked."""
     r = p
@@ -171,7 +171,7 @@ def _next_open(skip, q, p, end):
     return r
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _clip(x0, x1, hi, t0, t1):
     """Clip the parameter range [t0, t1] of the segment x0 -> x1 (x = x0 + t (x1 - x0)) to [0, hi]."""
     d = x1 - x0
@@ -186,13 +186,13 @@ def _clip(x0, x1, hi, t0, t1):
     return max(t0, ta), min(t1, tb)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _sub_interval(j, inv_sub, t0, t1):
     """The part [u0, u1] of the slab parameter range [t0, t1] in sub-plane j's segment (empty when u1 <= u0)."""
     return max(j * inv_sub, t0), min((j + 1) * inv_sub, t1)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _pixel_range(af0, afs, ab0, abs_, hi):
     """Pixels whose segment (front a = af0 + afs p, back a = ab0 + abs_ p) may meet [0, hi]."""
     p_lo = math.ceil(min((0.0 - af0) / afs, (0.0 - ab0) / abs_)) - 1
@@ -200,7 +200,7 @@ def _pixel_range(af0, afs, ab0, abs_, hi):
     return p_lo, p_hi
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _table_rgba(table, layer, xf, xb, bilinear_lookup):
     """The 2D table `table[layer]` at fractional entries (xf, xb), all four channels (the indices
     and weights are computed once: the lookup is most of a segment's cost)."""
@@ -237,7 +237,7 @@ def _table_rgba(table, layer, xf, xb, bilinear_lookup):
     return out0, out1, out2, out3
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _lut_rgba(lut, layer, x, bilinear_lookup):
     """The 1D LUT `lut[layer]` at fractional entry x: colour (not premultiplied) and opacity."""
     n = lut.shape[1]
@@ -252,7 +252,7 @@ def _lut_rgba(lut, layer, x, bilinear_lookup):
             lut[layer, i, 2] * g + lut[layer, i + 1, 2] * f, lut[layer, i, 3] * g + lut[layer, i + 1, 3] * f)  # fmt: skip
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _segment(xf, xb, df, sf, db, sb, layer, table, table_back, lut, preintegrated, shading, bilinear_lookup):
     """Premultiplied RGBA of one whole segment (front value xf, back value xb as table coordinates;
     diffuse factors and specular terms of its ends when shading)."""
@@ -280,7 +280,7 @@ def _segment(xf, xb, df, sf, db, sb, layer, table, table_back, lut, preintegrate
     return a0 * r0 + t1 * r1, a0 * g0 + t1 * g1, a0 * b0 + t1 * b1, a0 + t1
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _blend(rgba, q, p, cr, cg, cb, alpha):
     """rgba[q, p] += (1 - its alpha) * (cr, cg, cb, alpha): front-to-back 'over'."""
     t = 1.0 - rgba[q, p, 3]
@@ -290,7 +290,7 @@ def _blend(rgba, q, p, cr, cg, cb, alpha):
     rgba[q, p, 3] += t * alpha
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _span_sample(row0, row1, a, w, lo32, sc32):
     """The table coordinate of a fast span's bilinear sample at column a between two slice scanlines,
     row1 weighted w: float32 throughout, unclamped (the span's pixels lie inside), each value converted
@@ -305,7 +305,7 @@ def _span_sample(row0, row1, a, w, lo32, sc32):
     return (v0 + (v1 - v0) * w - lo32) * sc32
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p0, p1, rgba, buf_x, stamp, skip,
                layers, per_pixel_layer, table, lut, preintegrated, bilinear_lookup, lo, scale,
                use_termination, term_alpha, has_nan):  # fmt: skip
@@ -392,7 +392,7 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
     return n_comp, n_term
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _first_past(alpha, beta, bound, strict, p):
     """The first pixel p' (searching around the guess p) with alpha + beta p' >= bound (> bound
     when strict), beta > 0: exact in the same arithmetic the kernels use."""
@@ -403,12 +403,12 @@ def _first_past(alpha, beta, bound, strict, p):
     return p
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _guess(alpha, beta, bound):
     return int(max(min(math.ceil((bound - alpha) / beta), 1 << 30), -(1 << 30)))
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def interior_pixels(af0, afs, ab0, abs_, top_a, p_lo, p_hi):
     """The pixels [in_lo, in_hi) of [p_lo, p_hi) whose segment's front and back a (af0 + afs p,
     ab0 + abs_ p) both lie in [0, top_a), in the kernels' own arithmetic: `_fast_span` reads columns
@@ -422,13 +422,13 @@ def interior_pixels(af0, afs, ab0, abs_, top_a, p_lo, p_hi):
     return in_lo, min(max(in_hi, in_lo), p_hi)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _moves_forward(af0, afs, ab0, abs_, p):
     """Whether pixel p's ray moves towards larger a across the slab, in the kernels' own arithmetic."""
     return ab0 + abs_ * p >= af0 + afs * p
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _forward_split(af0, afs, ab0, abs_, p_lo, p_hi):
     """(split, forward_above): the pixels of [p_lo, p_hi) whose ray moves towards larger a across
     the slab (`_moves_forward`) are those >= split when forward_above, else those < split. The shift
@@ -446,7 +446,7 @@ def _forward_split(af0, afs, ab0, abs_, p_lo, p_hi):
     return p, above
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, table, table_back, lut, preintegrated,
                      shading, bilinear_lookup, use_termination, term_alpha):  # fmt: skip
     """Blend one segment (front value xf, back value xb, `frac` of a whole segment's length) into
@@ -471,7 +471,7 @@ def _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, tabl
     return 1, 0
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _point(vol, kf, kb, w, af, ab, bf, bb, lo, scale, shading, inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr):
     """(table coordinate, diffuse factor, specular term) of the ray at plane w of the slab; (x, 1, 0) unshaded."""
     a = af + w * (ab - af)
@@ -483,7 +483,7 @@ def _point(vol, kf, kb, w, af, ab, bf, bb, lo, scale, shading, inv_sp, light, hx
     return x, d, s
 
 
-@njit(cache=True, error_model="numpy")
+@njit(nogil=True, cache=True, error_model="numpy")
 def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u, rgba, buf_x, buf_d, buf_s, buf_len,
                     stamp, skip, layer, table, table_back, lut, preintegrated, shading, bilinear_lookup, lo, scale,
                     inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr, use_termination, term_alpha):  # fmt: skip
@@ -538,7 +538,7 @@ def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u
     return n_comp, 0
 
 
-@njit(parallel=True, cache=True, error_model="numpy")
+@njit(nogil=True, parallel=True, cache=True, error_model="numpy")
 def composite_slabs(
     vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows,
     rgba, buf_x, buf_d, buf_s, stamp, skip,
@@ -762,7 +762,7 @@ def composite_slabs(
         counters[rows[r0], 2] += n_term
 
 
-@njit(parallel=True, cache=True, error_model="numpy")
+@njit(nogil=True, parallel=True, cache=True, error_model="numpy")
 def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows, acc, mode, lengths,
                   clipping, clip_lo, clip_hi, row_block):  # fmt: skip
     """Maximum, minimum or length-weighted average of the values along each intermediate ray, over

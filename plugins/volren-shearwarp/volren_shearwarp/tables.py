@@ -41,7 +41,7 @@ def grid_length(i: int, reference: float, ratio: float) -> float:
     return reference * ratio**i
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def pixel_slots(col_d2, row_d2, dc2, bounds, slot_of_id, out):
     """out[q, p] = pool slot of the grid length nearest (in ratio) to the pixel's segment length,
     found by walking `bounds` (the squares, in the units of col_d2 + row_d2 + dc2, of the lengths

@@ -22,7 +22,7 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _weights(f, cubic):
     """Weights of taps -1, 0, 1, 2 at fraction f (Catmull-Rom, or bilinear on taps 0 and 1)."""
     if not cubic:
@@ -32,7 +32,7 @@ def _weights(f, cubic):
     return (-0.5 * f3 + f2 - 0.5 * f, 1.5 * f3 - 2.5 * f2 + 1.0, -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2)
 
 
-@njit(cache=True, inline="always", error_model="numpy", fastmath=True)
+@njit(nogil=True, cache=True, inline="always", error_model="numpy", fastmath=True)
 def _row_taps(row, p0, w0, w1, w2, w3):
     """(r, g, b, a) of taps p0 - 1 .. p0 + 2 of one intermediate row, weighted (all inside)."""
     t0, t1, t2, t3 = row[p0 - 1], row[p0], row[p0 + 1], row[p0 + 2]
@@ -40,7 +40,7 @@ def _row_taps(row, p0, w0, w1, w2, w3):
             w0 * t0[2] + w1 * t1[2] + w2 * t2[2] + w3 * t3[2], w0 * t0[3] + w1 * t1[3] + w2 * t2[3] + w3 * t3[3])  # fmt: skip
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(nogil=True, cache=True, inline="always", error_model="numpy")
 def _store(out, j, i, r, g, bl, al):
     """Pixel (i, j) under the output rules: values in [0, 1], colour <= alpha."""
     al = min(max(al, 0.0), 1.0)
@@ -50,7 +50,7 @@ def _store(out, j, i, r, g, bl, al):
     out[j, i, 3] = al
 
 
-@njit(parallel=True, cache=True, error_model="numpy")
+@njit(nogil=True, parallel=True, cache=True, error_model="numpy")
 def empty_taps(inter, empty):
     """empty[q, p] = 1 where the 4 x 4 taps of a pixel whose first interior tap is (p, q) (taps p - 1
     .. p + 2, q - 1 .. q + 2) are all transparent black, else 0.
@@ -79,7 +79,7 @@ def empty_taps(inter, empty):
             empty[q, p] = 1 - (above[p] | row[p] | below1[p] | below2[p])
 
 
-@njit(parallel=True, cache=True, error_model="numpy", fastmath=True)
+@njit(nogil=True, parallel=True, cache=True, error_model="numpy", fastmath=True)
 def warp_image(inter, hom, sign, a0, b0, scale, cubic, out, empty):
     """out[j, i] = `inter` (premultiplied RGBA) resampled where pixel (i, j)'s ray meets the
     plane; then clamped to the output rules (values in [0, 1], colour <= alpha). `empty` from

@@ -113,12 +113,12 @@ def clear_cache() -> None:
 
 
 # ---------------------------------------------------------------------------- uniform grids
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _axis_steps(n, stride):
     return (n + stride - 1) // stride
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _row(V, k, j, stride, ihx, ihy, ihz, vals, mags):
     """Values and |grad s| at the grid points (k, j, 0), (k, j, stride), ... into vals, mags;
     returns their number. Central differences, one-sided at the borders (np.gradient's rule)."""
@@ -142,7 +142,7 @@ def _row(V, k, j, stride, ihx, ihy, ihz, vals, mags):
     return n
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _grid_magnitudes(V, ihx, ihy, ihz, stride):
     """|grad s| at every stride-th grid point along each axis (NaN where the value is not finite)."""
     nz, ny, nx = V.shape
@@ -159,7 +159,7 @@ def _grid_magnitudes(V, ihx, ihy, ihz, stride):
     return out
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _grid_histogram(V, ihx, ihy, ihz, stride, lo, hi, gmax, counts):
     """Add every stride-th grid point to counts (n_gradients, n_values); returns the weight above gmax."""
     nz, ny, nx = V.shape

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit, prange
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def integral_function_table(tau, color, m, n, step, diag_tau, diag_color, out):
     """out (n, n, 4) float32 from the TF's bin means (nb = m (n - 1)) and its point values on the
     diagonal."""

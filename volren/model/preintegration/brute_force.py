@@ -15,7 +15,7 @@ from numba import njit, prange
 from volren.model.preintegration.segment_math import emission_centre
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def brute_force_tables(tau, color, m, n, lengths, weighted, out, out_back):
     """Same contract as `subrange.subrange_tables`, computed in float64 entry by entry."""
     nlen = lengths.shape[0]

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def emission_centre(x):
     """1/x - 1/(exp(x) - 1): the attenuation-weighted mean depth of emission, as a fraction."""
     if x < 1e-3:
@@ -24,7 +24,7 @@ def emission_centre(x):
     return 1.0 / x - 1.0 / math.expm1(x)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def emission_centres(depths):
     """`emission_centre` of every optical depth in a float64 array (any shape)."""
     out = np.empty_like(depths)

@@ -33,7 +33,7 @@ from volren.model.preintegration.segment_math import emission_centre
 GROUP = 16
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _bins(tau, color, ell, weighted, trans, col, centre):
     """Per-bin transmittance, premultiplied colour (opacity in channel 3) and emission centre
     for bins crossed over the length ell."""
@@ -50,7 +50,7 @@ def _bins(tau, color, ell, weighted, trans, col, centre):
             centre[k] = emission_centre(x)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _reverse(trans, col, centre, rtrans, rcol, rcentre):
     nb = trans.shape[0]
     for k in range(nb):
@@ -61,7 +61,7 @@ def _reverse(trans, col, centre, rtrans, rcol, rcentre):
         rcentre[k] = centre[nb - 1 - k]
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _block_composites(trans, col, big, sc, st, pc, pt):
     """For every bin q: sc/st the composite of bins q .. end of its block of `big` bins,
     pc/pt the composite of bins start of its block .. q."""
@@ -97,7 +97,7 @@ def _block_composites(trans, col, big, sc, st, pc, pt):
             pt[q] = t
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _ramped_block_composites(trans, col, centre, m, big, sg, pg):
     """Like `_block_composites` for the colours weighted by the global ramp g_q."""
     nb = trans.shape[0]
@@ -130,7 +130,7 @@ def _ramped_block_composites(trans, col, centre, m, big, sg, pg):
             pg[q, 3] = c3
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _entries(m, n, r, weighted, sc, st, pc, pt, sg, pg, res, back):
     """Entries (i, i + r) of the bin order the composites were built in: res (n - r, 4) RGBA and,
     when weighted, back (n - r, 4) the back-weighted colour and white."""
@@ -160,7 +160,7 @@ def _entries(m, n, r, weighted, sc, st, pc, pt, sg, pg, res, back):
                     back[i, c] = min(max((sg[p, c] + tf * pg[q, c] - i * v) / r, 0.0), v)
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def subrange_tables(tau, color, m, n, lengths, weighted, out, out_back):
     """Off-diagonal entries of out (L, n, n, 4) float32 premultiplied RGBA, and when weighted of
     out_back (L, n, n, 4): back-weighted colour in 0..2 and back-weighted white in 3.

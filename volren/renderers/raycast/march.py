@@ -41,7 +41,7 @@ F_H, F_LO, F_SCALE, F_TERM = range(4)
 N_F = 4
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _first_segment_past(t, t0, first, h, pre):
     """The first segment whose key point (its front pre-integrated, else its middle) lies at or past
     t; 0 when t is within the first segment."""
@@ -50,7 +50,7 @@ def _first_segment_past(t, t0, first, h, pre):
     return int(math.ceil((t - t0 - first) / h + (1.0 if pre else 0.5) - 1e-9))
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _middles_before(t, t0, first, last, h, ns):
     """How many of a ray's segments have their middle (a post-classified segment's key point) before t."""
     if ns == 0 or not t > t0 + 0.5 * first:
@@ -63,7 +63,7 @@ def _middles_before(t, t0, first, last, h, ns):
     return c
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ka, kb, r, g, b, a, term):
     """(r, g, b, a, segments sampled) after compositing the post-classified segments [ka, kb) of a
     ray front to back onto it, stopping once a reaches `term`. One counted loop over a run of
@@ -101,7 +101,7 @@ def _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, l
     return r, g, b, a, sampled
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _value(vol, px, py, pz):
     """Trilinear value at index point (px, py, pz) inside the grid's box. Every sample of a ray lies
     between its entry and exit points, so only the cell index is clamped (against rounding, and to
@@ -127,7 +127,7 @@ def _value(vol, px, py, pz):
     return y0 + fz * (y1 - y0)
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, lx, ly, lz, hx, hy, hz):
     """Where the ray (origin o, direction d, 1 / d = i) leaves the index box [l, h]."""
     te = math.inf
@@ -146,7 +146,7 @@ def _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, lx, ly, lz, hx, hy, hz):
     return te
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _classify(s, sb, length, pre, post, table, fp):
     """Premultiplied (r, g, b, a) of a segment `length` long: post-classified at value s, or
     pre-integrated from s (front) to sb (back); (0, 0, 0, 0) where a value is not finite."""
@@ -211,7 +211,7 @@ def _classify(s, sb, length, pre, post, table, fp):
     return r * a, g * a, b * a, a
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _pixel_ray(inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz):
     """Pixel (xx, row at NDC y ny_)'s ray in grid-index space: origin on the near plane, direction in
     index units per world unit, its inverse, the unit world direction, and where it enters and
@@ -253,7 +253,7 @@ def _pixel_ray(inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz):
     return ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_dir, t_far_eye, phase, pre, post, table, fp):  # fmt: skip
     """(r, g, b, a, samples, jumps): pixel column xx's ray at NDC y ny_ marched front to back
     (premultiplied, not yet clamped); `shift`: log2 of the brick size B, or -1."""
@@ -398,7 +398,7 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
     return r, g, b, a, taken, jumps
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _brick_shift(brick):
     """log2 of the brick size where it is a power of two (a shift instead of a division), else -1."""
     shift = -1
@@ -408,7 +408,7 @@ def _brick_shift(brick):
     return shift
 
 
-@njit(cache=True, inline="always", fastmath=FAST)
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _store(out, p, r, g, b, a):
     """A pixel's premultiplied colour, clamped to [0, 1] and rgb to at most alpha (rounding can
     leave a channel just above it; interpolation between such pixels keeps the bound)."""
@@ -419,7 +419,7 @@ def _store(out, p, r, g, b, a):
     out[p, 3] = a
 
 
-@njit(cache=True, parallel=True, fastmath=FAST)
+@njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
 def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, pre, post, table,
           fp, tiles, out, counts):  # fmt: skip
     """Render the tiles `tiles` (indices into the image's TILE x TILE tiles, row-major) into `out`
@@ -449,7 +449,7 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
         counts[tile, 1] = jumps
 
 
-@njit(cache=True, parallel=True, fastmath=FAST)
+@njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
 def march_pixels(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, pre, post,
                  table, fp, pixels, out, counts):  # fmt: skip
     """As `march`, for the listed pixels (row-major indices) only: out[q] and counts[q] are pixel
@@ -469,7 +469,7 @@ def march_pixels(vol, empty, brick, inv, width, height, grid_origin, spacing, vi
 MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
 
 
-@njit(cache=True, parallel=True, fastmath=FAST)
+@njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
 def project(vol, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, h, mode, acc):
     """Maximum, minimum or average of the values along every pixel's ray into acc[p] = (value,
     weight; weight 0: no finite value met). The same midpoint samples as `march` (the average is

@@ -82,13 +82,13 @@ SWITCH_CHECKS = 8
 MIN_TRANSMITTANCE = 1e-9
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def cubic(c, u):
     """c[0] + c[1] u + c[2] u^2 + c[3] u^3 (Horner)."""
     return ((c[3] * u + c[2]) * u + c[1]) * u + c[0]
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def critical_points(c, length):
     """Roots of the cubic's derivative strictly inside (0, length), ascending; NaN where none."""
     a = 3.0 * c[3]
@@ -116,7 +116,7 @@ def critical_points(c, length):
     return r1, r2
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _angle(ax, ay, az, bx, by, bz, thr):
     """Angle between two gradients; 0 unless both are shaded (above the threshold)."""
     na = math.sqrt(ax * ax + ay * ay + az * az)
@@ -129,7 +129,7 @@ def _angle(ax, ay, az, bx, by, bz, thr):
     return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _normal_turn(gk, u0, um, u1, thr):
     """Angle (radians) the gradient direction turns through from u0 over um to u1."""
     x0, y0, z0 = cubic(gk[0], u0), cubic(gk[1], u0), cubic(gk[2], u0)
@@ -138,7 +138,7 @@ def _normal_turn(gk, u0, um, u1, thr):
     return _angle(x0, y0, z0, xm, ym, zm, thr) + _angle(xm, ym, zm, x1, y1, z1, thr)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _root(c, v, ua, ub, ga, gb):
     """u in (ua, ub) with cubic(c, u) == v, given g = cubic - v of opposite signs ga, gb (Illinois)."""
     if c[2] == 0.0 and c[3] == 0.0 and c[1] != 0.0:
@@ -169,7 +169,7 @@ def _root(c, v, ua, ub, ga, gb):
     return 0.5 * (ua + ub)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _cuts_in_span(c, bp, ua, ub, fa, fb, out, n):
     """Append the breakpoint crossings of the monotone span [ua, ub] to out[n:], in order of u."""
     lo = min(fa, fb)
@@ -191,7 +191,7 @@ def _cuts_in_span(c, bp, ua, ub, fa, fb, out, n):
     return n + 1
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _interval_cuts(c, length, bp, out):
     """Fill out with the sorted cut points of one interval (critical points, breakpoint
     crossings, and `length` last); returns their number (out may be too short: count only)."""
@@ -212,7 +212,7 @@ def _interval_cuts(c, length, bp, out):
     return _cuts_in_span(c, bp, ua, length, fa, cubic(c, length), out, n)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _gap2(gk, u, thr2):
     """|grad s|^2 - thr^2 at u: positive where the sample is shaded."""
     gx = cubic(gk[0], u)
@@ -221,7 +221,7 @@ def _gap2(gk, u, thr2):
     return gx * gx + gy * gy + gz * gz - thr2
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _shading_switches(gk, length, thr2, out):
     """Points where |grad s| crosses the no-shading threshold, located between SWITCH_CHECKS + 1
     equally spaced checks (bisection to full precision); fills out (if long enough), returns the
@@ -251,7 +251,7 @@ def _shading_switches(gk, length, thr2, out):
     return n
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def interval_cuts_1d(c, G, k, length, tf_cuts, shading, thr2, out):
     """The cut points of interval k (cubic c; gradient cubics G[k] when shading), sorted, into out
     when it holds them all; returns their count (`refinement.compute_cuts`)."""
@@ -264,7 +264,7 @@ def interval_cuts_1d(c, G, k, length, tf_cuts, shading, thr2, out):
     return n
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def next_boundary(u0, length, cuts, ci, cend, p, piece, n):
     """The end of the sub-interval that starts at u0: the next of the n equal pieces' ends
     (p * piece) or the next cut, whichever comes first; returns (u1, ci, p) advanced past it.
@@ -282,7 +282,7 @@ def next_boundary(u0, length, cuts, ci, cend, p, piece, n):
     return upiece, ci, p + 1
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz):
     unit = tf[5]
     shading = sp[0]
@@ -370,7 +370,7 @@ def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, 
     return cr, cg, cb, 1.0 - T, samples, caps
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _project(ta, tb, P, m, mode):
     """Exact max / min / length-weighted mean of s over the intervals; (value, found)."""
     found = False
@@ -412,7 +412,7 @@ def _project(ta, tb, P, m, mode):
     return best, found
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def project_ray(ta, tb, P, m, mode, tf):
     """RGBA of one ray in a maximum, minimum or average mode, as `refinement.integrate_ray` gives it."""
     v, found = _project(ta, tb, P, m, mode)
@@ -423,7 +423,7 @@ def project_ray(ta, tb, P, m, mode, tf):
     return r * a, g * a, b * a, a, 1, 0, True, 0
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def store_pixel(out, stats, q, result, m):
     """Write one ray's integrate_ray `result` and its interval count `m` into row q."""
     r, g, b, a, samples, level, converged, caps = result

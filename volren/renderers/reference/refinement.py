@@ -35,7 +35,7 @@ from volren.renderers.reference.tf2d import _composite_level_2d, interval_cuts_2
 ASYMPTOTIC_RATIO = 4.0
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _cuts_of(P, G, k, length, tf, tf2d, shading, thr2, out):
     """The cut points of interval k, sorted into out when it holds them all; returns their count."""
     n = 0
@@ -46,7 +46,7 @@ def _cuts_of(P, G, k, length, tf, tf2d, shading, thr2, out):
     return n
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def compute_cuts(ta, tb, P, G, m, tf, tf2d, shading, thr):
     """CSR of the sorted cut points of every interval: (offsets (m + 1), cuts)."""
     offsets = np.zeros(m + 1, np.int64)
@@ -66,7 +66,7 @@ def compute_cuts(ta, tb, P, G, m, tf, tf2d, shading, thr):
     return offsets, cuts
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def converged(level, change, last, tol):
     """Whether level `level` (>= 1), `change` away from the level before, ends the refinement."""
     if level == 1:
@@ -74,7 +74,7 @@ def converged(level, change, last, tol):
     return change < tol and last < ASYMPTOTIC_RATIO * tol
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, tf2d, sp, dx, dy, dz):
     """RGBA of one ray and its statistics: (r, g, b, a, samples, level, converged, cap_hits)."""
     if m == 0:

@@ -29,7 +29,7 @@ from volren.renderers.reference.ray_integral import store_pixel
 from volren.renderers.reference.refinement import integrate_ray
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def render_tets(
     orig, dirs, tfar, offsets, cand, normals, anchors, sigma, tvals, grads,
     tf, spar, mode, h0, tol, max_levels, out, stats,

@@ -167,21 +167,21 @@ def _pack_profiles(widgets) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _profile_opacity(tf, i, s):
     """a_p(s) of 1d widget i (tf[9:15]: `_pack_profiles`)."""
     lo, hi = tf[12][i], tf[12][i + 1]
     return min(max(interp(tf[13][lo:hi], tf[14][lo:hi], s), 0.0), 1.0)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _profile_color(tf, i, s, channel):
     """One channel of c_p(s) of 1d widget i."""
     lo, hi = tf[9][i], tf[9][i + 1]
     return min(max(interp(tf[10][lo:hi], tf[11][lo:hi, channel], s), 0.0), 1.0)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def widget_opacity(kind, p, peak, s, g):
     """a_i(s, g) of one widget (the formulas of `model.transfer_function_2d`)."""
     if kind == GAUSSIAN:
@@ -201,7 +201,7 @@ def widget_opacity(kind, p, peak, s, g):
     return peak
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def eval_tf2d(tf, s, g):
     """(r, g, b, a) of the 2D TF at value s and gradient magnitude g (colour not premultiplied)."""
     if not (math.isfinite(s) and math.isfinite(g)):
@@ -255,7 +255,7 @@ def eval_tf2d(tf, s, g):
     return r, gr, b, alpha
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _grad_mag(gk, u):
     gx = cubic(gk[0], u)
     gy = cubic(gk[1], u)
@@ -263,7 +263,7 @@ def _grad_mag(gk, u):
     return math.sqrt(gx * gx + gy * gy + gz * gz)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _poly(c, deg, u):
     """c[0] + c[1] u + ... + c[deg] u^deg (Horner)."""
     v = c[deg]
@@ -272,7 +272,7 @@ def _poly(c, deg, u):
     return v
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _poly_root(c, deg, ua, ub, fa, fb):
     """The root in (ua, ub) of a polynomial monotone there with values fa, fb of opposite signs
     (Illinois, then bisection to full precision)."""
@@ -301,7 +301,7 @@ def _poly_root(c, deg, ua, ub, fa, fb):
     return 0.5 * (ua + ub)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _magnitude_poly(gk, out):
     """Coefficients (degree 6) of |grad s|^2 along the interval, from the three gradient cubics."""
     for i in range(7):
@@ -313,7 +313,7 @@ def _magnitude_poly(gk, out):
                 out[i + j] += c[i] * c[j]
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _poly_crossings(poly, length, level, out):
     """Every u in (0, length) where the polynomial (coefficients poly[0..deg], deg = len - 1) crosses
     `level`, ascending: the roots of each derivative split the interval into monotone spans for
@@ -363,7 +363,7 @@ def _poly_crossings(poly, length, level, out):
     return nroots
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
     """Cut points of one interval (see the module docstring), `length` among them, sorted into out
     when it holds them all; returns their count (`refinement.compute_cuts`)."""
@@ -404,7 +404,7 @@ def interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
     return n
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _subdivision(tf, s0, s1, g0, gm, g1):
     """Sub-pieces a piece needs at level 0 for the widgets its (s, g) span meets (step 2)."""
     rect = tf[4]
@@ -442,7 +442,7 @@ def _subdivision(tf, s0, s1, g0, gm, g1):
     return q
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _share(parts, k, r, g, b, a):
     parts[k, 0] = r
     parts[k, 1] = g
@@ -450,7 +450,7 @@ def _share(parts, k, r, g, b, a):
     parts[k, 3] = a
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz, parts):
     """One level of the ray's composite; parts[k] receives interval k's share of (r, g, b, a)."""
     unit = tf[5]
@@ -525,7 +525,7 @@ def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, h
     return cr, cg, cb, 1.0 - T, samples, caps
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def share_change(shares, before, m):
     """The change between two levels' interval shares (r, g, b, a) of the pixel: per channel the sum
     over the intervals of the change of each share, so that changes in different cells cannot

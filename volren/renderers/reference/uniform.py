@@ -22,7 +22,7 @@ How, per pixel ray (origin on the near plane, unit direction d):
 
 Cell boundaries are the only places where the trilinear interpolant has kinks, so splitting the
 ray there keeps the quadrature at second order everywhere. The kernel is
-``@njit(parallel=True)`` with a prange over the pixels of one block of rows.
+``@njit(nogil=True, parallel=True)`` with a prange over the pixels of one block of rows.
 """
 
 from __future__ import annotations
@@ -37,7 +37,7 @@ from volren.renderers.reference.ray_integral import store_pixel
 from volren.renderers.reference.refinement import integrate_ray
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def trilinear_cubic(v000, v100, v010, v110, v001, v101, v011, v111, x0, y0, z0, ax, ay, az, out):
     """Coefficients (in u) of the trilinear interpolant along x = x0 + ax u, y = ..., z = ...
 
@@ -66,7 +66,7 @@ def trilinear_cubic(v000, v100, v010, v110, v001, v101, v011, v111, x0, y0, z0, 
     out[3] = cxyz * ax * ay * az
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _diff(V, k, j, i, axis, h):
     """d s / d axis at grid point (k, j, i): central inside, one-sided at the borders."""
     if axis == 0:
@@ -91,7 +91,7 @@ def _diff(V, k, j, i, axis, h):
     return (V[k + 1, j, i] - V[k - 1, j, i]) / (2.0 * h)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def build_intervals(ox, oy, oz, dx, dy, dz, t_in, t_out, V, org, sp, shading, ta, tb, P, G):
     """Fill the per-cell intervals of one ray (front to back); returns their number."""
     nz, ny, nx = V.shape
@@ -176,7 +176,7 @@ def build_intervals(ox, oy, oz, dx, dy, dz, t_in, t_out, V, org, sp, shading, ta
     return m
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def render_uniform(orig, dirs, tfar, V, org, sp, lo, hi, tf, tf2d, spar, mode, h0, tol, max_levels, out, stats):
     """One block of rays: out (n, 4) float64 RGBA; stats (n, 5) = samples, level, unconverged,
     subdivision cap hits, intervals. One of `tf` (1D) and `tf2d` (2D, composite) is None."""

@@ -55,7 +55,7 @@ def project_faces(px: NDArray, py: NDArray, behind: NDArray, triangles: NDArray,
                       float(margin))
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _project(px, py, behind, tri, width, height, margin, boxes, edges):
     for i in range(tri.shape[0]):
         a, b, c = tri[i, 0], tri[i, 1], tri[i, 2]
@@ -86,7 +86,7 @@ def _project(px, py, behind, tri, width, height, margin, boxes, edges):
                 edges[i, e, k] = line[k] if math.isfinite(line[k]) else 0.0
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _covers(boxes, edges, i, x, y, margin):
     """Whether pixel centre (x, y) lies in triangle i's box and within `margin` pixels of it."""
     if not (boxes[i, 1] <= x <= boxes[i, 2] and boxes[i, 3] <= y <= boxes[i, 4]):
@@ -99,7 +99,7 @@ def _covers(boxes, edges, i, x, y, margin):
     return True
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _bin_rows(boxes, edges, cells, width, row0, row1, margin):
     counts = np.zeros((row1 - row0) * width + 1, np.int64)
     k = boxes.shape[0]
@@ -126,7 +126,7 @@ def bin_triangles(faces: EntryFaces, row0: int, row1: int) -> tuple[NDArray[np.i
     return _bin_rows(faces.boxes, faces.edges, faces.cells, faces.width, row0, row1, faces.margin)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _bin_tiles(boxes, width, height, tile):
     tiles_x = (width + tile - 1) // tile
     counts = np.zeros(tiles_x * ((height + tile - 1) // tile) + 1, np.int64)
@@ -155,7 +155,7 @@ def bin_tiles(faces: EntryFaces, tile: int = TILE) -> tuple[NDArray[np.int64], N
     return _bin_tiles(faces.boxes, faces.width, faces.height, tile)
 
 
-@njit(cache=True, parallel=True)
+@njit(nogil=True, cache=True, parallel=True)
 def _bin_pixels(boxes, edges, cells, width, pixels, margin, tile, tile_offsets, tile_members):
     """Two passes over the pixels, each in parallel (a pixel's list depends on nothing else): count
     each pixel's covering faces, then write them at the counts' running sums. Serial, this was a
@@ -191,7 +191,7 @@ def bin_triangles_at(faces: EntryFaces, tiles: tuple[NDArray, NDArray], pixels: 
     return _bin_pixels(faces.boxes, faces.edges, faces.cells, faces.width, pixels, faces.margin, tile, *tiles)
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def gather_lists(offsets, cand, pixels):
     """The CSR lists of some pixels (indices into `offsets`' pixels), in their order."""
     n = pixels.shape[0]
@@ -207,7 +207,7 @@ def gather_lists(offsets, cand, pixels):
     return out_offsets, out
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def merge_lists(o1, c1, o2, c2):
     """Two CSR lists over the same pixels as one."""
     n = o1.shape[0] - 1

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 MAX_ALPHA = 1.0 - 1e-7
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def _split(table, first_length, depth, ratio):
     layers, n = table.shape[0], table.shape[1]
     for i in prange(n):

@@ -44,7 +44,7 @@ MAX_ENTRIES = 512
 RAY_BLOCK = 16
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _bilinear(table, i0, j0, fi, fj, c):
     return (
         (1.0 - fi) * ((1.0 - fj) * table[i0, j0, c] + fj * table[i0, j0 + 1, c])
@@ -52,7 +52,7 @@ def _bilinear(table, i0, j0, fi, fj, c):
     )
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_front, s_back, length):
     """Premultiplied (r, g, b, alpha) of a segment from the 3D table: the optical depth is exact
     in the length (per-length depth, bilinear in the two values), the colour per unit opacity is
@@ -77,7 +77,7 @@ def integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_front, 
     return r * alpha, g * alpha, b * alpha, alpha
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _plane(t, f, ox, oy, oz, dx, dy, dz, planes):
     """(a, b): the ray is inside face f's half-space where a + b t >= 0."""
     a = planes[t, f, 0] * ox + planes[t, f, 1] * oy + planes[t, f, 2] * oz + planes[t, f, 3]
@@ -102,7 +102,7 @@ def pack_planes(normals: np.ndarray, anchors: np.ndarray, sigma: np.ndarray) -> 
 PARALLEL = 1e-12
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _symbolic_inside(t, f, planes):
     """Whether a ray lying in face f's plane counts as inside the cell: the ray moved by
     (e, e^2, e^3) for an infinitesimal e lies inside iff the first non-zero component of the
@@ -114,7 +114,7 @@ def _symbolic_inside(t, f, planes):
     return False
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _exit(t, ox, oy, oz, dx, dy, dz, planes, on_plane):
     """(t_exit, face) of the ray in tetrahedron t: the first plane it heads out of. A ray lying in
     a face plane that the symbolic perturbation puts outside this cell leaves through that face
@@ -132,7 +132,7 @@ def _exit(t, ox, oy, oz, dx, dy, dz, planes, on_plane):
     return t_out, face
 
 
-@njit(cache=True)
+@njit(nogil=True, cache=True)
 def _entries(q, ox, oy, oz, dx, dy, dz, tmax, offsets, cand, planes, tvals, grads, corner, boundary, on_plane, ts, ids,
              svals):
     """Entries of ray q into the mesh, sorted by t: (count, dropped). A candidate cell is an
@@ -187,7 +187,7 @@ def _entries(q, ox, oy, oz, dx, dy, dz, tmax, offsets, cand, planes, tvals, grad
     return count, dropped
 
 
-@njit(parallel=True, cache=True)
+@njit(nogil=True, parallel=True, cache=True)
 def cast_rays(
     orig, dirs, tfar, offsets, cand, boundary, neighbors, planes, tvals, grads, corner, ok, walkable,
     visible, depth_per_length, colour_ratio, lo, scale, lmax, sp, mode, termination, max_steps, on_plane,
