@@ -25,6 +25,7 @@ from volren.renderers.base import (
     Accuracy,
     Capabilities,
     KindSupport,
+    OptionSpec,
     ProgressCallback,
     QualityLevel,
     RendererBase,
@@ -54,7 +55,9 @@ class ExampleRenderer(RendererBase):
         quality=(QualityLevel("step 2", step=2.0), QualityLevel("step 1", step=1.0),
                  QualityLevel("step 0.5 (default)", step=0.5), QualityLevel("step 0.25", step=0.25)),
     )  # fmt: skip
-    option_help: ClassVar[Mapping[str, str]] = {}
+    #: None. An option is declared here once, e.g. OptionSpec("table_size", 256, "int", "entries", low=16,
+    #: high=4096); RendererBase parses and checks settings.options against it and keeps the values in self.opts.
+    options: ClassVar[tuple[OptionSpec, ...]] = ()
 
     def _volume_changed(self) -> None:
         volume = self.volume
