@@ -11,7 +11,7 @@ from volren.cli.main import main
 from volren.errors import VolrenError
 from volren.model import BlendMode, RenderSettings
 from volren.prepare import _prepare_in_processes, prepare, prepare_renderer
-from volren.renderers.base import Capabilities, KindSupport, QualityLevel, RendererBase
+from volren.renderers.base import Capabilities, KindSupport, OptionSpec, QualityLevel, RendererBase
 from volren.renderers.registry import registry
 
 
@@ -48,9 +48,12 @@ class Leveled(Counting):
         quality=(QualityLevel("coarse", step=2.0), QualityLevel("refined", options={"image_stride": 4})),
     )  # fmt: skip
 
-    def _check_options(self, options):
+    options = (OptionSpec("image_stride", 1, "int", "rays every so many pixels", low=1),)
+
+    def _parse_options(self, options):
         if "image_stride" in options and self.volume is not None and self.volume.kind == "tet":
             raise VolrenError("renderer prepare-leveled: option image_stride is for grids")
+        return super()._parse_options(options)
 
     def _render(self, camera, width, height, progress):
         Counting.drawn.append((self.volume.kind, self.settings.step, dict(self.settings.options)))

@@ -25,7 +25,7 @@ from PyQt5 import QtWidgets  # noqa: E402, F401
 from volren.app.core.loading import LoadedInput  # noqa: E402
 from volren.errors import VolrenError  # noqa: E402
 from volren.model.volume import UniformVolume  # noqa: E402
-from volren.renderers.base import Capabilities, KindSupport, RendererBase  # noqa: E402
+from volren.renderers.base import Capabilities, KindSupport, OptionSpec, RendererBase  # noqa: E402
 from volren.renderers.registry import registry  # noqa: E402
 from volren.samples import marschner_lobb, sample_transfer_functions  # noqa: E402
 
@@ -171,7 +171,7 @@ class DragOptionsRenderer(FakeRenderer):
     capabilities: ClassVar[Capabilities] = Capabilities(
         kinds={"uniform": KindSupport()}, summary="test double", tf_drag_options={"table_size": 8}
     )
-    option_help: ClassVar[Mapping[str, str]] = {"table_size": "entries"}
+    options: ClassVar[tuple[OptionSpec, ...]] = (OptionSpec("table_size", 256, "int", "entries", low=2),)
 
 
 class OutsideOnlyRenderer(FakeRenderer):

@@ -10,7 +10,15 @@ import numpy as np
 
 from volren.errors import VolrenError
 from volren.model.volume import UniformVolume
-from volren.renderers.base import Capabilities, FrameStats, KindSupport, QualityLevel
+from volren.renderers.base import (
+    Capabilities,
+    FrameStats,
+    KindSupport,
+    OptionSpec,
+    QualityLevel,
+    option_help_of,
+    parse_options,
+)
 
 
 class PlainRenderer:
@@ -21,7 +29,10 @@ class PlainRenderer:
         kinds={"uniform": KindSupport()},
         quality=(QualityLevel("coarse", step=1.0), QualityLevel("fine", step=0.25)),
     )
-    option_help: ClassVar[Mapping[str, str]] = {"alpha": "the opacity drawn (default 0.5)"}
+    options: ClassVar[tuple[OptionSpec, ...]] = (
+        OptionSpec("alpha", 0.5, "float", "the opacity drawn", low=0.0, high=1.0),
+    )
+    option_help: ClassVar[Mapping[str, str]] = option_help_of(options)
 
     def __init__(self) -> None:
         self.last_frame: FrameStats | None = None
@@ -47,7 +58,7 @@ class PlainRenderer:
 
     def set_settings(self, settings) -> None:
         self._alive()
-        self._alpha = float(settings.options.get("alpha", 0.5))
+        self._alpha = parse_options(self.name, self.options, settings.options)["alpha"]
 
     def render(self, camera, width, height, progress=None):
         self._alive()

@@ -118,3 +118,38 @@ def test_a_bad_spec_is_refused_where_it_is_declared(make, message):
 def test_a_renderer_class_setting_option_help_by_hand_is_refused():
     with pytest.raises(VolrenError, match="declare `options`"):
         type("HandHelp", (RendererBase,), {"options": SPECS[:1], "option_help": {"skip": "skip empty bricks"}})
+
+
+# ------------------------------------------------------------------------ the conformance kit
+def _options_check(renderer_class: type) -> list[str]:
+    """The FAIL lines of the kit's options check on `renderer_class`."""
+    from volren.testing import CHECKS, run_check
+
+    check = next(c for c in CHECKS if c.name == "options")
+    return run_check(check, renderer_class, quick=True).failures()
+
+
+def test_the_kit_passes_options_declared_through_the_spec():
+    from tests.renderers.protocol_renderer import PlainRenderer
+
+    assert _options_check(PlainRenderer) == []
+
+
+def test_the_kit_fails_options_parsed_outside_the_spec():
+    from tests.renderers.protocol_renderer import PlainRenderer
+
+    class OwnParsing(PlainRenderer):
+        """Declares its option but reads settings.options itself, accepting anything."""
+
+        def set_settings(self, settings):
+            self._alpha = settings.options.get("alpha", 0.5)
+
+    class Undeclared(PlainRenderer):
+        options = None
+
+    class HandWrittenHelp(PlainRenderer):
+        option_help = {"alpha": "the opacity drawn"}
+
+    assert any("bad values accepted (alpha, volren_kit_no_such_option)" in line for line in _options_check(OwnParsing))
+    assert any("not declared as a tuple of OptionSpec" in line for line in _options_check(Undeclared))
+    assert any("not the one derived from `options`" in line for line in _options_check(HandWrittenHelp))

@@ -66,6 +66,10 @@ class _NoOptionHelp(PlainRenderer):
     option_help = None
 
 
+class _NoOptionSpecs(PlainRenderer):
+    options = {"alpha": 0.5}
+
+
 class _NoLastFrame(PlainRenderer):
     def __init__(self) -> None:
         super().__init__()
@@ -75,6 +79,8 @@ class _NoLastFrame(PlainRenderer):
 def test_the_registry_checks_the_whole_protocol():
     with pytest.raises(VolrenError, match="option_help"):
         check_renderer_class(_NoOptionHelp, "x")
+    with pytest.raises(VolrenError, match="no `options` tuple of OptionSpec"):
+        check_renderer_class(_NoOptionSpecs, "x")
     reg = RendererRegistry(entry_points=lambda: [], builtin_fallback=False)
     reg.register("nolast", _NoLastFrame)
     with pytest.raises(VolrenError, match="last_frame"):

@@ -404,6 +404,7 @@ class Renderer(Protocol):
 
     name: ClassVar[str]
     capabilities: ClassVar[Capabilities]
+    options: ClassVar[tuple[OptionSpec, ...]]
     option_help: ClassVar[Mapping[str, str]]
     last_frame: FrameStats | None
 
@@ -446,8 +447,6 @@ class RendererBase(ABC):
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
-        if "option_help" in vars(cls) and not cls.options:  # TRANSITIONAL: until every renderer declares options
-            return
         if "option_help" in vars(cls):
             raise VolrenError(f"renderer class {cls.__name__} sets option_help: declare `options` (OptionSpec) "
                               "instead, option_help is derived from them")  # fmt: skip
@@ -550,16 +549,7 @@ class RendererBase(ABC):
     def _parse_options(self, options: Mapping[str, Any]) -> Mapping[str, Any]:
         """`options` parsed against `self.options` (`parse_options`), read-only. A renderer with a
         rule across options (two valid values it cannot draw together) extends this."""
-        if not self.options:  # TRANSITIONAL: a renderer parsing its own options
-            self._check_options(options)
-            return MappingProxyType(dict(options))
         return MappingProxyType(parse_options(self.name, self.options, options))
-
-    def _check_options(self, options: Mapping[str, Any]) -> None:  # TRANSITIONAL
-        unknown = set(options) - set(self.option_help)
-        if unknown:
-            valid = ", ".join(sorted(self.option_help)) or "none"
-            raise VolrenError(f"renderer {self.name} has no option(s) {sorted(unknown)}; valid: {valid}")
 
     def _volume_changed(self) -> None:
         """Hook: the volume was replaced."""

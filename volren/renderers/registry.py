@@ -16,7 +16,7 @@ from importlib import import_module, metadata
 from typing import Any
 
 from volren.errors import VolrenError, VolrenWarning
-from volren.renderers.base import Capabilities, Renderer
+from volren.renderers.base import Capabilities, OptionSpec, Renderer
 
 ENTRY_POINT_GROUP = "volren.renderers"
 OWN_DISTRIBUTION = "volren"
@@ -73,6 +73,9 @@ def check_renderer_class(cls: Any, name: str) -> None:
         raise VolrenError(f"renderer {name!r} has no `name` string")
     if not isinstance(getattr(cls, "capabilities", None), Capabilities):
         raise VolrenError(f"renderer {name!r} has no `capabilities` Capabilities record")
+    options = getattr(cls, "options", None)
+    if not isinstance(options, tuple) or not all(isinstance(spec, OptionSpec) for spec in options):
+        raise VolrenError(f"renderer {name!r} has no `options` tuple of OptionSpec")
     help_ = getattr(cls, "option_help", None)
     if not isinstance(help_, Mapping) or not all(isinstance(k, str) and isinstance(v, str) for k, v in help_.items()):
         raise VolrenError(f"renderer {name!r} has no `option_help` mapping of option names to help text")

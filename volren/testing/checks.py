@@ -27,7 +27,7 @@ from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction, TransferFunction2D
 from volren.model.volume import Volume
-from volren.renderers.base import Accuracy, Capabilities, Renderer, render_frame
+from volren.renderers.base import Accuracy, Capabilities, OptionSpec, Renderer, option_help_of, render_frame
 from volren.testing import oracles
 from volren.testing.metrics import image_error
 from volren.testing.scenes import axis_camera, column_camera, lattice_volume
@@ -554,6 +554,38 @@ def check_release(ctx: CheckContext) -> list[Measurement]:
     return [Measurement("release", kind, "uses after release not refused in one line", bad, 0)]
 
 
+#: A value no option kind accepts (bool, int, float, str and choice all refuse a list).
+NO_OPTION_VALUE = ["not", "an", "option", "value"]
+#: An option name no renderer declares.
+NO_SUCH_OPTION = "volren_kit_no_such_option"
+
+
+def check_options(ctx: CheckContext) -> list[Measurement]:
+    """Options are declared once, as a tuple of OptionSpec in `options`, with `option_help` derived
+    from them; set_settings accepts every declared default and refuses, in one line naming the
+    option, a value of no option kind for each and an option not declared."""
+    renderer = ctx.renderer()
+    cls = type(renderer)
+    specs = getattr(cls, "options", None)
+    if not isinstance(specs, tuple) or not all(isinstance(spec, OptionSpec) for spec in specs):
+        raise ContractError("options are not declared as a tuple of OptionSpec in the class attribute `options`")
+    if dict(cls.option_help) != option_help_of(specs):
+        raise ContractError("option_help is not the one derived from `options` (option_help_of)")
+    renderer.set_settings(RenderSettings(options={s.name: s.default for s in specs if s.default is not None}))
+    accepted = []
+    for name in [*(spec.name for spec in specs), NO_SUCH_OPTION]:
+        try:
+            renderer.set_settings(RenderSettings(options={name: NO_OPTION_VALUE}))
+        except VolrenError as exc:
+            if "\n" in str(exc) or name not in str(exc):
+                raise ContractError(f"option {name}={NO_OPTION_VALUE!r}: the refusal is not one line naming the "
+                                    f"option: {str(exc)[:200]!r}") from None  # fmt: skip
+            continue
+        accepted.append(name)
+    return [Measurement("options", f"{len(specs)} declared through OptionSpec, an unknown one",
+                        f"bad values accepted ({', '.join(accepted) or 'none'})", len(accepted), 0)]  # fmt: skip
+
+
 def kit_tf_2d() -> TransferFunction2D:
     return TransferFunction2D((-2.0, 4.0), (0.0, 3.0), [TFWidget.gaussian((1.0, 1.0), (1.0, 1.0), (1, 0.5, 0), 0.6)])
 
@@ -694,5 +726,5 @@ CHECKS: Sequence[Check] = tuple(
     Check(fn.__name__.removeprefix("check_"), fn)
     for fn in (check_output, check_empty, check_box, check_clip, check_ramp, check_projection, check_nan, check_point,
                check_step, check_thin, check_shading, check_eye_inside, check_progress, check_cancel, check_release,
-               check_capabilities, check_bricks)
+               check_capabilities, check_options, check_bricks)
 )  # fmt: skip
