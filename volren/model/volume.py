@@ -72,6 +72,15 @@ def finite_range(values: NDArray) -> tuple[tuple[float, float], int]:
     return (float(good.min()), float(good.max())), n_bad
 
 
+def spanning(lo: float, hi: float) -> tuple[float, float]:
+    """(lo, hi) with hi > lo, for a table over the range to divide by hi - lo: a constant range is
+    widened by 1, or by a millionth of |lo| where adding 1 is lost to rounding (from about 1e16:
+    lo + 1 == lo, and the division by zero ended the render)."""
+    if hi > lo:
+        return lo, hi
+    return lo, lo + max(1.0, 1e-6 * abs(lo))
+
+
 def merged_tets_note(name: str, count: int) -> str:
     """The note (and load warning) for `count` repeated tetrahedra kept once."""
     return f"{name}: {count:,} duplicated tetrahedr{'on' if count == 1 else 'a'} merged"

@@ -40,6 +40,7 @@ from volren.kernels.shading import gradient_threshold
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.preintegration import lighting_tables, preintegrate
 from volren.model.settings import check_step
+from volren.model.volume import spanning
 from volren.renderers.base import (
     Accuracy,
     Capabilities,
@@ -238,8 +239,7 @@ class ObjectOrderRenderer(RendererBase):
         vlo, vhi = volume.value_range
         tlo, thi = tf.value_range
         lo, hi = min(vlo, tlo), max(vhi, thi)
-        if not hi > lo:
-            hi = lo + 1.0
+        lo, hi = spanning(lo, hi)
         n = int(opts["table_size"])
         empty4 = np.zeros((2, 2, 4), np.float32)
         table, front, back = empty4, empty4, empty4

@@ -44,6 +44,7 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from volren.model import TransferFunction1D, UniformVolume
+from volren.model.volume import spanning
 from volren_shearwarp.factorization import PERMS
 
 #: Value bins of the opacity support over the volume's value range.
@@ -67,8 +68,7 @@ class OpacitySupport:
     def of(cls, tf: TransferFunction1D, lo: float, hi: float, bins: int = SUPPORT_BINS) -> OpacitySupport:
         """The support of `tf` over [lo, hi]: exact for piecewise-linear opacity (a bin is nonzero when
         the opacity is nonzero at either end or at a control point inside it)."""
-        if not hi > lo:
-            hi = lo + 1.0
+        lo, hi = spanning(lo, hi)
         edges = np.linspace(lo, hi, bins + 1)
         points = tf.opacity_points
         _, at_edges = tf.sample(edges)

@@ -63,6 +63,7 @@ from volren.kernels.shading import gradient_threshold
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.downsample import FACTORS as DOWNSAMPLE_FACTORS
 from volren.model.downsample import downsample
+from volren.model.volume import spanning
 from volren.renderers.base import (
     Accuracy,
     Capabilities,
@@ -375,8 +376,7 @@ class ShearWarpRenderer(RendererBase):
         vlo, vhi = full.value_range  # tables and the opacity support span the data's range at every level
         tlo, thi = tf.value_range
         lo, hi = min(vlo, tlo), max(vhi, thi)
-        if not hi > lo:
-            hi = lo + 1.0
+        lo, hi = spanning(lo, hi)
         n = auto_table_size(tau) if opts["table_size"] == "auto" else int(opts["table_size"])
         order = fac.order
         rows = _rows(fac.height)

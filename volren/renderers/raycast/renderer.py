@@ -30,6 +30,7 @@ from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.bricks import BrickGrid
 from volren.model.preintegration import preintegrate
 from volren.model.settings import check_step
+from volren.model.volume import spanning
 from volren.renderers.base import (
     Accuracy,
     Capabilities,
@@ -230,8 +231,7 @@ class RaycastRenderer(RendererBase):
         lo, hi = min(vlo, tlo), max(vhi, thi)
         if not (math.isfinite(lo) and math.isfinite(hi)):
             lo, hi = tlo, thi
-        if not hi > lo:
-            hi = lo + 1.0
+        lo, hi = spanning(lo, hi)
         table = np.zeros((2, 2, 4), np.float32)
         post = np.zeros((2, 4))
         if pre:
