@@ -355,6 +355,9 @@ def add_app_parsers(kinds) -> None:
     a.add_argument("--seconds", type=float, default=3.0, help="length of each drag gesture (default 3 s)")
     a.add_argument("--histogram-size", type=int, default=256,
                    help="time the 2D TF editor's joint histogram of an N^3 volume (default 256; 0: not)")
+    a.add_argument("--gesture-scenes", default="bonsai/smooth,bonsai/spiky,oxygen/smooth",
+                   help="dataset/style scenes whose gestures are timed with the renderer auto picks, at "
+                        "947x896 (default bonsai/smooth,bonsai/spiky,oxygen/smooth; empty: none)")
     a.add_argument("--out", help="folder to write app.md into")
     a.set_defaults(run=run_app)
 
@@ -363,12 +366,13 @@ def run_app(args: argparse.Namespace) -> int:
     from volren.extras import require
 
     require("app", "volren bench app")  # before anything is loaded
-    from volren.bench import app_latency
+    from volren.bench import app_gestures, app_latency
     from volren.bench.datasets import SCENES
 
     shared = shared_folder(args.shared)
     datasets = [d for d in args.datasets.split(",") if d]
-    unknown = [d for d in datasets if d not in SCENES]
+    scenes = [tuple(s.split("/", 1)) if "/" in s else (s, args.style) for s in args.gesture_scenes.split(",") if s]
+    unknown = [d for d in datasets + [d for d, _ in scenes] if d not in SCENES]
     if unknown:
         raise VolrenError(f"unknown datasets {unknown}; choose from {', '.join(SCENES)}")
     if args.edits < 1 or not (math.isfinite(args.seconds) and args.seconds > 0):
@@ -385,6 +389,15 @@ def run_app(args: argparse.Namespace) -> int:
     note = app_latency.NOTE.format(
         w=app_latency.VIEWPORT[0], h=app_latency.VIEWPORT[1], style=args.style, platform=app.platformName()
     )
+    if scenes:
+        lines += ["", app_gestures.note(app.platformName(), args.seconds), "", app_gestures.HEADER]
+        print("\n" + "\n".join(lines[-3:]), flush=True)
+        for dataset, style in scenes:
+            volume, tf = app_latency.scene_inputs(shared, dataset, style)
+            for row in app_gestures.markdown_rows(app_gestures.measure_scene(app, volume, tf, f"{dataset}/{style}",
+                                                                              args.seconds)):  # fmt: skip
+                lines.append(row)
+                print(row, flush=True)
     if args.histogram_size > 0:
         seconds = app_latency.joint_histogram_seconds(args.histogram_size)
         lines += ["", app_latency.histogram_line(args.histogram_size, seconds)]
