@@ -436,6 +436,30 @@ def test_a_volume_of_the_other_kind_gets_auto_and_a_renderer_picked_by_hand_stay
     assert error_boxes == []
 
 
+@pytest.mark.usefixtures("opengl")  # the slicer draws the 2D TF
+def test_a_2d_tf_from_a_band_tf_switches_to_a_renderer_that_draws_it(make_window, sample, qtbot, error_boxes):
+    """A band TF opens with pre-integration (its measured level), which no renderer has for 2D
+    TFs: "Use a 2D transfer function" left raycast in place and every frame failed ("does not
+    support 2D transfer functions"); the renderer and settings now move to ones that draw it."""
+    from volren.quality import tf_class
+
+    lo, hi = sample.volume.value_range
+    mid, span = 0.5 * (lo + hi), hi - lo
+    band = TransferFunction1D([[lo, 1, 1, 1], [hi, 1, 0.5, 0]],
+                              [[lo, 0], [mid - 0.02 * span, 0], [mid, 0.9], [mid + 0.02 * span, 0], [hi, 0]])  # fmt: skip
+    assert tf_class(band, (lo, hi)) == "band"
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(LoadedInput(sample.volume, band, source="band"))
+    assert w.state.settings.preintegration  # the band level
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
+        w.docks.tf_panel.editor_2d.use_2d_transfer_function()
+    assert w.state.transfer_function.dims == 2 and blocker.args[0].renderer == w.state.renderer
+    caps = w.registry.capabilities(w.state.renderer)
+    assert caps.unsupported_reason("uniform", 2, w.state.settings) is None
+    assert error_boxes == []
+
+
 def test_a_long_renderer_set_up_says_preparing_until_the_frame(make_window, fake_renderers, sample, qtbot):
     """A set-up over 0.3 s (the slow fake takes 0.8 s to take the volume) shows "preparing" in the
     frame label, and the frame's numbers replace it; a quick renderer never shows it."""

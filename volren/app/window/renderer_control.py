@@ -172,14 +172,24 @@ class RendererControl:
         state = self._state
         if state.volume is None:
             return
+        volume, tf = state.volume, state.transfer_function
+        assert tf is not None
         options = self.options()
-        assert state.transfer_function is not None
-        chosen = pick_renderer(options, state.renderer, self._measured(state.volume, state.transfer_function,
-                                                                       state.settings))  # fmt: skip
-        if chosen is not None and chosen != state.renderer:
+        chosen = pick_renderer(options, state.renderer, self._measured(volume, tf, state.settings))
+        plain = None
+        if chosen is None:  # a level's setting no renderer has for this TF (pre-integration of a 2D TF)
+            plain = state.settings.with_(preintegration=False)
+            plain_options = renderer_options(volume.kind, plain, self._registry, tf.dims)[0]
+            chosen = pick_renderer(plain_options, state.renderer, self._measured(volume, tf, plain))
+        if chosen is None:
+            return
+        if chosen != state.renderer:
             reason = next((o.reason for o in options if o.name == state.renderer), None)
             self._status_bar.showMessage(f"{renderer_message(state.renderer, reason)}; using {chosen}", 15000)
             self.switch(chosen)
+        if plain is not None and self._registry.capabilities(chosen).unsupported_reason(
+                volume.kind, tf.dims, state.settings) is not None:  # fmt: skip
+            state.set_settings(state.settings.with_(preintegration=False))
 
     # ------------------------------------------------------------------ frames
     def frame_shown(self, frame: Frame) -> None:
