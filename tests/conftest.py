@@ -51,3 +51,9 @@ def opengl() -> None:
     problem = opengl_problem()
     if problem:
         pytest.fail(problem, pytrace=False)
+
+
+@pytest.fixture(scope="session")
+def renders_with_vtk(opengl) -> None:
+    """Requested by a test, or a fixture, that draws with the vtk renderer: what uses it is marked
+    vtk and gl (tests/markers.py), and fails early, through `opengl`, where EGL cannot work."""

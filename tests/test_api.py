@@ -71,6 +71,7 @@ def test_default_transfer_function_of_values_near_the_float64_limits_is_finite()
     assert tf.sample([1.7e308])[1][0] > 0.0
 
 
+@pytest.mark.vtk
 def test_a_constant_fields_default_tf_draws_the_same_box_with_every_renderer():
     """Issue 23: the default TF of a constant field was a step at its value, which `reference`
     resolved as transparent and the others as opaque; now it is 0.3 there, unambiguously."""

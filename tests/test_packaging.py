@@ -18,6 +18,7 @@ from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 
 import volren
+from tests.markers import renderer_params
 
 REPO = Path(__file__).resolve().parents[1]
 PROJECT = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
@@ -105,7 +106,7 @@ def run_volren(*args: str, block: tuple[str, ...] = ()) -> subprocess.CompletedP
 
 
 @pytest.mark.usefixtures("opengl")
-@pytest.mark.parametrize("renderer", ["vtk", "slicer"])
+@pytest.mark.parametrize("renderer", renderer_params(["vtk", "slicer"]))
 def test_volren_render_loads_neither_qt_nor_matplotlib(tmp_path, renderer):
     out = tmp_path / "out.png"
     result = run_volren("render", str(SAMPLE), "--tf", str(SAMPLE_TF), "-o", str(out), "--size", "16",

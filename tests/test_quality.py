@@ -114,6 +114,7 @@ def test_the_committed_table_round_trips_and_covers_both_kinds():
             assert levels["exact"].worst_error_ratio <= levels["draft"].worst_error_ratio
 
 
+@pytest.mark.usefixtures("opengl")
 def test_the_cli_quality_flag_sets_the_measured_settings_and_flags_win(tmp_path, capsys, monkeypatch):
     table = QualityTable({"uniform": {"slicer": {level: LevelChoice("s", 2.0, False, {}, {"a/smooth": 1.0}, 1.0)
                                                  for level in quality.LEVELS}}}, "t")  # fmt: skip

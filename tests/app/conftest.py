@@ -93,7 +93,7 @@ def error_boxes(monkeypatch) -> list[tuple[str, str]]:
 
 
 @pytest.fixture
-def make_window(qtbot, error_boxes) -> Iterator[Callable[..., Any]]:
+def make_window(qtbot, error_boxes, renders_with_vtk) -> Iterator[Callable[..., Any]]:
     """Build shown MainWindows (closed and shut down after the test)."""
     from volren.app.window.main_window import MainWindow
 

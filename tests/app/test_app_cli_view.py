@@ -49,6 +49,7 @@ def test_view_screenshot_of_a_real_x_window(tmp_path):
 
 
 @pytest.mark.xvfb
+@pytest.mark.vtk
 def test_a_tf_edit_in_the_real_window_changes_the_frame_on_screen():
     """A real X window: a click in the 1D editor adds an opaque point, and the pixels the window
     system shows in the viewport change (grabbed from the screen, not from the widget)."""

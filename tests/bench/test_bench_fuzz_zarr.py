@@ -29,6 +29,7 @@ def test_the_quick_subset_holds_every_ome_zarr_case_written_by_hand():
         assert name in names, name
 
 
+@pytest.mark.usefixtures("opengl")  # the slicer draws some cases, in subprocesses
 def test_the_ome_zarr_cases_of_the_quick_subset_run_clean():
     """`volren bench fuzz --quick --only ome-zarr` in a fresh process: every case an error naming the
     image or the flag, or a render, as it should be; not even a silent acceptance."""

@@ -21,7 +21,7 @@ COLUMNS = [
 
 
 @pytest.fixture(scope="module")
-def quick_run(tmp_path_factory, opengl):
+def quick_run(tmp_path_factory, renders_with_vtk):
     """One --quick run into a fresh folder, with a fresh reference cache: (folder, cache, stdout)."""
     root = tmp_path_factory.mktemp("bench_run")
     out, cache = root / "out", root / "cache"

@@ -35,9 +35,8 @@ def _scene(name: str, volume, tf: TransferFunction1D) -> skipping.Scene:
 
 
 @pytest.fixture(scope="module")
-def rows(request) -> dict[tuple[str, str], dict]:
+def rows(opengl) -> dict[tuple[str, str], dict]:
     """Every row of one small run, by (renderer, variant)."""
-    request.getfixturevalue("opengl")
     # transparent outside radius 0.5, opaque inside 0.4: empty bricks around it, rays stopping on it
     sphere = _scene("ball", ball(), TransferFunction1D(GREY, [[-1.0, 0.0], [0.5, 0.0], [0.6, 1.0]], 0.05))
     # values below 0.8 transparent, above 1 opaque
@@ -110,7 +109,7 @@ def test_tables_are_rebuilt_only_after_a_tf_edit(rows):
         assert row["ms_min"] <= row["ms"] <= row["ms_max"] and row["ms_min"] > 0, (renderer, variant)
 
 
-def test_cli_writes_csv_and_markdown(tmp_path, capsys, opengl):
+def test_cli_writes_csv_and_markdown(tmp_path, capsys, renders_with_vtk):
     out = tmp_path / "skip"
     args = ["bench", "skip", "--samples", "--quick", "--size", "24", "--frames", "1", "--out", str(out)]
     assert main(args) == 0

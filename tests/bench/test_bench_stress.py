@@ -236,7 +236,7 @@ def test_real_exact_table_passes_and_matches_the_continuous_integral():
 
 
 # --------------------------------------------------------------------------------- CLI
-def test_cli_writes_csv_and_markdown_with_zero_counts(tmp_path, capsys, opengl):
+def test_cli_writes_csv_and_markdown_with_zero_counts(tmp_path, capsys, renders_with_vtk):
     args = ["bench", "stress", "--quick", "--suites", "images", "--cases", "f32-blob/zero,constant/*"]
     assert main([*args, "--renderers", "vtk", "--size", "24", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out

@@ -10,7 +10,7 @@ def _rows(text: str, prefix: str) -> list[list[str]]:
     return [[c.strip() for c in line.strip("|").split("|")] for line in text.splitlines() if line.startswith(prefix)]
 
 
-def test_no_options_against_vtk_gives_both_times_and_errors(capsys, tmp_path):
+def test_no_options_against_vtk_gives_both_times_and_errors(capsys, tmp_path, renders_with_vtk):
     out = tmp_path / "ab.md"
     argv = ["--datasets", "marschner_lobb", "--size", "24", "--frames", "2", "--out", str(out)]
     assert defaults_ab.main(argv) == 0

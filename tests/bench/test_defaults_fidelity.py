@@ -10,7 +10,7 @@ def _rows(text: str, prefix: str) -> list[list[str]]:
     return [[c.strip() for c in line.strip("|").split("|")] for line in text.splitlines() if line.startswith(prefix)]
 
 
-def test_a_row_per_size_with_both_errors_and_whether_it_holds(capsys, tmp_path):
+def test_a_row_per_size_with_both_errors_and_whether_it_holds(capsys, tmp_path, renders_with_vtk):
     out = tmp_path / "fidelity.md"
     argv = ["--datasets", "hard_specks", "--sizes", "24,40", "--out", str(out)]
     assert defaults_fidelity.main(argv) == 0
@@ -26,7 +26,7 @@ def test_a_row_per_size_with_both_errors_and_whether_it_holds(capsys, tmp_path):
     assert "--datasets hard_specks --sizes 24,40" in text and "rows hold" in text
 
 
-def test_strict_fails_when_a_row_does_not_hold(monkeypatch, capsys):
+def test_strict_fails_when_a_row_does_not_hold(monkeypatch, capsys, renders_with_vtk):
     real = defaults_fidelity.Row.holds
     monkeypatch.setattr(defaults_fidelity.Row, "holds", property(lambda self: False))
     assert defaults_fidelity.main(["--datasets", "hard_specks", "--sizes", "16", "--strict"]) == 1

@@ -157,7 +157,7 @@ def test_unwritable_out_file_is_an_error_after_printing(tmp_path, capsys, sample
     assert last.startswith(PREINT_ERROR) and str(target) in last and "cannot write" in last
 
 
-@pytest.mark.usefixtures("opengl")
+@pytest.mark.usefixtures("renders_with_vtk")
 def test_bench_slicer_prints_a_row_per_setting(shared_data, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("VOLREN_REFERENCE_CACHE", str(tmp_path / "cache"))
     out = tmp_path / "table.md"

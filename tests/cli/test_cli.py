@@ -54,6 +54,7 @@ def test_render_writes_png_and_array_and_prints_one_line(tmp_path, capsys, ml_sa
     assert np.array_equal(api, array)
 
 
+@pytest.mark.vtk
 def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
     volume, tf = ml_sample
     scene = {
@@ -80,6 +81,7 @@ def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
     capsys.readouterr()
 
 
+@pytest.mark.vtk
 def test_a_scene_naming_a_time_series_renders_its_step(tmp_path, capsys):
     """A scene's "time_series" (what the app saves on a step of a series) names the volume: the
     step's file of the series, as `volren render SERIES --time-step N` draws it."""
@@ -163,6 +165,7 @@ def test_usage_errors_are_one_line_naming_the_flag_and_exit_2(capsys, argv, name
     assert len(err) == 1 and all(n in err[0] for n in names) and "--help" in err[0], err
 
 
+@pytest.mark.vtk
 def test_demo_renders_every_sample_with_each_renderer(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path), "--size", "24", "--renderers", "vtk"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()

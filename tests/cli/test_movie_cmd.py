@@ -47,6 +47,7 @@ def keyed_tfs(ml_sample) -> tuple[TransferFunction1D, TransferFunction1D]:
     return tf, bright
 
 
+@pytest.mark.vtk
 def test_lossless_mp4_holds_exactly_the_rendered_orbit(tmp_path, capsys, ml_sample):
     volume, tf = map(str, ml_sample)
     movie = tmp_path / "orbit.mp4"
@@ -61,6 +62,7 @@ def test_lossless_mp4_holds_exactly_the_rendered_orbit(tmp_path, capsys, ml_samp
     assert not frames[0].tobytes() == frames[1].tobytes()
 
 
+@pytest.mark.vtk
 def test_default_mp4_and_gif_decode_to_the_frames_within_their_codecs_loss(tmp_path, ml_sample):
     volume, tf = map(str, ml_sample)
     flags = [volume, "--tf", tf, "--renderer", RENDERER, "--size", "41x31", "--orbit", "90"]
@@ -78,6 +80,7 @@ def test_default_mp4_and_gif_decode_to_the_frames_within_their_codecs_loss(tmp_p
         assert np.abs(frames[-1][:31, :41] - first).mean() > 2 * mean_error, name
 
 
+@pytest.mark.vtk
 def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     volume, tf_path = ml_sample
     tf, bright = keyed_tfs(ml_sample)
@@ -111,6 +114,7 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
 
 
 @pytest.mark.parametrize("explicit", [False, True])
+@pytest.mark.vtk
 def test_a_movie_at_a_level_draws_each_frame_at_its_tf_class_settings(tmp_path, ml_sample, monkeypatch, explicit):
     """The sharp part of a smooth-to-sharp movie gets the sharp level's settings, set once where the
     class changes; settings that are not a level's (the user's) stay for every frame."""
@@ -170,6 +174,7 @@ def test_orbit_flag_and_camera_keyframes_conflict(tmp_path, capsys, ml_sample):
     assert "--orbit turns the camera, but the scene's movie has camera keyframes" in capsys.readouterr().err
 
 
+@pytest.mark.vtk
 def test_a_failed_movie_leaves_no_file_and_keeps_an_older_one(tmp_path, ml_sample):
     from volren.io import load_volume
     from volren.model.animation import Animation
@@ -194,6 +199,7 @@ def test_a_failed_movie_leaves_no_file_and_keeps_an_older_one(tmp_path, ml_sampl
     assert len(decoded(target)) == 2
 
 
+@pytest.mark.vtk
 def test_a_time_series_renders_a_step_and_moves_through_all_steps(tmp_path, capsys):
     """Issue 23: time series on the command line: --time-step N renders that step; a movie of a
     series runs through its steps, one frame each, camera still."""

@@ -180,6 +180,7 @@ def test_volren_convert_writes_the_pyramid_and_refuses_what_it_cannot(tmp_path, 
     np.testing.assert_array_equal(load_volume(out).values, volume.values)  # a failed --force kept the old one
 
 
+@pytest.mark.vtk
 @pytest.mark.filterwarnings("default::volren.errors.VolrenWarning")  # the CLI prints it as one line
 def test_the_level_drawn_is_the_finest_within_the_memory_allowed(tmp_path, volume, capsys):
     """Issue 24, out of core on one machine (its first step): --memory bounds what is read, and the

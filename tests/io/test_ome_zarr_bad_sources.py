@@ -140,7 +140,7 @@ def test_an_image_without_chunk_files_renders_saying_so(image, render):
 
 
 @pytest.mark.filterwarnings("default::volren.errors.VolrenWarning")  # vtk's coarser level, said in one line
-@pytest.mark.parametrize("renderer", ["reference", "vtk"])
+@pytest.mark.parametrize("renderer", ["reference", pytest.param("vtk", marks=pytest.mark.vtk)])
 def test_too_little_memory_is_refused_alike_by_every_renderer(image, render, renderer):
     """--memory 100: less than a chunk (128 bytes) in the cache; a renderer that streams bricks
     (reference) would ignore it, one that reads a level whole (vtk) refused it in other words. A

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from tests.markers import renderer_params
 from volren.renderers.registry import registry
 from volren.testing import CHECKS, run_check
 from volren.testing.runner import renderer_factory
@@ -15,7 +16,7 @@ KNOWN_FAILURES: dict[tuple[str, str], str] = {}
 
 
 @pytest.mark.parametrize("check", CHECKS, ids=[c.name for c in CHECKS])
-@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize("name", renderer_params(NAMES))
 def test_registered_renderer_conforms(name, check, request):
     if (name, check.name) in KNOWN_FAILURES:
         request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN_FAILURES[name, check.name]))

@@ -344,6 +344,7 @@ def test_bad_options_are_one_line_errors(scene, options, message):
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.vtk
 def test_renderers_sharing_a_thread_keep_their_own_context(scene):
     """Each renderer makes its GL context current per frame: interleaving two slicers and VTK
     changes nothing."""

@@ -297,6 +297,7 @@ def spx(shared_data):
     return volume, load_scene_tf("spx-spiky"), Camera.orbit(volume.bounds, 30, 20, 1.0)
 
 
+@pytest.mark.vtk
 def test_spx_against_reference_and_vtk(spx):
     """spx is non-convex: rays leave and re-enter. No holes or streaks: the average along each ray
     (exact in both renderers) matches the reference's, so the walks cross the same segments; the
@@ -319,6 +320,7 @@ def test_spx_against_reference_and_vtk(spx):
     assert vtk_error < 0.05
 
 
+@pytest.mark.vtk
 def test_blunt_fin_subset_against_reference_and_vtk(shared_data):
     """A block of blunt fin's cells (its zero-volume cells were dropped on loading, leaving
     holes the rays must step over) against the reference: the same pixels covered (no holes or

@@ -1,0 +1,126 @@
+"""tests/markers.py: the markers derived from what a test uses (checked on a throw-away test folder
+in a subprocess, as tests/test_session_policy.py does), and the check that fails a test making an
+OpenGL context without the `gl` mark."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.markers import renderer_params
+
+REPO = Path(__file__).resolve().parents[1]
+
+USES = '''
+import pytest
+
+
+@pytest.fixture(scope="session")
+def opengl():
+    """Stands in for tests/conftest.py's fixture: its name is what marks a test."""
+
+
+@pytest.fixture(scope="session")
+def renders_with_vtk(opengl):
+    pass
+
+
+@pytest.fixture
+def window(renders_with_vtk):
+    pass
+
+
+def test_cpu():
+    pass
+
+
+def test_asks_for_opengl(opengl):
+    pass
+
+
+def test_through_a_fixture(window):
+    pass
+
+
+@pytest.mark.vtk
+def test_marked_vtk():
+    pass
+
+
+def test_qtbot(qtbot):
+    pass
+'''
+
+IMPORTS_QT = """
+from PyQt5.QtCore import QObject
+
+
+def test_in_a_module_that_imports_qt():
+    pass
+"""
+
+CONTEXTS = '''
+import moderngl
+import pytest
+
+
+def make_context():
+    moderngl.create_standalone_context(backend="egl").release()
+
+
+def test_unmarked_context():
+    make_context()
+
+
+@pytest.mark.gl
+def test_marked_context():
+    make_context()
+
+
+def test_only_asks_whether_opengl_works():
+    from volren.renderers.opengl import opengl_problem
+
+    assert opengl_problem() is None
+'''
+
+
+def run_pytest(folder: Path, *args: str) -> subprocess.CompletedProcess:
+    (folder / "pytest.ini").write_text("[pytest]\n")
+    cmd = [sys.executable, "-m", "pytest", "-p", "tests.markers", "-p", "no:cacheprovider", "-q",
+           "-c", str(folder / "pytest.ini"), "--rootdir", str(folder), *args, str(folder)]  # fmt: skip
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=120, cwd=REPO)
+
+
+def collected(folder: Path, expression: str) -> set[str]:
+    result = run_pytest(folder, "--collect-only", "-m", expression)
+    assert result.returncode in (0, 5), result.stdout + result.stderr  # 5: nothing selected
+    return {line.split("::")[-1] for line in result.stdout.splitlines() if "::" in line}
+
+
+def test_marks_follow_the_fixtures_and_imports(tmp_path):
+    (tmp_path / "test_uses.py").write_text(USES)
+    (tmp_path / "test_imports_qt.py").write_text(IMPORTS_QT)
+    assert collected(tmp_path, "gl") == {"test_asks_for_opengl", "test_through_a_fixture", "test_marked_vtk"}
+    assert collected(tmp_path, "vtk") == {"test_through_a_fixture", "test_marked_vtk"}
+    assert collected(tmp_path, "qt") == {"test_qtbot", "test_in_a_module_that_imports_qt"}
+    assert collected(tmp_path, "not gl and not qt and not slow") == {"test_cpu"}
+
+
+def test_renderers_are_marked_by_their_backend():
+    params = renderer_params(["vtk", "slicer", "raycast"])
+    marks = {param.values[0]: {mark.name for mark in param.marks} for param in params}
+    assert marks == {"vtk": {"vtk"}, "slicer": {"gl"}, "raycast": set()}
+
+
+@pytest.mark.usefixtures("opengl")
+def test_a_context_made_without_the_gl_mark_fails_the_test(tmp_path):
+    (tmp_path / "test_contexts.py").write_text(CONTEXTS)
+    result = run_pytest(tmp_path, "-rA")
+    out = result.stdout
+    assert result.returncode == 1, out
+    assert out.strip().splitlines()[-1].startswith("1 failed, 2 passed"), out
+    assert "test_contexts.py::test_unmarked_context made an OpenGL context but is not marked gl" in out
+    assert any(line.startswith("FAILED ") and line.endswith("::test_unmarked_context") for line in out.splitlines())
