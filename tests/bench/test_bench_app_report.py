@@ -13,6 +13,7 @@ os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="volren-xdg-"))
 os.environ.setdefault("XDG_CONFIG_HOME", tempfile.mkdtemp(prefix="volren-config-"))
 
 
+@pytest.mark.slow  # about 7 s
 def test_app_latency_measures_frames_on_a_sample(qapp, renders_with_vtk):
     from tests.app.conftest import vtk_unusable
 

@@ -104,6 +104,7 @@ def test_a_crashing_reader_is_one_line_naming_the_file():
     assert np.array_equal(back, values) and back.flags.writeable
 
 
+@pytest.mark.slow  # about 40 s
 @pytest.mark.usefixtures("renders_with_vtk")  # the corpus's scenes and flags, in subprocesses
 def test_quick_corpus_finds_no_failures():
     """`volren bench fuzz --quick` in a fresh process (forking this one, whose numba kernels have

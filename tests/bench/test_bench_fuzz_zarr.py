@@ -29,6 +29,7 @@ def test_the_quick_subset_holds_every_ome_zarr_case_written_by_hand():
         assert name in names, name
 
 
+@pytest.mark.slow  # about 15 s
 @pytest.mark.usefixtures("opengl")  # the slicer draws some cases, in subprocesses
 def test_the_ome_zarr_cases_of_the_quick_subset_run_clean():
     """`volren bench fuzz --quick --only ome-zarr` in a fresh process: every case an error naming the

@@ -31,6 +31,7 @@ def test_the_model_orders_the_strategies_as_icet_does():
     assert large["binary_swap"] < 2 * small["binary_swap"] and large["radix_k"] < large["binary_swap"]
 
 
+@pytest.mark.slow  # about 9 s
 @pytest.mark.usefixtures("opengl")
 @pytest.mark.filterwarnings("default::volren.errors.VolrenWarning")
 def test_bench_scale_measures_and_writes_its_table(tmp_path, capsys):

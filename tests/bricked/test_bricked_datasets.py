@@ -23,6 +23,7 @@ CASES = [
 ]
 
 
+@pytest.mark.slow  # 4-6 s per bonsai case
 @pytest.mark.usefixtures("opengl")
 @pytest.mark.parametrize("parallel", [False, True], ids=["perspective", "parallel"])
 @pytest.mark.parametrize("name, brick, settings", CASES, ids=[f"{c[0]}-{c[1]}" for c in CASES])

@@ -173,6 +173,7 @@ def test_cluster_flags_are_checked():
             parse_cluster(bad)
 
 
+@pytest.mark.slow  # starts a local dask cluster: about 13 s
 @pytest.mark.filterwarnings("default::volren.errors.VolrenWarning")
 def test_volren_render_on_a_local_cluster_equals_one_process(tmp_path, capsys):
     from volren.cli.main import main

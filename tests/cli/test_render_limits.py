@@ -89,6 +89,7 @@ def test_the_api_refuses_the_same_steps():
         volren.render(volume, renderer="reference", size=4, step=1e-9)
 
 
+@pytest.mark.slow  # about 20 s
 @pytest.mark.usefixtures("opengl")
 def test_a_small_legal_step_is_honoured(tmp_path, ml_volume):
     """Step 0.001 is 69,000 samples per ray here: legal, and drawn (VTK went blank near 690,000)."""

@@ -171,7 +171,11 @@ def test_fewer_pixels_per_voxel_draw_a_coarser_draft_of_the_same_image(pre):
     assert e_full < e_draft < min(2 * e_full, 0.03), (e_full, e_draft)  # measured: 0.0175 and 0.0275
 
 
-@pytest.mark.parametrize("dtype, kept", [(np.uint8, np.uint8), (np.uint16, np.float32), (np.int16, np.float32)])
+@pytest.mark.parametrize(
+    "dtype, kept",
+    [pytest.param(np.uint8, np.uint8, marks=pytest.mark.slow),  # about 6 s: compiles the uint8 kernels
+     (np.uint16, np.float32), (np.int16, np.float32)],
+)
 def test_8_bit_volumes_keep_their_type_in_the_axis_copies_and_draw_as_float32_ones(dtype, kept, monkeypatch):
     """uint8 data stays uint8 in the three copies (a quarter of float32's memory), and every path
     that reads them (fast spans, the general way, gradients for shading, the projections, jitter)
