@@ -108,7 +108,7 @@ def _share(frame) -> float:
 
 def run_gesture(app, window, name: str, step: Callable[[int], None], seconds: float, timeout_s: float) -> GestureTiming:
     """`step(k)` at 60 Hz for `seconds` inside an interaction, then release; what the person saw."""
-    from volren.bench.app_latency import _wait
+    from volren.bench.app_latency import _wait, drive_at_60hz
 
     state, stall = window.state, StallProbe()
     shown: list[tuple[float, object]] = []
@@ -117,13 +117,7 @@ def run_gesture(app, window, name: str, step: Callable[[int], None], seconds: fl
     try:
         stall.start()
         state.begin_interaction()
-        start = time.perf_counter()
-        k = 0
-        while time.perf_counter() - start < seconds:
-            step(k)
-            k += 1
-            _wait(app, lambda k=k: time.perf_counter() - start >= k / 60.0, 1.0)
-        elapsed = time.perf_counter() - start
+        elapsed = drive_at_60hz(app, step, seconds)
         previews = [f for _, f in shown if not f.full]
         released = time.perf_counter()
         state.end_interaction()

@@ -98,6 +98,18 @@ def _wait(app, condition: Callable[[], bool], timeout_s: float) -> bool:
     return True
 
 
+def drive_at_60hz(app, step: Callable[[int], None], seconds: float) -> float:
+    """Call step(k) at 60 Hz (a mouse's event rate) for `seconds`, running the event loop between
+    calls; returns the seconds it took."""
+    start = time.perf_counter()
+    k = 0
+    while time.perf_counter() - start < seconds:
+        step(k)
+        k += 1
+        _wait(app, lambda k=k: time.perf_counter() - start >= k / 60.0, 1.0)
+    return time.perf_counter() - start
+
+
 class _Probe:
     """Counts the frames a window shows and remembers the newest full one."""
 
@@ -177,13 +189,7 @@ def measure(
             """Call step(k) at 60 Hz for gesture_s inside an interaction; frames shown per second."""
             count = len(probe.shown)
             state.begin_interaction()
-            start = time.perf_counter()
-            k = 0
-            while time.perf_counter() - start < gesture_s:
-                step(k)
-                k += 1
-                _wait(app, lambda k=k: time.perf_counter() - start >= k / 60.0, 1.0)
-            elapsed = time.perf_counter() - start
+            elapsed = drive_at_60hz(app, step, gesture_s)
             shown = len(probe.shown) - count
             state.end_interaction()
             return shown / elapsed
