@@ -9,6 +9,7 @@ import pytest
 
 from volren.kernels.shading import (
     GRADIENT_EPS,
+    ShadeParams,
     blinn_phong_factors,
     gradient_threshold,
     headlight_half_vector,
@@ -19,7 +20,7 @@ KA, KD, KS, POWER = 0.1, 0.7, 0.2, 10.0
 
 
 def factors(g, light, half, gthr=0.0):
-    return blinn_phong_factors(*g, gthr, *light, *half, KA, KD, KS, POWER)
+    return blinn_phong_factors(*g, *half, ShadeParams(True, KA, KD, KS, POWER, gthr, *light))
 
 
 def closed_form(g, light, view):
@@ -61,7 +62,7 @@ def test_no_shading_at_or_below_the_threshold_nor_where_the_gradient_is_not_fini
 
 
 def test_shade_clamps_the_lit_colour():
-    sp = (True, KA, KD, KS, POWER, 0.0, 0.0, 0.0, 1.0)
+    sp = ShadeParams(True, KA, KD, KS, POWER, 0.0, 0.0, 0.0, 1.0)
     diffuse, specular = factors((0.0, -3.0, -4.0), sp[6:9], (0.0, 0.0, 1.0))
     r, g, b = shade(sp, 0.5, 1.0, 0.0, 0.0, -3.0, -4.0, 0.0, 0.0, 1.0)
     assert (r, g, b) == (0.5 * diffuse + specular, min(diffuse + specular, 1.0), specular)

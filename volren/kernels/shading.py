@@ -21,8 +21,8 @@ The formulas (all vectors unit length, world space):
 with ka, kd, ks, p = ambient, diffuse, specular, specular_power from RenderSettings. The opacity is
 not changed by shading; the shaded colour replaces c in the emission q = c * tau.
 
-`light_setup` gives the per-frame (L) and `half_vector` the per-ray (H) vectors; `shade` applies
-the formula to one sample. `ShadeParams` is the tuple (on, ka, kd, ks, p, gthr, lx, ly, lz).
+`shade_params` gives the per-frame `ShadeParams` (the light L among them) and `half_vector` the
+per-ray (H) vector; `shade` applies the formula to one sample.
 Every CPU renderer lights through `blinn_phong_factors` (those that pre-integrate colour apply its
 two factors to table entries rather than to one colour) and takes its no-shading threshold from
 `gradient_threshold`, so that one optical model holds for all of them.
@@ -31,6 +31,7 @@ two factors to table entries rather than to one colour) and takes its no-shading
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -48,11 +49,27 @@ def gradient_threshold(span: float, length: float) -> float:
     return GRADIENT_EPS * float(span) / float(length)
 
 
-def shade_params(settings: RenderSettings, camera: Camera, span: float, length: float) -> tuple:
-    """(on, ka, kd, ks, p, gthr, lx, ly, lz) for the kernels."""
+class ShadeParams(NamedTuple):
+    """One frame's lighting, passed to the kernels as one bundle (numba types it as a named tuple;
+    the field order is the positional order older kernels index)."""
+
+    on: bool
+    ambient: float
+    diffuse: float
+    specular: float
+    power: float
+    gradient_threshold: float
+    lx: float
+    ly: float
+    lz: float
+
+
+def shade_params(settings: RenderSettings, camera: Camera, span: float, length: float) -> ShadeParams:
+    """The frame's `ShadeParams`: the headlight L = -camera.direction and the no-shading threshold
+    for the value-range span and characteristic length."""
     light = -np.asarray(camera.direction, dtype=np.float64)
     gthr = gradient_threshold(span, length)
-    return (
+    return ShadeParams(
         bool(settings.shade),
         float(settings.ambient),
         float(settings.diffuse),
@@ -80,7 +97,7 @@ def headlight_half_vector(lx, ly, lz, dx, dy, dz):
 @njit(nogil=True, cache=True)
 def half_vector(sp, dx, dy, dz):
     """`headlight_half_vector` with the light of the tuple `sp`."""
-    return headlight_half_vector(sp[6], sp[7], sp[8], dx, dy, dz)
+    return headlight_half_vector(sp.lx, sp.ly, sp.lz, dx, dy, dz)
 
 
 @njit(nogil=True, cache=True)
@@ -93,27 +110,28 @@ def _clamp01(x):
 
 
 @njit(nogil=True, cache=True, inline="always")
-def blinn_phong_factors(gx, gy, gz, gthr, lx, ly, lz, hx, hy, hz, ka, kd, ks, power):
-    """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz), light L and half vector
-    H: the shaded colour is c * diffuse + specular; (1, 0) where |g| <= gthr or is not finite."""
+def blinn_phong_factors(gx, gy, gz, hx, hy, hz, sp):
+    """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz) and half vector H, with
+    the light and coefficients of the `ShadeParams` `sp`: the shaded colour is c * diffuse +
+    specular; (1, 0) where |g| <= sp.gradient_threshold or is not finite."""
     mag = math.sqrt(gx * gx + gy * gy + gz * gz)
-    if not (mag > gthr) or not math.isfinite(mag):
+    if not (mag > sp.gradient_threshold) or not math.isfinite(mag):
         return 1.0, 0.0
     nx = -gx / mag
     ny = -gy / mag
     nz = -gz / mag
-    ndl = nx * lx + ny * ly + nz * lz
+    ndl = nx * sp.lx + ny * sp.ly + nz * sp.lz
     if ndl < 0.0:  # two-sided lighting
         nx = -nx
         ny = -ny
         nz = -nz
         ndl = -ndl
     ndh = nx * hx + ny * hy + nz * hz
-    return ka + kd * ndl, ks * max(ndh, 0.0) ** power
+    return sp.ambient + sp.diffuse * ndl, sp.specular * max(ndh, 0.0) ** sp.power
 
 
 @njit(nogil=True, cache=True)
 def shade(sp, r, g, b, gx, gy, gz, hx, hy, hz):
     """Shaded colour of TF colour (r, g, b) at a sample with gradient (gx, gy, gz)."""
-    k, spec = blinn_phong_factors(gx, gy, gz, sp[5], sp[6], sp[7], sp[8], hx, hy, hz, sp[1], sp[2], sp[3], sp[4])
+    k, spec = blinn_phong_factors(gx, gy, gz, hx, hy, hz, sp)
     return _clamp01(r * k + spec), _clamp01(g * k + spec), _clamp01(b * k + spec)

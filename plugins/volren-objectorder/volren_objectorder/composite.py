@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit, prange
 
 from volren.kernels.sample_placement import segment_length
-from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
+from volren.kernels.shading import ShadeParams, blinn_phong_factors, headlight_half_vector
 from volren_objectorder.occlusion import hom_covered, hom_finish, hom_init, hom_layout
 from volren_objectorder.octree import bracket
 from volren_objectorder.patterns import ray_end, sample_t
@@ -182,8 +182,8 @@ def _locate(vol, px, py, pz):
 @njit(nogil=True, cache=True)
 def _light(gx, gy, gz, hx, hy, hz, fp):
     """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz), with the lighting of `fp`."""
-    return blinn_phong_factors(gx, gy, gz, fp[F_GTHR], fp[F_LX], fp[F_LY], fp[F_LZ], hx, hy, hz, fp[F_KA], fp[F_KD],
-                               fp[F_KS], fp[F_P])  # fmt: skip
+    sp = ShadeParams(True, fp[F_KA], fp[F_KD], fp[F_KS], fp[F_P], fp[F_GTHR], fp[F_LX], fp[F_LY], fp[F_LZ])
+    return blinn_phong_factors(gx, gy, gz, hx, hy, hz, sp)
 
 
 @njit(nogil=True, cache=True, inline="always")

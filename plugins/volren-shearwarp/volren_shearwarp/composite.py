@@ -49,7 +49,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
+from volren.kernels.shading import ShadeParams, blinn_phong_factors, headlight_half_vector
 
 #: Modes of `project_slabs`.
 MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
@@ -154,7 +154,8 @@ def _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, po
         gx = (1.0 - w) * fx + w * bx
         gy = (1.0 - w) * fy + w * by
         gz = (1.0 - w) * fz + w * bz
-    return blinn_phong_factors(gx, gy, gz, gthr, light[0], light[1], light[2], hx, hy, hz, ka, kd, ks, power)
+    return blinn_phong_factors(gx, gy, gz, hx, hy, hz,
+                               ShadeParams(True, ka, kd, ks, power, gthr, light[0], light[1], light[2]))
 
 
 @njit(nogil=True, cache=True, inline="always", error_model="numpy")

@@ -273,9 +273,8 @@ def cast_rays(
                             r, g, b, a = integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_in, s_out,
                                                            length)
                             if sp[0]:
-                                diffuse, specular = blinn_phong_factors(grads[t, 0], grads[t, 1], grads[t, 2], sp[5], sp[6],
-                                                                        sp[7], sp[8], hx, hy, hz, sp[1], sp[2], sp[3],
-                                                                        sp[4])  # fmt: skip
+                                diffuse, specular = blinn_phong_factors(grads[t, 0], grads[t, 1], grads[t, 2], hx, hy, hz,
+                                                                        sp)
                                 r = min(r * diffuse + specular * a, a)
                                 g = min(g * diffuse + specular * a, a)
                                 b = min(b * diffuse + specular * a, a)
