@@ -24,7 +24,7 @@ from volren.app.core.preview_settings import still_settings
 from volren.app.core.state import ViewState
 from volren.app.files.background_job import BackgroundJobs
 from volren.app.rendering.render_service import RendererFactory, _registry_factory
-from volren.draw import Drawing, Preparation, VolumeInput
+from volren.draw import Drawing, Preparation, VolumeInput, draw
 from volren.errors import VolrenError
 from volren.io.safe_write import check_output
 from volren.model.camera import Camera
@@ -79,19 +79,27 @@ def _still_frame_settings(settings: RenderSettings, renderer: Renderer) -> Rende
     return still_settings(settings, renderer.capabilities)
 
 
+def _job_scene(job: ScreenshotJob) -> Scene:
+    """The view's snapshot as a scene: its renderer and settings as they are (no quality level)."""
+    return Scene(None, job.tf, job.camera, job.settings, renderer=job.renderer, size=(job.width, job.height),
+                 volume=job.volume)  # fmt: skip
+
+
+def _preparation(factory: RendererFactory) -> Preparation:
+    """Renderers made by the app's `factory`, each given a still frame's settings (`still_settings`)."""
+    return Preparation(factory, _still_frame_settings)
+
+
 def job_drawing(job: ScreenshotJob, factory: RendererFactory = _registry_factory) -> Drawing:
-    """`job` as `volren.draw` draws it: the view's renderer and settings as they are (a still
-    frame's: `still_settings`), made by the app's `factory`; the view's state is no file to check."""
-    scene = Scene(None, job.tf, job.camera, job.settings, renderer=job.renderer, size=(job.width, job.height),
-                  volume=job.volume)  # fmt: skip
-    return Drawing(VolumeInput(job.volume), scene, how=Preparation(factory, _still_frame_settings))
+    """`job` as `volren.draw` draws it (the movie export keeps its renderer for every frame)."""
+    return Drawing(VolumeInput(job.volume), _job_scene(job), how=_preparation(factory))
 
 
 def render_job(
     job: ScreenshotJob, factory: RendererFactory = _registry_factory, progress: ProgressCallback | None = None
 ) -> NDArray[np.float32]:
     """The premultiplied RGBA frame of `job`, from a renderer made for it and released after."""
-    return job_drawing(job, factory).frame(job.camera, progress).image
+    return draw(VolumeInput(job.volume), _job_scene(job), job.camera, progress, how=_preparation(factory)).image
 
 
 def write_job(job: ScreenshotJob, image: NDArray[np.float32]) -> None:
