@@ -2,6 +2,8 @@
 
     import volren
     rgba = volren.render("head.mhd", "bone.json", renderer="vtk", size=(512, 512), azimuth=30)
+    with volren.drawing("head.mhd", "bone.json") as d:   # prepared once for many frames
+        frames = [d.frame(d.orbit(azimuth=a)).image for a in range(0, 360, 30)]
 
 Importing volren is cheap: VTK, PyVista, numba and Qt load only when something needs them.
 """
@@ -10,7 +12,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["VolrenError", "__version__", "render"]
+__all__ = ["VolrenError", "__version__", "drawing", "render"]
 
 
 def _version() -> str:
@@ -30,6 +32,10 @@ def __getattr__(name: str) -> Any:
         from volren.api import render
 
         return render
+    if name == "drawing":
+        from volren.api import drawing
+
+        return drawing
     if name == "VolrenError":
         from volren.errors import VolrenError
 

@@ -1,21 +1,31 @@
-"""`volren.render`: one call from a volume (or a file, or a PyVista dataset) to an RGBA image."""
+"""`volren.render`: one call from a volume (or a file, or a PyVista dataset) to an RGBA image;
+`volren.drawing`: the same, ready to draw many frames with one prepared renderer."""
 
 from __future__ import annotations
 
-import warnings
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
+from dataclasses import replace
 from os import PathLike
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.errors import VolrenError, VolrenWarning
+from volren.draw import (
+    Drawing,
+    DrawInput,
+    VolumeInput,
+    check_scene,
+    is_ome_zarr_path,
+    open_ome_zarr,
+    prepared_renderer,
+    resolve_scene,
+)
+from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.default_tf import default_transfer_function
-from volren.model.settings import RenderSettings, check_step, is_finite
-from volren.model.tf_coverage import coverage_problem
+from volren.model.scene import Scene
+from volren.model.settings import RenderSettings, is_finite
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import (
     TransferFunction,
@@ -23,7 +33,9 @@ from volren.model.transfer_function_2d import (
     transfer_function_from_dict,
 )
 from volren.model.volume import TetVolume, UniformVolume, Volume
-from volren.renderers.base import ProgressCallback, Renderer, render_frame
+from volren.renderers.base import ProgressCallback
+
+__all__ = ["as_transfer_function", "as_volume", "check_scene", "drawing", "parse_size", "prepared_renderer", "render"]
 
 
 def as_volume(volume: Any, scalars: str | None = None) -> Volume:
@@ -71,43 +83,46 @@ def parse_size(size: Any) -> tuple[int, int]:
     return int(values[0]), int(values[1])
 
 
-def check_scene(
-    volume: Volume,
-    tf: TransferFunction,
-    settings: RenderSettings,
-    tf_name: str | None = None,
-    step_name: str = "render setting step",
-) -> None:
-    """What `volren render` and `volren.render` check before drawing, so that bad input is an error
-    or a warning instead of a black image and success: a step too small to honour (an error naming
-    it as `step_name`), and a TF that shows nothing of the data (a VolrenWarning naming `tf_name`,
-    the TF file, where there is one)."""
-    check_step(settings.step, volume.bounds, volume.characteristic_length, step_name)
-    problem = coverage_problem(tf, volume.value_range)
-    if problem:
-        warnings.warn(f"{tf_name or 'transfer function'}: {problem}", VolrenWarning, stacklevel=2)
-
-
-@contextmanager
-def prepared_renderer(
-    name: str, volume: Volume, tf: TransferFunction, settings: RenderSettings | None = None
-) -> Iterator[Renderer]:
-    """``with prepared_renderer(...) as r``: a new renderer `name` holding the volume, TF and
-    settings, released at the end of the block (the Protocol asks for no context-manager methods).
-    A step too small for any renderer to honour is refused here, where the bench and the reference
-    images pass as well as `render`."""
-    from volren.renderers.registry import registry
-
-    settings = settings or RenderSettings()
-    check_step(settings.step, volume.bounds, volume.characteristic_length)
-    renderer = registry.create(name)
-    try:
-        renderer.set_volume(volume)
-        renderer.set_transfer_function(tf)
-        renderer.set_settings(settings)
-        yield renderer
-    finally:
-        renderer.release()
+def drawing(
+    volume: Any,
+    tf: Any = None,
+    renderer: str = "auto",
+    size: Any = (512, 512),
+    azimuth: float = 0.0,
+    elevation: float = 0.0,
+    zoom: float = 1.0,
+    parallel: bool = False,
+    camera: Camera | None = None,
+    scalars: str | None = None,
+    quality: str = "default",
+    memory: int | str | None = None,
+    level: int | None = None,
+    cluster: str | None = None,
+    scheduler: str | None = None,
+    **settings: Any,
+) -> Drawing:
+    """What `render` draws, ready for many frames: the input read, `auto` and the quality resolved
+    (for the camera given), the scene checked; the arguments are `render`'s. In a ``with`` block
+    the renderer is prepared once, on the first frame, and kept: ``d.frame(d.orbit(azimuth=a))``
+    draws another view and ``d.set_transfer_function(tf)`` another TF without preparing the
+    volume again (`volren.draw.Drawing`)."""
+    source = _open_input(volume, scalars, memory, level)
+    vol = source.stand_in()
+    transfer = as_transfer_function(tf, vol)
+    width, height = parse_size(size)
+    for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
+        if not is_finite(value):
+            raise VolrenError(f"{name} must be finite, got {value!r:.40}")
+    on_cluster = cluster is not None or scheduler is not None  # an empty one is refused, not ignored
+    cam = camera or Camera.orbit(source.bounds, azimuth, elevation, zoom, parallel, width / height)
+    # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
+    scene = Scene(None, transfer, cam, RenderSettings().with_(**settings), renderer=renderer, size=(width, height),
+                  volume=vol)  # fmt: skip
+    scene, _ = resolve_scene(scene, source, quality, cameras=(cam,), on_cluster=on_cluster)
+    scene = replace(scene, settings=scene.settings.with_(**{k: v for k, v in settings.items() if k != "options"}))
+    result = Drawing(source, scene, quality, cluster, scheduler)
+    result.check(tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
+    return result
 
 
 def render(
@@ -139,63 +154,26 @@ def render(
     apply; other keyword arguments are RenderSettings fields (step, preintegration, shade,
     blend_mode, options, ...) and win over the level's.
 
-    An OME-Zarr path draws as `volren render` does (`volren.bricked.zarr_input`): the `level`
+    An OME-Zarr path draws as `volren render` does (`volren.draw.ZarrImageInput`): the `level`
     given, else the full resolution (the level the view needs at quality draft and interactive),
     read whole within `memory` (bytes or "2GB"; default 8 GB) or streamed brick by brick. `cluster` ("local" or "local:N") or `scheduler` (an address) draws
     the bricks on a dask.distributed cluster (`volren.bricked.cluster`).
     """
-    zarr_input = _zarr_input(volume, memory, level)
-    vol = zarr_input.stand_in() if zarr_input is not None else as_volume(volume, scalars)
-    transfer = as_transfer_function(tf, vol)
-    width, height = parse_size(size)
-    for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
-        if not is_finite(value):
-            raise VolrenError(f"{name} must be finite, got {value!r:.40}")
-    from volren.quality import kind_of, resolve
-
-    on_cluster = cluster is not None or scheduler is not None  # an empty one is refused, not ignored
-    bounds = zarr_input.bounds if zarr_input is not None else vol.bounds
-    cam = camera or Camera.orbit(bounds, azimuth, elevation, zoom, parallel, width / height)
-    # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
-    renderer, at_level, _ = resolve(kind_of(vol, transfer), transfer.dims, renderer, quality, RenderSettings().with_(**settings),
-                                    bricks=zarr_input is not None or on_cluster, cameras=(cam,), bounds=bounds)  # fmt: skip
-    render_settings = at_level.with_(**{k: v for k, v in settings.items() if k != "options"})
-    check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
-    if on_cluster:
-        from volren.bricked.cluster import render_on_cluster
-
-        image, _, _ = render_on_cluster(cluster, scheduler, zarr_input or vol, renderer, render_settings, transfer,
-                                        cam, width, height, level, progress, quality)  # fmt: skip
-        return image
-    source = None
-    if zarr_input is not None:
-        frame = zarr_input.frame(renderer, cam, width, height, level, quality)
-        vol, source = frame.volume or vol, frame.source
-    with prepared_renderer(renderer, vol, transfer, render_settings) as r:
-        if source is not None:
-            from volren.bricked.sort_last import render_streamed
-
-            image, _ = render_streamed(r, source, transfer, cam, width, height, progress)
-        else:
-            image, _ = render_frame(r, cam, width, height, progress, label=renderer)
-        return image
+    ready = drawing(volume, tf, renderer, size, azimuth, elevation, zoom, parallel, camera, scalars, quality, memory,
+                    level, cluster, scheduler, **settings)  # fmt: skip
+    return ready.frame(progress=progress).image
 
 
-def _zarr_input(volume: Any, memory: int | str | None, level: int | None) -> Any:
-    """The opened OME-Zarr image when `volume` is a path to one (None otherwise); `memory` and
-    `level` are refused for anything else."""
-    from volren.io.ome_zarr_io import is_ome_zarr, parse_memory
+def _open_input(volume: Any, scalars: str | None, memory: int | str | None, level: int | None) -> DrawInput:
+    """What `volume` names, to draw from: an OME-Zarr image (within `memory`, at `level`), or a
+    volume (`as_volume`); `memory` and `level` are refused for anything but an OME-Zarr image."""
+    from volren.io.ome_zarr_io import parse_memory
 
-    if not (isinstance(volume, str | PathLike) and is_ome_zarr(volume)):
+    if not is_ome_zarr_path(volume):
         if memory is not None or level is not None:
             raise VolrenError("memory and level apply to an OME-Zarr image (a .zarr folder or URL)")
-        return None
-    from volren.bricked.zarr_input import ZarrInput
-
+        return VolumeInput(as_volume(volume, scalars))
     budget = parse_memory(memory) if isinstance(memory, str) else memory
     if budget is not None and (isinstance(budget, bool) or budget < 1):
         raise VolrenError(f"memory must be a positive number of bytes or a size like 2GB, got {memory!r}")
-    zarr_input = ZarrInput(volume, budget)
-    if level is not None:
-        zarr_input.check_level(level)
-    return zarr_input
+    return open_ome_zarr(volume, budget, level)

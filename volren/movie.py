@@ -10,14 +10,14 @@ is what `volren render` gives for the same camera and TF, converted to 8 bits ex
 
 from __future__ import annotations
 
-import functools
 import statistics
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from volren.api import prepared_renderer
+from volren.draw import Drawing, FrameData, VolumeInput, resolve_scene
+from volren.draw.frame import draw_prepared
 from volren.errors import VolrenError
 from volren.io.image_io import to_png_pixels
 from volren.io.movie_io import movie_writer
@@ -26,8 +26,8 @@ from volren.model.scene import Scene
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
-from volren.quality import AUTO, at_level, kind_of, resolve
-from volren.renderers.base import FrameStats, ProgressCallback, Renderer, render_frame
+from volren.quality import AUTO, at_level, kind_of
+from volren.renderers.base import ProgressCallback, Renderer
 
 if TYPE_CHECKING:
     from volren.bricked.source import BrickSource
@@ -70,23 +70,17 @@ def render_movie(
     `source`: a level too large for memory (`volren.bricked`), streamed brick by brick for every
     frame; the scene's volume then only stands in for it. `bounds` place the camera (default: the
     scene volume's; an OME-Zarr image's full resolution, so that the level drawn does not move it)."""
-    if scene.volume is None:
+    volume = scene.volume
+    if volume is None:
         raise VolrenError("the scene has no volume to make a movie of")
     if scene.renderer == AUTO:
-        place = bounds or scene.volume.bounds
+        place = bounds or volume.bounds
         cameras = [animation.camera(i, scene.camera, place, scene.size[0] / scene.size[1]) for i in range(animation.frames)]
-        renderer, settings, _ = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, AUTO, None,
-                                        scene.settings, cameras=cameras, bounds=scene.volume.bounds)  # fmt: skip
-        scene = replace(scene, renderer=renderer, settings=settings)
+        scene, _ = resolve_scene(scene, VolumeInput(volume), None, cameras=cameras)
     volumes = None if not steps else _step_volumes(steps, animation.frames, scene.scalars)
-    with prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings) as renderer:
-        draw = None
-        if source is not None:
-            from volren.bricked.sort_last import render_streamed
-
-            draw = functools.partial(render_streamed, source=source)
-        return record_movie(renderer, animation, scene.camera, scene.transfer_function, bounds or scene.volume.bounds,
-                            scene.size, path, background, lossless, progress, scene.renderer, volumes, draw,
+    with Drawing(VolumeInput(volume), scene) as drawing:
+        return record_movie(drawing.renderer, animation, scene.camera, scene.transfer_function, bounds or volume.bounds,
+                            scene.size, path, background, lossless, progress, scene.renderer, volumes, source,
                             level)  # fmt: skip
 
 
@@ -106,8 +100,6 @@ def _check_views(renderer: Renderer, animation: Animation, start_view: View, bou
             raise VolrenError(f"movie frame {index + 1} of {animation.frames}: renderer {name} {reason}")
 
 
-#: draw(renderer, tf=, camera=, width=, height=, progress=) -> (image, FrameStats): one frame.
-FrameDrawer = Callable[..., tuple[Any, FrameStats]]
 #: settings(volume, tf) -> the settings a frame showing `volume` with `tf` is drawn with.
 SettingsByClass = Callable[[Volume, TransferFunction], RenderSettings]
 
@@ -158,14 +150,14 @@ def record_movie(
     progress: ProgressCallback | None = None,
     label: str | None = None,
     volumes: Callable[[int], Volume | None] | None = None,
-    draw: FrameDrawer | None = None,
+    source: BrickSource | None = None,
     level: str | None = None,
 ) -> MovieResult:
     """The movie from a renderer that holds the volume, settings and `start_tf` (the app brings its
     own): the orbit starts at `start_view`; TF keyframes replace `start_tf` where they are;
     `volumes(i)`, where given, is the volume frame i shows when it is another than the frame
-    before's (a time series); `draw`, where given, draws each frame instead of the renderer alone
-    (`streamed_frames`). `level`: the quality level the renderer's settings are at for
+    before's (a time series); `source`, where given, is streamed brick by brick for each frame
+    (`volren.draw.frame.draw_prepared`; the renderer's volume stands in for it). `level`: the quality level the renderer's settings are at for
     `start_tf`'s class (`label` names the renderer); a frame whose TF is of another class gets
     the level's settings for that class (`_settings_by_class`)."""
     width, height = size
@@ -174,7 +166,8 @@ def record_movie(
     tf = start_tf
     settings_of = _settings_by_class(renderer, label or getattr(renderer, "name", None), level, start_tf)
     settings = getattr(renderer, "settings", None)
-    if draw is None:
+    frame_data = FrameData(source=source)
+    if source is None:
         _check_views(renderer, animation, start_view, bounds, width / height, label)
     with movie_writer(path, animation.fps, lossless) as writer:
         for index in range(frames):
@@ -192,10 +185,7 @@ def record_movie(
                 tf = frame_tf
             camera = animation.camera(index, start_view, bounds, width / height)
             within = None if progress is None else _within_frame(progress, index, frames)
-            if draw is None:
-                image, stats = render_frame(renderer, camera, width, height, within, label=label)
-            else:
-                image, stats = draw(renderer, tf=tf, camera=camera, width=width, height=height, progress=within)
+            image, stats, _ = draw_prepared(renderer, frame_data, tf, camera, width, height, within, label)
             times.append(stats.ms)
             writer.append(to_png_pixels(image, background))
             if progress is not None:

@@ -1,12 +1,10 @@
-"""`volren render --cluster local[:N]` and `--scheduler ADDRESS`: the frame drawn sort-last on a
-dask.distributed cluster (`volren.bricked.cluster`), brick by brick, equal to one process's."""
+"""`volren render --cluster local[:N]` and `--scheduler ADDRESS`: the flags that draw the frame
+sort-last on a dask.distributed cluster, brick by brick, equal to one process's (the frame itself:
+`volren.draw.frame.draw_on_cluster`)."""
 
 from __future__ import annotations
 
 import argparse
-from typing import Any
-
-from volren.model.scene import Scene
 
 
 def add_cluster_arguments(p: argparse.ArgumentParser) -> None:
@@ -29,21 +27,3 @@ def check_cluster_flag(args: argparse.Namespace) -> None:
         from volren.bricked.cluster import parse_cluster
 
         parse_cluster(args.cluster)
-
-
-def cluster_frame(args: argparse.Namespace, scene: Scene, camera, progress) -> tuple[Any, Any, str]:
-    """The frame on the cluster the flags name: (image, FrameStats, what was drawn, for the line)."""
-    from volren.bricked.cluster import render_on_cluster
-    from volren.cli.render_cmd import quality_asked
-    from volren.renderers.base import FrameStats
-
-    width, height = scene.size
-    zarr_input = getattr(args, "zarr_input", None)
-    image, frame, what = render_on_cluster(args.cluster, args.scheduler, zarr_input or scene.volume, scene.renderer,
-                                           scene.settings, scene.transfer_function, camera, width, height, args.level,
-                                           progress, quality_asked(args, scene))  # fmt: skip
-    counters = {"bricks": frame.bricks, "bricks_drawn": frame.drawn, "bricks_transparent": frame.transparent,
-                "runs": frame.runs, "workers": frame.workers, "composite_ms": frame.composite_ms}  # fmt: skip
-    note = f" ({what} on {frame.workers} worker{'s' if frame.workers != 1 else ''}: {frame.drawn} of {frame.bricks} " \
-           f"bricks drawn in {frame.runs} runs)"  # fmt: skip
-    return image, FrameStats(frame.total_ms, width, height, counters), note

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from volren.cli.render_cmd import (
     add_scene_arguments,
@@ -27,6 +28,11 @@ from volren.cli.render_cmd import (
 )
 from volren.errors import VolrenError
 from volren.model.animation import MAX_FPS, MAX_FRAMES, MIN_FPS, Animation, check_fps, check_frames
+from volren.model.scene import Scene
+
+if TYPE_CHECKING:
+    from volren.bricked.source import BrickSource
+    from volren.draw import DrawInput
 
 
 def _frames(text: str) -> int:
@@ -95,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     series = input_series(args)
     if series is not None and args.time_step is not None:
         raise VolrenError(f"--time-step picks one step; a movie of {args.input} runs through all {len(series)}")
-    scene, why = build_scene(args)
+    scene, why, source = build_scene(args)
     check_outputs((("-o", args.output),), [*inputs, ("scene's volume", scene.volume_path)], args.force)
     check_scene_input(args, scene)
     try:
@@ -104,13 +110,14 @@ def run(args: argparse.Namespace) -> int:
         raise VolrenError(f"{args.scene}: {exc}" if args.scene else str(exc)) from None
     check_movie_fps(args.output, animation.fps)
     width, height = scene.size
-    scene, source = _zarr_level_for_movie(args, scene)
-    zarr_bounds = args.zarr_input.bounds if getattr(args, "zarr_input", None) is not None else None
+    assert source is not None  # a scene without a volume was refused above
+    scene, stream = _level_for_movie(args, scene, source)
+    bounds = source.bounds if source.bricks else None
     try:
         with frame_bar(f"{scene.renderer} {width}x{height}", animation.frames) as progress:
             result = render_movie(scene, animation, args.output, lossless=args.lossless, progress=progress,
-                                  steps=series.steps if series is not None else None, source=source,
-                                  bounds=zarr_bounds, level=settings_level(args, scene))  # fmt: skip
+                                  steps=series.steps if series is not None else None, source=stream,
+                                  bounds=bounds, level=settings_level(args, scene))  # fmt: skip
     except VolrenError as exc:
         raise explained(exc, args, scene, why) from None
     chosen_by = f" (auto: {why})" if why else ""
@@ -121,15 +128,14 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _zarr_level_for_movie(args: argparse.Namespace, scene):
+def _level_for_movie(args: argparse.Namespace, scene: Scene, source: DrawInput) -> tuple[Scene, BrickSource | None]:
     """An OME-Zarr INPUT: the level its first frame needs for every frame, read whole or (larger
     than --memory) streamed brick by brick; (scene, the streamed source or None)."""
-    zarr_input = getattr(args, "zarr_input", None)
-    if zarr_input is None:
+    if not source.bricks:
         return scene, None
     width, height = scene.size
-    frame = zarr_input.frame(scene.renderer, scene.resolved_camera(zarr_input.bounds), width, height, args.level,
-                             quality_asked(args, scene))  # fmt: skip
+    frame = source.frame(scene.renderer, scene.resolved_camera(source.bounds), width, height,
+                         quality_asked(args, scene))  # fmt: skip
     if frame.volume is None:
         return scene, frame.source
     return scene.with_volume(frame.volume), None

@@ -10,19 +10,21 @@ import argparse
 import json
 import math
 import sys
-from contextlib import ExitStack
+from contextlib import AbstractContextManager
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from volren.cli.cluster_frame import add_cluster_arguments, check_cluster_flag, cluster_frame, wants_cluster
+from volren.cli.cluster_frame import add_cluster_arguments, check_cluster_flag, wants_cluster
 from volren.cli.raw_flags import add_raw_arguments, check_raw_flags, raw_load_arguments
 from volren.cli.stage_clock import StageClock
+from volren.draw import Drawing, DrawInput, VolumeInput, Watch
 from volren.errors import VolrenError
 from volren.model.camera import check_zoom
 from volren.model.scene import OrbitView, Scene
 from volren.model.settings import MAX_SAMPLES_PER_RAY, MAX_STEP, BlendMode
 from volren.quality import DEFAULT_LEVEL, LEVELS
+from volren.renderers.base import ProgressCallback
 
 #: How messages mark a renderer that the user did not name.
 CHOSEN_BY_AUTO = "(chosen by --renderer auto)"
@@ -174,26 +176,20 @@ def _step_path(args: argparse.Namespace) -> str:
     return str(series.steps[step])
 
 
-def _zarr_level(args: argparse.Namespace, path: str):
-    """For an OME-Zarr INPUT, the coarsest level to set the scene up on, with the opened image
-    kept in `args.zarr_input` (`run` decides the level drawn once the renderer and camera are
-    known: `volren.bricked.zarr_input`); the flags refused for other inputs (None then: load INPUT
-    as any volume)."""
-    from volren.bricked.zarr_input import ZarrInput
-    from volren.io.ome_zarr_io import is_ome_zarr
+def _ome_zarr_image(args: argparse.Namespace, path: str) -> DrawInput | None:
+    """For an OME-Zarr INPUT, the opened image (the scene is set up on its coarsest level; the
+    level drawn is decided once the renderer and camera are known: `ZarrInput.frame`); the flags
+    refused for other inputs (None then: load INPUT as any volume)."""
+    from volren.draw import is_ome_zarr_path, open_ome_zarr
 
-    args.zarr_input = None
-    if not is_ome_zarr(path):
+    if not is_ome_zarr_path(path):
         flag = _zarr_flag(args)
         if flag:
             raise VolrenError(f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL); {path} is not one")
         return None
     if args.scalars is not None:
         raise VolrenError(f"{path}: an OME-Zarr image holds one field; --scalars does not apply")
-    args.zarr_input = ZarrInput(path, args.memory, "--memory")
-    if args.level is not None:
-        args.zarr_input.check_level(args.level)
-    return args.zarr_input.stand_in()
+    return open_ome_zarr(path, args.memory, args.level, "--memory")
 
 
 def _zarr_flag(args: argparse.Namespace) -> str | None:
@@ -210,29 +206,36 @@ def _check_zarr_flags(args: argparse.Namespace) -> None:
         raise VolrenError(f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL), not to {what}")
 
 
-def _load_input(args: argparse.Namespace):
+def _load_input(args: argparse.Namespace) -> DrawInput:
+    """INPUT (or the time step asked for) to draw from: an OME-Zarr image, or a volume read whole."""
     from volren import io
 
     kwargs: dict[str, Any] = {"scalars": args.scalars, **raw_load_arguments(args)}
     path = _step_path(args)
-    zarr_level = None if args.raw_shape else _zarr_level(args, path)
-    return zarr_level if zarr_level is not None else io.load_volume(path, **kwargs)
+    image = None if args.raw_shape else _ome_zarr_image(args, path)
+    return image if image is not None else VolumeInput(io.load_volume(path, **kwargs))
 
 
-def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:
+def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None, DrawInput | None]:
     """The scene to render: from --scene and/or INPUT, at the quality asked for, with explicit flags
-    applied on top; and why `auto` chose its renderer (None when a renderer was named)."""
+    applied on top; why `auto` chose its renderer (None when a renderer was named); and what the
+    frames are drawn from (None when the scene names no volume)."""
     from volren import io
     from volren.api import as_transfer_function
 
     check_raw_flags(args, "render")
     _check_zarr_flags(args)
+    source: DrawInput | None = None
     if args.scene:
         scene = io.load_scene(args.scene, load_volume=args.input is None)
         if args.input is not None:
-            scene = replace(scene, volume=_load_input(args), volume_path=args.input)
+            source = _load_input(args)
+            scene = replace(scene, volume=source.stand_in(), volume_path=args.input)
+        elif scene.volume is not None:
+            source = VolumeInput(scene.volume)
     elif args.input is not None:
-        volume = _load_input(args)
+        source = _load_input(args)
+        volume = source.stand_in()
         tf = io.load_transfer_function(args.tf) if args.tf else as_transfer_function(None, volume)
         scene = Scene(args.input, tf, volume=volume, scalars=args.scalars)
     else:
@@ -260,7 +263,7 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:
     shown = {k: v for k, v in (("shade", args.shade), ("blend_mode", args.blend)) if v is not None}
     if shown:
         scene = replace(scene, settings=scene.settings.with_(**shown))
-    scene, why = _at_quality(args, scene)
+    scene, why = _at_quality(args, scene, source)
     sampling: dict[str, Any] = {k: v for k, v in (("step", args.step), ("preintegration", args.preintegration))
                                 if v is not None}  # fmt: skip
     if args.option:
@@ -269,7 +272,7 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None]:
         sampling["options"] = {**scene.settings.options, **given}
     if sampling:
         scene = replace(scene, settings=scene.settings.with_(**sampling))
-    return scene, why
+    return scene, why, source
 
 
 def _check_option_names(options: dict[str, Any], renderer: str, why: str | None) -> None:
@@ -286,21 +289,15 @@ def _check_option_names(options: dict[str, Any], renderer: str, why: str | None)
                           f"{', '.join(sorted(valid)) or 'none'}")  # fmt: skip
 
 
-def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | None]:
+def _at_quality(args: argparse.Namespace, scene: Scene, source: DrawInput | None) -> tuple[Scene, str | None]:
     """The scene's renderer resolved (`auto`) and its settings at the quality level asked for: the
     flag, the scene file's "quality", or `default` for a render without a scene file (a scene
     file's own settings are kept as they are unless a level is named); and why `auto` chose."""
-    from volren.quality import kind_of, resolve
+    from volren.draw import resolve_scene
 
-    if scene.volume is None:
+    if scene.volume is None or source is None:
         return scene, None
-    level = settings_level(args, scene)
-    zarr_input = getattr(args, "zarr_input", None)
-    bricks = zarr_input is not None or wants_cluster(args)
-    bounds = zarr_input.bounds if zarr_input is not None else scene.volume.bounds
-    renderer, settings, why = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, scene.renderer, level,
-                                      scene.settings, bricks, cameras=(scene.resolved_camera(bounds),), bounds=bounds)  # fmt: skip
-    return replace(scene, renderer=renderer, settings=settings), why
+    return resolve_scene(scene, source, settings_level(args, scene), on_cluster=wants_cluster(args))
 
 
 def settings_level(args: argparse.Namespace, scene: Scene) -> str | None:
@@ -324,8 +321,8 @@ def check_outputs(outputs, inputs, force: bool) -> None:
 
 
 def check_scene_input(args: argparse.Namespace, scene: Scene) -> None:
-    """`volren.api.check_scene`, naming what the user gave: the flag or the scene file."""
-    from volren.api import check_scene
+    """`volren.draw.check_scene`, naming what the user gave: the flag or the scene file."""
+    from volren.draw import check_scene
 
     from_scene = args.scene and args.step is None
     step_name = f"{args.scene}: settings.step (or --step)" if from_scene else "--step"
@@ -357,7 +354,6 @@ def explained(exc: VolrenError, args: argparse.Namespace, scene: Scene, why: str
 
 def run(args: argparse.Namespace) -> int:
     from volren import io
-    from volren.cli.progress import progress_bar
     from volren.io.safe_write import check_output
 
     if args.output == "" or args.save_array == "":
@@ -373,18 +369,14 @@ def run(args: argparse.Namespace) -> int:
     check_cluster_flag(args)
     clock = StageClock()
     with clock.stage("load"):
-        scene, why = build_scene(args)
+        scene, why, source = build_scene(args)
         check_outputs(outputs, [*inputs, ("scene's volume", scene.volume_path)], args.force)
         check_scene_input(args, scene)
+    assert source is not None  # a scene without a volume was refused above
     width, height = scene.size
-    zarr_input = getattr(args, "zarr_input", None)
+    drawing = Drawing(source, scene, quality_asked(args, scene), args.cluster, args.scheduler)
     try:
-        camera = scene.resolved_camera(zarr_input.bounds if zarr_input is not None else None)
-        if wants_cluster(args):
-            with clock.stage("frame"), progress_bar(f"{scene.renderer} {width}x{height} bricks") as progress:
-                image, stats, drawn = cluster_frame(args, scene, camera, progress)
-        else:
-            image, stats, drawn = _local_frame(args, scene, camera, clock)
+        image, stats, drawn = drawing.frame(drawing.camera(), watch=_CommandWatch(clock))
         clock.note_counters(stats.counters)
     except VolrenError as exc:
         raise explained(exc, args, scene, why) from None
@@ -401,32 +393,17 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _local_frame(args: argparse.Namespace, scene: Scene, camera, clock: StageClock):
-    """The frame in this process: (image, FrameStats, what was drawn for the line). An OME-Zarr
-    INPUT draws the level `ZarrInput.frame` decides, whole or streamed brick by brick."""
-    from volren.api import prepared_renderer
-    from volren.bricked.sort_last import render_streamed
-    from volren.cli.progress import progress_bar
-    from volren.renderers.base import render_frame
+class _CommandWatch(Watch):
+    """A frame's stages on the command's clock (--timings), its progress as a bar on a terminal."""
 
-    width, height = scene.size
-    zarr_input = getattr(args, "zarr_input", None)
-    source, drawn = None, ""
-    if zarr_input is not None:
-        with clock.stage("load"):
-            frame = zarr_input.frame(scene.renderer, camera, width, height, args.level, quality_asked(args, scene))
-        scene = scene.with_volume(frame.volume) if frame.volume is not None else scene
-        source = frame.source
-        drawn = f" ({zarr_input.name} {frame.describe()})"
-    with ExitStack() as stack:
-        with clock.stage("set-up"):
-            renderer = stack.enter_context(
-                prepared_renderer(scene.renderer, scene.volume, scene.transfer_function, scene.settings))
-        with clock.stage("frame"), progress_bar(f"{scene.renderer} {width}x{height}") as progress:
-            if source is None:
-                image, stats = render_frame(renderer, camera, width, height, progress, label=scene.renderer)
-            else:
-                image, stats = render_streamed(renderer, source, scene.transfer_function, camera, width, height,
-                                               progress)  # fmt: skip
-                drawn = drawn[:-1] + f": {stats.counters['bricks_drawn']:.0f} of {stats.counters['bricks']:.0f} bricks drawn)"
-    return image, stats, drawn
+    def __init__(self, clock: StageClock) -> None:
+        super().__init__()
+        self.clock = clock
+
+    def stage(self, name: str) -> AbstractContextManager[object]:
+        return self.clock.stage(name)
+
+    def progress(self, label: str) -> AbstractContextManager[ProgressCallback | None]:
+        from volren.cli.progress import progress_bar
+
+        return progress_bar(label)

@@ -15,7 +15,7 @@ from PyQt5.QtCore import QObject
 from volren.app.core.loading import PathArg
 from volren.app.core.state import ViewState
 from volren.app.files.background_job import BackgroundJobs
-from volren.app.files.screenshot import ScreenshotJob, job_renderer
+from volren.app.files.screenshot import ScreenshotJob, job_drawing
 from volren.app.rendering.render_service import RendererFactory, _registry_factory
 from volren.io.movie_io import check_movie_path
 from volren.model.animation import Animation
@@ -44,8 +44,8 @@ def record_job(job: MovieJob, factory: RendererFactory = _registry_factory,
     from volren.movie import record_movie
 
     view = job.view
-    with job_renderer(view, factory) as renderer:
-        record_movie(renderer, job.animation, view.camera, view.tf, view.volume.bounds, (view.width, view.height),
+    with job_drawing(view, factory) as drawing:
+        record_movie(drawing.renderer, job.animation, view.camera, view.tf, view.volume.bounds, (view.width, view.height),
                      view.path, view.background, job.lossless, progress, view.renderer)  # fmt: skip
     return str(view.path)
 

@@ -12,8 +12,6 @@ The PNG holds what the viewport shows: the premultiplied frame over the view's b
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,9 +24,11 @@ from volren.app.core.preview_settings import still_settings
 from volren.app.core.state import ViewState
 from volren.app.files.background_job import BackgroundJobs
 from volren.app.rendering.render_service import RendererFactory, _registry_factory
+from volren.draw import Drawing, Preparation, VolumeInput, draw
 from volren.errors import VolrenError
 from volren.io.safe_write import check_output
 from volren.model.camera import Camera
+from volren.model.scene import Scene
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
@@ -75,25 +75,31 @@ def check_writable(path: PathArg) -> None:
     check_output(path)
 
 
-@contextmanager
-def job_renderer(job: ScreenshotJob, factory: RendererFactory = _registry_factory) -> Iterator[Renderer]:
-    """A renderer made for `job` (its settings, volume and TF), released at the end of the block."""
-    renderer = factory(job.renderer)
-    try:
-        renderer.set_settings(still_settings(job.settings, renderer.capabilities))
-        renderer.set_volume(job.volume)
-        renderer.set_transfer_function(job.tf)
-        yield renderer
-    finally:
-        renderer.release()
+def _still_frame_settings(settings: RenderSettings, renderer: Renderer) -> RenderSettings:
+    return still_settings(settings, renderer.capabilities)
+
+
+def _job_scene(job: ScreenshotJob) -> Scene:
+    """The view's snapshot as a scene: its renderer and settings as they are (no quality level)."""
+    return Scene(None, job.tf, job.camera, job.settings, renderer=job.renderer, size=(job.width, job.height),
+                 volume=job.volume)  # fmt: skip
+
+
+def _preparation(factory: RendererFactory) -> Preparation:
+    """Renderers made by the app's `factory`, each given a still frame's settings (`still_settings`)."""
+    return Preparation(factory, _still_frame_settings)
+
+
+def job_drawing(job: ScreenshotJob, factory: RendererFactory = _registry_factory) -> Drawing:
+    """`job` as `volren.draw` draws it (the movie export keeps its renderer for every frame)."""
+    return Drawing(VolumeInput(job.volume), _job_scene(job), how=_preparation(factory))
 
 
 def render_job(
     job: ScreenshotJob, factory: RendererFactory = _registry_factory, progress: ProgressCallback | None = None
 ) -> NDArray[np.float32]:
     """The premultiplied RGBA frame of `job`, from a renderer made for it and released after."""
-    with job_renderer(job, factory) as renderer:
-        return np.asarray(renderer.render(job.camera, job.width, job.height, progress))
+    return draw(VolumeInput(job.volume), _job_scene(job), job.camera, progress, how=_preparation(factory)).image
 
 
 def write_job(job: ScreenshotJob, image: NDArray[np.float32]) -> None:
