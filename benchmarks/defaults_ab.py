@@ -25,11 +25,12 @@ from contextlib import ExitStack
 from pathlib import Path
 
 from benchmarks._cli import run
+from benchmarks.quality_levels import VTK_DEFAULT, _configs
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset, sample_datasets, shared_datasets, shared_folder
-from volren.bench.quality import VTK_DEFAULT, _configs
 from volren.model import RenderSettings
-from volren.quality import kind_of, resolve
+from volren.model.scene_class import SceneClass
+from volren.quality import resolve
 from volren.renderers.base import render_frame
 from volren.testing import image_error
 from volren.testing.reference_images import reference_image
@@ -51,7 +52,7 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
     """One scene: both renderers prepared, a warm-up frame each at the scene's view (scored against
     the reference), then `frames` pairs of turning frames."""
     camera_at = lambda turn: d.camera(volume.bounds, turn=turn)  # noqa: E731
-    name, settings, _ = resolve(kind_of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
+    name, settings, _ = resolve(SceneClass.of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
                                 cameras=(camera_at(0.0),), bounds=volume.bounds)  # fmt: skip
     curve, label = VTK_DEFAULT[d.kind]
     peer = _configs(d.kind, {curve})[(curve, label)]

@@ -151,13 +151,14 @@ def render(
     for name, value in (("azimuth", azimuth), ("elevation", elevation), ("zoom", zoom)):
         if not is_finite(value):
             raise VolrenError(f"{name} must be finite, got {value!r:.40}")
-    from volren.quality import kind_of, resolve
+    from volren.model.scene_class import SceneClass
+    from volren.quality import resolve
 
     on_cluster = cluster is not None or scheduler is not None  # an empty one is refused, not ignored
     bounds = zarr_input.bounds if zarr_input is not None else vol.bounds
     cam = camera or Camera.orbit(bounds, azimuth, elevation, zoom, parallel, width / height)
     # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
-    renderer, at_level, _ = resolve(kind_of(vol, transfer), transfer.dims, renderer, quality, RenderSettings().with_(**settings),
+    renderer, at_level, _ = resolve(SceneClass.of(vol, transfer), transfer.dims, renderer, quality, RenderSettings().with_(**settings),
                                     bricks=zarr_input is not None or on_cluster, cameras=(cam,), bounds=bounds)  # fmt: skip
     render_settings = at_level.with_(**{k: v for k, v in settings.items() if k != "options"})
     check_scene(vol, transfer, render_settings, tf_name=str(tf) if isinstance(tf, str | PathLike) else None)

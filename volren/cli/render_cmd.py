@@ -290,7 +290,8 @@ def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | No
     """The scene's renderer resolved (`auto`) and its settings at the quality level asked for: the
     flag, the scene file's "quality", or `default` for a render without a scene file (a scene
     file's own settings are kept as they are unless a level is named); and why `auto` chose."""
-    from volren.quality import kind_of, resolve
+    from volren.model.scene_class import SceneClass
+    from volren.quality import resolve
 
     if scene.volume is None:
         return scene, None
@@ -298,7 +299,7 @@ def _at_quality(args: argparse.Namespace, scene: Scene) -> tuple[Scene, str | No
     zarr_input = getattr(args, "zarr_input", None)
     bricks = zarr_input is not None or wants_cluster(args)
     bounds = zarr_input.bounds if zarr_input is not None else scene.volume.bounds
-    renderer, settings, why = resolve(kind_of(scene.volume, scene.transfer_function), scene.transfer_function.dims, scene.renderer, level,
+    renderer, settings, why = resolve(SceneClass.of(scene.volume, scene.transfer_function), scene.transfer_function.dims, scene.renderer, level,
                                       scene.settings, bricks, cameras=(scene.resolved_camera(bounds),), bounds=bounds)  # fmt: skip
     return replace(scene, renderer=renderer, settings=settings), why
 
