@@ -2,8 +2,8 @@
 
 Why: the fast-defaults goal is about what `volren render` gives with no options (`auto` at quality
 `default`) against VTK's default (vtkSmartVolumeMapper on grids, the unstructured ray caster on
-meshes: the peer of `volren bench quality`) on every shared scene: at no more error, >= 3x faster
-on grids and >= 10x on meshes. `volren bench quality` reads both frame times from sweeps taken
+meshes: the peer of `benchmarks.quality_levels`) on every shared scene: at no more error, >= 3x faster
+on grids and >= 10x on meshes. `benchmarks.quality_levels` reads both frame times from sweeps taken
 minutes apart, and this machine's frame times drift by 20-40 % between runs; here each scene's two
 renderers draw alternately, one frame each with the camera turning 2 degrees between pairs (which
 of the two goes first alternates too), so both see the same load.
