@@ -2,8 +2,8 @@
 
 Why: the fast-defaults goal is about what `volren render` gives with no options (`auto` at quality
 `default`) against VTK's default (vtkSmartVolumeMapper on grids, the unstructured ray caster on
-meshes: the peer of `volren bench quality`) on every shared scene: at no more error, >= 3x faster
-on grids and >= 10x on meshes. `volren bench quality` reads both frame times from sweeps taken
+meshes: the peer of `benchmarks.quality_levels`) on every shared scene: at no more error, >= 3x faster
+on grids and >= 10x on meshes. `benchmarks.quality_levels` reads both frame times from sweeps taken
 minutes apart, and this machine's frame times drift by 20-40 % between runs; here each scene's two
 renderers draw alternately, one frame each with the camera turning 2 degrees between pairs (which
 of the two goes first alternates too), so both see the same load.
@@ -25,11 +25,12 @@ from contextlib import ExitStack
 from pathlib import Path
 
 from benchmarks._cli import run
+from benchmarks.quality_levels import VTK_DEFAULT, _configs
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset, sample_datasets, shared_datasets, shared_folder
-from volren.bench.quality import VTK_DEFAULT, _configs
 from volren.model import RenderSettings
-from volren.quality import kind_of, resolve
+from volren.model.scene_class import SceneClass
+from volren.quality import resolve
 from volren.renderers.base import render_frame
 from volren.testing import image_error
 from volren.testing.reference_images import reference_image
@@ -51,7 +52,7 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
     """One scene: both renderers prepared, a warm-up frame each at the scene's view (scored against
     the reference), then `frames` pairs of turning frames."""
     camera_at = lambda turn: d.camera(volume.bounds, turn=turn)  # noqa: E731
-    name, settings, _ = resolve(kind_of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
+    name, settings, _ = resolve(SceneClass.of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
                                 cameras=(camera_at(0.0),), bounds=volume.bounds)  # fmt: skip
     curve, label = VTK_DEFAULT[d.kind]
     peer = _configs(d.kind, {curve})[(curve, label)]

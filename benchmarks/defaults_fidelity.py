@@ -25,11 +25,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from benchmarks._cli import int_list, run
+from benchmarks.quality_levels import VTK_DEFAULT, _configs
 from volren.api import prepared_renderer
 from volren.bench.datasets import select, shared_folder
-from volren.bench.quality import VTK_DEFAULT, _configs
 from volren.model import RenderSettings
-from volren.quality import kind_of, resolve
+from volren.model.scene_class import SceneClass
+from volren.quality import resolve
 from volren.renderers.base import render_frame
 from volren.testing.metrics import OFF_THRESHOLD, ImageError, image_error
 from volren.testing.reference_images import reference_image
@@ -78,7 +79,7 @@ def scene_rows(dataset, sizes: Iterable[int], styles: set[str] | None = None) ->
     for style, tf in dataset.transfer_functions():
         if styles is not None and style not in styles:
             continue
-        name, settings, _ = resolve(kind_of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
+        name, settings, _ = resolve(SceneClass.of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
                                     cameras=(camera,), bounds=volume.bounds)  # fmt: skip
         for size in sizes:
             truth = reference_image(volume, tf, camera, size, size)

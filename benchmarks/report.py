@@ -29,7 +29,7 @@ SECTIONS = (
     ("stress.md", "Numerical stress", "Do extreme inputs give NaN, Inf or out-of-range pixels?"),
     ("quality.md", "Fast by default: `auto` at each quality level against VTK's default",
      "What does a render with no options (or with `--quality LEVEL`) get, against VTK's default, scene by scene? "
-     "(`volren bench quality ... --markdown`)"),
+     "(`python -m benchmarks.quality_levels ... --markdown`)"),
     ("defaults_fidelity.md", "No options on hard scenes, at every image size",
      "Does a render with no options keep what VTK's default keeps: thin tubes and sheets, specks, noise, steps, "
      "anisotropic grids, from 128^2 to 1024^2 (RMSE and pixels off by more than 0.1)?"),

@@ -183,3 +183,31 @@ def test_the_licence_matches_pyproject():
     assert text.startswith("BSD 3-Clause License")
     assert "the volren developers" in text.splitlines()[2]
     assert "Neither the name of the copyright holder nor the names of its" in text
+
+
+def test_every_renderers_measured_levels_are_package_data_of_the_distribution_that_installs_it():
+    """`auto` reads each renderer's quality_levels.json from the renderer's installed package: the
+    core's pyproject ships the built-ins' (`*.json` under every volren package), each plugin's
+    pyproject its own."""
+    from fnmatch import fnmatch
+
+    from volren.quality import LEVELS_FILE
+
+    def shipped(pyproject: Path, package: str) -> bool:
+        tool = tomllib.loads(pyproject.read_text())["tool"]["setuptools"]
+        patterns = [p for key in ("*", package) for p in tool.get("package-data", {}).get(key, [])]
+        return any(fnmatch(LEVELS_FILE, p) for p in patterns)
+
+    found = sorted(REPO.glob(f"volren/**/{LEVELS_FILE}")) + sorted(REPO.glob(f"plugins/*/*/{LEVELS_FILE}"))
+    assert {p.parent.name for p in found} >= {"raycast", "slicer", "tetra", "vtk_mappers", "volren_shearwarp",
+                                              "volren_objectorder"}  # fmt: skip
+    for path in found:
+        package_dir = path.parent
+        project = next(d for d in package_dir.parents if (d / "pyproject.toml").is_file())
+        package = ".".join(package_dir.relative_to(project).parts)
+        assert (package_dir / "__init__.py").is_file(), path  # a package, so package data
+        assert shipped(project / "pyproject.toml", package), path
+    for dist in installs_of_this_checkout():  # the installed file list, where built from this checkout
+        files = [str(f) for f in dist.files or []]
+        if any(f.endswith(".py") for f in files):
+            assert any(f.endswith(f"renderers/raycast/{LEVELS_FILE}") for f in files), dist

@@ -1,21 +1,30 @@
-"""Quality levels and `auto` (`volren.quality`) and their derivation from bench results (`volren.bench.quality`)."""
+"""Quality levels and `auto` (`volren.quality`), each renderer's measured levels, and their derivation from
+bench results (`benchmarks.quality_levels`)."""
 
 from __future__ import annotations
 
 import csv
 import json
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from benchmarks.quality_levels import derive, read_rows
+from benchmarks.quality_levels import main as quality_levels_main
 from volren import quality
-from volren.bench.quality import derive, read_rows
 from volren.cli.main import main
 from volren.errors import VolrenError
 from volren.model import RenderSettings
-from volren.quality import LevelChoice, QualityTable, choose_renderer, settings_for
+from volren.model.scene_class import SceneClass
+from volren.model.tf_class import TFClass
+from volren.quality import Measurement, QualityTable, choose_renderer
+from volren.renderers.base import QualityLevel
 from volren.renderers.registry import registry
+
+UNIFORM, TET = SceneClass("uniform"), SceneClass("tet")
+SMOOTH, SHARP, BAND = (SceneClass("uniform", c) for c in (TFClass.SMOOTH, TFClass.SHARP, TFClass.BAND))
 
 SCENES = [("a", "smooth"), ("b", "opaque")]
 
@@ -32,17 +41,17 @@ def test_levels_are_the_fastest_configurations_within_each_bound_of_vtks_error()
     rows += rows_for("slicer", "step 0.5, post", (0.015, 0.02), 100)  # 1.5x / 1x
     rows += rows_for("slicer", "step 0.25, post", (0.008, 0.009), 180)  # 0.8x / 0.45x
     rows += rows_for("slicer", "step 0.25, pre 512", (0.002, 0.004), 200)  # 0.2x
-    levels = derive(rows, "test").levels["uniform"]["slicer"]
-    assert levels["draft"].label == "step 1, post"  # within 4x; step 2 is 5x on scene a
-    assert levels["interactive"].label == "step 0.5, post"
-    assert levels["default"].label == "step 0.25, post"
-    assert levels["high"].label == levels["exact"].label == "step 0.25, pre 512"
-    assert levels["default"].step == 0.25 and not levels["default"].preintegration
-    assert levels["high"].preintegration and levels["high"].options["table_size"] == 512
+    levels = derive(rows, "test").levels[UNIFORM]["slicer"]
+    assert levels["draft"].level.label == "step 1, post"  # within 4x; step 2 is 5x on scene a
+    assert levels["interactive"].level.label == "step 0.5, post"
+    assert levels["default"].level.label == "step 0.25, post"
+    assert levels["high"].level.label == levels["exact"].level.label == "step 0.25, pre 512"
+    assert levels["default"].level.step == 0.25 and not levels["default"].level.preintegration
+    assert levels["high"].level.preintegration and levels["high"].level.options["table_size"] == 512
     assert levels["draft"].ms == {"a/smooth": 60.0, "b/opaque": 60.0} and levels["draft"].worst_error_ratio == 3.0
     assert all(c.meets for c in levels.values())
     # VTK's own levels: its default configuration
-    assert derive(rows, "test").levels["uniform"]["vtk"]["default"].options == {"mapper": "smart"}
+    assert derive(rows, "test").levels[UNIFORM]["vtk"]["default"].level.options == {"mapper": "smart"}
 
 
 def test_a_renderer_that_never_reaches_vtks_error_keeps_its_default_and_faster_drafts():
@@ -50,11 +59,11 @@ def test_a_renderer_that_never_reaches_vtks_error_keeps_its_default_and_faster_d
     rows += rows_for("slicer", "step 1, post", (0.08, 0.09), 60)  # 9x
     rows += rows_for("slicer", "step 0.5, post", (0.05, 0.05), 100)  # 5x: the renderer's own default
     rows += rows_for("slicer", "step 0.25, pre 512", (0.02, 0.03), 900)  # 3x, its most accurate, slow
-    levels = derive(rows, "test").levels["uniform"]["slicer"]
-    assert levels["default"].label == "step 0.5, post" and not levels["default"].meets
+    levels = derive(rows, "test").levels[UNIFORM]["slicer"]
+    assert levels["default"].level.label == "step 0.5, post" and not levels["default"].meets
     # draft's 4x bound is met only by the slow accurate setting: drafts are never slower than the default
-    assert levels["draft"].label == levels["interactive"].label == "step 1, post"
-    assert levels["exact"].label == "step 0.25, pre 512"
+    assert levels["draft"].level.label == levels["interactive"].level.label == "step 1, post"
+    assert levels["exact"].level.label == "step 0.25, pre 512"
 
 
 def test_read_rows_lets_a_later_file_win_and_refuses_other_files(tmp_path):
@@ -71,43 +80,49 @@ def test_read_rows_lets_a_later_file_win_and_refuses_other_files(tmp_path):
         read_rows([tmp_path / "x.csv"])
 
 
-def choice(ms: float, meets: bool = True, step: float = 0.5) -> LevelChoice:
-    return LevelChoice("x", step, False, {}, {"a/smooth": ms}, 1.0, meets)
+def choice(ms: float, meets: bool = True, step: float = 0.5) -> Measurement:
+    return Measurement(QualityLevel("x", step, False, {}), {"a/smooth": ms}, {"a/smooth": 100.0}, 1.0, meets)
 
 
 def table_of(**renderers) -> QualityTable:
-    return QualityTable({"uniform": {name: {level: c for level in quality.LEVELS} for name, c in renderers.items()}}, "t")
+    return QualityTable({UNIFORM: {name: {level: c for level in quality.LEVELS} for name, c in renderers.items()}}, {})
 
 
 def test_auto_takes_the_fastest_that_meets_the_level_and_can_draw_the_scene():
     table = table_of(slicer=choice(100), objectorder=choice(50), shearwarp=choice(10, meets=False))
     names = registry.names()
-    assert choose_renderer("uniform", "default", 1, RenderSettings(), names, table)[0] == "objectorder"
+    assert choose_renderer(UNIFORM, "default", 1, RenderSettings(), names, table)[0] == "objectorder"
     # a 2D TF: only the slicer of the three draws it
-    assert choose_renderer("uniform", "default", 2, RenderSettings(), names, table)[0] == "slicer"
+    assert choose_renderer(UNIFORM, "default", 2, RenderSettings(), names, table)[0] == "slicer"
     # none meeting: the fastest measured
     table = table_of(slicer=choice(100, meets=False), shearwarp=choice(10, meets=False))
-    assert choose_renderer("uniform", "draft", 1, RenderSettings(), names, table)[0] == "shearwarp"
+    assert choose_renderer(UNIFORM, "draft", 1, RenderSettings(), names, table)[0] == "shearwarp"
     # nothing measured draws it: a registered renderer that can, never the reference
-    name, why = choose_renderer("tet", "default", 1, RenderSettings(), names, table)
+    name, why = choose_renderer(TET, "default", 1, RenderSettings(), names, table)
     assert name != "reference" and "no measured renderer" in why
     with pytest.raises(VolrenError, match="quality must be one of"):
-        choose_renderer("uniform", "best", 1, RenderSettings(), names, table)
+        choose_renderer(UNIFORM, "best", 1, RenderSettings(), names, table)
 
 
-def test_settings_for_applies_the_level_and_keeps_the_callers_options():
-    table = QualityTable({"uniform": {"slicer": {"draft": LevelChoice("s", 2.0, True, {"table_size": 64, "path": "march"},
-                                                                      {}, 3.0)}}}, "t")  # fmt: skip
-    got = settings_for("slicer", "uniform", "draft", RenderSettings(shade=True, options={"table_size": 128}), table)
-    assert (got.step, got.preintegration, got.shade) == (2.0, True, True)
+def test_resolve_applies_the_level_and_keeps_the_callers_options(monkeypatch):
+    level = QualityLevel("s", 2.0, True, {"table_size": 64, "path": "march"})
+    table = QualityTable({UNIFORM: {"slicer": {"draft": Measurement(level, {}, {}, 3.0)}}}, {})
+    monkeypatch.setattr(quality, "table", lambda: table)
+    caller = RenderSettings(shade=True, options={"table_size": 128})
+    name, got, why = quality.resolve(UNIFORM, 1, "slicer", "draft", caller)
+    assert (name, got.step, got.preintegration, got.shade, why) == ("slicer", 2.0, True, True, None)
     assert got.options == {"table_size": 128, "path": "march"}
-    assert settings_for("tetra", "uniform", "draft", RenderSettings(), table) == RenderSettings()
+    assert quality.resolve(UNIFORM, 1, "tetra", "draft", RenderSettings())[1] == RenderSettings()
+    # the app's chooser: exactly the level's settings, options replaced
+    assert quality.at_level("slicer", SMOOTH, "draft", caller, table).options == {"table_size": 64, "path": "march"}
 
 
 def test_the_committed_table_round_trips_and_covers_both_kinds():
     table = quality.table()
-    assert QualityTable.from_json(json.loads(json.dumps(table.to_json())), "again") == table
-    assert set(table.levels) == {f"{kind}{cls}" for kind in ("uniform", "tet") for cls in ("", "/smooth", "/sharp", "/band")}
+    again = QualityTable.merged(QualityTable.from_renderer_json(name, json.loads(json.dumps(table.renderer_json(name))),
+                                                                "again") for name in table.sources)  # fmt: skip
+    assert again == table
+    assert set(table.levels) == {SceneClass(kind, cls) for kind in ("uniform", "tet") for cls in (None, *TFClass)}
     for kind, renderers in table.levels.items():
         for name, levels in renderers.items():
             assert list(levels) == list(quality.LEVELS), (kind, name)
@@ -116,8 +131,9 @@ def test_the_committed_table_round_trips_and_covers_both_kinds():
 
 @pytest.mark.usefixtures("opengl")
 def test_the_cli_quality_flag_sets_the_measured_settings_and_flags_win(tmp_path, capsys, monkeypatch):
-    table = QualityTable({"uniform": {"slicer": {level: LevelChoice("s", 2.0, False, {}, {"a/smooth": 1.0}, 1.0)
-                                                 for level in quality.LEVELS}}}, "t")  # fmt: skip
+    level = QualityLevel("s", 2.0, False, {})
+    table = QualityTable({UNIFORM: {"slicer": {name: Measurement(level, {"a/smooth": 1.0}, {"a/smooth": 1.0}, 1.0)
+                                               for name in quality.LEVELS}}}, {})  # fmt: skip
     monkeypatch.setattr(quality, "table", lambda: table)
     from pathlib import Path
 
@@ -133,71 +149,30 @@ def test_the_cli_quality_flag_sets_the_measured_settings_and_flags_win(tmp_path,
     assert not np.array_equal(np.load(out["draft"]), np.load(out["step1"]))
 
 
-def test_tf_sharpness_is_the_steepest_optical_depth_change_across_the_data_range():
-    from volren.model import TransferFunction1D
-
-    ramp = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [10, 0.5]])
-    # -ln(1 - a) rises by ln 2 over the TF's whole span; over data spanning half of it, half that
-    assert quality.tf_sharpness(ramp, (0.0, 10.0)) == pytest.approx(np.log(2.0))
-    assert quality.tf_sharpness(ramp, (0.0, 5.0)) == pytest.approx(np.log(2.0) / 2)
-    assert quality.tf_class(ramp, (0.0, 10.0)) == "smooth"
-    # the same rise over a hundredth of the data's range is sharp
-    assert quality.tf_sharpness(ramp, (0.0, 1000.0)) == pytest.approx(100 * np.log(2.0))
-    assert quality.tf_class(ramp, (0.0, 1000.0)) == "sharp"
-    step = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [5, 0.0], [5, 0.2], [10, 0.2]])
-    assert quality.tf_sharpness(step, (0.0, 10.0)) == np.inf and quality.tf_class(step, (0.0, 10.0)) == "sharp"
-    flat = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.3], [10, 0.3]])
-    assert quality.tf_sharpness(flat, (0.0, 10.0)) == 0.0
-    assert quality.tf_sharpness(ramp, (3.0, 3.0)) == 0.0  # constant data: nothing to be sharp over
-    assert quality.tf_class(object(), (0.0, 1.0)) is None  # not a 1D TF (a 2D one): no class
-    assert quality.tf_visible_fraction(object(), (0.0, 1.0)) is None
-    assert quality.scene_kind("uniform", ramp, (0.0, 1000.0)) == "uniform/sharp"
-    assert quality.scene_kind("tet", object(), (0.0, 1.0)) == "tet"
-    assert quality.base_kind("uniform/sharp") == "uniform"
-
-
-def test_a_sharp_tf_visible_on_a_narrow_part_of_the_range_is_a_band_tf():
-    from volren.model import TransferFunction1D
-
-    grey = [[0, 1, 1, 1], [100, 1, 1, 1]]
-    # a peak 4 wide (visible on (48, 52)) and a step up to a solid body (visible on (40, 100])
-    peak = TransferFunction1D(grey, [[0, 0.0], [48, 0.0], [50, 0.9], [52, 0.0], [100, 0.0]])
-    step = TransferFunction1D(grey, [[0, 0.0], [40, 0.0], [42, 0.9], [100, 0.9]])
-    assert quality.tf_visible_fraction(peak, (0.0, 100.0)) == pytest.approx(0.04, abs=1e-3)
-    assert quality.tf_visible_fraction(step, (0.0, 100.0)) == pytest.approx(0.6, abs=1e-3)
-    assert quality.tf_sharpness(peak, (0.0, 100.0)) > quality.SHARP_TF
-    assert quality.tf_class(peak, (0.0, 100.0)) == "band" and quality.tf_class(step, (0.0, 100.0)) == "sharp"
-    # a gentle hump visible on a narrow part of a wide range stays smooth (band TFs are sharp ones)
-    hump = TransferFunction1D(grey, [[0, 0.0], [45, 0.0], [50, 0.002], [55, 0.0], [100, 0.0]])
-    assert quality.tf_class(hump, (0.0, 100.0)) == "smooth"
-    assert quality.features_class(quality.SHARP_TF, quality.BAND_TF) == "sharp"
-    assert quality.scene_kind("uniform", peak, (0.0, 100.0)) == "uniform/band"
-
-
 def test_levels_are_also_chosen_per_tf_class_and_looked_up_with_a_fallback():
     rows = rows_for("vtk-smart", "default", (0.01, 0.01), 300)
     rows += rows_for("slicer", "step 1, post", (0.005, 0.03), 60)  # within on the smooth scene only
     rows += rows_for("slicer", "step 0.5, pre 512", (0.02, 0.005), 100)  # within on the opaque scene only
     rows += rows_for("slicer", "step 0.25, pre 512", (0.008, 0.004), 200)  # within on both
-    classes = {("a", "smooth"): "smooth", ("b", "opaque"): "sharp"}
+    classes = {("a", "smooth"): TFClass.SMOOTH, ("b", "opaque"): TFClass.SHARP}
     table = derive(rows, "test", classes)
-    assert table.choice("slicer", "uniform", "default").label == "step 0.25, pre 512"
-    assert table.choice("slicer", "uniform/smooth", "default").label == "step 1, post"
-    assert table.choice("slicer", "uniform/sharp", "default").label == "step 0.5, pre 512"
-    assert table.choice("slicer", "uniform/smooth", "default").ms == {"a/smooth": 60.0}
+    assert table.measurement("slicer", UNIFORM, "default").level.label == "step 0.25, pre 512"
+    assert table.measurement("slicer", SMOOTH, "default").level.label == "step 1, post"
+    assert table.measurement("slicer", SHARP, "default").level.label == "step 0.5, pre 512"
+    assert table.measurement("slicer", SMOOTH, "default").ms == {"a/smooth": 60.0}
     # a class the table lacks falls back to the kind's own levels
-    lean = QualityTable({"uniform": table.levels["uniform"]}, "t")
-    assert lean.choice("slicer", "uniform/smooth", "default").label == "step 0.25, pre 512"
-    assert sorted(lean.measured("uniform/sharp")) == ["slicer", "vtk"]
+    lean = QualityTable({UNIFORM: table.levels[UNIFORM]}, {})
+    assert lean.measurement("slicer", SMOOTH, "default").level.label == "step 0.25, pre 512"
+    assert sorted(lean.measured(SHARP)) == ["slicer", "vtk"]
     # settings are at the level they measure as for the TF's class first (step 1 is the sharp class's draft) ...
-    smooth_default = table.choice("slicer", "uniform/smooth", "default").apply(RenderSettings())
-    assert quality.level_of("slicer", "uniform/sharp", smooth_default, table) == "draft"
+    smooth_default = table.measurement("slicer", SMOOTH, "default").level.apply(RenderSettings())
+    assert quality.level_of("slicer", SHARP, smooth_default, table) == "draft"
     # ... else at the other class's: a TF edited into the other class keeps its level
-    sharp_high = table.choice("slicer", "uniform/sharp", "high").apply(RenderSettings())
-    assert quality.level_of("slicer", "uniform/smooth", sharp_high, table) == "high"
-    assert quality.level_of("slicer", "uniform/sharp", RenderSettings(step=0.3), table) is None
+    sharp_high = table.measurement("slicer", SHARP, "high").level.apply(RenderSettings())
+    assert quality.level_of("slicer", SMOOTH, sharp_high, table) == "high"
+    assert quality.level_of("slicer", SHARP, RenderSettings(step=0.3), table) is None
     # without classes only the kind's levels
-    assert set(derive(rows, "test").levels) == {"uniform"}
+    assert set(derive(rows, "test").levels) == {UNIFORM}
 
 
 def test_auto_chooses_by_the_tfs_class(monkeypatch):
@@ -205,14 +180,14 @@ def test_auto_chooses_by_the_tfs_class(monkeypatch):
 
     uniform = {name: {level: choice(ms) for level in quality.LEVELS} for name, ms in (("slicer", 100), ("objectorder", 50))}
     sharp = {name: {level: choice(ms) for level in quality.LEVELS} for name, ms in (("slicer", 30), ("objectorder", 80))}
-    table = QualityTable({"uniform": uniform, "uniform/sharp": sharp}, "t")
+    table = QualityTable({UNIFORM: uniform, SHARP: sharp}, {})
     monkeypatch.setattr(quality, "table", lambda: table)
     smooth_tf = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [10, 0.5]])
     sharp_tf = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [5, 0.0], [5.01, 1.0], [10, 1.0]])
     for tf, wanted in ((smooth_tf, "objectorder"), (sharp_tf, "slicer")):
-        kind = quality.scene_kind("uniform", tf, (0.0, 10.0))
+        kind = SceneClass.of(SimpleNamespace(kind="uniform", value_range=(0.0, 10.0)), tf)
         name, _settings, why = quality.resolve(kind, 1, "auto", None, RenderSettings())
-        assert name == wanted and why == f"the fastest measured at quality default for a {kind[8:]} TF that draws this scene"
+        assert name == wanted and why == f"the fastest measured at quality default for a {kind.tf.value} TF that draws this scene"
 
 
 def test_bench_quality_classes_the_scenes_and_writes_the_auto_report(tmp_path, monkeypatch, capsys):
@@ -227,16 +202,18 @@ def test_bench_quality_classes_the_scenes_and_writes_the_auto_report(tmp_path, m
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    out, md = tmp_path / "levels.json", tmp_path / "quality.md"
-    assert main(["bench", "quality", str(runs), "--out", str(out), "--markdown", str(md)]) == 0
+    out, md = tmp_path / "levels", tmp_path / "quality.md"
+    assert quality_levels_main([str(runs), "--out", str(out), "--markdown", str(md)]) == 0
     printed = capsys.readouterr().out
     assert "TF class of marschner_lobb/sample: smooth" in printed
-    table = QualityTable.from_json(json.loads(out.read_text()), "t")
-    assert set(table.levels) == {"uniform", "uniform/smooth"}
-    assert table.choice("slicer", "uniform/smooth", "default").label == "step 1, post"
+    assert sorted(p.name for p in out.iterdir()) == ["slicer", "vtk"]  # one file per renderer
+    table = QualityTable.merged(quality.read_levels(name, out / name / quality.LEVELS_FILE) for name in ("slicer", "vtk"))
+    assert set(table.levels) == {UNIFORM, SMOOTH}
+    assert table.measurement("slicer", SMOOTH, "default").level.label == "step 1, post"
+    assert table.measurement("slicer", SMOOTH, "default").peer_ms == {"marschner_lobb/sample": 200.0}
     # the vtk renderer's default level is a faster VTK configuration within VTK's default's error; the
     # ratios are still against VTK's default itself (vtk-smart's default, 200 ms)
-    assert table.choice("vtk", "uniform/smooth", "default").label == "vtk-fixed_point: step 0.5"
+    assert table.measurement("vtk", SMOOTH, "default").level.label == "vtk-fixed_point: step 0.5"
     text = md.read_text()
     # auto takes the slicer (the only one of ours measured): 200 / 40 ms, its worst RMSE 0.8x VTK's
     assert "| marschner_lobb/sample | smooth (12, 0.2) | slicer: step 1, post | 40 | 200 | 5.0x |" in text
@@ -255,7 +232,7 @@ def test_auto_passes_over_a_renderer_that_cannot_draw_the_view():
                              clipping_range=(0.01, 50.0))  # fmt: skip
 
     def chosen(*cameras):
-        return choose_renderer("uniform", "default", 1, RenderSettings(), names, table, cameras=cameras, bounds=bounds)[0]
+        return choose_renderer(UNIFORM, "default", 1, RenderSettings(), names, table, cameras=cameras, bounds=bounds)[0]
 
     assert registry.capabilities("shearwarp").camera_reason("uniform", inside, bounds)
     assert chosen(outside) == "shearwarp" and chosen(parallel_inside) == "shearwarp"
@@ -263,7 +240,7 @@ def test_auto_passes_over_a_renderer_that_cannot_draw_the_view():
     assert chosen(outside, inside) == "objectorder"  # a movie: every frame's view must be drawable
     # the app's own list of drawable renderers still meets the view test
     only = {"shearwarp", "objectorder"}
-    assert choose_renderer("uniform", "default", 1, RenderSettings(), names, table, can_draw=only.__contains__,
+    assert choose_renderer(UNIFORM, "default", 1, RenderSettings(), names, table, can_draw=only.__contains__,
                            cameras=(inside,), bounds=bounds)[0] == "objectorder"  # fmt: skip
 
 
@@ -283,8 +260,8 @@ def test_the_api_renders_from_inside_the_volume_with_auto_where_its_first_choice
     from volren.model import Camera
 
     volume, band = band_scene()
-    kind = quality.scene_kind("uniform", band, volume.value_range)
-    assert kind == "uniform/band" and quality.resolve(kind, 1, "auto", "interactive", RenderSettings())[0] == "shearwarp"
+    kind = SceneClass.of(volume, band)
+    assert kind == BAND and quality.resolve(kind, 1, "auto", "interactive", RenderSettings())[0] == "shearwarp"
     inside = Camera(position=(5.0, 5.0, 5.0), focal_point=(11.0, 11.0, 11.0), clipping_range=(0.01, 50.0))
     with pytest.raises(VolrenError, match="inside"):
         volren.render(volume, band, renderer="shearwarp", camera=inside, size=(24, 24))
@@ -333,11 +310,11 @@ def test_clipping_planes_that_cut_a_mesh_pass_vtk_over():
     assert vtk.camera_reason("tet", whole, bounds) is None
     assert "near or far plane cuts" in vtk.camera_reason("tet", cut_near, bounds)
     assert vtk.camera_reason("uniform", cut_near, bounds) is None  # the grid mappers clip
-    tets = QualityTable({"tet": {"vtk": {level: choice(10) for level in quality.LEVELS},
-                                 "tetra": {level: choice(50) for level in quality.LEVELS}}}, "t")  # fmt: skip
+    tets = QualityTable({TET: {"vtk": {level: choice(10) for level in quality.LEVELS},
+                               "tetra": {level: choice(50) for level in quality.LEVELS}}}, {})  # fmt: skip
     names = registry.names()
-    assert choose_renderer("tet", "default", 1, RenderSettings(), names, tets, cameras=(whole,), bounds=bounds)[0] == "vtk"
-    assert choose_renderer("tet", "default", 1, RenderSettings(), names, tets, cameras=(cut_near,), bounds=bounds)[0] == "tetra"
+    assert choose_renderer(TET, "default", 1, RenderSettings(), names, tets, cameras=(whole,), bounds=bounds)[0] == "vtk"
+    assert choose_renderer(TET, "default", 1, RenderSettings(), names, tets, cameras=(cut_near,), bounds=bounds)[0] == "tetra"
 
 
 def test_a_movie_from_inside_the_volume_refuses_up_front_or_goes_to_a_renderer_that_draws_it(tmp_path):
@@ -363,11 +340,11 @@ def test_default_and_above_never_interpolate_pixels_even_when_faster_and_within_
     rows += rows_for("raycast", "step 0.25, refine 8/0.02", (0.005, 0.005), 20)  # fast, accurate, interpolating
     rows += rows_for("raycast", "step 0.5 (default)", (0.008, 0.009), 100)
     rows += rows_for("raycast", "step 0.25, pre-integrated", (0.002, 0.002), 200)
-    levels = derive(rows, "test").levels["uniform"]["raycast"]
-    assert levels["draft"].label == levels["interactive"].label == "step 0.25, refine 8/0.02"
-    assert levels["default"].label == "step 0.5 (default)"
-    assert levels["high"].label == levels["exact"].label == "step 0.25, pre-integrated"
-    assert all("image_stride" not in levels[level].options for level in ("default", "high", "exact"))
+    levels = derive(rows, "test").levels[UNIFORM]["raycast"]
+    assert levels["draft"].level.label == levels["interactive"].level.label == "step 0.25, refine 8/0.02"
+    assert levels["default"].level.label == "step 0.5 (default)"
+    assert levels["high"].level.label == levels["exact"].level.label == "step 0.25, pre-integrated"
+    assert all("image_stride" not in levels[level].level.options for level in ("default", "high", "exact"))
 
 
 def test_default_keeps_no_more_pixels_off_than_vtks_default_where_counted():
@@ -375,19 +352,19 @@ def test_default_keeps_no_more_pixels_off_than_vtks_default_where_counted():
     # within VTK's RMSE on both scenes, but 40 pixels off by more than 0.1 on one (a dropped vessel)
     rows += [dict(r, off=o) for r, o in zip(rows_for("slicer", "step 0.5, post", (0.008, 0.009), 50), ("0", "40"))]
     rows += [dict(r, off="2") for r in rows_for("slicer", "step 0.25, post", (0.009, 0.009), 90)]
-    levels = derive(rows, "test").levels["uniform"]["slicer"]
-    assert levels["draft"].label == "step 0.5, post"  # previews may drop what VTK keeps
-    assert levels["default"].label == "step 0.25, post"
+    levels = derive(rows, "test").levels[UNIFORM]["slicer"]
+    assert levels["draft"].level.label == "step 0.5, post"  # previews may drop what VTK keeps
+    assert levels["default"].level.label == "step 0.25, post"
     # where no configuration keeps the count, the level says it does not meet its bound
     rows = [r for r in rows if r["settings"] != "step 0.25, post"]
-    assert not derive(rows, "test").levels["uniform"]["slicer"]["default"].meets
+    assert not derive(rows, "test").levels[UNIFORM]["slicer"]["default"].meets
 
 
 def test_the_committed_table_samples_every_pixel_at_default_and_above():
     for kind, renderers in quality.table().levels.items():
         for name, levels in renderers.items():
             for level in ("default", "high", "exact"):
-                assert levels[level].options.get("image_stride", 1) == 1, (kind, name, level)
+                assert levels[level].level.options.get("image_stride", 1) == 1, (kind, name, level)
 
 
 def test_a_later_run_of_other_scenes_binds_every_level_and_drops_what_it_did_not_measure():
@@ -400,16 +377,70 @@ def test_a_later_run_of_other_scenes_binds_every_level_and_drops_what_it_did_not
     small += [dict(r, size="128") for r in rows_for("slicer", "step 0.5, post", (0.06, 0.06), 5)]
     small += [dict(r, size="128") for r in rows_for("slicer", "step 0.25, post", (0.01, 0.01), 9)]
     small += [dict(r, size="128") for r in rows_for("slicer", "step 1, post", (0.001, 0.001), 1)]
-    levels = derive(rows + small, "test").levels["uniform"]["slicer"]
-    assert levels["default"].label == "step 0.25, post"
+    levels = derive(rows + small, "test").levels[UNIFORM]["slicer"]
+    assert levels["default"].level.label == "step 0.25, post"
     assert set(levels["default"].ms) == {"a/smooth", "b/opaque", "a/smooth@128", "b/opaque@128"}
-    assert all(c.label != "step 1, post" for c in levels.values())  # measured on the small scenes only
+    assert all(c.level.label != "step 1, post" for c in levels.values())  # measured on the small scenes only
 
 
 def test_default_is_chosen_with_a_margin_below_vtks_error():
     rows = rows_for("vtk-smart", "default", (0.01, 0.01), 300)
     rows += rows_for("slicer", "step 0.5, post", (0.0095, 0.0095), 50)  # within VTK's error, not its margin
     rows += rows_for("slicer", "step 0.25, post", (0.008, 0.008), 90)
-    levels = derive(rows, "test").levels["uniform"]["slicer"]
-    assert levels["default"].label == "step 0.25, post" and levels["default"].meets
-    assert levels["interactive"].label == "step 0.5, post"
+    levels = derive(rows, "test").levels[UNIFORM]["slicer"]
+    assert levels["default"].level.label == "step 0.25, post" and levels["default"].meets
+    assert levels["interactive"].level.label == "step 0.5, post"
+
+
+def test_each_renderer_ships_its_levels_in_its_own_package_and_the_core_names_no_plugin():
+    from pathlib import Path
+
+    import volren_objectorder
+    import volren_shearwarp
+
+    core = Path(quality.__file__).parent
+    for name, package in (("shearwarp", volren_shearwarp), ("objectorder", volren_objectorder)):
+        path = registry.data_file(name, quality.LEVELS_FILE)  # found through its entry point
+        assert path == Path(package.__file__).parent / quality.LEVELS_FILE
+        assert name in quality.table().measured(UNIFORM)
+    core_files = sorted(core.rglob(quality.LEVELS_FILE))
+    assert {p.parent.name for p in core_files} == {"raycast", "slicer", "tetra", "vtk_mappers"}
+    for path in core_files:
+        text = path.read_text()
+        assert "shearwarp" not in text and "objectorder" not in text, path
+        assert quality.read_levels("x", path).levels  # a table, under whatever name it is read
+
+
+def test_auto_ranks_by_time_ratios_which_order_the_committed_runs_as_their_frame_times():
+    """Every scene of the committed levels was measured with VTK's default in the same run, so each
+    scene's peer time is the same for every renderer, and ranking by time ratios orders the
+    renderers as their summed frame times do: `auto`'s choices are the fastest measured."""
+    table = quality.table()
+    names = registry.names()
+    checked = 0
+    for scene, renderers in table.levels.items():
+        peers: dict[str, float] = {}
+        for per in renderers.values():
+            for m in per.values():
+                for s, ms in m.peer_ms.items():
+                    assert peers.setdefault(s, ms) == ms, (scene, s)  # one run's peer per scene
+        for level in quality.LEVELS:
+            found = {n: table.measurement(n, scene, level) for n in table.measured(scene) if n not in quality.NOT_AUTO}
+            common = set.intersection(*(set(m.ms) for m in found.values()))
+            by_ms = sorted(found, key=lambda n: (not found[n].meets, sum(found[n].ms[s] for s in common)))
+            assert quality.ranked(scene, level, names, table) == by_ms, (scene, level)
+            fastest_meeting = by_ms[0]
+            assert choose_renderer(scene, level, 1, RenderSettings(), names, table)[0] == fastest_meeting, (scene, level)
+            checked += 1
+    assert checked == len(table.levels) * len(quality.LEVELS) > 0
+
+
+def test_ratios_to_each_runs_peer_rank_runs_from_different_machines_fairly():
+    """A renderer measured on a machine twice as slow (its peer twice as slow too) ranks by its
+    ratio, not its frame times."""
+    fast_machine = Measurement(QualityLevel("a", 0.5, False, {}), {"s": 100.0}, {"s": 200.0}, 1.0)
+    slow_machine = Measurement(QualityLevel("b", 0.5, False, {}), {"s": 150.0}, {"s": 400.0}, 1.0)
+    table = QualityTable({UNIFORM: {"slicer": {level: fast_machine for level in quality.LEVELS},
+                                    "raycast": {level: slow_machine for level in quality.LEVELS}}}, {})  # fmt: skip
+    assert slow_machine.time_ratio(["s"]) == 0.375 and fast_machine.time_ratio(["s"]) == 0.5
+    assert quality.ranked(UNIFORM, "default", ["slicer", "raycast"], table) == ["raycast", "slicer"]

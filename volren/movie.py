@@ -2,7 +2,7 @@
 
 One renderer is prepared once and kept for every frame; it is given a new TF only on frames
 whose TF differs (so a movie without TF keyframes builds its tables once), and new settings only
-where that TF's class (`volren.quality.kind_of`: smooth, sharp, band) asks for others: at a
+where that TF's class (`volren.model.tf_class`: smooth, sharp, band) asks for others: at a
 quality level, each frame is drawn with the level's settings for its own TF's class. Each frame
 is what `volren render` gives for the same camera and TF, converted to 8 bits exactly as its PNG is
 (`volren.io.image_io.to_png_pixels`), so a lossless movie decodes to those PNGs' pixels.
@@ -23,10 +23,11 @@ from volren.io.image_io import to_png_pixels
 from volren.io.movie_io import movie_writer
 from volren.model.animation import Animation, View
 from volren.model.scene import Scene
+from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
-from volren.quality import AUTO, at_level, kind_of
+from volren.quality import AUTO, at_level
 from volren.renderers.base import ProgressCallback, Renderer
 
 if TYPE_CHECKING:
@@ -112,11 +113,11 @@ def _settings_by_class(renderer: Renderer, name: str | None, level: str | None,
     volume, settings = getattr(renderer, "volume", None), getattr(renderer, "settings", None)
     if level is None or name is None or volume is None or settings is None:
         return None
-    if at_level(name, kind_of(volume, start_tf), level, settings) != settings:
+    if at_level(name, SceneClass.of(volume, start_tf), level, settings) != settings:
         return None
 
     def settings_of(frame_volume: Volume, tf: TransferFunction) -> RenderSettings:
-        return at_level(name, kind_of(frame_volume, tf), level, settings) or settings
+        return at_level(name, SceneClass.of(frame_volume, tf), level, settings) or settings
 
     return settings_of
 

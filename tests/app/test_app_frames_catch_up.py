@@ -12,7 +12,14 @@ import pytest
 from PyQt5.QtCore import QPoint, Qt
 
 from volren.app.rendering.scheduling import FrameScheduler
-from volren.quality import LevelChoice, QualityTable
+from volren.model.scene_class import SceneClass
+from volren.quality import Measurement, QualityTable
+from volren.renderers.base import QualityLevel
+
+
+def measured(label: str, step: float, pre: bool, options: dict, ms: dict, worst: float, meets: bool = True) -> Measurement:
+    """A measured level whose peer took 1 ms on every scene (ratios rank as frame times)."""
+    return Measurement(QualityLevel(label, step, pre, options), ms, dict.fromkeys(ms, 1.0), worst, meets)
 
 pytestmark = [pytest.mark.qt]
 
@@ -24,10 +31,10 @@ def levels_for(renderer: str, monkeypatch) -> None:
     (interactive), so a still frame can follow a coarse one (progressive refinement)."""
     from volren import quality
 
-    def level(step: float) -> LevelChoice:
-        return LevelChoice(f"step {step}", step, False, {"table_size": 256}, {"a/smooth": 10.0}, 1.0)
+    def level(step: float) -> Measurement:
+        return measured(f"step {step}", step, False, {"table_size": 256}, {"a/smooth": 10.0}, 1.0)
 
-    table = QualityTable({"uniform": {renderer: {"default": level(0.25), "interactive": level(0.5)}}}, "test")
+    table = QualityTable({SceneClass("uniform"): {renderer: {"default": level(0.25), "interactive": level(0.5)}}}, {})
     monkeypatch.setattr(quality, "table", lambda: table)
 
 

@@ -15,8 +15,10 @@ from volren.app.core.frame_sizes import preview_size
 from volren.app.core.loading import LoadedInput
 from volren.app.core.state import default_camera
 from volren.errors import VolrenError
+from volren.model.scene_class import SceneClass
 from volren.model.transfer_function import TransferFunction1D
-from volren.quality import LevelChoice, QualityTable
+from volren.quality import Measurement, QualityTable
+from volren.renderers.base import QualityLevel
 from volren.samples import sample_transfer_functions
 
 pytestmark = [pytest.mark.qt, pytest.mark.vtk]
@@ -25,19 +27,24 @@ pytestmark = [pytest.mark.qt, pytest.mark.vtk]
 FRAME_TIMEOUT_MS = 20000
 
 
+def measured(label: str, step: float, pre: bool, options: dict, ms: dict, worst: float, meets: bool = True) -> Measurement:
+    """A measured level whose peer took 1 ms on every scene (ratios rank as frame times)."""
+    return Measurement(QualityLevel(label, step, pre, options), ms, dict.fromkeys(ms, 1.0), worst, meets)
+
+
 
 def use_levels(monkeypatch, levels: dict) -> QualityTable:
-    """Replace the measured quality table by `levels` (renderer -> level -> LevelChoice) of uniform volumes."""
+    """Replace the measured quality table by `levels` (renderer -> level -> Measurement) of uniform volumes."""
     from volren import quality
 
-    table = QualityTable({"uniform": levels}, "test")
+    table = QualityTable({SceneClass("uniform"): levels}, {})
     monkeypatch.setattr(quality, "table", lambda: table)
     return table
 
 
-def level(step: float, pre: bool = False, options: dict | None = None, ms: float = 10.0) -> LevelChoice:
+def level(step: float, pre: bool = False, options: dict | None = None, ms: float = 10.0) -> Measurement:
     """A measured level: `step`, pre-integration, `options`, `ms` on one scene, VTK's error."""
-    return LevelChoice(f"step {step}", step, pre, options or {}, {"a/smooth": ms}, 1.0)
+    return measured(f"step {step}", step, pre, options or {}, {"a/smooth": ms}, 1.0)
 
 
 
@@ -236,13 +243,13 @@ def test_a_renderer_that_cannot_draw_a_view_from_inside_gives_way_to_one_that_ca
 def test_requested_renderer_that_cannot_draw_is_an_error(make_window, fake_renderers, sample, qtbot, error_boxes):
     """The error says so, and the renderer drawing instead is `auto`'s measured choice (it was a
     fixed preference for vtk, the slowest renderer on the shared scenes)."""
-    from volren.quality import DEFAULT_LEVEL, choose_renderer, kind_of
+    from volren.quality import DEFAULT_LEVEL, choose_renderer
 
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
         w.files.apply_loaded(sample, "fake_tet_only")
     usable = [o.name for o in w.renderers.options() if o.enabled]
-    measured, _ = choose_renderer(kind_of(sample.volume, sample.transfer_function), DEFAULT_LEVEL, 1,
+    measured, _ = choose_renderer(SceneClass.of(sample.volume, sample.transfer_function), DEFAULT_LEVEL, 1,
                                   w.state.settings, usable, can_draw=set(usable).__contains__)  # fmt: skip
     assert blocker.args[0].renderer == measured and measured != "vtk"
     assert len(error_boxes) == 1 and "fake_tet_only does not render uniform volumes" in error_boxes[0][1]
@@ -394,13 +401,13 @@ def test_run_with_screenshot_in_process(qapp, tmp_path):
 
 
 def test_the_first_volume_gets_the_auto_renderer_and_the_status_bar_says_why(make_window, sample, qtbot, error_boxes):
-    from volren.quality import DEFAULT_LEVEL, choose_renderer, kind_of
+    from volren.quality import DEFAULT_LEVEL, choose_renderer
     from volren.renderers.registry import registry
 
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
         w.files.apply_loaded(sample)  # no renderer named: auto
-    kind = kind_of(sample.volume, sample.transfer_function)  # the TF's class chooses too
+    kind = SceneClass.of(sample.volume, sample.transfer_function)  # the TF's class chooses too
     expected, _ = choose_renderer(kind, DEFAULT_LEVEL, 1, w.state.settings, registry.names())
     assert w.state.renderer == blocker.args[0].renderer == expected != "auto"
     assert f"renderer {expected}: " in w.statusBar().currentMessage() and "(auto)" in w.statusBar().currentMessage()
@@ -412,12 +419,12 @@ def test_a_volume_of_the_other_kind_gets_auto_and_a_renderer_picked_by_hand_stay
     """Opening a mesh from a window showing a grid took vtk (a fixed preference: the slowest
     renderer, and the least accurate there); it takes `auto`'s measured choice, as the first
     volume does. A renderer the person picked stays for the next volume it can draw."""
-    from volren.quality import DEFAULT_LEVEL, choose_renderer, kind_of
+    from volren.quality import DEFAULT_LEVEL, choose_renderer
     from volren.samples import hollow_cylinder
 
     def auto_choice(loaded: LoadedInput) -> str:
         usable = [o.name for o in w.renderers.options() if o.enabled]
-        kind = kind_of(loaded.volume, loaded.transfer_function)
+        kind = SceneClass.of(loaded.volume, loaded.transfer_function)
         return choose_renderer(kind, DEFAULT_LEVEL, 1, w.state.settings, usable, can_draw=set(usable).__contains__)[0]
 
     mesh = hollow_cylinder()
@@ -441,13 +448,13 @@ def test_a_2d_tf_from_a_band_tf_switches_to_a_renderer_that_draws_it(make_window
     """A band TF opens with pre-integration (its measured level), which no renderer has for 2D
     TFs: "Use a 2D transfer function" left raycast in place and every frame failed ("does not
     support 2D transfer functions"); the renderer and settings now move to ones that draw it."""
-    from volren.quality import tf_class
+    from volren.model.tf_class import TFClass
 
     lo, hi = sample.volume.value_range
     mid, span = 0.5 * (lo + hi), hi - lo
     band = TransferFunction1D([[lo, 1, 1, 1], [hi, 1, 0.5, 0]],
                               [[lo, 0], [mid - 0.02 * span, 0], [mid, 0.9], [mid + 0.02 * span, 0], [hi, 0]])  # fmt: skip
-    assert tf_class(band, (lo, hi)) == "band"
+    assert TFClass.of(band, (lo, hi)) == TFClass.BAND
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(LoadedInput(sample.volume, band, source="band"))
@@ -505,7 +512,7 @@ def test_resting_before_release_draws_one_full_frame_not_two(loaded_window, qtbo
 def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_foreign_options(
     make_window, sample, qtbot, monkeypatch
 ):
-    draft = LevelChoice("step 2, table 64", 2.0, True, {"table_size": 64}, {"a/smooth": 10.0}, 3.0)
+    draft = measured("step 2, table 64", 2.0, True, {"table_size": 64}, {"a/smooth": 10.0}, 3.0)
     use_levels(monkeypatch, {"slicer": {"draft": draft}})
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):

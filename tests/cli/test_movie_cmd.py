@@ -14,6 +14,7 @@ from volren import quality
 from volren.cli.main import main
 from volren.errors import VolrenError
 from volren.io import load_volume
+from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
 from volren.model.tf_blend import blend_transfer_functions
 from volren.model.transfer_function import TransferFunction1D
@@ -99,9 +100,9 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     middle_tf.write_text(json.dumps(blend_transfer_functions(tf, bright, 0.5).to_dict()))
     # each frame is drawn at the level's settings for its own TF's class, as `volren render` draws
     # that TF: the first two are smooth, the bright one alone is sharp, whose settings differ
-    kinds = [quality.kind_of(load_volume(volume), t) for t in (tf, blend_transfer_functions(tf, bright, 0.5), bright)]
-    assert kinds == ["uniform/smooth", "uniform/smooth", "uniform/sharp"]
-    smooth, sharp = (quality.table().choice(RENDERER, kind, "default") for kind in kinds[1:])
+    kinds = [SceneClass.of(load_volume(volume), t) for t in (tf, blend_transfer_functions(tf, bright, 0.5), bright)]
+    assert [str(k) for k in kinds] == ["uniform/smooth", "uniform/smooth", "uniform/sharp"]
+    smooth, sharp = (quality.table().measurement(RENDERER, kind, "default").level for kind in kinds[1:])
     assert (smooth.step, smooth.options) != (sharp.step, sharp.options)
     flags = [str(volume), "--renderer", RENDERER, "--size", "32", "--quality", "default"]
     expected = [
@@ -125,9 +126,9 @@ def test_a_movie_at_a_level_draws_each_frame_at_its_tf_class_settings(tmp_path, 
 
     volume = load_volume(ml_sample[0])
     smooth_tf, sharp_tf = keyed_tfs(ml_sample)
-    smooth, sharp = (quality.at_level(RENDERER, quality.kind_of(volume, t), "default", RenderSettings())
+    smooth, sharp = (quality.at_level(RENDERER, SceneClass.of(volume, t), "default", RenderSettings())
                      for t in (smooth_tf, sharp_tf))  # fmt: skip
-    assert smooth != sharp and quality.kind_of(volume, sharp_tf) == "uniform/sharp"
+    assert smooth != sharp and str(SceneClass.of(volume, sharp_tf)) == "uniform/sharp"
     start = smooth.with_(step=0.3) if explicit else smooth
     drawn: list = []
     set_settings = RendererBase.set_settings

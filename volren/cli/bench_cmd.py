@@ -24,7 +24,6 @@ def add_parser(sub) -> None:
     add_stress_parser(kinds)
     add_app_parsers(kinds)
     add_fuzz_parser(kinds)
-    add_quality_parser(kinds)
     add_scale_parser(kinds)
 
 
@@ -56,67 +55,6 @@ def run_scale_cmd(args: argparse.Namespace) -> int:
         raise VolrenError("--image takes 16..8192 pixels and --frames at least 1")
     return run_scale(sizes, args.image, parse_memory(args.memory), args.frames, args.cluster_size, args.renderer,
                      Path(args.data), Path(args.out))  # fmt: skip
-
-
-def add_quality_parser(kinds) -> None:
-    q = kinds.add_parser("quality", help="the quality levels (--quality) and `auto`'s data from bench run results")
-    q.add_argument("runs", nargs="+", help="runs.csv files of `volren bench run` (a later file wins on overlaps)")
-    q.add_argument("--out", help="the table to write (default: volren/quality_levels.json, the one volren uses)")
-    q.add_argument("--shared", help="the folder with data/ and scenes/, whose scenes' TFs give the TF classes "
-                                    "(default: $VOLREN_SHARED; without it only the bundled samples are classed)")
-    q.add_argument("--markdown", help="also write `auto` against VTK's default per level and scene there "
-                                      "(BENCHMARKS.md's fragment docs/bench/quality.md)")
-    q.set_defaults(run=run_quality)
-
-
-def run_quality(args: argparse.Namespace) -> int:
-    import json
-    from pathlib import Path
-
-    from volren.bench.auto_report import auto_scenes, by_class, classed, markdown, summary_line
-    from volren.bench.datasets import shared_folder
-    from volren.bench.quality import derive, read_rows, scene_features, vtk_default_ms
-    from volren.quality import LEVELS, TABLE_PATH, base_kind, features_class
-    from volren.renderers.registry import registry
-
-    paths = [Path(p) for p in args.runs]
-    source = "volren bench quality " + " ".join(str(p) for p in paths)
-    rows = read_rows(paths)
-    features = scene_features({(r["dataset"], r["tf"]) for r in rows}, shared_folder(args.shared, required=False))
-    classes = {scene: features_class(*value) for scene, value in features.items()}
-    for (dataset, tf), (sharpness, visible) in sorted(features.items()):
-        print(f"TF class of {dataset}/{tf}: {classes[dataset, tf]} (sharpness {sharpness:.3g}, visible on {visible:.2g} of the range)")
-    quality = derive(rows, source, classes)
-    if not quality.levels:
-        raise VolrenError(f"{', '.join(args.runs)}: no scene has VTK's default measured, which the levels are defined against")
-    out = Path(args.out) if args.out else TABLE_PATH
-    try:
-        out.write_text(json.dumps(quality.to_json(), indent=1) + "\n", encoding="utf-8")
-    except OSError as exc:
-        raise VolrenError(f"{out}: cannot write: {exc.strerror or exc}") from None
-    for kind, renderers in quality.levels.items():
-        for name, per in renderers.items():
-            print(f"{kind:8s} {name:12s} " + " | ".join(f"{level}: {per[level].label} "
-                  f"(x{per[level].worst_error_ratio:.2g} VTK's error, {sum(per[level].ms.values()):.0f} ms)"
-                  for level in LEVELS))  # fmt: skip
-    print(f"wrote {out}")
-    scenes = auto_scenes(quality, registry.names(), vtk_default_ms(rows))
-    groups: dict[tuple[str, str, str], list] = {}
-    for s in scenes:
-        groups.setdefault((s.kind, s.level, f"{s.renderer} ({s.label})"), []).append(s)
-    for (kind, level, choice), group in groups.items():
-        print(f"auto at {level} on {kind}: {choice}, {summary_line(group)} VTK's default's RMSE")
-    for kind in sorted({base_kind(s.kind) for s in by_class(scenes)}):
-        for level in LEVELS:
-            print(f"auto at {level} on {kind} by TF class: {summary_line(classed(scenes, kind, level))} VTK's default's RMSE")
-    if args.markdown:
-        command = source + (f" --shared {args.shared}" if args.shared else "") + f" --markdown {args.markdown}"
-        try:
-            Path(args.markdown).write_text(markdown(scenes, classes, features, command), encoding="utf-8")
-        except OSError as exc:
-            raise VolrenError(f"{args.markdown}: cannot write: {exc.strerror or exc}") from None
-        print(f"wrote {args.markdown}")
-    return 0
 
 
 def float_list(text: str, what: str) -> list[float]:

@@ -14,7 +14,9 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from volren.quality import LEVELS, TF_CLASSES, table
+    from volren.model.scene_class import SceneClass
+    from volren.model.tf_class import TFClass
+    from volren.quality import LEVELS, table
     from volren.renderers.registry import registry
 
     quality = table()
@@ -33,16 +35,15 @@ def run(args: argparse.Namespace) -> int:
         if caps.quality:
             print(f"{'':12s} quality axis: {' | '.join(level.label for level in caps.quality)}")
         for kind in sorted(caps.kinds):
-            for scene_kind in [kind, *(f"{kind}/{cls}" for cls in TF_CLASSES)]:
-                if scene_kind not in quality.levels or name not in quality.levels[scene_kind]:
+            for scene in [SceneClass(kind), *(SceneClass(kind, cls) for cls in TFClass)]:
+                if name not in quality.levels.get(scene, {}):
                     continue
-                where = kind if scene_kind == kind else f"{kind} with a {scene_kind.split('/')[1]} TF"
+                where = kind if scene.tf is None else f"{kind} with a {scene.tf.value} TF"
                 for level in LEVELS:
-                    c = quality.levels[scene_kind][name][level]
-                    mean_ms = sum(c.ms.values()) / len(c.ms)
-                    print(f"{'':12s} --quality {level} on {where}: {c.label} (measured: {mean_ms:.0f} ms a 512x512 "
-                          f"frame on average, RMSE up to {c.worst_error_ratio:.2g}x VTK's default's over {len(c.ms)} "
-                          f"scenes)")  # fmt: skip
+                    c = quality.levels[scene][name][level]
+                    print(f"{'':12s} --quality {level} on {where}: {c.level.label} (measured: "
+                          f"{c.time_ratio(c.ms):.2g}x VTK's default's frame time, RMSE up to "
+                          f"{c.worst_error_ratio:.2g}x its RMSE, over {len(c.ms)} scenes)")  # fmt: skip
         for key, text in registry.get(name).option_help.items():
             print(f"{'':12s} option {key}: {text}")
     return 0

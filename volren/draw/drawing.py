@@ -35,12 +35,13 @@ def resolve_scene(scene: Scene, source: DrawInput, level: str | None, cameras: S
     """`scene` with its renderer resolved (`auto`: the fastest measured one that draws it: bricks
     for an OME-Zarr image or a cluster, every one of `cameras`, default the scene's own) and its
     settings at quality `level` (as they are when None); and why `auto` chose (`volren.quality`)."""
-    from volren.quality import kind_of, resolve
+    from volren.model.scene_class import SceneClass
+    from volren.quality import resolve
 
     volume = scene.volume if scene.volume is not None else source.stand_in()
     bounds = source.bounds
     views = tuple(cameras) if cameras is not None else (scene.resolved_camera(bounds),)
-    renderer, settings, why = resolve(kind_of(volume, scene.transfer_function), scene.transfer_function.dims,
+    renderer, settings, why = resolve(SceneClass.of(volume, scene.transfer_function), scene.transfer_function.dims,
                                       scene.renderer, level, scene.settings, source.bricks or on_cluster,
                                       cameras=views, bounds=bounds)  # fmt: skip
     return replace(scene, renderer=renderer, settings=settings), why

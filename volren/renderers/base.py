@@ -268,6 +268,18 @@ class QualityLevel:
             changes["options"] = {**settings.options, **self.options}
         return settings.with_(**changes)
 
+    def replace(self, settings: RenderSettings) -> RenderSettings:
+        """`settings` with this level's step and pre-integration and exactly its options (a level
+        picked in the app's chooser replaces the options of the one before)."""
+        return self.apply(settings.with_(options={}))
+
+    def matches(self, settings: RenderSettings) -> bool:
+        """Whether `settings` are at this level: its step and pre-integration where it sets them,
+        and exactly its options."""
+        return ((self.step is None or settings.step == self.step)
+                and (self.preintegration is None or settings.preintegration == self.preintegration)
+                and dict(settings.options) == dict(self.options))  # fmt: skip
+
 
 @dataclass(frozen=True)
 class KindSupport:

@@ -12,7 +12,8 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from importlib import import_module, metadata
+from importlib import import_module, metadata, util
+from pathlib import Path
 from typing import Any
 
 from volren.errors import VolrenError, VolrenWarning
@@ -202,6 +203,25 @@ class RendererRegistry:
                 continue
             out[name] = caps.unsupported_reason(volume_kind, tf_dim, settings)
         return out
+
+    def package_folder(self, name: str) -> Path | None:
+        """The folder of the package that holds renderer `name`'s module, found from the entry point
+        without importing the renderer (None for an unknown name or a module outside a package)."""
+        entry = self._discover().get(name)
+        package = entry.target.partition(":")[0].rpartition(".")[0] if entry is not None else ""
+        try:
+            spec = util.find_spec(package) if package else None
+        except (ImportError, ValueError):
+            return None
+        folders = (spec.submodule_search_locations or []) if spec is not None else []
+        return Path(folders[0]) if folders else None
+
+    def data_file(self, name: str, filename: str) -> Path | None:
+        """`filename` in renderer `name`'s package (`package_folder`): the data a renderer ships with
+        itself (its measured quality levels, `volren.quality`); None where there is no such file."""
+        folder = self.package_folder(name)
+        path = folder / filename if folder is not None else None
+        return path if path is not None and path.is_file() else None
 
     def registered_in_process(self, name: str) -> bool:
         """Whether `name` was registered by `register` in this process (another process, which reads

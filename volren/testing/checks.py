@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.scene_class import SceneClass
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction, TransferFunction2D
@@ -399,15 +400,15 @@ def check_shading(ctx: CheckContext) -> list[Measurement]:
     return out
 
 
-def _default_level(renderer: type[Renderer], kind: str) -> RenderSettings:
+def _default_level(renderer: type[Renderer], kind: SceneClass) -> RenderSettings:
     """What a renderer draws at quality `default` on a scene of this kind: the measured level
     (`volren.quality`), or, for a renderer with no measurements (which `auto` never picks), the
     most accurate level of its declared quality axis, or its defaults."""
     from volren.quality import table
 
-    choice = table().choice(renderer.name, kind, "default")
-    if choice is not None:
-        return choice.apply(RenderSettings())
+    measured = table().measurement(renderer.name, kind, "default")
+    if measured is not None:
+        return measured.level.apply(RenderSettings())
     axis = renderer.capabilities.quality  # fast to accurate
     return axis[-1].apply() if axis else RenderSettings()
 
@@ -423,8 +424,6 @@ def check_thin(ctx: CheckContext) -> list[Measurement]:
     level for the scene (`_default_level`): no pixel may be off by more than 0.1 (`volren.testing.metrics`) from the
     closed-form opacity, equal on every ray (`oracles.tent_sheet_alpha`). What a step too long or
     pixels interpolated between rays drop is a thin feature like this one."""
-    from volren.quality import kind_of
-
     out = []
     colour = (0.9, 0.8, 0.3)
     tf = TransferFunction1D([[0.0, *colour]], [[0.0, 0.0], [0.5, 0.0], [1.0, 0.9]], opacity_unit_distance=1.0)
@@ -432,7 +431,7 @@ def check_thin(ctx: CheckContext) -> list[Measurement]:
     for kind in ctx.kinds():
         volume = lattice_volume(kind, lambda x, y, z: np.where(np.isclose(z, layer), 1.0, 0.0), (11, 11, 7))
         renderer = ctx.renderer()
-        settings = _default_level(type(renderer), kind_of(volume, tf))
+        settings = _default_level(type(renderer), SceneClass.of(volume, tf))
         b = np.asarray(volume.bounds)
         centre = np.array([(b[0] + b[1]) / 2.0, (b[2] + b[3]) / 2.0, layer])
         for tilt in THIN_TILTS:

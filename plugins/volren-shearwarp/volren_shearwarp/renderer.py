@@ -211,8 +211,8 @@ def strided_order(order: NDArray[np.int64], stride: int) -> tuple[NDArray[np.int
 
 def _level(preintegrated: bool, step: float, oversampling: float, pixels_per_voxel: float | None = None) -> QualityLevel:
     """A quality level at a fixed `oversampling`, for drafts also `pixels_per_voxel` (below one: intermediate
-    pixels wider than voxels, `factorize`'s min_scale), labelled as the benchmarks and
-    `volren/quality_levels.json` name it."""
+    pixels wider than voxels, `factorize`'s min_scale), labelled as the benchmarks and this
+    package's own `quality_levels.json` name it."""
     label = f"{'pre-integrated' if preintegrated else 'post-classified'}, oversampling {oversampling:g}"
     options: dict[str, float] = {"oversampling": oversampling}
     if pixels_per_voxel is not None:

@@ -17,17 +17,18 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
+from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
-from volren.quality import LEVELS, NOT_AUTO, at_level, base_kind, fastest_measured, level_of
+from volren.quality import LEVELS, NOT_AUTO, at_level, level_of, ranked
 from volren.renderers.base import Capabilities
 
 #: The level previews use when the user's level is slower.
 PREVIEW_LEVEL = "interactive"
 
 
-def preview_settings(renderer: str, kind: str, settings: RenderSettings,
+def preview_settings(renderer: str, kind: SceneClass, settings: RenderSettings,
                      tf_drag_options: Mapping[str, Any] | None = None) -> RenderSettings:  # fmt: skip
-    """The settings of a preview frame of `renderer` on a `kind` volume whose still frames use
+    """The settings of a preview frame of `renderer` on a scene of class `kind` whose still frames use
     `settings`; `tf_drag_options` are added while a TF is dragged."""
     level = level_of(renderer, kind, settings)
     if level is not None and LEVELS.index(level) > LEVELS.index(PREVIEW_LEVEL):
@@ -47,7 +48,7 @@ def still_settings(settings: RenderSettings, capabilities: Capabilities | None) 
     return settings.with_(options={**settings.options, **extra})
 
 
-def preview_choice(renderer: str, kind: str, tf_dims: int, settings: RenderSettings, names: Iterable[str],
+def preview_choice(renderer: str, kind: SceneClass, tf_dims: int, settings: RenderSettings, names: Iterable[str],
                    capabilities: Callable[[str], Capabilities | None], tf_dragged: bool) -> tuple[str, RenderSettings]:  # fmt: skip
     """(renderer, settings) of a preview frame of a scene whose still frames `renderer` draws with
     `settings`: the fastest renderer measured at the `interactive` level that can draw the scene
@@ -63,9 +64,9 @@ def preview_choice(renderer: str, kind: str, tf_dims: int, settings: RenderSetti
         def can_draw(name: str) -> bool:
             caps = capabilities(name)
             at = at_level(name, kind, PREVIEW_LEVEL, settings)
-            return caps is not None and at is not None and caps.unsupported_reason(base_kind(kind), tf_dims, at) is None
+            return caps is not None and at is not None and caps.unsupported_reason(kind.kind, tf_dims, at) is None
 
-        fastest = fastest_measured(kind, PREVIEW_LEVEL, names, can_draw)
+        fastest = next((name for name in ranked(kind, PREVIEW_LEVEL, names, speed_only=True) if can_draw(name)), None)
         if fastest is not None and fastest != renderer:
             at = at_level(fastest, kind, PREVIEW_LEVEL, settings)
             assert at is not None

@@ -24,8 +24,8 @@ from volren.app.core.frame_sizes import FrameCost, adaptive_preview_scale, previ
 from volren.app.core.preview_settings import preview_choice, still_settings
 from volren.app.core.state import Change, ViewState
 from volren.app.rendering.render_service import Frame, RenderRequest, RenderService
+from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
-from volren.quality import kind_of
 from volren.renderers.base import Capabilities
 from volren.renderers.registry import RendererRegistry
 
@@ -127,7 +127,7 @@ class FrameScheduler(QObject):
         """(renderer, settings) the next preview draws with (`preview_choice`); kept while the
         inputs stay the same objects, since a drag asks for it at the mouse's rate."""
         s = self._state
-        kind = kind_of(s.volume, s.transfer_function) if s.volume is not None else "uniform"
+        kind = SceneClass.of(s.volume, s.transfer_function) if s.volume is not None else SceneClass("uniform")
         dims = s.transfer_function.dims if s.transfer_function is not None else 1
         dragged = self._tf_dragged if tf_dragged is None else tf_dragged
         names = [n for n in self._registry.names() if n not in self._failed_previewers] \

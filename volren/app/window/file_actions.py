@@ -30,8 +30,9 @@ from volren.app.window.time_control import TimeControl
 from volren.errors import VolrenError
 from volren.io.ome_zarr_io import MAX_IN_MEMORY_BYTES, is_ome_zarr
 from volren.io.series_io import TimeSeries, is_series, load_series
+from volren.model.scene_class import SceneClass
 from volren.model.transfer_function_2d import TransferFunction
-from volren.quality import AUTO, DEFAULT_LEVEL, at_level, kind_of, level_of
+from volren.quality import AUTO, DEFAULT_LEVEL, at_level, level_of
 
 OPEN_FILTER = (
     "Volumes, time series and scenes (*.vti *.vtk *.vtu *.mha *.mhd *.nrrd *.nhdr *.nii *.nii.gz *.slc *.dcm *.raw "
@@ -254,7 +255,7 @@ class FileActions(QObject):
         )
         if loaded.settings is None:
             level = self._level_shown()
-            kind = kind_of(volume, loaded.transfer_function)
+            kind = SceneClass.of(volume, loaded.transfer_function)
             settings = (at_level(renderer, kind, level, settings) if level is not None else None) or settings
             state.quality_level = level
         else:  # a scene's own settings, as they are: whichever level they are
@@ -278,7 +279,7 @@ class FileActions(QObject):
         state = self._state
         if state.volume is None:
             return APP_LEVEL
-        kind = kind_of(state.volume, state.transfer_function)
+        kind = SceneClass.of(state.volume, state.transfer_function)
         return level_of(state.renderer, kind, state.settings, prefer=state.quality_level)
 
     # ------------------------------------------------------------------ the loader's answers

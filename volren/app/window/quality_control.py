@@ -14,16 +14,16 @@ from PyQt5.QtWidgets import QComboBox, QWidget
 
 from volren import quality
 from volren.app.core.state import Change, ViewState
-from volren.quality import LEVELS, LevelChoice
+from volren.model.scene_class import SceneClass
+from volren.quality import LEVELS, Measurement
 
 #: The chooser's first entry: settings that are not exactly one level's.
 CUSTOM = "custom"
 
 
-def level_tooltip(level: str, choice: LevelChoice) -> str:
-    mean_ms = sum(choice.ms.values()) / max(len(choice.ms), 1)
-    return (f"{level}: {choice.label} (measured {mean_ms:.0f} ms a 512x512 frame on average, RMSE up to "
-            f"{choice.worst_error_ratio:.2g}x VTK's default's over {len(choice.ms)} scenes)")  # fmt: skip
+def level_tooltip(level: str, choice: Measurement) -> str:
+    return (f"{level}: {choice.level.label} (measured {choice.time_ratio(choice.ms):.2g}x VTK's default's frame "
+            f"time, RMSE up to {choice.worst_error_ratio:.2g}x its RMSE, over {len(choice.ms)} scenes)")  # fmt: skip
 
 
 class QualityControl:
@@ -39,12 +39,12 @@ class QualityControl:
         self._applying = False
         self.refresh()
 
-    def _choice(self, level: str) -> LevelChoice | None:
+    def _choice(self, level: str) -> Measurement | None:
         volume = self._state.volume
         if volume is None:
             return None
-        kind = quality.kind_of(volume, self._state.transfer_function)
-        return quality.table().choice(self._state.renderer, kind, level)  # looked up now: tests swap the table
+        kind = SceneClass.of(volume, self._state.transfer_function)
+        return quality.table().measurement(self._state.renderer, kind, level)  # looked up now: tests swap the table
 
     def refresh(self) -> None:
         """Enable the levels measured for the renderer and volume shown; show which one the settings are."""
@@ -63,7 +63,7 @@ class QualityControl:
         state = self._state
         if state.volume is None:
             return None
-        kind = quality.kind_of(state.volume, state.transfer_function)
+        kind = SceneClass.of(state.volume, state.transfer_function)
         return quality.level_of(state.renderer, kind, state.settings, prefer=state.quality_level)
 
     def _chosen(self, index: int) -> None:
@@ -75,7 +75,7 @@ class QualityControl:
         self._applying = True
         try:
             self._state.quality_level = level
-            self._state.set_settings(choice.replace(self._state.settings))
+            self._state.set_settings(choice.level.replace(self._state.settings))
         finally:
             self._applying = False
         self.chooser.setCurrentIndex(index)

@@ -22,10 +22,11 @@ from volren.app.rendering.render_service import Frame, RenderRequest
 from volren.app.rendering.renderer_chooser import RendererChooser
 from volren.app.rendering.viewport import Viewport
 from volren.errors import VolrenError
+from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
-from volren.quality import AUTO, DEFAULT_LEVEL, at_level, choose_renderer, kind_of, level_of
+from volren.quality import AUTO, DEFAULT_LEVEL, at_level, choose_renderer, level_of
 from volren.renderers.registry import RendererRegistry
 
 #: A set-up (new renderer or volume) longer than this without a frame is shown as "preparing".
@@ -81,7 +82,7 @@ class RendererControl:
             option_names = None
         state, settings = self._state, None
         if state.volume is not None:
-            kind = kind_of(state.volume, state.transfer_function)
+            kind = SceneClass.of(state.volume, state.transfer_function)
             level = level_of(state.renderer, kind, state.settings, prefer=state.quality_level)
             settings = at_level(name, kind, level, state.settings)
         state.set_renderer(name, option_names, settings)
@@ -118,7 +119,7 @@ class RendererControl:
         if wanted == AUTO:  # the fastest measured renderer that draws this (volren.quality)
             drawable = {o.name for o in options if o.reason is None}
             try:
-                wanted, why = choose_renderer(kind_of(volume, tf), DEFAULT_LEVEL, tf.dims, settings, list(drawable),
+                wanted, why = choose_renderer(SceneClass.of(volume, tf), DEFAULT_LEVEL, tf.dims, settings, list(drawable),
                                               can_draw=drawable.__contains__)  # fmt: skip
                 notes.append(f"renderer {wanted}: {why} (auto)")
             except VolrenError as exc:
@@ -142,7 +143,7 @@ class RendererControl:
 
         def fastest(usable: list[str]) -> str | None:
             try:
-                return choose_renderer(kind_of(volume, tf), DEFAULT_LEVEL, tf.dims, settings, usable,
+                return choose_renderer(SceneClass.of(volume, tf), DEFAULT_LEVEL, tf.dims, settings, usable,
                                        can_draw=set(usable).__contains__)[0]  # fmt: skip
             except VolrenError:
                 return None
@@ -211,7 +212,7 @@ class RendererControl:
         state = self._state
         if frame.settings is None or state.volume is None:
             return "custom"
-        kind = kind_of(state.volume, state.transfer_function)
+        kind = SceneClass.of(state.volume, state.transfer_function)
         if frame.full and frame.renderer == state.renderer:  # the state's settings (image refinement off)
             return level_of(state.renderer, kind, state.settings, prefer=state.quality_level) or "custom"
         return level_of(frame.renderer, kind, frame.settings) or "custom"
@@ -251,7 +252,7 @@ class RendererControl:
         if not refuses_view(request.renderer):
             return None
         try:
-            chosen, _ = choose_renderer(kind_of(volume, request.tf), DEFAULT_LEVEL, request.tf.dims, request.settings,
+            chosen, _ = choose_renderer(SceneClass.of(volume, request.tf), DEFAULT_LEVEL, request.tf.dims, request.settings,
                                         sorted(usable), can_draw=usable.__contains__, cameras=(camera,),
                                         bounds=volume.bounds)  # fmt: skip
         except VolrenError:

@@ -1,4 +1,5 @@
-"""`volren bench quality RUNS.csv ...`: the quality levels (`volren.quality`) from `bench run` results.
+"""`python -m benchmarks.quality_levels RUNS.csv ...`: each renderer's quality levels
+(`volren.quality`) from `bench run` results, written into the renderer's own package.
 
 Each row of runs.csv is one configuration of one curve (`volren.bench.sweep`) on one scene
 (dataset and TF) with its median frame time and RMSE. Per volume kind, a configuration counts
@@ -9,9 +10,14 @@ configuration's error (its `meets` flag false), and `exact` is the most accurate
 The curves of one registered renderer (VTK's mappers are the `vtk` renderer's) compete for that
 renderer's levels. Later files win where two give the same configuration and scene. The same
 choice is also made over the scenes of each TF class ("uniform/smooth", ...), given by the scenes'
-own TFs and volumes (`scene_features`, `volren.quality.tf_class`). A scene is a dataset and TF at
+own TFs and volumes (`scene_features`, `volren.model.tf_class`). A scene is a dataset and TF at
 one image size: rows at other sizes than `MAIN_SIZE` are scenes of their own ("dataset/tf@128"), so
-a level holds at every size measured.
+a level holds at every size measured. Each choice keeps VTK's default's frame time on each of its
+scenes from the same run (every scene comes from one runs.csv), which `auto` ranks by.
+
+Each renderer's levels go to `quality_levels.json` in the package its entry point names
+(`registry.package_folder`: volren's built-ins beside their renderer, a plugin in its own
+package, whose pyproject must ship it as package data), or under `--out FOLDER/NAME/`.
 
 Two rules hold at `default` and above (`FAITHFUL_LEVELS`), whatever the runs measured:
 - every pixel is sampled: no configuration that interpolates pixels between rays (an option
@@ -24,15 +30,21 @@ Two rules hold at `default` and above (`FAITHFUL_LEVELS`), whatever the runs mea
 
 from __future__ import annotations
 
+import argparse
 import csv
+import json
 import math
 from collections import defaultdict
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+from benchmarks._cli import run
 from volren.bench import sweep
 from volren.errors import VolrenError
-from volren.quality import LEVELS, TF_CLASSES, LevelChoice, QualityTable
+from volren.model.scene_class import SceneClass
+from volren.model.tf_class import TFClass, tf_sharpness, tf_visible_fraction
+from volren.quality import LEVELS, LEVELS_FILE, Measurement, QualityTable
+from volren.renderers.base import QualityLevel
 
 #: Each level's bound on RMSE / VTK default's RMSE (None: the most accurate configuration).
 BOUNDS: dict[str, float | None] = {"draft": 4.0, "interactive": 2.0, "default": 1.0, "high": 0.25, "exact": None}
@@ -88,26 +100,27 @@ def _configs(kind: str, curves: set[str]) -> dict[tuple[str, str], sweep.Config]
     return out
 
 
-def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], str] | None = None) -> QualityTable:
+def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], TFClass] | None = None) -> QualityTable:
     """The quality table of these rows (see the module docstring): per volume kind over all its
-    scenes, and per TF class (`volren.quality.tf_class`) over the scenes `classes` gives that class
-    ((dataset, tf) -> class), under the scene kind "kind/class"."""
-    levels: dict[str, dict[str, dict[str, LevelChoice]]] = {}
+    scenes, and per TF class (`volren.model.tf_class`) over the scenes `classes` gives that class
+    ((dataset, tf) -> class)."""
+    levels: dict[SceneClass, dict[str, dict[str, Measurement]]] = {}
+    peer_ms = vtk_default_ms(rows)
     for kind in VTK_DEFAULT:
         kind_rows = [r for r in rows if r.get("kind") == kind and _number(r.get("rmse")) is not None]
         peer = {scene_of(r): (float(r["rmse"]), _number(r.get("off"))) for r in kind_rows if _is_vtk_default(r)}
         if not peer:
             continue
         known = _configs(kind, {r["renderer"] for r in kind_rows})
-        found = _levels(kind_rows, peer, known)
+        found = _levels(kind_rows, peer, peer_ms, known)
         if found:
-            levels[kind] = found
-        for cls in TF_CLASSES:
+            levels[SceneClass(kind)] = found
+        for cls in TFClass:
             scenes = {scene for scene in peer if (classes or {}).get(scene_pair(scene)) == cls}
-            found = _levels(kind_rows, {s: e for s, e in peer.items() if s in scenes}, known) if scenes else {}
+            found = _levels(kind_rows, {s: e for s, e in peer.items() if s in scenes}, peer_ms, known) if scenes else {}
             if found:
-                levels[f"{kind}/{cls}"] = found
-    return QualityTable(levels, source)
+                levels[SceneClass(kind, cls)] = found
+    return QualityTable(levels, dict.fromkeys({n for per in levels.values() for n in per}, source))
 
 
 def vtk_default_ms(rows: list[dict]) -> dict[str, float]:
@@ -122,10 +135,10 @@ def _is_vtk_default(row: Mapping[str, str]) -> bool:
     return VTK_DEFAULT.get(row.get("kind", "")) == (row["renderer"], row["settings"])
 
 
-def _levels(kind_rows: list[dict], peer: Mapping[str, tuple[float, float | None]],
-            known: Mapping[tuple[str, str], sweep.Config]) -> dict[str, dict[str, LevelChoice]]:  # fmt: skip
-    """renderer -> level -> choice over the scenes of `peer` (scene -> VTK default's RMSE and
-    count of pixels off, None where not counted)."""
+def _levels(kind_rows: list[dict], peer: Mapping[str, tuple[float, float | None]], peer_ms: Mapping[str, float],
+            known: Mapping[tuple[str, str], sweep.Config]) -> dict[str, dict[str, Measurement]]:  # fmt: skip
+    """renderer -> level -> measurement over the scenes of `peer` (scene -> VTK default's RMSE and
+    count of pixels off, None where not counted; `peer_ms`: its frame time)."""
     # renderer -> (curve, label) -> scene -> (ms, rmse / peer's, whether no more pixels off than the peer)
     measured: dict[str, dict[tuple[str, str], dict[str, tuple[float, float, bool]]]] = defaultdict(
         lambda: defaultdict(dict))  # fmt: skip
@@ -140,7 +153,7 @@ def _levels(kind_rows: list[dict], peer: Mapping[str, tuple[float, float | None]
         faithful = peer_off is None or off is None or off <= peer_off
         measured[config.renderer][config.curve, config.label][scene] = (
             ms, float(r["rmse"]) / peer_rmse, faithful)  # fmt: skip
-    out: dict[str, dict[str, LevelChoice]] = {}
+    out: dict[str, dict[str, Measurement]] = {}
     for renderer, configs in measured.items():
         scenes, complete = _covered(configs)
         if not complete:
@@ -162,10 +175,11 @@ def _levels(kind_rows: list[dict], peer: Mapping[str, tuple[float, float | None]
             config = known[key]
             per = complete[key]
             settings = config.settings()
-            per_level[level] = LevelChoice(
-                label=f"{key[0]}: {key[1]}" if key[0] != renderer else key[1],
-                step=settings.step, preintegration=settings.preintegration, options=dict(settings.options),
-                ms={s: per[s][0] for s in sorted(scenes)}, worst_error_ratio=max(per[s][1] for s in scenes),
+            per_level[level] = Measurement(
+                QualityLevel(f"{key[0]}: {key[1]}" if key[0] != renderer else key[1], settings.step,
+                             settings.preintegration, dict(settings.options)),
+                ms={s: per[s][0] for s in sorted(scenes)}, peer_ms={s: peer_ms[s] for s in sorted(scenes)},
+                worst_error_ratio=max(per[s][1] for s in scenes),
                 meets=(BOUNDS[level] is None or max(per[s][1] for s in scenes) <= BOUNDS[level])
                 and (level not in FAITHFUL_LEVELS or all(per[s][2] for s in scenes)),
             )  # fmt: skip
@@ -180,7 +194,6 @@ def scene_features(
     shared datasets when `shared` is given, and the bundled samples), from its TF and its volume's
     value range."""
     from volren.bench.datasets import hard_datasets, sample_datasets, shared_datasets
-    from volren.quality import tf_sharpness, tf_visible_fraction
 
     datasets = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets(), **hard_datasets()}
     out: dict[tuple[str, str], tuple[float, float]] = {}
@@ -261,3 +274,82 @@ def _number(text: str | None) -> float | None:
     except ValueError:
         return None
     return value if value is not None and math.isfinite(value) else None
+
+
+def write_levels(quality: QualityTable, out: Path | None) -> list[Path]:
+    """Each renderer's levels into its own package (`registry.package_folder`), or `out`/NAME/; the
+    paths written."""
+    from volren.renderers.registry import registry
+
+    written = []
+    for name in sorted(quality.sources):
+        folder = out / name if out is not None else registry.package_folder(name)
+        if folder is None:
+            raise VolrenError(f"renderer {name!r} has no package to hold its {LEVELS_FILE} (pass --out)")
+        path = folder / LEVELS_FILE
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(quality.renderer_json(name), indent=1) + "\n", encoding="utf-8")
+        except OSError as exc:
+            raise VolrenError(f"{path}: cannot write: {exc.strerror or exc}") from None
+        written.append(path)
+    return written
+
+
+def run_quality(args: argparse.Namespace) -> int:
+    from benchmarks.quality_report import auto_scenes, by_class, classed, markdown, summary_line
+    from volren.bench.datasets import shared_folder
+    from volren.renderers.registry import registry
+
+    paths = [Path(p) for p in args.runs]
+    source = "python -m benchmarks.quality_levels " + " ".join(str(p) for p in paths)
+    rows = read_rows(paths)
+    features = scene_features({(r["dataset"], r["tf"]) for r in rows}, shared_folder(args.shared, required=False))
+    classes = {scene: TFClass.of_features(*value) for scene, value in features.items()}
+    for (dataset, tf), (sharpness, visible) in sorted(features.items()):
+        print(f"TF class of {dataset}/{tf}: {classes[dataset, tf].value} (sharpness {sharpness:.3g}, "
+              f"visible on {visible:.2g} of the range)")  # fmt: skip
+    quality = derive(rows, source, classes)
+    if not quality.levels:
+        raise VolrenError(f"{', '.join(args.runs)}: no scene has VTK's default measured, which the levels are defined against")
+    written = write_levels(quality, Path(args.out) if args.out else None)
+    for kind, renderers in quality.levels.items():
+        for name, per in renderers.items():
+            print(f"{str(kind):8s} {name:12s} " + " | ".join(f"{level}: {per[level].level.label} "
+                  f"(x{per[level].worst_error_ratio:.2g} VTK's error, {per[level].time_ratio(per[level].ms):.2g}x "
+                  "VTK's time)" for level in LEVELS))  # fmt: skip
+    print("wrote " + ", ".join(str(p) for p in written))
+    scenes = auto_scenes(quality, registry.names(), vtk_default_ms(rows))
+    groups: dict[tuple[SceneClass, str, str], list] = {}
+    for s in scenes:
+        groups.setdefault((s.kind, s.level, f"{s.renderer} ({s.label})"), []).append(s)
+    for (kind, level, choice), group in groups.items():
+        print(f"auto at {level} on {kind}: {choice}, {summary_line(group)} VTK's default's RMSE")
+    for kind in sorted({s.kind.kind for s in by_class(scenes)}):
+        for level in LEVELS:
+            print(f"auto at {level} on {kind} by TF class: {summary_line(classed(scenes, kind, level))} VTK's default's RMSE")
+    if args.markdown:
+        command = source + (f" --shared {args.shared}" if args.shared else "") + f" --markdown {args.markdown}"
+        text = markdown(scenes, {k: c.value for k, c in classes.items()}, features, command)
+        try:
+            Path(args.markdown).write_text(text, encoding="utf-8")
+        except OSError as exc:
+            raise VolrenError(f"{args.markdown}: cannot write: {exc.strerror or exc}") from None
+        print(f"wrote {args.markdown}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.quality_levels", description=__doc__.splitlines()[0])
+    parser.add_argument("runs", nargs="+", help="runs.csv files of `volren bench run` (a later file wins on overlaps)")
+    parser.add_argument("--out", help="a folder to write NAME/quality_levels.json into per renderer (default: each "
+                                      "renderer's own package, the files volren uses)")
+    parser.add_argument("--shared", help="the folder with data/ and scenes/, whose scenes' TFs give the TF classes "
+                                         "(default: $VOLREN_SHARED; without it only the bundled samples are classed)")
+    parser.add_argument("--markdown", help="also write `auto` against VTK's default per level and scene there "
+                                           "(BENCHMARKS.md's fragment docs/bench/quality.md)")
+    return run(run_quality, parser, argv)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

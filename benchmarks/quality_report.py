@@ -3,8 +3,8 @@
 Why: issue-style goals ("with no options, at least as accurate as VTK's default and N times faster
 on every shared scene") are about what a user gets, which is `auto`'s choice at the level asked
 for; the table (`volren.quality`) holds each choice's measured frame times per scene and its worst
-RMSE against VTK's default's, so the comparison needs no new runs. `volren bench quality` prints it
-and, with `--markdown`, writes it as the BENCHMARKS.md fragment `quality.md`.
+RMSE against VTK's default's, so the comparison needs no new runs. `python -m benchmarks.quality_levels`
+prints it and, with `--markdown`, writes it as the BENCHMARKS.md fragment `quality.md`.
 """
 
 from __future__ import annotations
@@ -13,16 +13,17 @@ import statistics
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from volren.bench.quality import scene_pair
+from benchmarks.quality_levels import scene_pair
+from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
-from volren.quality import LEVELS, QualityTable, base_kind, choose_renderer
+from volren.quality import LEVELS, QualityTable, choose_renderer
 
 
 @dataclass(frozen=True)
 class AutoScene:
     """`auto`'s choice on one scene at one level, against VTK's default there."""
 
-    kind: str  #: the scene kind the choice was made for ("uniform", or "uniform/smooth" by TF class)
+    kind: SceneClass  #: the scene class the choice was made for (the volume kind alone, or with a TF class)
     level: str
     scene: str  #: "dataset/tf"
     renderer: str
@@ -39,26 +40,26 @@ class AutoScene:
 
 def auto_scenes(quality: QualityTable, registered: list[str], vtk_ms: Mapping[str, float]) -> list[AutoScene]:
     """`auto`'s choice on every scene with VTK's default's frame time in `vtk_ms` ("dataset/tf" ->
-    ms, `volren.bench.quality.vtk_default_ms`), per scene kind and level."""
+    ms, `benchmarks.quality_levels.vtk_default_ms`), per scene class and level."""
     out = []
     for kind in quality.levels:
         for level in LEVELS:
             name, _ = choose_renderer(kind, level, 1, RenderSettings(), registered, quality)
-            choice = quality.choice(name, kind, level)
+            choice = quality.measurement(name, kind, level)
             assert choice is not None
-            out += [AutoScene(kind, level, scene, name, choice.label, choice.ms[scene], vtk_ms[scene],
+            out += [AutoScene(kind, level, scene, name, choice.level.label, choice.ms[scene], vtk_ms[scene],
                               choice.worst_error_ratio) for scene in sorted(set(choice.ms) & set(vtk_ms))]  # fmt: skip
     return out
 
 
 def by_class(scenes: list[AutoScene]) -> list[AutoScene]:
     """The rows of the TF-class kinds ("uniform/smooth", ...): what `auto` does, each scene under its class."""
-    return [s for s in scenes if s.kind != base_kind(s.kind)]
+    return [s for s in scenes if s.kind.tf is not None]
 
 
 def classed(scenes: list[AutoScene], kind: str, level: str) -> list[AutoScene]:
     """The `by_class` rows of one volume kind ("uniform") at one level: every scene under its TF's class."""
-    return [s for s in by_class(scenes) if base_kind(s.kind) == kind and s.level == level]
+    return [s for s in by_class(scenes) if s.kind.kind == kind and s.level == level]
 
 
 def summary_line(rows: list[AutoScene]) -> str:
@@ -82,16 +83,16 @@ def markdown(scenes: list[AutoScene], classes: Mapping[tuple[str, str], str],
         "| volumes | level | by TF class | one choice |",
         "|---|---|---|---|",
     ]
-    for kind in sorted({base_kind(s.kind) for s in scenes}):
+    for kind in sorted({s.kind.kind for s in scenes}):
         for level in LEVELS:
             rows = classed(scenes, kind, level)
-            whole = [s for s in scenes if s.kind == kind and s.level == level]
+            whole = [s for s in scenes if s.kind == SceneClass(kind) and s.level == level]
             lines.append(f"| {kind} | {level} | {summary_line(rows) if rows else '-'} | "
                          f"{summary_line(whole) if whole else '-'} |")  # fmt: skip
     lines += ["", "At `default` (what a render with no options gets), scene by scene:", "",
               "| scene | TF class (sharpness, visible fraction) | auto's choice | ms | VTK's default ms | faster than VTK |",
               "|---|---|---|---:|---:|---:|"]  # fmt: skip
-    for s in sorted(by_class(scenes), key=lambda s: (base_kind(s.kind), s.scene)):
+    for s in sorted(by_class(scenes), key=lambda s: (s.kind.kind, s.scene)):
         if s.level != "default":
             continue
         key = scene_pair(s.scene)
