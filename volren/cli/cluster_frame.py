@@ -31,17 +31,17 @@ def check_cluster_flag(args: argparse.Namespace) -> None:
         parse_cluster(args.cluster)
 
 
-def cluster_frame(args: argparse.Namespace, scene: Scene, camera, progress) -> tuple[Any, Any, str]:
-    """The frame on the cluster the flags name: (image, FrameStats, what was drawn, for the line)."""
+def cluster_frame(args: argparse.Namespace, scene: Scene, camera, progress, quality: str) -> tuple[Any, Any, str]:
+    """The frame on the cluster the flags name, at the quality level asked (which picks an OME-Zarr
+    input's pyramid level): (image, FrameStats, what was drawn, for the line)."""
     from volren.bricked.cluster import render_on_cluster
-    from volren.cli.render_cmd import quality_asked
     from volren.renderers.base import FrameStats
 
     width, height = scene.size
     zarr_input = getattr(args, "zarr_input", None)
     image, frame, what = render_on_cluster(args.cluster, args.scheduler, zarr_input or scene.volume, scene.renderer,
                                            scene.settings, scene.transfer_function, camera, width, height, args.level,
-                                           progress, quality_asked(args, scene))  # fmt: skip
+                                           progress, quality)  # fmt: skip
     counters = {"bricks": frame.bricks, "bricks_drawn": frame.drawn, "bricks_transparent": frame.transparent,
                 "runs": frame.runs, "workers": frame.workers, "composite_ms": frame.composite_ms}  # fmt: skip
     note = f" ({what} on {frame.workers} worker{'s' if frame.workers != 1 else ''}: {frame.drawn} of {frame.bricks} " \

@@ -382,7 +382,7 @@ def run(args: argparse.Namespace) -> int:
         camera = scene.resolved_camera(zarr_input.bounds if zarr_input is not None else None)
         if wants_cluster(args):
             with clock.stage("frame"), progress_bar(f"{scene.renderer} {width}x{height} bricks") as progress:
-                image, stats, drawn = cluster_frame(args, scene, camera, progress)
+                image, stats, drawn = cluster_frame(args, scene, camera, progress, quality_asked(args, scene))
         else:
             image, stats, drawn = _local_frame(args, scene, camera, clock)
         clock.note_counters(stats.counters)
