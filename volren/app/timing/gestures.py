@@ -20,7 +20,6 @@ whatever holds the thread (or the interpreter's lock) that long delays every cli
 
 from __future__ import annotations
 
-import math
 import statistics
 import time
 from collections.abc import Callable
@@ -31,7 +30,7 @@ import numpy as np
 from volren.app.timing.drive import application, drive_at_60hz, wait
 
 #: `application` is the QApplication a measurement runs in (`drive`), named here for `volren bench app`.
-__all__ = ["HEADER", "TARGETS", "VIEWPORT", "GestureTiming", "SceneTiming", "StallProbe", "application", "finite",
+__all__ = ["HEADER", "TARGETS", "VIEWPORT", "GestureTiming", "SceneTiming", "StallProbe", "application",
            "markdown_rows", "measure_scene", "note", "run_gesture", "settle"]
 
 #: The viewport the interaction targets were set on: a maximised window on a 1080p screen.
@@ -113,7 +112,6 @@ def _share(frame) -> float:
 
 def run_gesture(app, window, name: str, step: Callable[[int], None], seconds: float, timeout_s: float) -> GestureTiming:
     """`step(k)` at 60 Hz for `seconds` inside an interaction, then release; what the person saw."""
-
     state, stall = window.state, StallProbe()
     shown: list[tuple[float, object]] = []
     record = lambda frame: shown.append((time.perf_counter(), frame))  # noqa: E731
@@ -262,7 +260,3 @@ def note(platform: str, seconds: float) -> str:
     return NOTE.format(platform=platform, w=VIEWPORT[0], h=VIEWPORT[1], s=seconds, p=TARGETS["previews_per_s"],
                        share=100 * TARGETS["preview_share"], r=TARGETS["release_ms"], st=TARGETS["stall_ms"],
                        o=TARGETS["open_ms"])  # fmt: skip
-
-
-def finite(t: SceneTiming) -> bool:
-    return math.isfinite(t.open_ms) and all(math.isfinite(g.release_ms) for g in t.gestures)
