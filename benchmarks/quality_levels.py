@@ -39,6 +39,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from benchmarks._cli import run
+from benchmarks.quality_report import scene_pair
 from volren.bench import sweep
 from volren.errors import VolrenError
 from volren.model.scene_class import SceneClass
@@ -80,12 +81,6 @@ def scene_of(row: Mapping[str, str]) -> str:
     """A row's scene: "dataset/tf", with "@size" where the size is not `MAIN_SIZE`."""
     size = row.get("size") or str(MAIN_SIZE)
     return f"{row['dataset']}/{row['tf']}" + ("" if size == str(MAIN_SIZE) else f"@{size}")
-
-
-def scene_pair(scene: str) -> tuple[str, str]:
-    """(dataset, tf) of a scene, whatever its size."""
-    dataset, tf = scene.split("@", 1)[0].split("/", 1)
-    return dataset, tf
 
 
 def _configs(kind: str, curves: set[str]) -> dict[tuple[str, str], sweep.Config]:

@@ -13,10 +13,15 @@ import statistics
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from benchmarks.quality_levels import scene_pair
 from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
 from volren.quality import LEVELS, QualityTable, choose_renderer
+
+
+def scene_pair(scene: str) -> tuple[str, str]:
+    """(dataset, tf) of a scene, whatever its size."""
+    dataset, tf = scene.split("@", 1)[0].split("/", 1)
+    return dataset, tf
 
 
 @dataclass(frozen=True)

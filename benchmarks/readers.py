@@ -114,7 +114,7 @@ def _written_cases(folder: Path, values: NDArray[np.uint8]) -> list[Case]:
     import pyvista as pv
     import vtk
 
-    from volren.bench.fuzz.seeds import slc_bytes
+    from benchmarks.fuzz.seeds import slc_bytes
     from volren.testing.dicom_series import write_series
 
     nz, ny, nx = values.shape

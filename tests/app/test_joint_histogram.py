@@ -189,7 +189,7 @@ def test_tet_mesh_leaves_out_nonfinite_tets():
 # --------------------------------------------------------------------------------- size
 def test_a_256_cubed_volume_is_counted_in_full():
     """2^24 points are within MAX_SAMPLES: every one is counted, none subsampled away. How fast
-    that is (the app's target: well under 2 s) is measured by `volren bench app`, not asserted."""
+    that is (the app's target: well under 2 s) is measured by `python -m benchmarks.app_latency`, not asserted."""
     rng = np.random.default_rng(0)
     values = rng.integers(0, 256, size=(256, 256, 256), dtype=np.uint8)
     hist = jh.joint_histogram(UniformVolume(values))

@@ -1,4 +1,4 @@
-"""`volren bench app`'s gesture table (`volren.bench.app_gestures`), on a bundled sample."""
+"""`volren bench app`'s gesture table (`volren.app.timing.gestures`), on a bundled sample."""
 
 from __future__ import annotations
 
@@ -17,14 +17,14 @@ os.environ.setdefault("XDG_CONFIG_HOME", tempfile.mkdtemp(prefix="volren-config-
 def test_the_stall_probe_sees_the_gui_thread_held(qapp):
     """The probe's number is the GUI thread's longest gap: a 200 ms sleep on it shows as at least
     that, and an idle event loop as far less."""
-    from volren.bench.app_gestures import StallProbe
-    from volren.bench.app_latency import _wait
+    from volren.app.timing.drive import wait
+    from volren.app.timing.gestures import StallProbe
 
     probe = StallProbe()
     probe.start()
-    _wait(qapp, lambda: False, 0.05)
+    wait(qapp, lambda: False, 0.05)
     time.sleep(0.2)  # the GUI thread held, as by a kernel that keeps the interpreter's lock
-    _wait(qapp, lambda: False, 0.05)
+    wait(qapp, lambda: False, 0.05)
     assert probe.stop() >= 195.0
 
 
@@ -35,7 +35,7 @@ def test_the_gesture_table_times_every_gesture_with_the_renderer_auto_picks(qapp
 
     if vtk_unusable():
         pytest.fail(vtk_unusable(), pytrace=False)
-    from volren.bench import app_gestures
+    from volren.app.timing import gestures as app_gestures
     from volren.samples import marschner_lobb, sample_transfer_functions
 
     timing = app_gestures.measure_scene(qapp, marschner_lobb(17), sample_transfer_functions()["marschner_lobb"].copy(),
@@ -47,3 +47,15 @@ def test_the_gesture_table_times_every_gesture_with_the_renderer_auto_picks(qapp
         assert g.still_renderer != "-"
     rows = app_gestures.markdown_rows(timing)
     assert len(rows) == 4 and all(r.count("|") == app_gestures.HEADER.splitlines()[0].count("|") for r in rows)
+
+
+@pytest.mark.parametrize("args", [["--scenes", "nowhere/smooth"], ["--scenes", ","], ["--seconds", "0"]])
+def test_bench_app_refuses_bad_flags_in_one_line(tmp_path, capsys, args):
+    """`volren bench app` checks its flags before it opens a window."""
+    from volren.cli.main import main
+
+    (tmp_path / "data").mkdir()
+    (tmp_path / "scenes").mkdir()
+    assert main(["bench", "app", "--shared", str(tmp_path), *args]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("volren: error: --s"), err

@@ -8,15 +8,19 @@ import ctypes
 import os
 import signal
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from volren.bench import fuzz
-from volren.bench.fuzz.cases import Case
-from volren.bench.fuzz.runner import FAILURES, Run, classify, classify_run, run_cases
+from benchmarks import fuzz
+from benchmarks.fuzz.cases import Case
+from benchmarks.fuzz.runner import FAILURES, Run, classify, classify_run, run_cases
 from volren.errors import VolrenError
 from volren.io.isolation import run_isolated
+
+#: The repository root, where `python -m benchmarks.fuzz` runs.
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_corpus_is_deterministic_and_covers_every_input():
@@ -107,14 +111,14 @@ def test_a_crashing_reader_is_one_line_naming_the_file():
 @pytest.mark.slow  # about 40 s
 @pytest.mark.usefixtures("renders_with_vtk")  # the corpus's scenes and flags, in subprocesses
 def test_quick_corpus_finds_no_failures():
-    """`volren bench fuzz --quick` in a fresh process (forking this one, whose numba kernels have
+    """`python -m benchmarks.fuzz --quick` in a fresh process (forking this one, whose numba kernels have
     started OpenMP threads, would kill the children): no failure but silent acceptance, and none of
     that in the families written by hand (`fuzz.BY_HAND`)."""
     import subprocess
     import sys
 
-    done = subprocess.run([sys.executable, "-m", "volren.cli.main", "bench", "fuzz", "--quick"],
-                          capture_output=True, text=True, timeout=900)  # fmt: skip
+    done = subprocess.run([sys.executable, "-m", "benchmarks.fuzz", "--quick"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=900)  # fmt: skip
     lines = done.stdout.splitlines()
     summary = [line for line in lines if " cases in " in line]
     assert summary and int(summary[-1].split()[0]) >= 300, done.stdout[-2000:] + done.stderr[-2000:]

@@ -13,12 +13,15 @@ from pathlib import Path
 
 import pytest
 
-from volren.bench import fuzz
-from volren.bench.fuzz.cases import Case
-from volren.bench.fuzz.command_cases import CONVERT, FLAGS, MOVIE, command_cases
-from volren.bench.fuzz.output_cases import GROUP as OUTPUTS
-from volren.bench.fuzz.output_cases import output_cases
-from volren.bench.fuzz.runner import Run, classify_run, run_cases
+from benchmarks import fuzz
+from benchmarks.fuzz.cases import Case
+from benchmarks.fuzz.command_cases import CONVERT, FLAGS, MOVIE, command_cases
+from benchmarks.fuzz.output_cases import GROUP as OUTPUTS
+from benchmarks.fuzz.output_cases import output_cases
+from benchmarks.fuzz.runner import Run, classify_run, run_cases
+
+#: The repository root, where `python -m benchmarks.fuzz` runs.
+ROOT = Path(__file__).resolve().parents[2]
 
 pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
 
@@ -108,12 +111,12 @@ def test_the_runner_checks_the_files_after_each_command_and_applies_patches(tmp_
 
 def test_every_convert_case_including_the_sweeps_finds_no_failures():
     """The convert family in full (the sweeps of bad --chunks and --levels run in full only), in a
-    fresh process as `volren bench fuzz` runs: huge --chunks and --levels were refused by the
+    fresh process as `python -m benchmarks.fuzz` runs: huge --chunks and --levels were refused by the
     writer naming neither flag, and raw data given the --raw-* flags that convert now takes was
     still expected to be refused."""
     import subprocess
 
-    done = subprocess.run([sys.executable, "-m", "volren.cli.main", "bench", "fuzz", "--only", f"{CONVERT}/"],
-                          capture_output=True, text=True, timeout=300)  # fmt: skip
+    done = subprocess.run([sys.executable, "-m", "benchmarks.fuzz", "--only", f"{CONVERT}/"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)  # fmt: skip
     summary = [line for line in done.stdout.splitlines() if " cases in " in line]
     assert summary and summary[-1].endswith(": 0 failures"), done.stdout[-3000:] + done.stderr[-2000:]

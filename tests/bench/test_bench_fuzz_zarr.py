@@ -6,12 +6,16 @@ from __future__ import annotations
 import subprocess
 import sys
 from collections import Counter
+from pathlib import Path
 
 import pytest
 
-from volren.bench import fuzz
-from volren.bench.fuzz.runner import OUTCOMES
-from volren.bench.fuzz.zarr_cases import HTTP_GROUP, written_by_hand, zarr_cases
+from benchmarks import fuzz
+from benchmarks.fuzz.runner import OUTCOMES
+from benchmarks.fuzz.zarr_cases import HTTP_GROUP, written_by_hand, zarr_cases
+
+#: The repository root, where `python -m benchmarks.fuzz` runs.
+ROOT = Path(__file__).resolve().parents[2]
 
 pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
 
@@ -32,10 +36,10 @@ def test_the_quick_subset_holds_every_ome_zarr_case_written_by_hand():
 @pytest.mark.slow  # about 15 s
 @pytest.mark.usefixtures("opengl")  # the slicer draws some cases, in subprocesses
 def test_the_ome_zarr_cases_of_the_quick_subset_run_clean():
-    """`volren bench fuzz --quick --only ome-zarr` in a fresh process: every case an error naming the
+    """`python -m benchmarks.fuzz --quick --only ome-zarr` in a fresh process: every case an error naming the
     image or the flag, or a render, as it should be; not even a silent acceptance."""
-    done = subprocess.run([sys.executable, "-m", "volren.cli.main", "bench", "fuzz", "--quick", "--only", "ome-zarr"],
-                          capture_output=True, text=True, timeout=900)  # fmt: skip
+    done = subprocess.run([sys.executable, "-m", "benchmarks.fuzz", "--quick", "--only", "ome-zarr"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=900)  # fmt: skip
     lines = done.stdout.splitlines()
     summary = [line for line in lines if " cases in " in line]
     assert summary and int(summary[-1].split()[0]) >= 60, done.stdout[-2000:] + done.stderr[-2000:]

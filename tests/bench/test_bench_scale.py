@@ -1,4 +1,4 @@
-"""`volren bench scale` on tiny volumes: it writes the procedural pyramids, measures each size in a
+"""`python -m benchmarks.scale` on tiny volumes: it writes the procedural pyramids, measures each size in a
 fresh process and the 1- and 2-worker cluster, and writes its table and model."""
 
 from __future__ import annotations
@@ -8,9 +8,8 @@ import json
 import numpy as np
 import pytest
 
-from volren.bench.procedural import ProceduralVolume
-from volren.bench.scale import LayerCosts, composite_model
-from volren.cli.main import main
+from benchmarks.procedural import ProceduralVolume
+from benchmarks.scale import LayerCosts, composite_model, main
 
 pytest.importorskip("distributed", reason="dask.distributed is part of the test set-up")
 
@@ -36,7 +35,7 @@ def test_the_model_orders_the_strategies_as_icet_does():
 @pytest.mark.filterwarnings("default::volren.errors.VolrenWarning")
 def test_bench_scale_measures_and_writes_its_table(tmp_path, capsys):
     out = tmp_path / "out"
-    argv = ["bench", "scale", "--sizes", "40,72", "--image", "48", "--frames", "2", "--cluster-size", "40",
+    argv = ["--sizes", "40,72", "--image", "48", "--frames", "2", "--cluster-size", "40",
             "--data", str(tmp_path / "data"), "--out", str(out), "--memory", "1MB"]  # fmt: skip
     assert main(argv) == 0
     result = json.loads((out / "scale.json").read_text())

@@ -16,7 +16,7 @@ def test_benchmarks_md_collects_the_fragments_and_relinks_plots(tmp_path):
     assert "Assembled 2026-11-22" in text and "`python -m benchmarks.report`" in text
     assert "![engine](docs/bench/engine.png)" in text
     assert text.index("## Run time against error") < text.index("## Numerical stress")
-    assert "Not in this run: skip.md, quality.md, defaults_fidelity.md, defaults_fidelity_shared.md, defaults_ab.md, plugins.md, shearwarp_peers.md, occlusion_bound.md, resampling_floor.md, app.md, first_preview.md, zarr_levels.md, scale.md, oneshot.md, gpu.md." in text
+    assert "Not in this run: skip.md, quality.md, defaults_fidelity.md, defaults_fidelity_shared.md, defaults_ab.md, plugins.md, shearwarp_peers.md, occlusion_bound.md, resampling_floor.md, app.md, app_latency.md, first_preview.md, zarr_levels.md, scale.md, oneshot.md, gpu.md." in text
 
 
 def test_fragment_headings_nest_under_their_section(tmp_path, monkeypatch):

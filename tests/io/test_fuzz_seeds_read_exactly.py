@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from volren.bench.fuzz.seeds import SPACING, Seed, grid_values, mesh, seeds
+from benchmarks.fuzz.seeds import SPACING, Seed, grid_values, mesh, seeds
 from volren.errors import VolrenWarning
 from volren.io import load_volume
 from volren.model.volume import TetVolume, UniformVolume

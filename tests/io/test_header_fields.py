@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from volren.bench.fuzz.seeds import SPACING as SEED_SPACING
-from volren.bench.fuzz.seeds import grid_values, slc_bytes
-from volren.bench.fuzz.volume_cases import slc_cases
+from benchmarks.fuzz.seeds import SPACING as SEED_SPACING
+from benchmarks.fuzz.seeds import grid_values, slc_bytes
+from benchmarks.fuzz.volume_cases import slc_cases
 from volren.errors import VolrenError
 from volren.io import load_volume
 
@@ -122,7 +122,7 @@ def test_slc_header_words(tmp_path):
 
 # ----------------------------------------------------------------------------------------- DICOM
 
-from volren.bench.fuzz.volume_cases import _elements, set_element  # noqa: E402
+from benchmarks.fuzz.volume_cases import _elements, set_element  # noqa: E402
 from volren.testing.dicom_series import element, write_series  # noqa: E402
 
 DCM_SPACING = (0.5, 0.75, 2.0)
@@ -311,7 +311,7 @@ def test_dicom_slices_differing_in_format(tmp_path):
 import gzip  # noqa: E402
 import struct  # noqa: E402
 
-from volren.bench.fuzz.seeds import seeds  # noqa: E402
+from benchmarks.fuzz.seeds import seeds  # noqa: E402
 
 
 def nifti(tmp_path: Path, suffix: str = ".nii", **fields: tuple[int, str, float]) -> Path:
@@ -410,7 +410,7 @@ def _warn_three_times() -> None:
 @pytest.mark.parametrize("detached", [False, True])
 def test_nrrd_ascii_data_cut_short_is_refused(tmp_path, detached):
     """vtkNrrdReader fills missing ASCII numbers with zeros and reports success."""
-    from volren.bench.fuzz.seeds import SHAPE, nrrd_header
+    from benchmarks.fuzz.seeds import SHAPE, nrrd_header
 
     text = " ".join(str(v) for v in grid_values().reshape(-1)).encode()
     count = int(np.prod(SHAPE))
@@ -426,7 +426,7 @@ def test_nrrd_ascii_data_cut_short_is_refused(tmp_path, detached):
 
 def test_nrrd_ascii_reads_as_its_raw_twin(tmp_path):
     """vtkNrrdReader returns unfilled memory for ASCII data: volren parses it, same geometry."""
-    from volren.bench.fuzz.seeds import nrrd_header
+    from benchmarks.fuzz.seeds import nrrd_header
 
     text = " ".join(str(v) for v in grid_values().reshape(-1)).encode()
     (tmp_path / "text.nrrd").write_bytes((nrrd_header("ascii") + "\n").encode() + text + b"\n")

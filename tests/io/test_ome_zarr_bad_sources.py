@@ -17,7 +17,7 @@ from volren.errors import VolrenError, VolrenWarning
 from volren.model.volume import UniformVolume
 
 zarr = pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
-from volren.bench.fuzz.http_server import serving  # noqa: E402
+from benchmarks.fuzz.http_server import serving  # noqa: E402
 from volren.io.ome_zarr_io import open_multiscale  # noqa: E402
 
 #: What a message must not hold: an exception's class name (ValueError, ClientResponseError, ...).

@@ -2,7 +2,8 @@
 
 Everything that is not Qt-specific sits in `core`, usable and tested without widgets; the widgets
 around it all observe and edit one `core.state.ViewState`. Importing this package does not import
-Qt, nor does importing anything in `core` (tests/test_import_rules.py); the other subpackages do.
+Qt, nor does importing anything in `core` (pyproject.toml's import contracts, tests/test_import_rules.py);
+the other subpackages do.
 
 - `main`: `run()`, what `volren view` calls (window, input, event loop or --screenshot); Qt inside.
 - `core/` (Qt-free):
@@ -68,4 +69,7 @@ Qt, nor does importing anything in `core` (tests/test_import_rules.py); the othe
   - `file_drops`: files dropped on the window open like File > Open.
   - `docks`: places the TF editors and settings panels, and Ctrl+click picking.
   - `quality_control`: the Quality box (the measured settings of each level).
+- `timing/` (Qt): the app timing itself for `volren bench app`:
+  - `drive`: the QApplication of a measurement, waiting in its event loop, input at 60 Hz.
+  - `gestures`: the gesture table (rotate, TF point, 2D widget, crop face) against the targets.
 """

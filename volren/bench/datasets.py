@@ -19,6 +19,7 @@ from pathlib import Path
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.transfer_function import TransferFunction1D
+from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
 from volren.samples import SAMPLES, sample_paths
 
@@ -163,3 +164,13 @@ def select(names: Iterable[str] | None, shared: Path | None, quick: bool = False
         where = "" if shared is not None else " (no shared folder found: give --shared)"
         raise VolrenError(f"unknown datasets {unknown}; choose from {', '.join(available)}{where}")
     return [available[n] for n in names]
+
+
+def scene_inputs(shared: Path, dataset: str, style: str) -> tuple[Volume, TransferFunction]:
+    """The volume and TF of a shared scene (../shared/scenes/<dataset>-<style>.json)."""
+    from volren import io
+
+    path, scalars = SCENES[dataset][0], SCENES[dataset][1]
+    volume = io.load_volume(shared / "data" / path, scalars=scalars)
+    tf = io.load_transfer_function(shared / "scenes" / f"{dataset}-{style}.json")
+    return volume, tf

@@ -22,7 +22,7 @@ from volren.quality import DEFAULT_LEVEL
 
 #: The share of the memory allowed that the chunk cache may fill: the rest is for the process
 #: itself (Python, the renderer's GL driver: about 0.4 GiB) and the frame's images (measured with
-#: `volren bench scale`: 2048^3 uint16 at --memory 2GB peaked at 1.9 GiB resident).
+#: `python -m benchmarks.scale`: 2048^3 uint16 at --memory 2GB peaked at 1.9 GiB resident).
 CACHE_SHARE = 0.75
 #: The quality levels that preview: with no level named they draw the coarsest level the view
 #: needs (`level_for_view`); every other level draws the full resolution.

@@ -1,9 +1,11 @@
 """`volren bench run|skip|stress|app`: benchmarks that print numbers (medians of several runs).
 
 `run` sweeps every renderer's quality settings (time against error), `skip` switches each skipping
-technique on and off, `stress` feeds extreme input, `app` times the desktop app. The shared
-datasets are found with --shared or $VOLREN_SHARED. The experiments behind the docs (pre-integration
-tables, slicer settings, GPU runs, BENCHMARKS.md) are scripts in the repository's benchmarks/.
+technique on and off, `stress` feeds extreme input, `app` times the desktop app's gestures (the app
+measures itself: `volren.app.timing`, imported only when run). The shared datasets are found with
+--shared or $VOLREN_SHARED. The experiments behind the docs (the fuzz corpus, scaling, the app's TF
+edit latency, the quality levels' derivation, pre-integration tables, GPU runs, BENCHMARKS.md) are scripts in the repository's
+benchmarks/, run as `python -m benchmarks.NAME`.
 """
 
 from __future__ import annotations
@@ -23,38 +25,6 @@ def add_parser(sub) -> None:
     add_run_parser(kinds)
     add_stress_parser(kinds)
     add_app_parsers(kinds)
-    add_fuzz_parser(kinds)
-    add_scale_parser(kinds)
-
-
-def add_scale_parser(kinds) -> None:
-    s = kinds.add_parser("scale", help="time and peak memory against volume size, out of core and on a LocalCluster")
-    s.add_argument("--sizes", default="256,512,1024,2048", help="volume sides n (n^3 uint16; default 256,512,1024,2048)")
-    s.add_argument("--image", type=int, default=1024, help="image side in pixels (default 1024)")
-    s.add_argument("--memory", default="2GB", help="chunk cache budget of each process (default 2GB)")
-    s.add_argument("--frames", type=int, default=3, help="frames per measurement; the first is not counted (default 3)")
-    s.add_argument("--cluster-size", type=int, default=512, help="volume side for the 1- and 2-worker runs (default 512)")
-    s.add_argument("--renderer", default="slicer", help="a renderer that draws bricks (default slicer)")
-    s.add_argument("--data", default="bench-data", help="folder for the generated OME-Zarr volumes (kept; default bench-data)")
-    s.add_argument("--out", default="docs/bench", help="folder for scale.md and scale.json (default docs/bench)")
-    s.set_defaults(run=run_scale_cmd)
-
-
-def run_scale_cmd(args: argparse.Namespace) -> int:
-    from volren.bench.scale import run_scale
-    from volren.io.ome_zarr_io import parse_memory
-
-    try:
-        sizes = [int(v) for v in args.sizes.split(",") if v]
-    except ValueError:
-        raise VolrenError(f"--sizes takes numbers like 256,512, got {args.sizes!r}") from None
-    for n in [*sizes, args.cluster_size]:
-        if not 16 <= n <= 4096:
-            raise VolrenError(f"--sizes and --cluster-size take sides from 16 to 4096, got {n}")
-    if not 16 <= args.image <= 8192 or args.frames < 1:
-        raise VolrenError("--image takes 16..8192 pixels and --frames at least 1")
-    return run_scale(sizes, args.image, parse_memory(args.memory), args.frames, args.cluster_size, args.renderer,
-                     Path(args.data), Path(args.out))  # fmt: skip
 
 
 def float_list(text: str, what: str) -> list[float]:
@@ -283,19 +253,14 @@ def run_stress(args: argparse.Namespace) -> int:
 
 
 def add_app_parsers(kinds) -> None:
-    """`bench app`: the desktop app's latency and frame rate."""
-    a = kinds.add_parser("app", help="desktop app: TF edit -> new frame latency, frames per second rotating")
+    """`bench app`: the desktop app's gestures with the renderer `auto` picks."""
+    a = kinds.add_parser("app", help="desktop app: previews per second, release to full frame and GUI stalls "
+                         "of each gesture")  # fmt: skip
     a.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
-    a.add_argument("--datasets", default="ironProt,bonsai", help="comma-separated (default ironProt,bonsai)")
-    a.add_argument("--renderers", default="slicer,vtk", help="comma-separated (default slicer,vtk)")
-    a.add_argument("--style", default="smooth", help="TF style of the scenes (default smooth)")
-    a.add_argument("--edits", type=int, default=7, help="timed TF edits, median reported (default 7)")
-    a.add_argument("--seconds", type=float, default=3.0, help="length of each drag gesture (default 3 s)")
-    a.add_argument("--histogram-size", type=int, default=256,
-                   help="time the 2D TF editor's joint histogram of an N^3 volume (default 256; 0: not)")
-    a.add_argument("--gesture-scenes", default="bonsai/smooth,bonsai/spiky,oxygen/smooth",
-                   help="dataset/style scenes whose gestures are timed with the renderer auto picks, at "
-                        "947x896 (default bonsai/smooth,bonsai/spiky,oxygen/smooth; empty: none)")
+    a.add_argument("--scenes", default="bonsai/smooth,bonsai/spiky,oxygen/smooth",
+                   help="dataset/style scenes whose gestures are timed with the renderer auto picks, at 947x896 "
+                        "(default bonsai/smooth,bonsai/spiky,oxygen/smooth)")  # fmt: skip
+    a.add_argument("--seconds", type=float, default=3.0, help="length of each gesture (default 3 s)")
     a.add_argument("--out", help="folder to write app.md into")
     a.set_defaults(run=run_app)
 
@@ -304,96 +269,29 @@ def run_app(args: argparse.Namespace) -> int:
     from volren.extras import require
 
     require("app", "volren bench app")  # before anything is loaded
-    from volren.bench import app_gestures, app_latency
-    from volren.bench.datasets import SCENES
+    from volren.app.timing import gestures
+    from volren.bench.datasets import SCENES, scene_inputs
 
     shared = shared_folder(args.shared)
-    datasets = [d for d in args.datasets.split(",") if d]
-    scenes = [tuple(s.split("/", 1)) if "/" in s else (s, args.style) for s in args.gesture_scenes.split(",") if s]
-    unknown = [d for d in datasets + [d for d, _ in scenes] if d not in SCENES]
-    if unknown:
-        raise VolrenError(f"unknown datasets {unknown}; choose from {', '.join(SCENES)}")
-    if args.edits < 1 or not (math.isfinite(args.seconds) and args.seconds > 0):
-        raise VolrenError("--edits must be at least 1 and --seconds positive")
-    app = app_latency.application()
-    lines = [app_latency.HEADER]
-    print(app_latency.HEADER, flush=True)
-    for dataset in datasets:
-        volume, tf = app_latency.scene_inputs(shared, dataset, args.style)
-        for renderer in [r for r in args.renderers.split(",") if r]:
-            timing = app_latency.measure(app, volume, tf.copy(), renderer, dataset, args.edits, args.seconds)
-            lines.append(app_latency.markdown_row(timing))
-            print(lines[-1], flush=True)
-    note = app_latency.NOTE.format(
-        w=app_latency.VIEWPORT[0], h=app_latency.VIEWPORT[1], style=args.style, platform=app.platformName()
-    )
-    if scenes:
-        lines += ["", app_gestures.note(app.platformName(), args.seconds), "", app_gestures.HEADER]
-        print("\n" + "\n".join(lines[-3:]), flush=True)
-        for dataset, style in scenes:
-            volume, tf = app_latency.scene_inputs(shared, dataset, style)
-            for row in app_gestures.markdown_rows(app_gestures.measure_scene(app, volume, tf, f"{dataset}/{style}",
-                                                                              args.seconds)):  # fmt: skip
-                lines.append(row)
-                print(row, flush=True)
-    if args.histogram_size > 0:
-        seconds = app_latency.joint_histogram_seconds(args.histogram_size)
-        lines += ["", app_latency.histogram_line(args.histogram_size, seconds)]
-        print("\n" + lines[-1], flush=True)
+    scenes = [tuple(s.split("/", 1)) if "/" in s else (s, "smooth") for s in args.scenes.split(",") if s]
+    unknown = [d for d, _ in scenes if d not in SCENES]
+    if not scenes or unknown:
+        raise VolrenError(f"--scenes must name datasets of {', '.join(SCENES)}, got {args.scenes!r}")
+    if not (math.isfinite(args.seconds) and args.seconds > 0):
+        raise VolrenError("--seconds must be positive")
+    app = gestures.application()
+    lines = [gestures.HEADER]
+    print(gestures.HEADER, flush=True)
+    for dataset, style in scenes:
+        volume, tf = scene_inputs(shared, dataset, style)
+        for row in gestures.markdown_rows(gestures.measure_scene(app, volume, tf, f"{dataset}/{style}", args.seconds)):
+            lines.append(row)
+            print(row, flush=True)
     if args.out:
         out = Path(args.out)
         try:
             out.mkdir(parents=True, exist_ok=True)
-            (out / "app.md").write_text(note + "\n\n" + "\n".join(lines) + "\n")
+            (out / "app.md").write_text(gestures.note(app.platformName(), args.seconds) + "\n\n" + "\n".join(lines) + "\n")
         except OSError as exc:
             raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
     return 0
-
-
-
-
-def add_fuzz_parser(kinds) -> None:
-    """`bench fuzz`: the malformed-input corpus through `volren render` (volren.bench.fuzz)."""
-    f = kinds.add_parser("fuzz", help="malformed inputs through volren render: crashes, hangs, bad errors")
-    f.add_argument("--quick", action="store_true", help="the subset CI runs (every 12th case and the seeds)")
-    f.add_argument("--only", help="run the cases whose name contains this text")
-    f.add_argument("--jobs", type=int, default=2, help="children at a time (default 2)")
-    f.add_argument("--timeout", type=float, default=60.0, help="seconds before a case counts as a hang")
-    f.add_argument("--exec", action="store_true", help="a fresh interpreter per case instead of a fork")
-    f.add_argument("--seed", type=int, default=0, help="seed of the byte-level mutations (default 0)")
-    f.add_argument("--report", metavar="OUT.md", help="write the summary and the failing cases there")
-    f.add_argument("--work", help="folder for the cases' files (default: a temporary folder)")
-    f.set_defaults(run=run_fuzz)
-
-
-def run_fuzz(args: argparse.Namespace) -> int:
-    import tempfile
-    import time
-
-    from tqdm import tqdm
-
-    from volren.bench import fuzz
-    from volren.bench.fuzz import report
-    from volren.bench.fuzz.runner import run_cases
-    from volren.io.safe_write import write_atomically
-
-    if args.jobs < 1 or not args.timeout > 0:
-        raise VolrenError("--jobs must be at least 1 and --timeout positive")
-    cases = fuzz.quick_corpus(args.seed) if args.quick else fuzz.corpus(args.seed)
-    if args.only:
-        cases = [c for c in cases if args.only in c.name]
-    start = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="volren-fuzz-", dir=args.work) as work:
-        with tqdm(total=len(cases), desc="fuzz", unit="case", disable=None) as bar:
-            results = run_cases(cases, Path(work), args.jobs, args.timeout, "exec" if args.exec else "fork",
-                                on_result=lambda r: bar.update(1))  # fmt: skip
-    seconds = time.perf_counter() - start
-    print(report.table(results))
-    for r in report.failures(results):
-        print(f"{r.outcome}: {r.case.name}: {r.detail} | {r.first_line}")
-    if args.report:
-        command = "volren bench fuzz" + (" --quick" if args.quick else "")
-        text = report.markdown(results, command, seconds)
-        write_atomically(Path(args.report), lambda tmp: tmp.write_text(text))
-    print(f"{len(results)} cases in {seconds:.0f} s: {len(report.failures(results))} failures")
-    return 1 if report.failures(results) else 0

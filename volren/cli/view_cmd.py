@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import importlib
 
 from volren.cli.render_cmd import memory_size
 from volren.extras import require
@@ -32,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
 
     refuse_overwriting_inputs([("--screenshot", args.screenshot)], [("input", args.input), ("--tf file", args.tf)])
     require("app", "volren view")
-    app_main = importlib.import_module("volren.app.main")
+    from volren.app import main as app_main  # the CLI's one way into the app (pyproject.toml's contracts)
     return app_main.run(
         args.input,
         tf=args.tf,

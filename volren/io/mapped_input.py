@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import DTypeLike, NDArray
 
-from volren.bricked.chunk_cache import release_free_heap
+from volren.heap import release_free_heap
 from volren.io.formats import find_format
 from volren.io.formats.base import is_identity
 from volren.io.formats.geometry import parse_numbers

@@ -26,8 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from volren.bricked.chunk_cache import release_free_heap
 from volren.errors import VolrenError, VolrenWarning
+from volren.heap import release_free_heap
 from volren.model.pyramid import (
     DEFAULT_CHUNK,
     MAX_CHUNK,

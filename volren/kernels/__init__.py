@@ -15,8 +15,8 @@ internals; what several of them need lives here, neutral, and is tested on its o
 
 The tetrahedra's face planes themselves are part of the one mesh preparation,
 `volren.model.tet_mesh.prepare_mesh` (`PreparedMesh.planes`). Each renderer keeps its own
-integrator. Kernels import only `volren.model`, `volren.errors`, `volren.numba_cache` and the
-contract in `volren.renderers.base` (tested in tests/test_import_rules.py).
+integrator. Kernels import only `volren.model` (the progress callback and option rules included),
+`volren.errors` and `volren.numba_cache` (an import-linter contract in pyproject.toml).
 
 numba's on-disk cache checks only the source of the function it compiled, so a renderer package
 whose kernels call (and inline) these calls `drop_stale_cache_of` from its ``__init__``.

@@ -21,7 +21,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from volren.renderers.base import OptionRule, ProgressCallback
+from volren.model.option_rule import OptionRule
+from volren.model.progress import ProgressCallback
 
 #: cast(pixel indices, sorted, row-major) -> (n, 4) premultiplied RGBA of those pixels.
 CastRays = Callable[[NDArray[np.int64]], NDArray[np.floating]]

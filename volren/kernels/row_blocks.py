@@ -8,7 +8,7 @@ from contextlib import contextmanager
 
 import numba
 
-from volren.renderers.base import ProgressCallback
+from volren.model.progress import ProgressCallback
 
 
 def run_in_row_blocks(width: int, height: int, blocks: int, chunk_size: int, kernel: Callable[[int, int], None],

@@ -21,7 +21,7 @@ import math
 import threading
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, ClassVar, Literal, Protocol, runtime_checkable
@@ -31,14 +31,13 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.option_rule import OptionRule
+from volren.model.progress import ProgressCallback
 from volren.model.region import Region
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction, TransferFunction2D
 from volren.model.volume import Volume, VolumeKind
-
-#: Called with the fraction done in [0, 1]; it may raise to cancel the frame.
-ProgressCallback = Callable[[float], None]
 
 MAX_IMAGE_SIDE = 16384
 #: How far outside the bounds, as a fraction of their largest side, an eye still counts as inside.
@@ -70,15 +69,6 @@ OptionKind = Literal["bool", "int", "float", "str", "choice"]
 OPTION_KINDS: tuple[OptionKind, ...] = ("bool", "int", "float", "str", "choice")
 #: The longest shown form of a refused value in an error message.
 SHOWN_VALUE_CHARS = 60
-
-
-@dataclass(frozen=True)
-class OptionRule:
-    """A rule beyond an option's kind and range (a power of two, "0 or at least 16"), and the words
-    that say which values pass it, for error messages and help."""
-
-    test: Callable[[Any], bool]
-    allowed: str
 
 
 @dataclass(frozen=True)

@@ -9,12 +9,21 @@ do, and turns a Ctrl+click on the volume into a 2D TF widget at the picked value
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from PyQt5.QtCore import Qt
-from PyQt5.QtWidgets import QDockWidget, QGroupBox, QScrollArea, QVBoxLayout, QWidget
+from PyQt5.QtWidgets import (
+    QDockWidget,
+    QGroupBox,
+    QMenu,
+    QMenuBar,
+    QScrollArea,
+    QStatusBar,
+    QVBoxLayout,
+    QWidget,
+)
 
-from volren.app.core.state import Change
+from volren.app.core.state import Change, ViewState
 from volren.app.panels import (
     BackgroundPanel,
     BlendPanel,
@@ -23,13 +32,33 @@ from volren.app.panels import (
     LightingPanel,
     SamplingPanel,
 )
+from volren.app.rendering.viewport import Viewport
 from volren.app.tf_editor.history import TFHistory
 from volren.app.tf_editor.panel import TransferFunctionPanel
 from volren.app.window.field_undo import FieldUndoKeys, set_undo_shortcuts
+from volren.app.window.file_actions import FileActions
 from volren.renderers.base import KindSupport
+from volren.renderers.registry import RendererRegistry
 
-if TYPE_CHECKING:
-    from volren.app.window.main_window import MainWindow
+
+class DockHost(Protocol):
+    """What the docks use of the window they are placed in (`MainWindow`, whose QMainWindow is also
+    the parent of their widgets and actions): named here, so that the window imports the docks and
+    the docks do not import the window."""
+
+    state: ViewState
+    registry: RendererRegistry
+    viewport: Viewport
+    files: FileActions
+    view_menu: QMenu
+
+    def report_error(self, title: str, message: str) -> None: ...
+    def menuBar(self) -> QMenuBar: ...
+    def statusBar(self) -> QStatusBar: ...
+    def width(self) -> int: ...
+    def addDockWidget(self, area: Qt.DockWidgetArea, dock: QDockWidget) -> None: ...
+    def tabifyDockWidget(self, first: QDockWidget, second: QDockWidget) -> None: ...
+    def resizeDocks(self, docks: list[QDockWidget], sizes: list[int], orientation: Qt.Orientation) -> None: ...
 
 
 def _titled(title: str, panel: QWidget) -> QWidget:
@@ -60,7 +89,7 @@ def _scrolled(widget: QWidget) -> QScrollArea:
 class Docks:
     """Builds the docks of `window` and keeps them in step with its renderer."""
 
-    def __init__(self, window: MainWindow) -> None:
+    def __init__(self, window: DockHost) -> None:
         self.window = window
         state = window.state
         self.history = TFHistory(state, window)

@@ -13,8 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from volren.bench.fuzz.cases import Case, Expect
-from volren.bench.fuzz.json_cases import _volume_files
+from benchmarks.fuzz.cases import Case, Expect
+from benchmarks.fuzz.json_cases import _volume_files
 
 GROUP = "outputs"
 #: The valid input of every case in these families (a small uniform grid).

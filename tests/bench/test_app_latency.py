@@ -1,4 +1,4 @@
-"""`volren bench app`: the app's latency, on a bundled sample."""
+"""`python -m benchmarks.app_latency`: the app's TF edit latency and frame rates, on a bundled sample."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ def test_app_latency_measures_frames_on_a_sample(qapp, renders_with_vtk):
 
     if vtk_unusable():
         pytest.fail(vtk_unusable(), pytrace=False)
-    from volren.bench import app_latency
+    from benchmarks import app_latency
     from volren.samples import marschner_lobb, sample_transfer_functions
 
     timing = app_latency.measure(
@@ -37,9 +37,9 @@ def test_app_latency_measures_frames_on_a_sample(qapp, renders_with_vtk):
 
 
 def test_the_joint_histogram_timing_counts_every_point():
-    """`volren bench app` times the 2D TF editor's histogram (the claim the tests no longer make):
+    """`benchmarks.app_latency` times the 2D TF editor's histogram (the claim the tests no longer make):
     a real duration, of a histogram computed in full."""
-    from volren.bench import app_latency
+    from benchmarks import app_latency
 
     seconds = app_latency.joint_histogram_seconds(16, repeats=1)
     assert math.isfinite(seconds) and seconds > 0

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from volren.bench.fuzz.cases import BAD_NUMBERS, Case, Expect
-from volren.bench.fuzz.json_cases import _volume_files
-from volren.bench.fuzz.output_cases import SIDE, VOLUME, spot_case, spots
-from volren.bench.fuzz.seeds import seeds
-from volren.bench.fuzz.zarr_cases import IMAGE
-from volren.bench.fuzz.zarr_cases import seed_files as zarr_files
+from benchmarks.fuzz.cases import BAD_NUMBERS, Case, Expect
+from benchmarks.fuzz.json_cases import _volume_files
+from benchmarks.fuzz.output_cases import SIDE, VOLUME, spot_case, spots
+from benchmarks.fuzz.seeds import seeds
+from benchmarks.fuzz.zarr_cases import IMAGE
+from benchmarks.fuzz.zarr_cases import seed_files as zarr_files
 
 CONVERT = "convert"
 MOVIE = "movie"

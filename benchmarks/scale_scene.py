@@ -1,4 +1,4 @@
-"""The scene `volren bench scale` draws at every size: the procedural volume's TF, camera and
+"""The scene `python -m benchmarks.scale` draws at every size: the procedural volume's TF, camera and
 settings (the slicer's defaults, early termination off, so that every brick is drawn as the
 whole render would be)."""
 

@@ -4,18 +4,18 @@
 command-line flags, OME-Zarr images, `convert` and `movie`, output paths); `runner.run_cases` runs each in a child process with a time limit and
 classifies the outcome (render, clean error, crash, hang, traceback, several lines, unnamed
 culprit, bad pixels, nondeterministic image, bad header accepted in silence); `report` writes the
-summary. `volren bench fuzz` runs it all; CI runs `quick_corpus()`.
+summary. `python -m benchmarks.fuzz` runs it all; CI runs `quick_corpus()`.
 """
 
 from __future__ import annotations
 
-from volren.bench.fuzz import command_cases as commands
-from volren.bench.fuzz import output_cases as outputs
-from volren.bench.fuzz.cases import Case
-from volren.bench.fuzz.json_cases import flag_cases, scene_cases, tf_cases
-from volren.bench.fuzz.volume_cases import volume_cases
-from volren.bench.fuzz.zarr_cases import written_by_hand as zarr_by_hand
-from volren.bench.fuzz.zarr_cases import zarr_cases
+from benchmarks.fuzz import command_cases as commands
+from benchmarks.fuzz import output_cases as outputs
+from benchmarks.fuzz.cases import Case
+from benchmarks.fuzz.json_cases import flag_cases, scene_cases, tf_cases
+from benchmarks.fuzz.volume_cases import volume_cases
+from benchmarks.fuzz.zarr_cases import written_by_hand as zarr_by_hand
+from benchmarks.fuzz.zarr_cases import zarr_cases
 
 #: The families whose cases are written by hand, each a fault of its own, but for their sweeps.
 BY_HAND = frozenset({outputs.GROUP, commands.CONVERT, commands.MOVIE, commands.FLAGS})

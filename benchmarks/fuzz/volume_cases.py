@@ -17,8 +17,8 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from volren.bench.fuzz.cases import BAD_NUMBERS, Case, Expect, render_argv
-from volren.bench.fuzz.seeds import SHAPE, SPACING, Seed, grid_values, legacy_mesh_text, mesh, rle, seeds
+from benchmarks.fuzz.cases import BAD_NUMBERS, Case, Expect, render_argv
+from benchmarks.fuzz.seeds import SHAPE, SPACING, Seed, grid_values, legacy_mesh_text, mesh, rle, seeds
 
 TOKEN_BAD = ("0", "-1", "nan", "inf", "99999", "4294967296", "x")
 

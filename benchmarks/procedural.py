@@ -1,5 +1,5 @@
 """A procedural uint16 volume of any size, generated a block at a time (never whole in memory):
-what `volren bench scale` writes into OME-Zarr pyramids from 256^3 to 2048^3.
+what `python -m benchmarks.scale` writes into OME-Zarr pyramids from 256^3 to 2048^3.
 
 The field: Marschner and Lobb's test signal (smooth, with detail at every scale the grid can
 hold) inside a sphere, zero outside it, so that the scene has empty space to skip like real

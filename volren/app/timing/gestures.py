@@ -20,13 +20,18 @@ whatever holds the thread (or the interpreter's lock) that long delays every cli
 
 from __future__ import annotations
 
-import math
 import statistics
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+from volren.app.timing.drive import application, drive_at_60hz, wait
+
+#: `application` is the QApplication a measurement runs in (`drive`), named here for `volren bench app`.
+__all__ = ["HEADER", "TARGETS", "VIEWPORT", "GestureTiming", "SceneTiming", "StallProbe", "application",
+           "markdown_rows", "measure_scene", "note", "run_gesture", "settle"]
 
 #: The viewport the interaction targets were set on: a maximised window on a 1080p screen.
 VIEWPORT = (947, 896)
@@ -91,14 +96,13 @@ class StallProbe:
 
 def settle(app, window, timeout_s: float) -> None:
     """Wait until the full frame of the newest request is on screen and no warm-up runs."""
-    from volren.bench.app_latency import _wait
 
     def done() -> bool:
         frame = window.viewport.frame
         return (not window.service.warming and frame is not None and frame.full
                 and frame.serial == window.service.latest_serial)  # fmt: skip
 
-    if not _wait(app, done, timeout_s):
+    if not wait(app, done, timeout_s):
         raise TimeoutError(f"no full frame within {timeout_s:g} s")
 
 
@@ -108,8 +112,6 @@ def _share(frame) -> float:
 
 def run_gesture(app, window, name: str, step: Callable[[int], None], seconds: float, timeout_s: float) -> GestureTiming:
     """`step(k)` at 60 Hz for `seconds` inside an interaction, then release; what the person saw."""
-    from volren.bench.app_latency import _wait, drive_at_60hz
-
     state, stall = window.state, StallProbe()
     shown: list[tuple[float, object]] = []
     record = lambda frame: shown.append((time.perf_counter(), frame))  # noqa: E731
@@ -126,7 +128,7 @@ def run_gesture(app, window, name: str, step: Callable[[int], None], seconds: fl
         def final_shown() -> bool:
             return any(f.full and f.serial >= serial for _, f in shown)
 
-        if not _wait(app, final_shown, timeout_s):
+        if not wait(app, final_shown, timeout_s):
             raise TimeoutError(f"{name}: no full frame within {timeout_s:g} s of the release")
         done, final = next((t, f) for t, f in shown if f.full and f.serial >= serial)
         return GestureTiming(
@@ -162,7 +164,6 @@ def measure_scene(app, volume, tf, scene: str, seconds: float = 3.0, timeout_s: 
     """Open `volume` with `tf` (renderer `auto`) at VIEWPORT; time the opening and each gesture."""
     from volren.app.core.loading import LoadedInput
     from volren.app.window.main_window import MainWindow
-    from volren.bench.app_latency import _wait
     from volren.model.transfer_function import TransferFunction1D
     from volren.model.transfer_function_2d import TFWidget
 
@@ -180,7 +181,7 @@ def measure_scene(app, volume, tf, scene: str, seconds: float = 3.0, timeout_s: 
         serial = window.service.latest_serial
         full: list[float] = []
         window.fullFrameShown.connect(lambda f: full.append(time.perf_counter()) if f.serial >= serial else None)
-        if not _wait(app, lambda: bool(full), timeout_s):
+        if not wait(app, lambda: bool(full), timeout_s):
             raise TimeoutError(f"{scene}: no first frame within {timeout_s:g} s")
         open_ms, open_stall = (full[0] - start) * 1000.0, stall.stop()
         if errors:
@@ -259,7 +260,3 @@ def note(platform: str, seconds: float) -> str:
     return NOTE.format(platform=platform, w=VIEWPORT[0], h=VIEWPORT[1], s=seconds, p=TARGETS["previews_per_s"],
                        share=100 * TARGETS["preview_share"], r=TARGETS["release_ms"], st=TARGETS["stall_ms"],
                        o=TARGETS["open_ms"])  # fmt: skip
-
-
-def finite(t: SceneTiming) -> bool:
-    return math.isfinite(t.open_ms) and all(math.isfinite(g.release_ms) for g in t.gestures)

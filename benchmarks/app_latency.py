@@ -1,4 +1,4 @@
-"""How responsive the desktop app is: TF edit to new frame, and frames per second while rotating.
+"""`python -m benchmarks.app_latency`: how responsive the desktop app is: TF edit to new frame, and frames per second while rotating.
 
 Runs the real `MainWindow` (offscreen when there is no display) with its render thread, frame
 scheduler and viewport, drives it the way a person does, and times what they see:
@@ -20,14 +20,23 @@ Frames are counted when the window shows them (`MainWindow.frameShown`), after t
 
 from __future__ import annotations
 
+import argparse
 import math
 import statistics
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from benchmarks._cli import run
+from volren.app.timing.drive import application, drive_at_60hz, wait
+from volren.bench.datasets import SCENES, scene_inputs, shared_folder
+from volren.errors import VolrenError
+
+COMMAND = "python -m benchmarks.app_latency"
 
 #: The viewport size the issue asks for.
 VIEWPORT = (800, 600)
@@ -61,55 +70,6 @@ class AppTiming:
         return self.drag_preview_size[0] * self.drag_preview_size[1] / (VIEWPORT[0] * VIEWPORT[1])
 
 
-def application():
-    """The QApplication (offscreen where there is no display: the numbers do not need a screen)."""
-    import os
-
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
-    from volren.extras import require
-
-    require("app", "volren bench app")
-    from PyQt5.QtWidgets import QApplication
-
-    return QApplication.instance() or QApplication(["volren"])
-
-
-#: While waiting, the event loop wakes at least this often (ms) to test time-based conditions.
-WAKE_MS = 2
-
-
-def _wait(app, condition: Callable[[], bool], timeout_s: float) -> bool:
-    """Run the event loop until `condition()` holds (False after `timeout_s`). It sleeps in the
-    loop between events, as the app does: polling it every 0.5 ms took a third of a core from
-    the renderer's two threads, which made TF-drag previews on oxygen 1.6x slower than alone."""
-    from PyQt5.QtCore import QEventLoop, QTimer
-
-    end = time.perf_counter() + timeout_s
-    timer = QTimer()
-    timer.start(WAKE_MS)
-    try:
-        while not condition():
-            if time.perf_counter() > end:
-                return False
-            app.processEvents(QEventLoop.AllEvents | QEventLoop.WaitForMoreEvents)
-    finally:
-        timer.stop()
-    return True
-
-
-def drive_at_60hz(app, step: Callable[[int], None], seconds: float) -> float:
-    """Call step(k) at 60 Hz (a mouse's event rate) for `seconds`, running the event loop between
-    calls; returns the seconds it took."""
-    start = time.perf_counter()
-    k = 0
-    while time.perf_counter() - start < seconds:
-        step(k)
-        k += 1
-        _wait(app, lambda k=k: time.perf_counter() - start >= k / 60.0, 1.0)
-    return time.perf_counter() - start
-
-
 class _Probe:
     """Counts the frames a window shows and remembers the newest full one."""
 
@@ -126,7 +86,7 @@ def _full_frame_after(app, window, probe: _Probe, act: Callable[[], None], timeo
     start = time.perf_counter()
     act()
     serial = window.service.latest_serial
-    ok = _wait(app, lambda: any(f.serial >= serial for _, f in probe.full[count:]), timeout_s)
+    ok = wait(app, lambda: any(f.serial >= serial for _, f in probe.full[count:]), timeout_s)
     if not ok:
         raise TimeoutError(f"no full frame within {timeout_s:g} s")
     t, frame = next((t, f) for t, f in probe.full[count:] if f.serial >= serial)
@@ -197,7 +157,7 @@ def measure(
         drag_fps = gesture(lambda k: _move_point(state.transfer_function, (k % 60) / 59.0, base))
         drag_previews = [f for _, f in probe.shown[-5:] if not f.full]
         drag_preview = (drag_previews[-1].width, drag_previews[-1].height) if drag_previews else (0, 0)
-        _wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
+        wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
         settle = []
         rotate_fps = []
         preview = (0, 0)
@@ -208,7 +168,7 @@ def measure(
             if previews:
                 preview = (previews[-1].width, previews[-1].height)
             released = time.perf_counter()
-            _wait(
+            wait(
                 app,
                 lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial,
                 timeout_s,
@@ -222,12 +182,12 @@ def measure(
         state.begin_interaction()
         for _ in range(10):
             state.set_camera(state.camera.azimuth(2.0))
-            _wait(app, lambda: False, 1 / 60)
-        _wait(app, lambda: False, 0.4)
+            wait(app, lambda: False, 1 / 60)
+        wait(app, lambda: False, 0.4)
         released = time.perf_counter()
         state.end_interaction()
-        _wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
-        _wait(app, lambda: False, 0.5)  # a second full frame would come within the settle time
+        wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
+        wait(app, lambda: False, 0.5)  # a second full frame would come within the settle time
         rest_release = max(0.0, (probe.full[-1][0] - released) * 1000.0)
         final = state.camera
         duplicates = max(0, sum(1 for _, f in probe.full[count:] if f.camera == final) - 1)
@@ -311,12 +271,51 @@ def markdown_row(t: AppTiming) -> str:
     )
 
 
-def scene_inputs(shared: Path, dataset: str, style: str):
-    """The volume and TF of a shared scene (../shared/scenes/<dataset>-<style>.json)."""
-    from volren import io
-    from volren.bench.datasets import SCENES
+def measure_all(args: argparse.Namespace) -> int:
+    """The latency table of each dataset and renderer, then the joint histogram's time."""
+    shared = shared_folder(args.shared)
+    datasets = [d for d in args.datasets.split(",") if d]
+    unknown = [d for d in datasets if d not in SCENES]
+    if unknown:
+        raise VolrenError(f"unknown datasets {unknown}; choose from {', '.join(SCENES)}")
+    if args.edits < 1 or not (math.isfinite(args.seconds) and args.seconds > 0):
+        raise VolrenError("--edits must be at least 1 and --seconds positive")
+    app = application()
+    lines = [HEADER]
+    print(HEADER, flush=True)
+    for dataset in datasets:
+        volume, tf = scene_inputs(shared, dataset, args.style)
+        for renderer in [r for r in args.renderers.split(",") if r]:
+            lines.append(markdown_row(measure(app, volume, tf.copy(), renderer, dataset, args.edits, args.seconds)))
+            print(lines[-1], flush=True)
+    if args.histogram_size > 0:
+        lines += ["", histogram_line(args.histogram_size, joint_histogram_seconds(args.histogram_size))]
+        print("\n" + lines[-1], flush=True)
+    if args.out:
+        note = NOTE.format(w=VIEWPORT[0], h=VIEWPORT[1], style=args.style, platform=app.platformName())
+        out = Path(args.out)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            (out / "app_latency.md").write_text(note + "\n\n" + "\n".join(lines) + "\n")
+        except OSError as exc:
+            raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
+    return 0
 
-    path, scalars = SCENES[dataset][0], SCENES[dataset][1]
-    volume = io.load_volume(shared / "data" / path, scalars=scalars)
-    tf = io.load_transfer_function(shared / "scenes" / f"{dataset}-{style}.json")
-    return volume, tf
+
+def main(argv: list[str] | None = None) -> int:
+    a = argparse.ArgumentParser(prog=COMMAND, description="desktop app: TF edit -> new frame latency, frames per "
+                                "second rotating")  # fmt: skip
+    a.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
+    a.add_argument("--datasets", default="ironProt,bonsai", help="comma-separated (default ironProt,bonsai)")
+    a.add_argument("--renderers", default="slicer,vtk", help="comma-separated (default slicer,vtk)")
+    a.add_argument("--style", default="smooth", help="TF style of the scenes (default smooth)")
+    a.add_argument("--edits", type=int, default=7, help="timed TF edits, median reported (default 7)")
+    a.add_argument("--seconds", type=float, default=3.0, help="length of each drag gesture (default 3 s)")
+    a.add_argument("--histogram-size", type=int, default=HISTOGRAM_SIZE,
+                   help="time the 2D TF editor's joint histogram of an N^3 volume (default 256; 0: not)")
+    a.add_argument("--out", help="folder to write app_latency.md into")
+    return run(measure_all, a, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

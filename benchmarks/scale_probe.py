@@ -1,7 +1,7 @@
-"""One process's frames of an OME-Zarr level, streamed brick by brick, for `volren bench scale`:
+"""One process's frames of an OME-Zarr level, streamed brick by brick, for `python -m benchmarks.scale`:
 run as its own process so that its peak resident memory is the frame's alone.
 
-    python -m volren.bench.scale_probe PATH LEVEL MEMORY SIZE FRAMES RENDERER
+    python -m benchmarks.scale_probe PATH LEVEL MEMORY SIZE FRAMES RENDERER
 
 prints one JSON line: each frame's ms, the peak resident memory (bytes), the chunk cache's peak,
 and the last frame's counters.
@@ -14,7 +14,7 @@ import resource
 import sys
 import time
 
-from volren.bench.scale_scene import scale_camera, scale_settings, scale_tf
+from benchmarks.scale_scene import scale_camera, scale_settings, scale_tf
 
 
 def main(argv: list[str]) -> int:

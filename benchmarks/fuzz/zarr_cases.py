@@ -18,9 +18,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from volren.bench.fuzz.cases import Case, Expect, render_argv
-from volren.bench.fuzz.json_cases import _document_cases, _dump
-from volren.bench.fuzz.seeds import SPACING, grid_values
+from benchmarks.fuzz.cases import Case, Expect, render_argv
+from benchmarks.fuzz.json_cases import _document_cases, _dump
+from benchmarks.fuzz.seeds import SPACING, grid_values
 
 IMAGE = "img.zarr"
 GROUP = "ome-zarr"

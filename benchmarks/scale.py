@@ -1,8 +1,8 @@
-"""`volren bench scale`: time and peak memory against volume size, one process against a
+"""`python -m benchmarks.scale`: time and peak memory against volume size, one process against a
 LocalCluster of 1 and 2 workers, the share of compositing, and a model of compositing for 8 to
 1024 workers built on the per-layer costs measured here.
 
-Volumes: `bench.procedural` (Marschner-Lobb in a sphere), n^3 uint16, written once into OME-Zarr
+Volumes: `benchmarks.procedural` (Marschner-Lobb in a sphere), n^3 uint16, written once into OME-Zarr
 pyramids of 64^3 bricks under --data (kept between runs). For each size:
 - one process streams the full resolution and the level of detail the view picks, brick by brick
   within --memory, each in a fresh process (`scale_probe`) whose peak resident memory is read;
@@ -16,8 +16,10 @@ moving a layer between processes per byte, and a message's latency.
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
+import os
 import statistics
 import subprocess
 import sys
@@ -27,11 +29,15 @@ from pathlib import Path
 
 import numpy as np
 
-from volren.bench.procedural import ProceduralVolume
-from volren.bench.scale_scene import scale_camera, scale_settings, scale_tf
+from benchmarks._cli import run
+from benchmarks.procedural import ProceduralVolume
+from benchmarks.scale_scene import scale_camera, scale_settings, scale_tf
 from volren.errors import VolrenError
 
 CHUNK = 64
+COMMAND = "python -m benchmarks.scale"
+#: The repository root, on the probe's path wherever the benchmark was started from.
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def ensure_volume(folder: Path, n: int) -> Path:
@@ -50,9 +56,10 @@ def ensure_volume(folder: Path, n: int) -> Path:
 
 def probe(path: Path, level: int, memory: int, size: int, frames: int, renderer: str) -> dict:
     """`scale_probe` in a fresh process: its frames, peak memory and counters."""
-    command = [sys.executable, "-m", "volren.bench.scale_probe", str(path), str(level), str(memory), str(size),
+    command = [sys.executable, "-m", "benchmarks.scale_probe", str(path), str(level), str(memory), str(size),
                str(frames), renderer]  # fmt: skip
-    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p))
+    done = subprocess.run(command, capture_output=True, text=True, check=False, env=env)
     if done.returncode != 0:
         raise VolrenError(f"scale probe of {path.name} level {level} failed: {done.stderr.strip().splitlines()[-1:]}")
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -199,7 +206,7 @@ def scale_markdown(d: dict) -> str:
 
     image, memory = d["image"], d["memory"]
     lines = [
-        f"`volren bench scale` ({d['renderer']}, {image}x{image}, --memory {human_size(memory)}; procedural "
+        f"`{COMMAND}` ({d['renderer']}, {image}x{image}, --memory {human_size(memory)}; procedural "
         "Marschner-Lobb in a sphere, uint16, OME-Zarr of 64^3 bricks; each row a fresh process streaming brick by "
         "brick, median of the frames after the first (one frame for full-resolution 2048^3)).",
         "",
@@ -233,3 +240,37 @@ def scale_markdown(d: dict) -> str:
               "plus their rounds' latencies, radix-k with fewer rounds. Layers here are cropped to each run's pixels, "
               "so the measured composites are smaller than the model's full-frame layers."]
     return "\n".join(lines) + "\n"
+
+
+def run_scale_args(args: argparse.Namespace) -> int:
+    from volren.io.ome_zarr_io import parse_memory
+
+    try:
+        sizes = [int(v) for v in args.sizes.split(",") if v]
+    except ValueError:
+        raise VolrenError(f"--sizes takes numbers like 256,512, got {args.sizes!r}") from None
+    for n in [*sizes, args.cluster_size]:
+        if not 16 <= n <= 4096:
+            raise VolrenError(f"--sizes and --cluster-size take sides from 16 to 4096, got {n}")
+    if not 16 <= args.image <= 8192 or args.frames < 1:
+        raise VolrenError("--image takes 16..8192 pixels and --frames at least 1")
+    return run_scale(sizes, args.image, parse_memory(args.memory), args.frames, args.cluster_size, args.renderer,
+                     Path(args.data), Path(args.out))  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    s = argparse.ArgumentParser(prog=COMMAND, description="time and peak memory against volume size, out of core "
+                                "and on a LocalCluster")  # fmt: skip
+    s.add_argument("--sizes", default="256,512,1024,2048", help="volume sides n (n^3 uint16; default 256,512,1024,2048)")
+    s.add_argument("--image", type=int, default=1024, help="image side in pixels (default 1024)")
+    s.add_argument("--memory", default="2GB", help="chunk cache budget of each process (default 2GB)")
+    s.add_argument("--frames", type=int, default=3, help="frames per measurement; the first is not counted (default 3)")
+    s.add_argument("--cluster-size", type=int, default=512, help="volume side for the 1- and 2-worker runs (default 512)")
+    s.add_argument("--renderer", default="slicer", help="a renderer that draws bricks (default slicer)")
+    s.add_argument("--data", default="bench-data", help="folder for the generated OME-Zarr volumes (kept; default bench-data)")
+    s.add_argument("--out", default="docs/bench", help="folder for scale.md and scale.json (default docs/bench)")
+    return run(run_scale_args, s, argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

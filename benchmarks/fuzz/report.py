@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections import Counter
 
-from volren.bench.fuzz.runner import FAILURES, OUTCOMES, Result
+from benchmarks.fuzz.runner import FAILURES, OUTCOMES, Result
 
 
 def failures(results: list[Result]) -> list[Result]:

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from volren.bench.fuzz.cases import Case
+from benchmarks.fuzz.cases import Case
 
 #: Outcome classes, worst first; a case's class is the worst of its runs.
 FAILURES = (
@@ -109,7 +109,7 @@ def _child_main(case: Case, folder: Path, perturb: int, memory_limit: int) -> No
         if memory_limit:
             resource.setrlimit(resource.RLIMIT_AS, (memory_limit, memory_limit))
         ctypes.CDLL(None).mallopt(_M_PERTURB, perturb)
-        logging.getLogger().handlers.clear()  # a fresh interpreter's logging: `bench fuzz` added its own
+        logging.getLogger().handlers.clear()  # a fresh interpreter's logging: `benchmarks.fuzz` added its own
         warnings.resetwarnings()  # a fresh interpreter's filters, not the parent's (pytest's)
         for category in (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning):
             warnings.simplefilter("ignore", category)
@@ -331,8 +331,8 @@ class _Server:
         self.work, self.stack, self.base = work, stack, ""
 
     def case_for(self, case: Case, folder: Path) -> Case:
-        from volren.bench.fuzz.http_server import serving
-        from volren.bench.fuzz.zarr_cases import needs_server, with_server
+        from benchmarks.fuzz.http_server import serving
+        from benchmarks.fuzz.zarr_cases import needs_server, with_server
 
         if not needs_server(case):
             return case

@@ -11,8 +11,8 @@ import json
 from collections.abc import Iterator
 from typing import Any
 
-from volren.bench.fuzz.cases import Case, Expect, render_argv
-from volren.bench.fuzz.seeds import seeds
+from benchmarks.fuzz.cases import Case, Expect, render_argv
+from benchmarks.fuzz.seeds import seeds
 
 _VOLUME = "v.vti"
 
