@@ -283,9 +283,12 @@ def next_boundary(u0, length, cuts, ci, cend, p, piece, n):
 
 
 @njit(nogil=True, cache=True)
-def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz):
+def _composite_level(intervals, offsets, cuts, h0, level, tf, sp, hx, hy, hz):
+    """One level of the composite of a ray's `RayIntervals` (r, g, b, a, samples, cap hits): the
+    level-0 pieces of length h0 cut at `cuts` (CSR by interval, `offsets`), bisected `level` times."""
+    ta, tb, P, G, m = intervals
     unit = tf[5]
-    shading = sp[0]
+    shading = sp.on
     mult = 1 << level
     T = 1.0
     cr = 0.0
@@ -327,7 +330,7 @@ def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, 
                     elif q > 1.0:
                         nsub = int(math.ceil(q))
                 if shading:
-                    turn = _normal_turn(G[k], u0, 0.5 * (u0 + u1), u1, sp[5])
+                    turn = _normal_turn(G[k], u0, 0.5 * (u0 + u1), u1, sp.gradient_threshold)
                     if turn > SHADING_TURN:
                         q = turn / SHADING_TURN
                         if q > MAX_SUBDIVISION:

@@ -75,14 +75,18 @@ def converged(level, change, last, tol):
 
 
 @njit(nogil=True, cache=True)
-def integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, tf2d, sp, dx, dy, dz):
-    """RGBA of one ray and its statistics: (r, g, b, a, samples, level, converged, cap_hits)."""
+def integrate_ray(intervals, quad, tf, tf2d, sp, dx, dy, dz):
+    """RGBA of one ray (direction d) over its `RayIntervals` intervals, integrated as the
+    `Quadrature` quad says with the `ShadeParams` sp, and its statistics: (r, g, b, a, samples,
+    level, converged, cap_hits)."""
+    ta, tb, P, G, m = intervals
+    mode, h0, tol, max_levels = quad
     if m == 0:
         return 0.0, 0.0, 0.0, 0.0, 0, 0, True, 0
     if tf is not None and mode != COMPOSITE:
         return project_ray(ta, tb, P, m, mode, tf)
     hx, hy, hz = half_vector(sp, dx, dy, dz)
-    offsets, cuts = compute_cuts(ta, tb, P, G, m, tf, tf2d, sp[0], sp[5])
+    offsets, cuts = compute_cuts(ta, tb, P, G, m, tf, tf2d, sp.on, sp.gradient_threshold)
     shares = np.zeros((0, 4))
     before = np.zeros((0, 4))
     if tf2d is not None:  # a 2D TF's change is measured per interval
@@ -95,11 +99,10 @@ def integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, tf2d, sp, dx, 
     last = math.inf
     for level in range(max_levels):
         if tf is not None:
-            cr, cg, cb, ca, n, c = _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz)
+            cr, cg, cb, ca, n, c = _composite_level(intervals, offsets, cuts, h0, level, tf, sp, hx, hy, hz)
             change = max(abs(cr - pr), abs(cg - pg), abs(cb - pb), abs(ca - pa))
         if tf2d is not None:
-            cr, cg, cb, ca, n, c = _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf2d, sp, hx, hy,
-                                                       hz, shares)  # fmt: skip
+            cr, cg, cb, ca, n, c = _composite_level_2d(intervals, offsets, cuts, h0, level, tf2d, sp, hx, hy, hz, shares)
             change = share_change(shares, before, m)
             before, shares = shares, before
         pr, pg, pb, pa = cr, cg, cb, ca

@@ -451,10 +451,12 @@ def _share(parts, k, r, g, b, a):
 
 
 @njit(nogil=True, cache=True)
-def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz, parts):
-    """One level of the ray's composite; parts[k] receives interval k's share of (r, g, b, a)."""
+def _composite_level_2d(intervals, offsets, cuts, h0, level, tf, sp, hx, hy, hz, parts):
+    """One level of the composite of a ray's `RayIntervals` (as `ray_integral._composite_level`);
+    parts[k] receives interval k's share of (r, g, b, a)."""
+    ta, tb, P, G, m = intervals
     unit = tf[5]
-    shading = sp[0]
+    shading = sp.on
     mult = 1 << level
     T = 1.0
     cr = 0.0
@@ -485,7 +487,7 @@ def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, h
                 tf, cubic(c, u0), cubic(c, u1), _grad_mag(gk, u0), _grad_mag(gk, umid), _grad_mag(gk, u1)
             )
             if shading:
-                q = max(q, _normal_turn(gk, u0, umid, u1, sp[5]) / SHADING_TURN)
+                q = max(q, _normal_turn(gk, u0, umid, u1, sp.gradient_threshold) / SHADING_TURN)
             if q > MAX_SUBDIVISION:
                 nsub = MAX_SUBDIVISION
                 caps += 1
