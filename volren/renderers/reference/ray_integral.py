@@ -287,7 +287,7 @@ def _composite_level(intervals, offsets, cuts, h0, level, tf, sp, hx, hy, hz):
     """One level of the composite of a ray's `RayIntervals` (r, g, b, a, samples, cap hits): the
     level-0 pieces of length h0 cut at `cuts` (CSR by interval, `offsets`), bisected `level` times."""
     ta, tb, P, G, m = intervals
-    unit = tf[5]
+    unit = tf.unit
     shading = sp.on
     mult = 1 << level
     T = 1.0

@@ -40,7 +40,7 @@ def _cuts_of(P, G, k, length, tf, tf2d, shading, thr2, out):
     """The cut points of interval k, sorted into out when it holds them all; returns their count."""
     n = 0
     if tf is not None:
-        n = interval_cuts_1d(P[k], G, k, length, tf[6], shading, thr2, out)
+        n = interval_cuts_1d(P[k], G, k, length, tf.cuts, shading, thr2, out)
     if tf2d is not None:
         n = interval_cuts_2d(P[k], G[k], length, tf2d, shading, thr2, out)
     return n
