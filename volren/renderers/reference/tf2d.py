@@ -29,7 +29,7 @@ Per ray (composite only; the capabilities offer no other blend mode with a 2D TF
    Between two cuts the integrand is smooth apart from the clamp at the rectangle's edges, s and
    |grad s| are monotone, and every box or triangle is either present throughout or absent.
 2. The level-0 partition: interval k is split into ceil(len / h0) equal pieces intersected with
-   the cuts; each piece is subdivided so that, for every widget whose support box (a Gaussian's
+   the cuts (`refinement.level0_pieces`, shared with the 1D path); each piece is subdivided so that, for every widget whose support box (a Gaussian's
    to 6 standard deviations) meets the piece's span of (s, g) (exact, from its ends: both are
    monotone), s changes by at most FRACTION of the widget's value scale and g by at most
    FRACTION of its gradient scale (Gaussian: its standard deviations; triangle: its half-width
@@ -69,7 +69,6 @@ from volren.renderers.reference.ray_integral import (
     _interval_cuts,
     _normal_turn,
     cubic,
-    next_boundary,
 )
 
 GAUSSIAN, TRIANGLE, BOX, PROFILE = 0, 1, 2, 3
@@ -473,10 +472,11 @@ def _share(parts, k, r, g, b, a):
 
 
 @njit(nogil=True, cache=True)
-def _composite_level_2d(intervals, offsets, cuts, h0, level, tf, sp, hx, hy, hz, parts):
+def _composite_level_2d(intervals, pieces, level, tf, sp, hx, hy, hz, parts):
     """One level of the composite of a ray's `RayIntervals` (as `ray_integral._composite_level`);
     parts[k] receives interval k's share of (r, g, b, a)."""
     ta, tb, P, G, m = intervals
+    piece_starts, piece_ends = pieces
     unit = tf.unit
     shading = sp.on
     mult = 1 << level
@@ -494,16 +494,9 @@ def _composite_level_2d(intervals, offsets, cuts, h0, level, tf, sp, hx, hy, hz,
         r0, g0, b0, T0 = cr, cg, cb, T
         c = P[k]
         gk = G[k]
-        n = max(1, int(math.ceil(length / h0)))
-        piece = length / n
-        ci = offsets[k]
-        cend = offsets[k + 1]
-        p = 1
         u0 = 0.0
-        while u0 < length:
-            u1, ci, p = next_boundary(u0, length, cuts, ci, cend, p, piece, n)
-            if u1 <= u0:
-                continue
+        for e in range(piece_starts[k], piece_starts[k + 1]):
+            u1 = piece_ends[e]
             umid = 0.5 * (u0 + u1)
             q = _subdivision(
                 tf, cubic(c, u0), cubic(c, u1), _grad_mag(gk, u0), _grad_mag(gk, umid), _grad_mag(gk, u1)
