@@ -76,8 +76,9 @@ def test_a_renderer_is_imported_only_by_itself():
 
 
 def test_kernels_need_only_the_model_and_the_contract():
-    allowed = ("numpy", "numba", "math", "collections", "contextlib", "pathlib", "__future__", "volren.model",
-               "volren.errors", "volren.renderers.base", "volren.numba_cache")
+    # typing: the kernels' parameter bundles are typing.NamedTuples (numba types them as named tuples)
+    allowed = ("numpy", "numba", "math", "collections", "contextlib", "pathlib", "typing", "__future__",
+               "volren.model", "volren.errors", "volren.renderers.base", "volren.numba_cache")
     found = [
         f"{path.relative_to(PACKAGE)} imports {name}"
         for path, names in imports_of("kernels").items()
