@@ -12,6 +12,7 @@ internals; what several of them need lives here, neutral, and is tested on its o
 - `tet_projection`: tetrahedra projected to pixel boxes and binned per pixel;
 - `tet_clipping`: a ray clipped against one tetrahedron's face planes, exact at shared faces;
 - `box_clipping`: a ray clipped to a box (slab test).
+- `ray_block`: a block of pixel rays with their candidate cells, as one kernel parameter.
 
 The tetrahedra's face planes themselves are part of the one mesh preparation,
 `volren.model.tet_mesh.prepare_mesh` (`PreparedMesh.planes`). Each renderer keeps its own

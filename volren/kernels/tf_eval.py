@@ -4,8 +4,8 @@ Why: the reference renderer defines truth, so it must evaluate the TF exactly as
 it (piecewise linear colour and opacity between control points, constant beyond the ends) at
 every sample: no lookup table, no quantisation.
 
-How: `pack_tf` turns a `TransferFunction1D` into plain float64 arrays (a tuple that numba passes
-around as one argument):
+How: `pack_tf` turns a `TransferFunction1D` into plain float64 arrays (a `PackedTF`, a named tuple
+that numba passes around as one argument and reads by field name):
 
     (cx, crgb, ox, oa, bp, unit, cuts)
     cx (nc,)   colour control x, sorted      crgb (nc, 3) colour at cx
@@ -35,13 +35,25 @@ narrow the TF feature is, which sets how finely a piece is subdivided).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
 from volren.model.transfer_function import MAX_OPACITY, TransferFunction1D
 
-PackedTF = tuple  # (cx, crgb, ox, oa, bp, unit, cuts)
+
+class PackedTF(NamedTuple):
+    """A 1D TF as the kernels read it (the module docstring's (cx, crgb, ox, oa, bp, unit, cuts))."""
+
+    color_x: NDArray[np.float64]
+    color_rgb: NDArray[np.float64]
+    opacity_x: NDArray[np.float64]
+    opacity_a: NDArray[np.float64]
+    breakpoints: NDArray[np.float64]
+    unit: float
+    cuts: NDArray[np.float64]
 
 
 def pack_tf(tf: TransferFunction1D) -> PackedTF:
@@ -54,7 +66,7 @@ def pack_tf(tf: TransferFunction1D) -> PackedTF:
     oa = np.ascontiguousarray(opacity[:, 1], dtype=np.float64)
     bp = np.ascontiguousarray(tf.breakpoints(), dtype=np.float64)
     cuts = np.ascontiguousarray(tf.linear_cuts(), dtype=np.float64)
-    return (cx, crgb, ox, oa, bp, float(tf.opacity_unit_distance), cuts)
+    return PackedTF(cx, crgb, ox, oa, bp, float(tf.opacity_unit_distance), cuts)
 
 
 @njit(nogil=True, cache=True)
@@ -78,14 +90,14 @@ def interp(xs, ys, s):
 
 @njit(nogil=True, cache=True)
 def opacity(tf, s):
-    return interp(tf[2], tf[3], s)
+    return interp(tf.opacity_x, tf.opacity_a, s)
 
 
 @njit(nogil=True, cache=True)
 def opacity_line(tf, s):
     """(x0, a0, slope): the linear piece of the opacity that holds s, a(x) = a0 + slope (x - x0)."""
-    xs = tf[2]
-    ys = tf[3]
+    xs = tf.opacity_x
+    ys = tf.opacity_a
     n = xs.shape[0]
     if s <= xs[0]:
         return xs[0], ys[0], 0.0
@@ -98,8 +110,8 @@ def opacity_line(tf, s):
 @njit(nogil=True, cache=True)
 def color(tf, s):
     """(r, g, b) at s, not premultiplied."""
-    xs = tf[0]
-    rgb = tf[1]
+    xs = tf.color_x
+    rgb = tf.color_rgb
     n = xs.shape[0]
     if s <= xs[0]:
         return rgb[0, 0], rgb[0, 1], rgb[0, 2]
@@ -136,7 +148,7 @@ def mean_extinction(aa, ab, unit):
 @njit(nogil=True, cache=True)
 def interval_width(tf, s):
     """Width of the breakpoint interval holding s (the TF is linear across it); +inf outside."""
-    bp = tf[4]
+    bp = tf.breakpoints
     n = bp.shape[0]
     if not (s > bp[0] and s < bp[n - 1]):
         return math.inf

@@ -25,6 +25,7 @@ import math
 from numba import njit, prange
 
 from volren.kernels.sample_placement import ray_segment, ray_segments
+from volren.renderers.raycast.march_inputs import IndexRay
 
 #: numba's fast-math flags that keep non-finite values visible (they add nothing): fused multiply-add,
 #: reciprocals, signed zeros, approximate functions took 13-15 % off a frame on the smooth TFs of
@@ -36,9 +37,6 @@ TILE = 8
 MAX_OPACITY = 1.0 - 1e-6
 #: Post-classified segments of visible bricks held back before they are composited (`_composite_post`)
 MAX_RUN = 64
-# the float parameters
-F_H, F_LO, F_SCALE, F_TERM = range(4)
-N_F = 4
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
@@ -64,11 +62,14 @@ def _middles_before(t, t0, first, last, h, ns):
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
-def _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ka, kb, r, g, b, a, term):
-    """(r, g, b, a, segments sampled) after compositing the post-classified segments [ka, kb) of a
-    ray front to back onto it, stopping once a reaches `term`. One counted loop over a run of
+def _composite_post(vol, classes, ray, ka, kb, r, g, b, a, term):
+    """(r, g, b, a, segments sampled) after compositing the post-classified segments [ka, kb) of
+    the `IndexRay` ray front to back onto it, stopping once a reaches `term`. One counted loop over a run of
     visible bricks: the per-brick loop's exit test at every sample and its mispredicted exit at
     every brick go (7-12 % of a frame on bonsai and marschner_lobb, interleaved in one process)."""
+    post, lo_, scale_, h = classes.post, classes.lo, classes.scale, classes.step
+    ox, oy, oz, dx, dy, dz = ray.ox, ray.oy, ray.oz, ray.dx, ray.dy, ray.dz
+    t0, first, last, ns = ray.t0, ray.first, ray.last, ray.n_segments
     n_ = post.shape[0]
     base = t0 + first - 0.5 * h
     sampled = kb - ka
@@ -128,8 +129,9 @@ def _value(vol, px, py, pz):
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
-def _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, lx, ly, lz, hx, hy, hz):
-    """Where the ray (origin o, direction d, 1 / d = i) leaves the index box [l, h]."""
+def _box_exit(ray, lx, ly, lz, hx, hy, hz):
+    """Where the `IndexRay` ray (origin o, direction d, 1 / d = i) leaves the index box [l, h]."""
+    ox, oy, oz, dx, dy, dz, ix, iy, iz = ray.ox, ray.oy, ray.oz, ray.dx, ray.dy, ray.dz, ray.ix, ray.iy, ray.iz
     te = math.inf
     if dx > 0.0:
         te = min(te, (hx - ox) * ix)
@@ -147,16 +149,17 @@ def _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, lx, ly, lz, hx, hy, hz):
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
-def _classify(s, sb, length, pre, post, table, fp):
-    """Premultiplied (r, g, b, a) of a segment `length` long: post-classified at value s, or
-    pre-integrated from s (front) to sb (back); (0, 0, 0, 0) where a value is not finite."""
-    h = fp[F_H]
+def _classify(s, sb, length, classes):
+    """Premultiplied (r, g, b, a) of a segment `length` long (`Classification` classes):
+    post-classified at value s, or pre-integrated from s (front) to sb (back); (0, 0, 0, 0) where
+    a value is not finite."""
+    pre, post, table, h = classes.preintegrated, classes.post, classes.table, classes.step
     if not (math.isfinite(s) and math.isfinite(sb)):
         return 0.0, 0.0, 0.0, 0.0
     if pre:
         n = table.shape[0]
-        fi = min(max((s - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
-        fj = min(max((sb - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
+        fi = min(max((s - classes.lo) * classes.scale, 0.0), n - 1.0)
+        fj = min(max((sb - classes.lo) * classes.scale, 0.0), n - 1.0)
         i0 = min(int(fi), n - 2)
         j0 = min(int(fj), n - 2)
         wi = fi - i0
@@ -197,7 +200,7 @@ def _classify(s, sb, length, pre, post, table, fp):
             return r * f, g * f, b * f, a2
         return r, g, b, a
     n = post.shape[0]
-    fi = min(max((s - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
+    fi = min(max((s - classes.lo) * classes.scale, 0.0), n - 1.0)
     i0 = min(int(fi), n - 2)
     w = fi - i0
     a = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
@@ -212,10 +215,11 @@ def _classify(s, sb, length, pre, post, table, fp):
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
-def _pixel_ray(inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz):
-    """Pixel (xx, row at NDC y ny_)'s ray in grid-index space: origin on the near plane, direction in
-    index units per world unit, its inverse, the unit world direction, and where it enters and
-    leaves the box [0, u] (miss: parallel to a face and outside it)."""
+def _pixel_ray(view, xx, ny_, ux, uy, uz):
+    """Pixel (xx, row at NDC y ny_)'s ray of the `PixelView` view in grid-index space: origin on the
+    near plane, direction in index units per world unit, its inverse, the unit world direction,
+    and where it enters and leaves the box [0, u] (miss: parallel to a face and outside it)."""
+    inv, width, grid_origin, spacing = view.inverse, view.width, view.grid_origin, view.spacing
     nx_ = (xx + 0.5) / width * 2.0 - 1.0
     wn = inv[3, 0] * nx_ + inv[3, 1] * ny_ - inv[3, 2] + inv[3, 3]
     wf = inv[3, 0] * nx_ + inv[3, 1] * ny_ + inv[3, 2] + inv[3, 3]
@@ -254,21 +258,20 @@ def _pixel_ray(inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz):
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
-def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_dir, t_far_eye, phase, pre, post, table, fp):  # fmt: skip
-    """(r, g, b, a, samples, jumps): pixel column xx's ray at NDC y ny_ marched front to back
-    (premultiplied, not yet clamped); `shift`: log2 of the brick size B, or -1."""
+def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
+    """(r, g, b, a, samples, jumps): pixel column xx's ray at NDC y ny_ of the `PixelView` view
+    marched front to back through the `EmptyBricks` bricks (premultiplied, not yet clamped), with
+    the `Classification` classes, stopping once a reaches `term`; `shift`: log2 of the brick
+    size, or -1."""
+    empty, B = bricks.distance, bricks.size
+    view_dir, t_far_eye = view.view_dir, view.far_depth
+    pre, h = classes.preintegrated, classes.step
     nz, ny, nx = vol.shape
     nbz, nby, nbx = empty.shape
     ux, uy, uz = nx - 1.0, ny - 1.0, nz - 1.0
-    h = fp[F_H]
-    term = fp[F_TERM]
-    lo_ = fp[F_LO]
-    scale_ = fp[F_SCALE]
     taken = 0
     jumps = 0
-    ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(
-        inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz
-    )
+    ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(view, xx, ny_, ux, uy, uz)
     r = 0.0
     g = 0.0
     b = 0.0
@@ -281,6 +284,7 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
     last = 0.0
     if not miss and t1 > t0:
         ns, first, last = ray_segments(t1 - t0, h, (phase - t0 / h) % 1.0)
+    ray = IndexRay(ox, oy, oz, dx, dy, dz, ix, iy, iz, t0, first, last, ns)
     k = 0  # the next segment
     sb = 0.0  # pre-integrated: the value at segment k's front, when `have_front`
     have_front = False
@@ -312,7 +316,7 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
             if rb > ra and (d != 0 or rb - ra >= MAX_RUN):
                 # the run ends at an empty brick, or is long (an opaque ray stops within
                 # it: walk no further first): composite it
-                r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+                r, g, b, a, n_run = _composite_post(vol, classes, ray, ra, rb, r, g, b, a, term)
                 taken += n_run
                 ra = rb
                 if a >= term:
@@ -320,8 +324,8 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
                     break
             if d > 1:  # empty bricks all around: leave their box in one jump if that skips
                 e = d - 1
-                tb_ = _box_exit(ox, oy, oz, ix, iy, iz, dx, dy, dz, (bi - e) * B, (bj - e) * B,
-                                (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B, (bk + 1 + e) * B)  # fmt: skip
+                tb_ = _box_exit(ray, (bi - e) * B, (bj - e) * B, (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B,
+                                (bk + 1 + e) * B)  # fmt: skip
                 kn = _first_segment_past(tb_, t0, first, h, pre)
                 if kn > k:
                     k = kn
@@ -357,7 +361,7 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
                         sb = s
                     taken += 1
                     k += 1
-                    cr, cg, cb, ca = _classify(s, sb, lk, pre, post, table, fp)
+                    cr, cg, cb, ca = _classify(s, sb, lk, classes)
                     if ca > 0.0:
                         tr = 1.0 - a
                         r += tr * cr
@@ -393,7 +397,7 @@ def _ray(vol, empty, B, shift, inv, xx, ny_, width, grid_origin, spacing, view_d
         if not restart:
             break
     if rb > ra and a < term:
-        r, g, b, a, n_run = _composite_post(vol, post, lo_, scale_, ox, oy, oz, dx, dy, dz, t0, first, last, h, ns, ra, rb, r, g, b, a, term)
+        r, g, b, a, n_run = _composite_post(vol, classes, ray, ra, rb, r, g, b, a, term)
         taken += n_run
     return r, g, b, a, taken, jumps
 
@@ -420,16 +424,15 @@ def _store(out, p, r, g, b, a):
 
 
 @njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
-def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, pre, post, table,
-          fp, tiles, out, counts):  # fmt: skip
-    """Render the tiles `tiles` (indices into the image's TILE x TILE tiles, row-major) into `out`
-    ((height * width, 4), premultiplied RGBA, row 0 at the top); `counts[tile]` = (samples, jumps).
-
-    `empty[bz, by, bx]`: 0 for a brick to sample, else d >= 1 with every brick within Chebyshev
-    distance d - 1 empty too. `inv`: the inverse of projection @ view (pixel centres are unprojected
-    at NDC depth -1 and 1, as `Camera.pixel_rays` does)."""
+def march(vol, bricks, view, classes, term, tiles, out, counts):
+    """Render the tiles `tiles` (indices into the image's TILE x TILE tiles, row-major) of the
+    `PixelView` view into `out` ((height * width, 4), premultiplied RGBA, row 0 at the top);
+    `counts[tile]` = (samples, jumps). `bricks`: `EmptyBricks`; `classes`: `Classification`; a
+    ray stops once its opacity reaches `term`. (`view.inverse` unprojects pixel centres at NDC depth
+    -1 and 1, as `Camera.pixel_rays` does.)"""
+    width, height, phases = view.width, view.height, view.phases
     tiles_x = (width + TILE - 1) // TILE
-    shift = _brick_shift(brick)
+    shift = _brick_shift(bricks.size)
     for q in prange(tiles.shape[0]):
         tile = tiles[q]
         x_start = (tile % tiles_x) * TILE
@@ -440,8 +443,7 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
             ny_ = 1.0 - (yy + 0.5) / height * 2.0
             for xx in range(x_start, min(x_start + TILE, width)):
                 p = yy * width + xx
-                r, g, b, a, n, j = _ray(vol, empty, brick, shift, inv, xx, ny_, width, grid_origin, spacing, view_dir,
-                                        t_far_eye, phases[p], pre, post, table, fp)  # fmt: skip
+                r, g, b, a, n, j = _ray(vol, bricks, shift, view, xx, ny_, phases[p], classes, term)
                 taken += n
                 jumps += j
                 _store(out, p, r, g, b, a)
@@ -450,17 +452,16 @@ def march(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir,
 
 
 @njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
-def march_pixels(vol, empty, brick, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, pre, post,
-                 table, fp, pixels, out, counts):  # fmt: skip
+def march_pixels(vol, bricks, view, classes, term, pixels, out, counts):
     """As `march`, for the listed pixels (row-major indices) only: out[q] and counts[q] are pixel
     pixels[q]'s colour and (samples, jumps). Adaptive image refinement asks for scattered pixels."""
-    shift = _brick_shift(brick)
+    width, height, phases = view.width, view.height, view.phases
+    shift = _brick_shift(bricks.size)
     for q in prange(pixels.shape[0]):
         p = pixels[q]
         yy = p // width
         ny_ = 1.0 - (yy + 0.5) / height * 2.0
-        r, g, b, a, n, j = _ray(vol, empty, brick, shift, inv, p - yy * width, ny_, width, grid_origin, spacing,
-                                view_dir, t_far_eye, phases[p], pre, post, table, fp)  # fmt: skip
+        r, g, b, a, n, j = _ray(vol, bricks, shift, view, p - yy * width, ny_, phases[p], classes, term)
         counts[q, 0] = n
         counts[q, 1] = j
         _store(out, q, r, g, b, a)
@@ -470,20 +471,20 @@ MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
 
 
 @njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
-def project(vol, inv, width, height, grid_origin, spacing, view_dir, t_far_eye, phases, h, mode, acc):
-    """Maximum, minimum or average of the values along every pixel's ray into acc[p] = (value,
+def project(vol, view, h, mode, acc):
+    """Maximum, minimum or average of the values along every pixel's ray of the `PixelView` view
+    at step h into acc[p] = (value,
     weight; weight 0: no finite value met). The same midpoint samples as `march` (the average is
     their length-weighted mean); maximum and minimum also read every point where the ray crosses a
     grid plane and its ends, where a trilinear field's extremes along the ray lie on grid lines."""
+    width, height, view_dir, t_far_eye, phases = view.width, view.height, view.view_dir, view.far_depth, view.phases
     nz, ny, nx = vol.shape
     ux, uy, uz = nx - 1.0, ny - 1.0, nz - 1.0
     for yy in prange(height):
         ny_ = 1.0 - (yy + 0.5) / height * 2.0
         for xx in range(width):
             p = yy * width + xx
-            ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(
-                inv, xx, ny_, width, grid_origin, spacing, ux, uy, uz
-            )
+            ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(view, xx, ny_, ux, uy, uz)
             t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
             t0 = max(t_in, 0.0)
             t1 = min(t_out, t_far)

@@ -41,6 +41,7 @@ from volren.renderers.base import (
     RendererBase,
 )
 from volren.renderers.raycast import march as K
+from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, PixelView
 from volren.renderers.raycast.occupancy import empty_distance
 from volren.renderers.raycast.step_choice import largest_step_within, sample_size
 
@@ -76,9 +77,12 @@ OPTIONS: tuple[OptionSpec, ...] = (
 TILES_PER_CALL = 1024
 #: Pixels handed to a thread at a time when adaptive refinement asks for scattered pixels.
 PIXEL_CHUNK = 16
+#: The march kernels' arguments before the pixels and outputs: the values, `EmptyBricks`, `PixelView`,
+#: `Classification` and the termination opacity.
+MarchArgs = tuple[NDArray[Any], EmptyBricks, PixelView, Classification, float]
 
 
-def _march_listed(args: tuple, pixels: NDArray[np.int64]) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+def _march_listed(args: MarchArgs, pixels: NDArray[np.int64]) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
     """(premultiplied RGBA (n, 4), (samples, jumps) (n, 2)) of the listed pixels' rays (`march_pixels`)."""
     rgba = np.empty((len(pixels), 4), np.float32)
     counts = np.zeros((len(pixels), 2), np.int64)
@@ -195,12 +199,10 @@ class RaycastRenderer(RendererBase):
         origin = np.asarray(volume.origin, dtype=np.float64)
         spacing = np.asarray(volume.spacing, dtype=np.float64)
         view_dir = np.asarray(camera.direction, dtype=np.float64)
+        view = PixelView(inv, width, height, origin, spacing, view_dir, float(far - near), phases)
         if mode != BlendMode.COMPOSITE:
-            return self._project(
-                tf, mode, inv, width, height, origin, spacing, view_dir, float(far - near), phases, h
-            )
+            return self._project(tf, mode, view, h)
         pre = bool(settings.preintegration)
-        view = (inv, width, height, origin, spacing, view_dir, float(far - near), phases)
         chosen: dict[str, float] = {}
         if opts["target_error"] > 0:
             start = time.perf_counter()
@@ -208,7 +210,7 @@ class RaycastRenderer(RendererBase):
             chosen = {"step": h / volume.characteristic_length, "step_relative_error": estimate,
                       "step_choice_ms": 1000.0 * (time.perf_counter() - start)}  # fmt: skip
         args = self._march_args(tf, h, pre, opts, view)
-        empty = args[1]
+        empty = args[1].distance
         stride = int(opts["image_stride"])
         if stride > 1:
             image, samples, jumps, rays = self._refined(args, width, height, stride, opts["refine_tolerance"], progress)
@@ -218,9 +220,10 @@ class RaycastRenderer(RendererBase):
         return image, {"samples": float(samples), "jumps": float(jumps), "rays_cast": float(rays),
                        "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size), **chosen}  # fmt: skip
 
-    def _march_args(self, tf: TransferFunction1D, h: float, pre: bool, opts: Mapping[str, Any], view: tuple) -> tuple:
-        """The march kernels' arguments at step h (world units): classification or pre-integration
-        table, brick distances, and the view's (inverse matrix, size, grid, direction, depth, phases)."""
+    def _march_args(self, tf: TransferFunction1D, h: float, pre: bool, opts: Mapping[str, Any],
+                    view: PixelView) -> MarchArgs:  # fmt: skip
+        """The march kernels' arguments at step h (world units) for the view: brick distances,
+        classification or pre-integration table, termination opacity."""
         volume = self.volume
         assert isinstance(volume, UniformVolume)
         brick = int(opts["brick_size"])
@@ -244,14 +247,14 @@ class RaycastRenderer(RendererBase):
             post = np.ascontiguousarray(np.concatenate([rgb, alpha[:, None]], axis=1), dtype=np.float64)
         table = table.view()  # read-only, as a cached table is: numba compiles a kernel once per
         table.flags.writeable = False  # combination of writable and read-only arrays
-        fp = np.zeros(K.N_F)
-        fp[K.F_H], fp[K.F_LO], fp[K.F_SCALE] = h, lo, (n - 1) / (hi - lo)
-        fp[K.F_TERM] = opts["termination_alpha"] if opts["termination_alpha"] < 1.0 else 2.0
+        classes = Classification(pre, post, table, float(h), float(lo), float((n - 1) / (hi - lo)))
+        term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
         empty = self._empty_bricks(tf, brick, bool(opts["empty_space_skipping"]), reach, (hi - lo) / (n - 1))
-        return (self._values, empty, brick, *view, pre, post, table, fp)
+        assert self._values is not None
+        return self._values, EmptyBricks(empty, brick), view, classes, term
 
     def _step_within(self, tf: TransferFunction1D, coarsest: float, pre: bool, opts: Mapping[str, Any],
-                     view: tuple, phase_mode: str) -> tuple[float, float]:  # fmt: skip
+                     view: PixelView, phase_mode: str) -> tuple[float, float]:  # fmt: skip
         """(step, its estimated relative RMSE) for the target_error option (`step_choice`), estimated on
         every ray of a ~64x64 image of this frame's view and kept while the TF, the volume and the
         settings stay (a camera move keeps it: the step must not change from frame to frame of a
@@ -260,9 +263,9 @@ class RaycastRenderer(RendererBase):
                *(opts[k] for k in ("target_error", "table_size", "classification_table", "termination_alpha",
                                    "brick_size", "empty_space_skipping")))  # fmt: skip
         if self._step is None or self._step[0] != key:
-            width, height = sample_size(view[1], view[2])
+            width, height = sample_size(view.width, view.height)
             phases = pixel_phases(phase_mode, width, height, opts["jitter_seed"])
-            sampled = (view[0], width, height, *view[3:7], phases)
+            sampled = view._replace(width=width, height=height, phases=phases)
             pixels = np.arange(width * height, dtype=np.int64)
 
             def march(h: float) -> NDArray[np.float32]:
@@ -273,7 +276,7 @@ class RaycastRenderer(RendererBase):
         return self._step[1]
 
     @staticmethod
-    def _every_pixel(args: tuple, width: int, height: int, progress: ProgressCallback | None
+    def _every_pixel(args: MarchArgs, width: int, height: int, progress: ProgressCallback | None
                      ) -> tuple[NDArray[np.float32], int, int]:  # fmt: skip
         """(image, samples, jumps): a ray through every pixel, in tiles."""
         image = np.empty((height, width, 4), np.float32)
@@ -289,7 +292,7 @@ class RaycastRenderer(RendererBase):
         return image, int(samples), int(jumps)
 
     @staticmethod
-    def _refined(args: tuple, width: int, height: int, stride: int, tolerance: float,
+    def _refined(args: MarchArgs, width: int, height: int, stride: int, tolerance: float,
                  progress: ProgressCallback | None) -> tuple[NDArray[np.float32], int, int, int]:  # fmt: skip
         """(image, samples, jumps, rays cast): adaptive image refinement (`refine_image`), rays cast
         where a block's corner rays disagree, the rest interpolated."""
@@ -305,16 +308,16 @@ class RaycastRenderer(RendererBase):
         image = rgba.astype(np.float32, copy=False).reshape(height, width, 4)
         return image, int(totals[0]), int(totals[1]), rays
 
-    def _project(self, tf: TransferFunction1D, mode: BlendMode, inv: NDArray[np.float64], width: int, height: int,
-                 origin: NDArray[np.float64], spacing: NDArray[np.float64], view_dir: NDArray[np.float64],
-                 depth: float, phases: NDArray[np.float64], h: float) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
+    def _project(self, tf: TransferFunction1D, mode: BlendMode, view: PixelView,
+                 h: float) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
         """Maximum, minimum or average along each ray, coloured by the TF (DESIGN.md: colour and
         opacity of the projected value, no opacity where no finite value was met)."""
+        width, height = view.width, view.height
         acc = np.empty((width * height, 2))
         code = {BlendMode.MAXIMUM: K.MAXIMUM, BlendMode.MINIMUM: K.MINIMUM, BlendMode.AVERAGE: K.AVERAGE}[
             mode
         ]
-        K.project(self._values, inv, width, height, origin, spacing, view_dir, depth, phases, h, code, acc)
+        K.project(self._values, view, h, code, acc)
         hit = acc[:, 1] > 0
         value = np.where(hit, acc[:, 0], 0.0)
         if mode == BlendMode.AVERAGE:

@@ -16,7 +16,8 @@ Composite (emission-absorption, premultiplied RGBA over black, front to back):
    the TF is linear in s, so the integrand has no kink or jump inside any piece, even across TF
    kinks and steps.
 2. The level-0 partition. Interval k is split into n0 = max(1, ceil(len / h0)) equal pieces
-   (h0 = step * characteristic length), intersected with the cuts. A piece whose end values
+   (h0 = step * characteristic length), intersected with the cuts (`refinement.level0_pieces`,
+   shared with `tf2d`). A piece whose end values
    both have opacity 0 is skipped (the opacity is linear on it). Otherwise it is subdivided into
    n_sub equal sub-pieces so that s changes by at most FRACTION of the width of the TF
    breakpoint interval it lies in (narrow TF features are resolved) and, when shading, the
@@ -283,9 +284,13 @@ def next_boundary(u0, length, cuts, ci, cend, p, piece, n):
 
 
 @njit(nogil=True, cache=True)
-def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz):
-    unit = tf[5]
-    shading = sp[0]
+def _composite_level(intervals, pieces, level, tf, sp, hx, hy, hz):
+    """One level of the composite of a ray's `RayIntervals` (r, g, b, a, samples, cap hits): the
+    level-0 pieces (`refinement.level0_pieces`: their ends, CSR by interval) bisected `level` times."""
+    piece_starts, piece_ends = pieces
+    ta, tb, P, G, m = intervals
+    unit = tf.unit
+    shading = sp.on
     mult = 1 << level
     T = 1.0
     cr = 0.0
@@ -298,17 +303,10 @@ def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, 
         if not (length > 0.0):
             continue
         c = P[k]
-        n = max(1, int(math.ceil(length / h0)))
-        piece = length / n
-        ci = offsets[k]
-        cend = offsets[k + 1]
-        p = 1
         u0 = 0.0
         f0 = c[0]
-        while u0 < length:
-            u1, ci, p = next_boundary(u0, length, cuts, ci, cend, p, piece, n)
-            if u1 <= u0:
-                continue
+        for e in range(piece_starts[k], piece_starts[k + 1]):
+            u1 = piece_ends[e]
             f1 = cubic(c, u1)
             # the TF is linear on this piece: take its opacity line from the piece's middle, so
             # that the ends (on a cut, up to rounding) get the one-sided limits even at steps
@@ -327,7 +325,7 @@ def _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, 
                     elif q > 1.0:
                         nsub = int(math.ceil(q))
                 if shading:
-                    turn = _normal_turn(G[k], u0, 0.5 * (u0 + u1), u1, sp[5])
+                    turn = _normal_turn(G[k], u0, 0.5 * (u0 + u1), u1, sp.gradient_threshold)
                     if turn > SHADING_TURN:
                         q = turn / SHADING_TURN
                         if q > MAX_SUBDIVISION:

@@ -6,7 +6,8 @@ Why: a 2D TF (`tf2d`) needs other cut points and another quadrature per level th
 refined and stopped by the same rule.
 
 Per ray, `integrate_ray` gets the ray's intervals (`uniform.build_intervals`, `tets`) and
-1. sorts the cut points of every interval into one CSR table (`compute_cuts`);
+1. sorts the cut points of every interval into one CSR table (`compute_cuts`) and cuts each
+   interval into the level-0 pieces both quadratures start from (`level0_pieces`);
 2. computes levels (level L bisects every level-0 sub-piece L times) until the change between two
    successive ones is below `tol` and the change before it below ASYMPTOTIC_RATIO * tol (level 1,
    having none before it, must change by less than tol / ASYMPTOTIC_RATIO), so two coarse levels
@@ -27,7 +28,13 @@ import numpy as np
 from numba import njit
 
 from volren.kernels.shading import half_vector
-from volren.renderers.reference.ray_integral import COMPOSITE, _composite_level, interval_cuts_1d, project_ray
+from volren.renderers.reference.ray_integral import (
+    COMPOSITE,
+    _composite_level,
+    interval_cuts_1d,
+    next_boundary,
+    project_ray,
+)
 from volren.renderers.reference.tf2d import _composite_level_2d, interval_cuts_2d, share_change
 
 #: A level counts as converged when its change is below tol and the previous change was below
@@ -40,7 +47,7 @@ def _cuts_of(P, G, k, length, tf, tf2d, shading, thr2, out):
     """The cut points of interval k, sorted into out when it holds them all; returns their count."""
     n = 0
     if tf is not None:
-        n = interval_cuts_1d(P[k], G, k, length, tf[6], shading, thr2, out)
+        n = interval_cuts_1d(P[k], G, k, length, tf.cuts, shading, thr2, out)
     if tf2d is not None:
         n = interval_cuts_2d(P[k], G[k], length, tf2d, shading, thr2, out)
     return n
@@ -67,6 +74,42 @@ def compute_cuts(ta, tb, P, G, m, tf, tf2d, shading, thr):
 
 
 @njit(nogil=True, cache=True)
+def level0_pieces(ta, tb, m, offsets, cuts, h0):
+    """CSR of the level-0 pieces' ends of every interval, (starts (m + 1), ends): interval k is
+    split into max(1, ceil(len / h0)) equal pieces intersected with its cuts (CSR `offsets`,
+    `cuts`); the pieces of interval k end at ends[starts[k]:starts[k + 1]], the last at its
+    length. Every level of both quadratures (1D and 2D TFs) bisects these."""
+    bound = 0  # each end is a piece's end or a cut
+    for k in range(m):
+        length = tb[k] - ta[k]
+        if length > 0.0:
+            bound += max(1, int(math.ceil(length / h0))) + offsets[k + 1] - offsets[k]
+    starts = np.zeros(m + 1, np.int64)
+    ends = np.empty(bound)
+    e = 0
+    for k in range(m):
+        starts[k] = e
+        length = tb[k] - ta[k]
+        if not (length > 0.0):
+            continue
+        n = max(1, int(math.ceil(length / h0)))
+        piece = length / n
+        ci = offsets[k]
+        cend = offsets[k + 1]
+        p = 1
+        u0 = 0.0
+        while u0 < length:
+            u1, ci, p = next_boundary(u0, length, cuts, ci, cend, p, piece, n)
+            if u1 <= u0:
+                continue
+            ends[e] = u1
+            e += 1
+            u0 = u1
+    starts[m] = e
+    return starts, ends
+
+
+@njit(nogil=True, cache=True)
 def converged(level, change, last, tol):
     """Whether level `level` (>= 1), `change` away from the level before, ends the refinement."""
     if level == 1:
@@ -75,14 +118,19 @@ def converged(level, change, last, tol):
 
 
 @njit(nogil=True, cache=True)
-def integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, tf2d, sp, dx, dy, dz):
-    """RGBA of one ray and its statistics: (r, g, b, a, samples, level, converged, cap_hits)."""
+def integrate_ray(intervals, quad, tf, tf2d, sp, dx, dy, dz):
+    """RGBA of one ray (direction d) over its `RayIntervals` intervals, integrated as the
+    `Quadrature` quad says with the `ShadeParams` sp, and its statistics: (r, g, b, a, samples,
+    level, converged, cap_hits)."""
+    ta, tb, P, G, m = intervals
+    mode, h0, tol, max_levels = quad
     if m == 0:
         return 0.0, 0.0, 0.0, 0.0, 0, 0, True, 0
     if tf is not None and mode != COMPOSITE:
         return project_ray(ta, tb, P, m, mode, tf)
     hx, hy, hz = half_vector(sp, dx, dy, dz)
-    offsets, cuts = compute_cuts(ta, tb, P, G, m, tf, tf2d, sp[0], sp[5])
+    offsets, cuts = compute_cuts(ta, tb, P, G, m, tf, tf2d, sp.on, sp.gradient_threshold)
+    pieces = level0_pieces(ta, tb, m, offsets, cuts, h0)
     shares = np.zeros((0, 4))
     before = np.zeros((0, 4))
     if tf2d is not None:  # a 2D TF's change is measured per interval
@@ -95,11 +143,10 @@ def integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, tf2d, sp, dx, 
     last = math.inf
     for level in range(max_levels):
         if tf is not None:
-            cr, cg, cb, ca, n, c = _composite_level(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz)
+            cr, cg, cb, ca, n, c = _composite_level(intervals, pieces, level, tf, sp, hx, hy, hz)
             change = max(abs(cr - pr), abs(cg - pg), abs(cb - pb), abs(ca - pa))
         if tf2d is not None:
-            cr, cg, cb, ca, n, c = _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf2d, sp, hx, hy,
-                                                       hz, shares)  # fmt: skip
+            cr, cg, cb, ca, n, c = _composite_level_2d(intervals, pieces, level, tf2d, sp, hx, hy, hz, shares)
             change = share_change(shares, before, m)
             before, shares = shares, before
         pr, pg, pb, pa = cr, cg, cb, ca

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenWarning
+from volren.kernels.ray_block import BinnedRays
 from volren.kernels.row_blocks import run_in_row_blocks
 from volren.kernels.shading import shade_params
 from volren.kernels.tet_projection import bin_rows, projected_boxes, ray_far
@@ -50,6 +51,7 @@ from volren.renderers.base import (
     QualityLevel,
     RendererBase,
 )
+from volren.renderers.reference.ray_inputs import CellPlanes, GridBox, Quadrature
 from volren.renderers.reference.ray_integral import AVERAGE, COMPOSITE, MAXIMUM, MINIMUM
 from volren.renderers.reference.tets import render_tets
 from volren.renderers.reference.tf2d import pack_tf2d
@@ -151,6 +153,7 @@ class ReferenceRenderer(RendererBase):
         lo, hi = self._whole_value_range()
         spar = shade_params(settings, camera, hi - lo, length)
         h0 = float(settings.step) * length
+        quad = Quadrature(mode, h0, tol, max_levels)
 
         origins, dirs = camera.pixel_rays(width, height)
         origins = np.ascontiguousarray(origins.reshape(-1, 3))
@@ -168,17 +171,15 @@ class ReferenceRenderer(RendererBase):
 
         if isinstance(vol, UniformVolume):
             tf_1d, tf_2d = (None, tf) if two_d else (tf, None)
+            grid = GridBox(values, org, sp, blo, bhi)
 
             def kernel(a: int, b: int) -> None:
-                render_uniform(
-                    origins[a:b], dirs[a:b], tfar[a:b], values, org, sp, blo, bhi,
-                    tf_1d, tf_2d, spar, mode, h0, tol, max_levels, out[a:b], stats[a:b],
-                )  # fmt: skip
+                render_uniform(origins[a:b], dirs[a:b], tfar[a:b], grid, tf_1d, tf_2d, spar, quad, out[a:b], stats[a:b])
 
         else:
             mesh, _ = prepared
             p = mesh.planes
-            normals, anchors, sigma, tvals, grads = p.normals, p.anchors, p.sigma, p.values, p.gradients
+            cells = CellPlanes(p.normals, p.anchors, p.sigma, p.values, p.gradients)
             boxes = projected_boxes(camera, width, height, mesh.points, mesh.tets, p.usable)
             extra["candidates"] = 0.0
             extra["flat_or_nonfinite_tets"] = float(np.count_nonzero(~p.usable))
@@ -186,10 +187,8 @@ class ReferenceRenderer(RendererBase):
             def kernel(a: int, b: int) -> None:
                 offsets, cand = bin_rows(boxes, width, a // width, b // width)
                 extra["candidates"] += len(cand)
-                render_tets(
-                    origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, normals, anchors, sigma,
-                    tvals, grads, tf, spar, mode, h0, tol, max_levels, out[a:b], stats[a:b],
-                )  # fmt: skip
+                render_tets(BinnedRays(origins[a:b], dirs[a:b], tfar[a:b], offsets, cand), cells, tf, spar, quad,
+                            out[a:b], stats[a:b])  # fmt: skip
 
         run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, kernel, progress)
 

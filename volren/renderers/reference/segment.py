@@ -12,13 +12,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from volren.errors import VolrenError
+from volren.kernels.shading import ShadeParams
 from volren.kernels.tf_eval import pack_tf
 from volren.model.transfer_function import TransferFunction1D
+from volren.renderers.reference.ray_inputs import Quadrature, RayIntervals
 from volren.renderers.reference.ray_integral import COMPOSITE
 from volren.renderers.reference.refinement import integrate_ray
 
 #: Shading off (the other entries are unused then).
-_NO_SHADING = (False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+_NO_SHADING = ShadeParams(False, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
 
 def segment_rgba(
@@ -37,11 +39,11 @@ def segment_rgba(
     ta = np.zeros(1)
     tb = np.array([float(length)])
     shading = np.zeros((0, 3, 4))
+    quad = Quadrature(COMPOSITE, length / 4, tol, max_levels)
     for k, (front, back) in enumerate(zip(fronts, backs, strict=True)):
         poly = np.array([[front, (back - front) / length, 0.0, 0.0]])
-        r, g, b, a, _, _, converged, _ = integrate_ray(
-            ta, tb, poly, shading, 1, COMPOSITE, length / 4, tol, max_levels, packed, None, _NO_SHADING, 0.0, 0.0, 1.0
-        )
+        intervals = RayIntervals(ta, tb, poly, shading, 1)
+        r, g, b, a, _, _, converged, _ = integrate_ray(intervals, quad, packed, None, _NO_SHADING, 0.0, 0.0, 1.0)
         if not converged:
             raise VolrenError(f"the segment integral from {front} to {back} did not converge to {tol}")
         out[k] = (r, g, b, a)

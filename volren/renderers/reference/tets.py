@@ -25,19 +25,20 @@ import numpy as np
 from numba import njit, prange
 
 from volren.kernels.tet_clipping import clip_tet
+from volren.renderers.reference.ray_inputs import RayIntervals
 from volren.renderers.reference.ray_integral import store_pixel
 from volren.renderers.reference.refinement import integrate_ray
 
 
 @njit(nogil=True, parallel=True, cache=True)
-def render_tets(
-    orig, dirs, tfar, offsets, cand, normals, anchors, sigma, tvals, grads,
-    tf, spar, mode, h0, tol, max_levels, out, stats,
-):  # fmt: skip
-    """One block of n rays with their CSR candidate lists: out (n, 4) RGBA; stats (n, 5) =
-    samples, level, unconverged, subdivision cap hits, intervals."""
+def render_tets(rays, cells, tf, spar, quad, out, stats):
+    """One block of n `BinnedRays` rays with their CSR candidate lists through the `CellPlanes`
+    cells, integrated as the `Quadrature` quad says with the `ShadeParams` spar: out (n, 4) RGBA;
+    stats (n, 5) = samples, level, unconverged, subdivision cap hits, intervals."""
+    orig, dirs, tfar, offsets, cand = rays.origins, rays.directions, rays.far, rays.offsets, rays.candidates
+    normals, anchors, sigma, tvals, grads = cells.normals, cells.anchors, cells.sigma, cells.values, cells.gradients
     n = orig.shape[0]
-    shading = spar[0]
+    shading = spar.on
     for q in prange(n):
         for c in range(4):
             out[q, c] = 0.0
@@ -81,5 +82,5 @@ def render_tets(
                 G[e, 0, 0] = grads[t, 0]
                 G[e, 1, 0] = grads[t, 1]
                 G[e, 2, 0] = grads[t, 2]
-        result = integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, None, spar, dx, dy, dz)
+        result = integrate_ray(RayIntervals(ta, tb, P, G, m), quad, tf, None, spar, dx, dy, dz)
         store_pixel(out, stats, q, result, m)

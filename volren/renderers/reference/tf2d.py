@@ -29,7 +29,7 @@ Per ray (composite only; the capabilities offer no other blend mode with a 2D TF
    Between two cuts the integrand is smooth apart from the clamp at the rectangle's edges, s and
    |grad s| are monotone, and every box or triangle is either present throughout or absent.
 2. The level-0 partition: interval k is split into ceil(len / h0) equal pieces intersected with
-   the cuts; each piece is subdivided so that, for every widget whose support box (a Gaussian's
+   the cuts (`refinement.level0_pieces`, shared with the 1D path); each piece is subdivided so that, for every widget whose support box (a Gaussian's
    to 6 standard deviations) meets the piece's span of (s, g) (exact, from its ends: both are
    monotone), s changes by at most FRACTION of the widget's value scale and g by at most
    FRACTION of its gradient scale (Gaussian: its standard deviations; triangle: its half-width
@@ -50,9 +50,11 @@ Per ray (composite only; the capabilities offer no other blend mode with a 2D TF
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
 from volren.kernels.shading import shade
 from volren.kernels.tf_eval import interp
@@ -67,7 +69,6 @@ from volren.renderers.reference.ray_integral import (
     _interval_cuts,
     _normal_turn,
     cubic,
-    next_boundary,
 )
 
 GAUSSIAN, TRIANGLE, BOX, PROFILE = 0, 1, 2, 3
@@ -77,7 +78,27 @@ GAUSSIAN_REACH = 6.0
 #: A triangle's value scale near its apex is at least this fraction of its half_width.
 TRIANGLE_MIN_SCALE = 1.0 / 64.0
 
-PackedTF2D = tuple  # (types, params, rgb, peak, rect, unit, value_cuts, gradient_cuts, support, *profiles)
+
+
+class PackedTF2D(NamedTuple):
+    """A 2D TF as the kernels read it (`pack_tf2d`)."""
+
+    types: NDArray[np.int64]
+    params: NDArray[np.float64]
+    rgb: NDArray[np.float64]
+    peak: NDArray[np.float64]
+    rect: NDArray[np.float64]
+    unit: float
+    value_cuts: NDArray[np.float64]
+    gradient_cuts: NDArray[np.float64]
+    support: NDArray[np.float64]
+    #: the 1d widgets' points (`_pack_profiles`)
+    color_start: NDArray[np.int64]
+    color_x: NDArray[np.float64]
+    color_rgb: NDArray[np.float64]
+    opacity_start: NDArray[np.int64]
+    opacity_x: NDArray[np.float64]
+    opacity_a: NDArray[np.float64]
 
 
 def pack_tf2d(tf: TransferFunction2D) -> PackedTF2D:
@@ -92,7 +113,7 @@ def pack_tf2d(tf: TransferFunction2D) -> PackedTF2D:
     value_cuts              sorted box value edges and triangle centres inside (lo, hi)
     gradient_cuts           sorted box gradient edges and triangle tops inside (0, gmax)
     support (n, 4)          (s_min, s_max, g_min, g_max) outside which a widget is ~0
-    *profiles               the 1d widgets' points (six arrays, `_pack_profiles`)
+    color_start ... opacity_a  the 1d widgets' points (six arrays, `_pack_profiles`)
     """
     widgets = tf.widgets
     n = len(widgets)
@@ -135,7 +156,7 @@ def pack_tf2d(tf: TransferFunction2D) -> PackedTF2D:
     value_cuts = np.unique(np.asarray([v for v in vcuts if lo < v < hi], dtype=np.float64))
     gradient_cuts = np.unique(np.asarray([g for g in gcuts if 0.0 < g < gmax], dtype=np.float64))
     rect = np.array([lo, hi, gmax], dtype=np.float64)
-    return (
+    return PackedTF2D(
         types,
         params,
         rgb,
@@ -169,16 +190,16 @@ def _pack_profiles(widgets) -> tuple:
 
 @njit(nogil=True, cache=True)
 def _profile_opacity(tf, i, s):
-    """a_p(s) of 1d widget i (tf[9:15]: `_pack_profiles`)."""
-    lo, hi = tf[12][i], tf[12][i + 1]
-    return min(max(interp(tf[13][lo:hi], tf[14][lo:hi], s), 0.0), 1.0)
+    """a_p(s) of 1d widget i (`_pack_profiles`)."""
+    lo, hi = tf.opacity_start[i], tf.opacity_start[i + 1]
+    return min(max(interp(tf.opacity_x[lo:hi], tf.opacity_a[lo:hi], s), 0.0), 1.0)
 
 
 @njit(nogil=True, cache=True)
 def _profile_color(tf, i, s, channel):
     """One channel of c_p(s) of 1d widget i."""
-    lo, hi = tf[9][i], tf[9][i + 1]
-    return min(max(interp(tf[10][lo:hi], tf[11][lo:hi, channel], s), 0.0), 1.0)
+    lo, hi = tf.color_start[i], tf.color_start[i + 1]
+    return min(max(interp(tf.color_x[lo:hi], tf.color_rgb[lo:hi, channel], s), 0.0), 1.0)
 
 
 @njit(nogil=True, cache=True)
@@ -206,11 +227,11 @@ def eval_tf2d(tf, s, g):
     """(r, g, b, a) of the 2D TF at value s and gradient magnitude g (colour not premultiplied)."""
     if not (math.isfinite(s) and math.isfinite(g)):
         return 0.0, 0.0, 0.0, 0.0
-    types = tf[0]
-    params = tf[1]
-    rgb = tf[2]
-    peak = tf[3]
-    rect = tf[4]
+    types = tf.types
+    params = tf.params
+    rgb = tf.rgb
+    peak = tf.peak
+    rect = tf.rect
     s = min(max(s, rect[0]), rect[1])
     g = min(max(g, 0.0), rect[2])
     transmit = 1.0
@@ -367,11 +388,11 @@ def _poly_crossings(poly, length, level, out):
 def interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
     """Cut points of one interval (see the module docstring), `length` among them, sorted into out
     when it holds them all; returns their count (`refinement.compute_cuts`)."""
-    n = _interval_cuts(c, length, tf[6], out)
-    gcuts = tf[7]
+    n = _interval_cuts(c, length, tf.value_cuts, out)
+    gcuts = tf.gradient_cuts
     smooth = False  # a Gaussian or a triangle: cut where |grad s| turns, too
-    for i in range(tf[0].shape[0]):
-        if tf[0][i] == GAUSSIAN or tf[0][i] == TRIANGLE:
+    for i in range(tf.types.shape[0]):
+        if tf.types[i] == GAUSSIAN or tf.types[i] == TRIANGLE:
             smooth = True
     if gcuts.shape[0] > 0 or shading or smooth:
         h2 = np.empty(7)
@@ -387,10 +408,10 @@ def interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
                 dh2[i] = h2[i + 1] * (i + 1)
             n += _poly_crossings(dh2, length, 0.0, out[n:] if n < out.shape[0] else out[:0])
         edge = np.empty(7)
-        for i in range(tf[0].shape[0]):
-            if tf[0][i] == TRIANGLE:
+        for i in range(tf.types.shape[0]):
+            if tf.types[i] == TRIANGLE:
                 # the edges |s - s0| = (w / gm) g: roots of (s - s0)^2 - (w / gm)^2 |grad s|^2
-                p = tf[1][i]
+                p = tf.params[i]
                 k2 = (p[1] / p[2]) ** 2
                 for j in range(7):
                     edge[j] = -k2 * h2[j]
@@ -407,10 +428,10 @@ def interval_cuts_2d(c, gk, length, tf, shading, thr2, out):
 @njit(nogil=True, cache=True)
 def _subdivision(tf, s0, s1, g0, gm, g1):
     """Sub-pieces a piece needs at level 0 for the widgets its (s, g) span meets (step 2)."""
-    rect = tf[4]
-    types = tf[0]
-    params = tf[1]
-    support = tf[8]
+    rect = tf.rect
+    types = tf.types
+    params = tf.params
+    support = tf.support
     cs0 = min(max(s0, rect[0]), rect[1])
     cs1 = min(max(s1, rect[0]), rect[1])
     cg0 = min(max(g0, 0.0), rect[2])
@@ -451,10 +472,13 @@ def _share(parts, k, r, g, b, a):
 
 
 @njit(nogil=True, cache=True)
-def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, hy, hz, parts):
-    """One level of the ray's composite; parts[k] receives interval k's share of (r, g, b, a)."""
-    unit = tf[5]
-    shading = sp[0]
+def _composite_level_2d(intervals, pieces, level, tf, sp, hx, hy, hz, parts):
+    """One level of the composite of a ray's `RayIntervals` (as `ray_integral._composite_level`);
+    parts[k] receives interval k's share of (r, g, b, a)."""
+    ta, tb, P, G, m = intervals
+    piece_starts, piece_ends = pieces
+    unit = tf.unit
+    shading = sp.on
     mult = 1 << level
     T = 1.0
     cr = 0.0
@@ -470,22 +494,15 @@ def _composite_level_2d(ta, tb, P, G, m, offsets, cuts, h0, level, tf, sp, hx, h
         r0, g0, b0, T0 = cr, cg, cb, T
         c = P[k]
         gk = G[k]
-        n = max(1, int(math.ceil(length / h0)))
-        piece = length / n
-        ci = offsets[k]
-        cend = offsets[k + 1]
-        p = 1
         u0 = 0.0
-        while u0 < length:
-            u1, ci, p = next_boundary(u0, length, cuts, ci, cend, p, piece, n)
-            if u1 <= u0:
-                continue
+        for e in range(piece_starts[k], piece_starts[k + 1]):
+            u1 = piece_ends[e]
             umid = 0.5 * (u0 + u1)
             q = _subdivision(
                 tf, cubic(c, u0), cubic(c, u1), _grad_mag(gk, u0), _grad_mag(gk, umid), _grad_mag(gk, u1)
             )
             if shading:
-                q = max(q, _normal_turn(gk, u0, umid, u1, sp[5]) / SHADING_TURN)
+                q = max(q, _normal_turn(gk, u0, umid, u1, sp.gradient_threshold) / SHADING_TURN)
             if q > MAX_SUBDIVISION:
                 nsub = MAX_SUBDIVISION
                 caps += 1

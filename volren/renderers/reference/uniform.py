@@ -33,16 +33,22 @@ import numpy as np
 from numba import njit, prange
 
 from volren.kernels.box_clipping import clip_box
+from volren.renderers.reference.ray_inputs import RayIntervals
 from volren.renderers.reference.ray_integral import store_pixel
 from volren.renderers.reference.refinement import integrate_ray
 
 
 @njit(nogil=True, cache=True)
-def trilinear_cubic(v000, v100, v010, v110, v001, v101, v011, v111, x0, y0, z0, ax, ay, az, out):
+def trilinear_cubic(corners, start, rate, out):
     """Coefficients (in u) of the trilinear interpolant along x = x0 + ax u, y = ..., z = ...
+    with start = (x0, y0, z0), rate = (ax, ay, az).
 
-    Local cell coordinates: corner vXYZ sits at (X, Y, Z) in {0, 1}^3.
+    Local cell coordinates: corner vXYZ sits at (X, Y, Z) in {0, 1}^3; corners = (v000, v100,
+    v010, v110, v001, v101, v011, v111).
     """
+    v000, v100, v010, v110, v001, v101, v011, v111 = corners
+    x0, y0, z0 = start
+    ax, ay, az = rate
     cx = v100 - v000
     cy = v010 - v000
     cz = v001 - v000
@@ -92,12 +98,12 @@ def _diff(V, k, j, i, axis, h):
 
 
 @njit(nogil=True, cache=True)
-def build_intervals(ox, oy, oz, dx, dy, dz, t_in, t_out, V, org, sp, shading, ta, tb, P, G):
-    """Fill the per-cell intervals of one ray (front to back); returns their number."""
+def build_intervals(o, d, t_in, t_out, grid, shading, ta, tb, P, G):
+    """Fill the per-cell intervals of one ray (origin o, direction d: (x, y, z)) through the
+    `GridBox` grid on [t_in, t_out] (front to back, `RayIntervals`' arrays); returns their number."""
+    V, org, sp = grid.values, grid.origin, grid.spacing
     nz, ny, nx = V.shape
     dims = (nx, ny, nz)
-    o = (ox, oy, oz)
-    d = (dx, dy, dz)
     cap = ta.shape[0]
     idx = np.zeros(3, np.int64)
     step = np.zeros(3, np.int64)
@@ -147,23 +153,23 @@ def build_intervals(ox, oy, oz, dx, dy, dz, t_in, t_out, V, org, sp, shading, ta
                 if finite:
                     ta[m] = t
                     tb[m] = tn
-                    trilinear_cubic(
-                        v000, v100, v010, v110, v001, v101, v011, v111,
-                        loc[0], loc[1], loc[2], rate[0], rate[1], rate[2], P[m],
-                    )  # fmt: skip
+                    trilinear_cubic((v000, v100, v010, v110, v001, v101, v011, v111), (loc[0], loc[1], loc[2]),
+                                    (rate[0], rate[1], rate[2]), P[m])  # fmt: skip
                     if shading:
                         for axis in range(3):
                             h = sp[axis]
                             trilinear_cubic(
-                                _diff(V, k, j, i, axis, h),
-                                _diff(V, k, j, i + 1, axis, h),
-                                _diff(V, k, j + 1, i, axis, h),
-                                _diff(V, k, j + 1, i + 1, axis, h),
-                                _diff(V, k + 1, j, i, axis, h),
-                                _diff(V, k + 1, j, i + 1, axis, h),
-                                _diff(V, k + 1, j + 1, i, axis, h),
-                                _diff(V, k + 1, j + 1, i + 1, axis, h),
-                                loc[0], loc[1], loc[2], rate[0], rate[1], rate[2], G[m, axis],
+                                (
+                                    _diff(V, k, j, i, axis, h),
+                                    _diff(V, k, j, i + 1, axis, h),
+                                    _diff(V, k, j + 1, i, axis, h),
+                                    _diff(V, k, j + 1, i + 1, axis, h),
+                                    _diff(V, k + 1, j, i, axis, h),
+                                    _diff(V, k + 1, j, i + 1, axis, h),
+                                    _diff(V, k + 1, j + 1, i, axis, h),
+                                    _diff(V, k + 1, j + 1, i + 1, axis, h),
+                                ),
+                                (loc[0], loc[1], loc[2]), (rate[0], rate[1], rate[2]), G[m, axis],
                             )  # fmt: skip
                     m += 1
             t = tn
@@ -177,13 +183,16 @@ def build_intervals(ox, oy, oz, dx, dy, dz, t_in, t_out, V, org, sp, shading, ta
 
 
 @njit(nogil=True, parallel=True, cache=True)
-def render_uniform(orig, dirs, tfar, V, org, sp, lo, hi, tf, tf2d, spar, mode, h0, tol, max_levels, out, stats):
-    """One block of rays: out (n, 4) float64 RGBA; stats (n, 5) = samples, level, unconverged,
-    subdivision cap hits, intervals. One of `tf` (1D) and `tf2d` (2D, composite) is None."""
+def render_uniform(orig, dirs, tfar, grid, tf, tf2d, spar, quad, out, stats):
+    """One block of rays (origins, directions, far-plane parameters) through the `GridBox` grid,
+    integrated as the `Quadrature` quad says with the `ShadeParams` spar: out (n, 4) float64 RGBA;
+    stats (n, 5) = samples, level, unconverged, subdivision cap hits, intervals. One of `tf` (1D)
+    and `tf2d` (2D, composite) is None."""
     n = orig.shape[0]
-    nz, ny, nx = V.shape
+    nz, ny, nx = grid.values.shape
+    lo, hi = grid.lo, grid.hi
     cap = nx + ny + nz + 4
-    gradients = spar[0]  # shading
+    gradients = spar.on  # shading
     if tf2d is not None:
         gradients = True  # |grad s| is the 2D TF's second axis
     for p in prange(n):
@@ -200,6 +209,6 @@ def render_uniform(orig, dirs, tfar, V, org, sp, lo, hi, tf, tf2d, spar, mode, h
         tb = np.empty(cap)
         P = np.empty((cap, 4))
         G = np.empty((cap if gradients else 0, 3, 4))
-        m = build_intervals(ox, oy, oz, dx, dy, dz, t0, t1, V, org, sp, gradients, ta, tb, P, G)
-        result = integrate_ray(ta, tb, P, G, m, mode, h0, tol, max_levels, tf, tf2d, spar, dx, dy, dz)
+        m = build_intervals((ox, oy, oz), (dx, dy, dz), t0, t1, grid, gradients, ta, tb, P, G)
+        result = integrate_ray(RayIntervals(ta, tb, P, G, m), quad, tf, tf2d, spar, dx, dy, dz)
         store_pixel(out, stats, p, result, m)

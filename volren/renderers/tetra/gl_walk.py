@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.kernels.shading import ShadeParams
 from volren.kernels.tet_projection import projected_boxes
 from volren.model.camera import Camera
 from volren.renderers.glsl import compile_program, load_shader
@@ -134,7 +135,7 @@ class WalkParameters:
     """What a frame needs besides the camera (see `walk.comp.glsl`'s uniforms)."""
 
     blend: int                 # traversal.COMPOSITE ... AVERAGE
-    shade: tuple               # volren.kernels.shading.shade_params
+    shade: ShadeParams         # volren.kernels.shading.shade_params
     lo: float                  # table index = (value - lo) * scale
     scale: float
     lmax: float
@@ -371,7 +372,7 @@ class GLWalk(GLObjectOwner):
     def _walk(self, camera: Camera, width: int, height: int, world_to_clip: NDArray, p: WalkParameters) -> None:
         mesh = self._mesh
         assert mesh is not None
-        program = self._program("walk", {"BLEND": p.blend, "SHADE": int(bool(p.shade[0])), "JUMP": int(p.jump)})
+        program = self._program("walk", {"BLEND": p.blend, "SHADE": int(bool(p.shade.on)), "JUMP": int(p.jump)})
         buffers = self._mesh_buffers
         for name, binding in (("planes", 0), ("neighbours", 1), ("fields", 2)):
             buffers[name].bind_to_storage_buffer(binding)
@@ -386,9 +387,10 @@ class GLWalk(GLObjectOwner):
         _set(program, "u_tolerance", mesh.tolerance)
         _set(program, "u_termination", p.termination if p.termination < 1.0 else 2.0)
         _set(program, "u_max_steps", p.max_steps)
-        _set(program, "u_phong", tuple(float(v) for v in p.shade[1:5]))
-        _set(program, "u_gradient_threshold", float(p.shade[5]))
-        _set(program, "u_light", tuple(float(v) for v in p.shade[6:9]))
+        light = p.shade
+        _set(program, "u_phong", (float(light.ambient), float(light.diffuse), float(light.specular), float(light.power)))
+        _set(program, "u_gradient_threshold", float(light.gradient_threshold))
+        _set(program, "u_light", (float(light.lx), float(light.ly), float(light.lz)))
         program.run(math.ceil(width / LOCAL), math.ceil(height / LOCAL), 1)
 
     def release(self) -> None:

@@ -27,8 +27,9 @@ from numpy.typing import NDArray
 from volren.errors import VolrenError
 from volren.kernels.camera_rays import image_rays, pixel_rays
 from volren.kernels.image_refinement import STRIDE_RULE, refine_image
+from volren.kernels.ray_block import BinnedRays
 from volren.kernels.row_blocks import parallel_chunk_size, run_in_row_blocks
-from volren.kernels.shading import shade_params
+from volren.kernels.shading import ShadeParams, shade_params
 from volren.kernels.tet_planes import packed_face_planes
 from volren.kernels.tet_projection import bin_rows, pixel_coordinates, ray_far
 from volren.kernels.visible_ranges import visible_ranges
@@ -64,6 +65,7 @@ from volren.renderers.tetra.traversal import (
     MINIMUM,
     cast_rays,
 )
+from volren.renderers.tetra.walk_inputs import SegmentTable, TetCells, WalkedSet, WalkOptions
 from volren.renderers.tetra.walked_cells import WalkedCells, walked_cells
 
 _MODES = {BlendMode.COMPOSITE: COMPOSITE, BlendMode.MAXIMUM: MAXIMUM, BlendMode.MINIMUM: MINIMUM,
@@ -307,9 +309,13 @@ class TetraRenderer(RendererBase):
             if progress is not None:
                 progress(1.0)
         else:
-            rgba, counters = self._render_cpu(camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors,
-                                              fields, packed, usable.cells, walked, visible, depth, ratio, lo,
-                                              scale, lmax)
+            entries = self._entry_candidates(camera, width, height, mesh, tets, walked)
+            assert self._corner is not None
+            cells = TetCells(neighbors, packed, tvals, grads, self._corner, usable.cells, self._on_plane(mesh))
+            options = WalkOptions(mode, float(opts["termination_alpha"]), int(opts["max_steps"]))
+            rgba, counters = self._render_cpu(camera, width, height, progress, opts, entries, cells,
+                                              WalkedSet(walked.boundary, walked.cells, visible),
+                                              SegmentTable(depth, ratio, lo, scale, lmax), options, sp)  # fmt: skip
         counters["cells_transparent"] = transparent
         # what this frame paid for its mesh and TF (0 when they were ready): `volren render --timings`
         counters["prepare_ms"] = 1000.0 * (prepared - start)
@@ -337,24 +343,23 @@ class TetraRenderer(RendererBase):
                                                         tvals, grads, usable.cells))
         return self._gl
 
-    def _render_cpu(self, camera, width, height, progress, opts, mode, sp, mesh, tets, neighbors, fields, packed,
-                    usable, walked, visible, depth, ratio, lo, scale, lmax) -> tuple[NDArray, dict[str, float]]:
+    def _render_cpu(self, camera: Camera, width: int, height: int, progress: ProgressCallback | None,
+                    opts: Mapping[str, Any], entries: tuple[EntryFaces, NDArray[np.int64]], cells: TetCells,
+                    walked: WalkedSet, table: SegmentTable, options: WalkOptions,
+                    sp: ShadeParams) -> tuple[NDArray, dict[str, float]]:  # fmt: skip
         """The numba walk: (H * W, 4) premultiplied RGBA and the counters. A ray per pixel over
-        blocks of rows, or with image_stride > 1 adaptive refinement (`image_refinement`)."""
-        tvals, grads = fields
-        corner = self._corner
-        faces, near_cells = self._entry_candidates(camera, width, height, mesh, tets, walked)
+        blocks of rows, or with image_stride > 1 adaptive refinement (`image_refinement`); rays
+        enter the mesh through the `entries` of `_entry_candidates`."""
+        faces, near_cells = entries
+        mode = options.mode
         totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
 
         def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray, out: NDArray) -> NDArray:
             """The rays' walk output into `out` (n, 4); the counters summed into `totals`."""
             stats = np.zeros((len(origins), 4), np.int64)
-            cast_rays(
-                np.ascontiguousarray(origins), np.ascontiguousarray(dirs), np.ascontiguousarray(ray_far(camera, dirs)),
-                offsets, cand, walked.boundary, neighbors, packed, tvals, grads, corner, usable, walked.cells, visible,
-                depth, ratio, lo, scale, lmax, sp, mode, float(opts["termination_alpha"]), int(opts["max_steps"]),
-                self._on_plane(mesh), out, stats,
-            )  # fmt: skip
+            rays = BinnedRays(np.ascontiguousarray(origins), np.ascontiguousarray(dirs),
+                              np.ascontiguousarray(ray_far(camera, dirs)), offsets, cand)  # fmt: skip
+            cast_rays(rays, cells, walked, table, options, sp, out, stats)
             totals[:4] += stats.sum(axis=0)
             totals[4] += np.count_nonzero(stats[:, 0])
             return out

@@ -53,10 +53,13 @@ def _bilinear(table, i0, j0, fi, fj, c):
 
 
 @njit(nogil=True, cache=True)
-def integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_front, s_back, length):
-    """Premultiplied (r, g, b, alpha) of a segment from the 3D table: the optical depth is exact
-    in the length (per-length depth, bilinear in the two values), the colour per unit opacity is
-    interpolated linearly between the evenly spaced length layers (`model.preintegration.lengths`)."""
+def integrate_segment(table, s_front, s_back, length):
+    """Premultiplied (r, g, b, alpha) of a segment from the 3D table (`SegmentTable`): the optical
+    depth is exact in the length (per-length depth, bilinear in the two values), the colour per
+    unit opacity is interpolated linearly between the evenly spaced length layers
+    (`model.preintegration.lengths`)."""
+    depth_per_length, colour_ratio = table.depth_per_length, table.colour_ratio
+    lo, scale, lmax = table.lo, table.scale, table.lmax
     n = depth_per_length.shape[0]
     x = min(max((s_front - lo) * scale, 0.0), n - 1.0)
     y = min(max((s_back - lo) * scale, 0.0), n - 1.0)
@@ -133,10 +136,15 @@ def _exit(t, ox, oy, oz, dx, dy, dz, planes, on_plane):
 
 
 @njit(nogil=True, cache=True)
-def _entries(q, ox, oy, oz, dx, dy, dz, tmax, offsets, cand, planes, tvals, grads, corner, boundary, on_plane, ts, ids,
-             svals):
-    """Entries of ray q into the mesh, sorted by t: (count, dropped). A candidate cell is an
-    entry where the ray enters it through a boundary face, or starts inside it."""
+def _entries(q, rays, cells, boundary, ts, ids, svals):
+    """Entries of ray q of the `BinnedRays` rays into the `TetCells` cells through faces marked in
+    `boundary`, sorted by t into ts (their ray parameters), ids (their cells) and svals (the
+    values there): (count, dropped). A candidate cell is an entry where the ray enters it
+    through a boundary face, or starts inside it."""
+    ox, oy, oz = rays.origins[q, 0], rays.origins[q, 1], rays.origins[q, 2]
+    dx, dy, dz = rays.directions[q, 0], rays.directions[q, 1], rays.directions[q, 2]
+    tmax, offsets, cand = rays.far[q], rays.offsets, rays.candidates
+    planes, tvals, grads, corner, on_plane = cells.planes, cells.values, cells.gradients, cells.corner, cells.on_plane
     count = 0
     dropped = 0
     for c in range(offsets[q], offsets[q + 1]):
@@ -188,19 +196,20 @@ def _entries(q, ox, oy, oz, dx, dy, dz, tmax, offsets, cand, planes, tvals, grad
 
 
 @njit(nogil=True, parallel=True, cache=True)
-def cast_rays(
-    orig, dirs, tfar, offsets, cand, boundary, neighbors, planes, tvals, grads, corner, ok, walkable,
-    visible, depth_per_length, colour_ratio, lo, scale, lmax, sp, mode, termination, max_steps, on_plane,
-    out, stats,
-):  # fmt: skip
-    """One block of rays: out (n, 4) premultiplied RGBA (for maximum / minimum / average: the
-    value in out[:, 0] and 1 in out[:, 1] where the ray met data); stats (n, 4) = cell steps,
-    cells integrated, walks cut at max_steps, entries dropped.
+def cast_rays(rays, cells, walked, table, options, sp, out, stats):
+    """One block of `BinnedRays` rays through the `TetCells` cells, integrated with the
+    `SegmentTable` table as the `WalkOptions` options say, lit by the `ShadeParams` sp: out (n, 4) premultiplied RGBA (for
+    maximum / minimum / average: the value in out[:, 0] and 1 in out[:, 1] where the ray met data);
+    stats (n, 4) = cell steps, cells integrated, walks cut at max_steps, entries dropped.
 
-    ok: the usable cells; walkable: those a walk may run through at positive length (the entry
-    faces in `boundary` and `cand` are theirs). A walk steps into any usable cell, so that it goes
-    around an edge or a vertex at zero length as always, and ends where it would run through a
-    cell outside `walkable`."""
+    `WalkedSet` walked: walkable are the cells a walk may run through at positive length (the entry
+    faces in `boundary` and the rays' candidates are theirs). A walk steps into any usable cell, so
+    that it goes around an edge or a vertex at zero length as always, and ends where it would run
+    through a cell outside `walkable`."""
+    orig, dirs, tfar, offsets = rays.origins, rays.directions, rays.far, rays.offsets
+    neighbors, planes, grads, ok, on_plane = cells.neighbors, cells.planes, cells.gradients, cells.usable, cells.on_plane
+    boundary, walkable, visible = walked.boundary, walked.walkable, walked.visible
+    mode, termination, max_steps = options.mode, options.termination, options.max_steps
     n = orig.shape[0]
     blocks = (n + RAY_BLOCK - 1) // RAY_BLOCK
     for block in prange(blocks):  # the entry lists are allocated once per block of rays, not per ray
@@ -215,12 +224,11 @@ def cast_rays(
                 continue
             ox, oy, oz = orig[q, 0], orig[q, 1], orig[q, 2]
             dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
-            count, dropped = _entries(q, ox, oy, oz, dx, dy, dz, tfar[q], offsets, cand, planes, tvals, grads, corner,
-                                      boundary, on_plane, ts, ids, svals)
+            count, dropped = _entries(q, rays, cells, boundary, ts, ids, svals)
             stats[q, 3] = dropped
             if count == 0:
                 continue
-            hx, hy, hz = headlight_half_vector(sp[6], sp[7], sp[8], dx, dy, dz)
+            hx, hy, hz = headlight_half_vector(sp.lx, sp.ly, sp.lz, dx, dy, dz)
             cr = 0.0
             cg = 0.0
             cb = 0.0
@@ -270,9 +278,8 @@ def cast_rays(
                                     best = v
                             found = True
                         elif visible[t]:
-                            r, g, b, a = integrate_segment(depth_per_length, colour_ratio, lo, scale, lmax, s_in, s_out,
-                                                           length)
-                            if sp[0]:
+                            r, g, b, a = integrate_segment(table, s_in, s_out, length)
+                            if sp.on:
                                 diffuse, specular = blinn_phong_factors(grads[t, 0], grads[t, 1], grads[t, 2], hx, hy, hz,
                                                                         sp)
                                 r = min(r * diffuse + specular * a, a)

@@ -1,0 +1,76 @@
+"""What the `march` kernels read, bundled by what travels together.
+
+Why bundles: the kernels took 15-22 positional parameters (arrays, a float array indexed by
+constants), where moving one place still compiled and drew a wrong image. numba types a
+`typing.NamedTuple` as a named tuple (arrays allowed as members, fields read by name in nopython
+mode, cached kernels keep working while the class is defined at module level), so each bundle
+below reaches a kernel as one parameter at no cost per sample.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+class PixelView(NamedTuple):
+    """One frame's pixel rays, as the kernels unproject them (`march._pixel_ray`)."""
+
+    #: inverse of projection @ view: pixel centres are unprojected at NDC depth -1 and 1
+    inverse: NDArray[np.floating[Any]]
+    width: int
+    height: int
+    #: the grid's world origin and spacing (x, y, z): world to index space
+    grid_origin: NDArray[np.float64]
+    spacing: NDArray[np.float64]
+    #: the camera's unit view direction and the far plane's depth from the near plane along it
+    view_dir: NDArray[np.float64]
+    far_depth: float
+    #: each pixel's segment phase in steps (`volren.kernels.sample_placement.pixel_phases`)
+    phases: NDArray[np.float64]
+
+
+class Classification(NamedTuple):
+    """How a segment of the step's length gets its colour: post-classified from `post` at its
+    middle value, or pre-integrated from `table` by its two end values (Engel et al. 2001)."""
+
+    preintegrated: bool
+    #: (n, 4) colour and opacity per step at n values evenly spaced from lo (unused pre-integrated)
+    post: NDArray[np.float64]
+    #: (n, n, 4) premultiplied colour and opacity of a step from value i to value j (unused post-classified)
+    table: NDArray[np.float32]
+    #: the step h (index units along a ray are world units through `PixelView.spacing`)
+    step: float
+    #: a value s sits at table entry (s - lo) * scale
+    lo: float
+    scale: float
+
+
+class EmptyBricks(NamedTuple):
+    """Empty-space skipping (`occupancy`): `distance[bz, by, bx]` is 0 for a brick to sample, else
+    d >= 1 with every brick within Chebyshev distance d - 1 empty too; bricks of `size` cells."""
+
+    distance: NDArray[np.int32]
+    size: int
+
+
+class IndexRay(NamedTuple):
+    """One ray in grid-index space, cut into its segments (`volren.kernels.sample_placement`)."""
+
+    ox: float
+    oy: float
+    oz: float
+    dx: float
+    dy: float
+    dz: float
+    #: 1 / d per axis (inf where d is 0)
+    ix: float
+    iy: float
+    iz: float
+    #: where the first segment starts, the first and last segments' lengths, how many segments
+    t0: float
+    first: float
+    last: float
+    n_segments: int
