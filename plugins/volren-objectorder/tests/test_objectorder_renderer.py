@@ -4,6 +4,8 @@ on colour edits, and bad input (thin, constant, NaN, anisotropic volumes, axis a
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pytest
 from volren_objectorder import ObjectOrderRenderer
@@ -14,32 +16,15 @@ from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, 
 from volren.model.crop import crop_volume
 from volren.testing import conformance_test, image_error, oracles
 from volren.testing.reference_images import reference_image
+from volren.testing.render_helpers import SHELL_TF, SMOOTH_TF, field, render_checked
 from volren.testing.scenes import distant_camera_cut_by_far_plane
 
 # one pytest test per check of the kit
 test_conformance = conformance_test(ObjectOrderRenderer, quick=True)
 
-SMOOTH_TF = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.6]], 1.5)
-# opacity zero below 1.37 and above 2.23: much of the field is transparent (breakpoints off the data)
-SHELL_TF = TransferFunction1D([[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.37, 0.0], [1.61, 0.7], [2.23, 0.0]], 1.0)
 OPAQUE_TF = TransferFunction1D([[-2, 1, 1, 1], [4, 1, 0.4, 0.2]], [[-2, 0.0], [0.3, 1.0]], 1.0)
 
-
-def field(shape=(14, 16, 18), spacing=(1.0, 1.0, 1.0)) -> UniformVolume:
-    z, y, x = np.mgrid[0 : shape[0], 0 : shape[1], 0 : shape[2]]
-    values = np.sin(x / 3.0) + np.cos(y / 4.0) + z / 8.0
-    return UniformVolume(values.astype(np.float32), spacing=spacing)
-
-
-def draw(volume, tf, camera, size=(40, 32), **settings) -> tuple[np.ndarray, ObjectOrderRenderer]:
-    renderer = ObjectOrderRenderer()
-    renderer.set_volume(volume)
-    renderer.set_transfer_function(tf)
-    renderer.set_settings(RenderSettings(**settings))
-    image = renderer.render(camera, *size)
-    assert image.dtype == np.float32 and np.all(np.isfinite(image))
-    assert image.min() >= 0 and image.max() <= 1 and np.all(image[..., :3] <= image[..., 3:4] + 1e-6)
-    return image, renderer
+draw = partial(render_checked, ObjectOrderRenderer)
 
 
 # ------------------------------------------------------------------- same samples as a ray caster

@@ -7,6 +7,7 @@ from __future__ import annotations
 import inspect
 import math
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
 import pytest
@@ -28,29 +29,13 @@ from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, 
 from volren.model.downsample import downsample
 from volren.testing import conformance_test, image_error, oracles
 from volren.testing.reference_images import reference_image
+from volren.testing.render_helpers import SMOOTH_TF, field, render_checked
 from volren.testing.scenes import distant_camera_cut_by_far_plane
 
 # one pytest test per check of the kit
 test_conformance = conformance_test(ShearWarpRenderer, quick=True)
 
-SMOOTH_TF = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.6]], 1.5)
-
-
-def field(shape=(14, 16, 18), spacing=(1.0, 1.0, 1.0)) -> UniformVolume:
-    z, y, x = np.mgrid[0 : shape[0], 0 : shape[1], 0 : shape[2]]
-    values = np.sin(x / 3.0) + np.cos(y / 4.0) + z / 8.0
-    return UniformVolume(values.astype(np.float32), spacing=spacing)
-
-
-def draw(volume, tf, camera, size=(40, 32), **settings) -> tuple[np.ndarray, ShearWarpRenderer]:
-    renderer = ShearWarpRenderer()
-    renderer.set_volume(volume)
-    renderer.set_transfer_function(tf)
-    renderer.set_settings(RenderSettings(**settings))
-    image = renderer.render(camera, *size)
-    assert image.dtype == np.float32 and np.all(np.isfinite(image))
-    assert image.min() >= 0 and image.max() <= 1 and np.all(image[..., :3] <= image[..., 3:4] + 1e-6)
-    return image, renderer
+draw = partial(render_checked, ShearWarpRenderer)
 
 
 # ---------------------------------------------------------------------------------- geometry
