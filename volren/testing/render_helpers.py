@@ -16,6 +16,9 @@ from numpy.typing import NDArray
 
 from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.renderers.base import Renderer
+from volren.testing import oracles
+from volren.testing.checks import clipped_camera
+from volren.testing.metrics import image_error
 
 R = TypeVar("R", bound=Renderer)
 
@@ -56,3 +59,33 @@ def render_checked(
     image = renderer.render(camera, *size)
     assert_valid_image(image)
     return image, renderer
+
+
+#: Clipping planes cutting `clipped_constant_box`: near only, far only, both (fractions of its depth).
+CLIPPING_PLANES = ((0.3, None), (None, 0.6), (0.2, 0.65))
+
+ClipCase = tuple[float | None, float | None, Camera, NDArray[np.float64]]
+
+
+def clipped_constant_box(
+    parallel: bool, size: int = 40
+) -> tuple[UniformVolume, TransferFunction1D, list[ClipCase]]:
+    """A constant box and TF whose image has a closed form (1 - (1 - a)^(L / d_u), L the path
+    length), and for each of `CLIPPING_PLANES` (near, far, the camera they cut, its closed-form
+    `size` x `size` image); each image differs from the uncut one, so the planes matter."""
+    volume = UniformVolume(np.full((6, 7, 8), 1.0, np.float32), spacing=(0.9, 1.1, 1.0), origin=(0.5, -1.0, 2.0))
+    tf = TransferFunction1D.constant(0.15, (0.4, 0.7, 0.2), opacity_unit_distance=0.7)
+    camera = Camera.orbit(volume.bounds, 35, -20, zoom=1.3, parallel=parallel)
+
+    def closed_form(view: Camera) -> NDArray[np.float64]:
+        lengths = oracles.box_path_lengths(view, size, size, volume.bounds)
+        return oracles.homogeneous_image(lengths, (0.4, 0.7, 0.2), 0.15, 0.7)
+
+    whole = closed_form(camera)
+    cases: list[ClipCase] = []
+    for near, far in CLIPPING_PLANES:
+        clipped = clipped_camera(camera, volume.bounds, near, far)
+        expected = closed_form(clipped)
+        assert image_error(expected, whole).rmse > 0.03  # the planes matter
+        cases.append((near, far, clipped, expected))
+    return volume, tf, cases
