@@ -50,26 +50,23 @@ def test_the_readme_is_short():
     assert lines <= MAX_README_LINES, f"README.md has {lines} lines; the details belong in docs/"
 
 
-def test_no_session_references_in_code_or_docs():
-    found = [
+def lines_matching(pattern: re.Pattern[str], roots: tuple[str, ...]) -> list[str]:
+    """"file:line: text" for each line under `roots` (relative to the repository) that `pattern` finds."""
+    return [
         f"{path.relative_to(REPO)}:{number}: {line.strip()[:100]}"
-        for root in SEARCHED
+        for root in roots
         for path, text in text_files(REPO / root)
         for number, line in enumerate(text.splitlines(), 1)
-        if SESSION_REFERENCE.search(line)
+        if pattern.search(line)
     ]
-    assert found == []
+
+
+def test_no_session_references_in_code_or_docs():
+    assert lines_matching(SESSION_REFERENCE, SEARCHED) == []
 
 
 def test_no_machine_paths_in_the_pages():
-    found = [
-        f"{path.relative_to(REPO)}:{number}: {line.strip()[:100]}"
-        for root in PAGES
-        for path, text in text_files(REPO / root)
-        for number, line in enumerate(text.splitlines(), 1)
-        if MACHINE_PATH.search(line)
-    ]
-    assert found == []
+    assert lines_matching(MACHINE_PATH, PAGES) == []
 
 
 @pytest.mark.parametrize("page", LINKED_PAGES, ids=lambda p: p.relative_to(REPO).as_posix())

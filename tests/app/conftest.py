@@ -23,6 +23,8 @@ import pytestqt  # noqa: E402, F401
 from PyQt5 import QtWidgets  # noqa: E402, F401
 
 from volren.app.core.loading import LoadedInput  # noqa: E402
+from volren.app.core.state import ViewState, default_camera  # noqa: E402
+from volren.app.tf_editor.history import TFHistory  # noqa: E402
 from volren.errors import VolrenError  # noqa: E402
 from volren.model.volume import UniformVolume  # noqa: E402
 from volren.renderers.base import Capabilities, KindSupport, OptionSpec, RendererBase  # noqa: E402
@@ -63,6 +65,24 @@ def ml_volume() -> UniformVolume:
 def sample(ml_volume) -> LoadedInput:
     """The Marschner-Lobb sample built in memory (no file reading needed)."""
     return LoadedInput(ml_volume, sample_transfer_functions()["marschner_lobb"], source="marschner_lobb")
+
+
+@pytest.fixture
+def state() -> ViewState:
+    """A view state holding the Marschner-Lobb sample (17 points a side) and its TF; the TF editor
+    tests edit it (modules with other scenes define their own `state`)."""
+    s = ViewState()
+    volume = marschner_lobb(17)
+    s.load(volume, sample_transfer_functions()["marschner_lobb"].copy(), default_camera(volume))
+    return s
+
+
+@pytest.fixture
+def history(state) -> Iterator[TFHistory]:
+    """The undo history of `state`'s TF edits, detached afterwards."""
+    h = TFHistory(state)
+    yield h
+    h.detach()
 
 
 @pytest.fixture
@@ -202,3 +222,21 @@ def fake_renderers() -> Iterator[dict[str, type]]:
     finally:
         for name in classes:
             registry.unregister(name)
+
+
+@pytest.fixture
+def fake_2d(fake_renderers) -> Iterator[type]:
+    """The constant-colour fake renderer drawing 2D TFs too, registered as "fake_2d" (with the
+    other fakes); unregistered afterwards."""
+
+    class Fake2D(fake_renderers["fake"]):
+        name: ClassVar[str] = "fake_2d"
+        capabilities: ClassVar[Capabilities] = Capabilities(
+            kinds={"uniform": KindSupport(tf_dims=frozenset({1, 2}))}, summary="test double, 1D and 2D TFs"
+        )
+
+    registry.register(Fake2D.name, Fake2D, replace=True)
+    try:
+        yield Fake2D
+    finally:
+        registry.unregister(Fake2D.name)

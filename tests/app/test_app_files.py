@@ -24,7 +24,6 @@ from volren.model import TFWidget, TransferFunction2D
 from volren.model.camera import Camera
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function import TransferFunction1D
-from volren.renderers.base import Capabilities, KindSupport
 from volren.renderers.registry import registry
 from volren.samples import marschner_lobb, sample_paths, sample_transfer_functions
 
@@ -34,20 +33,9 @@ TIMEOUT_MS = 20000
 
 
 @pytest.fixture
-def fakes(fake_renderers):
+def fakes(fake_renderers, fake_2d):
     """conftest's fake renderers and `fake_2d`, the constant-colour one drawing 2D TFs too."""
-
-    class Fake2D(fake_renderers["fake"]):
-        name: ClassVar[str] = "fake_2d"
-        capabilities: ClassVar[Capabilities] = Capabilities(
-            kinds={"uniform": KindSupport(tf_dims=frozenset({1, 2}))}, summary="test double, 1D and 2D TFs"
-        )
-
-    registry.register(Fake2D.name, Fake2D, replace=True)
-    try:
-        yield fake_renderers
-    finally:
-        registry.unregister(Fake2D.name)
+    return fake_renderers
 
 
 @pytest.fixture

@@ -10,8 +10,8 @@ from itertools import combinations
 import numpy as np
 import pytest
 from PyQt5.QtCore import QPoint, Qt
-from PyQt5.QtGui import QImage
 
+from tests.app.viewport_pixels import frame_rect, grab
 from volren.app.core.crop_handles import (
     FACE_NAMES,
     MESH_MIN_THICKNESS_SHARE,
@@ -167,22 +167,6 @@ def test_the_size_cursor_points_along_the_faces_axis_on_screen(vector, kind):
 
 
 # ------------------------------------------------------------------------------------- widgets
-
-def grab(viewport) -> np.ndarray:
-    """The viewport as painted, (H, W, 3) uint8."""
-    image = viewport.grab().toImage().convertToFormat(QImage.Format_RGB888)
-    w, h = image.width(), image.height()
-    bits = image.constBits()
-    bits.setsize(image.byteCount())
-    return np.frombuffer(bits, np.uint8).reshape(h, image.bytesPerLine())[:, : 3 * w].reshape(h, w, 3).copy()
-
-
-def frame_rect(viewport) -> tuple[float, float, float, float]:
-    frame = viewport.frame
-    scale = min(viewport.width() / frame.width, viewport.height() / frame.height)
-    w, h = frame.width * scale, frame.height * scale
-    return ((viewport.width() - w) / 2.0, (viewport.height() - h) / 2.0, w, h)
-
 
 def handle_points(window, box) -> np.ndarray:
     """The widget pixels of `box`'s face centres with the camera of the frame on screen."""

@@ -188,17 +188,13 @@ def test_tet_mesh_gaps_are_no_data(camera):
 # ---------------------------------------------------------------------------- the viewport
 @pytest.fixture
 def viewport(qtbot, sphere, camera):
+    from tests.app.widget_input import shown
     from volren.app.core.state import ViewState
     from volren.app.rendering.viewport import Viewport
 
     state = ViewState()
     state.load(sphere, below(RADIUS), camera.reset(sphere.bounds, 1.5))
-    view = Viewport(state)
-    qtbot.addWidget(view)
-    view.resize(300, 200)
-    view.show()
-    qtbot.waitExposed(view)
-    return view
+    return shown(qtbot, Viewport(state), (300, 200))
 
 
 def test_ctrl_click_emits_the_pixel_in_full_frame_coordinates(qtbot, viewport):

@@ -3,7 +3,7 @@ values under the mouse, a drag is one undo step, the panel follows TFs replaced 
 presets, range and unit boxes, files (volren JSON, ParaView presets, bad files) and 2D TFs.
 
 Qt's test mouseMove does not deliver moves to a widget in the offscreen platform, so drags send
-the QMouseEvents themselves (`drag`); presses and releases go through qtbot.
+the QMouseEvents themselves (`widget_input.drag`); presses and releases go through qtbot.
 """
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from PyQt5.QtCore import QEvent, QPoint, QPointF, Qt
-from PyQt5.QtGui import QColor, QMouseEvent
-from PyQt5.QtWidgets import QApplication, QWidget
+from PyQt5.QtCore import QPoint, Qt
+from PyQt5.QtGui import QColor
 
+from tests.app.widget_input import drag, shown
 from volren.api import default_transfer_function
 from volren.app.core.colormap_presets import (
     PRESET_NAMES,
@@ -36,37 +36,18 @@ from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
 from volren.model.value_histogram import value_histogram
 from volren.model.volume import UniformVolume
-from volren.samples import marschner_lobb, sample_transfer_functions
+from volren.samples import marschner_lobb
 
 SIZE = (320, 300)
 
 
 # ---------------------------------------------------------------------------- fixtures and helpers
-@pytest.fixture
-def state() -> ViewState:
-    s = ViewState()
-    volume = marschner_lobb(17)
-    # colour and opacity span [0, 1], the data range is inside it: the value axis is [0, 1]
-    s.load(volume, sample_transfer_functions()["marschner_lobb"].copy(), default_camera(volume))
-    return s
-
-
-@pytest.fixture
-def history(state) -> TFHistory:
-    h = TFHistory(state)
-    yield h
-    h.detach()
-
-
+# `state` (the Marschner-Lobb sample: colour and opacity span [0, 1], the data range is inside it,
+# so the value axis is [0, 1]) and `history` come from conftest
 @pytest.fixture
 def make_editor(qtbot):
     def make(state: ViewState) -> TransferFunction1DEditor:
-        editor = TransferFunction1DEditor(state)
-        editor.resize(*SIZE)
-        qtbot.addWidget(editor)
-        editor.show()
-        qtbot.waitExposed(editor)
-        return editor
+        return shown(qtbot, TransferFunction1DEditor(state), SIZE)
 
     return make
 
@@ -74,18 +55,6 @@ def make_editor(qtbot):
 @pytest.fixture
 def editor(make_editor, state) -> TransferFunction1DEditor:
     return make_editor(state)
-
-
-def move(widget: QWidget, pos: QPoint) -> None:
-    event = QMouseEvent(QEvent.MouseMove, QPointF(pos), Qt.NoButton, Qt.LeftButton, Qt.NoModifier)
-    QApplication.sendEvent(widget, event)
-
-
-def drag(qtbot, widget: QWidget, start: QPoint, end: QPoint, steps: int = 4) -> None:
-    qtbot.mousePress(widget, Qt.LeftButton, pos=start)
-    for k in range(1, steps + 1):
-        move(widget, start + (end - start) * (k / steps))
-    qtbot.mouseRelease(widget, Qt.LeftButton, pos=end)
 
 
 def value_per_pixel(editor: TransferFunction1DEditor) -> float:

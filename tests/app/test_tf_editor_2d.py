@@ -10,10 +10,10 @@ import pytest
 from PyQt5.QtCore import QPoint, Qt
 from PyQt5.QtGui import QColor
 
+from tests.app.widget_input import shown
 from volren.app.core import tf_widget_geometry as geometry
 from volren.app.core.joint_histogram import joint_histogram, suggested_gradient_max
 from volren.app.core.state import Change, ViewState, default_camera
-from volren.app.tf_editor.history import TFHistory
 from volren.app.tf_editor.two_d.editor import DEFAULT_OPACITY, TransferFunction2DEditor
 from volren.model.colormaps import VIRIDIS, color_stops
 from volren.model.transfer_function import TransferFunction1D
@@ -49,19 +49,7 @@ def state() -> ViewState:
 
 @pytest.fixture
 def editor(qtbot, state) -> TransferFunction2DEditor:
-    e = TransferFunction2DEditor(state)
-    qtbot.addWidget(e)
-    e.resize(560, 440)
-    e.show()
-    qtbot.waitExposed(e)
-    return e
-
-
-@pytest.fixture
-def history(state):
-    h = TFHistory(state)
-    yield h
-    h.detach()
+    return shown(qtbot, TransferFunction2DEditor(state), (560, 440))
 
 
 def drag(qtbot, widget, start: QPoint, end: QPoint, steps: int = 4) -> None:

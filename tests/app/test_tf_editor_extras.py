@@ -16,9 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from PyQt5.QtCore import QEvent, QPoint, QPointF, QRect, Qt
-from PyQt5.QtGui import QColor, QMouseEvent, QWheelEvent
+from PyQt5.QtGui import QColor, QWheelEvent
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox, QWidget
 
+from tests.app.widget_input import drag, hover, shown
 from volren.api import default_transfer_function
 from volren.app.core.colormap_presets import (
     PARAVIEW_FILE,
@@ -30,7 +31,6 @@ from volren.app.core.colormap_presets import (
 )
 from volren.app.core.joint_histogram import joint_histogram
 from volren.app.core.state import ViewState, default_camera
-from volren.app.tf_editor.history import TFHistory
 from volren.app.tf_editor.one_d.editor import PRESET_PLACEHOLDER, TransferFunction1DEditor
 from volren.app.tf_editor.one_d.point_canvas import MARGIN, ZOOM_STEP
 from volren.app.tf_editor.one_d.preset_browser import SWATCH, swatch_image
@@ -39,53 +39,16 @@ from volren.app.tf_editor.two_d.widget_canvas import MARGINS
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
 from volren.model.value_histogram import value_histogram
 from volren.model.volume import UniformVolume
-from volren.samples import marschner_lobb, sample_transfer_functions
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 # ---------------------------------------------------------------------------- fixtures and helpers
-@pytest.fixture
-def state() -> ViewState:
-    s = ViewState()
-    volume = marschner_lobb(17)
-    # colours: viridis at 0, .25, .5, .75, 1; opacity points at 0, .4, .5, .6, 1; data inside [0, 1]
-    s.load(volume, sample_transfer_functions()["marschner_lobb"].copy(), default_camera(volume))
-    return s
-
-
-@pytest.fixture
-def history(state) -> TFHistory:
-    h = TFHistory(state)
-    yield h
-    h.detach()
-
-
+# `state` (the Marschner-Lobb sample: colours viridis at 0, .25, .5, .75, 1; opacity points at 0,
+# .4, .5, .6, 1; data inside [0, 1]) and `history` come from conftest
 @pytest.fixture
 def editor(qtbot, state) -> TransferFunction1DEditor:
-    e = TransferFunction1DEditor(state)
-    e.resize(320, 420)
-    qtbot.addWidget(e)
-    e.show()
-    qtbot.waitExposed(e)
-    return e
-
-
-def move(widget: QWidget, pos: QPoint | QPointF) -> None:
-    event = QMouseEvent(QEvent.MouseMove, QPointF(pos), Qt.NoButton, Qt.LeftButton, Qt.NoModifier)
-    QApplication.sendEvent(widget, event)
-
-
-def hover(widget: QWidget, pos: QPoint | QPointF) -> None:
-    event = QMouseEvent(QEvent.MouseMove, QPointF(pos), Qt.NoButton, Qt.NoButton, Qt.NoModifier)
-    QApplication.sendEvent(widget, event)
-
-
-def drag(qtbot, widget: QWidget, start: QPoint, end: QPoint, steps: int = 4) -> None:
-    qtbot.mousePress(widget, Qt.LeftButton, pos=start)
-    for k in range(1, steps + 1):
-        move(widget, start + (end - start) * (k / steps))
-    qtbot.mouseRelease(widget, Qt.LeftButton, pos=end)
+    return shown(qtbot, TransferFunction1DEditor(state), (320, 420))
 
 
 def wheel(widget: QWidget, pos: QPoint, notches: float = 1.0) -> None:
@@ -447,12 +410,7 @@ def editor_2d(qtbot) -> TransferFunction2DEditor:
     gaussian = TFWidget.gaussian((0.9, 1.0), (0.1, 0.2), (1.0, 0.5, 0.0), 0.6)
     s = ViewState()
     s.load(volume, TransferFunction2D((0.0, 1.8), (0.0, 2.0), [gaussian], 0.1), default_camera(volume))
-    e = TransferFunction2DEditor(s)
-    qtbot.addWidget(e)
-    e.resize(560, 440)
-    e.show()
-    qtbot.waitExposed(e)
-    return e
+    return shown(qtbot, TransferFunction2DEditor(s), (560, 440))
 
 
 def test_the_hover_readout_shows_what_is_under_the_mouse(qtbot, editor_2d):

@@ -4,12 +4,10 @@ actions and the pixels they put on screen."""
 
 from __future__ import annotations
 
-from typing import ClassVar
-
 import numpy as np
 import pytest
-from PyQt5.QtGui import QImage
 
+from tests.app.viewport_pixels import frame_rect, grab
 from volren.app.core.loading import LoadedInput
 from volren.app.core.overlay_geometry import BOX_EDGES, outline_segments, project_points, triad_arms
 from volren.app.core.view_directions import VIEW_DIRECTIONS, look_along, view_direction
@@ -28,8 +26,6 @@ from volren.model.camera import Camera, bounds_corners
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
 from volren.model.volume import UniformVolume
-from volren.renderers.base import Capabilities, KindSupport
-from volren.renderers.registry import registry
 
 pytestmark = pytest.mark.qt
 
@@ -178,23 +174,6 @@ def box_volume() -> UniformVolume:
 
 
 @pytest.fixture
-def fake_2d(fake_renderers):
-    """conftest's constant-colour renderer, drawing 1D and 2D TFs."""
-
-    class Fake2D(fake_renderers["fake"]):
-        name: ClassVar[str] = "fake_2d"
-        capabilities: ClassVar[Capabilities] = Capabilities(
-            kinds={"uniform": KindSupport(tf_dims=frozenset({1, 2}))}, summary="test double, 1D and 2D TFs"
-        )
-
-    registry.register(Fake2D.name, Fake2D, replace=True)
-    try:
-        yield Fake2D
-    finally:
-        registry.unregister(Fake2D.name)
-
-
-@pytest.fixture
 def shown(window, fake_2d, qtbot):
     """The window showing `box_volume` with the constant-colour renderer, a full frame on screen."""
     tf = TransferFunction1D([[0.0, 0.1, 0.2, 0.9], [1.0, 0.9, 0.8, 0.1], [2.5, 0.2, 0.9, 0.3]],
@@ -207,24 +186,6 @@ def shown(window, fake_2d, qtbot):
 def show_view(window, qtbot, name: str) -> None:
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         window.view_direction_actions[name].trigger()
-
-
-def grab(viewport) -> np.ndarray:
-    """The viewport as painted, (H, W, 3) uint8."""
-    image = viewport.grab().toImage().convertToFormat(QImage.Format_RGB888)
-    w, h = image.width(), image.height()
-    assert (w, h) == (viewport.width(), viewport.height())
-    bits = image.constBits()
-    bits.setsize(image.byteCount())
-    return np.frombuffer(bits, np.uint8).reshape(h, image.bytesPerLine())[:, : 3 * w].reshape(h, w, 3).copy()
-
-
-def frame_rect(viewport) -> tuple[float, float, float, float]:
-    """Where the frame is drawn: the largest rectangle of its aspect centred in the viewport."""
-    frame = viewport.frame
-    scale = min(viewport.width() / frame.width, viewport.height() / frame.height)
-    w, h = frame.width * scale, frame.height * scale
-    return ((viewport.width() - w) / 2.0, (viewport.height() - h) / 2.0, w, h)
 
 
 def projected_corners(camera: Camera, aspect: float, rect, bounds) -> np.ndarray:

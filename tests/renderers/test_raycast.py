@@ -3,6 +3,8 @@ distance jumps, pre-integration, the projections and bad options."""
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pytest
 
@@ -14,32 +16,13 @@ from volren.renderers.raycast import march as K
 from volren.renderers.raycast.occupancy import empty_distance
 from volren.testing import image_error, oracles
 from volren.testing.reference_images import reference_image
+from volren.testing.render_helpers import SHELL_TF, SMOOTH_TF, field, render_checked
 
-# opacity zero below 1.37 and above 2.23: much of the field is transparent (breakpoints off the data)
-SHELL_TF = TransferFunction1D(
-    [[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.37, 0.0], [1.61, 0.7], [2.23, 0.0]], 1.0
-)
-SMOOTH_TF = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.6]], 1.5)
 SPIKE_TF = TransferFunction1D(
     [[-2, 1, 0.6, 0.2], [4, 0.2, 0.6, 1.0]], [[1.50, 0.0], [1.52, 1.0], [1.54, 0.0]], 0.5
 )
 
-
-def field(shape=(14, 16, 18), spacing=(1.0, 1.0, 1.0)) -> UniformVolume:
-    z, y, x = np.mgrid[0 : shape[0], 0 : shape[1], 0 : shape[2]]
-    values = np.sin(x / 3.0) + np.cos(y / 4.0) + z / 8.0
-    return UniformVolume(values.astype(np.float32), spacing=spacing)
-
-
-def draw(volume, tf, camera, size=(40, 32), **settings) -> tuple[np.ndarray, RaycastRenderer]:
-    renderer = RaycastRenderer()
-    renderer.set_volume(volume)
-    renderer.set_transfer_function(tf)
-    renderer.set_settings(RenderSettings(**settings))
-    image = renderer.render(camera, *size)
-    assert image.dtype == np.float32 and np.all(np.isfinite(image))
-    assert image.min() >= 0 and image.max() <= 1 and np.all(image[..., :3] <= image[..., 3:4] + 1e-6)
-    return image, renderer
+draw = partial(render_checked, RaycastRenderer)
 
 
 @pytest.mark.parametrize("parallel", [True, False])

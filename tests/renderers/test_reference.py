@@ -20,6 +20,7 @@ from volren.errors import VolrenError, VolrenWarning
 from volren.model import BlendMode, Camera, RenderSettings, TetVolume, TransferFunction1D, UniformVolume
 from volren.renderers.reference import ReferenceRenderer
 from volren.testing.oracles import box_path_lengths, linear_colour_emission
+from volren.testing.scenes import kuhn_tetrahedra, lattice_points, positively_oriented
 
 SHARED = Path(__file__).resolve().parents[3] / "shared"
 MAXA = 1.0 - 1e-6
@@ -47,36 +48,27 @@ def grid(values_fn, dims, spacing, origin=(0.0, 0.0, 0.0)):
 
 
 def lattice_tets(dims, spacing, kind=6, skip=()):
-    """Points of a lattice and its cubes split into 6 (Kuhn) or 5 (alternating) tetrahedra."""
+    """Points of a lattice and its cubes (less the (i, j, k) in `skip`) split into 6 (Kuhn, as the
+    conformance kit's scenes) or 5 (alternating) tetrahedra, positively oriented."""
     nx, ny, nz = dims
-    k, j, i = np.meshgrid(np.arange(nz), np.arange(ny), np.arange(nx), indexing="ij")
-    pts = np.stack([i * spacing[0], j * spacing[1], k * spacing[2]], -1).reshape(-1, 3).astype(float)
+    pts = lattice_points(dims, spacing, (0.0, 0.0, 0.0))
+    cubes = list(itertools.product(range(nz - 1), range(ny - 1), range(nx - 1)))
+    if kind == 6:
+        keep = [(ii, jj, kk) not in skip for kk, jj, ii in cubes]
+        return pts, positively_oriented(pts, kuhn_tetrahedra(dims).reshape(-1, 6, 4)[keep].reshape(-1, 4))
     tets = []
-    for kk, jj, ii in itertools.product(range(nz - 1), range(ny - 1), range(nx - 1)):
+    for kk, jj, ii in cubes:
         if (ii, jj, kk) in skip:
             continue
         c = {(a, b, e): ((kk + e) * ny + jj + b) * nx + ii + a for a in (0, 1) for b in (0, 1) for e in (0, 1)}
-        if kind == 6:
-            for perm in itertools.permutations(range(3)):
-                v = [0, 0, 0]
-                path = [c[tuple(v)]]
-                for axis in perm:
-                    v[axis] = 1
-                    path.append(c[tuple(v)])
-                tets.append(path)
-        else:
-            even = [(0, 0, 0), (1, 1, 0), (1, 0, 1), (0, 1, 1)]
-            odd = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)]
-            centre, corners = (odd, even) if (ii + jj + kk) % 2 == 0 else (even, odd)
-            tets.append([c[x] for x in centre])
-            for cc in corners:
-                near = [x for x in centre if sum(abs(a - b) for a, b in zip(x, cc)) == 1]
-                tets.append([c[cc]] + [c[x] for x in near])
-    tets = np.array(tets)
-    p = pts[tets]
-    vol = np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]))
-    tets[vol < 0] = tets[vol < 0][:, [0, 1, 3, 2]]
-    return pts, tets
+        even = [(0, 0, 0), (1, 1, 0), (1, 0, 1), (0, 1, 1)]
+        odd = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)]
+        centre, corners = (odd, even) if (ii + jj + kk) % 2 == 0 else (even, odd)
+        tets.append([c[x] for x in centre])
+        for cc in corners:
+            near = [x for x in centre if sum(abs(a - b) for a, b in zip(x, cc)) == 1]
+            tets.append([c[cc]] + [c[x] for x in near])
+    return pts, positively_oriented(pts, np.array(tets))
 
 
 def axis_camera(bounds, axis_from, scale, view_up):

@@ -50,16 +50,22 @@ def vtk_image(volume, tf, camera, **settings):
         return renderer.render(camera, SIZE, SIZE)
 
 
+def scene(shared_data, reference_folder, path: str, tf_name: str):
+    """The data set `path` (its "scalars"), the scene TF `tf_name`, the test's orbit camera and the
+    reference renderer's image of them."""
+    volume = load(shared_data, path, "scalars")
+    tf = load_scene_tf(tf_name)
+    camera = Camera.orbit(volume.bounds, 30, 20, 1.0)
+    return volume, tf, camera, reference_image(volume, tf, camera, SIZE, SIZE, folder=reference_folder)
+
+
 # style -> RMSE bound at step 0.5 (measured: 0.00097, 0.0089, 0.040)
 IRONPROT_BOUNDS = {"smooth": 0.002, "opaque": 0.015, "spiky": 0.06}
 
 
 @pytest.mark.parametrize("style", sorted(IRONPROT_BOUNDS))
 def test_uniform_ironprot(shared_data, reference_folder, style):
-    volume = load(shared_data, "uniform/ironProt.vtk", "scalars")
-    tf = load_scene_tf(f"ironProt-{style}")
-    camera = Camera.orbit(volume.bounds, 30, 20, 1.0)
-    reference = reference_image(volume, tf, camera, SIZE, SIZE, folder=reference_folder)
+    volume, tf, camera, reference = scene(shared_data, reference_folder, "uniform/ironProt.vtk", f"ironProt-{style}")
     coarse = image_error(vtk_image(volume, tf, camera, step=0.5), reference)
     fine = image_error(vtk_image(volume, tf, camera, step=0.125), reference)
     print(f"\nironProt-{style} vtk vs reference: step 0.5 {coarse}; step 0.125 {fine}")
@@ -75,10 +81,7 @@ SPX_BOUNDS = {"smooth": 0.01, "spiky": 0.02, "opaque": 0.035}
 
 @pytest.mark.parametrize("style", sorted(SPX_BOUNDS))
 def test_tetrahedral_spx(shared_data, reference_folder, style):
-    volume = load(shared_data, "tets/spx.vtk", "scalars")
-    tf = load_scene_tf(f"spx-{style}")
-    camera = Camera.orbit(volume.bounds, 30, 20, 1.0)
-    reference = reference_image(volume, tf, camera, SIZE, SIZE, folder=reference_folder)
+    volume, tf, camera, reference = scene(shared_data, reference_folder, "tets/spx.vtk", f"spx-{style}")
     image = vtk_image(volume, tf, camera)
     error = image_error(image, reference)
     coverage = np.abs(image[..., 3] - reference[..., 3]) > 0.5

@@ -50,7 +50,8 @@ def kuhn_tetrahedra(dims: Sequence[int]) -> NDArray[np.int64]:
     return np.array(tets, dtype=np.int64)
 
 
-def _orient(points: NDArray, tets: NDArray) -> NDArray:
+def positively_oriented(points: NDArray, tets: NDArray) -> NDArray:
+    """`tets` with the last two corners swapped where the signed volume is negative."""
     p = points[tets]
     signed = np.einsum("ij,ij->i", p[:, 1] - p[:, 0], np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]))
     out = tets.copy()
@@ -73,7 +74,7 @@ def lattice_volume(
         nx, ny, nz = dims
         return UniformVolume(point_values.reshape(nz, ny, nx), spacing=spacing, origin=origin, name=name)
     if kind == "tet":
-        return TetVolume(pts, _orient(pts, kuhn_tetrahedra(dims)), point_values, name=name)
+        return TetVolume(pts, positively_oriented(pts, kuhn_tetrahedra(dims)), point_values, name=name)
     raise ValueError(f"no kit scenes for {kind} volumes")
 
 

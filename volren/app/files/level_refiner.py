@@ -8,10 +8,10 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Sequence
 
-from PyQt5.QtCore import QObject, QThreadPool, pyqtSignal, pyqtSlot
+from PyQt5.QtCore import QObject, pyqtSignal, pyqtSlot
 
 from volren.app.core.loading import prepare_for_rendering
-from volren.app.files.pool_read import ReadSignals, ReadTask
+from volren.app.files.pool_read import SerialReads
 from volren.model.volume import Volume
 
 #: read(path, level) -> that level, prepared for rendering.
@@ -39,11 +39,7 @@ class LevelRefiner(QObject):
         self._serial = 0
         self._path = ""
         self._levels: list[int] = []
-        self._pool = QThreadPool(self)
-        self._pool.setMaxThreadCount(1)
-        self._signals = ReadSignals(self)
-        self._signals.done.connect(self._on_done)
-        self._signals.failed.connect(self._on_failed)
+        self._reads = SerialReads(self, self._on_done, self._on_failed)
 
     @property
     def pending(self) -> tuple[int, ...]:
@@ -63,7 +59,7 @@ class LevelRefiner(QObject):
         if self._levels:
             path, level = self._path, self._levels[0]
             read = functools.partial(self._read, path, level)
-            self._pool.start(ReadTask((self._serial, level), path, read, self._signals))
+            self._reads.start((self._serial, level), path, read)
 
     @pyqtSlot(object, object)
     def _on_done(self, key: tuple[int, int], volume: object) -> None:
@@ -82,4 +78,4 @@ class LevelRefiner(QObject):
 
     def shutdown(self, timeout_ms: int = 30000) -> bool:
         self.cancel()
-        return self._pool.waitForDone(timeout_ms)
+        return self._reads.wait(timeout_ms)

@@ -19,14 +19,11 @@ from PyQt5.QtWidgets import (
     QDoubleSpinBox,
     QFileDialog,
     QFormLayout,
-    QHBoxLayout,
     QLabel,
-    QLineEdit,
-    QPushButton,
-    QSpinBox,
     QWidget,
 )
 
+from volren.app.files.dialog_fields import clamped_spin, path_row, run_modal, size_row
 from volren.io.movie_io import MOVIE_SUFFIXES
 from volren.model.animation import DEFAULT_FPS, DEFAULT_FRAMES, MAX_FPS, MAX_FRAMES, Animation
 from volren.renderers.base import MAX_IMAGE_SIDE
@@ -94,20 +91,11 @@ class MovieDialog(QDialog):
     def __init__(self, parent: QWidget | None, path: str, fields: MovieFields) -> None:
         super().__init__(parent)
         self.setWindowTitle("Export movie")
-        self.path_edit = QLineEdit(path, self)
-        browse = QPushButton("Browse…", self)
-        browse.clicked.connect(self._browse)
-        path_row = QHBoxLayout()
-        path_row.addWidget(self.path_edit, 1)
-        path_row.addWidget(browse)
-
-        self.width_box, self.height_box = (self._spin(1, MAX_IMAGE_SIDE, v) for v in (fields.width, fields.height))
-        size_row = QHBoxLayout()
-        size_row.addWidget(self.width_box)
-        size_row.addWidget(QLabel("x", self))
-        size_row.addWidget(self.height_box)
-        size_row.addWidget(QLabel("pixels", self), 1)
-        self.frames_box = self._spin(1, MAX_FRAMES, fields.frames)
+        self.path_edit, file_row = path_row(self, path, self._browse)
+        self.width_box, self.height_box = (
+            clamped_spin(self, 1, MAX_IMAGE_SIDE, v) for v in (fields.width, fields.height)
+        )
+        self.frames_box = clamped_spin(self, 1, MAX_FRAMES, fields.frames)
         self.fps_box = QDoubleSpinBox(self)
         self.fps_box.setRange(1.0, MAX_FPS)
         self.fps_box.setDecimals(1)
@@ -130,8 +118,8 @@ class MovieDialog(QDialog):
         self.buttons.rejected.connect(self.reject)
 
         form = QFormLayout(self)
-        form.addRow("File:", path_row)
-        form.addRow("Frame size:", size_row)
+        form.addRow("File:", file_row)
+        form.addRow("Frame size:", size_row(self, self.width_box, self.height_box))
         form.addRow("Frames:", self.frames_box)
         form.addRow("Frames per second:", self.fps_box)
         form.addRow("Orbit:", self.orbit_box)
@@ -140,12 +128,6 @@ class MovieDialog(QDialog):
         form.addRow(self.buttons)
         self._path_changed(path)
         self._update_length()
-
-    def _spin(self, lo: int, hi: int, value: int) -> QSpinBox:
-        box = QSpinBox(self)
-        box.setRange(lo, hi)
-        box.setValue(max(lo, min(hi, int(value))))
-        return box
 
     def _update_length(self) -> None:
         self.length_label.setText(f"{self.frames_box.value() / self.fps_box.value():.1f} s")
@@ -171,8 +153,4 @@ class MovieDialog(QDialog):
 
 def ask_movie(parent: QWidget | None, path: str, fields: MovieFields) -> MovieChoice | None:
     """Run the movie dialog; None when cancelled. Looked up at call time so tests can patch it."""
-    dialog = MovieDialog(parent, path, fields)
-    try:
-        return dialog.choice() if dialog.exec_() == QDialog.Accepted else None
-    finally:
-        dialog.deleteLater()
+    return run_modal(MovieDialog(parent, path, fields), MovieDialog.choice)

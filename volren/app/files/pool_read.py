@@ -9,8 +9,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
-from PyQt5.QtCore import QObject, QRunnable, pyqtSignal
+from PyQt5.QtCore import QObject, QRunnable, QThreadPool, pyqtSignal
 
 from volren.app.core.loading import one_line_error
 
@@ -43,3 +44,27 @@ class ReadTask(QRunnable):
             getattr(self._signals, signal).emit(self._key, payload)
         except RuntimeError:  # the window closed while we read
             pass
+
+
+class SerialReads(QObject):
+    """Reads one at a time, in the order started, on a pool thread of their own (the callers'
+    queues, coarse level before fine, the step shown before its neighbours, rely on that order);
+    each answered in the GUI thread by `done(key, volume)` or `failed(key, one-line message)`."""
+
+    def __init__(
+        self, parent: QObject, done: Callable[[Any, object], None], failed: Callable[[Any, str], None]
+    ) -> None:
+        super().__init__(parent)
+        self._pool = QThreadPool(self)
+        self._pool.setMaxThreadCount(1)
+        self._signals = ReadSignals(self)
+        self._signals.done.connect(done)
+        self._signals.failed.connect(failed)
+
+    def start(self, key: object, source: str | Path, read: Callable[[], object]) -> None:
+        """Queue `read()` (its failures named after `source`), answered under `key`."""
+        self._pool.start(ReadTask(key, source, read, self._signals))
+
+    def wait(self, timeout_ms: int) -> bool:
+        """Wait for the reads under way and queued; False when `timeout_ms` passed first."""
+        return self._pool.waitForDone(timeout_ms)

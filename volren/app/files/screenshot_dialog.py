@@ -15,14 +15,11 @@ from PyQt5.QtWidgets import (
     QDialogButtonBox,
     QFileDialog,
     QFormLayout,
-    QHBoxLayout,
-    QLabel,
-    QLineEdit,
-    QPushButton,
     QSpinBox,
     QWidget,
 )
 
+from volren.app.files.dialog_fields import clamped_spin, path_row, run_modal, size_row
 from volren.renderers.base import MAX_IMAGE_SIDE
 
 PNG_FILTER = "PNG images (*.png)"
@@ -53,19 +50,8 @@ class ScreenshotDialog(QDialog):
         self._aspect = size[0] / size[1] if size[0] > 0 and size[1] > 0 else 1.0
         self._syncing = False
 
-        self.path_edit = QLineEdit(path, self)
-        browse = QPushButton("Browse…", self)
-        browse.clicked.connect(self._browse)
-        path_row = QHBoxLayout()
-        path_row.addWidget(self.path_edit, 1)
-        path_row.addWidget(browse)
-
-        self.width_box, self.height_box = (self._side_box(v) for v in size)
-        size_row = QHBoxLayout()
-        size_row.addWidget(self.width_box)
-        size_row.addWidget(QLabel("x", self))
-        size_row.addWidget(self.height_box)
-        size_row.addWidget(QLabel("pixels", self), 1)
+        self.path_edit, file_row = path_row(self, path, self._browse)
+        self.width_box, self.height_box = (clamped_spin(self, 1, MAX_IMAGE_SIDE, v) for v in size)
         self.keep_aspect = QCheckBox("Keep the viewport's aspect ratio", self)
         self.keep_aspect.setChecked(True)
         self.whole_window = QCheckBox("Whole window, as shown (window size)", self)
@@ -81,17 +67,11 @@ class ScreenshotDialog(QDialog):
         )
 
         form = QFormLayout(self)
-        form.addRow("File:", path_row)
-        form.addRow("Size:", size_row)
+        form.addRow("File:", file_row)
+        form.addRow("Size:", size_row(self, self.width_box, self.height_box))
         form.addRow("", self.keep_aspect)
         form.addRow("", self.whole_window)
         form.addRow(self.buttons)
-
-    def _side_box(self, value: int) -> QSpinBox:
-        box = QSpinBox(self)
-        box.setRange(1, MAX_IMAGE_SIDE)
-        box.setValue(max(1, min(MAX_IMAGE_SIDE, int(value))))
-        return box
 
     def _side_changed(self, other: QSpinBox, value: float) -> None:
         if self._syncing or not self.keep_aspect.isChecked():
@@ -122,8 +102,4 @@ class ScreenshotDialog(QDialog):
 
 def ask_screenshot(parent: QWidget | None, path: str, size: tuple[int, int]) -> ScreenshotChoice | None:
     """Run the screenshot dialog; None when cancelled. Looked up at call time so tests can patch it."""
-    dialog = ScreenshotDialog(parent, path, size)
-    try:
-        return dialog.choice() if dialog.exec_() == QDialog.Accepted else None
-    finally:
-        dialog.deleteLater()
+    return run_modal(ScreenshotDialog(parent, path, size), ScreenshotDialog.choice)

@@ -15,10 +15,10 @@ from collections import OrderedDict
 from collections.abc import Callable
 from pathlib import Path
 
-from PyQt5.QtCore import QObject, QThreadPool, pyqtSignal, pyqtSlot
+from PyQt5.QtCore import QObject, pyqtSignal, pyqtSlot
 
 from volren.app.core.loading import prepare_for_rendering
-from volren.app.files.pool_read import ReadSignals, ReadTask
+from volren.app.files.pool_read import SerialReads
 from volren.io.series_io import TimeSeries
 from volren.model.volume import Volume
 
@@ -54,11 +54,7 @@ class SeriesSteps(QObject):
         self._queue: list[int] = []
         self._reading: int | None = None
         self._wanted: int | None = None
-        self._pool = QThreadPool(self)
-        self._pool.setMaxThreadCount(1)
-        self._signals = ReadSignals(self)
-        self._signals.done.connect(self._on_done)
-        self._signals.failed.connect(self._on_failed)
+        self._reads = SerialReads(self, self._on_done, self._on_failed)
 
     @property
     def cached(self) -> tuple[int, ...]:
@@ -105,7 +101,7 @@ class SeriesSteps(QObject):
             self._reading = index
             path = self.series.steps[index]
             read = functools.partial(self._read, path, self._scalars)
-            self._pool.start(ReadTask(index, path, read, self._signals))
+            self._reads.start(index, path, read)
 
     def _store(self, index: int, volume: Volume) -> None:
         self._cache[index] = volume
@@ -139,4 +135,4 @@ class SeriesSteps(QObject):
     def shutdown(self, timeout_ms: int = 30000) -> bool:
         """Read nothing more and wait for the read in progress."""
         self._queue = []
-        return self._pool.waitForDone(timeout_ms)
+        return self._reads.wait(timeout_ms)
