@@ -274,6 +274,7 @@ class RaycastRenderer(RendererBase):
                     return largest_step_within(march, coarsest, opts["target_error"])
 
             scene = (key, phase_mode, opts["jitter_seed"], sampled[:7])  # the view: `step_cache`
+            assert self._values is not None
             self._step = (key, remembered_step(self._values, scene, search))
         return self._step[1]
 
