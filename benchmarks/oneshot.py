@@ -150,7 +150,8 @@ def measure(args: argparse.Namespace) -> int:
         ratios = (f"{first / vtk[label][0]:.2f} | {later / vtk[label][1]:.2f}" if renderer == DEFAULT and label in vtk
                   else " | ")  # fmt: skip
         say(f"| {label} | {renderer} | {first:.2f} | {later:.2f} | {first - later:+.2f} | {ratios} |")
-    label, renderer, flags = cases[0] if not args.importtime_case else next(c for c in cases if c[0].startswith(args.importtime_case))
+    label, renderer, flags = next(c for c in cases if (c[0].startswith(args.importtime_case) if args.importtime_case
+                                                       else c[1] == DEFAULT))  # fmt: skip
     with tempfile.TemporaryDirectory(prefix="volren-oneshot-") as tmp:
         total, slowest = import_seconds(flags, dict(os.environ), Path(tmp) / "out.png")
     say()
@@ -174,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples-only", action="store_true", help="only the bundled samples")
     parser.add_argument("--out", help="folder to write oneshot.md into (BENCHMARKS.md's section)")
     parser.add_argument("--runs", type=int, default=3, help="processes per case, the first with empty caches (default 3)")
-    parser.add_argument("--importtime-case", help="the case (label's start) whose imports are measured (default: the first)")
+    parser.add_argument("--importtime-case", help="the case (label's start) whose imports are measured (default: the first drawn with no --renderer)")
     return run(measure, parser, argv)
 
 
