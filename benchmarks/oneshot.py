@@ -1,11 +1,16 @@
-"""`python -m benchmarks.oneshot`: a one-shot `volren render`, stage by stage, first run against the next.
+"""`python -m benchmarks.oneshot`: a one-shot `volren render`, stage by stage, first run against the next,
+and against the same render with `--renderer vtk`.
 
-Why: the target is that a fresh install's first render of a bundled sample be at most 3 s slower
-than the second, and a one-shot render's wall time cut stage by stage. Each case runs
-`volren render --timings` in a new process (what a user's shell does), `runs` times in a row:
-the first with an empty mesh cache (`VOLREN_MESH_CACHE` in a new folder: a mesh never seen
-before), the others with what the first stored. The numba kernels' cache is what `volren
-prepare` (run by scripts/setup.sh) left; delete it to measure compilation too.
+Why: the targets are that a fresh install's first render of a bundled sample be at most 3 s slower
+than the second, and that a one-shot `volren render IN -o OUT.png` with no options take at most
+0.6x the wall time of `volren render IN -o OUT.png --renderer vtk`; a one-shot render's wall time
+is cut stage by stage. Each case runs `volren render --timings` in a new process (what a user's
+shell does), `runs` times in a row: the first with empty mesh and step caches
+(`VOLREN_MESH_CACHE`, `VOLREN_STEP_CACHE` in new folders: a mesh and a scene never seen before),
+the others with what the first stored. The numba kernels' cache is what `volren prepare` (run by
+scripts/setup.sh) left; delete it to measure compilation too. The start-up's imports are
+measured apart with ``python -X importtime`` (the sum of the top-level imports' cumulative
+times, less sensitive to a loaded machine than wall times).
 """
 
 from __future__ import annotations
@@ -26,10 +31,15 @@ from volren.bench.datasets import SCENES, shared_folder
 from volren.errors import VolrenError
 from volren.samples import sample_paths
 
-#: (label, bundled sample, renderer); the shared cases are (dataset in SCENES, renderer)
+#: The renderer of a render with no --renderer (what `volren render IN -o OUT.png` draws with).
+DEFAULT = "default"
+#: (label, bundled sample, renderer); the shared cases are (dataset in SCENES, renderer). Every
+#: DEFAULT case is measured with `--renderer vtk` too (the ratio's denominator).
 SAMPLE_CASES = (("hollow_cylinder (sample)", "hollow_cylinder", "tetra"), ("hollow_cylinder (sample)", "hollow_cylinder", "reference"),
-                ("phantom_ct (sample)", "phantom_ct", "auto"))  # fmt: skip
-SHARED_CASES = (("oxygen", "tetra"), ("bonsai", "auto"))
+                ("phantom_ct (sample)", "phantom_ct", DEFAULT), ("marschner_lobb (sample)", "marschner_lobb", DEFAULT),
+                ("hollow_cylinder (sample)", "hollow_cylinder", DEFAULT))  # fmt: skip
+SHARED_CASES = (("oxygen", "tetra"), *((name, DEFAULT) for name in ("bonsai", "engine", "aneurism", "ironProt", "oxygen",
+                                                                    "bluntfin", "spx")))  # fmt: skip
 
 _STAGE = re.compile(r"([\w-]+) ([\d.]+) s")
 
@@ -64,20 +74,43 @@ def _render(args: list[str], env: dict[str, str], out: Path) -> tuple[float, dic
     return wall, _stages(done.stderr)
 
 
+def import_seconds(args: list[str], env: dict[str, str], out: Path) -> tuple[float, list[tuple[str, float]]]:
+    """(seconds of all top-level imports, the slowest five as (module, seconds)) of a render, from
+    ``-X importtime`` (microseconds per module; a top-level import's line names it unindented)."""
+    command = [sys.executable, "-X", "importtime", "-m", "volren.cli.main", "render", *args, "-o", str(out), "--force"]
+    done = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"{' '.join(command)}: {done.stderr.strip()[-300:]}")
+    top = []
+    for line in done.stderr.splitlines():
+        if line.startswith("import time:") and "|" in line:
+            _, cumulative, name = line.split("|")
+            if cumulative.strip().isdigit() and not name.startswith("  "):
+                top.append((name.strip(), int(cumulative) / 1e6))
+    return sum(s for _, s in top), sorted(top, key=lambda item: -item[1])[:5]
+
+
+def _with_renderer(flags: list[str], renderer: str) -> list[str]:
+    return flags if renderer == DEFAULT else [*flags, "--renderer", renderer]
+
+
 def measure(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise VolrenError(f"--runs must be at least 1, got {args.runs}")
     cases = []
     for label, sample, renderer in SAMPLE_CASES:
         volume, tf = sample_paths(sample)
-        cases.append((label, renderer, [str(volume), "--tf", str(tf), "--renderer", renderer]))
+        cases.append((label, renderer, _with_renderer([str(volume), "--tf", str(tf)], renderer)))
     shared = shared_folder(args.shared, required=False) if not args.samples_only else None
     if shared is not None:
         for name, renderer in SHARED_CASES:
             rel, scalars = SCENES[name][0], SCENES[name][1]
             flags = ["--scalars", scalars] if scalars else []
             tf = shared / "scenes" / f"{name}-smooth.json"
-            cases.append((name, renderer, [str(shared / "data" / rel), *flags, "--tf", str(tf), "--renderer", renderer]))
+            if (shared / "data" / rel).is_file() and tf.is_file():
+                cases.append((name, renderer, _with_renderer([str(shared / "data" / rel), *flags, "--tf", str(tf)], renderer)))
+    cases = [c for label, renderer, flags in cases
+             for c in ((label, renderer, flags), *([(label, "vtk", [*flags, "--renderer", "vtk"])] if renderer == DEFAULT else []))]  # fmt: skip
     lines: list[str] = []
 
     def say(text: str = "") -> None:
@@ -86,9 +119,10 @@ def measure(args: argparse.Namespace) -> int:
 
     command = "python -m benchmarks.oneshot" + (f" --shared {args.shared}" if args.shared else "")
     say(f"Measured {datetime.date.today().isoformat()} by `{command}`: each case is `volren render ... --timings` "
-        f"in a new process, {args.runs} times in a row, the first with an empty mesh cache (numba's cache as "
+        f"in a new process, {args.runs} times in a row, the first with empty mesh and step caches (numba's cache as "
         "`volren prepare` left it). Seconds; *wall*: the process from start to exit; *frame: prepare* and *frame: "
-        "tables*: what tetra's first frame paid for its mesh and pre-integration tables.")  # fmt: skip
+        "tables*: what tetra's first frame paid for its mesh and pre-integration tables; *frame: step_choice*: "
+        f"what raycast's error target paid for its step (a search, or the cached step); *{DEFAULT}*: no --renderer.")  # fmt: skip
     say()
     say(f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     say()
@@ -97,21 +131,32 @@ def measure(args: argparse.Namespace) -> int:
     summary = []
     with tempfile.TemporaryDirectory(prefix="volren-oneshot-") as tmp:
         for i, (label, renderer, flags) in enumerate(cases):
-            env = {**os.environ, "VOLREN_MESH_CACHE": str(Path(tmp) / f"meshes-{i}")}
+            env = {**os.environ, "VOLREN_MESH_CACHE": str(Path(tmp) / f"meshes-{i}"),
+                   "VOLREN_STEP_CACHE": str(Path(tmp) / f"steps-{i}")}  # fmt: skip
             walls = []
             for k in range(args.runs):
                 wall, stages = _render(flags, env, Path(tmp) / "out.png")
                 walls.append(wall)
                 cells = " | ".join(f"{stages[s]:.2f}" if s in stages else "" for s in STAGES)
-                say(f"| {label} | {renderer} | {'first (no mesh cache)' if k == 0 else k + 1} | {wall:.2f} | {cells} |")
+                say(f"| {label} | {renderer} | {'first (no caches)' if k == 0 else k + 1} | {wall:.2f} | {cells} |")
             summary.append((label, renderer, walls[0], statistics.median(walls[1:]) if len(walls) > 1 else walls[0]))
     say()
     say(f"load average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     say()
-    say("| case | renderer | first run s | later runs s (median) | first - later s |")
-    say("|---|---|---:|---:|---:|")
+    vtk = {label: (first, later) for label, renderer, first, later in summary if renderer == "vtk"}
+    say("| case | renderer | first run s | later runs s (median) | first - later s | first / vtk's | later / vtk's |")
+    say("|---|---|---:|---:|---:|---:|---:|")
     for label, renderer, first, later in summary:
-        say(f"| {label} | {renderer} | {first:.2f} | {later:.2f} | {first - later:+.2f} |")
+        ratios = (f"{first / vtk[label][0]:.2f} | {later / vtk[label][1]:.2f}" if renderer == DEFAULT and label in vtk
+                  else " | ")  # fmt: skip
+        say(f"| {label} | {renderer} | {first:.2f} | {later:.2f} | {first - later:+.2f} | {ratios} |")
+    label, renderer, flags = next(c for c in cases if (c[0].startswith(args.importtime_case) if args.importtime_case
+                                                       else c[1] == DEFAULT))  # fmt: skip
+    with tempfile.TemporaryDirectory(prefix="volren-oneshot-") as tmp:
+        total, slowest = import_seconds(flags, dict(os.environ), Path(tmp) / "out.png")
+    say()
+    say(f"imports of `volren render` ({label}, {renderer}; `-X importtime`, top-level modules' cumulative): "
+        f"{total:.2f} s; slowest: " + ", ".join(f"{name} {s:.2f} s" for name, s in slowest))  # fmt: skip
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
@@ -120,7 +165,7 @@ def measure(args: argparse.Namespace) -> int:
 
 
 #: The columns: `volren render --timings`' stages and the parts of the frame renderers time themselves.
-STAGES = ("start-up", "load", "set-up", "frame", "frame: prepare", "frame: tables", "write", "total")
+STAGES = ("start-up", "load", "set-up", "frame", "frame: prepare", "frame: tables", "frame: step_choice", "write", "total")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -129,7 +174,8 @@ def main(argv: list[str] | None = None) -> int:
                         "the bundled samples only)")  # fmt: skip
     parser.add_argument("--samples-only", action="store_true", help="only the bundled samples")
     parser.add_argument("--out", help="folder to write oneshot.md into (BENCHMARKS.md's section)")
-    parser.add_argument("--runs", type=int, default=3, help="processes per case, the first with an empty mesh cache (default 3)")
+    parser.add_argument("--runs", type=int, default=3, help="processes per case, the first with empty caches (default 3)")
+    parser.add_argument("--importtime-case", help="the case (label's start) whose imports are measured (default: the first drawn with no --renderer)")
     return run(measure, parser, argv)
 
 

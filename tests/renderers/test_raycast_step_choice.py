@@ -14,6 +14,12 @@ from volren.renderers.raycast import renderer as raycast_module
 from volren.renderers.raycast.step_choice import FINE, candidate_steps, largest_step_within, sample_size
 
 
+@pytest.fixture(autouse=True)
+def empty_step_cache(tmp_path, monkeypatch):
+    """Every test searches: no step stored on disk by another test (`step_cache`)."""
+    monkeypatch.setenv("VOLREN_STEP_CACHE", str(tmp_path / "steps"))
+
+
 def relative_rmse(image: np.ndarray, fine: np.ndarray) -> float:
     a, b = image.astype(np.float64), fine.astype(np.float64)
     return float(np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(b**2)))

@@ -9,26 +9,30 @@ stray VTK output print as one line each, once (`volren.cli.messages`).
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
 import volren
-from volren.cli import (
-    bench_cmd,
-    check_cmd,
-    convert_cmd,
-    demo_cmd,
-    movie_cmd,
-    prepare_cmd,
-    render_cmd,
-    renderers_cmd,
-    view_cmd,
-)
 from volren.cli.messages import one_line_messages
 from volren.errors import VolrenError
 
-COMMANDS = (renderers_cmd, render_cmd, movie_cmd, view_cmd, convert_cmd, demo_cmd, bench_cmd, check_cmd, prepare_cmd)
+#: The subcommands in `volren --help`'s order: (name, module in volren.cli, the line `--help` lists).
+#: Only the module of the command run is imported: each imports what its command needs (numpy, the
+#: model, the renderers, the bench's datasets), which a one-shot `volren render` should not pay for
+#: the other commands. The lines are the ones each module's ``add_parser`` gives (a test holds them equal).
+COMMANDS = (
+    ("renderers", "renderers_cmd", "list registered renderers and their capabilities"),
+    ("render", "render_cmd", "render a volume offscreen to a PNG"),
+    ("movie", "movie_cmd", "render an orbit (or a scene's keyframes) offscreen to MP4 or GIF"),
+    ("view", "view_cmd", "open the desktop app (a bundled sample when no INPUT)"),
+    ("convert", "convert_cmd", "write a volume as a bricked multiresolution OME-Zarr image"),
+    ("demo", "demo_cmd", "render the bundled samples with every renderer (offscreen)"),
+    ("bench", "bench_cmd", "benchmarks (print tables of times and errors)"),
+    ("check-renderer", "check_cmd", "run the conformance kit on a registered renderer"),
+    ("prepare", "prepare_cmd", "compile the renderers' kernels now, so that first frames do not wait"),
+)
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -40,20 +44,32 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {text} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None, *, every: bool = True) -> argparse.ArgumentParser:
+    """The parser with every subcommand's arguments, or (`every` False) with only those of the
+    command `only` (the others listed by name and help line, their modules not imported)."""
     parser = OneLineParser(
         prog="volren", description="Volume rendering of uniform grids and tetrahedral meshes."
     )
     parser.add_argument("--version", action="version", version=f"volren {volren.__version__}")
     parser.add_argument("--traceback", action="store_true", help="show the full traceback on errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for command in COMMANDS:
-        command.add_parser(sub)
+    for name, module, help_line in COMMANDS:
+        if every or name == only:
+            importlib.import_module(f"volren.cli.{module}").add_parser(sub)
+        else:
+            sub.add_parser(name, help=help_line)
     return parser
 
 
+def command_named(argv: Sequence[str]) -> str | None:
+    """The subcommand `argv` runs: its first word that is not an option (`volren`'s own options
+    take no values), or None."""
+    return next((word for word in argv if not word.startswith("-")), None)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(command_named(argv), every=False)
     args = parser.parse_args(argv)
     try:
         with one_line_messages():

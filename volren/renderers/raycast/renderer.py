@@ -43,6 +43,7 @@ from volren.renderers.base import (
 from volren.renderers.raycast import march as K
 from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, PixelView
 from volren.renderers.raycast.occupancy import empty_distance
+from volren.renderers.raycast.step_cache import remembered_step
 from volren.renderers.raycast.step_choice import largest_step_within, sample_size
 
 OFFSET_MODES = ("interleaved", "midpoint")
@@ -271,8 +272,13 @@ class RaycastRenderer(RendererBase):
             def march(h: float) -> NDArray[np.float32]:
                 return _march_listed(self._march_args(tf, h, pre, opts, sampled), pixels)[0]
 
-            with parallel_chunk_size(PIXEL_CHUNK):
-                self._step = (key, largest_step_within(march, coarsest, opts["target_error"]))
+            def search() -> tuple[float, float]:
+                with parallel_chunk_size(PIXEL_CHUNK):
+                    return largest_step_within(march, coarsest, opts["target_error"])
+
+            scene = (key, phase_mode, opts["jitter_seed"], sampled[:7])  # the view: `step_cache`
+            assert self._values is not None
+            self._step = (key, remembered_step(self._values, scene, search))
         return self._step[1]
 
     @staticmethod
