@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 from volren_objectorder import ObjectOrderRenderer
+from volren_objectorder.bundles import Grid, Rays
 from volren_objectorder.composite import _slab
 from volren_objectorder.octree import MinMaxOctree, Reach
 from volren_objectorder.patterns import ray_table, sample_t, screen_matrix
@@ -86,9 +87,12 @@ def saturation_depths(values, ro, rd, t0, count, first, last, h, alpha_lut, lo, 
 
 
 @njit(cache=True, parallel=True)
-def cell_states(visible, M, ro, rd, ri, count, t_sat, width, height, state):
-    """state[z, y, x] for each visible cell: 0 not seen by any ray, 1 seen, 2 occludable."""
+def cell_states(visible, M, rays, grid, t_sat, width, height, state):
+    """state[z, y, x] for each visible cell (of the `Grid`'s cells) and the `Rays`: 0 not seen by
+    any ray, 1 seen, 2 occludable."""
     nz, ny, nx = visible.shape
+    ri = rays.inverse
+    count = rays.n_samples
     for z in prange(nz):
         for y in range(ny):
             for x in range(nx):
@@ -111,7 +115,7 @@ def cell_states(visible, M, ro, rd, ri, count, t_sat, width, height, state):
                         if count[p] == 0:
                             continue
                         q = 0 if ri.shape[0] == 1 else p
-                        tlo, thi = _slab(ro, rd, ri, p, q, x, y, z, 1, 1, 1, nx, ny, nz)  # the renderer's test
+                        tlo, thi = _slab(rays, grid, p, q, x, y, z, 1, 1, 1)  # the renderer's test
                         if thi > tlo:
                             seen = True
                             if tlo < t_sat[p]:
@@ -159,8 +163,11 @@ def bound(volume: UniformVolume, tf: TransferFunction1D, camera, termination: fl
     assert octree is not None
     visible = visible_cells(octree, tf)
     state = np.empty(visible.shape, np.int8)
-    cell_states(visible, screen_matrix(camera, volume, SIZE, SIZE), rays.origin, rays.direction, rays.inverse,
-                rays.count, t_sat,
+    inv_spacing = 1.0 / np.asarray(volume.spacing, dtype=np.float64)
+    cell_states(visible, screen_matrix(camera, volume, SIZE, SIZE),
+                Rays(rays.origin, rays.direction, rays.world_direction, rays.inverse, rays.t0, rays.count, rays.first,
+                     rays.last),
+                Grid(values, visible.shape[2], visible.shape[1], visible.shape[0], *map(float, inv_spacing)), t_sat,
                 SIZE, SIZE, state)  # fmt: skip
     seen = int(np.count_nonzero(state > 0))
     occludable = int(np.count_nonzero(state == 2))

@@ -19,7 +19,7 @@ sample of a ray falls in exactly one cell: the same samples as a ray caster's.
 
 Compositing (front to back, premultiplied): post-classified, sample k stands for its segment of
 length L (h, or the first or last segment's), opacity 1 - (1 - a)^(L / d_u) (from a table made for L = h,
-or exactly per sample, `_post_table` and `_post`); pre-integrated, sample k closes the
+or exactly per sample, `_post_rgba`); pre-integrated, sample k closes the
 segment from sample k - 1 (table lookup, length-corrected when it is not h), and the pieces from
 the ray's entry point on the box to the first sample and from the last to the exit point too. Maximum / minimum take
 the samples and the ray's entry and exit points of each cell; average the length-weighted samples.
@@ -33,7 +33,8 @@ import numpy as np
 from numba import njit, prange
 
 from volren.kernels.sample_placement import segment_length
-from volren.kernels.shading import ShadeParams, blinn_phong_factors, headlight_half_vector
+from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
+from volren_objectorder.bundles import Band, CellBlock, Occlusion, PixelRay, Rect, Sample, Scratch
 from volren_objectorder.occlusion import hom_covered, hom_finish, hom_init, hom_layout
 from volren_objectorder.octree import bracket
 from volren_objectorder.patterns import ray_end, sample_t
@@ -42,12 +43,6 @@ from volren_objectorder.traversal import child_order_mask, footprint, footprint_
 COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
 MAX_OPACITY = 1.0 - 1e-6
 
-# indices into the float parameter array
-(F_H, F_DU, F_LO, F_SCALE, F_KA, F_KD, F_KS, F_P, F_GTHR, F_TERM, F_LX, F_LY, F_LZ, F_ISX, F_ISY, F_ISZ, F_PLO,
- F_PSCALE) = range(18)  # fmt: skip
-N_F = 18
-# indices into the integer parameter array
-I_MODE, I_PRE, I_SHADE, I_HVR, I_BLOCK = range(5)
 # per-band counters
 S_NODES, S_CELLS, S_OCCLUDED_CELLS, S_OCCLUDED_NODES, S_SAMPLES, S_SATURATED = range(6)
 N_STATS = 6
@@ -62,34 +57,36 @@ def tf_lookup(xs, tab, s):
 
 
 @njit(nogil=True, cache=True)
-def _point_gradient(vol, x, y, z, fp):
-    """Central differences at grid point (x, y, z) in world units, one-sided at the borders."""
+def _point_gradient(grid, x, y, z):
+    """Central differences at grid point (x, y, z) of the `Grid` in world units, one-sided at the borders."""
+    vol = grid.values
     nz, ny, nx = vol.shape
     if x == 0:
-        gx = (vol[z, y, 1] - vol[z, y, 0]) * fp[F_ISX]
+        gx = (vol[z, y, 1] - vol[z, y, 0]) * grid.isx
     elif x == nx - 1:
-        gx = (vol[z, y, x] - vol[z, y, x - 1]) * fp[F_ISX]
+        gx = (vol[z, y, x] - vol[z, y, x - 1]) * grid.isx
     else:
-        gx = (vol[z, y, x + 1] - vol[z, y, x - 1]) * 0.5 * fp[F_ISX]
+        gx = (vol[z, y, x + 1] - vol[z, y, x - 1]) * 0.5 * grid.isx
     if y == 0:
-        gy = (vol[z, 1, x] - vol[z, 0, x]) * fp[F_ISY]
+        gy = (vol[z, 1, x] - vol[z, 0, x]) * grid.isy
     elif y == ny - 1:
-        gy = (vol[z, y, x] - vol[z, y - 1, x]) * fp[F_ISY]
+        gy = (vol[z, y, x] - vol[z, y - 1, x]) * grid.isy
     else:
-        gy = (vol[z, y + 1, x] - vol[z, y - 1, x]) * 0.5 * fp[F_ISY]
+        gy = (vol[z, y + 1, x] - vol[z, y - 1, x]) * 0.5 * grid.isy
     if z == 0:
-        gz = (vol[1, y, x] - vol[0, y, x]) * fp[F_ISZ]
+        gz = (vol[1, y, x] - vol[0, y, x]) * grid.isz
     elif z == nz - 1:
-        gz = (vol[z, y, x] - vol[z - 1, y, x]) * fp[F_ISZ]
+        gz = (vol[z, y, x] - vol[z - 1, y, x]) * grid.isz
     else:
-        gz = (vol[z + 1, y, x] - vol[z - 1, y, x]) * 0.5 * fp[F_ISZ]
+        gz = (vol[z + 1, y, x] - vol[z - 1, y, x]) * 0.5 * grid.isz
     return gx, gy, gz
 
 
 @njit(nogil=True, cache=True)
-def _load_block(vol, x0, y0, z0, sx, sy, sz, shade, fp, cb, gb):
+def _load_block(grid, x0, y0, z0, sx, sy, sz, shade, cb, gb):
     """The grid points of the block of sx x sy x sz cells from (x0, y0, z0), point (x0 + a, y0 + b,
     z0 + c) at cb[9 c + 3 b + a], and, when shading, their gradients."""
+    vol = grid.values
     if sx == 1 and sy == 1 and sz == 1 and not shade:  # one cell, unrolled
         cb[0] = vol[z0, y0, x0]
         cb[1] = vol[z0, y0, x0 + 1]
@@ -106,7 +103,7 @@ def _load_block(vol, x0, y0, z0, sx, sy, sz, shade, fp, cb, gb):
                 n = 9 * c + 3 * b + a
                 cb[n] = vol[z0 + c, y0 + b, x0 + a]
                 if shade:
-                    gx, gy, gz = _point_gradient(vol, x0 + a, y0 + b, z0 + c, fp)
+                    gx, gy, gz = _point_gradient(grid, x0 + a, y0 + b, z0 + c)
                     gb[n, 0] = gx
                     gb[n, 1] = gy
                     gb[n, 2] = gz
@@ -180,10 +177,9 @@ def _locate(vol, px, py, pz):
 
 
 @njit(nogil=True, cache=True)
-def _light(gx, gy, gz, hx, hy, hz, fp):
-    """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz), with the lighting of `fp`."""
-    sp = ShadeParams(True, fp[F_KA], fp[F_KD], fp[F_KS], fp[F_P], fp[F_GTHR], fp[F_LX], fp[F_LY], fp[F_LZ])
-    return blinn_phong_factors(gx, gy, gz, hx, hy, hz, sp)
+def _light(gx, gy, gz, hx, hy, hz, shading):
+    """(diffuse factor, specular term) at a sample of gradient (gx, gy, gz), with the frame's `ShadeParams`."""
+    return blinn_phong_factors(gx, gy, gz, hx, hy, hz, shading)
 
 
 @njit(nogil=True, cache=True, inline="always")
@@ -194,39 +190,6 @@ def _over(rgba, p, r, g, b, a):
     rgba[p, 1] += t * g
     rgba[p, 2] += t * b
     rgba[p, 3] += t * a
-
-
-@njit(nogil=True, cache=True)
-def _post(rgba, p, xs, tab, s, length, fd, sp, fp):
-    """A post-classified piece of `length` at value s, shaded with (fd, sp)."""
-    if length <= 0.0:
-        return
-    r, g, b, a = tf_lookup(xs, tab, s)
-    if a <= 0.0:
-        return
-    alpha = -math.expm1(length / fp[F_DU] * math.log1p(-min(a, MAX_OPACITY)))
-    r = _clamp01(r * fd + sp)
-    g = _clamp01(g * fd + sp)
-    b = _clamp01(b * fd + sp)
-    _over(rgba, p, r * alpha, g * alpha, b * alpha, alpha)
-
-
-@njit(nogil=True, cache=True)
-def _post_table(rgba, p, post, s, fd, sp, fp):
-    """A post-classified full step at value s from `post`, the TF sampled evenly with the opacity
-    already corrected to the step h: a lookup instead of a search over the breakpoints and an exp
-    and a log per sample (every sample but a ray's first and last stands for exactly h)."""
-    n = post.shape[0]
-    fi = min(max((s - fp[F_PLO]) * fp[F_PSCALE], 0.0), n - 1.0)
-    i0 = min(int(fi), n - 2)
-    w = fi - i0
-    alpha = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
-    if alpha <= 0.0:
-        return
-    r = _clamp01((post[i0, 0] + w * (post[i0 + 1, 0] - post[i0, 0])) * fd + sp)
-    g = _clamp01((post[i0, 1] + w * (post[i0 + 1, 1] - post[i0, 1])) * fd + sp)
-    b = _clamp01((post[i0, 2] + w * (post[i0 + 1, 2] - post[i0, 2])) * fd + sp)
-    _over(rgba, p, r * alpha, g * alpha, b * alpha, alpha)
 
 
 @njit(nogil=True, cache=True, inline="always")
@@ -241,12 +204,17 @@ def _bilinear(table, fi, fj, c):
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _segment(rgba, p, sf, sb, length, fd_f, sp_f, fd_b, sp_b, shade, table, front, back, fp):
-    """A pre-integrated segment from value sf (front) to sb (back), `length` long; lit by
-    interpolated pre-integrated lighting (Lum et al.) when shading."""
+def _segment(rgba, p, start, end, length, h, shade, tables):
+    """A pre-integrated segment from `Sample` start (front) to end (back), `length` long (the tables'
+    for step h); lit by interpolated pre-integrated lighting (Lum et al.) when shading."""
+    sf, fd_f, sp_f = start
+    sb, fd_b, sp_b = end
+    table = tables.table
+    front = tables.front
+    back = tables.back
     n = table.shape[0] if not shade else front.shape[0]
-    fi = min(max((sf - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
-    fj = min(max((sb - fp[F_LO]) * fp[F_SCALE], 0.0), n - 1.0)
+    fi = min(max((sf - tables.lo) * tables.scale, 0.0), n - 1.0)
+    fj = min(max((sb - tables.lo) * tables.scale, 0.0), n - 1.0)
     if shade:
         a = _bilinear(front, fi, fj, 3)
         if a <= 0.0:
@@ -264,7 +232,6 @@ def _segment(rgba, p, sf, sb, length, fd_f, sp_f, fd_b, sp_b, shade, table, fron
         r = _bilinear(table, fi, fj, 0)
         g = _bilinear(table, fi, fj, 1)
         b = _bilinear(table, fi, fj, 2)
-    h = fp[F_H]
     if abs(length - h) > 1e-9 * h:  # opacity and colour correction to this length
         ratio = length / h
         corrected = -math.expm1(ratio * math.log1p(-min(a, MAX_OPACITY)))
@@ -274,55 +241,63 @@ def _segment(rgba, p, sf, sb, length, fd_f, sp_f, fd_b, sp_b, shade, table, fron
 
 
 @njit(nogil=True, cache=True)
-def _fetch(vol, px, py, pz, fp, cb, gb):
+def _fetch(grid, px, py, pz, cb, gb):
     """The trilinear value at index point (px, py, pz); NaN when a corner of its cell is not finite
     (a NaN or an infinity reaches the interpolated value whatever the weights; cb: scratch for the
     cell's grid points, laid out as `_load_block`'s; gb: unused, the gradients' scratch)."""
-    i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
-    _load_block(vol, i, j, k, 1, 1, 1, False, fp, cb, gb)
+    i, j, k, fx, fy, fz = _locate(grid.values, px, py, pz)
+    _load_block(grid, i, j, k, 1, 1, 1, False, cb, gb)
     return _trilinear_at(cb, 0, fx, fy, fz)
 
 
 @njit(nogil=True, cache=True)
-def _fetch_light(vol, px, py, pz, hx, hy, hz, fp, cb, gb):
+def _fetch_light(grid, px, py, pz, hx, hy, hz, shading, cb, gb):
     """The lighting (diffuse factor, specular term) at index point (px, py, pz) (cb, gb: scratch)."""
-    i, j, k, fx, fy, fz = _locate(vol, px, py, pz)
-    _load_block(vol, i, j, k, 1, 1, 1, True, fp, cb, gb)
+    i, j, k, fx, fy, fz = _locate(grid.values, px, py, pz)
+    _load_block(grid, i, j, k, 1, 1, 1, True, cb, gb)
     return _light(_trilinear_at_g(gb, 0, 0, fx, fy, fz), _trilinear_at_g(gb, 1, 0, fx, fy, fz),
-                  _trilinear_at_g(gb, 2, 0, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
+                  _trilinear_at_g(gb, 2, 0, fx, fy, fz), hx, hy, hz, shading)  # fmt: skip
 
 
 @njit(nogil=True, cache=True)
-def _edge(rgba, p, vol, ro, te, dx, dy, dz, s, length, fd, sp, entry, hx, hy, hz, shade, table, front, back, fp,
-          e8, eg8):  # fmt: skip
-    """The pre-integrated piece between a ray's end point at `te` (its entry or exit on the box) and
-    its first or last sample (value s, lighting fd, sp); transparent when the end point's cell
-    has a non-finite corner."""
+def _edge(ray, te, sample, length, entry, grid, ro, tables, frame, shading, rgba, scratch):
+    """The pre-integrated piece between the `PixelRay`'s end point at `te` (its entry or exit on the
+    box) and its first or last `Sample`; transparent when the end point's cell has a non-finite corner."""
     if length <= 0.0:
         return
-    px = ro[p, 0] + te * dx
-    py = ro[p, 1] + te * dy
-    pz = ro[p, 2] + te * dz
-    se = _fetch(vol, px, py, pz, fp, e8, eg8)
+    p = ray.p
+    shade = shading.on
+    e8 = scratch.e8
+    eg8 = scratch.eg8
+    px = ro[p, 0] + te * ray.dx
+    py = ro[p, 1] + te * ray.dy
+    pz = ro[p, 2] + te * ray.dz
+    se = _fetch(grid, px, py, pz, e8, eg8)
     if not np.isfinite(se):
         return
     fde = 1.0
     spe = 0.0
     if shade:
-        fde, spe = _fetch_light(vol, px, py, pz, hx, hy, hz, fp, e8, eg8)
+        fde, spe = _fetch_light(grid, px, py, pz, ray.hx, ray.hy, ray.hz, shading, e8, eg8)
     if entry:
-        _segment(rgba, p, se, s, length, fde, spe, fd, sp, shade, table, front, back, fp)
+        _segment(rgba, p, Sample(se, fde, spe), sample, length, frame.h, shade, tables)
     else:
-        _segment(rgba, p, s, se, length, fd, sp, fde, spe, shade, table, front, back, fp)
+        _segment(rgba, p, sample, Sample(se, fde, spe), length, frame.h, shade, tables)
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _slab(ro, rd, ri, p, dp, x0, y0, z0, sx, sy, sz, ncx, ncy, ncz):
-    """[tlo, thi) of pixel p's ray (its direction in row dp of rd and ri: p, or 0 when every ray
-    shares one) in the block of sx x sy x sz cells from cell (x0, y0, z0), the exact slab test in
-    index space; thi <= tlo when the ray misses the block. Each plane's crossing is (q - o) / d from
-    the plane's index q alone, so two blocks sharing a face agree on it and every sample falls in
-    exactly one block."""
+def _slab(rays, grid, p, dp, x0, y0, z0, sx, sy, sz):
+    """[tlo, thi) of pixel p's ray (its direction in row dp of the `Rays`' direction and inverse: p,
+    or 0 when every ray shares one) in the block of sx x sy x sz cells from cell (x0, y0, z0) of the
+    `Grid`, the exact slab test in index space; thi <= tlo when the ray misses the block. Each plane's
+    crossing is (q - o) / d from the plane's index q alone, so two blocks sharing a face agree on it
+    and every sample falls in exactly one block."""
+    ro = rays.origin
+    rd = rays.direction
+    ri = rays.inverse
+    ncx = grid.ncx
+    ncy = grid.ncy
+    ncz = grid.ncz
     tlo = -math.inf
     thi = math.inf
     for ax in range(3):
@@ -361,19 +336,22 @@ def _first_sample(t0, first, h, ns, last, k0, tlo):
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _half_vector(rwd, p, fp):
-    """Blinn-Phong's half vector of pixel p's view direction and the headlight."""
-    return headlight_half_vector(fp[F_LX], fp[F_LY], fp[F_LZ], rwd[p, 0], rwd[p, 1], rwd[p, 2])
+def _half_vector(rwd, p, shading):
+    """Blinn-Phong's half vector of pixel p's view direction and the headlight (`ShadeParams`)."""
+    return headlight_half_vector(shading.lx, shading.ly, shading.lz, rwd[p, 0], rwd[p, 1], rwd[p, 2])
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _post_rgba(xs, tab, post, use_post, s, length, shaded, fd, sp, fp):
+def _post_rgba(tables, use_post, s, length, shaded, fd, sp, frame):
     """Premultiplied (r, g, b, alpha) of a post-classified piece of `length` at value s, shaded with
-    (fd, sp) when `shaded`: from the table for a full step (`_post_table`), exactly otherwise (`_post`)."""
-    h = fp[F_H]
+    (fd, sp) when `shaded`: for a full step from `tables.post`, the TF sampled evenly with the opacity
+    already corrected to the step h (a lookup instead of a search over the breakpoints and an exp and
+    a log per sample: every sample but a ray's first and last stands for exactly h); exactly otherwise."""
+    post = tables.post
+    h = frame.h
     if use_post and length == h:
         n = post.shape[0]
-        fi = min(max((s - fp[F_PLO]) * fp[F_PSCALE], 0.0), n - 1.0)
+        fi = min(max((s - tables.post_lo) * tables.post_scale, 0.0), n - 1.0)
         i0 = min(int(fi), n - 2)
         w = fi - i0
         alpha = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
@@ -389,10 +367,10 @@ def _post_rgba(xs, tab, post, use_post, s, length, shaded, fd, sp, fp):
         return r * alpha, g * alpha, b * alpha, alpha
     if length <= 0.0:
         return 0.0, 0.0, 0.0, 0.0
-    r, g, b, a = tf_lookup(xs, tab, s)
+    r, g, b, a = tf_lookup(tables.xs, tables.tab, s)
     if a <= 0.0:
         return 0.0, 0.0, 0.0, 0.0
-    alpha = -math.expm1(length / fp[F_DU] * math.log1p(-min(a, MAX_OPACITY)))
+    alpha = -math.expm1(length / frame.du * math.log1p(-min(a, MAX_OPACITY)))
     r = _clamp01(r * fd + sp)
     g = _clamp01(g * fd + sp)
     b = _clamp01(b * fd + sp)
@@ -400,13 +378,16 @@ def _post_rgba(xs, tab, post, use_post, s, length, shaded, fd, sp, fp):
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, shade, use_post,
-                xs, tab, post, fp, rgba):  # fmt: skip
-    """Composite, post-classified: pixel p's samples kk.. with t < thi in the current cell, front to
-    back. The pixel's colour stays in registers for the cell (one load and one store instead of a
-    read-modify-write of memory per sample). Returns (next sample, samples taken, 1 if it saturated)."""
-    h = fp[F_H]
-    term = fp[F_TERM]
+def _pixel_post(ray, kk, thi, blk, use_post, tables, frame, shading, rgba, scratch):
+    """Composite, post-classified: the `PixelRay`'s samples kk.. with t < thi in the current cell,
+    front to back. The pixel's colour stays in registers for the cell (one load and one store instead
+    of a read-modify-write of memory per sample). Returns (next sample, samples taken, 1 if it saturated)."""
+    p, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns = ray
+    c8 = scratch.c8
+    g8 = scratch.g8
+    shade = shading.on
+    h = frame.h
+    term = frame.term
     r = rgba[p, 0]
     g = rgba[p, 1]
     b = rgba[p, 2]
@@ -427,12 +408,12 @@ def _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0,
         sp = 0.0
         if shade:
             fd, sp = _light(_trilinear_at_g(g8, 0, base, fx, fy, fz), _trilinear_at_g(g8, 1, base, fx, fy, fz),
-                            _trilinear_at_g(g8, 2, base, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
+                            _trilinear_at_g(g8, 2, base, fx, fy, fz), hx, hy, hz, shading)  # fmt: skip
         if not np.isfinite(s):  # a cell of the block with a non-finite corner: transparent
             kk += 1
             continue
-        cr, cg, cb, ca = _post_rgba(xs, tab, post, use_post, s, segment_length(first, last, h, ns, kk), shade, fd,
-                                     sp, fp)  # fmt: skip
+        cr, cg, cb, ca = _post_rgba(tables, use_post, s, segment_length(first, last, h, ns, kk), shade, fd, sp,
+                                     frame)  # fmt: skip
         if ca > 0.0:
             tr = 1.0 - a
             r += tr * cr
@@ -451,19 +432,26 @@ def _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0,
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns, fp,
-               rays, tables, state, scratch):  # fmt: skip
-    """Composite, pre-integrated: pixel p's samples kk.. with t < thi in the current cell, each closing
-    the segment from the ray's previous sample. Returns (next sample, samples taken, 1 if it saturated).
-    Inlined into the walk like `_pixel_post` (so at most 30 arguments, the arrays in `_block`'s tuples):
-    as a call, its 36 arguments (an array is passed as seven words) cost more than its samples, bonsai's
-    smooth TF at step 0.5 taking 1.5 s instead of 0.4 s post-classified."""
-    ro = rays[0]
-    table, front, back = tables[3], tables[4], tables[5]
-    rgba, prev_s, prev_k, prev_fd, prev_sp = state[0], state[3], state[4], state[5], state[6]
-    e8, eg8 = scratch[2], scratch[3]
-    h = fp[F_H]
-    term = fp[F_TERM]
+def _pixel_pre(ray, kk, thi, blk, grid, rays, tables, frame, shading, state, scratch):
+    """Composite, pre-integrated: the `PixelRay`'s samples kk.. with t < thi in the current cell, each
+    closing the segment from the ray's previous sample. Returns (next sample, samples taken, 1 if it
+    saturated). Inlined into the walk like `_pixel_post` (numba inlines a call of at most 30 arguments,
+    a bundle counting as one): as a call, its 36 arguments (an array is passed as seven words) cost
+    more than its samples, bonsai's smooth TF at step 0.5 taking 1.5 s instead of 0.4 s post-classified."""
+    p, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns = ray
+    shade = shading.on
+    ro = rays.origin
+    rgba = state.rgba
+    prev_s = state.prev_s
+    prev_k = state.prev_k
+    prev_fd = state.prev_fd
+    prev_sp = state.prev_sp
+    c8 = scratch.c8
+    g8 = scratch.g8
+    e8 = scratch.e8
+    eg8 = scratch.eg8
+    h = frame.h
+    term = frame.term
     taken = 0
     while kk < ns:
         t = sample_t(t0, first, h, ns, last, kk)
@@ -479,11 +467,10 @@ def _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, 
         sp = 0.0
         if shade:
             fd, sp = _light(_trilinear_at_g(g8, 0, base, fx, fy, fz), _trilinear_at_g(g8, 1, base, fx, fy, fz),
-                            _trilinear_at_g(g8, 2, base, fx, fy, fz), hx, hy, hz, fp)  # fmt: skip
+                            _trilinear_at_g(g8, 2, base, fx, fy, fz), hx, hy, hz, shading)  # fmt: skip
         finite = np.isfinite(s)  # not: a cell of the block with a non-finite corner, transparent
         if kk == 0 and finite:  # from the ray's entry point (on the box) to its first sample
-            _edge(rgba, p, vol, ro, t0, dx, dy, dz, s, t - t0, fd, sp, True, hx, hy, hz,
-                  shade, table, front, back, fp, e8, eg8)  # fmt: skip
+            _edge(ray, t0, Sample(s, fd, sp), t - t0, True, grid, ro, tables, frame, shading, rgba, scratch)
         elif kk > 0 and finite:
             tp = sample_t(t0, first, h, ns, last, kk - 1)
             if prev_k[p] == kk - 1:
@@ -494,17 +481,16 @@ def _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, 
                 px = ro[p, 0] + tp * dx
                 py = ro[p, 1] + tp * dy
                 pz = ro[p, 2] + tp * dz
-                sf = _fetch(vol, px, py, pz, fp, e8, eg8)
+                sf = _fetch(grid, px, py, pz, e8, eg8)
                 fd_f = 1.0
                 sp_f = 0.0
                 if shade and np.isfinite(sf):
-                    fd_f, sp_f = _fetch_light(vol, px, py, pz, hx, hy, hz, fp, e8, eg8)
+                    fd_f, sp_f = _fetch_light(grid, px, py, pz, hx, hy, hz, shading, e8, eg8)
             if np.isfinite(sf):
-                _segment(rgba, p, sf, s, t - tp, fd_f, sp_f, fd, sp, shade, table, front, back, fp)
+                _segment(rgba, p, Sample(sf, fd_f, sp_f), Sample(s, fd, sp), t - tp, h, shade, tables)
         if kk == ns - 1 and finite:  # from the last sample to the ray's exit point
             t_end = ray_end(t0, first, h, ns, last)
-            _edge(rgba, p, vol, ro, t_end, dx, dy, dz, s, t_end - t, fd, sp, False, hx, hy, hz,
-                  shade, table, front, back, fp, e8, eg8)  # fmt: skip
+            _edge(ray, t_end, Sample(s, fd, sp), t_end - t, False, grid, ro, tables, frame, shading, rgba, scratch)
         prev_s[p] = s
         prev_k[p] = kk
         prev_fd[p] = fd
@@ -516,11 +502,13 @@ def _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, 
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _pixel_project(p, kk, tlo, thi, mode, c8, ox, oy, oz, dx, dy, dz, t0, first, last, ns, fp, acc):
-    """Maximum, minimum and average: pixel p's samples kk.. with t < thi in the current cell (t >= tlo;
-    the cell's grid points in `c8` as `_load_block` lays them out). Returns (next sample, samples
-    taken, 0)."""
-    h = fp[F_H]
+def _pixel_project(ray, kk, tlo, thi, c8, frame, acc):
+    """Maximum, minimum and average: the `PixelRay`'s samples kk.. with t < thi in the current cell
+    (t >= tlo; the cell's grid points in `c8` as `_load_block` lays them out). Returns (next sample,
+    samples taken, 0)."""
+    p, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns = ray
+    mode = frame.mode
+    h = frame.h
     taken = 0
     if mode == MAXIMUM or mode == MINIMUM:  # the ray's entry and exit points of the cell
         t_end = ray_end(t0, first, h, ns, last)
@@ -566,9 +554,15 @@ def _finished_pixel(finished, q0, q1, c0, c1, width):
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1):
-    """(c0, c1, q0, q1, own): the columns and the band's rows (q0 > q1: none) of node (lv, i, j, k)'s
-    footprint, and 1 when the band holds its middle row (it counts the node)."""
+def _node_rect(view, grid, lv, i, j, k, r0, r1):
+    """(c0, c1, q0, q1, own): the columns and the band's rows r0..r1 - 1 (q0 > q1: none) of node
+    (lv, i, j, k)'s footprint in the `View`, and 1 when the band holds its middle row (it counts the node)."""
+    M = view.M
+    width = view.width
+    height = view.height
+    ncx = grid.ncx
+    ncy = grid.ncy
+    ncz = grid.ncz
     size = 1 << lv
     x0 = i * size
     y0 = j * size
@@ -576,7 +570,7 @@ def _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1
     x1 = min(x0 + size, ncx)
     y1 = min(y0 + size, ncy)
     z1 = min(z0 + size, ncz)
-    if perspective:
+    if view.perspective:
         c0, c1, fr0, fr1 = footprint(M, float(x0), float(y0), float(z0), float(x1), float(y1), float(z1),
                                      width, height)  # fmt: skip
     else:
@@ -589,11 +583,10 @@ def _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch, fp,
-           mode, pre, shade, hvr, use_post, ncx, ncy, ncz):  # fmt: skip
-    """The block of up to size^3 leaf cells from cell (x0, y0, z0), `cells` = bits + 256 size: size 1
+def _block(at, rect, r0, grid, view, rays, tables, frame, shading, state, occlusion, scratch):
+    """The `CellBlock` of up to size^3 leaf cells from cell (x0, y0, z0), `cells` = bits + 256 size: size 1
     (a cell) or 2 (an octree node one level above the cells); its grid points loaded once, then the
-    samples of every unfinished pixel of rows q0..q1, columns c0..c1 that lie in it, none in the
+    samples of every unfinished pixel of the `Rect` (rows q0..q1 of the band from r0) that lie in it, none in the
     cells the TF leaves transparent (bits: the octree's leaf bits, x + 2 y + 4 z). Returns (samples
     taken, pixels saturated). The walk calls it from one place, so that it is compiled once, with its
     pixel loops inlined (two copies, one per size, had doubled the plugin's compile time).
@@ -602,17 +595,30 @@ def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, stat
     up to eight cells, and a pixel's slab test once for the cells of the block it crosses (the block's
     footprint rectangle holds about a third of the pixels of its cells' rectangles at 1-2 pixels a
     voxel); the samples, and so the image, are the cells' own. The walk takes cells one by one where
-    the occlusion map may hide some of them (`_walk_band`). The arrays come in tuples: numba inlines a
+    the occlusion map may hide some of them (`_walk_band`). The arrays come in bundles: numba inlines a
     call of at most 30 arguments only (more are passed as *args)."""
+    x0, y0, z0, cells = at
+    c0, c1, q0, q1 = rect
+    ncx = grid.ncx
+    ncy = grid.ncy
+    ncz = grid.ncz
+    width = view.width
     ro, rd, rwd, ri, rt0, rcount, rfirst, rlast = rays
-    xs, tab, post = tables[0], tables[1], tables[2]  # the pre-integration tables are `_pixel_pre`'s
-    rgba, acc, nextk, finished = state[0], state[1], state[2], state[7]  # and so are the previous samples
+    rgba = state.rgba  # the previous samples are `_pixel_pre`'s
+    acc = state.acc
+    nextk = state.nextk
+    finished = state.finished
     hom, hl, hoff, hcols = occlusion
-    c8, g8 = scratch[0], scratch[1]
+    c8 = scratch.c8
+    g8 = scratch.g8
+    mode = frame.mode
+    shade = shading.on
+    hvr = frame.hvr and mode == COMPOSITE
+    use_post = tables.post.shape[0] > 1
     shared = rd.shape[0] == 1  # one direction for every ray (a parallel projection, `RayTable`)
-    h = fp[F_H]
-    term = fp[F_TERM]
-    post_path = mode == COMPOSITE and not pre
+    h = frame.h
+    term = frame.term
+    post_path = mode == COMPOSITE and not frame.pre
     n_samples = 0
     n_saturated = 0
     bits = cells & 255
@@ -621,14 +627,14 @@ def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, stat
     sy = min(size, ncy - y0)
     sz = min(size, ncz - z0)
     blk = (np.int64(bits), np.int64(sx), np.int64(sy), np.int64(sz), np.int64(size))  # one type: indexable
-    _load_block(vol, x0, y0, z0, sx, sy, sz, shade, fp, c8, g8)
+    _load_block(grid, x0, y0, z0, sx, sy, sz, shade, c8, g8)
     for r in range(q0, q1 + 1):
         for c in range(c0, c1 + 1):
             p = r * width + c
             if finished[p]:
                 continue
             dp = 0 if shared else p
-            tlo, thi = _slab(ro, rd, ri, p, dp, x0, y0, z0, sx, sy, sz, ncx, ncy, ncz)
+            tlo, thi = _slab(rays, grid, p, dp, x0, y0, z0, sx, sy, sz)
             if not thi > tlo:
                 continue
             ns = rcount[p]
@@ -644,16 +650,14 @@ def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, stat
             oz = ro[p, 2] - z0
             hx = hy = hz = 0.0
             if shade:
-                hx, hy, hz = _half_vector(rwd, dp, fp)
+                hx, hy, hz = _half_vector(rwd, dp, shading)
+            ray = PixelRay(p, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns)
             if post_path:
-                kk, taken, sat = _pixel_post(p, kk, thi, blk, c8, g8, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first,
-                                             last, ns, shade, use_post, xs, tab, post, fp, rgba)  # fmt: skip
+                kk, taken, sat = _pixel_post(ray, kk, thi, blk, use_post, tables, frame, shading, rgba, scratch)
             elif mode == COMPOSITE:
-                kk, taken, sat = _pixel_pre(p, kk, thi, blk, shade, c8, g8, vol, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0,
-                                            first, last, ns, fp, rays, tables, state, scratch)  # fmt: skip
+                kk, taken, sat = _pixel_pre(ray, kk, thi, blk, grid, rays, tables, frame, shading, state, scratch)
             else:
-                kk, taken, sat = _pixel_project(p, kk, tlo, thi, mode, c8, ox, oy, oz, dx, dy, dz, t0, first, last, ns,
-                                                fp, acc)  # fmt: skip
+                kk, taken, sat = _pixel_project(ray, kk, tlo, thi, c8, frame, acc)
             n_samples += taken
             n_saturated += sat
             nextk[p] = kk
@@ -664,52 +668,49 @@ def _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, stat
 
 
 @njit(nogil=True, cache=True)
-def render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
-                ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
-                rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
-    """Rows r0..r1 - 1 (`_walk_band`), with the band's scratch arrays allocated here: the walk is
+def render_band(band, grid, octree, view, rays, tables, frame, shading, state):
+    """The `Band`'s rows (`_walk_band`), with the band's scratch arrays allocated here: the walk is
     compiled without numba's reference counting, which otherwise left atomic increments and
     decrements of shared arrays' counts in the per-pixel loop (slow on one thread, and the two
     threads fought over those counters' cache lines)."""
-    rows = r1 - r0
-    hl, hoff, hcols, hsize = hom_layout(rows, width)
+    rows = band.r1 - band.r0
+    hl, hoff, hcols, hsize = hom_layout(rows, view.width)
     hom = np.empty(hsize, np.int32)
-    depth = 8 * shapes.shape[0] + 8
+    depth = 8 * octree.shapes.shape[0] + 8
     stack = np.empty((depth, 4), np.int64)
     c8 = np.empty(27)  # a block's grid points (`_load_block`)
     g8 = np.zeros((27, 3))
     e8 = np.empty(27)  # one cell's grid points for `_fetch`, as `_load_block` lays them out
     eg8 = np.zeros((27, 3))
-    _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
-               ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
-               rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats,
-               hom, hl, hoff, hcols, stack, c8, g8, e8, eg8)  # fmt: skip
+    _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, Occlusion(hom, hl, hoff, hcols),
+               Scratch(stack, c8, g8, e8, eg8))  # fmt: skip
 
 
 @njit(nogil=True, cache=True, _nrt=False)
-def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
-               ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
-               rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats,
-               hom, hl, hoff, hcols, stack, c8, g8, e8, eg8):  # fmt: skip
-    """Rows r0..r1 - 1: walk the octree front to back, skipping transparent nodes and (with hidden
+def _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, occlusion, scratch):
+    """The `Band`'s rows r0..r1 - 1: walk the `Octree` front to back, skipping transparent nodes and (with hidden
     volume removal) nodes on finished pixels, and sample every leaf cell's rays. The counters are
     kept in locals and written once at the end (`stats` rows of neighbouring bands share cache
     lines: an increment per sample there made the two threads fight over them)."""
-    mode = ip[I_MODE]
-    pre = ip[I_PRE] != 0
-    shade = ip[I_SHADE] != 0
-    hvr = ip[I_HVR] != 0 and mode == COMPOSITE
-    use_post = post.shape[0] > 1
+    r0, r1, stats = band
+    counts, offsets, shapes, leaves = octree
+    width = view.width
+    perspective = view.perspective
+    eye = view.eye
+    vdir = view.vdir
+    rcount = rays.n_samples
+    rgba = state.rgba
+    nextk = state.nextk
+    finished = state.finished
+    hom, hl, hoff, hcols = occlusion
+    stack = scratch.stack
+    mode = frame.mode
+    hvr = frame.hvr and mode == COMPOSITE
     # a node above the cells with at most this many pixels, none finished, and at least 4 of its 8 cells
     # visible is drawn as one block (`_block`); larger ones, whose cells' overheads many pixels share
     # already, and sparse ones (a block's footprint and slab tests cost more than a few cells' own), cell
     # by cell
-    block_pixels = ip[I_BLOCK] if mode == COMPOSITE else 0  # maximum, minimum, average: cell by cell
-    rays = (ro, rd, rwd, ri, rt0, rcount, rfirst, rlast)
-    tables = (xs, tab, post, table, front, back)
-    state = (rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished)
-    occlusion = (hom, hl, hoff, hcols)
-    scratch = (c8, g8, e8, eg8)
+    block_pixels = frame.block_pixels if mode == COMPOSITE else 0  # maximum, minimum, average: cell by cell
     rows = r1 - r0
     hom_init(hom, hl, hoff, hcols, rows, width)
     for p in range(r0 * width, r1 * width):  # the band's pixels start clear (buffers are reused across frames)
@@ -723,9 +724,6 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, p
             finished[p] = 1
             hom_finish(hom, hl, hoff, hcols, p // width - r0, p % width)
     levels = shapes.shape[0]
-    ncx = shapes[0, 2]
-    ncy = shapes[0, 1]
-    ncz = shapes[0, 0]
     stack[0, 0] = levels - 1  # (level, i, j, k) of the nodes still to visit, the nearest on top
     stack[0, 1] = 0
     stack[0, 2] = 0
@@ -747,7 +745,7 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, p
         count = 1 if lv == 0 and levels > 1 else counts[offsets[lv] + (k * shapes[lv, 1] + j) * shapes[lv, 2] + i]
         if count == 0:
             continue
-        c0, c1, q0, q1, own = _node_rect(M, lv, i, j, k, ncx, ncy, ncz, perspective, width, height, r0, r1)
+        c0, c1, q0, q1, own = _node_rect(view, grid, lv, i, j, k, r0, r1)
         if q0 > q1:
             continue
         n_nodes += own
@@ -784,8 +782,8 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, p
                     top += 1
             continue
         n_cells += count * own
-        taken, sat = _block(x0, y0, z0, cells, c0, c1, q0, q1, r0, width, vol, rays, tables, state, occlusion, scratch,
-                            fp, mode, pre, shade, hvr, use_post, ncx, ncy, ncz)  # fmt: skip
+        taken, sat = _block(CellBlock(x0, y0, z0, cells), Rect(c0, c1, q0, q1), r0, grid, view, rays, tables, frame,
+                            shading, state, occlusion, scratch)  # fmt: skip
         n_samples += taken
         n_saturated += sat
     stats[S_NODES] += n_nodes
@@ -797,17 +795,15 @@ def _walk_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, p
 
 
 @njit(nogil=True, cache=True, parallel=True)
-def render_bands(bands, band_rows, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
-                 ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
-                 rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats):  # fmt: skip
-    """The bands listed in `bands`, in parallel (each band's rows belong to it alone)."""
+def render_bands(bands, band_rows, grid, octree, view, rays, tables, frame, shading, state, stats):
+    """The bands listed in `bands` (of band_rows rows each; counters in stats[band]), in parallel
+    (each band's rows belong to it alone), lit with the frame's `ShadeParams` `shading` (its own
+    parameter, no bundle's member: numba's parallel loops take a bundle apart one level only)."""
     for q in prange(bands.shape[0]):
         b = bands[q]
         r0 = b * band_rows
-        r1 = min(height, r0 + band_rows)
-        render_band(r0, r1, width, height, vol, counts, offsets, shapes, leaves, M, perspective, eye, vdir,
-                    ro, rd, rwd, ri, rt0, rcount, rfirst, rlast, ip, fp, xs, tab, post, table, front, back,
-                    rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats[b])  # fmt: skip
+        r1 = min(view.height, r0 + band_rows)
+        render_band(Band(r0, r1, stats[b]), grid, octree, view, rays, tables, frame, shading, state)
 
 
 @njit(nogil=True, cache=True, parallel=True)

@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 
 from volren.kernels.sample_placement import ray_segment, ray_segments
 from volren.model import Camera, UniformVolume
+from volren_objectorder.bundles import IndexBox, Rays, Unprojection
 
 OFFSET_MODES = ("interleaved", "midpoint", "random")
 
@@ -55,14 +56,17 @@ class RayTable:
 
 
 @njit(nogil=True, cache=True, parallel=True)
-def _fill_rays(inv, width, height, grid_origin, spacing, upper, view_dir, t_far_eye, h, offsets,
-               o_out, d_out, i_out, w_out, t0_out, count_out, first_out, last_out):  # fmt: skip
+def _fill_rays(camera, box, h, offsets, out):
     """Every pixel's ray as `Camera.pixel_rays` makes it (unproject the pixel centre at NDC depth
-    -1 and 1), clipped to the box [0, upper] (index space) and the clipping planes.
+    -1 and 1, `Unprojection`), clipped to the box [0, upper] (`IndexBox`) and the clipping planes,
+    with its samples at step h (offsets: each pixel's sample phase), into the `Rays` out.
 
     Speed: a row's unprojection is affine in the pixel's x up to the two homogeneous divisions, and
     each division by a per-frame or per-pixel constant is one reciprocal (16 divisions a pixel were
     most of a 512 x 512 table's 11 ms)."""
+    inv, width, height, view_dir, t_far_eye = camera
+    grid_origin, spacing, upper = box
+    o_out, d_out, w_out, i_out, t0_out, count_out, first_out, last_out = out
     inv_sp0, inv_sp1, inv_sp2 = 1.0 / spacing[0], 1.0 / spacing[1], 1.0 / spacing[2]
     inv_h = 1.0 / h
     shared = d_out.shape[0] == 1  # a parallel projection: every ray has the view direction, set once
@@ -154,10 +158,10 @@ def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h:
         t0, first, last = np.empty(p), np.empty(p), np.empty(p)
         count = np.empty(p, np.int32)
     near, far = camera.clipping_range
-    _fill_rays(inv, width, height, np.asarray(volume.origin, dtype=np.float64),
-               np.asarray(volume.spacing, dtype=np.float64), np.asarray(volume.dimensions, dtype=np.float64) - 1.0,
-               np.asarray(camera.direction, dtype=np.float64), far - near, float(h), offsets,
-               o, d, i, w, t0, count, first, last)  # fmt: skip
+    _fill_rays(Unprojection(inv, width, height, np.asarray(camera.direction, dtype=np.float64), far - near),
+               IndexBox(np.asarray(volume.origin, dtype=np.float64), np.asarray(volume.spacing, dtype=np.float64),
+                        np.asarray(volume.dimensions, dtype=np.float64) - 1.0),
+               float(h), offsets, Rays(o, d, w, i, t0, count, first, last))  # fmt: skip
     return RayTable(o, d, i, w, t0, count, first, last)
 
 

@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.kernels.sample_placement import pixel_phases
-from volren.kernels.shading import gradient_threshold
+from volren.kernels.shading import ShadeParams, gradient_threshold
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.preintegration import lighting_tables, preintegrate
 from volren.model.settings import check_step
@@ -52,6 +52,7 @@ from volren.renderers.base import (
     RendererBase,
 )
 from volren_objectorder import composite as K
+from volren_objectorder.bundles import Compositing, Grid, Octree, PixelState, Rays, Tables, View
 from volren_objectorder.octree import Classification, MinMaxOctree, Reach
 from volren_objectorder.patterns import (
     OFFSET_MODES,
@@ -258,15 +259,16 @@ class ObjectOrderRenderer(RendererBase):
             alpha = -np.expm1(h / tf.opacity_unit_distance * np.log1p(-np.minimum(a, K.MAX_OPACITY)))
             post = np.ascontiguousarray(np.concatenate([rgb, alpha[:, None]], axis=1), dtype=np.float64)
         light = -np.asarray(camera.direction, dtype=np.float64)
-        fp = np.zeros(K.N_F)
-        fp[K.F_H], fp[K.F_DU], fp[K.F_LO], fp[K.F_SCALE] = h, tf.opacity_unit_distance, lo, (n - 1) / (hi - lo)
-        fp[K.F_KA], fp[K.F_KD], fp[K.F_KS], fp[K.F_P] = settings.ambient, settings.diffuse, settings.specular, settings.specular_power
-        fp[K.F_GTHR] = gradient_threshold(vhi - vlo, volume.characteristic_length)
-        fp[K.F_TERM] = opts["termination_alpha"] if hvr else 2.0
-        fp[K.F_LX:K.F_LZ + 1] = light
-        fp[K.F_ISX:K.F_ISZ + 1] = 1.0 / spacing
-        fp[K.F_PLO], fp[K.F_PSCALE] = lo, (len(post) - 1) / (hi - lo)
-        ip = np.array([mode, pre, shade, hvr, opts["block_pixels"]], dtype=np.int64)
+        inv_spacing = 1.0 / spacing
+        tables = Tables(xs, tab, post, table, front, back, float(lo), float((n - 1) / (hi - lo)), float(lo),
+                        float((len(post) - 1) / (hi - lo)))  # fmt: skip
+        term = float(opts["termination_alpha"]) if hvr else 2.0  # 2: never, without hidden volume removal
+        frame = Compositing(int(mode), bool(pre), bool(hvr), int(opts["block_pixels"]), float(h),
+                            float(tf.opacity_unit_distance), term)  # fmt: skip
+        shading = ShadeParams(bool(shade), float(settings.ambient), float(settings.diffuse), float(settings.specular),
+                              float(settings.specular_power),
+                              float(gradient_threshold(vhi - vlo, volume.characteristic_length)),
+                              float(light[0]), float(light[1]), float(light[2]))  # fmt: skip
 
         pixels = width * height
         # per-pixel state, kept across frames (no page faults on fresh memory); rgba, nextk and
@@ -295,15 +297,18 @@ class ObjectOrderRenderer(RendererBase):
         # a group per progress call, large enough that no thread idles at a group's end for long
         group = max(16, 8 * threads)
         order = np.arange(n_bands, dtype=np.int64)
-        values = self._octree.values
+        grid = Grid(self._octree.values, int(cls.shapes[0, 2]), int(cls.shapes[0, 1]), int(cls.shapes[0, 0]),
+                    float(inv_spacing[0]), float(inv_spacing[1]), float(inv_spacing[2]))  # fmt: skip
+        octree = Octree(cls.counts, cls.offsets, cls.shapes, cls.leaves)
+        view = View(M, not camera.parallel, eye, vdir, width, height)
+        ray_set = Rays(rays.origin, rays.direction, rays.world_direction, rays.inverse, rays.t0, rays.count, rays.first,
+                       rays.last)  # fmt: skip
+        state = PixelState(rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished)
         for g0 in range(0, n_bands, group):
             bands = order[g0 : g0 + group]
             old = numba.set_parallel_chunksize(1)
             try:
-                K.render_bands(bands, band_rows, width, height, values, cls.counts, cls.offsets, cls.shapes, cls.leaves, M,
-                               not camera.parallel, eye, vdir, rays.origin, rays.direction, rays.world_direction,
-                               rays.inverse, rays.t0, rays.count, rays.first, rays.last, ip, fp, xs, tab, post, table,
-                               front, back, rgba, acc, nextk, prev_s, prev_k, prev_fd, prev_sp, finished, stats)  # fmt: skip
+                K.render_bands(bands, band_rows, grid, octree, view, ray_set, tables, frame, shading, state, stats)
             finally:
                 numba.set_parallel_chunksize(old)
             if progress is not None:

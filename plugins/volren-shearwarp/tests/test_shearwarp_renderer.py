@@ -558,7 +558,7 @@ def test_shading_takes_every_renderers_threshold_on_an_anisotropic_grid(monkeypa
     thresholds = []
 
     def spy(*args, **kwargs):
-        thresholds.append(inspect.signature(real.py_func).bind(*args, **kwargs).arguments["gthr"])
+        thresholds.append(inspect.signature(real.py_func).bind(*args, **kwargs).arguments["light"].gradient_threshold)
         return real(*args, **kwargs)
 
     monkeypatch.setattr(module, "composite_slabs", spy)

@@ -49,7 +49,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from volren.kernels.shading import ShadeParams, blinn_phong_factors, headlight_half_vector
+from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
+from volren_shearwarp.bundles import Intermediate, Ray, Scanline, SegmentEnd, SlabMap, SlabSegment
 
 #: Modes of `project_slabs`.
 MAXIMUM, MINIMUM, AVERAGE = 1, 2, 3
@@ -143,7 +144,9 @@ def _plane_value(vol, kf, kb, w, a, b, lo, scale):
 
 
 @njit(nogil=True, cache=True, inline="always", error_model="numpy")
-def _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr):
+def _plane_light(vol, kf, kb, w, a, b, inv_sp, shading, hx, hy, hz):
+    """(diffuse factor, specular term) at plane w (0 = slice kf, 1 = slice kb) and in-plane (a, b), with
+    the frame's `ShadeParams` and the ray's half vector."""
     if w == 0.0:
         gx, gy, gz = gradient(vol, kf, a, b, inv_sp)
     elif w == 1.0:
@@ -154,8 +157,7 @@ def _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, po
         gx = (1.0 - w) * fx + w * bx
         gy = (1.0 - w) * fy + w * by
         gz = (1.0 - w) * fz + w * bz
-    return blinn_phong_factors(gx, gy, gz, hx, hy, hz,
-                               ShadeParams(True, ka, kd, ks, power, gthr, light[0], light[1], light[2]))
+    return blinn_phong_factors(gx, gy, gz, hx, hy, hz, shading)
 
 
 @njit(nogil=True, cache=True, inline="always", error_model="numpy")
@@ -254,9 +256,16 @@ def _lut_rgba(lut, layer, x, bilinear_lookup):
 
 
 @njit(nogil=True, cache=True, inline="always", error_model="numpy")
-def _segment(xf, xb, df, sf, db, sb, layer, table, table_back, lut, preintegrated, shading, bilinear_lookup):
-    """Premultiplied RGBA of one whole segment (front value xf, back value xb as table coordinates;
-    diffuse factors and specular terms of its ends when shading)."""
+def _segment(front, back, layer, tables, shading):
+    """Premultiplied RGBA of one whole segment from `front` to `back` (`SegmentEnd`s: table
+    coordinates; diffuse factors and specular terms when shading) in table layer `layer`."""
+    xf, df, sf = front
+    xb, db, sb = back
+    table = tables.table
+    table_back = tables.table_back
+    lut = tables.lut
+    preintegrated = tables.preintegrated
+    bilinear_lookup = tables.bilinear_lookup
     if preintegrated:
         cr, cg, cb, alpha = _table_rgba(table, layer, xf, xb, bilinear_lookup)
         if not shading or alpha <= 0.0:
@@ -307,11 +316,11 @@ def _span_sample(row0, row1, a, w, lo32, sc32):
 
 
 @njit(nogil=True, cache=True, inline="always", error_model="numpy")
-def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p0, p1, rgba, buf_x, stamp, skip,
-               layers, per_pixel_layer, table, lut, preintegrated, bilinear_lookup, lo, scale,
-               use_termination, term_alpha, has_nan):  # fmt: skip
-    """Pixels p0..p1 of row q whose whole segment lies inside the slab, one segment per slab, no
-    lighting: the common case (most of a frame's segments). Returns (segments, terminated).
+def _fast_span(geom, slab, line, p0, p1, rgba, buf_x, stamp, skip, tables, termination):
+    """Pixels p0..p1 of the `Scanline` whose whole segment lies inside the slab (`SlabMap`), one
+    segment per slab, no lighting: the common case (most of a frame's segments). Returns (segments,
+    terminated). The arrays it writes (the `Intermediate`'s) come one by one: a kernel inlined into a
+    parallel loop must not write through a bundle (numba drops such stores as dead code).
 
     Why it is written this way (each measured on bonsai, in isolation): float32 arithmetic
     (values, table coordinates, blending) with no float64 promotion, 1D row views hoisted out of
@@ -320,8 +329,19 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
     nearest lookups inline, pre-integrated and post-classified (bilinear lookups go through
     `_segment`, cast back to float32): together about 25% less time per segment than the general
     path's helpers."""
-    lo32 = np.float32(lo)
-    sc32 = np.float32(scale)
+    vol = geom.values
+    has_nan = geom.has_nan
+    kf, kb, af0, afs, ab0, abs_ = slab
+    q, plane, ibf, fbf, ibb, fbb = line
+    layers = tables.layers
+    per_pixel_layer = tables.per_pixel_layer
+    table = tables.table
+    lut = tables.lut
+    preintegrated = tables.preintegrated
+    bilinear_lookup = tables.bilinear_lookup
+    use_termination, term_alpha = termination
+    lo32 = np.float32(tables.lo)
+    sc32 = np.float32(tables.scale)
     wbb = np.float32(fbb)
     wbf = np.float32(fbf)
     half = np.float32(0.5)
@@ -331,7 +351,7 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
     back1 = vol[kb, ibb + 1]
     front0 = vol[kf, ibf]
     front1 = vol[kf, ibf + 1]
-    image = rgba[q]
+    pixels = rgba[q]
     stamps = stamp[q]
     values = buf_x[q]
     links = skip[q]
@@ -374,19 +394,18 @@ def _fast_span(vol, kf, kb, plane, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, p
             cb = a0 * lut[layer, i, 2] + t1 * lut[layer, j, 2]
             alpha = a0 + t1
         else:
-            r, g, b, a_ = _segment(xf, xb, 1.0, 0.0, 1.0, 0.0, layer, table, table, lut, preintegrated, False,
-                                   bilinear_lookup)  # fmt: skip
+            r, g, b, a_ = _segment(SegmentEnd(xf, 1.0, 0.0), SegmentEnd(xb, 1.0, 0.0), layer, tables, False)
             cr = np.float32(r)
             cg = np.float32(g)
             cb = np.float32(b)
             alpha = np.float32(a_)
-        t = np.float32(1.0) - image[p, 3]
-        image[p, 0] += t * cr
-        image[p, 1] += t * cg
-        image[p, 2] += t * cb
-        image[p, 3] += t * alpha
+        t = np.float32(1.0) - pixels[p, 3]
+        pixels[p, 0] += t * cr
+        pixels[p, 1] += t * cg
+        pixels[p, 2] += t * cb
+        pixels[p, 3] += t * alpha
         n_comp += 1
-        if use_termination and image[p, 3] >= term_alpha:
+        if use_termination and pixels[p, 3] >= term_alpha:
             links[p] = 1
             n_term += 1
         p += 1
@@ -448,14 +467,15 @@ def _forward_split(af0, afs, ab0, abs_, p_lo, p_hi):
 
 
 @njit(nogil=True, cache=True, inline="always", error_model="numpy")
-def _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, table, table_back, lut, preintegrated,
-                     shading, bilinear_lookup, use_termination, term_alpha):  # fmt: skip
-    """Blend one segment (front value xf, back value xb, `frac` of a whole segment's length) into
-    pixel (q, p). Returns (composited: 0 or 1, terminated: 0 or 1)."""
-    if xf != xf or xb != xb:
+def _composite_piece(rgba, skip, ray, front, back, frac, tables, shading, termination):
+    """Blend one segment (`SegmentEnd`s front and back, `frac` of a whole segment's length) into
+    the `Ray`'s pixel of `rgba` (skip: its skip links, as `_fast_span`'s). Returns (composited: 0 or
+    1, terminated: 0 or 1)."""
+    if front.x != front.x or back.x != back.x:
         return 0, 0
-    cr, cg, cb, alpha = _segment(xf, xb, df, sf, db, sb, layer, table, table_back, lut, preintegrated, shading,
-                                 bilinear_lookup)  # fmt: skip
+    q = ray.q
+    p = ray.p
+    cr, cg, cb, alpha = _segment(front, back, ray.layer, tables, shading)
     if alpha <= 0.0:
         return 1, 0
     if frac < 1.0:  # a partial segment: Schulze et al.'s opacity and colour correction
@@ -466,44 +486,58 @@ def _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, tabl
         cb *= factor
         alpha = corrected
     _blend(rgba, q, p, cr, cg, cb, alpha)
-    if use_termination and rgba[q, p, 3] >= term_alpha:
+    if termination.on and rgba[q, p, 3] >= termination.alpha:
         skip[q, p] = 1
         return 1, 1
     return 1, 0
 
 
 @njit(nogil=True, cache=True, inline="always", error_model="numpy")
-def _point(vol, kf, kb, w, af, ab, bf, bb, lo, scale, shading, inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr):
-    """(table coordinate, diffuse factor, specular term) of the ray at plane w of the slab; (x, 1, 0) unshaded."""
+def _point(vol, seg, ray, w, tables, shading, inv_sp):
+    """(table coordinate, diffuse factor, specular term) of the ray at plane w of its `SlabSegment`;
+    (x, 1, 0) unshaded (`ShadeParams` shading)."""
+    kf, kb, af, ab, bf, bb = seg
     a = af + w * (ab - af)
     b = bf + w * (bb - bf)
-    x = _plane_value(vol, kf, kb, w, a, b, lo, scale)
-    if not shading:
+    x = _plane_value(vol, kf, kb, w, a, b, tables.lo, tables.scale)
+    if not shading.on:
         return x, 1.0, 0.0
-    d, s = _plane_light(vol, kf, kb, w, a, b, inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)
+    d, s = _plane_light(vol, kf, kb, w, a, b, inv_sp, shading, ray.hx, ray.hy, ray.hz)
     return x, d, s
 
 
 @njit(nogil=True, cache=True, error_model="numpy")
-def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u, rgba, buf_x, buf_d, buf_s, buf_len,
-                    stamp, skip, layer, table, table_back, lut, preintegrated, shading, bilinear_lookup, lo, scale,
-                    inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr, use_termination, term_alpha):  # fmt: skip
-    """Slab m of pixel (q, p) with jittered samples: at w = (j + u) / sub, j = 0 .. sub - 1 (u in
-    [0, 1) fixed per pixel), instead of on the slices. Segments run from sample to sample across
-    slab boundaries: the segment open at the end of a slab is carried to the next one in the
-    buffers (start value, its lighting, and the length so far, in whole-segment units, stamp = m);
-    a ray's first and last segments run from where it enters and to where it leaves, corrected to
-    their length like clipped ones. A slab skipped as empty closes nothing: the next slab starts
-    afresh where the ray enters it. Returns (segments composited, terminated)."""
+def _jittered_pixel(geom, m, seg, ray, t0, t1, u, image, tables, shading, termination):
+    """Slab m of the `Ray`'s pixel (q, p), its segment `seg`, with jittered samples: at
+    w = (j + u) / sub, j = 0 .. sub - 1 (u in [0, 1) fixed per pixel), instead of on the slices.
+    Segments run from sample to sample across slab boundaries: the segment open at the end of a slab
+    is carried to the next one in the buffers (start value, its lighting, and the length so far, in
+    whole-segment units, stamp = m); a ray's first and last segments run from where it enters and to
+    where it leaves, corrected to their length like clipped ones. A slab skipped as empty closes
+    nothing: the next slab starts afresh where the ray enters it. Returns (segments composited,
+    terminated)."""
+    vol = geom.values
+    m_last = geom.order.shape[0] - 1  # the back slab
+    sub = geom.planes
+    q = ray.q
+    p = ray.p
+    inv_sp = geom.inv_spacing
+    shade = shading.on
+    buf_x = image.buf_x
+    buf_d = image.buf_d
+    buf_s = image.buf_s
+    buf_len = image.buf_len
+    stamp = image.stamp
+    rgba = image.rgba
+    skip = image.skip
     n_comp = 0
     if stamp[q, p] == m - 1 and t0 <= 0.0:
         xs = buf_x[q, p]
-        ds = buf_d[q, p] if shading else 1.0
-        ss = buf_s[q, p] if shading else 0.0
+        ds = buf_d[q, p] if shade else 1.0
+        ss = buf_s[q, p] if shade else 0.0
         done = buf_len[q, p]
     else:
-        xs, ds, ss = _point(vol, kf, kb, t0, af, ab, bf, bb, lo, scale, shading, inv_sp, light, hx, hy, hz,
-                            ka, kd, ks, power, gthr)  # fmt: skip
+        xs, ds, ss = _point(vol, seg, ray, t0, tables, shading, inv_sp)
         done = 0.0
     stamp[q, p] = -1
     pos = t0
@@ -514,12 +548,11 @@ def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u
         w = t1 if last_piece else (j + u) / sub
         if w < t0 or w > t1:
             continue
-        xw, dw, sw = _point(vol, kf, kb, w, af, ab, bf, bb, lo, scale, shading, inv_sp, light, hx, hy, hz,
-                            ka, kd, ks, power, gthr)  # fmt: skip
+        xw, dw, sw = _point(vol, seg, ray, w, tables, shading, inv_sp)
         frac = done + (w - pos) * sub
         if frac > 0.0:
-            c, t = _composite_piece(rgba, skip, q, p, xs, xw, ds, ss, dw, sw, min(frac, 1.0), layer, table, table_back,
-                                    lut, preintegrated, shading, bilinear_lookup, use_termination, term_alpha)  # fmt: skip
+            c, t = _composite_piece(rgba, skip, ray, SegmentEnd(xs, ds, ss), SegmentEnd(xw, dw, sw), min(frac, 1.0),
+                                    tables, shade, termination)  # fmt: skip
             n_comp += c
             if t:
                 return n_comp, 1
@@ -531,7 +564,7 @@ def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u
         done = 0.0
         pos = w
     buf_x[q, p] = xs
-    if shading:
+    if shade:
         buf_d[q, p] = ds
         buf_s[q, p] = ss
     buf_len[q, p] = done + (1.0 - pos) * sub
@@ -540,38 +573,64 @@ def _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, u
 
 
 @njit(nogil=True, parallel=True, cache=True, error_model="numpy")
-def composite_slabs(
-    vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows,
-    rgba, buf_x, buf_d, buf_s, stamp, skip,
-    layers, per_pixel_layer, table, table_back, lut, preintegrated, bilinear_lookup, lo, scale,
-    offsets, starts, ends, extent, use_runs, run_slab, slab_frac, use_termination, term_alpha, has_nan,
-    shading, light, half, ray_dirs, ka, kd, ks, power, gthr, inv_sp,
-    clipping, clip_lo, clip_hi, jitter, offsets_u, buf_len, counters, row_block,
-):  # fmt: skip
-    """Composite the slabs between order[m - 1] and order[m] for m in [m0, m1) into `rgba`
-    (intermediate image, premultiplied RGBA float32), clearing each row's image, stamps and skip
+def composite_slabs(geom, m0, m1, image, tables, runs, termination, light, view, clip, jittered):
+    """Composite the slabs between order[m - 1] and order[m] for m in [m0, m1) (`SlabGeometry`) into
+    the `Intermediate` image (premultiplied RGBA float32), clearing each row's image, stamps and skip
     links first when m0 <= 1 (the buffers are reused from frame to frame). counters[q] +=
-    (segments composited, pixels skipped as empty, pixels terminated).
+    (segments composited, pixels skipped as empty, pixels terminated). Lit when light.on
+    (`ShadeParams`, the light in a, b, c order), with the half vectors of `ViewVectors` view.
 
     `order` may skip slices (every stride-th slice: the slabs then span stride slices, and the
     tables are for that length); slab m's runs are run_slab[m]'s of the runs, and slab_frac[m] is its
     length in whole slabs (below 1 for a short last slab, which goes the general way, its segments
     corrected to their part like clipped ones).
 
-    With `clipping`, pixel (q, p)'s ray is drawn only for u in [clip_lo[q, p], clip_hi[q, p]]
+    With `Clipping` (clip), pixel (q, p)'s ray is drawn only for u in [clip_lo[q, p], clip_hi[q, p]]
     (`Factorization.clip_limits`; slab m spans u in [m - 1, m]): the fast spans keep the pixels
     whose whole slab lies inside, the general way takes the rest (a segment cut by a plane sampled
     at the cut and corrected to its part, one wholly outside skipped).
 
-    With `jitter`, pixel (q, p)'s samples sit at offsets_u[q, p] of the way between planes
+    With `Jitter` (jittered), pixel (q, p)'s samples sit at offsets_u[q, p] of the way between planes
     (`_jittered_pixel`), every pixel through the general way."""
+    vol = geom.values
+    order = geom.order
+    sub = geom.planes
+    alpha_a = geom.alpha_a
+    beta_a = geom.beta_a
+    alpha_b = geom.alpha_b
+    beta_b = geom.beta_b
+    rows = geom.rows
+    row_block = geom.row_block
+    slab_frac = geom.slab_frac
+    # the arrays written, one by one: the parallel loop below must not touch the bundle `image` (numba
+    # would pass its members as more arguments declared unaliased with these, and drop stores through
+    # it as dead code in the kernels it inlines)
+    rgba = image.rgba
+    buf_x = image.buf_x
+    buf_d = image.buf_d
+    buf_s = image.buf_s
+    buf_len = image.buf_len
+    stamp = image.stamp
+    skip = image.skip
+    counters = image.counters
+    layers = tables.layers
+    per_pixel_layer = tables.per_pixel_layer
+    lo = tables.lo
+    scale = tables.scale
+    use_runs, offsets, starts, ends, extent, run_slab = runs
+    use_termination = termination.on
+    shading = light.on
+    half = view.half
+    ray_dirs = view.ray_dirs
+    inv_sp = geom.inv_spacing
+    clipping, clip_lo, clip_hi = clip
+    jitter, offsets_u = jittered
     nc, nb, na = vol.shape
     width = rgba.shape[1]
     inv_sub = 1.0 / sub
     top_a = na - 1.0
     top_b = nb - 1.0
     lean = sub == 1 and not shading and not jitter
-    m_last = order.shape[0] - 1  # the back slab
     for block in prange((rows.shape[0] + row_block - 1) // row_block):
         r0 = block * row_block
         r1 = min(r0 + row_block, rows.shape[0])
@@ -667,9 +726,8 @@ def composite_slabs(
                         while f1 > f0 and not (clip_lo[q, f1 - 1] <= m - 1 and clip_hi[q, f1 - 1] >= m):
                             f1 -= 1
                     if f1 > f0:
-                        c, t = _fast_span(vol, kf, kb, m - 1, ibf, fbf, ibb, fbb, af0, afs, ab0, abs_, q, f0, f1,
-                                          rgba, buf_x, stamp, skip, layers, per_pixel_layer, table, lut, preintegrated,
-                                          bilinear_lookup, lo, scale, use_termination, term_alpha, has_nan)  # fmt: skip
+                        c, t = _fast_span(geom, SlabMap(kf, kb, af0, afs, ab0, abs_), Scanline(q, m - 1, ibf, fbf, ibb, fbb),
+                                          f0, f1, rgba, buf_x, stamp, skip, tables, termination)  # fmt: skip
                         n_comp += c
                         n_term += t
                     p = lo_p
@@ -697,14 +755,14 @@ def composite_slabs(
                             continue
                         layer = layers[q, p] if per_pixel_layer else layers[0, 0]
                         if shading and ray_dirs.shape[0] > 1:
-                            hx, hy, hz = headlight_half_vector(light[0], light[1], light[2], ray_dirs[q, p, 0],
-                                                               ray_dirs[q, p, 1], ray_dirs[q, p, 2])
+                            hx, hy, hz = headlight_half_vector(light.lx, light.ly, light.lz, ray_dirs[q, p, 0],
+                                                               ray_dirs[q, p, 1], ray_dirs[q, p, 2])  # fmt: skip
+                        ray = Ray(q, p, layer, hx, hy, hz)
                         if jitter:
-                            c, t = _jittered_pixel(vol, kf, kb, m, m_last, sub, q, p, af, ab, bf, bb, t0, t1, offsets_u[q, p],
-                                                   rgba, buf_x, buf_d, buf_s, buf_len, stamp, skip, layer, table,
-                                                   table_back, lut, preintegrated, shading, bilinear_lookup, lo, scale,
-                                                   inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr, use_termination,
-                                                   term_alpha)  # fmt: skip
+                            c, t = _jittered_pixel(geom, m, SlabSegment(kf, kb, af, ab, bf, bb), ray, t0, t1,
+                                                   offsets_u[q, p],
+                                                   Intermediate(rgba, buf_x, buf_d, buf_s, buf_len, stamp, skip, counters),
+                                                   tables, light, termination)  # fmt: skip
                             n_comp += c
                             n_term += t
                             p += 1
@@ -735,22 +793,21 @@ def composite_slabs(
                                 xf = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), lo, scale)
                                 if shading:
                                     df, sf = _plane_light(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf),
-                                                          inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
+                                                          inv_sp, light, hx, hy, hz)  # fmt: skip
                             xb = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), lo, scale)
                             db = 1.0
                             sb = 0.0
                             if shading:
                                 db, sb = _plane_light(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf),
-                                                      inv_sp, light, hx, hy, hz, ka, kd, ks, power, gthr)  # fmt: skip
+                                                      inv_sp, light, hx, hy, hz)  # fmt: skip
                                 if not cut_back:
                                     buf_d[q, p] = db
                                     buf_s[q, p] = sb
                             if not cut_back:
                                 stamp[q, p] = plane + 1
                                 buf_x[q, p] = xb
-                            c, t = _composite_piece(rgba, skip, q, p, xf, xb, df, sf, db, sb, frac, layer, table,
-                                                    table_back, lut, preintegrated, shading, bilinear_lookup,
-                                                    use_termination, term_alpha)  # fmt: skip
+                            c, t = _composite_piece(rgba, skip, ray, SegmentEnd(xf, df, sf), SegmentEnd(xb, db, sb), frac,
+                                                    tables, shading, termination)  # fmt: skip
                             n_comp += c
                             if t:
                                 n_term += 1
@@ -764,12 +821,21 @@ def composite_slabs(
 
 
 @njit(nogil=True, parallel=True, cache=True, error_model="numpy")
-def project_slabs(vol, order, m0, m1, sub, alpha_a, beta_a, alpha_b, beta_b, rows, acc, mode, lengths,
-                  clipping, clip_lo, clip_hi, row_block):  # fmt: skip
+def project_slabs(geom, m0, m1, acc, mode, lengths, clip):
     """Maximum, minimum or length-weighted average of the values along each intermediate ray, over
-    the segments inside the volume whose ends are finite: acc[q, p] = (value, weight). With
-    `clipping`, only the part of each ray between the near and far planes (as `composite_slabs`),
-    a cut segment sampled at the cut."""
+    the segments inside the volume (`SlabGeometry`) whose ends are finite: acc[q, p] = (value,
+    weight), lengths[q, p] a whole segment's length. With `Clipping`, only the part of each ray
+    between the near and far planes (as `composite_slabs`), a cut segment sampled at the cut."""
+    vol = geom.values
+    order = geom.order
+    sub = geom.planes
+    alpha_a = geom.alpha_a
+    beta_a = geom.beta_a
+    alpha_b = geom.alpha_b
+    beta_b = geom.beta_b
+    rows = geom.rows
+    row_block = geom.row_block
+    clipping, clip_lo, clip_hi = clip
     nc, nb, na = vol.shape
     width = acc.shape[1]
     inv_sub = 1.0 / sub

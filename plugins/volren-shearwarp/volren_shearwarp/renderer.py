@@ -59,7 +59,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.kernels.shading import gradient_threshold
+from volren.kernels.shading import ShadeParams, gradient_threshold
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
 from volren.model.downsample import FACTORS as DOWNSAMPLE_FACTORS
 from volren.model.downsample import downsample
@@ -72,6 +72,16 @@ from volren.renderers.base import (
     ProgressCallback,
     QualityLevel,
     RendererBase,
+)
+from volren_shearwarp.bundles import (
+    Classification,
+    Clipping,
+    Intermediate,
+    Jitter,
+    Runs,
+    SlabGeometry,
+    Termination,
+    ViewVectors,
 )
 from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport, slab_pairs
 from volren_shearwarp.composite import AVERAGE, MAXIMUM, MINIMUM, composite_slabs, project_slabs
@@ -392,9 +402,11 @@ class ShearWarpRenderer(RendererBase):
         if settings.blend_mode is not BlendMode.COMPOSITE:
             acc = np.zeros((fac.height, fac.width, 2))
             lengths = fac.pixel_lengths() / planes
+            geom = SlabGeometry(values, has_nan, order, np.ones(len(order)), planes, fac.alpha_a, fac.beta_a,
+                                fac.alpha_b, fac.beta_b, rows, ROW_BLOCK, 1.0 / fac.spacing)  # fmt: skip
+            clip = Clipping(clipping, clip_lo, clip_hi)
             self._blocks(progress, len(order), lambda m0, m1: project_slabs(
-                values, order, m0, m1, planes, fac.alpha_a, fac.beta_a, fac.alpha_b, fac.beta_b, rows, acc,
-                _MODES[settings.blend_mode], lengths, clipping, clip_lo, clip_hi, ROW_BLOCK))  # fmt: skip
+                geom, m0, m1, acc, _MODES[settings.blend_mode], lengths, clip))
             hit = acc[..., 1] > 0
             value = np.where(hit, acc[..., 0], 0.0)
             if settings.blend_mode is BlendMode.AVERAGE:
@@ -501,19 +513,22 @@ class ShearWarpRenderer(RendererBase):
             offsets_u = np.zeros((1, 1), np.float32)
         buf_len = self._scratch("buf_len", shape if jitter else (1, 1), np.float32)
 
+        geom = SlabGeometry(values, has_nan, order, slab_frac, planes, fac.alpha_a, fac.beta_a, fac.alpha_b,
+                            fac.beta_b, rows, ROW_BLOCK, inv_sp)  # fmt: skip
+        intermediate = Intermediate(rgba, buf_x, buf_d, buf_s, buf_len, stamp, skip, per_row)
+        tables = Classification(layers, per_pixel, table, back, lut, bool(settings.preintegration),
+                                opts["lookup"] == "bilinear", float(lo), float(scale))  # fmt: skip
+        run_set = Runs(use_runs, offsets, starts, ends, extent, run_slab)
+        termination = Termination(bool(opts["early_termination"]), float(opts["termination_alpha"]))
+        shade = ShadeParams(shading, float(settings.ambient), float(settings.diffuse), float(settings.specular),
+                            float(settings.specular_power), float(gthr), float(light[0]), float(light[1]),
+                            float(light[2]))  # fmt: skip
+        view = ViewVectors(half, ray_dirs)
+        clip = Clipping(clipping, clip_lo, clip_hi)
+        jittered = Jitter(jitter, offsets_u)
+
         def block(m0: int, m1: int) -> None:
-            composite_slabs(
-                values, order, m0, m1, planes, fac.alpha_a, fac.beta_a, fac.alpha_b, fac.beta_b, rows,
-                rgba, buf_x, buf_d, buf_s, stamp, skip,
-                layers, per_pixel, table, back, lut, bool(settings.preintegration),
-                opts["lookup"] == "bilinear", float(lo), float(scale),
-                offsets, starts, ends, extent, use_runs, run_slab, slab_frac, bool(opts["early_termination"]),
-                float(opts["termination_alpha"]),
-                has_nan,
-                shading, light, half, ray_dirs, float(settings.ambient), float(settings.diffuse),
-                float(settings.specular), float(settings.specular_power), float(gthr), inv_sp,
-                clipping, clip_lo, clip_hi, jitter, offsets_u, buf_len, per_row, ROW_BLOCK,
-            )  # fmt: skip
+            composite_slabs(geom, m0, m1, intermediate, tables, run_set, termination, shade, view, clip, jittered)
 
         self._blocks(progress, len(order), block)
         image = self._warp(rgba, fac, width, height, opts)
