@@ -34,7 +34,9 @@ def subjects_after(repo: str, base: str) -> list[tuple[str, str]]:
 
 def too_long(subjects: list[tuple[str, str]], limit: int = MAX_SUBJECT) -> list[str]:
     """One line per subject over `limit` characters."""
-    return [f"{sha}: {len(subject)} characters: {subject}" for sha, subject in subjects if len(subject) > limit]
+    return [
+        f"{sha}: {len(subject)} characters: {subject}" for sha, subject in subjects if len(subject) > limit
+    ]
 
 
 def base_problem(repo: str, base: str) -> tuple[str, bool] | None:
@@ -48,7 +50,10 @@ def base_problem(repo: str, base: str) -> tuple[str, bool] | None:
     shallow = git(repo, "rev-parse", "--is-shallow-repository").stdout.strip() == "true"
     if shallow:
         return f"the base commit {base[:12]} is not in this shallow clone; nothing checked", False
-    return f"the base commit {base[:12]} is not in this repository's history; update BASE in .ci/check_commit_subjects.py", True
+    return (
+        f"the base commit {base[:12]} is not in this repository's history; update BASE in .ci/check_commit_subjects.py",
+        True,
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -66,8 +71,10 @@ def main(argv: list[str] | None = None) -> int:
     for line in bad:
         print(f"check_commit_subjects: subject over {MAX_SUBJECT} characters: {line}", file=sys.stderr)
     if not bad:
-        print(f"check_commit_subjects: {len(subjects)} commit subject(s) after {args.base[:12]} within "
-              f"{MAX_SUBJECT} characters")
+        print(
+            f"check_commit_subjects: {len(subjects)} commit subject(s) after {args.base[:12]} within "
+            f"{MAX_SUBJECT} characters"
+        )
     return 1 if bad else 0
 
 

@@ -20,7 +20,9 @@ def int_list(minimum: int) -> Callable[[str], list[int]]:
         try:
             values = [int(v) for v in text.split(",") if v.strip()]
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected comma-separated whole numbers, got {text!r}") from None
+            raise argparse.ArgumentTypeError(
+                f"expected comma-separated whole numbers, got {text!r}"
+            ) from None
         if not values or min(values) < minimum:
             raise argparse.ArgumentTypeError(f"expected whole numbers >= {minimum}, got {text!r}")
         return values
@@ -28,8 +30,9 @@ def int_list(minimum: int) -> Callable[[str], list[int]]:
     return parse
 
 
-def run(command: Callable[[argparse.Namespace], int], parser: argparse.ArgumentParser,
-        argv: list[str] | None) -> int:
+def run(
+    command: Callable[[argparse.Namespace], int], parser: argparse.ArgumentParser, argv: list[str] | None
+) -> int:
     """Parse `argv` and run `command`; a `VolrenError` becomes one line on stderr and exit 1."""
     args = parser.parse_args(argv)
     try:

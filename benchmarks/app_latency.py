@@ -57,7 +57,10 @@ class AppTiming:
     preview_size: tuple[int, int]  # the size of the preview frames seen while rotating
     rest_release_ms: float = math.nan  # a rotation that rests 0.4 s before its release: release -> full frame
     duplicate_frames: int = 0  # full frames that repeated the one before them (same camera, same TF)
-    drag_preview_size: tuple[int, int] = (0, 0)  # the size of the preview frames seen while a TF point is dragged
+    drag_preview_size: tuple[int, int] = (
+        0,
+        0,
+    )  # the size of the preview frames seen while a TF point is dragged
 
     @property
     def preview_fraction(self) -> float:
@@ -80,7 +83,9 @@ class _Probe:
         window.fullFrameShown.connect(lambda f: self.full.append((time.perf_counter(), f)))
 
 
-def _full_frame_after(app, window, probe: _Probe, act: Callable[[], None], timeout_s: float) -> tuple[float, float]:
+def _full_frame_after(
+    app, window, probe: _Probe, act: Callable[[], None], timeout_s: float
+) -> tuple[float, float]:
     """Run `act`, wait for the full frame of the newest request; (ms to it, its render ms)."""
     count = len(probe.full)
     start = time.perf_counter()
@@ -129,9 +134,17 @@ def measure(
     probe = _Probe(window)
     try:
         requested = None if renderer == "auto" else renderer  # auto: what the app opens with by default
-        _full_frame_after(app, window, probe, lambda: window.files.apply_loaded(LoadedInput(volume, tf), requested), timeout_s)
+        _full_frame_after(
+            app,
+            window,
+            probe,
+            lambda: window.files.apply_loaded(LoadedInput(volume, tf), requested),
+            timeout_s,
+        )
         if errors or window.state.renderer != (requested or window.state.renderer):
-            raise RuntimeError(f"{renderer} could not show {dataset}: {'; '.join(errors) or window.state.renderer}")
+            raise RuntimeError(
+                f"{renderer} could not show {dataset}: {'; '.join(errors) or window.state.renderer}"
+            )
         if requested is None:
             renderer = f"{window.state.renderer} (auto)"
         state = window.state
@@ -139,7 +152,11 @@ def measure(
         edit_ms, frame_ms = [], []
         for i in range(edits + 1):
             ms, rendered = _full_frame_after(
-                app, window, probe, lambda i=i: _move_point(state.transfer_function, (i % 2) * 1.0, base), timeout_s
+                app,
+                window,
+                probe,
+                lambda i=i: _move_point(state.transfer_function, (i % 2) * 1.0, base),
+                timeout_s,
             )
             if i:  # the first edit builds tables that later edits reuse or rebuild alike
                 edit_ms.append(ms)
@@ -157,7 +174,11 @@ def measure(
         drag_fps = gesture(lambda k: _move_point(state.transfer_function, (k % 60) / 59.0, base))
         drag_previews = [f for _, f in probe.shown[-5:] if not f.full]
         drag_preview = (drag_previews[-1].width, drag_previews[-1].height) if drag_previews else (0, 0)
-        wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
+        wait(
+            app,
+            lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial,
+            timeout_s,
+        )
         settle = []
         rotate_fps = []
         preview = (0, 0)
@@ -186,7 +207,11 @@ def measure(
         wait(app, lambda: False, 0.4)
         released = time.perf_counter()
         state.end_interaction()
-        wait(app, lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial, timeout_s)
+        wait(
+            app,
+            lambda: bool(probe.full) and probe.full[-1][1].serial == window.service.latest_serial,
+            timeout_s,
+        )
         wait(app, lambda: False, 0.5)  # a second full frame would come within the settle time
         rest_release = max(0.0, (probe.full[-1][0] - released) * 1000.0)
         final = state.camera
@@ -286,7 +311,9 @@ def measure_all(args: argparse.Namespace) -> int:
     for dataset in datasets:
         volume, tf = scene_inputs(shared, dataset, args.style)
         for renderer in [r for r in args.renderers.split(",") if r]:
-            lines.append(markdown_row(measure(app, volume, tf.copy(), renderer, dataset, args.edits, args.seconds)))
+            lines.append(
+                markdown_row(measure(app, volume, tf.copy(), renderer, dataset, args.edits, args.seconds))
+            )
             print(lines[-1], flush=True)
     if args.histogram_size > 0:
         lines += ["", histogram_line(args.histogram_size, joint_histogram_seconds(args.histogram_size))]
@@ -311,8 +338,12 @@ def main(argv: list[str] | None = None) -> int:
     a.add_argument("--style", default="smooth", help="TF style of the scenes (default smooth)")
     a.add_argument("--edits", type=int, default=7, help="timed TF edits, median reported (default 7)")
     a.add_argument("--seconds", type=float, default=3.0, help="length of each drag gesture (default 3 s)")
-    a.add_argument("--histogram-size", type=int, default=HISTOGRAM_SIZE,
-                   help="time the 2D TF editor's joint histogram of an N^3 volume (default 256; 0: not)")
+    a.add_argument(
+        "--histogram-size",
+        type=int,
+        default=HISTOGRAM_SIZE,
+        help="time the 2D TF editor's joint histogram of an N^3 volume (default 256; 0: not)",
+    )
     a.add_argument("--out", help="folder to write app_latency.md into")
     return run(measure_all, a, argv)
 

@@ -60,7 +60,9 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
     with ExitStack() as stack:
         ours = stack.enter_context(prepared_renderer(name, volume, tf, settings))
         vtk = stack.enter_context(prepared_renderer(peer.renderer, volume, tf, peer.settings()))
-        errors = [image_error(render_frame(r, camera_at(0.0), size, size)[0], truth).rmse for r in (ours, vtk)]
+        errors = [
+            image_error(render_frame(r, camera_at(0.0), size, size)[0], truth).rmse for r in (ours, vtk)
+        ]
         ms: tuple[list[float], list[float]] = ([], [])
         for f in range(frames):
             camera = camera_at(TURN * (f + 1))
@@ -101,12 +103,16 @@ def measure(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.defaults_ab", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.defaults_ab", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED; without "
                                          "it, the bundled samples only)")  # fmt: skip
     parser.add_argument("--datasets", default="", help="comma-separated datasets (default: every one)")
     parser.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
-    parser.add_argument("--frames", type=int, default=7, help="timed frame pairs per scene, median (default 7)")
+    parser.add_argument(
+        "--frames", type=int, default=7, help="timed frame pairs per scene, median (default 7)"
+    )
     parser.add_argument("--out", help="also write the table to this Markdown file (BENCHMARKS.md's fragment: "
                                       "docs/bench/defaults_ab.md)")  # fmt: skip
     return run(measure, parser, argv)

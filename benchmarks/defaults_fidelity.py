@@ -116,7 +116,9 @@ def measure(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.defaults_fidelity", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.defaults_fidelity", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     parser.add_argument("--datasets", default="hard",
                         help="comma-separated datasets; `hard` is every hard scene (default hard)")  # fmt: skip

@@ -19,7 +19,11 @@ import time
 from pathlib import Path
 
 VIEWPORT = (800, 600)
-DATASETS = {"bonsai": "uniform/bonsai.vti", "engine": "uniform/engine.vti", "oxygen": "tets/oxygen_post_tets.vtu"}
+DATASETS = {
+    "bonsai": "uniform/bonsai.vti",
+    "engine": "uniform/engine.vti",
+    "oxygen": "tets/oxygen_post_tets.vtu",
+}
 
 
 def _wait(app, condition, timeout_s: float = 120.0) -> float:
@@ -73,7 +77,9 @@ def main() -> int:
     from volren.app.core.loading import load_input
 
     print(f"first preview after opening, {VIEWPORT[0]}x{VIEWPORT[1]}, median of {args.repeats} fresh windows")
-    print("| dataset | still renderer | preview renderer | set up at the first preview, ms | set up while still, ms | ratio |")
+    print(
+        "| dataset | still renderer | preview renderer | set up at the first preview, ms | set up while still, ms | ratio |"
+    )
     print("|---|---|---|---|---|---|")
     for name in args.datasets.split(","):
         loaded = load_input(Path(args.shared) / "data" / DATASETS[name])

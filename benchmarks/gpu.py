@@ -39,8 +39,21 @@ ERROR_SIZE = 512
 SIZES = (512, 1024)
 FRAMES = 11
 TURN = 2.0
-COLUMNS = ("dataset", "tf", "renderer", "settings", "size", "ms", "gpu_ms", "gpu_bin_ms", "gpu_walk_ms", "rmse",
-           "max_abs", "cell_steps", "samples")
+COLUMNS = (
+    "dataset",
+    "tf",
+    "renderer",
+    "settings",
+    "size",
+    "ms",
+    "gpu_ms",
+    "gpu_bin_ms",
+    "gpu_walk_ms",
+    "rmse",
+    "max_abs",
+    "cell_steps",
+    "samples",
+)
 
 
 @dataclass(frozen=True)
@@ -53,15 +66,31 @@ class GLConfig:
 def configs(kind: str) -> list[GLConfig]:
     """The GL configurations measured on a volume of this kind."""
     if kind == "tet":
-        return [GLConfig("tetra", f"gl, table 256x32{', no termination' if alpha == 1.0 else ''}",
-                         RenderSettings(options={"backend": "gl", "table_size": 256, "table_lengths": 32,
-                                                 "termination_alpha": alpha}))
-                for alpha in (0.999, 1.0)]
+        return [
+            GLConfig(
+                "tetra",
+                f"gl, table 256x32{', no termination' if alpha == 1.0 else ''}",
+                RenderSettings(
+                    options={
+                        "backend": "gl",
+                        "table_size": 256,
+                        "table_lengths": 32,
+                        "termination_alpha": alpha,
+                    }
+                ),
+            )
+            for alpha in (0.999, 1.0)
+        ]
     out = []
     for step in (1.0, 0.5, 0.25):
         out.append(GLConfig("slicer", f"step {step:g}, post", RenderSettings(step=step)))
-        out.append(GLConfig("slicer", f"step {step:g}, pre 512",
-                            RenderSettings(step=step, preintegration=True, options={"table_size": 512})))
+        out.append(
+            GLConfig(
+                "slicer",
+                f"step {step:g}, pre 512",
+                RenderSettings(step=step, preintegration=True, options={"table_size": 512}),
+            )
+        )
     return out
 
 
@@ -72,8 +101,12 @@ class ArrayDataset(Dataset):
         with np.load(self.path) as data:
             if self.kind == "tet":
                 return TetVolume(data["points"], data["tets"], data["values"], name=self.name)
-            return UniformVolume(data["values"], tuple(data["spacing"].tolist()), tuple(data["origin"].tolist()),
-                                 name=self.name)
+            return UniformVolume(
+                data["values"],
+                tuple(data["spacing"].tolist()),
+                tuple(data["origin"].tolist()),
+                name=self.name,
+            )
 
 
 def export(shared: Path, folder: Path, names: list[str] | None = None) -> None:
@@ -87,11 +120,17 @@ def export(shared: Path, folder: Path, names: list[str] | None = None) -> None:
         print(f"exporting {name}", flush=True)
         volume = dataset.load()
         if isinstance(volume, TetVolume):
-            np.savez_compressed(folder / f"{name}.npz", points=volume.points, tets=volume.tets, values=volume.values)
+            np.savez_compressed(
+                folder / f"{name}.npz", points=volume.points, tets=volume.tets, values=volume.values
+            )
         else:
             assert isinstance(volume, UniformVolume)
-            np.savez_compressed(folder / f"{name}.npz", values=volume.values, spacing=np.asarray(volume.spacing),
-                                origin=np.asarray(volume.origin))
+            np.savez_compressed(
+                folder / f"{name}.npz",
+                values=volume.values,
+                spacing=np.asarray(volume.spacing),
+                origin=np.asarray(volume.origin),
+            )
         styles, references = [], {}
         for style, tf in dataset.transfer_functions():
             shutil.copy(dict(dataset.tf_paths)[style], folder / f"{name}-{style}.json")
@@ -100,8 +139,16 @@ def export(shared: Path, folder: Path, names: list[str] | None = None) -> None:
             references[key] = reference_image(volume, tf, camera, ERROR_SIZE, ERROR_SIZE)
             styles.append(style)
         np.savez_compressed(folder / f"{name}-reference.npz", **references)
-        index.append({"name": name, "kind": dataset.kind, "azimuth": dataset.azimuth,
-                      "elevation": dataset.elevation, "zoom": dataset.zoom, "styles": styles})
+        index.append(
+            {
+                "name": name,
+                "kind": dataset.kind,
+                "azimuth": dataset.azimuth,
+                "elevation": dataset.elevation,
+                "zoom": dataset.zoom,
+                "styles": styles,
+            }
+        )
     (folder / "datasets.json").write_text(json.dumps(index, indent=1))
 
 
@@ -113,19 +160,31 @@ def exported(folder: Path) -> list[Dataset]:
         with np.load(folder / f"{d['name']}-reference.npz") as references:
             for key in references.files:
                 np.save(folder / "reference" / f"{key}.npy", references[key])
-    return [ArrayDataset(d["name"], d["kind"], folder / f"{d['name']}.npz", None,
-                         tuple((s, folder / f"{d['name']}-{s}.json") for s in d["styles"]),
-                         d["azimuth"], d["elevation"], d["zoom"]) for d in index]
+    return [
+        ArrayDataset(
+            d["name"],
+            d["kind"],
+            folder / f"{d['name']}.npz",
+            None,
+            tuple((s, folder / f"{d['name']}-{s}.json") for s in d["styles"]),
+            d["azimuth"],
+            d["elevation"],
+            d["zoom"],
+        )
+        for d in index
+    ]
 
 
-def measure(datasets: list[Dataset], sizes: tuple[int, ...], frames: int, reference_folder: Path | None
-            ) -> Iterator[dict]:
+def measure(
+    datasets: list[Dataset], sizes: tuple[int, ...], frames: int, reference_folder: Path | None
+) -> Iterator[dict]:
     """One row per dataset, TF, configuration and size."""
     for dataset in datasets:
         volume = dataset.load()
         for style, tf in dataset.transfer_functions():
-            reference = reference_image(volume, tf, dataset.camera(volume.bounds), ERROR_SIZE, ERROR_SIZE,
-                                        folder=reference_folder)
+            reference = reference_image(
+                volume, tf, dataset.camera(volume.bounds), ERROR_SIZE, ERROR_SIZE, folder=reference_folder
+            )
             for config in configs(dataset.kind):
                 with prepared_renderer(config.renderer, volume, tf, config.settings) as renderer:
                     for size in sizes:
@@ -159,7 +218,8 @@ def markdown(rows: list[dict], device: str, frames: int = FRAMES) -> str:
         "timer queries around the passes (tetra: entry lists + walk). RMSE against `reference` at "
         f"{ERROR_SIZE}x{ERROR_SIZE}; work: cell steps (tetra) or samples (slicer) at {ERROR_SIZE}x{ERROR_SIZE}.",
         "",
-        "| dataset | TF | renderer | settings | " + " | ".join(f"ms {n} | GPU ms {n}" for n in sizes)
+        "| dataset | TF | renderer | settings | "
+        + " | ".join(f"ms {n} | GPU ms {n}" for n in sizes)
         + " | RMSE | work |",
         "|---|---|---|---|" + "---|---|" * len(sizes) + "---|---|",
     ]
@@ -171,12 +231,17 @@ def markdown(rows: list[dict], device: str, frames: int = FRAMES) -> str:
         for n in sizes:
             r = by_size.get(n)
             gpu = r["gpu_ms"] if r is not None else float("nan")
-            cells.append(("" if r is None else f"{r['ms']:.1f}") + " | " + ("" if gpu != gpu else f"{gpu:.1f}"))
+            cells.append(
+                ("" if r is None else f"{r['ms']:.1f}") + " | " + ("" if gpu != gpu else f"{gpu:.1f}")
+            )
         first = by_size.get(ERROR_SIZE) or next(iter(by_size.values()))
         work = first["cell_steps"] if first["cell_steps"] is not None else first["samples"]
         rmse = "" if first["rmse"] is None else f"{first['rmse']:.5f}"
-        lines.append(f"| {dataset} | {tf} | {renderer} | {settings} | " + " | ".join(cells)
-                     + f" | {rmse} | {'' if work is None else format(work, '.3g')} |")
+        lines.append(
+            f"| {dataset} | {tf} | {renderer} | {settings} | "
+            + " | ".join(cells)
+            + f" | {rmse} | {'' if work is None else format(work, '.3g')} |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -218,8 +283,10 @@ def main(argv: list[str] | None = None) -> int:
                 rows.append(row)
                 writer.writerow(row)
                 stream.flush()
-                print(" ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()),
-                      flush=True)
+                print(
+                    " ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in row.items()),
+                    flush=True,
+                )
     (args.out / "gpu.md").write_text(markdown(rows, device, args.frames))
     return 0
 

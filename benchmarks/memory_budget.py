@@ -53,8 +53,15 @@ def peak(argv: list[str], code: str | None, cwd: Path) -> tuple[float, float, st
     env = dict(os.environ, NUMBA_NUM_THREADS="1")
     if code:
         env["PYTHONPATH"] = code
-    command = [sys.executable, "-c", "import sys; from volren.cli.main import main; sys.exit(main(sys.argv[1:]))", *argv]
-    start = time.perf_counter()  # run from the temporary folder: a checkout in the working folder would come first
+    command = [
+        sys.executable,
+        "-c",
+        "import sys; from volren.cli.main import main; sys.exit(main(sys.argv[1:]))",
+        *argv,
+    ]
+    start = (
+        time.perf_counter()
+    )  # run from the temporary folder: a checkout in the working folder would come first
     child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, cwd=cwd)
     output = child.stdout.read().decode(errors="replace") if child.stdout else ""
     _, status, usage = os.wait4(child.pid, 0)
@@ -83,15 +90,41 @@ def main() -> int:
         volume = args.size**3 * 2 / MIB
         print(f"{args.size}^3 uint16 = {volume:.0f} MiB, --memory {args.memory} ({budget:.0f} MiB); peak resident "
               f"memory of each command (MiB){' with ' + args.volren if args.volren else ''}")  # fmt: skip
-        print(f"{'command':<44} {'peak':>7} {'fixed':>7} {'working':>8} {'budget':>7} {'time s':>7}  what it said")
+        print(
+            f"{'command':<44} {'peak':>7} {'fixed':>7} {'working':>8} {'budget':>7} {'time s':>7}  what it said"
+        )
         convert = ["convert", "{nrrd}", "{zarr}", "--force", "--chunks", "{chunks}"]
         convert += [] if args.volren else ["--memory", args.memory]
         rows = [
             ("convert raw NRRD" + (" (no --memory)" if args.volren else ""), convert),
-            ("render, quality default", ["render", "{zarr}", *RENDER, "--memory", "{memory}",
-                                         "--save-array", str(tmp / "a.npy"), "--force"]),  # fmt: skip
-            ("render --level 1", ["render", "{zarr}", *RENDER, "--level", "{level}", "--memory", "{memory}",
-                                  "--save-array", str(tmp / "b.npy"), "--force"]),  # fmt: skip
+            (
+                "render, quality default",
+                [
+                    "render",
+                    "{zarr}",
+                    *RENDER,
+                    "--memory",
+                    "{memory}",
+                    "--save-array",
+                    str(tmp / "a.npy"),
+                    "--force",
+                ],
+            ),  # fmt: skip
+            (
+                "render --level 1",
+                [
+                    "render",
+                    "{zarr}",
+                    *RENDER,
+                    "--level",
+                    "{level}",
+                    "--memory",
+                    "{memory}",
+                    "--save-array",
+                    str(tmp / "b.npy"),
+                    "--force",
+                ],
+            ),  # fmt: skip
         ]
         for label, argv in rows:
             # the 16^3 pyramid in 8^3 bricks has two levels, both streamed at 12KB: the same code runs
@@ -104,7 +137,9 @@ def main() -> int:
             if "FAILED" in said:
                 raise SystemExit(f"the 16^3 run failed: {said}")
             top, seconds, said = peak(big, args.volren, tmp)
-            print(f"{label:<44} {top:7.0f} {fixed:7.0f} {top - fixed:8.0f} {budget:7.0f} {seconds:7.1f}  {said[:110]}")
+            print(
+                f"{label:<44} {top:7.0f} {fixed:7.0f} {top - fixed:8.0f} {budget:7.0f} {seconds:7.1f}  {said[:110]}"
+            )
     return 0
 
 

@@ -25,8 +25,10 @@ def measure(args: argparse.Namespace) -> int:
 
     datasets = shared_datasets(shared_folder(args.shared))
     print(f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
-    print("| scene | step | cells ms | blocks ms | cells / blocks | max pixel difference | samples (both) "
-          "| cells, occluded (cell by cell) | cells, occluded (blocks) |")
+    print(
+        "| scene | step | cells ms | blocks ms | cells / blocks | max pixel difference | samples (both) "
+        "| cells, occluded (cell by cell) | cells, occluded (blocks) |"
+    )
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for case in args.cases.split(","):
         name, style, step = case.split("/")
@@ -53,7 +55,11 @@ def measure(args: argparse.Namespace) -> int:
         c, b = (renderers[k].last_frame.counters for k in ("cells", "blocks"))
         t_c, t_b = np.median(times["cells"]), np.median(times["blocks"])
         diff = float(np.abs(images["cells"].astype(np.float64) - images["blocks"]).max())
-        samples = f"{c['samples']:.0f}" if c["samples"] == b["samples"] else f"{c['samples']:.0f} / {b['samples']:.0f}"
+        samples = (
+            f"{c['samples']:.0f}"
+            if c["samples"] == b["samples"]
+            else f"{c['samples']:.0f} / {b['samples']:.0f}"
+        )
         print(f"| {name} {style} | {step} | {t_c:.1f} | {t_b:.1f} | {t_c / t_b:.2f}x | {diff:.1e} | {samples} "
               f"| {c['cells']:.0f}, {c['occluded_ratio'] * 100:.1f} % | {b['cells']:.0f}, {b['occluded_ratio'] * 100:.1f} % |",
               flush=True)  # fmt: skip
@@ -64,10 +70,16 @@ def measure(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.objectorder_blocks", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.objectorder_blocks", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
-    parser.add_argument("--cases", default="bonsai/smooth/1,bonsai/smooth/0.5,engine/smooth/1,bonsai/opaque/0.25,"
-                        "aneurism/opaque/0.25,ironProt/opaque/0.25", help="DATASET/TF/STEP,... (default: six)")
+    parser.add_argument(
+        "--cases",
+        default="bonsai/smooth/1,bonsai/smooth/0.5,engine/smooth/1,bonsai/opaque/0.25,"
+        "aneurism/opaque/0.25,ironProt/opaque/0.25",
+        help="DATASET/TF/STEP,... (default: six)",
+    )
     parser.add_argument("--frames", type=int, default=5, help="turning frames per round (default 5)")
     parser.add_argument("--rounds", type=int, default=3, help="rounds, the two ways alternating (default 3)")
     return run(measure, parser, argv)

@@ -30,7 +30,9 @@ from volren.model import RenderSettings
 
 #: The renderer's own rule (restored after each scene)
 ONE_SIDED = oo.segment_reach
-SCENES = "bonsai/opaque,engine/opaque,aneurism/opaque,ironProt/opaque,phantom_ct/sample,bonsai/spiky,engine/smooth"
+SCENES = (
+    "bonsai/opaque,engine/opaque,aneurism/opaque,ironProt/opaque,phantom_ct/sample,bonsai/spiky,engine/smooth"
+)
 
 
 def _both_ways(camera, volume, rays, h: float) -> oo.Reach:
@@ -66,8 +68,10 @@ def _frames(d, volume, tf, camera, size: int, frames: int) -> tuple[list, list, 
 def measure(args: argparse.Namespace) -> int:
     shared = shared_folder(args.shared, required=False)
     found = {**(shared_datasets(shared) if shared else {}), **sample_datasets()}
-    print("| scene | visible cells, both ways | one-sided | cells taken, both ways | one-sided "
-          "| samples, both ways | one-sided | max image difference | ms, both ways | one-sided |")
+    print(
+        "| scene | visible cells, both ways | one-sided | cells taken, both ways | one-sided "
+        "| samples, both ways | one-sided | max image difference | ms, both ways | one-sided |"
+    )
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for scene in args.scenes.split(","):
         name, style = scene.split("/")
@@ -91,7 +95,9 @@ def measure(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.objectorder_reach", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.objectorder_reach", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     parser.add_argument("--scenes", default=SCENES, help=f"comma-separated dataset/TF (default {SCENES})")
     parser.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")

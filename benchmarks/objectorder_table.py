@@ -39,7 +39,9 @@ def main() -> None:
     frames = int(sys.argv[4]) if len(sys.argv) > 4 else 5
     ds = shared_datasets(Path(os.environ.get("VOLREN_SHARED", "../shared")))
     settings = RenderSettings(step=0.5)
-    print("load average (1, 5, 15 min) at the start: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()), flush=True)
+    print(
+        "load average (1, 5, 15 min) at the start: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()), flush=True
+    )
     print(machine_line(), flush=True)
     print(f"{'scene':17s} {'RMSE oo':>8s} {'RMSE slicer':>11s} | {'HVR':3s} {'ms':>7s} {'cells':>8s} {'occluded':>8s} "
           f"{'nodes':>8s} {'samples':>9s} {'Mcells/s':>8s}", flush=True)  # fmt: skip

@@ -137,7 +137,9 @@ def visible_cells(octree: MinMaxOctree, tf: TransferFunction1D) -> np.ndarray:
     return np.ascontiguousarray(cells[:nz, :ny, :nx].astype(bool))
 
 
-def bound(volume: UniformVolume, tf: TransferFunction1D, camera, termination: float = TERMINATION) -> dict[str, float]:
+def bound(
+    volume: UniformVolume, tf: TransferFunction1D, camera, termination: float = TERMINATION
+) -> dict[str, float]:
     """The bound's counts for one view, and what the renderer's occlusion map achieved there, both
     with pixels finished at opacity `termination`."""
     h = STEP * volume.characteristic_length
@@ -182,7 +184,9 @@ def main() -> None:
     styles = sys.argv[2].split(",") if len(sys.argv) > 2 else ["opaque"]
     ds = shared_datasets(Path(os.environ.get("VOLREN_SHARED", "../shared")))
     print(machine_line())
-    print("| scene | visible cells | seen | occludable | bound | objectorder's occluded ratio | rays opaque |")
+    print(
+        "| scene | visible cells | seen | occludable | bound | objectorder's occluded ratio | rays opaque |"
+    )
     print("|---|---:|---:|---:|---:|---:|---:|")
     for name in names:
         d = ds[name]

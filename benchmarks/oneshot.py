@@ -65,7 +65,17 @@ def _stages(stderr: str) -> dict[str, float]:
 
 def _render(args: list[str], env: dict[str, str], out: Path) -> tuple[float, dict[str, float]]:
     """(wall seconds of the process, its stages)."""
-    command = [sys.executable, "-m", "volren.cli.main", "render", *args, "-o", str(out), "--timings", "--force"]
+    command = [
+        sys.executable,
+        "-m",
+        "volren.cli.main",
+        "render",
+        *args,
+        "-o",
+        str(out),
+        "--timings",
+        "--force",
+    ]
     start = time.perf_counter()
     done = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
     wall = time.perf_counter() - start
@@ -77,7 +87,18 @@ def _render(args: list[str], env: dict[str, str], out: Path) -> tuple[float, dic
 def import_seconds(args: list[str], env: dict[str, str], out: Path) -> tuple[float, list[tuple[str, float]]]:
     """(seconds of all top-level imports, the slowest five as (module, seconds)) of a render, from
     ``-X importtime`` (microseconds per module; a top-level import's line names it unindented)."""
-    command = [sys.executable, "-X", "importtime", "-m", "volren.cli.main", "render", *args, "-o", str(out), "--force"]
+    command = [
+        sys.executable,
+        "-X",
+        "importtime",
+        "-m",
+        "volren.cli.main",
+        "render",
+        *args,
+        "-o",
+        str(out),
+        "--force",
+    ]
     done = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(command)}: {done.stderr.strip()[-300:]}")
@@ -108,7 +129,13 @@ def measure(args: argparse.Namespace) -> int:
             flags = ["--scalars", scalars] if scalars else []
             tf = shared / "scenes" / f"{name}-smooth.json"
             if (shared / "data" / rel).is_file() and tf.is_file():
-                cases.append((name, renderer, _with_renderer([str(shared / "data" / rel), *flags, "--tf", str(tf)], renderer)))
+                cases.append(
+                    (
+                        name,
+                        renderer,
+                        _with_renderer([str(shared / "data" / rel), *flags, "--tf", str(tf)], renderer),
+                    )
+                )
     cases = [c for label, renderer, flags in cases
              for c in ((label, renderer, flags), *([(label, "vtk", [*flags, "--renderer", "vtk"])] if renderer == DEFAULT else []))]  # fmt: skip
     lines: list[str] = []
@@ -138,13 +165,19 @@ def measure(args: argparse.Namespace) -> int:
                 wall, stages = _render(flags, env, Path(tmp) / "out.png")
                 walls.append(wall)
                 cells = " | ".join(f"{stages[s]:.2f}" if s in stages else "" for s in STAGES)
-                say(f"| {label} | {renderer} | {'first (no caches)' if k == 0 else k + 1} | {wall:.2f} | {cells} |")
-            summary.append((label, renderer, walls[0], statistics.median(walls[1:]) if len(walls) > 1 else walls[0]))
+                say(
+                    f"| {label} | {renderer} | {'first (no caches)' if k == 0 else k + 1} | {wall:.2f} | {cells} |"
+                )
+            summary.append(
+                (label, renderer, walls[0], statistics.median(walls[1:]) if len(walls) > 1 else walls[0])
+            )
     say()
     say(f"load average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     say()
     vtk = {label: (first, later) for label, renderer, first, later in summary if renderer == "vtk"}
-    say("| case | renderer | first run s | later runs s (median) | first - later s | first / vtk's | later / vtk's |")
+    say(
+        "| case | renderer | first run s | later runs s (median) | first - later s | first / vtk's | later / vtk's |"
+    )
     say("|---|---|---:|---:|---:|---:|---:|")
     for label, renderer, first, later in summary:
         ratios = (f"{first / vtk[label][0]:.2f} | {later / vtk[label][1]:.2f}" if renderer == DEFAULT and label in vtk
@@ -165,7 +198,17 @@ def measure(args: argparse.Namespace) -> int:
 
 
 #: The columns: `volren render --timings`' stages and the parts of the frame renderers time themselves.
-STAGES = ("start-up", "load", "set-up", "frame", "frame: prepare", "frame: tables", "frame: step_choice", "write", "total")
+STAGES = (
+    "start-up",
+    "load",
+    "set-up",
+    "frame",
+    "frame: prepare",
+    "frame: tables",
+    "frame: step_choice",
+    "write",
+    "total",
+)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -174,8 +217,13 @@ def main(argv: list[str] | None = None) -> int:
                         "the bundled samples only)")  # fmt: skip
     parser.add_argument("--samples-only", action="store_true", help="only the bundled samples")
     parser.add_argument("--out", help="folder to write oneshot.md into (BENCHMARKS.md's section)")
-    parser.add_argument("--runs", type=int, default=3, help="processes per case, the first with empty caches (default 3)")
-    parser.add_argument("--importtime-case", help="the case (label's start) whose imports are measured (default: the first drawn with no --renderer)")
+    parser.add_argument(
+        "--runs", type=int, default=3, help="processes per case, the first with empty caches (default 3)"
+    )
+    parser.add_argument(
+        "--importtime-case",
+        help="the case (label's start) whose imports are measured (default: the first drawn with no --renderer)",
+    )
     return run(measure, parser, argv)
 
 

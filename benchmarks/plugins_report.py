@@ -72,13 +72,18 @@ def module_output(args: list[str], shared: str) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.plugins_report", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.plugins_report", description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--out", type=Path, default=Path("docs/bench"))
     parser.add_argument("--shared", default=os.environ.get("VOLREN_SHARED", "../shared"))
     parser.add_argument("--datasets", default=DATASETS)
     args = parser.parse_args(argv)
     folder = args.out / "plugins"
-    lines = [f"Measured {datetime.date.today().isoformat()} by `python -m benchmarks.plugins_report --out {args.out}`.", ""]
+    lines = [
+        f"Measured {datetime.date.today().isoformat()} by `python -m benchmarks.plugins_report --out {args.out}`.",
+        "",
+    ]
 
     start, speed = load(), machine_line()
     run_args = ["bench", "run", "--shared", args.shared, "--datasets", args.datasets,
@@ -104,7 +109,13 @@ def main(argv: list[str] | None = None) -> int:
 
     table1 = ["benchmarks.shearwarp_table1", "--shared", args.shared]
     text = module_output(table1, args.shared)
-    lines += ["", "### Schulze et al.'s Table 1 (shearwarp, seconds per frame)", "", f"`python -m {' '.join(table1)}`", ""]
+    lines += [
+        "",
+        "### Schulze et al.'s Table 1 (shearwarp, seconds per frame)",
+        "",
+        f"`python -m {' '.join(table1)}`",
+        "",
+    ]
     for line in text.splitlines():  # the table as Markdown, the load lines as paragraphs around it
         lines += [line] if line.startswith("|") else ["", line, ""]
     counters = ["benchmarks.objectorder_table", args.datasets, "smooth,spiky,opaque", "256", "5"]

@@ -108,10 +108,16 @@ def measure_size(
     values = values_of(idx, n, lo, hi)
     truth = segment_rgba(tf, values[:, 0], values[:, 1], step)
 
-    row.exact_s, exact = median_seconds(lambda: preintegrate(tf, n, step, oversampling=1, cache=None), repeats)
+    row.exact_s, exact = median_seconds(
+        lambda: preintegrate(tf, n, step, oversampling=1, cache=None), repeats
+    )
     row.errors["exact"] = max_error(exact, idx, truth)
-    row.lighting_s, _ = median_seconds(lambda: lighting_tables(tf, n, step, oversampling=1, cache=None), repeats)
-    row.approx_s, approx = median_seconds(lambda: preintegrate_approximate(tf, n, step, oversampling=1), repeats)
+    row.lighting_s, _ = median_seconds(
+        lambda: lighting_tables(tf, n, step, oversampling=1, cache=None), repeats
+    )
+    row.approx_s, approx = median_seconds(
+        lambda: preintegrate_approximate(tf, n, step, oversampling=1), repeats
+    )
     row.errors["approximate"] = max_error(approx, idx, truth)
     if run_brute:
         start = time.perf_counter()
@@ -128,7 +134,10 @@ def measure_size(
         )
         pick = rng.integers(0, lengths, size=len(idx))
         truth3d = np.stack(
-            [segment_rgba(tf, values[k : k + 1, 0], values[k : k + 1, 1], layers[pick[k]])[0] for k in range(len(idx))]
+            [
+                segment_rgba(tf, values[k : k + 1, 0], values[k : k + 1, 1], layers[pick[k]])[0]
+                for k in range(len(idx))
+            ]
         )
         got = table3d[pick, idx[:, 0], idx[:, 1]].astype(np.float64)
         row.errors["3d"] = float(np.abs(got - truth3d).max())
@@ -164,7 +173,12 @@ def size_rows(
 
 
 def oversampling_errors(
-    tf: TransferFunction1D, sizes: Sequence[int], factors: Sequence[int], step: float, entries: int, seed: int = 1
+    tf: TransferFunction1D,
+    sizes: Sequence[int],
+    factors: Sequence[int],
+    step: float,
+    entries: int,
+    seed: int = 1,
 ) -> dict[tuple[int, int], float]:
     """Max error of the exact table against the continuous integral per (n, oversampling)."""
     rng = np.random.default_rng(seed)
@@ -209,7 +223,10 @@ def format_size_table(rows: Sequence[SizeRow], lengths: int) -> str:
 def format_oversampling_table(errors: dict[tuple[int, int], float]) -> str:
     sizes = sorted({n for n, _ in errors})
     factors = sorted({m for _, m in errors})
-    lines = ["| n \\ n_t | " + " | ".join(f"n_t = {m}(n-1)+1" for m in factors) + " |", "|" + "---|" * (len(factors) + 1)]
+    lines = [
+        "| n \\ n_t | " + " | ".join(f"n_t = {m}(n-1)+1" for m in factors) + " |",
+        "|" + "---|" * (len(factors) + 1),
+    ]
     for n in sizes:
         lines.append(f"| {n} | " + " | ".join(_fmt_e(errors[(n, m)]) for m in factors) + " |")
     return "\n".join(lines)
@@ -274,16 +291,28 @@ def run_tables(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m benchmarks.preint", description="pre-integration tables: seconds and max error per table size")
-    p.add_argument("--tf", help="transfer-function JSON (default: engine-spiky.json of $VOLREN_SHARED, else the Marschner-Lobb sample TF)")
+    p = argparse.ArgumentParser(
+        prog="python -m benchmarks.preint",
+        description="pre-integration tables: seconds and max error per table size",
+    )
+    p.add_argument(
+        "--tf",
+        help="transfer-function JSON (default: engine-spiky.json of $VOLREN_SHARED, else the Marschner-Lobb sample TF)",
+    )
     p.add_argument("--sizes", type=int_list(2), default=None, help="table sizes n (default 32,64,...,4096)")
     p.add_argument("--step", type=float, default=0.5, help="segment length in world units (default 0.5)")
     p.add_argument("--lengths", type=int, default=64, help="lengths of the 3D table (default 64)")
     p.add_argument("--entries", type=int, default=500, help="random entries checked per size (default 500)")
     p.add_argument("--repeats", type=int, default=5, help="timed runs per table, median reported (default 5)")
-    p.add_argument("--brute-limit", type=float, default=60.0, help="skip brute force predicted above this many s")
-    p.add_argument("--oversampling", type=int_list(1), default=None, help="n_t factors for the error table (1,2,4,8)")
-    p.add_argument("--error-sizes", type=int_list(2), default=None, help="sizes for the error table (64,256,1024)")
+    p.add_argument(
+        "--brute-limit", type=float, default=60.0, help="skip brute force predicted above this many s"
+    )
+    p.add_argument(
+        "--oversampling", type=int_list(1), default=None, help="n_t factors for the error table (1,2,4,8)"
+    )
+    p.add_argument(
+        "--error-sizes", type=int_list(2), default=None, help="sizes for the error table (64,256,1024)"
+    )
     p.add_argument("--out", help="also write the tables to this Markdown file")
     return run(run_tables, p, argv)
 

@@ -48,7 +48,13 @@ from volren.quality import LEVELS, LEVELS_FILE, Measurement, QualityTable
 from volren.renderers.base import QualityLevel
 
 #: Each level's bound on RMSE / VTK default's RMSE (None: the most accurate configuration).
-BOUNDS: dict[str, float | None] = {"draft": 4.0, "interactive": 2.0, "default": 1.0, "high": 0.25, "exact": None}
+BOUNDS: dict[str, float | None] = {
+    "draft": 4.0,
+    "interactive": 2.0,
+    "default": 1.0,
+    "high": 0.25,
+    "exact": None,
+}
 #: The fraction of its bound a level is chosen within: `default` promises at most VTK's error and
 #: is chosen at 0.9 of it, a margin for scenes no run measured.
 MARGINS: dict[str, float] = {"default": 0.9}
@@ -95,7 +101,9 @@ def _configs(kind: str, curves: set[str]) -> dict[tuple[str, str], sweep.Config]
     return out
 
 
-def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], TFClass] | None = None) -> QualityTable:
+def derive(
+    rows: list[dict], source: str, classes: Mapping[tuple[str, str], TFClass] | None = None
+) -> QualityTable:
     """The quality table of these rows (see the module docstring): per volume kind over all its
     scenes, and per TF class (`volren.model.tf_class`) over the scenes `classes` gives that class
     ((dataset, tf) -> class)."""
@@ -103,7 +111,9 @@ def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], TFCl
     peer_ms = vtk_default_ms(rows)
     for kind in VTK_DEFAULT:
         kind_rows = [r for r in rows if r.get("kind") == kind and _number(r.get("rmse")) is not None]
-        peer = {scene_of(r): (float(r["rmse"]), _number(r.get("off"))) for r in kind_rows if _is_vtk_default(r)}
+        peer = {
+            scene_of(r): (float(r["rmse"]), _number(r.get("off"))) for r in kind_rows if _is_vtk_default(r)
+        }
         if not peer:
             continue
         known = _configs(kind, {r["renderer"] for r in kind_rows})
@@ -112,7 +122,11 @@ def derive(rows: list[dict], source: str, classes: Mapping[tuple[str, str], TFCl
             levels[SceneClass(kind)] = found
         for cls in TFClass:
             scenes = {scene for scene in peer if (classes or {}).get(scene_pair(scene)) == cls}
-            found = _levels(kind_rows, {s: e for s, e in peer.items() if s in scenes}, peer_ms, known) if scenes else {}
+            found = (
+                _levels(kind_rows, {s: e for s, e in peer.items() if s in scenes}, peer_ms, known)
+                if scenes
+                else {}
+            )
             if found:
                 levels[SceneClass(kind, cls)] = found
     return QualityTable(levels, dict.fromkeys({n for per in levels.values() for n in per}, source))
@@ -190,7 +204,11 @@ def scene_features(
     value range."""
     from volren.bench.datasets import hard_datasets, sample_datasets, shared_datasets
 
-    datasets = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets(), **hard_datasets()}
+    datasets = {
+        **(shared_datasets(shared) if shared is not None else {}),
+        **sample_datasets(),
+        **hard_datasets(),
+    }
     out: dict[tuple[str, str], tuple[float, float]] = {}
     wanted = sorted(set(scenes))
     for name in sorted({d for d, _ in wanted}):
@@ -299,14 +317,18 @@ def run_quality(args: argparse.Namespace) -> int:
     paths = [Path(p) for p in args.runs]
     source = "python -m benchmarks.quality_levels " + " ".join(str(p) for p in paths)
     rows = read_rows(paths)
-    features = scene_features({(r["dataset"], r["tf"]) for r in rows}, shared_folder(args.shared, required=False))
+    features = scene_features(
+        {(r["dataset"], r["tf"]) for r in rows}, shared_folder(args.shared, required=False)
+    )
     classes = {scene: TFClass.of_features(*value) for scene, value in features.items()}
     for (dataset, tf), (sharpness, visible) in sorted(features.items()):
         print(f"TF class of {dataset}/{tf}: {classes[dataset, tf].value} (sharpness {sharpness:.3g}, "
               f"visible on {visible:.2g} of the range)")  # fmt: skip
     quality = derive(rows, source, classes)
     if not quality.levels:
-        raise VolrenError(f"{', '.join(args.runs)}: no scene has VTK's default measured, which the levels are defined against")
+        raise VolrenError(
+            f"{', '.join(args.runs)}: no scene has VTK's default measured, which the levels are defined against"
+        )
     written = write_levels(quality, Path(args.out) if args.out else None)
     for kind, renderers in quality.levels.items():
         for name, per in renderers.items():
@@ -322,9 +344,13 @@ def run_quality(args: argparse.Namespace) -> int:
         print(f"auto at {level} on {kind}: {choice}, {summary_line(group)} VTK's default's RMSE")
     for kind in sorted({s.kind.kind for s in by_class(scenes)}):
         for level in LEVELS:
-            print(f"auto at {level} on {kind} by TF class: {summary_line(classed(scenes, kind, level))} VTK's default's RMSE")
+            print(
+                f"auto at {level} on {kind} by TF class: {summary_line(classed(scenes, kind, level))} VTK's default's RMSE"
+            )
     if args.markdown:
-        command = source + (f" --shared {args.shared}" if args.shared else "") + f" --markdown {args.markdown}"
+        command = (
+            source + (f" --shared {args.shared}" if args.shared else "") + f" --markdown {args.markdown}"
+        )
         text = markdown(scenes, {k: c.value for k, c in classes.items()}, features, command)
         try:
             Path(args.markdown).write_text(text, encoding="utf-8")
@@ -335,14 +361,27 @@ def run_quality(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.quality_levels", description=__doc__.splitlines()[0])
-    parser.add_argument("runs", nargs="+", help="runs.csv files of `volren bench run` (a later file wins on overlaps)")
-    parser.add_argument("--out", help="a folder to write NAME/quality_levels.json into per renderer (default: each "
-                                      "renderer's own package, the files volren uses)")
-    parser.add_argument("--shared", help="the folder with data/ and scenes/, whose scenes' TFs give the TF classes "
-                                         "(default: $VOLREN_SHARED; without it only the bundled samples are classed)")
-    parser.add_argument("--markdown", help="also write `auto` against VTK's default per level and scene there "
-                                           "(BENCHMARKS.md's fragment docs/bench/quality.md)")
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.quality_levels", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "runs", nargs="+", help="runs.csv files of `volren bench run` (a later file wins on overlaps)"
+    )
+    parser.add_argument(
+        "--out",
+        help="a folder to write NAME/quality_levels.json into per renderer (default: each "
+        "renderer's own package, the files volren uses)",
+    )
+    parser.add_argument(
+        "--shared",
+        help="the folder with data/ and scenes/, whose scenes' TFs give the TF classes "
+        "(default: $VOLREN_SHARED; without it only the bundled samples are classed)",
+    )
+    parser.add_argument(
+        "--markdown",
+        help="also write `auto` against VTK's default per level and scene there "
+        "(BENCHMARKS.md's fragment docs/bench/quality.md)",
+    )
     return run(run_quality, parser, argv)
 
 

@@ -32,7 +32,9 @@ def ratios(rows: list[dict], ours: str) -> dict[tuple[str, str, str], list[tuple
         reach = [m for m in mine[r["dataset"], r["tf"]] if m[0] <= float(r["rmse"])]
         if reach:
             best = min(reach, key=lambda m: m[1])
-            out[r["dataset"], r["tf"], r["renderer"]].append((float(r["ms"]) / best[1], float(r["ms"]), r["settings"], best[2]))
+            out[r["dataset"], r["tf"], r["renderer"]].append(
+                (float(r["ms"]) / best[1], float(r["ms"]), r["settings"], best[2])
+            )
     return out
 
 
@@ -69,7 +71,6 @@ def main(argv: list[str] | None = None) -> int:
             print(f"error: {args.fragment}: cannot write: {exc.strerror or exc}", file=sys.stderr)
             return 1
     return 0
-
 
 
 if __name__ == "__main__":

@@ -29,44 +29,95 @@ SECTIONS = (
     ("summary.md", "Run time against error", "How fast is each renderer for a given error, against VTK?"),
     ("skip.md", "The cost of skipping", "What does each skipping technique save, and what does it change?"),
     ("stress.md", "Numerical stress", "Do extreme inputs give NaN, Inf or out-of-range pixels?"),
-    ("quality.md", "Fast by default: `auto` at each quality level against VTK's default",
-     "What does a render with no options (or with `--quality LEVEL`) get, against VTK's default, scene by scene? "
-     "(`python -m benchmarks.quality_levels ... --markdown`)"),
-    ("defaults_fidelity.md", "No options on hard scenes, at every image size",
-     "Does a render with no options keep what VTK's default keeps: thin tubes and sheets, specks, noise, steps, "
-     "anisotropic grids, from 128^2 to 1024^2 (RMSE and pixels off by more than 0.1)?"),
-    ("defaults_fidelity_shared.md", "No options on the shared scenes, 128^2 to 512^2",
-     "The same question on the shared scenes and samples (the table was chosen at 512^2 on them, so 128^2 and "
-     "256^2 are held out)."),
-    ("defaults_ab.md", "No options against VTK's default, frames interleaved",
-     "The same question as the table above, each scene's two renderers drawing alternately so that both see the "
-     "same load (`python -m benchmarks.defaults_ab`)"),
-    ("plugins.md", "The plugin renderers (shear-warp, object order)",
-     "How do the papers' CPU algorithms compare with VTK and the slicer at equal error, and with the papers' tables?"),
-    ("shearwarp_peers.md", "Shear-warp against VTK's fastest mapper and the slicer, one run",
-     "At equal or lower error, how much faster is `shearwarp` than VTK's fixed-point mapper and the slicer, scene by "
-     "scene, timed in one run? (`volren bench run ... --renderers shearwarp,vtk-fixed_point,slicer`, then "
-     "`python -m benchmarks.ratios ... --fragment`)"),
-    ("occlusion_bound.md", "What hidden volume removal could occlude at most",
-     "Of the cells a TF leaves visible, how many lie behind rays that are already opaque, against what "
-     "objectorder's occlusion map skips? (`python -m benchmarks.occlusion_bound`)"),
-    ("resampling_floor.md", "What resampling costs against a point-sampled reference",
-     "How close can a renderer that resamples its rays (shear-warp's warp) come to `reference`, whose pixels are "
-     "point samples, however exact its rays? (`python -m benchmarks.resampling_floor`)"),
-    ("app.md", "Desktop app responsiveness", "Does each gesture follow the hand: previews per second, release to full "
-     "frame, the GUI thread's longest stall? (`volren bench app`)"),
-    ("app_latency.md", "Desktop app latency", "How long from a TF edit to the new frame; frames per second. "
-     "(`python -m benchmarks.app_latency`)"),
-    ("first_preview.md", "The first gesture after opening", "How long does the first preview of a gesture wait "
-     "when it is drawn by another renderer than the still frames? (`python -m benchmarks.first_preview`)"),
-    ("zarr_levels.md", "OME-Zarr levels", "What does writing and reading a pyramid cost, and what does a coarser "
-     "level save per frame, at what error? (`python -m benchmarks.zarr_levels`)"),
-    ("scale.md", "Scaling: out of core and on a cluster", "How do frame time and memory grow from 256^3 to 2048^3 "
-     "streamed within 2 GB, and what do 2 workers give over 1? (`python -m benchmarks.scale`)"),
-    ("oneshot.md", "One-shot renders", "Where does a `volren render`'s wall time go, and how much slower is the "
-     "first run than the next? (`python -m benchmarks.oneshot`)"),
-    ("gpu.md", "On a GPU", "How fast are the OpenGL renderers on a real GPU, at what error? "
-     "(`python -m benchmarks.gpu`, on a machine with one)"),
+    (
+        "quality.md",
+        "Fast by default: `auto` at each quality level against VTK's default",
+        "What does a render with no options (or with `--quality LEVEL`) get, against VTK's default, scene by scene? "
+        "(`python -m benchmarks.quality_levels ... --markdown`)",
+    ),
+    (
+        "defaults_fidelity.md",
+        "No options on hard scenes, at every image size",
+        "Does a render with no options keep what VTK's default keeps: thin tubes and sheets, specks, noise, steps, "
+        "anisotropic grids, from 128^2 to 1024^2 (RMSE and pixels off by more than 0.1)?",
+    ),
+    (
+        "defaults_fidelity_shared.md",
+        "No options on the shared scenes, 128^2 to 512^2",
+        "The same question on the shared scenes and samples (the table was chosen at 512^2 on them, so 128^2 and "
+        "256^2 are held out).",
+    ),
+    (
+        "defaults_ab.md",
+        "No options against VTK's default, frames interleaved",
+        "The same question as the table above, each scene's two renderers drawing alternately so that both see the "
+        "same load (`python -m benchmarks.defaults_ab`)",
+    ),
+    (
+        "plugins.md",
+        "The plugin renderers (shear-warp, object order)",
+        "How do the papers' CPU algorithms compare with VTK and the slicer at equal error, and with the papers' tables?",
+    ),
+    (
+        "shearwarp_peers.md",
+        "Shear-warp against VTK's fastest mapper and the slicer, one run",
+        "At equal or lower error, how much faster is `shearwarp` than VTK's fixed-point mapper and the slicer, scene by "
+        "scene, timed in one run? (`volren bench run ... --renderers shearwarp,vtk-fixed_point,slicer`, then "
+        "`python -m benchmarks.ratios ... --fragment`)",
+    ),
+    (
+        "occlusion_bound.md",
+        "What hidden volume removal could occlude at most",
+        "Of the cells a TF leaves visible, how many lie behind rays that are already opaque, against what "
+        "objectorder's occlusion map skips? (`python -m benchmarks.occlusion_bound`)",
+    ),
+    (
+        "resampling_floor.md",
+        "What resampling costs against a point-sampled reference",
+        "How close can a renderer that resamples its rays (shear-warp's warp) come to `reference`, whose pixels are "
+        "point samples, however exact its rays? (`python -m benchmarks.resampling_floor`)",
+    ),
+    (
+        "app.md",
+        "Desktop app responsiveness",
+        "Does each gesture follow the hand: previews per second, release to full "
+        "frame, the GUI thread's longest stall? (`volren bench app`)",
+    ),
+    (
+        "app_latency.md",
+        "Desktop app latency",
+        "How long from a TF edit to the new frame; frames per second. (`python -m benchmarks.app_latency`)",
+    ),
+    (
+        "first_preview.md",
+        "The first gesture after opening",
+        "How long does the first preview of a gesture wait "
+        "when it is drawn by another renderer than the still frames? (`python -m benchmarks.first_preview`)",
+    ),
+    (
+        "zarr_levels.md",
+        "OME-Zarr levels",
+        "What does writing and reading a pyramid cost, and what does a coarser "
+        "level save per frame, at what error? (`python -m benchmarks.zarr_levels`)",
+    ),
+    (
+        "scale.md",
+        "Scaling: out of core and on a cluster",
+        "How do frame time and memory grow from 256^3 to 2048^3 "
+        "streamed within 2 GB, and what do 2 workers give over 1? (`python -m benchmarks.scale`)",
+    ),
+    (
+        "oneshot.md",
+        "One-shot renders",
+        "Where does a `volren render`'s wall time go, and how much slower is the "
+        "first run than the next? (`python -m benchmarks.oneshot`)",
+    ),
+    (
+        "gpu.md",
+        "On a GPU",
+        "How fast are the OpenGL renderers on a real GPU, at what error? "
+        "(`python -m benchmarks.gpu`, on a machine with one)",
+    ),
 )
 
 
@@ -190,7 +241,11 @@ def run_all(args: argparse.Namespace) -> int:
         print(f"bench {name}: exit {code} after {time.perf_counter() - start:.0f} s", flush=True)
         status = status or code
     markdown = Path(args.markdown)
-    command = "python -m benchmarks.report --out " + str(out) + (f" --run-args {shlex.quote(args.run_args)}" if args.run_args else "")
+    command = (
+        "python -m benchmarks.report --out "
+        + str(out)
+        + (f" --run-args {shlex.quote(args.run_args)}" if args.run_args else "")
+    )
     try:
         markdown.write_text(compose(out, markdown.resolve().parent, command=command))
     except OSError as exc:
@@ -200,13 +255,19 @@ def run_all(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    b = argparse.ArgumentParser(prog="python -m benchmarks.report", description="volren bench run, skip, stress, app and the app's latency into one folder, then BENCHMARKS.md")
+    b = argparse.ArgumentParser(
+        prog="python -m benchmarks.report",
+        description="volren bench run, skip, stress, app and the app's latency into one folder, then BENCHMARKS.md",
+    )
     b.add_argument("--out", default="docs/bench", help="folder for every result (default docs/bench)")
     b.add_argument("--markdown", default="BENCHMARKS.md", help="the summary file (default BENCHMARKS.md)")
     b.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     b.add_argument("--run-args", default="", help="extra arguments for `bench run`, e.g. '--steps 1,0.5'")
-    b.add_argument("--only", default="run,skip,stress,app,app_latency,plugins",
-                   help="which benchmarks to run, of run, skip, stress, app, app_latency, plugins (default: all)")
+    b.add_argument(
+        "--only",
+        default="run,skip,stress,app,app_latency,plugins",
+        help="which benchmarks to run, of run, skip, stress, app, app_latency, plugins (default: all)",
+    )
     return run(run_all, b, argv)
 
 

@@ -52,17 +52,23 @@ def half_way_downsample(fine: NDArray, k: int) -> NDArray[np.float64]:
 
 def measure(args: argparse.Namespace) -> int:
     if any(k % 2 for k in args.factors):
-        raise VolrenError(f"--factors must be even (pixel centres then lie half-way between fine rays), got {args.factors}")
+        raise VolrenError(
+            f"--factors must be even (pixel centres then lie half-way between fine rays), got {args.factors}"
+        )
     datasets = shared_datasets(shared_folder(args.shared))
     size = args.size
-    lines = [f"Measured {datetime.date.today()} by `python -m benchmarks.resampling_floor --datasets "
-             f"{','.join(args.datasets)} --styles {','.join(args.styles)} --factors "
-             f"{','.join(map(str, args.factors))}`: {size}x{size}, each scene's camera, RMSE against `reference`. "
-             "*exact rays*: `raycast`, pre-integrated, step 0.25, one ray per pixel centre; *rays k x, "
-             "half-way*: the same rays at k times the resolution, each pixel Catmull-Rom interpolated "
-             "half-way between them (a resampler with perfect rays, in the worst alignment); *shearwarp*: "
-             "its default level, then `oversampling` k (intermediate pixels per output pixel along each axis).",
-             "", f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}", ""]
+    lines = [
+        f"Measured {datetime.date.today()} by `python -m benchmarks.resampling_floor --datasets "
+        f"{','.join(args.datasets)} --styles {','.join(args.styles)} --factors "
+        f"{','.join(map(str, args.factors))}`: {size}x{size}, each scene's camera, RMSE against `reference`. "
+        "*exact rays*: `raycast`, pre-integrated, step 0.25, one ray per pixel centre; *rays k x, "
+        "half-way*: the same rays at k times the resolution, each pixel Catmull-Rom interpolated "
+        "half-way between them (a resampler with perfect rays, in the worst alignment); *shearwarp*: "
+        "its default level, then `oversampling` k (intermediate pixels per output pixel along each axis).",
+        "",
+        f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}",
+        "",
+    ]
     head = ["scene", "exact rays"] + [f"rays {k}x, half-way" for k in args.factors]
     head += ["shearwarp default"] + [f"shearwarp oversampling {k}" for k in args.factors]
     lines += ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
@@ -85,11 +91,15 @@ def measure(args: argparse.Namespace) -> int:
             shear.set_transfer_function(tf)
             row = [image_error(rays.render(camera, size, size), ref).rmse]
             for k in args.factors:
-                row.append(image_error(half_way_downsample(rays.render(camera, k * size, k * size), k), ref).rmse)
+                row.append(
+                    image_error(half_way_downsample(rays.render(camera, k * size, k * size), k), ref).rmse
+                )
             shear.set_settings(RenderSettings(step=0.5, preintegration=True))
             row.append(image_error(shear.render(camera, size, size), ref).rmse)
             for k in args.factors:
-                shear.set_settings(RenderSettings(step=0.5, preintegration=True, options={"oversampling": float(k)}))
+                shear.set_settings(
+                    RenderSettings(step=0.5, preintegration=True, options={"oversampling": float(k)})
+                )
                 row.append(image_error(shear.render(camera, size, size), ref).rmse)
             line = f"| {name} {style} | " + " | ".join(f"{v:.4f}" for v in row) + " |"
             print(line, flush=True)
@@ -105,11 +115,17 @@ def measure(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.resampling_floor", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.resampling_floor", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
-    parser.add_argument("--datasets", type=lambda s: s.split(","), default=["bonsai", "engine", "aneurism", "ironProt"])
+    parser.add_argument(
+        "--datasets", type=lambda s: s.split(","), default=["bonsai", "engine", "aneurism", "ironProt"]
+    )
     parser.add_argument("--styles", type=lambda s: s.split(","), default=["smooth", "opaque"])
-    parser.add_argument("--factors", type=int_list(2), default=[2, 4], help="even oversampling factors (default 2,4)")
+    parser.add_argument(
+        "--factors", type=int_list(2), default=[2, 4], help="even oversampling factors (default 2,4)"
+    )
     parser.add_argument("--size", type=int, default=512, help="output pixels along each axis (default 512)")
     parser.add_argument("--out", help="folder to write resampling_floor.md into (BENCHMARKS.md's section)")
     return run(measure, parser, argv)

@@ -58,10 +58,14 @@ def probe(path: Path, level: int, memory: int, size: int, frames: int, renderer:
     """`scale_probe` in a fresh process: its frames, peak memory and counters."""
     command = [sys.executable, "-m", "benchmarks.scale_probe", str(path), str(level), str(memory), str(size),
                str(frames), renderer]  # fmt: skip
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p))
+    env = dict(
+        os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p)
+    )
     done = subprocess.run(command, capture_output=True, text=True, check=False, env=env)
     if done.returncode != 0:
-        raise VolrenError(f"scale probe of {path.name} level {level} failed: {done.stderr.strip().splitlines()[-1:]}")
+        raise VolrenError(
+            f"scale probe of {path.name} level {level} failed: {done.stderr.strip().splitlines()[-1:]}"
+        )
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
@@ -78,7 +82,9 @@ def cluster_frames(path: Path, workers: int, size: int, frames: int, renderer: s
         try:
             for _ in range(frames):
                 start = time.perf_counter()
-                _, frame = cluster.render(scale_settings(renderer), scale_tf(), scale_camera(image), size, size)
+                _, frame = cluster.render(
+                    scale_settings(renderer), scale_tf(), scale_camera(image), size, size
+                )
                 times.append((time.perf_counter() - start) * 1000.0)
                 shares.append(frame.composite_ms / frame.total_ms)
         finally:
@@ -180,8 +186,11 @@ def run_scale(sizes: list[int], image: int, memory: int, frames: int, cluster_si
                    "frames": len(timed), "peak_rss": result["peak_rss"], "cache_peak": result["cache_peak"],
                    "bricks": result["bricks"], "drawn": result["drawn"]}  # fmt: skip
             rows.append(row)
-            print(f"scale {n}^3 level {level}{' (LoD)' if level == lod else ''}: {row['ms'] / 1000:.1f} s a frame, "
-                  f"peak memory {human_size(row['peak_rss'])}, {row['drawn']} of {row['bricks']} bricks", flush=True)
+            print(
+                f"scale {n}^3 level {level}{' (LoD)' if level == lod else ''}: {row['ms'] / 1000:.1f} s a frame, "
+                f"peak memory {human_size(row['peak_rss'])}, {row['drawn']} of {row['bricks']} bricks",
+                flush=True,
+            )
     path = ensure_volume(data, cluster_size)
     cluster = {}
     for workers in (1, 2):
@@ -189,8 +198,11 @@ def run_scale(sizes: list[int], image: int, memory: int, frames: int, cluster_si
         timed = result["ms"][1:] or result["ms"]
         cluster[workers] = {"ms": statistics.median(timed), "composite_share": statistics.median(result["composite_share"][1:] or result["composite_share"]),
                             "runs": result["runs"]}  # fmt: skip
-        print(f"scale cluster of {workers}: {cluster[workers]['ms'] / 1000:.2f} s a frame, final composite "
-              f"{100 * cluster[workers]['composite_share']:.1f} %", flush=True)
+        print(
+            f"scale cluster of {workers}: {cluster[workers]['ms'] / 1000:.2f} s a frame, final composite "
+            f"{100 * cluster[workers]['composite_share']:.1f} %",
+            flush=True,
+        )
     costs = layer_costs(image)
     model = {p: composite_model(costs, image * image, p) for p in (8, 16, 64, 256, 1024)}
     data_out = {"sizes": rows, "cluster": cluster, "cluster_size": cluster_size, "image": image, "memory": memory,
@@ -215,8 +227,10 @@ def scale_markdown(d: dict) -> str:
     ]
     for r in d["sizes"]:
         level = f"{r['level']}" + (" (level of detail)" if r["lod"] else "")
-        lines.append(f"| {r['size']}^3 ({human_size(r['size'] ** 3 * 2)}) | {level} | {r['ms'] / 1000:.2f} s | "
-                     f"{human_size(r['peak_rss'])} | {human_size(r['cache_peak'])} | {r['drawn']} of {r['bricks']} |")
+        lines.append(
+            f"| {r['size']}^3 ({human_size(r['size'] ** 3 * 2)}) | {level} | {r['ms'] / 1000:.2f} s | "
+            f"{human_size(r['peak_rss'])} | {human_size(r['cache_peak'])} | {r['drawn']} of {r['bricks']} |"
+        )
     cluster = {int(k): v for k, v in d["cluster"].items()}
     c1, c2 = cluster[1], cluster[2]
     lines += [
@@ -236,9 +250,12 @@ def scale_markdown(d: dict) -> str:
     ]
     for p, m in d["model"].items():
         lines.append(f"| {p} | {m['gather']:.3f} | {m['binary_swap']:.3f} | {m['radix_k']:.3f} |")
-    lines += ["", "Gather grows with P; binary swap and radix-k stay near one frame's worth of sends and composites "
-              "plus their rounds' latencies, radix-k with fewer rounds. Layers here are cropped to each run's pixels, "
-              "so the measured composites are smaller than the model's full-frame layers."]
+    lines += [
+        "",
+        "Gather grows with P; binary swap and radix-k stay near one frame's worth of sends and composites "
+        "plus their rounds' latencies, radix-k with fewer rounds. Layers here are cropped to each run's pixels, "
+        "so the measured composites are smaller than the model's full-frame layers.",
+    ]
     return "\n".join(lines) + "\n"
 
 
@@ -261,14 +278,26 @@ def run_scale_args(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     s = argparse.ArgumentParser(prog=COMMAND, description="time and peak memory against volume size, out of core "
                                 "and on a LocalCluster")  # fmt: skip
-    s.add_argument("--sizes", default="256,512,1024,2048", help="volume sides n (n^3 uint16; default 256,512,1024,2048)")
+    s.add_argument(
+        "--sizes", default="256,512,1024,2048", help="volume sides n (n^3 uint16; default 256,512,1024,2048)"
+    )
     s.add_argument("--image", type=int, default=1024, help="image side in pixels (default 1024)")
     s.add_argument("--memory", default="2GB", help="chunk cache budget of each process (default 2GB)")
-    s.add_argument("--frames", type=int, default=3, help="frames per measurement; the first is not counted (default 3)")
-    s.add_argument("--cluster-size", type=int, default=512, help="volume side for the 1- and 2-worker runs (default 512)")
+    s.add_argument(
+        "--frames", type=int, default=3, help="frames per measurement; the first is not counted (default 3)"
+    )
+    s.add_argument(
+        "--cluster-size", type=int, default=512, help="volume side for the 1- and 2-worker runs (default 512)"
+    )
     s.add_argument("--renderer", default="slicer", help="a renderer that draws bricks (default slicer)")
-    s.add_argument("--data", default="bench-data", help="folder for the generated OME-Zarr volumes (kept; default bench-data)")
-    s.add_argument("--out", default="docs/bench", help="folder for scale.md and scale.json (default docs/bench)")
+    s.add_argument(
+        "--data",
+        default="bench-data",
+        help="folder for the generated OME-Zarr volumes (kept; default bench-data)",
+    )
+    s.add_argument(
+        "--out", default="docs/bench", help="folder for scale.md and scale.json (default docs/bench)"
+    )
     return run(run_scale_args, s, argv)
 
 

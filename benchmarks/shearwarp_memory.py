@@ -58,16 +58,22 @@ def _measure(volume: UniformVolume, tf: TransferFunction1D, extent: int) -> dict
         ranges_bytes += sum(r.nbytes for r in ranges)
         runs_bytes += runs.nbytes
     # the copy along z is the volume itself where its type is kept (`copy_dtype`): no memory of its own
-    copies = sum(c.values.nbytes for c in classified.copies.values() if not np.shares_memory(c.values, volume.values))
+    copies = sum(
+        c.values.nbytes for c in classified.copies.values() if not np.shares_memory(c.values, volume.values)
+    )
     return {"copies": copies, "ranges": ranges_bytes, "runs": runs_bytes, "copy_ms": copy_ms,
             "ranges_ms": ranges_ms, "rebuild_ms": rebuild_ms}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.shearwarp_memory", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.shearwarp_memory", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("datasets", nargs="?", default="bonsai,engine,aneurism,ironProt")
     parser.add_argument("--shared", type=Path, default=Path(os.environ.get("VOLREN_SHARED", "../shared")))
-    parser.add_argument("--extent", type=int, default=1, help="run extent (cells a ray moves per slab, rounded up)")
+    parser.add_argument(
+        "--extent", type=int, default=1, help="run extent (cells a ray moves per slab, rounded up)"
+    )
     args = parser.parse_args(argv)
     datasets = shared_datasets(args.shared)
     # compile the kernels first, on a small volume

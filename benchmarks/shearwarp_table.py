@@ -6,6 +6,7 @@ median of warm frames with the camera turning 2 degrees of azimuth per frame.
 CONFIGS_JSON is a list of {"step": S, "pre": bool, <renderer options>}; docs/shearwarp.md holds a run.
 The shared folder is $VOLREN_SHARED (default ../shared); reference images are cached as
 volren.testing.reference_images does."""
+
 import json
 import os
 import sys
@@ -38,7 +39,9 @@ def main():
             r.set_transfer_function(tf)
             for cfg in configs:
                 cfg = dict(cfg)
-                s = RenderSettings(step=cfg.pop("step", 0.5), preintegration=cfg.pop("pre", False), options=cfg)
+                s = RenderSettings(
+                    step=cfg.pop("step", 0.5), preintegration=cfg.pop("pre", False), options=cfg
+                )
                 r.set_settings(s)
                 img = r.render(d.camera(vol.bounds), 512, 512)
                 err = image_error(img, ref)
@@ -47,10 +50,14 @@ def main():
                     r.render(d.camera(vol.bounds, turn=2.0 * (f + 1)), 512, 512)
                     times.append(r.last_frame.ms)
                 c = r.last_frame.counters
-                print(f"{name:9s} {style:7s} step {s.step:g} {'pre ' if s.preintegration else 'post'} {json.dumps(s.options):40s} "
-                      f"RMSE {err.rmse:.5f} max {err.max_abs:.3f}  ms median {np.median(times):7.1f} "
-                      f"samples {c['samples']:.3g} inter {c['intermediate_width']:.0f}x{c['intermediate_height']:.0f} tl {c.get('table_lengths')}", flush=True)
+                print(
+                    f"{name:9s} {style:7s} step {s.step:g} {'pre ' if s.preintegration else 'post'} {json.dumps(s.options):40s} "
+                    f"RMSE {err.rmse:.5f} max {err.max_abs:.3f}  ms median {np.median(times):7.1f} "
+                    f"samples {c['samples']:.3g} inter {c['intermediate_width']:.0f}x{c['intermediate_height']:.0f} tl {c.get('table_lengths')}",
+                    flush=True,
+                )
         r.release()
+
 
 if __name__ == "__main__":
     main()

@@ -95,7 +95,10 @@ def main() -> None:
         tf = ramp_tf(volume)
         nx, ny, nz = volume.dimensions
         for projection in args.projections.split(","):
-            secs = [frame_seconds(volume, tf, column, projection == "parallel", args.degrees) for column in COLUMNS]
+            secs = [
+                frame_seconds(volume, tf, column, projection == "parallel", args.degrees)
+                for column in COLUMNS
+            ]
             cells = " | ".join(f"{s:.3f}" for s in secs)
             print(f"| {name} | {nx}x{ny}x{nz} | {100 * transparent_fraction(volume, tf):.1f}% | {projection} | {cells} |",
                   flush=True)  # fmt: skip

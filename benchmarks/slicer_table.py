@@ -46,7 +46,11 @@ def configs(steps: Iterable[float], paths: Iterable[str]) -> list[Config]:
         for path in paths:
             for pre in (False, True):
                 name = f"slicer {path} {'pre' if pre else 'post'}"
-                out.append(Config(name, "slicer", RenderSettings(step=step, preintegration=pre, options={"path": path})))
+                out.append(
+                    Config(
+                        name, "slicer", RenderSettings(step=step, preintegration=pre, options={"path": path})
+                    )
+                )
         out.append(Config("vtk", "vtk", RenderSettings(step=step)))
     return out
 
@@ -79,7 +83,9 @@ def run(
         volume = load_volume(shared / "data" / path, scalars=scalars)
         camera = Camera.orbit(volume.bounds, az, el, zoom)
         for style in styles:
-            tf = TransferFunction1D.from_dict(json.loads((shared / "scenes" / f"{dataset}-{style}.json").read_text()))
+            tf = TransferFunction1D.from_dict(
+                json.loads((shared / "scenes" / f"{dataset}-{style}.json").read_text())
+            )
             reference = reference_image(volume, tf, camera, size, size)
             for config in configs(steps, paths):
                 with prepared_renderer(config.renderer, volume, tf, config.settings) as renderer:
@@ -126,7 +132,9 @@ def equal_error_rows(rows: list[dict]) -> list[str]:
     for peer in (r for r in rows if r["renderer"] == "vtk"):
         scene = [r for r in rows if (r["dataset"], r["tf"]) == (peer["dataset"], peer["tf"])]
         (match,) = equal_error([peer], [r for r in scene if r["renderer"].startswith("slicer")])
-        head = f"| {peer['dataset']} | {peer['tf']} | {peer['step']:g} | {peer['ms']:.1f} | {peer['rmse']:.5f} |"
+        head = (
+            f"| {peer['dataset']} | {peer['tf']} | {peer['step']:g} | {peer['ms']:.1f} | {peer['rmse']:.5f} |"
+        )
         best = match.ours
         if best is None:
             out.append(head + " none | - | - | - |")
@@ -178,14 +186,19 @@ def run_table(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    s = argparse.ArgumentParser(prog="python -m benchmarks.slicer_table", description="slicer and vtk: ms per frame and RMSE against reference per step")
+    s = argparse.ArgumentParser(
+        prog="python -m benchmarks.slicer_table",
+        description="slicer and vtk: ms per frame and RMSE against reference per step",
+    )
     s.add_argument("--shared", help="the shared folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     s.add_argument("--datasets", default="bonsai,engine", help="comma-separated (default bonsai,engine)")
     s.add_argument("--styles", default="smooth,spiky,opaque", help="TF styles (default smooth,spiky,opaque)")
     s.add_argument("--steps", default="1,0.5,0.25", help="sample steps (default 1,0.5,0.25)")
     s.add_argument("--paths", default="march", help="slicer paths: march, slices or both (default march)")
     s.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
-    s.add_argument("--frames", type=int, default=5, help="timed frames per setting, median reported (default 5)")
+    s.add_argument(
+        "--frames", type=int, default=5, help="timed frames per setting, median reported (default 5)"
+    )
     s.add_argument("--out", help="also write the table to this Markdown file")
     return run_command(run_table, s, argv)
 

@@ -80,18 +80,29 @@ def measure(args: argparse.Namespace) -> int:
                                          partial(_move_opacity, tf, span=hi - lo))  # fmt: skip
                 finally:
                     renderer.release()
-                print(f"| {renderer_name} | {name} {style} | {still:.0f} | {colour:.0f} | {opacity:.0f} | |", flush=True)
+                print(
+                    f"| {renderer_name} | {name} {style} | {still:.0f} | {colour:.0f} | {opacity:.0f} | |",
+                    flush=True,
+                )
     return 0
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m benchmarks.tf_edit_latency", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m benchmarks.tf_edit_latency", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
-    parser.add_argument("--renderers", default="shearwarp,slicer,vtk", help="comma-separated (default shearwarp,slicer,vtk)")
-    parser.add_argument("--datasets", default="bonsai", help="comma-separated shared datasets (default bonsai)")
+    parser.add_argument(
+        "--renderers", default="shearwarp,slicer,vtk", help="comma-separated (default shearwarp,slicer,vtk)"
+    )
+    parser.add_argument(
+        "--datasets", default="bonsai", help="comma-separated shared datasets (default bonsai)"
+    )
     parser.add_argument("--styles", default="smooth", help="comma-separated TF styles (default smooth)")
     parser.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
-    parser.add_argument("--edits", type=int, default=5, help="timed frames per kind of edit, median (default 5)")
+    parser.add_argument(
+        "--edits", type=int, default=5, help="timed frames per kind of edit, median (default 5)"
+    )
     parser.add_argument("--preintegration", action="store_true", help="pre-integrated TFs (default: the renderer's "
                         "settings default, post-classified)")  # fmt: skip
     return run(measure, parser, argv)

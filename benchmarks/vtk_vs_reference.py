@@ -50,7 +50,9 @@ def main(argv: list[str] | None = None) -> None:
         volume = load_volume(shared / "data" / path, scalars=scalars)
         camera = Camera.orbit(volume.bounds, az, el, zoom)
         for style in args.styles.split(","):
-            tf = TransferFunction1D.from_dict(json.loads((shared / "scenes" / f"{dataset}-{style}.json").read_text()))
+            tf = TransferFunction1D.from_dict(
+                json.loads((shared / "scenes" / f"{dataset}-{style}.json").read_text())
+            )
             settings = RenderSettings(step=args.step)
             start = time.perf_counter()
             with prepared_renderer("reference", volume, tf) as reference_renderer:
@@ -59,8 +61,10 @@ def main(argv: list[str] | None = None) -> None:
             with prepared_renderer("vtk", volume, tf, settings) as renderer:
                 ms, image = time_frames(renderer, camera, size, size, args.frames)
             err = image_error(image, reference)
-            print(f"| {dataset} | {style} | {ms:.1f} | {ref_ms:.0f} | {err.rmse:.5f} | {err.max_abs:.4f} | {err.psnr:.1f} |",
-                  flush=True)
+            print(
+                f"| {dataset} | {style} | {ms:.1f} | {ref_ms:.0f} | {err.rmse:.5f} | {err.max_abs:.4f} | {err.psnr:.1f} |",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

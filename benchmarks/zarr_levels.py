@@ -19,7 +19,11 @@ import time
 from functools import partial
 from pathlib import Path
 
-DATASETS = {"bonsai": "uniform/bonsai.vti", "engine": "uniform/engine.vti", "aneurism": "uniform/aneurism.vti"}
+DATASETS = {
+    "bonsai": "uniform/bonsai.vti",
+    "engine": "uniform/engine.vti",
+    "aneurism": "uniform/aneurism.vti",
+}
 
 
 def _median_ms(action, repeats: int) -> float:
@@ -48,8 +52,10 @@ def main() -> int:
     from volren.testing.metrics import image_error
 
     print(f"OME-Zarr pyramids, 64^3 bricks; frames {args.size}x{args.size}, median of {args.repeats}")
-    print("| dataset | write pyramid, ms | level | dims | read level, ms | renderer | frame, ms | frame ratio, full/level "
-          "| RMSE against full |")
+    print(
+        "| dataset | write pyramid, ms | level | dims | read level, ms | renderer | frame, ms | frame ratio, full/level "
+        "| RMSE against full |"
+    )
     print("|---|---|---|---|---|---|---|---|---|")
     folder = Path(tempfile.mkdtemp(prefix="volren-zarr-"))
     try:
@@ -66,7 +72,9 @@ def main() -> int:
                 data = load_level(path, level)
                 with prepared_renderer(renderer, data, tf, settings) as r:
                     image, _ = render_frame(r, camera, args.size, args.size)  # warm-up: tables, caches
-                    frame_ms = _median_ms(partial(render_frame, r, camera, args.size, args.size), args.repeats)
+                    frame_ms = _median_ms(
+                        partial(render_frame, r, camera, args.size, args.size), args.repeats
+                    )
                 if full_image is None:
                     full_image, full_ms = image, frame_ms
                 error = image_error(image, full_image).rmse

@@ -43,7 +43,9 @@ def main() -> int:
     shown = []
     window.fullFrameShown.connect(shown.append)
     shared = Path(args.shared)
-    window.files.apply_loaded(load_input(shared / "data/uniform/bonsai.vti", shared / "scenes/bonsai-smooth.json"))
+    window.files.apply_loaded(
+        load_input(shared / "data/uniform/bonsai.vti", shared / "scenes/bonsai-smooth.json")
+    )
     _wait(app, lambda: bool(shown) and not window.service.warming)
     window.overlay_actions["legend"].setChecked(True)
     app.processEvents()

@@ -53,7 +53,11 @@ def derived_markers(item: pytest.Item) -> set[str]:
     fixtures = set(getattr(item, "fixturenames", ()))
     marks = {mark.name for mark in item.iter_markers()}
     derived = set()
-    if fixtures & QT_FIXTURES or item.path.is_relative_to(APP_TESTS) or imports_qt(getattr(item, "module", None)):
+    if (
+        fixtures & QT_FIXTURES
+        or item.path.is_relative_to(APP_TESTS)
+        or imports_qt(getattr(item, "module", None))
+    ):
         derived.add("qt")
     if fixtures & VTK_FIXTURES:
         derived.add("vtk")

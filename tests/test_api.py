@@ -35,10 +35,14 @@ def test_default_transfer_function_spans_the_data():
     volume = UniformVolume(np.linspace(-5, 7, 27, dtype=np.float32).reshape(3, 3, 3), spacing=(2, 2, 2))
     tf = default_transfer_function(volume)
     assert tf.value_range == (-5.0, 7.0) and tf.opacity_unit_distance == 2.0
-    assert tf.sample([-5.0])[1][0] == 0.0 and tf.sample([7.0])[1][0] > 0.0  # how much: tests/model/test_default_tf.py
+    assert (
+        tf.sample([-5.0])[1][0] == 0.0 and tf.sample([7.0])[1][0] > 0.0
+    )  # how much: tests/model/test_default_tf.py
 
 
-@pytest.mark.parametrize("size, expected", [(64, (64, 64)), ("640x480", (640, 480)), ((3, 5), (3, 5)), ("32", (32, 32))])
+@pytest.mark.parametrize(
+    "size, expected", [(64, (64, 64)), ("640x480", (640, 480)), ((3, 5), (3, 5)), ("32", (32, 32))]
+)
 def test_parse_size(size, expected):
     assert parse_size(size) == expected
 
@@ -80,7 +84,10 @@ def test_a_constant_fields_default_tf_draws_the_same_box_with_every_renderer():
     xs = tf.opacity_points[:, 0]
     assert np.all(np.diff(xs) > 0) and tf.sample([5.0])[1][0] == pytest.approx(0.3)
     kwargs = dict(size=(24, 24), azimuth=0, elevation=0, parallel=True, quality=None)
-    alphas = {name: volren.render(volume, tf, renderer=name, **kwargs)[12, 12, 3] for name in ("reference", "vtk", "slicer")}
+    alphas = {
+        name: volren.render(volume, tf, renderer=name, **kwargs)[12, 12, 3]
+        for name in ("reference", "vtk", "slicer")
+    }
     expected = 1.0 - (1.0 - 0.3) ** 7  # 7 voxel spacings of 0.3 per spacing, through the middle
     for name, alpha in alphas.items():
         assert alpha == pytest.approx(expected, abs=0.03), (name, alphas)

@@ -51,7 +51,7 @@ def test_the_readme_is_short():
 
 
 def lines_matching(pattern: re.Pattern[str], roots: tuple[str, ...]) -> list[str]:
-    """"file:line: text" for each line under `roots` (relative to the repository) that `pattern` finds."""
+    """ "file:line: text" for each line under `roots` (relative to the repository) that `pattern` finds."""
     return [
         f"{path.relative_to(REPO)}:{number}: {line.strip()[:100]}"
         for root in roots
@@ -77,7 +77,11 @@ def test_relative_links_lead_to_files(page):
 
 def test_the_pages_the_map_lists_link_to_files_too():
     index = REPO / "docs" / "index.md"
-    pages = {(index.parent / t.split("#")[0]).resolve() for t in relative_links(index) if t.split("#")[0].endswith(".md")}
+    pages = {
+        (index.parent / t.split("#")[0]).resolve()
+        for t in relative_links(index)
+        if t.split("#")[0].endswith(".md")
+    }
     missing = [
         f"{page.relative_to(REPO)} -> {t}"
         for page in sorted(pages)

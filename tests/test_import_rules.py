@@ -14,7 +14,10 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 PACKAGE = REPO / "volren"
 HEAVY = ("vtk", "vtkmodules", "pyvista", "pyvistaqt", "moderngl", "PyQt5", "numba", "matplotlib")
-CONTRACTS = {c["name"]: c for c in tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]}
+CONTRACTS = {
+    c["name"]: c
+    for c in tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["importlinter"]["contracts"]
+}
 
 
 def contract(type_: str, words: str) -> dict:

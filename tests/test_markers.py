@@ -63,7 +63,7 @@ def test_in_a_module_that_imports_qt():
     pass
 """
 
-CONTEXTS = '''
+CONTEXTS = """
 import moderngl
 import pytest
 
@@ -85,7 +85,7 @@ def test_only_asks_whether_opengl_works():
     from volren.renderers.opengl import opengl_problem
 
     assert opengl_problem() is None
-'''
+"""
 
 
 def run_pytest(folder: Path, *args: str) -> subprocess.CompletedProcess:
@@ -110,7 +110,11 @@ def test_marks_follow_the_fixtures_and_imports(tmp_path):
     (tmp_path / "conftest.py").write_text(REPORT_MARKS)
     result = run_pytest(tmp_path, "--collect-only")
     assert result.returncode == 0, result.stdout + result.stderr
-    marks = {words[1]: set(words[2:]) for words in map(str.split, result.stdout.splitlines()) if words[:1] == ["MARKS"]}
+    marks = {
+        words[1]: set(words[2:])
+        for words in map(str.split, result.stdout.splitlines())
+        if words[:1] == ["MARKS"]
+    }
     assert marks == {
         "test_cpu": set(),
         "test_asks_for_opengl": {"gl"},

@@ -25,8 +25,14 @@ PROJECT = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
 SAMPLE = REPO / "data_samples" / "marschner_lobb.vti"
 SAMPLE_TF = REPO / "data_samples" / "marschner_lobb.tf.json"
 #: Optional packages and the extra that brings each.
-OPTIONAL = {"pyqt5": "app", "matplotlib": "bench", "imageio": "movie", "imageio-ffmpeg": "movie",
-            "zarr": "zarr", "distributed": "cluster"}
+OPTIONAL = {
+    "pyqt5": "app",
+    "matplotlib": "bench",
+    "imageio": "movie",
+    "imageio-ffmpeg": "movie",
+    "zarr": "zarr",
+    "distributed": "cluster",
+}
 
 
 def names(requirements: list[str]) -> set[str]:
@@ -209,5 +215,7 @@ def test_every_renderers_measured_levels_are_package_data_of_the_distribution_th
         assert shipped(project / "pyproject.toml", package), path
     for dist in installs_of_this_checkout():  # the installed file list, where built from this checkout
         files = [str(f) for f in dist.files or []]
-        if any(f.startswith("volren/") and f.endswith(".py") for f in files):  # not an editable install's finder
+        if any(
+            f.startswith("volren/") and f.endswith(".py") for f in files
+        ):  # not an editable install's finder
             assert any(f.endswith(f"renderers/raycast/{LEVELS_FILE}") for f in files), dist

@@ -76,7 +76,9 @@ def test_every_claimed_combination_scalar_type_and_projection_is_drawn(fakes):
     drawn = set(Counting.drawn)
     # uniform: 5 kept scalar types x (post, pre) x (composite, maximum) x 2 projections; tet: 1 x 2 projections
     assert result.frames == len(Counting.drawn) == 5 * 2 * 2 * 2 + 2
-    assert {d[1] for d in drawn if d[0] == "uniform"} == {np.dtype(t) for t in ("uint8", "int16", "uint16", "float32", "float64")}
+    assert {d[1] for d in drawn if d[0] == "uniform"} == {
+        np.dtype(t) for t in ("uint8", "int16", "uint16", "float32", "float64")
+    }
     assert {(d[2], d[3], d[4]) for d in drawn if d[0] == "uniform"} == {
         (pre, mode, parallel) for pre in (False, True) for mode in (BlendMode.COMPOSITE, BlendMode.MAXIMUM)
         for parallel in (False, True)}  # fmt: skip

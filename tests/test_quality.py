@@ -29,7 +29,9 @@ SMOOTH, SHARP, BAND = (SceneClass("uniform", c) for c in (TFClass.SMOOTH, TFClas
 SCENES = [("a", "smooth"), ("b", "opaque")]
 
 
-def rows_for(curve: str, label: str, errors: tuple[float, float], ms: float, kind: str = "uniform") -> list[dict]:
+def rows_for(
+    curve: str, label: str, errors: tuple[float, float], ms: float, kind: str = "uniform"
+) -> list[dict]:
     return [{"dataset": d, "tf": tf, "kind": kind, "renderer": curve, "settings": label, "ms": str(ms),
              "rmse": str(e)} for (d, tf), e in zip(SCENES, errors, strict=True)]  # fmt: skip
 
@@ -48,7 +50,10 @@ def test_levels_are_the_fastest_configurations_within_each_bound_of_vtks_error()
     assert levels["high"].level.label == levels["exact"].level.label == "step 0.25, pre 512"
     assert levels["default"].level.step == 0.25 and not levels["default"].level.preintegration
     assert levels["high"].level.preintegration and levels["high"].level.options["table_size"] == 512
-    assert levels["draft"].ms == {"a/smooth": 60.0, "b/opaque": 60.0} and levels["draft"].worst_error_ratio == 3.0
+    assert (
+        levels["draft"].ms == {"a/smooth": 60.0, "b/opaque": 60.0}
+        and levels["draft"].worst_error_ratio == 3.0
+    )
     assert all(c.meets for c in levels.values())
     # VTK's own levels: its default configuration
     assert derive(rows, "test").levels[UNIFORM]["vtk"]["default"].level.options == {"mapper": "smart"}
@@ -85,7 +90,9 @@ def choice(ms: float, meets: bool = True, step: float = 0.5) -> Measurement:
 
 
 def table_of(**renderers) -> QualityTable:
-    return QualityTable({UNIFORM: {name: {level: c for level in quality.LEVELS} for name, c in renderers.items()}}, {})
+    return QualityTable(
+        {UNIFORM: {name: {level: c for level in quality.LEVELS} for name, c in renderers.items()}}, {}
+    )
 
 
 def test_auto_takes_the_fastest_that_meets_the_level_and_can_draw_the_scene():
@@ -114,7 +121,10 @@ def test_resolve_applies_the_level_and_keeps_the_callers_options(monkeypatch):
     assert got.options == {"table_size": 128, "path": "march"}
     assert quality.resolve(UNIFORM, 1, "tetra", "draft", RenderSettings())[1] == RenderSettings()
     # the app's chooser: exactly the level's settings, options replaced
-    assert quality.at_level("slicer", SMOOTH, "draft", caller, table).options == {"table_size": 64, "path": "march"}
+    assert quality.at_level("slicer", SMOOTH, "draft", caller, table).options == {
+        "table_size": 64,
+        "path": "march",
+    }
 
 
 def test_the_committed_table_round_trips_and_covers_both_kinds():
@@ -122,7 +132,9 @@ def test_the_committed_table_round_trips_and_covers_both_kinds():
     again = QualityTable.merged(QualityTable.from_renderer_json(name, json.loads(json.dumps(table.renderer_json(name))),
                                                                 "again") for name in table.sources)  # fmt: skip
     assert again == table
-    assert set(table.levels) == {SceneClass(kind, cls) for kind in ("uniform", "tet") for cls in (None, *TFClass)}
+    assert set(table.levels) == {
+        SceneClass(kind, cls) for kind in ("uniform", "tet") for cls in (None, *TFClass)
+    }
     for kind, renderers in table.levels.items():
         for name, levels in renderers.items():
             assert list(levels) == list(quality.LEVELS), (kind, name)
@@ -142,7 +154,22 @@ def test_the_cli_quality_flag_sets_the_measured_settings_and_flags_win(tmp_path,
     for name, extra in (("draft", ["--quality", "draft"]), ("step2", ["--step", "2"]), ("override", ["--quality", "draft", "--step", "1"]),
                         ("step1", ["--step", "1"])):  # fmt: skip
         out[name] = tmp_path / f"{name}.npy"
-        assert main(["render", volume, "--renderer", "slicer", "--size", "24", "--save-array", str(out[name]), *extra]) == 0
+        assert (
+            main(
+                [
+                    "render",
+                    volume,
+                    "--renderer",
+                    "slicer",
+                    "--size",
+                    "24",
+                    "--save-array",
+                    str(out[name]),
+                    *extra,
+                ]
+            )
+            == 0
+        )
     capsys.readouterr()
     assert np.array_equal(np.load(out["draft"]), np.load(out["step2"]))
     assert np.array_equal(np.load(out["override"]), np.load(out["step1"]))
@@ -178,8 +205,14 @@ def test_levels_are_also_chosen_per_tf_class_and_looked_up_with_a_fallback():
 def test_auto_chooses_by_the_tfs_class(monkeypatch):
     from volren.model import TransferFunction1D
 
-    uniform = {name: {level: choice(ms) for level in quality.LEVELS} for name, ms in (("slicer", 100), ("objectorder", 50))}
-    sharp = {name: {level: choice(ms) for level in quality.LEVELS} for name, ms in (("slicer", 30), ("objectorder", 80))}
+    uniform = {
+        name: {level: choice(ms) for level in quality.LEVELS}
+        for name, ms in (("slicer", 100), ("objectorder", 50))
+    }
+    sharp = {
+        name: {level: choice(ms) for level in quality.LEVELS}
+        for name, ms in (("slicer", 30), ("objectorder", 80))
+    }
     table = QualityTable({UNIFORM: uniform, SHARP: sharp}, {})
     monkeypatch.setattr(quality, "table", lambda: table)
     smooth_tf = TransferFunction1D([[0, 1, 1, 1], [10, 1, 1, 1]], [[0, 0.0], [10, 0.5]])
@@ -187,7 +220,11 @@ def test_auto_chooses_by_the_tfs_class(monkeypatch):
     for tf, wanted in ((smooth_tf, "objectorder"), (sharp_tf, "slicer")):
         kind = SceneClass.of(SimpleNamespace(kind="uniform", value_range=(0.0, 10.0)), tf)
         name, _settings, why = quality.resolve(kind, 1, "auto", None, RenderSettings())
-        assert name == wanted and why == f"the fastest measured at quality default for a {kind.tf.value} TF that draws this scene"
+        assert (
+            name == wanted
+            and why
+            == f"the fastest measured at quality default for a {kind.tf.value} TF that draws this scene"
+        )
 
 
 def test_bench_quality_classes_the_scenes_and_writes_the_auto_report(tmp_path, monkeypatch, capsys):
@@ -207,7 +244,9 @@ def test_bench_quality_classes_the_scenes_and_writes_the_auto_report(tmp_path, m
     printed = capsys.readouterr().out
     assert "TF class of marschner_lobb/sample: smooth" in printed
     assert sorted(p.name for p in out.iterdir()) == ["slicer", "vtk"]  # one file per renderer
-    table = QualityTable.merged(quality.read_levels(name, out / name / quality.LEVELS_FILE) for name in ("slicer", "vtk"))
+    table = QualityTable.merged(
+        quality.read_levels(name, out / name / quality.LEVELS_FILE) for name in ("slicer", "vtk")
+    )
     assert set(table.levels) == {UNIFORM, SMOOTH}
     assert table.measurement("slicer", SMOOTH, "default").level.label == "step 1, post"
     assert table.measurement("slicer", SMOOTH, "default").peer_ms == {"marschner_lobb/sample": 200.0}
@@ -232,7 +271,9 @@ def test_auto_passes_over_a_renderer_that_cannot_draw_the_view():
                              clipping_range=(0.01, 50.0))  # fmt: skip
 
     def chosen(*cameras):
-        return choose_renderer(UNIFORM, "default", 1, RenderSettings(), names, table, cameras=cameras, bounds=bounds)[0]
+        return choose_renderer(
+            UNIFORM, "default", 1, RenderSettings(), names, table, cameras=cameras, bounds=bounds
+        )[0]
 
     assert registry.capabilities("shearwarp").camera_reason("uniform", inside, bounds)
     assert chosen(outside) == "shearwarp" and chosen(parallel_inside) == "shearwarp"
@@ -251,7 +292,9 @@ def band_scene():
 
     values = np.fromfunction(lambda z, y, x: (x + 2 * y + 3 * z) % 100, (12, 12, 12)).astype(np.float32)
     volume = UniformVolume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0))
-    band = TransferFunction1D([[0, 1, 0.5, 0.2], [100, 1, 0.5, 0.2]], [[0, 0.0], [49, 0.0], [50, 1.0], [51, 0.0], [100, 0.0]], 0.2)
+    band = TransferFunction1D(
+        [[0, 1, 0.5, 0.2], [100, 1, 0.5, 0.2]], [[0, 0.0], [49, 0.0], [50, 1.0], [51, 0.0], [100, 0.0]], 0.2
+    )
     return volume, band
 
 
@@ -261,11 +304,15 @@ def test_the_api_renders_from_inside_the_volume_with_auto_where_its_first_choice
 
     volume, band = band_scene()
     kind = SceneClass.of(volume, band)
-    assert kind == BAND and quality.resolve(kind, 1, "auto", "interactive", RenderSettings())[0] == "shearwarp"
+    assert (
+        kind == BAND and quality.resolve(kind, 1, "auto", "interactive", RenderSettings())[0] == "shearwarp"
+    )
     inside = Camera(position=(5.0, 5.0, 5.0), focal_point=(11.0, 11.0, 11.0), clipping_range=(0.01, 50.0))
     with pytest.raises(VolrenError, match="inside"):
         volren.render(volume, band, renderer="shearwarp", camera=inside, size=(24, 24))
-    image = volren.render(volume, band, camera=inside, size=(24, 24), quality="interactive")  # another draws it
+    image = volren.render(
+        volume, band, camera=inside, size=(24, 24), quality="interactive"
+    )  # another draws it
     assert np.isfinite(image).all() and image[..., 3].max() > 0.05
 
 
@@ -282,15 +329,39 @@ def test_the_cli_renders_from_inside_the_volume_with_auto_and_names_the_renderer
              "camera": inside.to_dict(), "size": [24, 24]}  # fmt: skip
     scene_path = tmp_path / "scene.json"
     scene_path.write_text(json.dumps(scene))
-    assert main(["render", "--scene", str(scene_path), "--quality", "interactive",
-                 "--save-array", str(tmp_path / "in.npy")]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "--scene",
+                str(scene_path),
+                "--quality",
+                "interactive",
+                "--save-array",
+                str(tmp_path / "in.npy"),
+            ]
+        )
+        == 0
+    )
     line = capsys.readouterr().out
     assert line.split(" ", 1)[0] != "shearwarp" and "(auto:" in line
     assert np.load(tmp_path / "in.npy")[..., 3].max() > 0.05
     scene["camera"] = {"azimuth": 30, "elevation": 20}  # from outside, the band TF's choice draws it
     scene_path.write_text(json.dumps(scene))
-    assert main(["render", "--scene", str(scene_path), "--quality", "interactive",
-                 "--save-array", str(tmp_path / "out.npy")]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "--scene",
+                str(scene_path),
+                "--quality",
+                "interactive",
+                "--save-array",
+                str(tmp_path / "out.npy"),
+            ]
+        )
+        == 0
+    )
     assert capsys.readouterr().out.startswith("shearwarp (auto:")
 
 
@@ -313,8 +384,16 @@ def test_clipping_planes_that_cut_a_mesh_pass_vtk_over():
     tets = QualityTable({TET: {"vtk": {level: choice(10) for level in quality.LEVELS},
                                "tetra": {level: choice(50) for level in quality.LEVELS}}}, {})  # fmt: skip
     names = registry.names()
-    assert choose_renderer(TET, "default", 1, RenderSettings(), names, tets, cameras=(whole,), bounds=bounds)[0] == "vtk"
-    assert choose_renderer(TET, "default", 1, RenderSettings(), names, tets, cameras=(cut_near,), bounds=bounds)[0] == "tetra"
+    assert (
+        choose_renderer(TET, "default", 1, RenderSettings(), names, tets, cameras=(whole,), bounds=bounds)[0]
+        == "vtk"
+    )
+    assert (
+        choose_renderer(TET, "default", 1, RenderSettings(), names, tets, cameras=(cut_near,), bounds=bounds)[
+            0
+        ]
+        == "tetra"
+    )
 
 
 def test_a_movie_from_inside_the_volume_refuses_up_front_or_goes_to_a_renderer_that_draws_it(tmp_path):
@@ -328,7 +407,9 @@ def test_a_movie_from_inside_the_volume_refuses_up_front_or_goes_to_a_renderer_t
     animation = Animation(frames=3, fps=3)
     scene = Scene("v.vti", band, camera=inside, renderer="shearwarp", size=(16, 16), volume=volume)
     path = tmp_path / "m.gif"
-    with pytest.raises(VolrenError, match=r"movie frame 1 of 3: renderer shearwarp cannot draw .* inside") as info:
+    with pytest.raises(
+        VolrenError, match=r"movie frame 1 of 3: renderer shearwarp cannot draw .* inside"
+    ) as info:
         render_movie(scene, animation, path)
     assert "\n" not in str(info.value) and not path.exists()
     render_movie(replace(scene, renderer="auto"), animation, path)  # auto passes shearwarp over
@@ -337,7 +418,9 @@ def test_a_movie_from_inside_the_volume_refuses_up_front_or_goes_to_a_renderer_t
 
 def test_default_and_above_never_interpolate_pixels_even_when_faster_and_within_the_bound():
     rows = rows_for("vtk-smart", "default", (0.01, 0.01), 300)
-    rows += rows_for("raycast", "step 0.25, refine 8/0.02", (0.005, 0.005), 20)  # fast, accurate, interpolating
+    rows += rows_for(
+        "raycast", "step 0.25, refine 8/0.02", (0.005, 0.005), 20
+    )  # fast, accurate, interpolating
     rows += rows_for("raycast", "step 0.5 (default)", (0.008, 0.009), 100)
     rows += rows_for("raycast", "step 0.25, pre-integrated", (0.002, 0.002), 200)
     levels = derive(rows, "test").levels[UNIFORM]["raycast"]
@@ -350,7 +433,9 @@ def test_default_and_above_never_interpolate_pixels_even_when_faster_and_within_
 def test_default_keeps_no_more_pixels_off_than_vtks_default_where_counted():
     rows = [dict(r, off="3") for r in rows_for("vtk-smart", "default", (0.01, 0.01), 300)]
     # within VTK's RMSE on both scenes, but 40 pixels off by more than 0.1 on one (a dropped vessel)
-    rows += [dict(r, off=o) for r, o in zip(rows_for("slicer", "step 0.5, post", (0.008, 0.009), 50), ("0", "40"))]
+    rows += [
+        dict(r, off=o) for r, o in zip(rows_for("slicer", "step 0.5, post", (0.008, 0.009), 50), ("0", "40"))
+    ]
     rows += [dict(r, off="2") for r in rows_for("slicer", "step 0.25, post", (0.009, 0.009), 90)]
     levels = derive(rows, "test").levels[UNIFORM]["slicer"]
     assert levels["draft"].level.label == "step 0.5, post"  # previews may drop what VTK keeps
@@ -425,12 +510,19 @@ def test_auto_ranks_by_time_ratios_which_order_the_committed_runs_as_their_frame
                 for s, ms in m.peer_ms.items():
                     assert peers.setdefault(s, ms) == ms, (scene, s)  # one run's peer per scene
         for level in quality.LEVELS:
-            found = {n: table.measurement(n, scene, level) for n in table.measured(scene) if n not in quality.NOT_AUTO}
+            found = {
+                n: table.measurement(n, scene, level)
+                for n in table.measured(scene)
+                if n not in quality.NOT_AUTO
+            }
             common = set.intersection(*(set(m.ms) for m in found.values()))
             by_ms = sorted(found, key=lambda n: (not found[n].meets, sum(found[n].ms[s] for s in common)))
             assert quality.ranked(scene, level, names, table) == by_ms, (scene, level)
             fastest_meeting = by_ms[0]
-            assert choose_renderer(scene, level, 1, RenderSettings(), names, table)[0] == fastest_meeting, (scene, level)
+            assert choose_renderer(scene, level, 1, RenderSettings(), names, table)[0] == fastest_meeting, (
+                scene,
+                level,
+            )
             checked += 1
     assert checked == len(table.levels) * len(quality.LEVELS) > 0
 

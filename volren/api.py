@@ -35,7 +35,15 @@ from volren.model.transfer_function_2d import (
 from volren.model.volume import TetVolume, UniformVolume, Volume
 from volren.renderers.base import ProgressCallback
 
-__all__ = ["as_transfer_function", "as_volume", "check_scene", "drawing", "parse_size", "prepared_renderer", "render"]
+__all__ = [
+    "as_transfer_function",
+    "as_volume",
+    "check_scene",
+    "drawing",
+    "parse_size",
+    "prepared_renderer",
+    "render",
+]
 
 
 def as_volume(volume: Any, scalars: str | None = None) -> Volume:
@@ -119,7 +127,9 @@ def drawing(
     scene = Scene(None, transfer, cam, RenderSettings().with_(**settings), renderer=renderer, size=(width, height),
                   volume=vol)  # fmt: skip
     scene, _ = resolve_scene(scene, source, quality, cameras=(cam,), on_cluster=on_cluster)
-    scene = replace(scene, settings=scene.settings.with_(**{k: v for k, v in settings.items() if k != "options"}))
+    scene = replace(
+        scene, settings=scene.settings.with_(**{k: v for k, v in settings.items() if k != "options"})
+    )
     result = Drawing(source, scene, quality, cluster, scheduler)
     result.check(tf_name=str(tf) if isinstance(tf, str | PathLike) else None)
     return result

@@ -76,7 +76,10 @@ def render_movie(
         raise VolrenError("the scene has no volume to make a movie of")
     if scene.renderer == AUTO:
         place = bounds or volume.bounds
-        cameras = [animation.camera(i, scene.camera, place, scene.size[0] / scene.size[1]) for i in range(animation.frames)]
+        cameras = [
+            animation.camera(i, scene.camera, place, scene.size[0] / scene.size[1])
+            for i in range(animation.frames)
+        ]
         scene, _ = resolve_scene(scene, VolumeInput(volume), None, cameras=cameras)
     volumes = None if not steps else _step_volumes(steps, animation.frames, scene.scalars)
     with Drawing(VolumeInput(volume), scene) as drawing:
@@ -95,7 +98,9 @@ def _check_views(renderer: Renderer, animation: Animation, start_view: View, bou
     if capabilities is None or volume is None:
         return
     for index in range(animation.frames):
-        reason = capabilities.camera_reason(volume.kind, animation.camera(index, start_view, bounds, aspect), volume.bounds)
+        reason = capabilities.camera_reason(
+            volume.kind, animation.camera(index, start_view, bounds, aspect), volume.bounds
+        )
         if reason:
             name = label or getattr(renderer, "name", "the renderer")
             raise VolrenError(f"movie frame {index + 1} of {animation.frames}: renderer {name} {reason}")
@@ -122,7 +127,9 @@ def _settings_by_class(renderer: Renderer, name: str | None, level: str | None,
     return settings_of
 
 
-def _step_volumes(steps: Sequence[str | Path], frames: int, scalars: str | None) -> Callable[[int], Volume | None]:
+def _step_volumes(
+    steps: Sequence[str | Path], frames: int, scalars: str | None
+) -> Callable[[int], Volume | None]:
     """Frame i's time step, read when it first comes (None: the frame before's step still)."""
     from volren.io import load_volume
 

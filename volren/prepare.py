@@ -49,7 +49,9 @@ def _volumes(kind: str) -> Iterator[Volume]:
     z, y, x = np.mgrid[0:5, 0:6, 0:7]
     ramp = (x * 7 + y * 3 + z * 5).astype(np.float64)
     for dtype in KEPT_DTYPES:
-        yield UniformVolume(ramp.astype(dtype), spacing=(1.0, 0.9, 1.1), name=f"prepare {np.dtype(dtype).name}")
+        yield UniformVolume(
+            ramp.astype(dtype), spacing=(1.0, 0.9, 1.1), name=f"prepare {np.dtype(dtype).name}"
+        )
 
 
 def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Camera, bool]]]]:
@@ -71,7 +73,9 @@ def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Came
             claimed = [(tf1 if dims == 1 else tf2, settings, camera, False)
                        for dims, settings, is_claimed in contract_combinations(support) if is_claimed
                        for camera in cameras]  # fmt: skip
-            levels = [(tf1, level.apply(), camera, True) for level in capabilities.quality for camera in cameras]
+            levels = [
+                (tf1, level.apply(), camera, True) for level in capabilities.quality for camera in cameras
+            ]
             yield volume, claimed + levels
 
 
@@ -102,7 +106,9 @@ def prepare_renderer(name: str) -> Prepared:
     except VolrenError as exc:
         return Prepared(name, time.perf_counter() - start, frames, str(exc))
     except Exception as exc:  # noqa: BLE001 - a plugin's failure is reported, never fatal to set-up
-        return Prepared(name, time.perf_counter() - start, frames, f"{type(exc).__name__}: {' '.join(str(exc).split())}")
+        return Prepared(
+            name, time.perf_counter() - start, frames, f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+        )
     return Prepared(name, time.perf_counter() - start, frames)
 
 

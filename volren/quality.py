@@ -61,7 +61,9 @@ class Measurement:
     ms: Mapping[str, float]  #: median frame time per scene ("dataset/tf"), 512x512
     peer_ms: Mapping[str, float]  #: VTK's default's frame time per scene, measured in the same run
     worst_error_ratio: float  #: largest RMSE / VTK default's RMSE over the scenes
-    meets: bool = True  #: within the level's own bound (False: the bound was scaled to what the renderer reaches)
+    meets: bool = (
+        True  #: within the level's own bound (False: the bound was scaled to what the renderer reaches)
+    )
 
     def time_ratio(self, scenes: Iterable[str]) -> float:
         """The frame time over these scenes as a multiple of VTK's default's in the same runs (the
@@ -77,7 +79,9 @@ class Measurement:
 class QualityTable:
     """Measurements by scene class, renderer and level, with where each renderer's came from."""
 
-    levels: Mapping[SceneClass, Mapping[str, Mapping[str, Measurement]]]  #: class -> renderer -> level -> measurement
+    levels: Mapping[
+        SceneClass, Mapping[str, Mapping[str, Measurement]]
+    ]  #: class -> renderer -> level -> measurement
     sources: Mapping[str, str]  #: renderer -> the command and runs that made its file
 
     def measurement(self, renderer: str, scene: SceneClass, level: str) -> Measurement | None:
@@ -216,10 +220,14 @@ def ranked(scene: SceneClass, level: str, names: Iterable[str], quality: Quality
     quality = quality or table()
     check_level(level)
     wanted = set(names) - NOT_AUTO
-    found = {n: m for n in quality.measured(scene) if n in wanted and (m := quality.measurement(n, scene, level))}
+    found = {
+        n: m for n in quality.measured(scene) if n in wanted and (m := quality.measurement(n, scene, level))
+    }
     if not found:
         return []
-    common = set.intersection(*(set(m.ms) for m in found.values())) or set.union(*(set(m.ms) for m in found.values()))
+    common = set.intersection(*(set(m.ms) for m in found.values())) or set.union(
+        *(set(m.ms) for m in found.values())
+    )
     ratio = {n: m.time_ratio(common) for n, m in found.items()}
     return sorted(found, key=lambda n: (not speed_only and not found[n].meets, ratio[n]))
 
@@ -250,7 +258,9 @@ def choose_renderer(scene: SceneClass, level: str, tf_dim: int, settings: Render
             level_settings = _with_level(quality.measurement(name, scene, level), settings)
             if capabilities.unsupported_reason(scene.kind, tf_dim, level_settings) is not None:
                 return False
-        return bounds is None or all(capabilities.camera_reason(scene.kind, c, bounds) is None for c in cameras)
+        return bounds is None or all(
+            capabilities.camera_reason(scene.kind, c, bounds) is None for c in cameras
+        )
 
     measured = ranked(scene, level, names, quality)
     for name in measured:

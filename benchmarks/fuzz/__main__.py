@@ -47,7 +47,9 @@ def fuzz(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog=COMMAND, description="malformed inputs through volren: crashes, hangs, "
                                      "bad errors")  # fmt: skip
-    parser.add_argument("--quick", action="store_true", help="the subset CI runs (every 12th case and the seeds)")
+    parser.add_argument(
+        "--quick", action="store_true", help="the subset CI runs (every 12th case and the seeds)"
+    )
     parser.add_argument("--only", help="run the cases whose name contains this text")
     parser.add_argument("--jobs", type=int, default=2, help="children at a time (default 2)")
     parser.add_argument("--timeout", type=float, default=60.0, help="seconds before a case counts as a hang")

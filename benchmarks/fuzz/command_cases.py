@@ -40,40 +40,87 @@ def convert_cases(volume: dict[str, bytes], image: dict[str, bytes]) -> Iterator
     --force), a headerless raw file with and without the --raw-* flags, outputs not named *.zarr,
     bad --chunks, --levels."""
     zattrs = f"{IMAGE}/.zattrs"
-    yield _convert("valid", volume, (VOLUME, "out.zarr"), "render", after=(("written", "out.zarr"), ("kept", VOLUME)))
-    yield _convert("valid-from-ome-zarr", image, (IMAGE, "out.zarr"), "any",
-                   after=(("written", "out.zarr"), ("kept", zattrs)))
+    yield _convert(
+        "valid", volume, (VOLUME, "out.zarr"), "render", after=(("written", "out.zarr"), ("kept", VOLUME))
+    )
+    yield _convert(
+        "valid-from-ome-zarr",
+        image,
+        (IMAGE, "out.zarr"),
+        "any",
+        after=(("written", "out.zarr"), ("kept", zattrs)),
+    )
     yield _convert("missing-input", {}, ("nowhere.vti", "out.zarr"), names=("nowhere.vti",))
-    yield _convert("input-empty-folder", {}, ("empty", "out.zarr"), names=("empty",), nodes=(("folder", "empty"),))
+    yield _convert(
+        "input-empty-folder", {}, ("empty", "out.zarr"), names=("empty",), nodes=(("folder", "empty"),)
+    )
     yield _convert("input-folder-of-text", {"notes/a.txt": b"text"}, ("notes", "out.zarr"), names=("notes",))
-    yield _convert("input-fifo", {}, ("pipe.vti", "out.zarr"), names=("pipe.vti",), nodes=(("fifo", "pipe.vti"),))
-    yield _convert("input-socket", {}, ("sock.vti", "out.zarr"), names=("sock.vti",), nodes=(("socket", "sock.vti"),))
+    yield _convert(
+        "input-fifo", {}, ("pipe.vti", "out.zarr"), names=("pipe.vti",), nodes=(("fifo", "pipe.vti"),)
+    )
+    yield _convert(
+        "input-socket", {}, ("sock.vti", "out.zarr"), names=("sock.vti",), nodes=(("socket", "sock.vti"),)
+    )
     mesh = next(s for s in seeds() if s.name == "vtu-binary")
     yield _convert("input-mesh", dict(mesh.files), (mesh.target, "out.zarr"), names=(mesh.target,))
     for force in ((), ("--force",)):
         tag = "-force" if force else ""
-        yield _convert(f"output-is-the-input{tag}", image, (IMAGE, IMAGE, *force), names=(IMAGE,),
-                       after=(("kept", zattrs),))
+        yield _convert(
+            f"output-is-the-input{tag}",
+            image,
+            (IMAGE, IMAGE, *force),
+            names=(IMAGE,),
+            after=(("kept", zattrs),),
+        )
         holder = {f"out.zarr/{VOLUME}": volume[VOLUME]}
-        yield _convert(f"output-holds-the-input{tag}", holder, (f"out.zarr/{VOLUME}", "out.zarr", *force),
-                       names=("out.zarr",), after=(("kept", f"out.zarr/{VOLUME}"),))
-        yield _convert(f"output-inside-the-input{tag}", image, (IMAGE, f"{IMAGE}/inner.zarr", *force), "any",
-                       names=(IMAGE,), after=(("kept", zattrs),))
-        yield _convert(f"output-exists{tag}", {**volume, "out.zarr/.zgroup": b"{}"}, (VOLUME, "out.zarr", *force),
-                       "any" if force else "error", names=("out.zarr",), after=(("kept", VOLUME),))
+        yield _convert(
+            f"output-holds-the-input{tag}",
+            holder,
+            (f"out.zarr/{VOLUME}", "out.zarr", *force),
+            names=("out.zarr",),
+            after=(("kept", f"out.zarr/{VOLUME}"),),
+        )
+        yield _convert(
+            f"output-inside-the-input{tag}",
+            image,
+            (IMAGE, f"{IMAGE}/inner.zarr", *force),
+            "any",
+            names=(IMAGE,),
+            after=(("kept", zattrs),),
+        )
+        yield _convert(
+            f"output-exists{tag}",
+            {**volume, "out.zarr/.zgroup": b"{}"},
+            (VOLUME, "out.zarr", *force),
+            "any" if force else "error",
+            names=("out.zarr",),
+            after=(("kept", VOLUME),),
+        )
     raw = next(s for s in seeds() if s.name == "raw")
     yield _convert("raw-without-shape", dict(raw.files), (raw.target, "out.zarr"), names=(raw.target,))
-    yield _convert("raw-flags", dict(raw.files), (raw.target, "out.zarr", *raw.flags), "render",
-                   after=(("written", "out.zarr"), ("kept", raw.target)))  # convert takes render's --raw-* flags
+    yield _convert(
+        "raw-flags",
+        dict(raw.files),
+        (raw.target, "out.zarr", *raw.flags),
+        "render",
+        after=(("written", "out.zarr"), ("kept", raw.target)),
+    )  # convert takes render's --raw-* flags
     for output in ("out.vti", "out", ".zarr", "out.zarr.zip"):
-        yield _convert(f"output-named-{output}", volume, (VOLUME, output), names=(output,), after=(("kept", VOLUME),))
-    yield _convert("output-named-OUT.ZARR", volume, (VOLUME, "OUT.ZARR"), "any", after=(("written", "OUT.ZARR"),))
+        yield _convert(
+            f"output-named-{output}", volume, (VOLUME, output), names=(output,), after=(("kept", VOLUME),)
+        )
+    yield _convert(
+        "output-named-OUT.ZARR", volume, (VOLUME, "OUT.ZARR"), "any", after=(("written", "OUT.ZARR"),)
+    )
     for flag, value in (("--chunks", "0"), ("--chunks", "-4"), ("--chunks", "abc"), ("--levels", "0"),
                         ("--levels", "1.5"), ("--scalars", "nosuch"), ("--scalars", "")):  # fmt: skip
-        yield _convert(f"flag{flag}={value or 'empty'}", volume, (VOLUME, "out.zarr", flag, value),
-                       names=(flag, VOLUME))
+        yield _convert(
+            f"flag{flag}={value or 'empty'}", volume, (VOLUME, "out.zarr", flag, value), names=(flag, VOLUME)
+        )
     for flag, value in (("--chunks", "99999999999"), ("--levels", "99")):
-        yield _convert(f"flag{flag}={value}", volume, (VOLUME, "out.zarr", flag, value), "any", names=(flag, VOLUME))
+        yield _convert(
+            f"flag{flag}={value}", volume, (VOLUME, "out.zarr", flag, value), "any", names=(flag, VOLUME)
+        )
     for spot in spots("out.zarr"):
         yield spot_case(f"{CONVERT}/output={spot.label}", CONVERT, spot, ("convert", VOLUME, spot.path), "OUTPUT",
                         None, volume)  # fmt: skip
@@ -110,13 +157,19 @@ def movie_cases(volume: dict[str, bytes]) -> Iterator[Case]:
     """--fps and --frames out of range, -o at every place and with suffixes movies do not have."""
     yield _movie("valid", volume, movie_argv(), "render", ())
     for fps in ("0", "-1", "1e-300", "1e-6", "0.001", "nan", "inf", "-inf", "241", "1e308", "abc", ""):
-        yield _movie(f"fps={fps or 'empty'}", volume, movie_argv("out.gif", "--fps", fps), "error", ("--fps",))
+        yield _movie(
+            f"fps={fps or 'empty'}", volume, movie_argv("out.gif", "--fps", fps), "error", ("--fps",)
+        )
     for fps in ("51", "240"):  # GIF frames shorter than 2 hundredths of a second play as 10
         yield _movie(f"fps={fps}", volume, movie_argv("out.gif", "--fps", fps), "error", ("--fps", "out.gif"))
     for fps, output in (("0.01", "out.gif"), ("50", "out.gif"), ("240", "out.mp4")):  # the ends of the ranges
-        yield _movie(f"fps={fps}-{output}", volume, movie_argv(output, "--fps", fps), "any", ("--fps",), output)
+        yield _movie(
+            f"fps={fps}-{output}", volume, movie_argv(output, "--fps", fps), "any", ("--fps",), output
+        )
     for frames in ("0", "-1", "100001", "99999999999", "1.5", "abc"):
-        yield _movie(f"frames={frames}", volume, movie_argv("out.gif", "--frames", frames), "error", ("--frames",))
+        yield _movie(
+            f"frames={frames}", volume, movie_argv("out.gif", "--frames", frames), "error", ("--frames",)
+        )
     for output in ("out.avi", "out", "out.gif.txt"):
         yield _movie(f"o-named-{output}", volume, movie_argv(output), "error", ("-o", output), output)
     yield _movie("o-named-OUT.GIF", volume, movie_argv("OUT.GIF"), "any", ("-o",), "OUT.GIF")
@@ -132,7 +185,9 @@ def movie_sweep(volume: dict[str, bytes]) -> Iterator[Case]:
         for value in BAD_NUMBERS:
             angle = flag == "--orbit" and value not in ("nan", "inf", "-inf", "abc", "", "1,5")
             expect: Expect = "any" if angle else "error"
-            yield _movie(f"sweep{flag}={value or 'empty'}", volume, movie_argv("out.gif", flag, value), expect, (flag,))
+            yield _movie(
+                f"sweep{flag}={value or 'empty'}", volume, movie_argv("out.gif", flag, value), expect, (flag,)
+            )
 
 
 # ----------------------------------------------------------------------- cluster and memory flags
@@ -163,11 +218,17 @@ def flag_cases(volume: dict[str, bytes], image: dict[str, bytes]) -> Iterator[Ca
     for value in CLUSTER_VALUES:
         yield _flags(f"cluster={value or 'empty'}", volume, VOLUME, ("--cluster", value))
     for value in SCHEDULER_VALUES[:3]:
-        yield _flags(_scheduler("scheduler", value), volume, VOLUME, ("--scheduler", value), patches=_SHORT_WAIT)
-    yield _flags("cluster-and-scheduler", volume, VOLUME, ("--cluster", "local:1", "--scheduler", NO_SCHEDULER))
+        yield _flags(
+            _scheduler("scheduler", value), volume, VOLUME, ("--scheduler", value), patches=_SHORT_WAIT
+        )
+    yield _flags(
+        "cluster-and-scheduler", volume, VOLUME, ("--cluster", "local:1", "--scheduler", NO_SCHEDULER)
+    )
     for value in ("0", "1", "-5", "lots", "5XB", "nan", "inf", "", "1e-3"):
         yield _flags(f"memory={value or 'empty'}", image, IMAGE, ("--memory", value))
-    yield _flags("memory=1e30", image, IMAGE, ("--memory", "1e30", "--renderer", "raycast"), "any")  # no GL: quick
+    yield _flags(
+        "memory=1e30", image, IMAGE, ("--memory", "1e30", "--renderer", "raycast"), "any"
+    )  # no GL: quick
     for value in ("-1", "99", "2", "abc", "1.5", ""):
         yield _flags(f"level={value or 'empty'}", image, IMAGE, ("--level", value))
     for flags in (("--memory", "2GB"), ("--memory", "lots"), ("--level", "0"), ("--level", "99")):
@@ -183,11 +244,15 @@ def flag_sweep(volume: dict[str, bytes], image: dict[str, bytes]) -> Iterator[Ca
         label = value or "empty"
         memory_expect: Expect = "any" if value in ("1e308", "4294967296", "99999999999999999999") else "error"
         yield _flags(f"sweep-memory={label}", image, IMAGE, ("--memory", value), memory_expect)
-        yield _flags(f"sweep-level={label}", image, IMAGE, ("--level", value), "any" if value == "0" else "error")
+        yield _flags(
+            f"sweep-level={label}", image, IMAGE, ("--level", value), "any" if value == "0" else "error"
+        )
         if value:  # local: is local, which would start a cluster of every core
             yield _flags(f"sweep-cluster=local:{label}", volume, VOLUME, ("--cluster", f"local:{value}"))
     for value in SCHEDULER_VALUES[3:]:
-        yield _flags(_scheduler("sweep-scheduler", value), volume, VOLUME, ("--scheduler", value), patches=_SHORT_WAIT)
+        yield _flags(
+            _scheduler("sweep-scheduler", value), volume, VOLUME, ("--scheduler", value), patches=_SHORT_WAIT
+        )
     for value in CLUSTER_VALUES:
         yield _flags(f"sweep-{IMAGE}-cluster={value or 'empty'}", image, IMAGE, ("--cluster", value))
     for value in SCHEDULER_VALUES[:3]:

@@ -30,10 +30,28 @@ TF_2D: dict[str, Any] = {
     "value_range": [0, 2200],
     "gradient_range": [0, 800],
     "widgets": [
-        {"type": "gaussian", "center": [1500, 300], "width": [300, 200], "color": [1, 0.8, 0.6], "opacity": 0.8},
-        {"type": "triangle", "value": 700, "half_width": 200, "gradient_max": 600, "color": [0.2, 0.4, 1],
-         "opacity": 0.3},
-        {"type": "box", "value_range": [100, 400], "gradient_range": [0, 400], "color": [0, 1, 0], "opacity": 0.1},
+        {
+            "type": "gaussian",
+            "center": [1500, 300],
+            "width": [300, 200],
+            "color": [1, 0.8, 0.6],
+            "opacity": 0.8,
+        },
+        {
+            "type": "triangle",
+            "value": 700,
+            "half_width": 200,
+            "gradient_max": 600,
+            "color": [0.2, 0.4, 1],
+            "opacity": 0.3,
+        },
+        {
+            "type": "box",
+            "value_range": [100, 400],
+            "gradient_range": [0, 400],
+            "color": [0, 1, 0],
+            "opacity": 0.1,
+        },
     ],  # fmt: skip
 }
 
@@ -89,7 +107,9 @@ def _document_cases(group: str, doc: dict, file: str, argv: tuple[str, ...], fil
         label = _label(path)
         for wrong in WRONG:
             if not isinstance(path[-1], int) or wrong in (None, "abc", float("nan"), -1, 1e308):
-                expect: Expect = "error" if str(path[0]) in refused_at and not _harmless(path, wrong) else "any"
+                expect: Expect = (
+                    "error" if str(path[0]) in refused_at and not _harmless(path, wrong) else "any"
+                )
                 yield Case(f"{group}/{label}={json.dumps(wrong)}", group, {**files, file: _dump(_set(doc, path, wrong))},
                            argv, expect, (file,))  # fmt: skip
         if isinstance(path[-1], str):
@@ -116,7 +136,11 @@ def _harmless(path: tuple, wrong: Any) -> bool:
             return True
         if path[0] in ("value_range", "gradient_range") and wrong != 0:
             return True  # the table's range: wide, or below zero on the value axis
-        if path[0] == "widgets" and key in ("center", "value", "value_range", "gradient_range") and wrong != 0:
+        if (
+            path[0] == "widgets"
+            and key in ("center", "value", "value_range", "gradient_range")
+            and wrong != 0
+        ):
             return True  # a widget anywhere
         if path[0] == "widgets" and key in ("width", "half_width", "gradient_max") and wrong == 1e308:
             return True  # a widget that covers everything
@@ -162,21 +186,49 @@ def tf_cases() -> list[Case]:
     files = _volume_files()
     out: list[Case] = []
     for kind, doc in (("tf1d", TF_1D), ("tf2d", TF_2D)):
-        argv = render_argv(_VOLUME, "--tf", "tf.json", *(("--renderer", "reference") if kind == "tf2d" else ()))
-        refused = {"version", "kind", "color", "opacity", "value_range", "gradient_range", "widgets", "opacity_unit_distance"}
+        argv = render_argv(
+            _VOLUME, "--tf", "tf.json", *(("--renderer", "reference") if kind == "tf2d" else ())
+        )
+        refused = {
+            "version",
+            "kind",
+            "color",
+            "opacity",
+            "value_range",
+            "gradient_range",
+            "widgets",
+            "opacity_unit_distance",
+        }
         out += _document_cases(kind, doc, "tf.json", argv, files, refused)
         out += _raw_text_cases(kind, "tf.json", argv, files)
     many = {**TF_1D, "opacity": [[i, (i % 7) / 7] for i in range(200_000)]}
     argv = render_argv(_VOLUME, "--tf", "tf.json")
-    out.append(Case("tf1d/points-200000", "tf1d", {**files, "tf.json": _dump(many)}, argv, "error", ("tf.json",)))
+    out.append(
+        Case("tf1d/points-200000", "tf1d", {**files, "tf.json": _dump(many)}, argv, "error", ("tf.json",))
+    )
     widgets = {**TF_2D, "widgets": [TF_2D["widgets"][0]] * 5000}
-    out.append(Case("tf2d/widgets-5000", "tf2d", {**files, "tf.json": _dump(widgets)}, argv, "error", ("tf.json",)))
+    out.append(
+        Case("tf2d/widgets-5000", "tf2d", {**files, "tf.json": _dump(widgets)}, argv, "error", ("tf.json",))
+    )
     unsorted = {**TF_1D, "opacity": [[1600, 0.8], [0, 0], [700, 0.05]]}
-    out.append(Case("tf1d/unsorted", "tf1d", {**files, "tf.json": _dump(unsorted)}, argv, "any", ("tf.json",)))
+    out.append(
+        Case("tf1d/unsorted", "tf1d", {**files, "tf.json": _dump(unsorted)}, argv, "any", ("tf.json",))
+    )
     miss = {**TF_1D, "color": [[1e6, 1, 1, 1], [2e6, 1, 1, 1]], "opacity": [[1e6, 1], [2e6, 1]]}
-    out.append(Case("tf1d/range-misses-data", "tf1d", {**files, "tf.json": _dump(miss)}, argv, "any", ("tf.json",)))
+    out.append(
+        Case("tf1d/range-misses-data", "tf1d", {**files, "tf.json": _dump(miss)}, argv, "any", ("tf.json",))
+    )
     preset = [{"Name": "x", "ColorSpace": "Lab", "RGBPoints": [0, 0, 0, 0, 1, "a", 1, 1]}]
-    out.append(Case("tf1d/paraview-preset-bad", "tf1d", {**files, "tf.json": _dump(preset)}, argv, "error", ("tf.json",)))
+    out.append(
+        Case(
+            "tf1d/paraview-preset-bad",
+            "tf1d",
+            {**files, "tf.json": _dump(preset)},
+            argv,
+            "error",
+            ("tf.json",),
+        )
+    )
     for space in ("Bogus", None, 5):
         preset = [{"Name": "x", "ColorSpace": space, "RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1]}]
         out.append(Case(f"tf1d/paraview-colorspace-{space}", "tf1d", {**files, "tf.json": _dump(preset)}, argv, "any", ("tf.json",)))  # fmt: skip
@@ -189,8 +241,13 @@ def scene_document() -> dict[str, Any]:
         "volume": {"path": _VOLUME, "scalars": None},
         "transfer_function": TF_1D,
         "camera": {"azimuth": 30.0, "elevation": 20.0, "zoom": 1.0, "parallel": False},
-        "settings": {"step": 0.5, "shade": True, "blend_mode": "composite", "preintegration": False,
-                     "options": {}},
+        "settings": {
+            "step": 0.5,
+            "shade": True,
+            "blend_mode": "composite",
+            "preintegration": False,
+            "options": {},
+        },
         "renderer": "vtk",
         "size": [24, 24],
     }
@@ -203,17 +260,48 @@ def scene_cases() -> list[Case]:
     doc = scene_document()
     out = list(_document_cases("scene", doc, "scene.json", argv, files, refused))
     out += _raw_text_cases("scene", "scene.json", argv, files)
-    out.append(Case("scene/valid", "scene", {**files, "scene.json": _dump(doc)}, argv, "render", ("scene.json",)))
+    out.append(
+        Case("scene/valid", "scene", {**files, "scene.json": _dump(doc)}, argv, "render", ("scene.json",))
+    )
     for label, path in (("missing-volume", "nope.vti"), ("volume-is-folder", "."), ("volume-is-scene", "scene.json"),
                         ("volume-absolute-missing", "/nonexistent/v.vti")):  # fmt: skip
         changed = {**doc, "volume": {"path": path}}
-        out.append(Case(f"scene/{label}", "scene", {**files, "scene.json": _dump(changed)}, argv, "error", ("scene.json",)))
+        out.append(
+            Case(
+                f"scene/{label}",
+                "scene",
+                {**files, "scene.json": _dump(changed)},
+                argv,
+                "error",
+                ("scene.json",),
+            )
+        )
     tf_missing = {**doc, "transfer_function": "nope.json"}
-    out.append(Case("scene/tf-path-missing", "scene", {**files, "scene.json": _dump(tf_missing)}, argv, "error", ("scene.json",)))
+    out.append(
+        Case(
+            "scene/tf-path-missing",
+            "scene",
+            {**files, "scene.json": _dump(tf_missing)},
+            argv,
+            "error",
+            ("scene.json",),
+        )
+    )
     tf_self = {**doc, "transfer_function": "scene.json"}
-    out.append(Case("scene/tf-path-is-scene", "scene", {**files, "scene.json": _dump(tf_self)}, argv, "error", ("scene.json",)))
+    out.append(
+        Case(
+            "scene/tf-path-is-scene",
+            "scene",
+            {**files, "scene.json": _dump(tf_self)},
+            argv,
+            "error",
+            ("scene.json",),
+        )
+    )
     big = {**doc, "size": [100000, 100000]}
-    out.append(Case("scene/size-huge", "scene", {**files, "scene.json": _dump(big)}, argv, "error", ("scene.json",)))
+    out.append(
+        Case("scene/size-huge", "scene", {**files, "scene.json": _dump(big)}, argv, "error", ("scene.json",))
+    )
     out.append(Case("scene/output-is-volume", "scene", {**files, "scene.json": _dump(doc)},
                     ("render", "--scene", "scene.json", "-o", _VOLUME), "error", (_VOLUME, "-o")))  # fmt: skip
     return out
@@ -257,7 +345,9 @@ def flag_cases() -> list[Case]:
             else:
                 argv += [flag, value]
             strict = always or (value in _STRICT_VALUES and flag in ("--zoom", "--step"))
-            strict = strict or (value in ("nan", "inf", "-inf", "abc") and flag in ("--azimuth", "--elevation"))
+            strict = strict or (
+                value in ("nan", "inf", "-inf", "abc") and flag in ("--azimuth", "--elevation")
+            )
             parts = (value, *value.split("=")) if value and len(value) < 100 else ()
             names = tuple(n for n in (flag, _VOLUME, _DEFAULT_RENDERER, *parts) if n)
             out.append(Case(f"flags/{flag.strip('-')}={value[:20] or 'empty'}", "flags", files, tuple(argv),

@@ -65,9 +65,13 @@ def spot_case(name: str, group: str, spot: Spot, argv: tuple[str, ...], flag: st
     """The case of `argv` with `flag` pointed at `spot` (the input volume laid out beside it, and
     kept unless --force lets the output replace it)."""
     forced = "--force" in argv
-    after = tuple(a for a in spot.after if a != ("kept", VOLUME)) if forced else (*spot.after, ("kept", VOLUME))
+    after = (
+        tuple(a for a in spot.after if a != ("kept", VOLUME)) if forced else (*spot.after, ("kept", VOLUME))
+    )
     expect = "any" if forced and spot.path == VOLUME else spot.expect
-    return Case(name, group, {**volume, **spot.files}, argv, expect, (flag, spot.path), spot.nodes, after, array)
+    return Case(
+        name, group, {**volume, **spot.files}, argv, expect, (flag, spot.path), spot.nodes, after, array
+    )
 
 
 def render_argv(output: str = "out.png", array: str = "out.npy", *extra: str) -> tuple[str, ...]:
@@ -89,4 +93,3 @@ def output_cases() -> list[Case]:
                 out.append(spot_case(f"{GROUP}/{prefix}{flag.strip('-')}={spot.label}", GROUP, spot, argv, flag, None,
                                      volume))  # fmt: skip
     return out
-

@@ -91,7 +91,9 @@ class Result:
 # ---------------------------------------------------------------------------------- children
 
 
-def _child_main(case: Case, folder: Path, perturb: int, memory_limit: int) -> None:  # pragma: no cover - child
+def _child_main(
+    case: Case, folder: Path, perturb: int, memory_limit: int
+) -> None:  # pragma: no cover - child
     """In the forked child: redirect output, set the malloc perturbation and limits, run volren."""
     code = 3
     try:
@@ -177,7 +179,15 @@ def _finish(case: Case, child: _Child, folder: Path, kill: bool) -> Run:
             image = np.load(folder / case.array, allow_pickle=False)
         except (ValueError, OSError):
             image = None
-    return Run(code, read("stdout.txt"), read("stderr.txt"), seconds, kill, image, _bad_output(case, folder, code == 0))
+    return Run(
+        code,
+        read("stdout.txt"),
+        read("stderr.txt"),
+        seconds,
+        kill,
+        image,
+        _bad_output(case, folder, code == 0),
+    )
 
 
 def _bad_output(case: Case, folder: Path, succeeded: bool) -> str:
@@ -369,7 +379,9 @@ def _run_all(cases: Iterable[Case], work: Path, jobs: int, timeout: float, mode:
                 index, case = nxt
                 attempt = 0
             folder = folder_for(index, case, attempt)
-            child = _start(server.case_for(case, folder), folder, _PERTURB[attempt], mode, timeout, memory_limit)
+            child = _start(
+                server.case_for(case, folder), folder, _PERTURB[attempt], mode, timeout, memory_limit
+            )
             running[child.fd] = (index, case, child, folder)
         if not running:
             break

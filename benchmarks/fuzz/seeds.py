@@ -105,10 +105,17 @@ def _vtk_seeds() -> list[Seed]:
         Seed("legacy-ascii", {"v.vtk": _written(lambda p: img.save(p, binary=False), "v.vtk")}, "v.vtk"),
         Seed("vtu-binary", {"m.vtu": _written(lambda p: grid.save(p), "m.vtu")}, "m.vtu", kind="mesh"),
         Seed(
-            "vtu-ascii", {"m.vtu": _written(lambda p: grid.save(p, binary=False), "m.vtu")}, "m.vtu", kind="mesh"
+            "vtu-ascii",
+            {"m.vtu": _written(lambda p: grid.save(p, binary=False), "m.vtu")},
+            "m.vtu",
+            kind="mesh",
         ),
-        Seed("legacy-mesh-51", {"m.vtk": _written(lambda p: grid.save(p, binary=True), "m.vtk")}, "m.vtk",
-             kind="mesh"),  # fmt: skip
+        Seed(
+            "legacy-mesh-51",
+            {"m.vtk": _written(lambda p: grid.save(p, binary=True), "m.vtk")},
+            "m.vtk",
+            kind="mesh",
+        ),  # fmt: skip
         Seed("mhd", meta_pair(False), "head.mhd"),
         Seed("mha-zlib", {"v.mha": _written(lambda p: meta(p, True), "v.mha")}, "v.mha"),
         Seed("mha-raw", {"v.mha": _written(lambda p: meta(p, False), "v.mha")}, "v.mha"),
@@ -207,6 +214,7 @@ def seeds() -> list[Seed]:
         *_slc_seeds(),
         Seed("dicom", dicom_files(grid_values()), "series"),
         Seed("raw", {"v.raw": raw}, "v.raw", ("--raw-shape", shape, "--raw-dtype", "int16")),
-        Seed("legacy-mesh-30", {"m.vtk": legacy_mesh_text(points, tets, values).encode()}, "m.vtk", kind="mesh"),
+        Seed(
+            "legacy-mesh-30", {"m.vtk": legacy_mesh_text(points, tets, values).encode()}, "m.vtk", kind="mesh"
+        ),
     ]
-

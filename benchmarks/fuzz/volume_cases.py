@@ -113,7 +113,9 @@ def text_field_cases(seed: Seed, file: str, full: bool) -> Iterator[Case]:
             yield _case(seed, f"{label}-one-value-short", files, expectation(key, "abc"))
             files = {**seed.files, file: _replace_line(data, start, key, value, value + " 7")}
             yield _case(seed, f"{label}-one-value-more", files)
-        yield _case(seed, f"{label}-dropped", {**seed.files, file: _replace_line(data, start, key, value, None)})
+        yield _case(
+            seed, f"{label}-dropped", {**seed.files, file: _replace_line(data, start, key, value, None)}
+        )
         doubled = data[:start] + (key + value).encode() + b"\n" + data[start:]
         yield _case(seed, f"{label}-twice", {**seed.files, file: doubled})
 
@@ -134,8 +136,10 @@ def xml_attribute_cases(seed: Seed, full: bool) -> Iterator[Case]:
         if name in ("version", "RangeMin", "RangeMax") or (not full and seen[name] > 1):
             continue
         label = f"{name}{seen[name] if seen[name] > 1 else ''}"
-        for bad in (*BAD_NUMBERS[:6], "String", "UInt64", "-1 -1 -1 -1 -1 -1", "99999999 99999999") if full else (
-            "-1", "nan", "abc"
+        for bad in (
+            (*BAD_NUMBERS[:6], "String", "UInt64", "-1 -1 -1 -1 -1 -1", "99999999 99999999")
+            if full
+            else ("-1", "nan", "abc")
         ):
             new = data[: m.start(2)] + bad.encode() + data[m.end(2) :]
             yield _case(seed, f"{label}={bad or 'empty'}", {file: new}, _xml_expectation(name, bad))
@@ -163,11 +167,17 @@ def byte_cases(seed: Seed, rng: random.Random) -> Iterator[Case]:
     n = len(data)
     for fraction in (0.02, 0.1, 0.3, 0.5, 0.7, 0.9, 0.99):
         cut = max(1, int(n * fraction))
-        yield _case(seed, f"cut-{fraction:g}", {**seed.files, file: data[:cut]}, "error" if fraction < 0.95 else "any")
+        yield _case(
+            seed, f"cut-{fraction:g}", {**seed.files, file: data[:cut]}, "error" if fraction < 0.95 else "any"
+        )
     yield _case(seed, "cut-last-byte", {**seed.files, file: data[:-1]})
     yield _case(seed, "empty", {**seed.files, file: b""}, "error")
-    yield _case(seed, "garbage-appended", {**seed.files, file: data + bytes(rng.getrandbits(8) for _ in range(999))})
-    yield _case(seed, "zeros-in-middle", {**seed.files, file: data[: n // 2] + bytes(64) + data[n // 2 + 64 :]})
+    yield _case(
+        seed, "garbage-appended", {**seed.files, file: data + bytes(rng.getrandbits(8) for _ in range(999))}
+    )
+    yield _case(
+        seed, "zeros-in-middle", {**seed.files, file: data[: n // 2] + bytes(64) + data[n // 2 + 64 :]}
+    )
     yield _case(seed, "random-same-length", {**seed.files, file: bytes(rng.getrandbits(8) for _ in range(n))})
     for trial in range(4):
         flipped = bytearray(data)
@@ -306,7 +316,11 @@ def dicom_cases(seed: Seed) -> Iterator[Case]:
                     f: set_element(d, tag, value) if scope == "all" or f == middle else d
                     for f, d in seed.files.items()
                 }
-                expect: Expect = "error" if label in _DICOM_REFUSED and not (label == "bits_allocated" and i == 2) else "any"
+                expect: Expect = (
+                    "error"
+                    if label in _DICOM_REFUSED and not (label == "bits_allocated" and i == 2)
+                    else "any"
+                )
                 if label == "position" and scope == "one":
                     expect = "any"
                 yield _case(seed, f"{label}[{i}]-{scope}", files, expect)
@@ -317,7 +331,12 @@ def dicom_cases(seed: Seed) -> Iterator[Case]:
     short = set_element(data, pixels_tag, pixel_bytes[: len(pixel_bytes) // 2])
     yield _case(seed, "pixel-data-short", {**seed.files, middle: short}, "error")
     yield _case(seed, "pixel-data-length-lies", {**seed.files, middle: set_element(data, pixels_tag, pixel_bytes, 2 * len(pixel_bytes))}, "error")  # fmt: skip
-    yield _case(seed, "pixel-data-odd", {**seed.files, middle: set_element(data, pixels_tag, pixel_bytes[:-1])}, "error")
+    yield _case(
+        seed,
+        "pixel-data-odd",
+        {**seed.files, middle: set_element(data, pixels_tag, pixel_bytes[:-1])},
+        "error",
+    )
     yield _case(seed, "pixel-data-missing", {**seed.files, middle: data[: start - 12]}, "error")
     yield _case(seed, "slice-empty", {**seed.files, middle: b""}, "error")
     yield _case(seed, "slice-garbage", {**seed.files, middle: bytes(range(256)) * 4}, "error")
@@ -331,8 +350,9 @@ def dicom_cases(seed: Seed) -> Iterator[Case]:
 # ---------------------------------------------------------------------------------------- SLC
 
 
-def _slc_file(blocks: list[bytes], flag: int = 1, sizes: list[str] | None = None, icon: str = "2 2",
-              bits: int = 8) -> bytes:
+def _slc_file(
+    blocks: list[bytes], flag: int = 1, sizes: list[str] | None = None, icon: str = "2 2", bits: int = 8
+) -> bytes:
     """An SLC file of the seed's size whose slices are `blocks`, each after its 'size X' when
     `sizes` is given (the blocks' own lengths by default, for flag 1)."""
     nx, ny, nz = SHAPE
@@ -361,15 +381,29 @@ def slc_cases() -> Iterator[Case]:
     yield case("flag-rle-on-raw-slices", _slc_file(planes, 1, sizes=[]))
     yield case("flag-raw-on-rle-slices", _slc_file(coded, 0, sizes=[str(len(c)) for c in coded]))
     yield case("run-longer-than-slice", _slc_file(with_slice(bytes([0x7F, 9, 0]))))
-    yield case("literal-run-past-block", _slc_file(with_slice(bytes([0x80 | plane]) + planes[2][:20] + b"\0")))
+    yield case(
+        "literal-run-past-block", _slc_file(with_slice(bytes([0x80 | plane]) + planes[2][:20] + b"\0"))
+    )
     yield case("repeat-run-without-value", _slc_file(with_slice(bytes([5]))))
     yield case("runs-short-of-slice", _slc_file(with_slice(rle(planes[2][: plane // 2]))))
     yield case("no-end-marker", _slc_file(with_slice(coded[2][:-1])))
     yield case("size-past-end", _slc_file(coded, 1, sizes=[*(str(len(c)) for c in coded[:-1]), "99999"]))
-    yield case("size-negative", _slc_file(coded, 1, sizes=[str(len(c)) if k != 2 else "-5" for k, c in enumerate(coded)]))
-    yield case("size-short", _slc_file(coded, 1, sizes=[str(len(c) - (3 if k == 2 else 0)) for k, c in enumerate(coded)]))
-    yield case("size-long", _slc_file(coded, 1, sizes=[str(len(c) + (5 if k == 2 else 0)) for k, c in enumerate(coded)]))
-    yield case("size-huge", _slc_file(coded, 1, sizes=[str(len(c)) if k != 2 else "9" * 20 for k, c in enumerate(coded)]))
+    yield case(
+        "size-negative",
+        _slc_file(coded, 1, sizes=[str(len(c)) if k != 2 else "-5" for k, c in enumerate(coded)]),
+    )
+    yield case(
+        "size-short",
+        _slc_file(coded, 1, sizes=[str(len(c) - (3 if k == 2 else 0)) for k, c in enumerate(coded)]),
+    )
+    yield case(
+        "size-long",
+        _slc_file(coded, 1, sizes=[str(len(c) + (5 if k == 2 else 0)) for k, c in enumerate(coded)]),
+    )
+    yield case(
+        "size-huge",
+        _slc_file(coded, 1, sizes=[str(len(c)) if k != 2 else "9" * 20 for k, c in enumerate(coded)]),
+    )
     yield case("icon-huge", _slc_file(coded, 1, icon="99999 99999"))
     yield case("icon-negative", _slc_file(coded, 1, icon="-2 2"))
     yield case("bits-16", _slc_file(coded, 1, bits=16))
@@ -381,7 +415,9 @@ def slc_cases() -> Iterator[Case]:
 
 def _mesh_text(points=None, tets=None, values=None, edit: Callable[[str], str] | None = None) -> bytes:
     p, t, v = mesh()
-    text = legacy_mesh_text(p if points is None else points, t if tets is None else tets, v if values is None else values)
+    text = legacy_mesh_text(
+        p if points is None else points, t if tets is None else tets, v if values is None else values
+    )
     return (edit(text) if edit else text).encode()
 
 
@@ -406,14 +442,33 @@ def mesh_cases() -> Iterator[Case]:
     yield case("cell-size-huge", _mesh_text(edit=lambda s: s.replace("\n4 ", "\n2000000000 ", 1)), "error")
     yield case("cell-size-negative", _mesh_text(edit=lambda s: s.replace("\n4 ", "\n-4 ", 1)), "error")
     for ctype in ("0", "255", "-1", "7", "42", "12", "1"):
-        yield case(f"cell-type-{ctype}", _mesh_text(edit=lambda s, c=ctype: s.replace("CELL_TYPES 40\n10", f"CELL_TYPES 40\n{c}")))
+        yield case(
+            f"cell-type-{ctype}",
+            _mesh_text(edit=lambda s, c=ctype: s.replace("CELL_TYPES 40\n10", f"CELL_TYPES 40\n{c}")),
+        )
     yield case("all-cell-types-vertex", _mesh_text(edit=lambda s: s.replace("\n10", "\n1")), "error")
-    yield case("cells-count-short", _mesh_text(edit=lambda s: s.replace("CELLS 40 200", "CELLS 41 205")), "error")
+    yield case(
+        "cells-count-short", _mesh_text(edit=lambda s: s.replace("CELLS 40 200", "CELLS 41 205")), "error"
+    )
     yield case("cells-count-zero", _mesh_text(edit=lambda s: s.replace("CELLS 40 200", "CELLS 0 0")), "error")
-    yield case("cell-types-count", _mesh_text(edit=lambda s: s.replace("CELL_TYPES 40", "CELL_TYPES 39")), "error")
-    yield case("points-count-more", _mesh_text(edit=lambda s: s.replace(f"POINTS {n} float", f"POINTS {n + 5} float")), "error")
-    yield case("points-count-less", _mesh_text(edit=lambda s: s.replace(f"POINTS {n} float", f"POINTS {n - 5} float")), "error")
-    yield case("point-data-count", _mesh_text(edit=lambda s: s.replace(f"POINT_DATA {n}", f"POINT_DATA {n - 1}")), "error")
+    yield case(
+        "cell-types-count", _mesh_text(edit=lambda s: s.replace("CELL_TYPES 40", "CELL_TYPES 39")), "error"
+    )
+    yield case(
+        "points-count-more",
+        _mesh_text(edit=lambda s: s.replace(f"POINTS {n} float", f"POINTS {n + 5} float")),
+        "error",
+    )
+    yield case(
+        "points-count-less",
+        _mesh_text(edit=lambda s: s.replace(f"POINTS {n} float", f"POINTS {n - 5} float")),
+        "error",
+    )
+    yield case(
+        "point-data-count",
+        _mesh_text(edit=lambda s: s.replace(f"POINT_DATA {n}", f"POINT_DATA {n - 1}")),
+        "error",
+    )
     for label, value in (("nan", np.nan), ("inf", np.inf), ("huge", 1e300)):
         bad = points.copy()
         bad[4, 1] = value
@@ -431,7 +486,10 @@ def mesh_cases() -> Iterator[Case]:
     yield case("no-cells", _mesh_text(edit=lambda s: s.split("CELLS")[0] + "POINT_DATA 27\nSCALARS pressure float 1\nLOOKUP_TABLE default\n" + "1\n" * 27), "error")  # fmt: skip
     yield case("no-point-data", _mesh_text(edit=lambda s: s.split("POINT_DATA")[0]), "error")
     yield case("cell-data-only", _mesh_text(edit=lambda s: s.replace(f"POINT_DATA {n}", "CELL_DATA 40").split("LOOKUP_TABLE default")[0] + "LOOKUP_TABLE default\n" + "2\n" * 40), "any")  # fmt: skip
-    yield case("value-type-string", _mesh_text(edit=lambda s: s.replace("SCALARS pressure float", "SCALARS pressure string")))
+    yield case(
+        "value-type-string",
+        _mesh_text(edit=lambda s: s.replace("SCALARS pressure float", "SCALARS pressure string")),
+    )
     yield case("value-components-0", _mesh_text(edit=lambda s: s.replace("SCALARS pressure float 1", "SCALARS pressure float 0")), "error")  # fmt: skip
     yield case("value-components-9", _mesh_text(edit=lambda s: s.replace("SCALARS pressure float 1", "SCALARS pressure float 9")), "error")  # fmt: skip
 
@@ -462,19 +520,59 @@ def raw_cases(seed: Seed) -> Iterator[Case]:
         return Case(f"raw/{what}", "raw", {"v.raw": content}, render_argv("v.raw", *flags), expect,
                     ("v.raw", "--raw-shape", "--raw-dtype", "--raw-spacing", "--raw-byte-order"))  # fmt: skip
 
-    for shape in ("8,7", "8,7,6,1", "0,7,6", "-8,7,6", "8,7,nan", "4294967296,1,1", "99999,99999,99999", "8.5,7,6", "x"):
+    for shape in (
+        "8,7",
+        "8,7,6,1",
+        "0,7,6",
+        "-8,7,6",
+        "8,7,nan",
+        "4294967296,1,1",
+        "99999,99999,99999",
+        "8.5,7,6",
+        "x",
+    ):
         yield case(f"shape={shape}", ("--raw-shape", shape, "--raw-dtype", "int16"), "error")
-    for dtype in ("int17", "complex64", "object", "U8", "float16", "bool", "datetime64", "V2", "int8", "uint32"):
+    for dtype in (
+        "int17",
+        "complex64",
+        "object",
+        "U8",
+        "float16",
+        "bool",
+        "datetime64",
+        "V2",
+        "int8",
+        "uint32",
+    ):
         expect: Expect = "any" if dtype in ("float16", "int8", "uint32") else "error"
         yield case(f"dtype={dtype}", ("--raw-shape", "8,7,6", "--raw-dtype", dtype), expect)
     for spacing in ("0,1,1", "nan,1,1", "inf,1,1", "-1,1,1", "1,1", "a,b,c"):
         expect = "any" if spacing == "-1,1,1" else "error"
-        yield case(f"spacing={spacing}", ("--raw-shape", "8,7,6", "--raw-dtype", "int16", "--raw-spacing", spacing), expect)
+        yield case(
+            f"spacing={spacing}",
+            ("--raw-shape", "8,7,6", "--raw-dtype", "int16", "--raw-spacing", spacing),
+            expect,
+        )
     yield case("no-dtype-two-bytes", ("--raw-shape", "8,7,6"), "error")
     yield case("no-shape", (), "error")
-    yield case("float-nan-data", ("--raw-shape", "8,7,6", "--raw-dtype", "float64"), "any", np.full(336, np.nan).tobytes())
-    yield case("float-inf-data", ("--raw-shape", "8,7,6", "--raw-dtype", "float64"), "any", np.full(336, np.inf).tobytes())
-    yield case("float-huge-data", ("--raw-shape", "8,7,6", "--raw-dtype", "float64"), "any", np.full(336, 1e308).tobytes())
+    yield case(
+        "float-nan-data",
+        ("--raw-shape", "8,7,6", "--raw-dtype", "float64"),
+        "any",
+        np.full(336, np.nan).tobytes(),
+    )
+    yield case(
+        "float-inf-data",
+        ("--raw-shape", "8,7,6", "--raw-dtype", "float64"),
+        "any",
+        np.full(336, np.inf).tobytes(),
+    )
+    yield case(
+        "float-huge-data",
+        ("--raw-shape", "8,7,6", "--raw-dtype", "float64"),
+        "any",
+        np.full(336, 1e308).tobytes(),
+    )
     yield case("float32-denormal", ("--raw-shape", "8,7,6", "--raw-dtype", "float32"), "any", np.full(336 * 2, 1e-42, np.float32).tobytes())  # fmt: skip
     yield case("constant", ("--raw-shape", "8,7,6", "--raw-dtype", "int16"), "any", bytes(len(data)))
 
@@ -491,8 +589,18 @@ def volume_cases(seed_value: int = 0) -> list[Case]:
         out += byte_cases(seed, rng)
         name = seed.name
         if name.startswith(("nrrd", "nhdr", "mhd", "mha", "legacy", "slc")):
-            header_file = next(f for f in seed.files if f.endswith((".nrrd", ".nhdr", ".mhd", ".mha", ".vtk", ".slc")))
-            full = name in ("nrrd-raw", "nhdr", "mhd", "mha-zlib", "legacy-binary", "legacy-mesh-30", "slc-rle")
+            header_file = next(
+                f for f in seed.files if f.endswith((".nrrd", ".nhdr", ".mhd", ".mha", ".vtk", ".slc"))
+            )
+            full = name in (
+                "nrrd-raw",
+                "nhdr",
+                "mhd",
+                "mha-zlib",
+                "legacy-binary",
+                "legacy-mesh-30",
+                "slc-rle",
+            )
             out += text_field_cases(seed, header_file, full)
         if name.startswith(("vti", "vtu")):
             out += xml_attribute_cases(seed, full=name in ("vti-raw", "vti-zlib", "vtu-binary"))

@@ -36,7 +36,9 @@ def seed_files() -> dict[str, bytes]:
     volume = UniformVolume(grid_values(), SPACING, (1.0, -2.0, 0.5), name="fuzz")
     with tempfile.TemporaryDirectory() as tmp:
         save_ome_zarr(volume, Path(tmp) / IMAGE, chunk=4, levels=2)
-        return {p.relative_to(tmp).as_posix(): p.read_bytes() for p in sorted(Path(tmp).rglob("*")) if p.is_file()}
+        return {
+            p.relative_to(tmp).as_posix(): p.read_bytes() for p in sorted(Path(tmp).rglob("*")) if p.is_file()
+        }
 
 
 def _is_chunk(rel: str) -> bool:
@@ -65,13 +67,17 @@ def metadata_cases(files: dict[str, bytes]) -> Iterator[Case]:
     """The image's group attributes and level 0's array metadata, one fault at a time: each must be refused."""
     attrs, array = f"{IMAGE}/.zattrs", f"{IMAGE}/0/.zarray"
     faults: dict[str, Callable[[dict], None]] = {
-        "transforms-as-strings": lambda d: _dataset(d).update(coordinateTransformations=["scale", "translation"]),
+        "transforms-as-strings": lambda d: _dataset(d).update(
+            coordinateTransformations=["scale", "translation"]
+        ),
         "transforms-as-string": lambda d: _dataset(d).update(coordinateTransformations="scale"),
         "scale-as-string": lambda d: _dataset(d)["coordinateTransformations"][0].update(scale="1,1,1"),
         "scale-short": lambda d: _dataset(d)["coordinateTransformations"][0].update(scale=[1, 1]),
         "scale-zero": lambda d: _dataset(d)["coordinateTransformations"][0].update(scale=[0, 1, 1]),
         "scale-true": lambda d: _dataset(d)["coordinateTransformations"][0].update(scale=[True, 1, 1]),
-        "translation-nan": lambda d: _dataset(d)["coordinateTransformations"][1].update(translation=[float("nan"), 0, 0]),
+        "translation-nan": lambda d: _dataset(d)["coordinateTransformations"][1].update(
+            translation=[float("nan"), 0, 0]
+        ),
         "range-short": lambda d: d["volren"]["brick_ranges"][0].__setitem__(0, [5]),
         "range-empty": lambda d: d["volren"]["brick_ranges"][0].__setitem__(0, []),
         "range-reversed": lambda d: d["volren"]["brick_ranges"][0].__setitem__(0, [9, 1]),
@@ -117,7 +123,10 @@ def chunk_cases(files: dict[str, bytes]) -> Iterator[Case]:
     yield _case("chunk-missing", {rel: data for rel, data in files.items() if rel != first}, "any")
     no_chunks = {rel: data for rel, data in files.items() if not _is_chunk(rel)}
     yield _case("no-chunk-files", no_chunks)
-    yield _case("no-chunk-files-no-ranges", _edited(no_chunks, f"{IMAGE}/.zattrs", lambda d: _set_in(d, lambda x: x.pop("volren"))))
+    yield _case(
+        "no-chunk-files-no-ranges",
+        _edited(no_chunks, f"{IMAGE}/.zattrs", lambda d: _set_in(d, lambda x: x.pop("volren"))),
+    )
 
 
 def flag_cases(files: dict[str, bytes]) -> Iterator[Case]:
@@ -144,7 +153,14 @@ def http_cases(files: dict[str, bytes]) -> Iterator[Case]:
     """The image read over HTTP from a server that serves it well, or fails every request or every chunk."""
     for mode in ("ok", "500", "403", "loop", "short", "chunks-500", "chunks-short"):
         expect: Expect = "render" if mode == "ok" else "error"
-        yield Case(f"{HTTP_GROUP}/{mode}", HTTP_GROUP, files, render_argv(f"{{http:{mode}}}/{IMAGE}"), expect, (IMAGE,))
+        yield Case(
+            f"{HTTP_GROUP}/{mode}",
+            HTTP_GROUP,
+            files,
+            render_argv(f"{{http:{mode}}}/{IMAGE}"),
+            expect,
+            (IMAGE,),
+        )
 
 
 def zarr_cases() -> list[Case]:

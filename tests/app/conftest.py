@@ -156,12 +156,16 @@ class FakeRenderer(RendererBase):
     """A constant-colour renderer that records what it was given (and on which thread)."""
 
     name: ClassVar[str] = "fake"
-    capabilities: ClassVar[Capabilities] = Capabilities(kinds={"uniform": KindSupport()}, summary="test double")
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        kinds={"uniform": KindSupport()}, summary="test double"
+    )
     color: ClassVar[tuple[float, float, float, float]] = (0.4, 0.2, 0.1, 0.5)
     calls: ClassVar[list[dict[str, Any]]] = []
 
     def _render(self, camera, width, height, progress) -> tuple[np.ndarray, Mapping[str, float]]:
-        type(self).calls.append({"camera": camera, "tf": self.transfer_function.copy(), "size": (width, height)})
+        type(self).calls.append(
+            {"camera": camera, "tf": self.transfer_function.copy(), "size": (width, height)}
+        )
         image = np.empty((height, width, 4), np.float32)
         image[...] = self.color
         return image, {}

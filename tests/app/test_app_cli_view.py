@@ -36,7 +36,9 @@ def chromatic_fraction(path: Path) -> float:
 @pytest.mark.xvfb
 def test_view_screenshot_of_a_real_x_window(tmp_path):
     if shutil.which("xvfb-run") is None:
-        pytest.fail(f"xvfb-run is not on PATH (scripts/setup.sh --tests installs {XVFB_PACKAGES})", pytrace=False)
+        pytest.fail(
+            f"xvfb-run is not on PATH (scripts/setup.sh --tests installs {XVFB_PACKAGES})", pytrace=False
+        )
     out = tmp_path / "view.png"
     env = dict(os.environ, QT_QPA_PLATFORM="xcb")
     result = view(["--screenshot", str(out)], env, prefix=["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24"])
@@ -56,9 +58,19 @@ def test_a_tf_edit_in_the_real_window_changes_the_frame_on_screen():
     import json
 
     if shutil.which("xvfb-run") is None:
-        pytest.fail(f"xvfb-run is not on PATH (scripts/setup.sh --tests installs {XVFB_PACKAGES})", pytrace=False)
+        pytest.fail(
+            f"xvfb-run is not on PATH (scripts/setup.sh --tests installs {XVFB_PACKAGES})", pytrace=False
+        )
     env = dict(os.environ, QT_QPA_PLATFORM="xcb")
-    cmd = ["xvfb-run", "-a", "-s", "-screen 0 1400x900x24", sys.executable, "-m", "tests.app.real_window_edit"]
+    cmd = [
+        "xvfb-run",
+        "-a",
+        "-s",
+        "-screen 0 1400x900x24",
+        sys.executable,
+        "-m",
+        "tests.app.real_window_edit",
+    ]
     root = Path(__file__).resolve().parents[2]
     result = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=240, cwd=root)
     assert result.returncode == 0, f"exit {result.returncode}: {result.stderr[-2000:]}"
@@ -67,9 +79,15 @@ def test_a_tf_edit_in_the_real_window_changes_the_frame_on_screen():
     assert report["points_added"] == 1
     assert report["changed_fraction"] > 0.02, report
     assert report["frame_matches_screen"], report
-    assert report["round_trip"] == [2, True, True], report  # the 1D TF as a 2D band, then the edited 1D TF back
+    assert report["round_trip"] == [2, True, True], (
+        report
+    )  # the 1D TF as a 2D band, then the edited 1D TF back
     enabled, tooltip, dims, _status = report["mesh_2d"]
-    assert not enabled and "No renderer draws 2D transfer functions on tetrahedral volumes" in tooltip and dims == 1
+    assert (
+        not enabled
+        and "No renderer draws 2D transfer functions on tetrahedral volumes" in tooltip
+        and dims == 1
+    )
 
 
 def test_view_with_an_unknown_renderer_fails_in_one_line(tmp_path):

@@ -73,7 +73,9 @@ def test_history_records_finished_edits_once_and_undoes_them(qapp, state):
     assert s.transfer_function.opacity_points.tolist() == original.tolist()
     history.redo()
     history.redo()
-    assert s.transfer_function.opacity_points[-1, 1] == 0.6 and s.transfer_function.opacity_unit_distance == 0.5
+    assert (
+        s.transfer_function.opacity_points[-1, 1] == 0.6 and s.transfer_function.opacity_unit_distance == 0.5
+    )
     assert history.stack.count() == 2  # undo/redo themselves record nothing
 
 
@@ -82,7 +84,9 @@ def test_history_spans_1d_and_2d_and_restarts_with_a_new_volume(qapp, state):
     history = TFHistory(s)
     one_d = s.transfer_function.to_dict()
     s.set_transfer_function(
-        TransferFunction2D((-1.0, 1.0), (0.0, 4.0), [TFWidget.box((0.0, 1.0), (0.0, 4.0), (1.0, 0.5, 0.0), 0.5)])
+        TransferFunction2D(
+            (-1.0, 1.0), (0.0, 4.0), [TFWidget.box((0.0, 1.0), (0.0, 4.0), (1.0, 0.5, 0.0), 0.5)]
+        )
     )
     assert history.stack.count() == 1 and history.stack.undoText() == "new transfer function"
     history.undo()

@@ -22,7 +22,9 @@ def frame_after(qtbot, window, act) -> object:
 def test_the_window_has_the_editors_and_panels_docked(loaded_window):
     w = loaded_window
     docks = w.docks
-    assert docks.tf_dock.widget().widget() is docks.tf_panel and not docks.tf_dock.isHidden()  # in a scroll area
+    assert (
+        docks.tf_dock.widget().widget() is docks.tf_panel and not docks.tf_dock.isHidden()
+    )  # in a scroll area
     assert docks.tf_panel.tabs.currentWidget() is docks.tf_panel.editor_1d
     assert docks.dataset.facts()["Dimensions"] == " × ".join(str(n) for n in w.state.volume.dimensions)
     width, height = w.viewport.pixel_size()
@@ -115,7 +117,10 @@ def test_the_docks_show_their_whole_width_at_the_default_window_size(make_window
     from volren.model.volume import UniformVolume
 
     name = "ct_abdomen_patient_000042_series_0003_reconstructed_0.625mm.nrrd"
-    arrays = ("density_after_the_second_correction_pass", "density_after_the_second_correction_pass:magnitude")
+    arrays = (
+        "density_after_the_second_correction_pass",
+        "density_after_the_second_correction_pass:magnitude",
+    )
     values = np.arange(6 * 7 * 8, dtype=np.float32).reshape(8, 7, 6)
     volume = UniformVolume(values, spacing=(0.625, 0.625, 0.625), origin=(-123.4567, -98.7654, 1234.5678), name=name,
                            notes=(f"{name}: 12,345 cells of a kind volren does not draw were dropped",),
@@ -133,5 +138,9 @@ def test_the_docks_show_their_whole_width_at_the_default_window_size(make_window
         qtbot.wait(50)
         scroll = dock.widget()
         needed, shown = scroll.widget().minimumSizeHint().width(), scroll.viewport().width()
-        assert needed <= shown and not scroll.horizontalScrollBar().isVisible(), (dock.windowTitle(), needed, shown)
+        assert needed <= shown and not scroll.horizontalScrollBar().isVisible(), (
+            dock.windowTitle(),
+            needed,
+            shown,
+        )
     assert docks.dataset.facts()["Name"] == name  # shown whole where it fits, in full in its tooltip

@@ -177,11 +177,19 @@ def test_cancel_drops_a_slow_load_and_keeps_the_view(files_window, fakes, qtbot,
     assert not w.files.cancel_action.isEnabled()
     w.files.open_input(tmp_path / "slow.vti")
     qtbot.waitUntil(load.started.is_set, timeout=TIMEOUT_MS)
-    assert w.files.busy_bar.isVisible() and w.files.cancel_button.isVisible() and w.files.cancel_action.isEnabled()
+    assert (
+        w.files.busy_bar.isVisible()
+        and w.files.cancel_button.isVisible()
+        and w.files.cancel_action.isEnabled()
+    )
     assert w.files.cancel_action.shortcut() == QKeySequence(Qt.Key_Escape)
     qtbot.mouseClick(w.files.cancel_button, Qt.LeftButton)
     assert finished == [False]
-    assert not w.files.busy_bar.isVisible() and not w.files.cancel_button.isVisible() and not w.files.cancel_action.isEnabled()
+    assert (
+        not w.files.busy_bar.isVisible()
+        and not w.files.cancel_button.isVisible()
+        and not w.files.cancel_action.isEnabled()
+    )
     load.release.set()
     assert load.finished.wait(10) and w.files.loader.wait(5000)
     qtbot.wait(100)  # the abandoned result arrives now, and must be dropped
@@ -234,7 +242,11 @@ def test_stages_show_in_the_status_bar(files_window, fakes, qtbot, tmp_path):
     w = files_window(load=staged)
     w.files.open_input(tmp_path / "big.vtu", renderer="fake")
     qtbot.waitUntil(lambda: w.files.stage_label.text() == "Preparing mesh…", timeout=TIMEOUT_MS)
-    assert w.files.stage_label.isVisible() and w.files.busy_bar.maximum() == 100 and w.files.busy_bar.value() == 25
+    assert (
+        w.files.stage_label.isVisible()
+        and w.files.busy_bar.maximum() == 100
+        and w.files.busy_bar.value() == 25
+    )
     with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
         release.set()
     assert not w.files.stage_label.isVisible() and w.state.source == "ml9"
@@ -248,7 +260,11 @@ def test_loading_a_mesh_prepares_it_and_cancelling_skips_that(monkeypatch, tmp_p
     tet_mesh.clear_memory_cache()
     stages = []
     loaded = load_input(volume_file, progress=lambda text, fraction: stages.append((text, fraction)))
-    assert stages == [("Reading hollow_cylinder.vtu…", None), ("Preparing mesh…", None), ("Histograms…", None)]
+    assert stages == [
+        ("Reading hollow_cylinder.vtu…", None),
+        ("Preparing mesh…", None),
+        ("Histograms…", None),
+    ]
     assert loaded.volume_path == str(Path(volume_file).absolute()) and loaded.volume.kind == "tet"
     assert tet_mesh.content_key(loaded.volume) in tet_mesh._memory  # the renderer's call is free now
     assert "mean_edge_length" in vars(loaded.volume)
@@ -440,7 +456,9 @@ def test_screenshot_menu_action_uses_the_dialog_choice(files_window, fakes, qtbo
     assert png_pixels(tmp_path / "menu.png").shape == (40, 64, 3)
 
     monkeypatch.setattr(
-        screenshot_dialog, "ask_screenshot", lambda *a: screenshot_dialog.ScreenshotChoice(str(tmp_path / "w.png"), 1, 1, True)
+        screenshot_dialog,
+        "ask_screenshot",
+        lambda *a: screenshot_dialog.ScreenshotChoice(str(tmp_path / "w.png"), 1, 1, True),
     )
     with qtbot.waitSignal(w.screenshots.saved, timeout=TIMEOUT_MS):
         w.screenshots.action.trigger()
@@ -543,7 +561,9 @@ def test_a_slow_screenshot_without_progress_reports_shows_a_busy_dialog_with_the
         with qtbot.waitSignal(w.screenshots.saved, timeout=TIMEOUT_MS):
             assert w.screenshots.render(tmp_path / "slow.png", 32, 32)
             progress = w.screenshots._progress.dialog
-            qtbot.waitUntil(lambda: progress.isVisible() and progress.labelText().endswith(" s"), timeout=1500)
+            qtbot.waitUntil(
+                lambda: progress.isVisible() and progress.labelText().endswith(" s"), timeout=1500
+            )
             assert progress.maximum() == 0  # busy: no percentage to show
             assert "fake_slow_frame" in progress.labelText()
         assert (tmp_path / "slow.png").exists() and w.screenshots._progress is None
@@ -552,7 +572,9 @@ def test_a_slow_screenshot_without_progress_reports_shows_a_busy_dialog_with_the
 
 
 # ---------------------------------------------------------------------------- choosing the array
-def test_the_dataset_panel_switches_fields_keeping_the_view_and_each_fields_tf(files_window, fakes, qtbot, tmp_path):
+def test_the_dataset_panel_switches_fields_keeping_the_view_and_each_fields_tf(
+    files_window, fakes, qtbot, tmp_path
+):
     """Issue 23: choose the scalar array (and a vector's component or magnitude) in the app; the
     Dataset panel names the array shown."""
     import pyvista as pv
@@ -590,7 +612,9 @@ def test_the_dataset_panel_switches_fields_keeping_the_view_and_each_fields_tf(f
     assert w.state.camera == camera and w.state.renderer == renderer
     low, high = volume.value_range
     assert w.state.transfer_function is not edited
-    assert w.state.transfer_function.value_range == pytest.approx((low, high))  # the default TF over this field
+    assert w.state.transfer_function.value_range == pytest.approx(
+        (low, high)
+    )  # the default TF over this field
     choose("velocity (magnitude)")
     np.testing.assert_allclose(w.state.volume.values.reshape(-1), np.linalg.norm(velocity, axis=1), rtol=1e-6)
     choose("density")

@@ -17,9 +17,12 @@ from volren.quality import Measurement, QualityTable
 from volren.renderers.base import QualityLevel
 
 
-def measured(label: str, step: float, pre: bool, options: dict, ms: dict, worst: float, meets: bool = True) -> Measurement:
+def measured(
+    label: str, step: float, pre: bool, options: dict, ms: dict, worst: float, meets: bool = True
+) -> Measurement:
     """A measured level whose peer took 1 ms on every scene (ratios rank as frame times)."""
     return Measurement(QualityLevel(label, step, pre, options), ms, dict.fromkeys(ms, 1.0), worst, meets)
+
 
 pytestmark = [pytest.mark.qt]
 
@@ -34,7 +37,9 @@ def levels_for(renderer: str, monkeypatch) -> None:
     def level(step: float) -> Measurement:
         return measured(f"step {step}", step, False, {"table_size": 256}, {"a/smooth": 10.0}, 1.0)
 
-    table = QualityTable({SceneClass("uniform"): {renderer: {"default": level(0.25), "interactive": level(0.5)}}}, {})
+    table = QualityTable(
+        {SceneClass("uniform"): {renderer: {"default": level(0.25), "interactive": level(0.5)}}}, {}
+    )
     monkeypatch.setattr(quality, "table", lambda: table)
 
 
@@ -87,7 +92,9 @@ def caught_up(w, qtbot) -> None:
     assert len(w.frames_shown) == shown and current(w)
 
 
-def test_a_refinement_asked_twice_still_ends_in_its_still_frame(make_window, slow_fake, sample, qtbot, monkeypatch):
+def test_a_refinement_asked_twice_still_ends_in_its_still_frame(
+    make_window, slow_fake, sample, qtbot, monkeypatch
+):
     """A request for the same full frame while its coarse frame is drawn (Show array sets the
     background and crop after the volume) dropped the refinement: the coarse frame stayed on
     screen until the next gesture."""

@@ -90,10 +90,14 @@ def test_dolly_and_wheel_factors():
     assert interaction.drag_dolly_factor(-50, 100) == pytest.approx(1.1**10)
     closer = interaction.dolly(cam, 2.0, BOUNDS)
     assert closer.distance == pytest.approx(cam.distance / 2)
-    assert closer.clipping_range[0] < closer.distance - math.sqrt(3), "near plane must stay in front of the data"
+    assert closer.clipping_range[0] < closer.distance - math.sqrt(3), (
+        "near plane must stay in front of the data"
+    )
     flat = Camera.orbit(BOUNDS, parallel=True)
     zoomed = interaction.dolly(flat, 2.0, BOUNDS)
-    assert zoomed.parallel_scale == pytest.approx(flat.parallel_scale / 2) and zoomed.distance == flat.distance
+    assert (
+        zoomed.parallel_scale == pytest.approx(flat.parallel_scale / 2) and zoomed.distance == flat.distance
+    )
 
 
 def test_pan_moves_the_scene_with_the_mouse():
@@ -161,7 +165,11 @@ def test_frame_cost_fits_fixed_and_per_pixel_parts_from_full_frames_and_the_late
 
 
 def test_pick_renderer_keeps_current_else_takes_the_measured_choice():
-    opts = [RendererOption("reference", None), RendererOption("vtk", None), RendererOption("slicer", "no tets")]
+    opts = [
+        RendererOption("reference", None),
+        RendererOption("vtk", None),
+        RendererOption("slicer", "no tets"),
+    ]
     asked = []
 
     def measured(usable):
@@ -170,7 +178,9 @@ def test_pick_renderer_keeps_current_else_takes_the_measured_choice():
 
     assert pick_renderer(opts, "reference", measured) == "reference" and asked == []
     assert pick_renderer(opts, "slicer", measured) == "vtk" and asked == [["reference", "vtk"]]
-    assert pick_renderer(opts, "slicer", lambda usable: None) == "reference"  # nothing measured: the first usable
+    assert (
+        pick_renderer(opts, "slicer", lambda usable: None) == "reference"
+    )  # nothing measured: the first usable
     assert pick_renderer(opts, "slicer", lambda usable: "slicer") == "reference"  # never an unusable one
     assert pick_renderer([RendererOption("a", "x"), RendererOption("b", None)], "a") == "b"
     assert pick_renderer([RendererOption("a", "x")], "a") is None
@@ -192,7 +202,9 @@ def test_loading_a_2d_tf_gives_it_to_the_app(tmp_path):
     from volren.model.scene import Scene
     from volren.samples import sample_paths
 
-    tf = TransferFunction2D((0.0, 1.0), (0.0, 1.0), [TFWidget.box((0.2, 0.8), (0.0, 1.0), (1.0, 1.0, 1.0), 0.5)])
+    tf = TransferFunction2D(
+        (0.0, 1.0), (0.0, 1.0), [TFWidget.box((0.2, 0.8), (0.0, 1.0), (1.0, 1.0, 1.0), 0.5)]
+    )
     io.save_transfer_function(tf, tmp_path / "tf2d.json")
     volume_path, _ = sample_paths("marschner_lobb")
     io.save_scene(Scene(str(volume_path), tf, renderer="reference"), tmp_path / "scene.json")

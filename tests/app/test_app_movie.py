@@ -75,7 +75,9 @@ def test_export_records_the_orbit_of_the_view_in_its_own_thread(movie_window, ca
         direct.set_transfer_function(w.state.transfer_function)
         for index, frame in enumerate(frames):
             expected = direct.render(animation.camera(index, camera, volume.bounds, 30 / 20), 30, 20)
-            np.testing.assert_array_equal(frame, to_png_pixels(expected, w.state.background), err_msg=str(index))
+            np.testing.assert_array_equal(
+                frame, to_png_pixels(expected, w.state.background), err_msg=str(index)
+            )
     assert not np.array_equal(frames[0], frames[1])
     assert error_boxes == [] and "Saved" in w.statusBar().currentMessage()
 
@@ -142,7 +144,11 @@ def test_the_dialog_fields_make_the_choice(qtbot, tmp_path):
     dialog.lossless.setChecked(True)
     choice = dialog.choice()
     assert choice.path == str(tmp_path / "film.mp4") and choice.lossless
-    assert (choice.animation.frames, choice.animation.fps, choice.animation.orbit_degrees) == (90, 15.0, 180.0)
+    assert (choice.animation.frames, choice.animation.fps, choice.animation.orbit_degrees) == (
+        90,
+        15.0,
+        180.0,
+    )
     dialog.path_edit.setText(str(tmp_path / "film.gif"))
     assert not dialog.lossless.isEnabled() and not dialog.choice().lossless
     dialog.path_edit.setText("  ")

@@ -25,5 +25,3 @@ def test_the_app_renders_it(qtbot):
     finally:
         service.shutdown()
     assert frames[-1].rgb.shape == (6, 8, 3) and frames[-1].ms == 1.0
-
-

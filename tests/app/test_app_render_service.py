@@ -73,7 +73,8 @@ def test_newest_request_wins_and_the_renderer_stays_on_one_thread(qtbot, scene):
             service.submit("slow", volume, tf, RenderSettings(), camera, 8, 8)
         frames.clear()
         serials = [
-            service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(i), 8, 8, full=False) for i in range(20)
+            service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(i), 8, 8, full=False)
+            for i in range(20)
         ]
         qtbot.waitUntil(lambda: bool(frames) and frames[-1].serial == serials[-1], timeout=5000)
     finally:

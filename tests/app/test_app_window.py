@@ -27,10 +27,11 @@ pytestmark = [pytest.mark.qt, pytest.mark.vtk]
 FRAME_TIMEOUT_MS = 20000
 
 
-def measured(label: str, step: float, pre: bool, options: dict, ms: dict, worst: float, meets: bool = True) -> Measurement:
+def measured(
+    label: str, step: float, pre: bool, options: dict, ms: dict, worst: float, meets: bool = True
+) -> Measurement:
     """A measured level whose peer took 1 ms on every scene (ratios rank as frame times)."""
     return Measurement(QualityLevel(label, step, pre, options), ms, dict.fromkeys(ms, 1.0), worst, meets)
-
 
 
 def use_levels(monkeypatch, levels: dict) -> QualityTable:
@@ -45,7 +46,6 @@ def use_levels(monkeypatch, levels: dict) -> QualityTable:
 def level(step: float, pre: bool = False, options: dict | None = None, ms: float = 10.0) -> Measurement:
     """A measured level: `step`, pre-integration, `options`, `ms` on one scene, VTK's error."""
     return measured(f"step {step}", step, pre, options or {}, {"a/smooth": ms}, 1.0)
-
 
 
 def frame_pixels(window) -> np.ndarray:
@@ -66,7 +66,10 @@ def test_window_opens_on_sample_and_shows_first_full_frame(loaded_window, error_
     assert frame.full and frame.renderer == "vtk"
     assert (frame.width, frame.height) == w.viewport.pixel_size()
     assert not_background(w) > 0.05 * frame.width * frame.height, "the volume is not visible"
-    assert "vtk" in w.renderers.frame_label.text() and f"{frame.width} x {frame.height}" in w.renderers.frame_label.text()
+    assert (
+        "vtk" in w.renderers.frame_label.text()
+        and f"{frame.width} x {frame.height}" in w.renderers.frame_label.text()
+    )
     assert "ms" in w.renderers.frame_label.text()
     assert w.renderers.chooser.currentText() == "vtk"
     assert "marschner_lobb" in w.windowTitle()
@@ -189,7 +192,9 @@ def test_switching_renderer_keeps_camera_and_tf(loaded_window, fake_renderers, q
     assert error_boxes == []
 
 
-def test_renderer_that_cannot_draw_the_volume_is_disabled_with_tooltip(make_window, fake_renderers, sample, qtbot):
+def test_renderer_that_cannot_draw_the_volume_is_disabled_with_tooltip(
+    make_window, fake_renderers, sample, qtbot
+):
     w = make_window()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "vtk")
@@ -236,11 +241,17 @@ def test_a_renderer_that_cannot_draw_a_view_from_inside_gives_way_to_one_that_ca
         w.state.set_camera(inside)
     drawn = blocker.args[0].renderer
     assert drawn not in ("fake_outside_only", "reference") and w.state.renderer == drawn
-    assert len(error_boxes) == 1 and "inside" in error_boxes[0][1] and f"switched to {drawn}" in error_boxes[0][1]
+    assert (
+        len(error_boxes) == 1
+        and "inside" in error_boxes[0][1]
+        and f"switched to {drawn}" in error_boxes[0][1]
+    )
     assert blocker.args[0].camera == inside
 
 
-def test_requested_renderer_that_cannot_draw_is_an_error(make_window, fake_renderers, sample, qtbot, error_boxes):
+def test_requested_renderer_that_cannot_draw_is_an_error(
+    make_window, fake_renderers, sample, qtbot, error_boxes
+):
     """The error says so, and the renderer drawing instead is `auto`'s measured choice (it was a
     fixed preference for vtk, the slowest renderer on the shared scenes)."""
     from volren.quality import DEFAULT_LEVEL, choose_renderer
@@ -260,11 +271,15 @@ def fake_load(path, tf, scalars):
     from volren.samples import marschner_lobb
 
     if str(path).endswith("good.vti"):
-        return LoadedInput(marschner_lobb(17), sample_transfer_functions()["marschner_lobb"], source="good.vti")
+        return LoadedInput(
+            marschner_lobb(17), sample_transfer_functions()["marschner_lobb"], source="good.vti"
+        )
     raise VolrenError(f"{path}: not a VTK XML image file")
 
 
-def test_opening_a_bad_file_keeps_the_volume_and_reports_one_line(make_window, sample, qtbot, error_boxes, tmp_path):
+def test_opening_a_bad_file_keeps_the_volume_and_reports_one_line(
+    make_window, sample, qtbot, error_boxes, tmp_path
+):
     w = make_window(load=fake_load)
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(sample, "vtk")
@@ -342,7 +357,9 @@ def test_opening_a_scene_then_a_tf_file(window, qtbot, tmp_path, error_boxes):
     volume_path, tf_path = sample_paths("marschner_lobb")
     scene_path = tmp_path / "scene.json"
     view = OrbitView(azimuth=90.0, elevation=10.0, zoom=1.5)
-    io.save_scene(Scene(str(volume_path), io.load_transfer_function(tf_path), view, renderer="vtk"), scene_path)
+    io.save_scene(
+        Scene(str(volume_path), io.load_transfer_function(tf_path), view, renderer="vtk"), scene_path
+    )
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         window.files.open_input(scene_path)
     volume = window.state.volume
@@ -400,7 +417,9 @@ def test_run_with_screenshot_in_process(qapp, tmp_path):
     assert (image.width(), image.height()) == (1300, 720)
 
 
-def test_the_first_volume_gets_the_auto_renderer_and_the_status_bar_says_why(make_window, sample, qtbot, error_boxes):
+def test_the_first_volume_gets_the_auto_renderer_and_the_status_bar_says_why(
+    make_window, sample, qtbot, error_boxes
+):
     from volren.quality import DEFAULT_LEVEL, choose_renderer
     from volren.renderers.registry import registry
 
@@ -410,7 +429,10 @@ def test_the_first_volume_gets_the_auto_renderer_and_the_status_bar_says_why(mak
     kind = SceneClass.of(sample.volume, sample.transfer_function)  # the TF's class chooses too
     expected, _ = choose_renderer(kind, DEFAULT_LEVEL, 1, w.state.settings, registry.names())
     assert w.state.renderer == blocker.args[0].renderer == expected != "auto"
-    assert f"renderer {expected}: " in w.statusBar().currentMessage() and "(auto)" in w.statusBar().currentMessage()
+    assert (
+        f"renderer {expected}: " in w.statusBar().currentMessage()
+        and "(auto)" in w.statusBar().currentMessage()
+    )
     assert error_boxes == []
 
 
@@ -425,7 +447,9 @@ def test_a_volume_of_the_other_kind_gets_auto_and_a_renderer_picked_by_hand_stay
     def auto_choice(loaded: LoadedInput) -> str:
         usable = [o.name for o in w.renderers.options() if o.enabled]
         kind = SceneClass.of(loaded.volume, loaded.transfer_function)
-        return choose_renderer(kind, DEFAULT_LEVEL, 1, w.state.settings, usable, can_draw=set(usable).__contains__)[0]
+        return choose_renderer(
+            kind, DEFAULT_LEVEL, 1, w.state.settings, usable, can_draw=set(usable).__contains__
+        )[0]
 
     mesh = hollow_cylinder()
     tets = LoadedInput(mesh, TransferFunction1D.ramp(*mesh.value_range, 0.6), source="hollow_cylinder")
@@ -520,14 +544,19 @@ def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_fo
     combo = w.quality.chooser
     model = combo.model()
     assert combo.currentText() == "custom"
-    assert model.item(combo.findText("draft")).isEnabled() and not model.item(combo.findText("exact")).isEnabled()
+    assert (
+        model.item(combo.findText("draft")).isEnabled()
+        and not model.item(combo.findText("exact")).isEnabled()
+    )
     assert "step 2, table 64" in model.item(combo.findText("draft")).toolTip()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         combo.activated.emit(combo.findText("draft"))
     s = w.state.settings
     assert (s.step, s.preintegration, dict(s.options)) == (2.0, True, {"table_size": 64})
     assert combo.currentText() == "draft"
-    w.state.set_settings(s.with_(step=1.0, preintegration=False))  # any other edit: custom (vtk: no pre-integration on grids)
+    w.state.set_settings(
+        s.with_(step=1.0, preintegration=False)
+    )  # any other edit: custom (vtk: no pre-integration on grids)
     assert combo.currentText() == "custom"
     # vtk has no table_size option: switching drops it instead of failing the frame
     shown = []
@@ -538,7 +567,9 @@ def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_fo
     assert not model.item(combo.findText("draft")).isEnabled()  # nothing measured for vtk in this table
 
 
-def test_the_first_volume_opens_at_the_app_level_and_a_switch_keeps_the_level(make_window, sample, qtbot, monkeypatch):
+def test_the_first_volume_opens_at_the_app_level_and_a_switch_keeps_the_level(
+    make_window, sample, qtbot, monkeypatch
+):
     """What the app shows with no options is the `default` level's measured settings, as the CLI's
     (its previews are at `interactive`); switching renderer gives the new renderer's settings at the
     level chosen, even through a renderer whose levels are all equal (the box showed the first of
@@ -552,7 +583,9 @@ def test_the_first_volume_opens_at_the_app_level_and_a_switch_keeps_the_level(ma
         w.files.apply_loaded(sample, "slicer")
     s = w.state.settings
     assert (s.step, s.preintegration, dict(s.options)) == (0.5, True, {"table_size": 128})
-    assert w.quality.chooser.currentText() == "default" and "slicer (default)" in w.renderers.frame_label.text()
+    assert (
+        w.quality.chooser.currentText() == "default" and "slicer (default)" in w.renderers.frame_label.text()
+    )
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.renderers.switch("vtk")
     s = w.state.settings
@@ -751,7 +784,9 @@ def test_a_preview_renderer_that_fails_previews_no_more_and_the_still_frame_come
     w = window_previewing_with(make_window, monkeypatch, qtbot, sample, "fake_broken")
     w.state.begin_interaction()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as still:
-        w.state.set_camera(w.state.camera.azimuth(5.0))  # fake_broken's preview fails: the still frame follows
+        w.state.set_camera(
+            w.state.camera.azimuth(5.0)
+        )  # fake_broken's preview fails: the still frame follows
     assert still.args[0].renderer == "fake_drag" and still.args[0].camera == w.state.camera
     frames = []
     w.frameShown.connect(frames.append)

@@ -37,7 +37,14 @@ BOUNDS = (-1.0, 3.0, 0.5, 2.5, 4.0, 5.0)
 CROP = (0.0, 2.0, 1.0, 2.0, 4.2, 4.8)
 THICKNESS = (0.1, 0.1, 0.1)
 #: The face centres of CROP, written out: xmin, xmax, ymin, ymax, zmin, zmax.
-CROP_CENTRES = [(0.0, 1.5, 4.5), (2.0, 1.5, 4.5), (1.0, 1.0, 4.5), (1.0, 2.0, 4.5), (1.0, 1.5, 4.2), (1.0, 1.5, 4.8)]
+CROP_CENTRES = [
+    (0.0, 1.5, 4.5),
+    (2.0, 1.5, 4.5),
+    (1.0, 1.0, 4.5),
+    (1.0, 2.0, 4.5),
+    (1.0, 1.5, 4.2),
+    (1.0, 1.5, 4.8),
+]
 
 
 def project(camera: Camera, aspect: float, rect, points) -> np.ndarray:
@@ -82,8 +89,12 @@ def test_the_handle_under_a_pixel_is_the_one_projected_there(parallel):
         assert handle_at(cam, aspect, rect, CROP, x, y) == face
         for angle in np.linspace(0.0, 2 * np.pi, 8, endpoint=False):
             dx, dy = np.cos(angle), np.sin(angle)
-            inside = handle_at(cam, aspect, rect, CROP, x + (PICK_RADIUS - 0.5) * dx, y + (PICK_RADIUS - 0.5) * dy)
-            outside = handle_at(cam, aspect, rect, CROP, x + (PICK_RADIUS + 0.5) * dx, y + (PICK_RADIUS + 0.5) * dy)
+            inside = handle_at(
+                cam, aspect, rect, CROP, x + (PICK_RADIUS - 0.5) * dx, y + (PICK_RADIUS - 0.5) * dy
+            )
+            outside = handle_at(
+                cam, aspect, rect, CROP, x + (PICK_RADIUS + 0.5) * dx, y + (PICK_RADIUS + 0.5) * dy
+            )
             assert (inside, outside) == (face, None), f"face {FACE_NAMES[face]} at angle {angle:.2f}"
 
 
@@ -168,6 +179,7 @@ def test_the_size_cursor_points_along_the_faces_axis_on_screen(vector, kind):
 
 # ------------------------------------------------------------------------------------- widgets
 
+
 def handle_points(window, box) -> np.ndarray:
     """The widget pixels of `box`'s face centres with the camera of the frame on screen."""
     frame = window.viewport.frame
@@ -249,7 +261,11 @@ def test_the_view_menus_toggle_paints_the_box_and_its_handles_and_hides_them(sho
     corners = project(frame.camera, frame.width / frame.height, frame_rect(w.viewport), bounds_corners(box))
     for i, j in ((0, 1), (0, 2), (0, 4), (7, 6), (7, 5), (7, 3)):
         mid = (corners[i] + corners[j]) / 2
-        patch = pixels[int(mid[1]) - 1: int(mid[1]) + 2, int(mid[0]) - 1: int(mid[0]) + 2].reshape(-1, 3).astype(int)
+        patch = (
+            pixels[int(mid[1]) - 1 : int(mid[1]) + 2, int(mid[0]) - 1 : int(mid[0]) + 2]
+            .reshape(-1, 3)
+            .astype(int)
+        )
         assert np.any(np.all(patch == rgb(CROP_BOX_COLOR), axis=1)), f"no crop box edge at {mid}"
     assert not np.array_equal(before, pixels)
     action.trigger()
@@ -291,7 +307,9 @@ def test_dragging_a_face_handle_crops_by_the_distance_under_the_mouse_in_one_int
     assert w.state.camera is camera, "a face drag does not turn the camera"
     crops = [c for c in changes if c.what == "crop"]
     assert len(crops) == 4 and all(c.interactive for c in crops), "each move a preview"
-    assert [c for c in changes if c.what == "interaction"] == [Change("interaction", False)], "one interaction"
+    assert [c for c in changes if c.what == "interaction"] == [Change("interaction", False)], (
+        "one interaction"
+    )
     assert changes[-1] == Change("interaction", False)
     assert any(not f.full for f in frames) and frames[-1].full
     assert w.docks.crop.enable.isChecked() and w.docks.crop.box() == w.state.crop, "the panel follows"
@@ -332,7 +350,9 @@ def test_a_press_off_the_handles_rotates_and_the_toggle_turns_face_dragging_off(
     camera = w.state.camera
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         drag(qtbot, w.viewport, centre, centre + QPoint(40, 0))
-    assert w.state.crop is None and not np.allclose(w.state.camera.position, camera.position), "end-on: rotated"
+    assert w.state.crop is None and not np.allclose(w.state.camera.position, camera.position), (
+        "end-on: rotated"
+    )
 
     show_view(w, qtbot, "+X")
     w.crop_handles_action.trigger()

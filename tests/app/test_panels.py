@@ -246,7 +246,9 @@ def test_sampling_step_range_units_and_world_length(rec, make):
     panel = make(SamplingPanel, rec.state)
     spin = panel.step.spin
     assert (spin.minimum(), spin.maximum()) == (pytest.approx(0.05), pytest.approx(4.0))
-    assert "smallest voxel spacing" in panel.step.toolTip() and "mean tetrahedron edge" in panel.step.toolTip()
+    assert (
+        "smallest voxel spacing" in panel.step.toolTip() and "mean tetrahedron edge" in panel.step.toolTip()
+    )
     # marschner_lobb(9): spacing 2 / 8 = 0.25; the default step 0.5 is 0.125 world units
     assert "0.125 world units" in panel.step_length.text()
     spin.setValue(2.0)

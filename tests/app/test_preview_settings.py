@@ -14,7 +14,9 @@ from volren.renderers.base import QualityLevel
 UNIFORM = SceneClass("uniform")
 
 
-def measured(label: str, step: float, pre: bool, options: dict, ms: dict, worst: float, meets: bool = True) -> Measurement:
+def measured(
+    label: str, step: float, pre: bool, options: dict, ms: dict, worst: float, meets: bool = True
+) -> Measurement:
     """A measured level whose peer took 1 ms on every scene (ratios rank as frame times)."""
     return Measurement(QualityLevel(label, step, pre, options), ms, dict.fromkeys(ms, 1.0), worst, meets)
 
@@ -70,9 +72,15 @@ def test_previews_go_to_the_fastest_renderer_measured_that_can_draw_the_scene(mo
     default = table.measurement("slow", UNIFORM, "default").level.replace(RenderSettings())
     names = ["slow", "fast", "unimportable"]
     renderer, settings = preview_choice("slow", UNIFORM, 1, default, names, caps.get, False)
-    assert (renderer, settings.step, dict(settings.options)) == ("fast", 1.0, {"m": 1})  # worse error: still fastest
+    assert (renderer, settings.step, dict(settings.options)) == (
+        "fast",
+        1.0,
+        {"m": 1},
+    )  # worse error: still fastest
     # a scene kind with the TF's class: the kind's levels where the table has none for the class
-    assert preview_choice("slow", SceneClass("uniform", TFClass.SHARP), 1, default, names, caps.get, False) == (renderer, settings)
+    assert preview_choice(
+        "slow", SceneClass("uniform", TFClass.SHARP), 1, default, names, caps.get, False
+    ) == (renderer, settings)
     renderer, settings = preview_choice("slow", UNIFORM, 1, default, names, caps.get, True)
     assert (renderer, dict(settings.options)) == ("fast", {"m": 2})  # its own drag options
     shaded = default.with_(shade=True)  # fast cannot shade: the user's renderer previews
@@ -88,7 +96,12 @@ def test_reference_is_previewed_by_the_fastest_renderer_whatever_its_settings(mo
 
     table = QualityTable({SceneClass("uniform"): {"fast": {"interactive": _level(1.0, {"m": 1})}}}, {})
     monkeypatch.setattr(quality, "table", lambda: table)
-    caps = {"reference": Capabilities(kinds={"uniform": KindSupport()}), "fast": Capabilities(kinds={"uniform": KindSupport()})}
+    caps = {
+        "reference": Capabilities(kinds={"uniform": KindSupport()}),
+        "fast": Capabilities(kinds={"uniform": KindSupport()}),
+    }
     custom = RenderSettings(step=0.1)
-    renderer, settings = preview_choice("reference", UNIFORM, 1, custom, ["reference", "fast"], caps.get, False)
+    renderer, settings = preview_choice(
+        "reference", UNIFORM, 1, custom, ["reference", "fast"], caps.get, False
+    )
     assert (renderer, settings.step, dict(settings.options)) == ("fast", 1.0, {"m": 1})

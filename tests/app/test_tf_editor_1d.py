@@ -461,7 +461,9 @@ def test_the_selected_points_value_and_opacity_are_typed(qtbot, editor, state):
     index = len(points) // 2
     qtbot.mouseClick(curve, Qt.LeftButton, pos=curve.point_positions()[index])
     assert curve.selected == index and entry.isEnabled()
-    assert entry.value.value() == pytest.approx(points[index, 0]) and entry.opacity.value() == pytest.approx(points[index, 1], abs=1e-3)
+    assert entry.value.value() == pytest.approx(points[index, 0]) and entry.opacity.value() == pytest.approx(
+        points[index, 1], abs=1e-3
+    )
     left, right = points[index - 1, 0], points[index + 1, 0]
     target = left + 0.25 * (right - left)
     entry.value.setValue(target)
@@ -519,7 +521,9 @@ def test_tissue_presets_fit_the_data_ct_ones_only_on_hounsfield_units(make_edito
     assert "CT lung: CT presets are in Hounsfield units" in errors[0]
 
 
-def test_the_shift_sliders_travel_is_half_the_data_range_each_way_in_steps_of_a_thousandth(make_editor, qtbot):
+def test_the_shift_sliders_travel_is_half_the_data_range_each_way_in_steps_of_a_thousandth(
+    make_editor, qtbot
+):
     """The whole slider spans the data range (half of it each way), so a pixel of a drag is a
     fraction of a percent; the arrow keys move a thousandth of the range, Page Up/Down a hundredth."""
     state = _ct_state()  # -1000..1000 HU
@@ -564,7 +568,9 @@ def test_the_shift_slider_slides_the_whole_tf_and_a_drag_is_one_undo_step(make_e
         assert history.stack.count() == recorded + 1  # the drag is one step
         assert slider.value() == 15 and editor.shift_label.text() == "+30"  # kept after the release
         slider.setValue(-5)  # a keyboard step: from the same base
-        np.testing.assert_allclose(state.transfer_function.opacity_points[:, 0], preset.opacity_points[:, 0] - 5 * step)
+        np.testing.assert_allclose(
+            state.transfer_function.opacity_points[:, 0], preset.opacity_points[:, 0] - 5 * step
+        )
         state.transfer_function.set_opacity_unit_distance(2.0)  # another edit: the slider starts from here
         assert slider.value() == 0 and editor.shift_label.text() == "0"
         history.undo()

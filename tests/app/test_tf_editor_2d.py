@@ -327,8 +327,12 @@ def test_the_2d_tfs_band_drags_as_a_whole(qtbot, editor, state, history):
     drag(qtbot, canvas, start, end)
     moved = tf.widgets[0]
     assert moved.type == "1d" and ds < 0 < dg
-    np.testing.assert_allclose(np.array(moved.color_points), np.array(band.color_points) + [ds, 0, 0, 0], rtol=1e-12)
-    np.testing.assert_allclose(np.array(moved.opacity_points), np.array(band.opacity_points) + [ds, 0], rtol=1e-12)
+    np.testing.assert_allclose(
+        np.array(moved.color_points), np.array(band.color_points) + [ds, 0, 0, 0], rtol=1e-12
+    )
+    np.testing.assert_allclose(
+        np.array(moved.opacity_points), np.array(band.opacity_points) + [ds, 0], rtol=1e-12
+    )
     np.testing.assert_allclose(moved.gradient_range, np.add(band.gradient_range, dg), rtol=1e-12)
     assert history.stack.count() == 2  # the switch to 2D, then the drag
     editor.select(0)

@@ -25,7 +25,7 @@ def write_steps(folder: Path, count: int, names=None) -> list[Path]:
     paths = []
     for index in range(count):
         grid = pv.ImageData(dimensions=(5, 4, 3))
-        grid.point_data["density"] = (np.arange(grid.n_points, dtype=np.float32) / grid.n_points + index)
+        grid.point_data["density"] = np.arange(grid.n_points, dtype=np.float32) / grid.n_points + index
         path = folder / (names[index] if names else f"step_{index}.vti")
         grid.save(path)
         paths.append(path)
@@ -43,7 +43,9 @@ def write_pvd(path: Path, entries: list[tuple[float, str]], extra: str = "") -> 
 def test_a_pvd_lists_its_steps_by_time_relative_to_itself(tmp_path):
     (tmp_path / "data").mkdir()
     write_steps(tmp_path / "data", 3)
-    pvd = write_pvd(tmp_path / "run.pvd", [(0.5, "data/step_1.vti"), (0.0, "data/step_0.vti"), (2.5, "data/step_2.vti")])
+    pvd = write_pvd(
+        tmp_path / "run.pvd", [(0.5, "data/step_1.vti"), (0.0, "data/step_0.vti"), (2.5, "data/step_2.vti")]
+    )
     series = load_series(pvd)
     assert is_series(pvd) and len(series) == 3
     assert [p.name for p in series.steps] == ["step_0.vti", "step_1.vti", "step_2.vti"]
@@ -55,7 +57,11 @@ def test_a_folder_of_volumes_is_a_series_in_natural_order_and_other_folders_are_
     write_steps(tmp_path, 3, ["t2.vti", "t10.vti", "t1.vti"])
     (tmp_path / "notes.txt").write_text("not a volume")
     series = load_series(tmp_path)
-    assert [p.name for p in series.steps] == ["t1.vti", "t2.vti", "t10.vti"] and series.times == (0.0, 1.0, 2.0)
+    assert [p.name for p in series.steps] == ["t1.vti", "t2.vti", "t10.vti"] and series.times == (
+        0.0,
+        1.0,
+        2.0,
+    )
     single = tmp_path / "single"
     single.mkdir()
     write_steps(single, 1)
@@ -74,13 +80,22 @@ def test_a_folder_of_volumes_is_a_series_in_natural_order_and_other_folders_are_
         ("<VTKFile", "not a readable .pvd collection"),
         ('<VTKFile type="UnstructuredGrid"/>', "not a ParaView data collection"),
         ('<VTKFile type="Collection"><Collection/></VTKFile>', "lists no data sets"),
-        ('<VTKFile type="Collection"><Collection><DataSet timestep="x" file="a.vti"/></Collection></VTKFile>',
-         "timestep 'x' is not a number"),
-        ('<VTKFile type="Collection"><Collection><DataSet timestep="0" file="gone.vti"/></Collection></VTKFile>',
-         "1 of its 1 files are missing, e.g. gone.vti"),
-        ('<VTKFile type="Collection"><Collection><DataSet timestep="0" part="1" file="a.vti"/></Collection></VTKFile>',
-         "several parts per time step"),
-        ('<VTKFile type="Collection"><Collection><DataSet timestep="0"/></Collection></VTKFile>', "has no 'file'"),
+        (
+            '<VTKFile type="Collection"><Collection><DataSet timestep="x" file="a.vti"/></Collection></VTKFile>',
+            "timestep 'x' is not a number",
+        ),
+        (
+            '<VTKFile type="Collection"><Collection><DataSet timestep="0" file="gone.vti"/></Collection></VTKFile>',
+            "1 of its 1 files are missing, e.g. gone.vti",
+        ),
+        (
+            '<VTKFile type="Collection"><Collection><DataSet timestep="0" part="1" file="a.vti"/></Collection></VTKFile>',
+            "several parts per time step",
+        ),
+        (
+            '<VTKFile type="Collection"><Collection><DataSet timestep="0"/></Collection></VTKFile>',
+            "has no 'file'",
+        ),
     ],
 )
 def test_bad_pvd_files_are_one_line_errors_naming_the_file(tmp_path, text, message):
@@ -147,7 +162,9 @@ def test_opening_a_pvd_shows_the_time_bar_and_steps_keep_the_view_and_undo(make_
     with qtbot.waitSignal(w.fullFrameShown, timeout=TIMEOUT_MS):
         w.files.open_input(pvd, renderer="fake")
     time = w.time
-    assert time.isVisible() and time.slider.maximum() == 3 and time.label.text().startswith("step 1 of 4 (t = 0")
+    assert (
+        time.isVisible() and time.slider.maximum() == 3 and time.label.text().startswith("step 1 of 4 (t = 0")
+    )
     edited = TransferFunction1D.ramp(0.5, 3.5, 0.4)
     w.state.set_transfer_function(edited)
     w.state.set_camera(w.state.camera.azimuth(25))
@@ -193,12 +210,16 @@ def test_an_ome_zarr_image_opens_coarse_at_once_and_refines_to_full_resolution(m
     from volren.io.ome_zarr_io import save_ome_zarr
 
     rng = np.random.default_rng(3)
-    full = UniformVolume(rng.integers(0, 1000, (20, 24, 28)).astype(np.uint16), spacing=(1.0, 1.0, 2.0), name="c")
+    full = UniformVolume(
+        rng.integers(0, 1000, (20, 24, 28)).astype(np.uint16), spacing=(1.0, 1.0, 2.0), name="c"
+    )
     path = tmp_path / "cells.zarr"
     save_ome_zarr(full, path, chunk=8, levels=3)
     w = make_window(settings=ini)
     shown = []
-    w.state.subscribe(lambda change: shown.append(w.state.volume.dimensions) if change.what == "volume" else None)
+    w.state.subscribe(
+        lambda change: shown.append(w.state.volume.dimensions) if change.what == "volume" else None
+    )
     with qtbot.waitSignal(w.files.loadFinished, timeout=TIMEOUT_MS):
         w.files.open_input(path, renderer="fake")
     tf, camera = w.state.transfer_function, w.state.camera
@@ -209,7 +230,9 @@ def test_an_ome_zarr_image_opens_coarse_at_once_and_refines_to_full_resolution(m
     assert w.state.source == "cells.zarr (level 0)" and not w.files.refiner.pending
 
 
-def test_the_app_refines_only_up_to_the_memory_allowed(make_window, ini, fake_renderers, qtbot, tmp_path, error_boxes):
+def test_the_app_refines_only_up_to_the_memory_allowed(
+    make_window, ini, fake_renderers, qtbot, tmp_path, error_boxes
+):
     """`volren view x.zarr --memory SIZE`: the refinement stops at the finest level within SIZE,
     and an image whose coarsest level is larger says so in one line."""
     pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
@@ -226,7 +249,9 @@ def test_the_app_refines_only_up_to_the_memory_allowed(make_window, ini, fake_re
     w.files.zarr_memory = 14 * 12 * 10 * drawn_per_voxel
     assert 28 * 24 * 20 * 2 <= w.files.zarr_memory < 28 * 24 * 20 * drawn_per_voxel
     shown = []
-    w.state.subscribe(lambda change: shown.append(w.state.volume.dimensions) if change.what == "volume" else None)
+    w.state.subscribe(
+        lambda change: shown.append(w.state.volume.dimensions) if change.what == "volume" else None
+    )
     with qtbot.waitSignal(w.files.loadFinished, timeout=TIMEOUT_MS):
         w.files.open_input(path, renderer="fake")
     qtbot.waitUntil(lambda: w.state.volume.dimensions == (14, 12, 10), timeout=TIMEOUT_MS)
@@ -236,8 +261,14 @@ def test_the_app_refines_only_up_to_the_memory_allowed(make_window, ini, fake_re
     w.files.open_input(path, renderer="fake")
     qtbot.waitUntil(lambda: len(error_boxes) == 1, timeout=TIMEOUT_MS)
     title, text = error_boxes[0]
-    assert title == "Cannot open" and ("even the coarsest level takes 6.6 KiB drawn by renderer fake (its values and "
-                                       "the renderer's copies), more than the memory allowed (100 bytes)") in text
+    assert (
+        title == "Cannot open"
+        and (
+            "even the coarsest level takes 6.6 KiB drawn by renderer fake (its values and "
+            "the renderer's copies), more than the memory allowed (100 bytes)"
+        )
+        in text
+    )
     assert w.state.volume.dimensions == (14, 12, 10)  # what was shown stays
 
 

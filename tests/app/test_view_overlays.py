@@ -64,7 +64,11 @@ def test_each_view_direction_looks_along_its_axis_at_the_centre_keeping_distance
     assert np.allclose(cam.focal_point, centre(BOUNDS), atol=1e-12)
     assert cam.distance == pytest.approx(start.distance, rel=1e-12)
     assert cam.view_up == tuple(float(v) for v in up)
-    assert (cam.view_angle, cam.parallel, cam.parallel_scale) == (start.view_angle, parallel, start.parallel_scale)
+    assert (cam.view_angle, cam.parallel, cam.parallel_scale) == (
+        start.view_angle,
+        parallel,
+        start.parallel_scale,
+    )
     near, far = cam.clipping_range
     depths = eye_depths(cam, BOUNDS)
     assert near < depths.min() and far > depths.max(), "the clipping range must enclose the box"
@@ -110,7 +114,9 @@ def test_after_a_plus_z_view_the_outline_is_axis_aligned_rectangles_with_the_box
         # Looking along +Z with Y up, +X points left on screen and +Y up.
         assert xs[1] < xs[0] and ys[2] < ys[0]
         assert (xs[0] - xs[1]) / (ys[0] - ys[2]) == pytest.approx(dx / dy, rel=1e-9)
-        assert face.mean(axis=0) == pytest.approx((10.0 + 320.0, 20.0 + 240.0), abs=1e-9), "centred in the rect"
+        assert face.mean(axis=0) == pytest.approx((10.0 + 320.0, 20.0 + 240.0), abs=1e-9), (
+            "centred in the rect"
+        )
     near_face, far_face = pixels[:4], pixels[4:]  # zmin is nearer when looking along +Z
     if parallel:
         assert np.allclose(near_face, far_face), "a parallel projection draws both faces on each other"
@@ -143,7 +149,9 @@ def test_triad_arms_are_the_world_axes_as_a_parallel_camera_draws_them():
     rect = (0.0, 0.0, 700.0, height)
     fp = np.asarray(cam.focal_point)
     ends = project_points(cam, 700.0 / height, rect, fp + np.eye(3))
-    expected = (ends - project_points(cam, 700.0 / height, rect, fp[None])) * (2.0 * cam.parallel_scale / height)
+    expected = (ends - project_points(cam, 700.0 / height, rect, fp[None])) * (
+        2.0 * cam.parallel_scale / height
+    )
     offsets, order = triad_arms(cam, 10.0)
     assert np.allclose(offsets, 10.0 * expected, atol=1e-9)
     depth = np.eye(3) @ -cam.direction  # toward the viewer
@@ -190,7 +198,10 @@ def show_view(window, qtbot, name: str) -> None:
 
 def projected_corners(camera: Camera, aspect: float, rect, bounds) -> np.ndarray:
     """The box's corners in widget pixels, straight from the camera's matrices."""
-    clip = np.c_[bounds_corners(bounds), np.ones(8)] @ (camera.projection_matrix(aspect) @ camera.view_matrix()).T
+    clip = (
+        np.c_[bounds_corners(bounds), np.ones(8)]
+        @ (camera.projection_matrix(aspect) @ camera.view_matrix()).T
+    )
     ndc = clip[:, :2] / clip[:, 3:]
     x, y, w, h = rect
     return np.c_[x + (ndc[:, 0] + 1) / 2 * w, y + (1 - ndc[:, 1]) / 2 * h]
@@ -199,14 +210,16 @@ def projected_corners(camera: Camera, aspect: float, rect, bounds) -> np.ndarray
 def near(pixels: np.ndarray, point, color, radius: int = 1, tolerance: int = 0) -> bool:
     """Whether a pixel of `color` lies within `radius` pixels of `point` (x, y)."""
     x, y = (int(np.floor(v)) for v in point)
-    patch = pixels[max(y - radius, 0): y + radius + 1, max(x - radius, 0): x + radius + 1].astype(int)
+    patch = pixels[max(y - radius, 0) : y + radius + 1, max(x - radius, 0) : x + radius + 1].astype(int)
     return bool(np.any(np.abs(patch - np.asarray(color)).max(axis=-1) <= tolerance))
 
 
 WHITE = (255, 255, 255)
 
 
-def test_view_direction_actions_sit_in_the_view_menu_and_toolbar_disabled_without_a_volume(window, fake_2d, qtbot):
+def test_view_direction_actions_sit_in_the_view_menu_and_toolbar_disabled_without_a_volume(
+    window, fake_2d, qtbot
+):
     actions = window.view_direction_actions
     assert list(actions) == list(EXPECTED)
     assert [a.text() for a in actions.values()] == list(EXPECTED)
@@ -219,7 +232,9 @@ def test_view_direction_actions_sit_in_the_view_menu_and_toolbar_disabled_withou
     actions["+X"].trigger()  # disabled: does nothing
     assert window.state.camera is before is None
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        window.files.apply_loaded(LoadedInput(box_volume(), TransferFunction1D.ramp(0, 2), source="box"), "fake_2d")
+        window.files.apply_loaded(
+            LoadedInput(box_volume(), TransferFunction1D.ramp(0, 2), source="box"), "fake_2d"
+        )
     assert all(a.isEnabled() for a in actions.values())
 
 
@@ -229,8 +244,13 @@ def test_anatomical_views_are_offered_where_the_data_says_how_the_patient_lies(w
     assert list(actions) == ["A", "P", "L", "R", "S", "I"]
     assert all(a in window.view_direction_menu.actions() for a in actions.values())
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        window.files.apply_loaded(LoadedInput(box_volume(), TransferFunction1D.ramp(0, 2), source="box"), "fake_2d")
-    assert not any(a.isEnabled() for a in actions.values()) and "nothing of how the patient lies" in actions["A"].toolTip()
+        window.files.apply_loaded(
+            LoadedInput(box_volume(), TransferFunction1D.ramp(0, 2), source="box"), "fake_2d"
+        )
+    assert (
+        not any(a.isEnabled() for a in actions.values())
+        and "nothing of how the patient lies" in actions["A"].toolTip()
+    )
     values = box_volume().values
     patient = UniformVolume(values, spacing=(0.4, 0.2, 0.3), patient_axes=("L", "P", "S"), name="ct")
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
@@ -238,12 +258,20 @@ def test_anatomical_views_are_offered_where_the_data_says_how_the_patient_lies(w
     assert all(a.isEnabled() for a in actions.values())
     assert actions["S"].toolTip() == "View from the patient's superior side (A up)"
     distance = window.state.camera.distance
-    for letter, direction, up in (("A", (0, 1, 0), (0, 0, 1)), ("L", (-1, 0, 0), (0, 0, 1)), ("I", (0, 0, 1), (0, -1, 0))):
+    for letter, direction, up in (
+        ("A", (0, 1, 0), (0, 0, 1)),
+        ("L", (-1, 0, 0), (0, 0, 1)),
+        ("I", (0, 0, 1), (0, -1, 0)),
+    ):
         with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
             actions[letter].trigger()
         camera = window.state.camera
-        assert np.allclose(camera.direction, direction, atol=1e-12) and camera.view_up == tuple(map(float, up)), letter
-        assert np.allclose(camera.focal_point, centre(patient.bounds)) and camera.distance == pytest.approx(distance)
+        assert np.allclose(camera.direction, direction, atol=1e-12) and camera.view_up == tuple(
+            map(float, up)
+        ), letter
+        assert np.allclose(camera.focal_point, centre(patient.bounds)) and camera.distance == pytest.approx(
+            distance
+        )
 
 
 def test_view_direction_actions_turn_the_camera_to_the_cropped_volumes_centre(shown, qtbot):
@@ -271,7 +299,11 @@ def test_overlay_actions_toggle_flags_and_repaint_without_rendering(shown, fake_
         "outline": "Outline", "axes": "Orientation axes", "legend": "Colour legend"}  # fmt: skip
     assert all(a.isCheckable() and a in w.view_menu.actions() for a in actions.values())
     assert {n: a.isChecked() for n, a in actions.items()} == {"outline": True, "axes": True, "legend": False}
-    assert (w.viewport.overlays.outline, w.viewport.overlays.axes, w.viewport.overlays.legend) == (True, True, False)
+    assert (w.viewport.overlays.outline, w.viewport.overlays.axes, w.viewport.overlays.legend) == (
+        True,
+        True,
+        False,
+    )
     qtbot.wait(100)
     renders = len(fake_2d.calls)
     updates = []
@@ -295,9 +327,11 @@ def test_outline_is_drawn_at_the_projected_corners_and_goes_when_toggled_off(sho
         show_view(w, qtbot, view)
     frame = w.viewport.frame
     assert frame.camera == w.state.camera
-    corners = projected_corners(frame.camera, frame.width / frame.height, frame_rect(w.viewport), w.state.volume.bounds)
+    corners = projected_corners(
+        frame.camera, frame.width / frame.height, frame_rect(w.viewport), w.state.volume.bounds
+    )
     pixels = grab(w.viewport)
-    for (i, j) in BOX_EDGES:
+    for i, j in BOX_EDGES:
         for point in (corners[i], corners[j], (corners[i] + corners[j]) / 2):
             assert near(pixels, point, WHITE), f"no outline at {point} ({view} view)"
     w.overlay_actions["outline"].trigger()
@@ -324,7 +358,7 @@ def test_outline_follows_the_crop_box(shown, qtbot):
 def reddish(pixels, point, channel: int, radius: int = 1) -> bool:
     """Whether a pixel near `point` is clearly of the axis colour `channel` (0 red, 1 green, 2 blue)."""
     x, y = (int(np.floor(v)) for v in point)
-    patch = pixels[y - radius: y + radius + 1, x - radius: x + radius + 1].astype(int).reshape(-1, 3)
+    patch = pixels[y - radius : y + radius + 1, x - radius : x + radius + 1].astype(int).reshape(-1, 3)
     others = np.delete(patch, channel, axis=1)
     return bool(np.any((patch[:, channel] > 150) & (patch[:, channel] - others.max(axis=1) > 70)))
 
@@ -366,19 +400,23 @@ def test_colour_legend_shows_the_tfs_colours_opacity_and_range_and_hides_for_a_2
     for share in (0.1, 0.3, 0.5, 0.7, 0.9):  # colours: the maximum on top
         y = bar.top() + share * bar.height()
         rgb, _ = tf.sample(hi - share * (hi - lo))
-        assert np.abs(pixels[int(y), x].astype(int) - np.round(rgb * 255)).max() <= 4, f"bar colour at {share}"
+        assert np.abs(pixels[int(y), x].astype(int) - np.round(rgb * 255)).max() <= 4, (
+            f"bar colour at {share}"
+        )
     curve_left = bar.left() - 3.0 - OPACITY_WIDTH
     for share in (0.2, 0.5, 0.52, 0.8):  # opacity: a curve beside the bar, 0 at its left, 1 at its right
         y = bar.top() + share * bar.height()
         _, alpha = tf.sample(hi - share * (hi - lo))
         expected_x = curve_left + float(alpha) * OPACITY_WIDTH
-        assert near(pixels, (expected_x, y), OPACITY_COLOR.getRgb()[:3], radius=2, tolerance=60), f"opacity at {share}"
+        assert near(pixels, (expected_x, y), OPACITY_COLOR.getRgb()[:3], radius=2, tolerance=60), (
+            f"opacity at {share}"
+        )
     for top in (bar.top() - 20, bar.bottom() + 4):  # the range's numbers above and below the bar
-        region = pixels[int(top): int(top) + 16, int(bar.left()) - 30: int(bar.right()) + 1].astype(int)
+        region = pixels[int(top) : int(top) + 16, int(bar.left()) - 30 : int(bar.right()) + 1].astype(int)
         text = np.abs(region - np.asarray(LEGEND_TEXT_COLOR.getRgb()[:3])).max(axis=-1) < 40
         assert np.count_nonzero(text) >= 3, "the range's number is written there"
     outside = np.ones(pixels.shape[:2], bool)
-    outside[int(bar.top()) - 24: int(bar.bottom()) + 24, int(curve_left) - 200:] = False
+    outside[int(bar.top()) - 24 : int(bar.bottom()) + 24, int(curve_left) - 200 :] = False
     assert np.array_equal(pixels[outside], before[outside]), "the legend draws only beside the right edge"
 
     widget = TFWidget.box((0.5, 2.0), (0.0, 1.0), (1.0, 0.0, 0.0), 0.5)
@@ -429,10 +467,12 @@ def test_outline_hugs_the_volume_the_vtk_renderer_draws(make_window, qtbot, view
     if view is not None:
         show_view(w, qtbot, view)
     frame = w.viewport.frame
-    rendered = np.abs(frame.rgb.astype(int) - np.round(np.asarray(w.state.background) * 255)).max(axis=-1) > 40
+    rendered = (
+        np.abs(frame.rgb.astype(int) - np.round(np.asarray(w.state.background) * 255)).max(axis=-1) > 40
+    )
     corners = project_points(frame.camera, frame.width / frame.height, (0.0, 0.0, frame.width, frame.height),
                              bounds_corners(w.state.volume.bounds))  # fmt: skip
-    yy, xx = np.mgrid[0: frame.height, 0: frame.width] + 0.5
+    yy, xx = np.mgrid[0 : frame.height, 0 : frame.width] + 0.5
     sd = signed_distance(convex_hull(corners), xx, yy)
     assert np.count_nonzero(rendered) > 0.05 * rendered.size
     assert not np.any(rendered & (sd > 1.0)), "the renderer drew outside the outline"

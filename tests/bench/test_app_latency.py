@@ -23,8 +23,13 @@ def test_app_latency_measures_frames_on_a_sample(qapp, renders_with_vtk):
     from volren.samples import marschner_lobb, sample_transfer_functions
 
     timing = app_latency.measure(
-        qapp, marschner_lobb(17), sample_transfer_functions()["marschner_lobb"].copy(), "vtk", "ml",
-        edits=2, gesture_s=0.5,
+        qapp,
+        marschner_lobb(17),
+        sample_transfer_functions()["marschner_lobb"].copy(),
+        "vtk",
+        "ml",
+        edits=2,
+        gesture_s=0.5,
     )
     assert timing.edit_ms >= timing.edit_frame_ms > 0 and math.isfinite(timing.edit_ms)
     assert timing.rotate_fps > 0 and timing.drag_fps > 0, "no frame was shown during a gesture"
@@ -44,4 +49,6 @@ def test_the_joint_histogram_timing_counts_every_point():
     seconds = app_latency.joint_histogram_seconds(16, repeats=1)
     assert math.isfinite(seconds) and seconds > 0
     line = app_latency.histogram_line(16, seconds)
-    assert line.startswith("Joint histogram (2D TF editor) of a 16^3 uint8 volume") and "target of 2 s" in line
+    assert (
+        line.startswith("Joint histogram (2D TF editor) of a 16^3 uint8 volume") and "target of 2 s" in line
+    )

@@ -46,7 +46,9 @@ def test_the_gesture_table_times_every_gesture_with_the_renderer_auto_picks(qapp
         assert g.release_ms > 0 and g.stall_ms >= 0 and 0 <= g.preview_share <= 0.25 + 1e-3, g
         assert g.still_renderer != "-"
     rows = app_gestures.markdown_rows(timing)
-    assert len(rows) == 4 and all(r.count("|") == app_gestures.HEADER.splitlines()[0].count("|") for r in rows)
+    assert len(rows) == 4 and all(
+        r.count("|") == app_gestures.HEADER.splitlines()[0].count("|") for r in rows
+    )
 
 
 @pytest.mark.parametrize("args", [["--scenes", "nowhere/smooth"], ["--scenes", ","], ["--seconds", "0"]])

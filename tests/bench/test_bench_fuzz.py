@@ -46,10 +46,18 @@ def _run(code=0, out="", err="", image=None, timed_out=False) -> Run:
 def test_classification():
     ok = np.zeros((2, 2, 4), np.float32)
     assert classify_run(_case(), _run(-signal.SIGSEGV))[0] == "crash"
-    assert classify_run(_case(), _run(1, err="volren: error: v.vti: bad\nfree(): invalid pointer\n"))[0] == "crash"
+    assert (
+        classify_run(_case(), _run(1, err="volren: error: v.vti: bad\nfree(): invalid pointer\n"))[0]
+        == "crash"
+    )
     assert classify_run(_case(), _run(0, timed_out=True))[0] == "hang"
-    assert classify_run(_case(), _run(1, err="Traceback (most recent call last):\n  x\nValueError: y\n"))[0] == "traceback"
-    assert classify_run(_case(), _run(3, err="volren: internal error: ValueError: y\n"))[0] == "internal-error"
+    assert (
+        classify_run(_case(), _run(1, err="Traceback (most recent call last):\n  x\nValueError: y\n"))[0]
+        == "traceback"
+    )
+    assert (
+        classify_run(_case(), _run(3, err="volren: internal error: ValueError: y\n"))[0] == "internal-error"
+    )
     assert classify_run(_case(), _run(1, err="volren: error: v.vti: bad\nmore text\n"))[0] == "several-lines"
     assert classify_run(_case(), _run(1, err="volren: error: something is wrong\n"))[0] == "unnamed"
     assert classify_run(_case(), _run(1, err="volren: error: v.vti: truncated\n"))[0] == "error"
@@ -85,7 +93,10 @@ def test_runner_sees_crashes_and_hangs_from_outside(tmp_path, monkeypatch):
         return 1
 
     monkeypatch.setattr(cli, "main", fake_main)
-    cases = [Case(f"t/{w}", "t", {"a": b""}, ("render", w), "any", ("fine",)) for w in ("segv", "abort", "hang", "fine")]
+    cases = [
+        Case(f"t/{w}", "t", {"a": b""}, ("render", w), "any", ("fine",))
+        for w in ("segv", "abort", "hang", "fine")
+    ]
     results = run_cases(cases, tmp_path, jobs=2, timeout=3)
     assert [r.outcome for r in results] == ["crash", "crash", "hang", "error"]
 

@@ -33,7 +33,9 @@ def test_the_quick_subset_holds_every_case_written_by_hand_of_the_new_families()
     assert {c.name for c in by_hand} <= quick
     assert {c.name for c in cases if "/sweep-" in c.name} - quick, "the sweeps run in full only"
     groups = Counter(c.group for c in by_hand)
-    assert groups[OUTPUTS] >= 25 and groups[CONVERT] >= 40 and groups[MOVIE] >= 40 and groups[FLAGS] >= 30, groups
+    assert groups[OUTPUTS] >= 25 and groups[CONVERT] >= 40 and groups[MOVIE] >= 40 and groups[FLAGS] >= 30, (
+        groups
+    )
     for name in ("outputs/o=fifo", "outputs/save-array=link-to-file", "outputs/o=socket", "outputs/o=the-input",
                  "convert/valid", "convert/input-fifo", "convert/output-holds-the-input-force", "convert/raw-flags",
                  "movie/valid", "movie/fps=1e-300", "movie/fps=240", "movie/frames=0", "movie/o=fifo",
@@ -47,7 +49,9 @@ def test_a_case_lays_out_fifos_sockets_links_and_read_only_folders(tmp_path):
         ("fifo", "pipe"), ("socket", "sock"), ("folder", "dir"), ("link", "out.png", "real.png"),
         ("link", "dangling.png", "gone/x.png"), ("read-only", "locked")))  # fmt: skip
     case.lay_out(tmp_path)
-    assert stat.S_ISFIFO((tmp_path / "pipe").lstat().st_mode) and stat.S_ISSOCK((tmp_path / "sock").lstat().st_mode)
+    assert stat.S_ISFIFO((tmp_path / "pipe").lstat().st_mode) and stat.S_ISSOCK(
+        (tmp_path / "sock").lstat().st_mode
+    )
     assert (tmp_path / "dir").is_dir() and (tmp_path / "out.png").read_bytes() == b"old"
     assert os.readlink(tmp_path / "dangling.png") == "gone/x.png"
     assert stat.S_IMODE((tmp_path / "locked").stat().st_mode) == 0o555
@@ -95,9 +99,21 @@ def test_the_runner_checks_the_files_after_each_command_and_applies_patches(tmp_
     after = (("fifo", "pipe"), ("link", "out.gif"), ("kept", "v.vti"), ("written", "real.gif"))
     nodes = (("fifo", "pipe"), ("link", "out.gif", "real.gif"))
     patch = (("volren.bricked.cluster", "CONNECT_TIMEOUT_S", 0.25),)
-    cases = [Case(f"t/{w}", "t", {"v.vti": b"volume", "real.gif": b"old"}, ("movie", w), "any", ("v.vti",), nodes,
-                  after, None, patch)  # fmt: skip
-             for w in ("replace-fifo", "replace-link", "change-input", "nothing", "write", "patched")]
+    cases = [
+        Case(
+            f"t/{w}",
+            "t",
+            {"v.vti": b"volume", "real.gif": b"old"},
+            ("movie", w),
+            "any",
+            ("v.vti",),
+            nodes,
+            after,
+            None,
+            patch,
+        )  # fmt: skip
+        for w in ("replace-fifo", "replace-link", "change-input", "nothing", "write", "patched")
+    ]
     results = run_cases(cases, tmp_path, jobs=2, timeout=20)
     assert [(r.outcome, r.detail) for r in results] == [
         ("bad-output", "pipe is no longer a FIFO"),

@@ -42,7 +42,9 @@ def rows(opengl) -> dict[tuple[str, str], dict]:
     # values below 0.8 transparent, above 1 opaque
     cyl_tf = TransferFunction1D(GREY, [[-1.0, 0.0], [0.8, 0.0], [1.0, 1.0]], 0.1)
     cyl = _scene("hollow_cylinder", hollow_cylinder(), cyl_tf)
-    out = skipping.run([sphere, cyl], ["slicer", "tetra", "raycast"], size=40, frames=2, turn=1.0, base=RenderSettings())
+    out = skipping.run(
+        [sphere, cyl], ["slicer", "tetra", "raycast"], size=40, frames=2, turn=1.0, base=RenderSettings()
+    )
     return {(r["renderer"], r["variant"]): r for r in out}
 
 
@@ -136,7 +138,11 @@ def test_cli_writes_csv_and_markdown(tmp_path, capsys, renders_with_vtk):
     found = {(r["dataset"], r["renderer"], r["variant"]) for r in table}
     # phantom_ct: slicer (6 rows), vtk (3), the shearwarp and objectorder plugins (6 each) and raycast
     # (5: no shading); hollow_cylinder: tetra (6) and vtk without shading (2)
-    assert len(table) == 34 and ("phantom_ct", "raycast", "shading") not in found and ("hollow_cylinder", "vtk", "shading") not in found
+    assert (
+        len(table) == 34
+        and ("phantom_ct", "raycast", "shading") not in found
+        and ("hollow_cylinder", "vtk", "shading") not in found
+    )
     assert ("phantom_ct", "shearwarp", "no_early_termination") in found
     assert ("phantom_ct", "objectorder", "no_hidden_volume_removal") in found
     assert ("phantom_ct", "raycast", "no_empty_space") in found

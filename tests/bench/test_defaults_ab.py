@@ -7,7 +7,11 @@ from benchmarks import defaults_ab, objectorder_reach
 
 
 def _rows(text: str, prefix: str) -> list[list[str]]:
-    return [[c.strip() for c in line.strip("|").split("|")] for line in text.splitlines() if line.startswith(prefix)]
+    return [
+        [c.strip() for c in line.strip("|").split("|")]
+        for line in text.splitlines()
+        if line.startswith(prefix)
+    ]
 
 
 def test_no_options_against_vtk_gives_both_times_and_errors(capsys, tmp_path, renders_with_vtk):
@@ -19,12 +23,25 @@ def test_no_options_against_vtk_gives_both_times_and_errors(capsys, tmp_path, re
     ours, vtk, ratio = float(row[2]), float(row[3]), float(row[4].rstrip("x"))
     assert ours > 0 and vtk > 0 and abs(ratio - vtk / ours) <= 0.051 * ratio + 0.05
     our_rmse, vtk_rmse, error_ratio = (float(c) for c in row[5:8])
-    assert 0 < our_rmse < 0.1 and 0 < vtk_rmse < 0.1 and abs(error_ratio - our_rmse / vtk_rmse) < 0.01 * error_ratio + 0.01
+    assert (
+        0 < our_rmse < 0.1
+        and 0 < vtk_rmse < 0.1
+        and abs(error_ratio - our_rmse / vtk_rmse) < 0.01 * error_ratio + 0.01
+    )
     assert "| marschner_lobb/sample |" in out.read_text()
 
 
 def test_the_one_sided_reach_takes_fewer_cells_and_draws_the_same(capsys, shared_data):
-    argv = ["--shared", str(shared_data.parent), "--scenes", "ironProt/opaque", "--size", "48", "--frames", "1"]
+    argv = [
+        "--shared",
+        str(shared_data.parent),
+        "--scenes",
+        "ironProt/opaque",
+        "--size",
+        "48",
+        "--frames",
+        "1",
+    ]
     assert objectorder_reach.main(argv) == 0
     (row,) = _rows(capsys.readouterr().out, "| ironProt/opaque |")
     number = lambda cell: float(cell.split()[0])  # noqa: E731

@@ -7,7 +7,11 @@ from benchmarks import defaults_fidelity
 
 
 def _rows(text: str, prefix: str) -> list[list[str]]:
-    return [[c.strip() for c in line.strip("|").split("|")] for line in text.splitlines() if line.startswith(prefix)]
+    return [
+        [c.strip() for c in line.strip("|").split("|")]
+        for line in text.splitlines()
+        if line.startswith(prefix)
+    ]
 
 
 def test_a_row_per_size_with_both_errors_and_whether_it_holds(capsys, tmp_path, renders_with_vtk):

@@ -27,7 +27,10 @@ def test_export_then_run(shared_data, tmp_path, monkeypatch):
     assert volume.points.dtype == np.float64 and len(volume.tets) > 1000
 
     out = tmp_path / "out"
-    assert gpu.main(["run", "--arrays", str(arrays), "--out", str(out), "--sizes", "16,32", "--frames", "1"]) == 0
+    assert (
+        gpu.main(["run", "--arrays", str(arrays), "--out", str(out), "--sizes", "16,32", "--frames", "1"])
+        == 0
+    )
     rows = list(csv.DictReader((out / "gpu.csv").open()))
     assert len(rows) == 3 * 2 * 2  # TFs x configurations x sizes
     for row in rows:

@@ -12,8 +12,22 @@ from volren.model import UniformVolume
 ROWS = [
     {"dataset": "d", "tf": "t", "renderer": "shearwarp", "settings": "fast", "ms": "10", "rmse": "0.02"},
     {"dataset": "d", "tf": "t", "renderer": "shearwarp", "settings": "fine", "ms": "40", "rmse": "0.005"},
-    {"dataset": "d", "tf": "t", "renderer": "vtk-fixed_point", "settings": "step 2", "ms": "30", "rmse": "0.03"},
-    {"dataset": "d", "tf": "t", "renderer": "vtk-fixed_point", "settings": "step 1", "ms": "80", "rmse": "0.01"},
+    {
+        "dataset": "d",
+        "tf": "t",
+        "renderer": "vtk-fixed_point",
+        "settings": "step 2",
+        "ms": "30",
+        "rmse": "0.03",
+    },
+    {
+        "dataset": "d",
+        "tf": "t",
+        "renderer": "vtk-fixed_point",
+        "settings": "step 1",
+        "ms": "80",
+        "rmse": "0.01",
+    },
     {"dataset": "d", "tf": "t", "renderer": "slicer", "settings": "step 0.25", "ms": "500", "rmse": "0.001"},
 ]
 

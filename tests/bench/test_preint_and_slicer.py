@@ -161,8 +161,26 @@ def test_unwritable_out_file_is_an_error_after_printing(tmp_path, capsys, sample
 def test_bench_slicer_prints_a_row_per_setting(shared_data, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("VOLREN_REFERENCE_CACHE", str(tmp_path / "cache"))
     out = tmp_path / "table.md"
-    code = main(["bench", "slicer", "--shared", str(shared_data.parent), "--datasets", "bonsai", "--styles",
-                 "spiky", "--steps", "2", "--size", "16", "--frames", "1", "--out", str(out)])
+    code = main(
+        [
+            "bench",
+            "slicer",
+            "--shared",
+            str(shared_data.parent),
+            "--datasets",
+            "bonsai",
+            "--styles",
+            "spiky",
+            "--steps",
+            "2",
+            "--size",
+            "16",
+            "--frames",
+            "1",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0
     table = [r for r in rows(out.read_text(), "bonsai") if len(r) == 8]
     assert [r[2] for r in table] == ["slicer march post", "slicer march pre", "vtk"]
@@ -173,8 +191,14 @@ def test_bench_slicer_prints_a_row_per_setting(shared_data, tmp_path, monkeypatc
     assert len(rows(out.read_text(), "bonsai")) == 4  # three settings and one equal-error row
 
 
-@pytest.mark.parametrize("args, message", [(["--steps", "0"], "--steps"), (["--datasets", "spx"], "non-uniform"),
-                                           (["--paths", "raycast"], "--paths")])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--steps", "0"], "--steps"),
+        (["--datasets", "spx"], "non-uniform"),
+        (["--paths", "raycast"], "--paths"),
+    ],
+)
 def test_bench_slicer_bad_arguments(shared_data, args, message, capsys):
     assert main(["bench", "slicer", "--shared", str(shared_data.parent), *args]) != 0
     assert message in capsys.readouterr().err

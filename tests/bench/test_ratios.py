@@ -24,6 +24,7 @@ def write_runs(folder, rows):
         writer.writerows(rows)
     return path
 
+
 def test_the_fastest_of_ours_at_or_below_each_peer_error():
     found = ratios.ratios(ROWS, "ours")[("d", "t", "peer")]
     # coarse: our fast setting (5x); exact: only the fine one reaches 0.01 (5x); beyond: none reaches
@@ -52,7 +53,9 @@ def test_the_fragment_for_benchmarks_md(tmp_path):
     text = fragment.read_text()
     assert f"`python -m benchmarks.ratios {path} ours --fragment {fragment}`" in text
     # d: 5.00 at the peer's fastest setting reached (coarse), e: 2.00; f is not reached
-    assert "- against `peer`: 2.00-5.00x at its fastest setting reached, on 2 of 3 scenes (median 3.50x)" in text
+    assert (
+        "- against `peer`: 2.00-5.00x at its fastest setting reached, on 2 of 3 scenes (median 3.50x)" in text
+    )
     assert "| e | t | peer | 2.00 (coarse: 20 ms; ours: fast) | 2.00-2.00 (1 settings) |" in text
     assert "| f |" not in text
 

@@ -12,11 +12,16 @@ def test_benchmarks_md_collects_the_fragments_and_relinks_plots(tmp_path):
     out.mkdir(parents=True)
     (out / "summary.md").write_text("ratio 0.3\n\n![engine](engine.png)\n")
     (out / "stress.md").write_text("0 NaN\n")
-    text = report.compose(out, tmp_path, date=datetime.date(2026, 11, 22), command="python -m benchmarks.report")
+    text = report.compose(
+        out, tmp_path, date=datetime.date(2026, 11, 22), command="python -m benchmarks.report"
+    )
     assert "Assembled 2026-11-22" in text and "`python -m benchmarks.report`" in text
     assert "![engine](docs/bench/engine.png)" in text
     assert text.index("## Run time against error") < text.index("## Numerical stress")
-    assert "Not in this run: skip.md, quality.md, defaults_fidelity.md, defaults_fidelity_shared.md, defaults_ab.md, plugins.md, shearwarp_peers.md, occlusion_bound.md, resampling_floor.md, app.md, app_latency.md, first_preview.md, zarr_levels.md, scale.md, oneshot.md, gpu.md." in text
+    assert (
+        "Not in this run: skip.md, quality.md, defaults_fidelity.md, defaults_fidelity_shared.md, defaults_ab.md, plugins.md, shearwarp_peers.md, occlusion_bound.md, resampling_floor.md, app.md, app_latency.md, first_preview.md, zarr_levels.md, scale.md, oneshot.md, gpu.md."
+        in text
+    )
 
 
 def test_fragment_headings_nest_under_their_section(tmp_path, monkeypatch):
@@ -25,7 +30,9 @@ def test_fragment_headings_nest_under_their_section(tmp_path, monkeypatch):
     monkeypatch.setattr(report, "machine", lambda: "a test machine")  # no GL context for the header
     out = tmp_path / "bench"
     out.mkdir()
-    (out / "summary.md").write_text("# Run time against error\n\nratio\n\n## bonsai\n\n```sh\n# a comment\n```\n")
+    (out / "summary.md").write_text(
+        "# Run time against error\n\nratio\n\n## bonsai\n\n```sh\n# a comment\n```\n"
+    )
     (out / "plugins.md").write_text("### Speed at equal error\n\n1.5x\n")
     text = report.compose(out, tmp_path, date=datetime.date(2026, 11, 22))
     headings = [line for line in text.splitlines() if line.startswith("#")]

@@ -37,5 +37,7 @@ def test_bricked_equals_whole_on_real_data(shared_data, name, brick, settings, p
     assert stats.drawn >= 8
     assert whole[..., 3].mean() > 0.05
     error = float(np.sqrt(np.mean((bricked.astype(np.float64) - whole) ** 2)))
-    print(f"{name} {brick}^3 {'parallel' if parallel else 'perspective'}: RMSE {error:.3g}, {stats.drawn} bricks")
+    print(
+        f"{name} {brick}^3 {'parallel' if parallel else 'perspective'}: RMSE {error:.3g}, {stats.drawn} bricks"
+    )
     assert error <= 1e-5

@@ -23,8 +23,11 @@ from volren.testing.silent_server import silent_server
 
 pytest.importorskip("distributed", reason="dask.distributed is part of the test set-up")
 
-TF = TransferFunction1D([[0, 0.1, 0.4, 1.0], [2, 0.9, 0.9, 0.2], [4, 1.0, 0.2, 0.1]],
-                        [[0, 0.0], [1.0, 0.1], [2.5, 0.5], [4, 0.2]], 2.0)
+TF = TransferFunction1D(
+    [[0, 0.1, 0.4, 1.0], [2, 0.9, 0.9, 0.2], [4, 1.0, 0.2, 0.1]],
+    [[0, 0.0], [1.0, 0.1], [2.5, 0.5], [4, 0.2]],
+    2.0,
+)
 
 
 def field_volume() -> UniformVolume:
@@ -75,7 +78,9 @@ def test_workers_stream_an_ome_zarr_level_with_the_slicer(client, tmp_path):
     volume = UniformVolume((field_volume().values * 1000).astype(np.uint16), (1.0, 1.2, 0.9), name="field")
     path = tmp_path / "field.zarr"
     ome_zarr_io.save_ome_zarr(volume, path, chunk=8, levels=2)
-    tf = TransferFunction1D([[0, 0.1, 0.4, 1.0], [4000, 1.0, 0.2, 0.1]], [[0, 0.0], [1000, 0.1], [4000, 0.4]], 2.0)
+    tf = TransferFunction1D(
+        [[0, 0.1, 0.4, 1.0], [4000, 1.0, 0.2, 0.1]], [[0, 0.0], [1000, 0.1], [4000, 0.4]], 2.0
+    )
     settings = RenderSettings(preintegration=True, options={"early_termination": False})
     camera = Camera.orbit(volume.bounds, -30, 15)
     whole = ome_zarr_io.load_level(path, 0)
@@ -162,17 +167,26 @@ def test_volren_render_from_python_on_a_local_cluster():
 def test_a_scheduler_that_cannot_be_reached_is_one_line():
     """A closed port and a port where something says nothing (no dask greeting) are one line each,
     naming the time limit given (how long giving up takes: `python -m benchmarks.give_up_times`)."""
-    with pytest.raises(VolrenError, match=r"cannot reach the dask scheduler at tcp://127.0.0.1:9 within 2 s") as exc:
+    with pytest.raises(
+        VolrenError, match=r"cannot reach the dask scheduler at tcp://127.0.0.1:9 within 2 s"
+    ) as exc:
         connect("tcp://127.0.0.1:9", timeout=2.0)
     assert "\n" not in str(exc.value)
-    with silent_server() as port, pytest.raises(VolrenError, match=rf"at tcp://127.0.0.1:{port} within 0.5 s") as exc:
+    with (
+        silent_server() as port,
+        pytest.raises(VolrenError, match=rf"at tcp://127.0.0.1:{port} within 0.5 s") as exc,
+    ):
         connect(f"tcp://127.0.0.1:{port}", timeout=0.5)
     assert "\n" not in str(exc.value)
 
 
 def test_cluster_flags_are_checked():
     assert parse_cluster("local:3") == 3 and parse_cluster("local") >= 1
-    for bad, message in (("remote", "takes local or local:N"), ("local:0", "N in 1..256"), ("local:x", "N in 1..256")):
+    for bad, message in (
+        ("remote", "takes local or local:N"),
+        ("local:0", "N in 1..256"),
+        ("local:x", "N in 1..256"),
+    ):
         with pytest.raises(VolrenError, match=message):
             parse_cluster(bad)
 
@@ -186,13 +200,19 @@ def test_volren_render_on_a_local_cluster_equals_one_process(tmp_path, capsys):
     path = tmp_path / "field.zarr"
     ome_zarr_io.save_ome_zarr(volume, path, chunk=8, levels=2)
     flags = ["--renderer", "reference", "--size", "20x16", "--level", "0"]
-    assert main(["render", str(path), *flags, "--cluster", "local:2", "--save-array", str(tmp_path / "c.npy")]) == 0
+    assert (
+        main(["render", str(path), *flags, "--cluster", "local:2", "--save-array", str(tmp_path / "c.npy")])
+        == 0
+    )
     line = capsys.readouterr().out
     assert "(field.zarr level 0 on 2 workers:" in line and "bricks drawn in" in line
     assert main(["render", str(path), *flags, "--save-array", str(tmp_path / "w.npy")]) == 0
     assert rmse(np.load(tmp_path / "c.npy"), np.load(tmp_path / "w.npy")) <= 1e-5
     capsys.readouterr()
-    assert main(["render", str(path), *flags, "--scheduler", "tcp://127.0.0.1:9", "-o", str(tmp_path / "x.png")]) == 1
+    assert (
+        main(["render", str(path), *flags, "--scheduler", "tcp://127.0.0.1:9", "-o", str(tmp_path / "x.png")])
+        == 1
+    )
     assert "cannot reach the dask scheduler at tcp://127.0.0.1:9" in capsys.readouterr().err
 
 
@@ -247,7 +267,9 @@ def render_in_a_thread(argv: list[str], limit: float) -> tuple[bool, int | None]
 
 @pytest.mark.parametrize("reply", [b"", b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n", b"\0" * 64],
                          ids=["silent", "http", "zeros"])  # fmt: skip
-def test_a_port_where_no_scheduler_listens_is_one_line_within_the_time_limit(tmp_path, capsys, monkeypatch, reply):
+def test_a_port_where_no_scheduler_listens_is_one_line_within_the_time_limit(
+    tmp_path, capsys, monkeypatch, reply
+):
     """Something else listening (a web server, a service that says nothing, bytes that are not dask's):
     the greeting is bounded by the connection time limit, and the error names --scheduler."""
     from volren.bricked import cluster
@@ -265,7 +287,8 @@ def test_a_port_where_no_scheduler_listens_is_one_line_within_the_time_limit(tmp
     assert ended and status == 1
     reason = "no answer" if not reply else "what answered is not a dask scheduler"
     assert capsys.readouterr().err.splitlines() == [
-        f"volren: error: --scheduler: cannot reach the dask scheduler at {listener.address} within 1 s ({reason})"]
+        f"volren: error: --scheduler: cannot reach the dask scheduler at {listener.address} within 1 s ({reason})"
+    ]
 
 
 @pytest.mark.parametrize(("flags", "message"), [

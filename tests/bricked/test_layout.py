@@ -27,7 +27,7 @@ def test_bricks_partition_the_cells(dimensions, brick):
     for b in layout.bricks():
         assert all(0 <= f < e <= n - 1 for f, e, n in zip(b.first, b.end, dimensions))
         assert all(e - f <= brick for f, e in zip(b.first, b.end))
-        count[b.first[2]:b.end[2], b.first[1]:b.end[1], b.first[0]:b.end[0]] += 1
+        count[b.first[2] : b.end[2], b.first[1] : b.end[1], b.first[0] : b.end[0]] += 1
     assert count.min() == 1 and count.max() == 1
     assert layout.n_bricks == len(list(layout.bricks()))
 

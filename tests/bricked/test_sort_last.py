@@ -25,8 +25,11 @@ def field_volume(shape=(14, 11, 9), spacing=(1.1, 0.9, 1.0)) -> UniformVolume:
     return UniformVolume(values.astype(np.float32), spacing, (-3.0, 1.0, 0.5))
 
 
-TF = TransferFunction1D([[-2, 0.1, 0.4, 1.0], [0.5, 0.9, 0.9, 0.2], [5, 1.0, 0.2, 0.1]],
-                        [[-2, 0.0], [0.0, 0.05], [1.0, 0.5], [5, 0.2]], 1.5)
+TF = TransferFunction1D(
+    [[-2, 0.1, 0.4, 1.0], [0.5, 0.9, 0.9, 0.2], [5, 1.0, 0.2, 0.1]],
+    [[-2, 0.0], [0.0, 0.05], [1.0, 0.5], [5, 0.2]],
+    1.5,
+)
 
 
 class CountingSource(VolumeSource):
@@ -66,7 +69,9 @@ CAMERAS = {
 def test_reference_bricked_equals_whole(camera, shade):
     volume = field_volume()
     settings = RenderSettings(shade=shade, options={"tolerance": 1e-6})
-    whole, bricked, _, stats = whole_and_bricked("reference", volume, TF, CAMERAS[camera](volume), settings, 4)
+    whole, bricked, _, stats = whole_and_bricked(
+        "reference", volume, TF, CAMERAS[camera](volume), settings, 4
+    )
     assert stats.drawn > 8 and stats.ghost == 1
     assert np.abs(whole).max() > 0.05
     assert rmse(bricked, whole) <= 1e-6
@@ -78,7 +83,9 @@ def test_reference_bricked_equals_whole(camera, shade):
 def test_slicer_bricked_equals_whole(camera, pre, shade):
     volume = field_volume()
     settings = RenderSettings(preintegration=pre, shade=shade, options={"early_termination": False})
-    whole, bricked, again, stats = whole_and_bricked("slicer", volume, TF, CAMERAS[camera](volume), settings, 4)
+    whole, bricked, again, stats = whole_and_bricked(
+        "slicer", volume, TF, CAMERAS[camera](volume), settings, 4
+    )
     assert stats.drawn > 8 and stats.ghost == (2 if pre else 1)
     assert np.abs(whole).max() > 0.05
     assert rmse(bricked, whole) <= 1e-5
@@ -148,7 +155,9 @@ def test_what_cannot_be_bricked_is_a_one_line_error():
             render_bricked(shearwarp, VolumeSource(volume), TF, camera, 8, 8)
     finally:
         shearwarp.release()
-    assert Region((0, 0, 0), (1, 1, 1), (0, 1, 0, 1, 0, 1), (0, 1)).owns(np.array([[1.0, 0.5, 0.5]])).tolist() == [False]
+    assert Region((0, 0, 0), (1, 1, 1), (0, 1, 0, 1, 0, 1), (0, 1)).owns(
+        np.array([[1.0, 0.5, 0.5]])
+    ).tolist() == [False]
 
 
 @pytest.mark.usefixtures("opengl")

@@ -24,8 +24,11 @@ from volren.renderers.registry import registry
 
 zarr = pytest.importorskip("zarr", reason="volren[zarr] is part of the test set-up")
 
-TF = TransferFunction1D([[0, 0.1, 0.4, 1.0], [2000, 0.9, 0.9, 0.2], [4000, 1.0, 0.2, 0.1]],
-                        [[0, 0.0], [1000, 0.05], [2500, 0.4], [4000, 0.2]], 3.0)
+TF = TransferFunction1D(
+    [[0, 0.1, 0.4, 1.0], [2000, 0.9, 0.9, 0.2], [4000, 1.0, 0.2, 0.1]],
+    [[0, 0.0], [1000, 0.05], [2500, 0.4], [4000, 0.2]],
+    3.0,
+)
 
 
 @pytest.fixture
@@ -86,7 +89,9 @@ def test_bricks_the_tf_hides_are_never_read(tmp_path, monkeypatch):
     high_only = TransferFunction1D([[0, 1, 1, 1], [4000, 1, 0, 0]], [[0, 0.0], [3300, 0.0], [4000, 0.8]])
     image = ome_zarr_io.open_multiscale(path)
     source = ZarrSource(image, 0, 1 << 20)
-    shown = np.array([i for i, r in zip(np.ndindex(5, 5, 5), image.brick_ranges[0], strict=True) if r[1] > 3300])
+    shown = np.array(
+        [i for i, r in zip(np.ndindex(5, 5, 5), image.brick_ranges[0], strict=True) if r[1] > 3300]
+    )
     renderer = registry.create("reference")
     try:
         camera = Camera.orbit((0, 39, 0, 39, 0, 39), 10, 10)
@@ -145,7 +150,10 @@ def test_volren_render_streams_a_level_larger_than_the_memory_allowed(image_path
     from volren.cli.main import main
 
     flags = ["--renderer", "reference", "--size", "20x16", "--level", "0"]
-    assert main(["render", str(image_path), *flags, "--memory", "4KB", "--save-array", str(tmp_path / "s.npy")]) == 0
+    assert (
+        main(["render", str(image_path), *flags, "--memory", "4KB", "--save-array", str(tmp_path / "s.npy")])
+        == 0
+    )
     line = capsys.readouterr().out
     assert "(field.zarr level 0 streamed:" in line and "bricks drawn)" in line
     assert main(["render", str(image_path), *flags, "--save-array", str(tmp_path / "w.npy")]) == 0

@@ -22,15 +22,26 @@ def bricks_along_rays(layout, origins, dirs, samples=400):
     for o, d in zip(origins, dirs):
         p = o + t[:, None] * d
         inside = np.all((p >= b[0::2]) & (p < b[1::2]), axis=1)
-        idx = [np.clip(np.searchsorted(edges[a], p[inside, a], side="right") - 1, 0, len(edges[a]) - 2) for a in range(3)]
+        idx = [
+            np.clip(np.searchsorted(edges[a], p[inside, a], side="right") - 1, 0, len(edges[a]) - 2)
+            for a in range(3)
+        ]
         seq = [(int(k), int(j), int(i)) for i, j, k in zip(*idx)]
         sequences.append([s for n, s in enumerate(seq) if n == 0 or s != seq[n - 1]])
     return sequences
 
 
 @settings(max_examples=30, deadline=None)
-@given(st.integers(2, 30), st.integers(2, 30), st.integers(2, 30), st.integers(2, 9),
-       st.floats(-180, 180), st.floats(-80, 80), st.floats(0.5, 6.0), st.booleans())
+@given(
+    st.integers(2, 30),
+    st.integers(2, 30),
+    st.integers(2, 30),
+    st.integers(2, 9),
+    st.floats(-180, 180),
+    st.floats(-80, 80),
+    st.floats(0.5, 6.0),
+    st.booleans(),
+)
 def test_every_ray_meets_the_bricks_in_the_order(nx, ny, nz, brick, azimuth, elevation, zoom, parallel):
     layout = BrickLayout((nx, ny, nz), (1.0, 0.8, 1.2), (0.0, -3.0, 1.0), (0.0, 1.0), brick)
     camera = Camera.orbit(layout.bounds, azimuth, elevation, zoom=zoom, parallel=parallel)
@@ -44,8 +55,11 @@ def test_every_ray_meets_the_bricks_in_the_order(nx, ny, nz, brick, azimuth, ele
 
 
 @settings(max_examples=30, deadline=None)
-@given(st.tuples(*(st.floats(0.05, 0.95) for _ in range(3))), st.tuples(*(st.floats(-1, 1) for _ in range(3))),
-       st.floats(20, 120))
+@given(
+    st.tuples(*(st.floats(0.05, 0.95) for _ in range(3))),
+    st.tuples(*(st.floats(-1, 1) for _ in range(3))),
+    st.floats(20, 120),
+)
 def test_with_the_eye_inside_the_grid(place, look, angle):
     layout = BrickLayout((17, 13, 21), (1.0, 1.0, 1.0), (0.0, 0.0, 0.0), (0.0, 1.0), 4)
     b = np.asarray(layout.bounds)

@@ -36,7 +36,9 @@ def render_line(path, tmp_path, capsys, name, *flags) -> tuple[np.ndarray, str]:
 def test_a_level_whose_values_fit_but_not_its_float_copy_is_streamed(field_zarr, tmp_path, capsys):
     voxels = int(np.prod(SHAPE))
     budget = 64 * 1024
-    assert voxels * 2 <= budget < voxels * (2 + RENDERER_COPY_BYTES["reference"])  # the float64 copy does not fit
+    assert (
+        voxels * 2 <= budget < voxels * (2 + RENDERER_COPY_BYTES["reference"])
+    )  # the float64 copy does not fit
     flags = ["--renderer", "reference", "--level", "0"]
     streamed, said = render_line(field_zarr, tmp_path, capsys, "streamed", *flags, "--memory", "64KiB")
     assert "(field.zarr level 0 streamed:" in said.out
@@ -66,7 +68,11 @@ def test_the_level_read_whole_is_the_finest_whose_values_and_renderer_copies_fit
     image = ome_zarr_io.open_multiscale(field_zarr)
     budget = 128 * 1024
     voxels = [int(np.prod(level.shape)) for level in image.levels]
-    assert voxels[0] * (2 + RENDERER_COPY_BYTES["raycast"]) <= budget < voxels[0] * (2 + RENDERER_COPY_BYTES["slicer"])
+    assert (
+        voxels[0] * (2 + RENDERER_COPY_BYTES["raycast"])
+        <= budget
+        < voxels[0] * (2 + RENDERER_COPY_BYTES["slicer"])
+    )
     assert finest_level_read_whole(image, budget, "raycast") == 0
     assert finest_level_read_whole(image, budget, "slicer") == 1
     assert finest_level_read_whole(image, budget, "auto") == 1  # not chosen yet: the most copies

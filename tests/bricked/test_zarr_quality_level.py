@@ -41,13 +41,25 @@ def render(tmp_path, capsys, path, name, *flags) -> tuple[np.ndarray, str]:
     from volren.cli.main import main
 
     out = tmp_path / f"{name}.npy"
-    argv = ["render", str(path), "--renderer", "slicer", "--size", str(SIZE), *flags, "--save-array", str(out)]
+    argv = [
+        "render",
+        str(path),
+        "--renderer",
+        "slicer",
+        "--size",
+        str(SIZE),
+        *flags,
+        "--save-array",
+        str(out),
+    ]
     assert main(argv) == 0
     return np.load(out), capsys.readouterr().out
 
 
 @pytest.mark.usefixtures("opengl")
-def test_default_quality_draws_the_full_resolution_and_draft_the_level_the_view_needs(tube_zarr, tmp_path, capsys):
+def test_default_quality_draws_the_full_resolution_and_draft_the_level_the_view_needs(
+    tube_zarr, tmp_path, capsys
+):
     coarse = view_level(tube_zarr)
     assert coarse >= 1  # the view alone would draw a coarser level
     for quality in ("default", "high"):
@@ -56,7 +68,9 @@ def test_default_quality_draws_the_full_resolution_and_draft_the_level_the_view_
         assert "(tube.zarr level 0 in memory)" in line
         np.testing.assert_array_equal(image, level_0)
     draft, line = render(tmp_path, capsys, tube_zarr, "draft", "--quality", "draft")
-    named, _ = render(tmp_path, capsys, tube_zarr, "draft-named", "--quality", "draft", "--level", str(coarse))
+    named, _ = render(
+        tmp_path, capsys, tube_zarr, "draft-named", "--quality", "draft", "--level", str(coarse)
+    )
     assert f"(tube.zarr level {coarse} in memory)" in line
     np.testing.assert_array_equal(draft, named)
 
@@ -66,7 +80,9 @@ def test_volren_render_from_python_takes_the_level_from_the_quality(tube_zarr):
     import volren
 
     flags = {"renderer": "slicer", "size": SIZE}
-    np.testing.assert_array_equal(volren.render(str(tube_zarr), **flags), volren.render(str(tube_zarr), level=0, **flags))
+    np.testing.assert_array_equal(
+        volren.render(str(tube_zarr), **flags), volren.render(str(tube_zarr), level=0, **flags)
+    )
     np.testing.assert_array_equal(volren.render(str(tube_zarr), quality="interactive", **flags),
                                   volren.render(str(tube_zarr), quality="interactive", level=view_level(tube_zarr),
                                                 **flags))  # fmt: skip

@@ -23,7 +23,6 @@ def test_a_conformant_renderer_exits_0(capsys):
     assert any("box [uniform, perspective] RMSE" in line and "bound <= 0.05" in line for line in out)
 
 
-
 def test_a_failing_renderer_prints_its_numbers_and_exits_1(capsys):
     registry.register("plain", PlainRenderer, replace=True)
     try:

@@ -34,8 +34,24 @@ def test_renderers_lists_the_builtins_with_capabilities(capsys):
 def test_render_writes_png_and_array_and_prints_one_line(tmp_path, capsys, ml_sample):
     volume, tf = ml_sample
     png, npy = tmp_path / "out.png", tmp_path / "out.npy"
-    code = main(["render", str(volume), "--tf", str(tf), "-o", str(png), "--size", "40x30",
-                 "--azimuth", "30", "--elevation", "20", "--save-array", str(npy)])
+    code = main(
+        [
+            "render",
+            str(volume),
+            "--tf",
+            str(tf),
+            "-o",
+            str(png),
+            "--size",
+            "40x30",
+            "--azimuth",
+            "30",
+            "--elevation",
+            "20",
+            "--save-array",
+            str(npy),
+        ]
+    )
     assert code == 0
     out = capsys.readouterr().out.strip().splitlines()
     # no --renderer: `auto` names its choice and why
@@ -70,13 +86,48 @@ def test_scene_file_and_flag_overrides(tmp_path, capsys, ml_sample):
     scene_path = tmp_path / "scene.json"
     scene_path.write_text(json.dumps(scene))
     assert main(["render", "--scene", str(scene_path), "--save-array", str(tmp_path / "a.npy")]) == 0
-    assert main(["render", "--scene", str(scene_path), "--size", "16", "--azimuth", "120",
-                 "--save-array", str(tmp_path / "b.npy")]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "--scene",
+                str(scene_path),
+                "--size",
+                "16",
+                "--azimuth",
+                "120",
+                "--save-array",
+                str(tmp_path / "b.npy"),
+            ]
+        )
+        == 0
+    )
     a, b = np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy")
     assert a.shape == (24, 24, 4) and b.shape == (16, 16, 4)
     direct = tmp_path / "c.npy"
-    assert main(["render", str(volume), "--tf", str(tf), "--size", "24", "--azimuth", "30", "--renderer", "vtk",
-                 "--elevation", "20", "--zoom", "1.2", "--save-array", str(direct)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                str(volume),
+                "--tf",
+                str(tf),
+                "--size",
+                "24",
+                "--azimuth",
+                "30",
+                "--renderer",
+                "vtk",
+                "--elevation",
+                "20",
+                "--zoom",
+                "1.2",
+                "--save-array",
+                str(direct),
+            ]
+        )
+        == 0
+    )
     assert np.array_equal(a, np.load(direct))
     capsys.readouterr()
 
@@ -107,8 +158,10 @@ def test_a_scene_naming_a_time_series_renders_its_step(tmp_path, capsys):
         (["render", "{missing}", "-o", "{out}"], "missing.vti"),
         (["render", "{volume}", "-o", "{out}", "--renderer", "nope"], "unknown renderer 'nope'"),
         (["render", "{volume}", "-o", "{out}", "--tf", "{missing}"], "missing.vti"),
-        (["render", "{volume}", "-o", "{out}", "--renderer", "vtk", "--option", "mapper=warp"],
-         "renderer vtk: option mapper must be one of 'auto'"),
+        (
+            ["render", "{volume}", "-o", "{out}", "--renderer", "vtk", "--option", "mapper=warp"],
+            "renderer vtk: option mapper must be one of 'auto'",
+        ),
         (["render", "{volume}", "-o", "{out}", "--option", "mapper=warp"], "--option mapper: renderer "),
         (["render", "{volume}", "-o", "{tmp}/no/such/dir/x.png"], "does not exist"),
         (["render", "{volume}"], "-o OUT.png"),
@@ -116,8 +169,12 @@ def test_a_scene_naming_a_time_series_renders_its_step(tmp_path, capsys):
     ],
 )
 def test_bad_input_gives_one_line_and_exit_1(tmp_path, capsys, ml_sample, args, message):
-    fill = {"missing": str(tmp_path / "missing.vti"), "out": str(tmp_path / "x.png"),
-            "volume": str(ml_sample[0]), "tmp": str(tmp_path)}
+    fill = {
+        "missing": str(tmp_path / "missing.vti"),
+        "out": str(tmp_path / "x.png"),
+        "volume": str(ml_sample[0]),
+        "tmp": str(tmp_path),
+    }
     code = main([a.format(**fill) for a in args])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1
@@ -126,8 +183,9 @@ def test_bad_input_gives_one_line_and_exit_1(tmp_path, capsys, ml_sample, args, 
 
 def run_cli(*args: str) -> subprocess.CompletedProcess:
     env = dict(os.environ, PYTHONWARNINGS="ignore")
-    return subprocess.run([sys.executable, "-m", "volren.cli.main", *args], capture_output=True,
-                          text=True, timeout=120, env=env)
+    return subprocess.run(
+        [sys.executable, "-m", "volren.cli.main", *args], capture_output=True, text=True, timeout=120, env=env
+    )
 
 
 def test_subprocess_missing_file_is_one_line_and_nonzero(tmp_path):
@@ -171,18 +229,26 @@ def test_demo_renders_every_sample_with_each_renderer(tmp_path, capsys):
     lines = capsys.readouterr().out.strip().splitlines()
     assert len(lines) == 3 and all("ms per frame" in line for line in lines)
     assert sorted(p.name for p in tmp_path.glob("*.png")) == [
-        "hollow_cylinder_vtk.png", "marschner_lobb_vtk.png", "phantom_ct_vtk.png"]
+        "hollow_cylinder_vtk.png",
+        "marschner_lobb_vtk.png",
+        "phantom_ct_vtk.png",
+    ]
 
 
 @pytest.mark.parametrize(
     "extra, message",
     [
-        (["--raw-spacing", "2,2,2"], "--raw-spacing describes headerless raw data only (it needs --raw-shape)"),
+        (
+            ["--raw-spacing", "2,2,2"],
+            "--raw-spacing describes headerless raw data only (it needs --raw-shape)",
+        ),
         (["--raw-dtype", "int16"], "--raw-dtype describes headerless raw data only"),
         (["--raw-byte-order", "big"], "--raw-byte-order describes headerless raw data only"),
     ],
 )
-def test_raw_flags_on_a_file_with_a_header_are_refused_not_ignored(tmp_path, capsys, ml_sample, extra, message):
+def test_raw_flags_on_a_file_with_a_header_are_refused_not_ignored(
+    tmp_path, capsys, ml_sample, extra, message
+):
     assert main(["render", str(ml_sample[0]), "-o", str(tmp_path / "x.png"), *extra]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0] and str(ml_sample[0]) in err[0], err
@@ -193,8 +259,15 @@ def test_headerless_raw_without_a_shape_names_the_flags(tmp_path, capsys):
     raw.write_bytes(bytes(60))
     assert main(["render", str(raw), "-o", str(tmp_path / "x.png")]) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "--raw-shape NX,NY,NZ" in err[0] and "--raw-dtype" in err[0] and "shape=" not in err[0]
-    assert main(["render", str(raw), "--raw-shape", "5,4,3", "-o", str(tmp_path / "x.png"), "--size", "8"]) == 0
+    assert (
+        len(err) == 1
+        and "--raw-shape NX,NY,NZ" in err[0]
+        and "--raw-dtype" in err[0]
+        and "shape=" not in err[0]
+    )
+    assert (
+        main(["render", str(raw), "--raw-shape", "5,4,3", "-o", str(tmp_path / "x.png"), "--size", "8"]) == 0
+    )
 
 
 def test_headerless_raw_without_a_shape_is_offered_the_cube_its_size_holds(tmp_path, capsys):
@@ -213,7 +286,16 @@ def test_convert_takes_the_raw_flags_render_takes(tmp_path, capsys, ml_sample):
     values = np.arange(6 * 5 * 4, dtype=">i2").reshape(6, 5, 4)  # z, y, x
     raw = tmp_path / "d.raw"
     raw.write_bytes(values.tobytes())
-    flags = ["--raw-shape", "4,5,6", "--raw-dtype", "short", "--raw-byte-order", "big", "--raw-spacing", "1,2,3"]
+    flags = [
+        "--raw-shape",
+        "4,5,6",
+        "--raw-dtype",
+        "short",
+        "--raw-byte-order",
+        "big",
+        "--raw-spacing",
+        "1,2,3",
+    ]
     assert main(["convert", str(raw), str(tmp_path / "d.zarr"), *flags]) == 0
     volume = load_volume(tmp_path / "d.zarr")
     np.testing.assert_array_equal(volume.values, values.astype(np.int16))

@@ -18,7 +18,9 @@ def files(tmp_path):
     values = np.broadcast_to(2.0 * x, (4, 3, 5)).astype(np.float32)  # s = 2 x: |grad s| = 2
     volume = UniformVolume(np.ascontiguousarray(values), spacing=(0.5, 0.5, 0.5))
     save_volume(volume, tmp_path / "ramp.vti")
-    tf = TransferFunction2D((0.0, 4.0), (0.0, 3.0), [TFWidget.box((0.5, 3.5), (1.5, 2.5), (1.0, 0.5, 0.0), 0.6)])
+    tf = TransferFunction2D(
+        (0.0, 4.0), (0.0, 3.0), [TFWidget.box((0.5, 3.5), (1.5, 2.5), (1.0, 0.5, 0.0), 0.6)]
+    )
     save_transfer_function(tf, tmp_path / "tf2d.json")
     return tmp_path, tf
 
@@ -35,13 +37,25 @@ def test_render_with_a_2d_tf_file(files, capsys):
     assert image[..., 3].max() > 0.3
     api = volren.render(folder / "ramp.vti", tf, renderer="reference", size=12, azimuth=20)
     assert np.array_equal(api, image)
-    assert np.array_equal(volren.render(folder / "ramp.vti", tf.to_dict(), renderer="reference", size=12, azimuth=20), image)
+    assert np.array_equal(
+        volren.render(folder / "ramp.vti", tf.to_dict(), renderer="reference", size=12, azimuth=20), image
+    )
 
 
 def test_vtk_refuses_a_2d_tf_file_in_one_line(files, capsys):
     folder, _ = files
-    code = main(["render", str(folder / "ramp.vti"), "--tf", str(folder / "tf2d.json"), "-o", str(folder / "x.png"),
-                 "--renderer", "vtk"])
+    code = main(
+        [
+            "render",
+            str(folder / "ramp.vti"),
+            "--tf",
+            str(folder / "tf2d.json"),
+            "-o",
+            str(folder / "x.png"),
+            "--renderer",
+            "vtk",
+        ]
+    )
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and len(err) == 1, err
     assert err[0] == "volren: error: renderer vtk does not support 2D transfer functions on uniform volumes"

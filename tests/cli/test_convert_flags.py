@@ -59,8 +59,9 @@ def test_more_levels_than_the_grid_has_are_refused_naming_levels(grid, capsys, l
 
 
 def test_the_levels_a_grid_allows_end_before_an_axis_drops_below_two_samples():
-    assert [max_levels(shape) for shape in ((6, 7, 8), (3, 100, 100), (4, 4, 4), (21, 30, 37), (512, 512, 8))] == [
-        2, 1, 2, 4, 3]
+    assert [
+        max_levels(shape) for shape in ((6, 7, 8), (3, 100, 100), (4, 4, 4), (21, 30, 37), (512, 512, 8))
+    ] == [2, 1, 2, 4, 3]
 
 
 def test_all_the_levels_a_grid_allows_are_written(grid, capsys):
@@ -73,7 +74,9 @@ def test_an_output_linked_into_a_missing_folder_is_refused_before_the_load(grid,
     link's resolved target, not OUTPUT as given."""
     import volren.io
 
-    monkeypatch.setattr(volren.io, "load_volume", lambda *a, **k: pytest.fail("read before OUTPUT was checked"))
+    monkeypatch.setattr(
+        volren.io, "load_volume", lambda *a, **k: pytest.fail("read before OUTPUT was checked")
+    )
     os.symlink("gone/real.zarr", "out.zarr")
     assert main(["convert", grid, "out.zarr"]) == 1
     gone = Path("gone").resolve()

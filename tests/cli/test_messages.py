@@ -48,7 +48,9 @@ def test_library_warnings_are_one_line_once_with_their_origin():
     lines = out.getvalue().splitlines()
     assert len(lines) == 3, lines
     assert lines[0].startswith("volren: warning: overflow encountered in scalar multiply (RuntimeWarning at ")
-    assert lines[1].startswith("volren: warning: a library's multi-line warning (UserWarning at cli/test_messages.py:")
+    assert lines[1].startswith(
+        "volren: warning: a library's multi-line warning (UserWarning at cli/test_messages.py:"
+    )
     assert lines[2] == "volren: warning: ours, naming the file"
 
 
@@ -59,8 +61,10 @@ def test_log_records_are_one_line_once():
             logging.getLogger("pyvista.test").warning("first line\nsecond line")
         logging.getLogger("numba.test").info("below WARNING: not shown")
     assert out.getvalue().splitlines() == ["volren: warning: pyvista.test: first line second line"]
-    assert not any(isinstance(h, logging.Handler) and type(h).__name__ == "_LoggingHandler"
-                   for h in logging.getLogger().handlers)
+    assert not any(
+        isinstance(h, logging.Handler) and type(h).__name__ == "_LoggingHandler"
+        for h in logging.getLogger().handlers
+    )
 
 
 @pytest.mark.parametrize("with_pyvista", [False, True])
@@ -93,16 +97,32 @@ def huge_inputs(tmp_path_factory):
     grid = pv.ImageData(dimensions=(6, 6, 6))
     grid.point_data["v"] = np.linspace(-1.0, 1.0, 6**3) * 1.7e308
     grid.save(folder / "huge.vti")
-    tf = {"version": 1, "kind": "1d", "color": [[-1.7e308, 1, 0, 0], [1.7e308, 0, 1, 0]],
-          "opacity": [[-1.7e308, 0], [1.7e308, 1]], "opacity_unit_distance": 1.0}
+    tf = {
+        "version": 1,
+        "kind": "1d",
+        "color": [[-1.7e308, 1, 0, 0], [1.7e308, 0, 1, 0]],
+        "opacity": [[-1.7e308, 0], [1.7e308, 1]],
+        "opacity_unit_distance": 1.0,
+    }
     (folder / "huge.tf.json").write_text(json.dumps(tf))
     return folder
 
 
 @pytest.mark.parametrize("with_tf", [False, True])
 def test_subprocess_render_of_absurd_values_says_one_line_per_message(tmp_path, huge_inputs, with_tf):
-    args = [sys.executable, "-m", "volren.cli.main", "render", str(huge_inputs / "huge.vti"),
-            "-o", str(tmp_path / "x.png"), "--size", "8", "--renderer", "reference"]
+    args = [
+        sys.executable,
+        "-m",
+        "volren.cli.main",
+        "render",
+        str(huge_inputs / "huge.vti"),
+        "-o",
+        str(tmp_path / "x.png"),
+        "--size",
+        "8",
+        "--renderer",
+        "reference",
+    ]
     if with_tf:
         args += ["--tf", str(huge_inputs / "huge.tf.json")]
     env = {k: v for k, v in os.environ.items() if k != "PYTHONWARNINGS"}

@@ -58,7 +58,9 @@ def test_lossless_mp4_holds_exactly_the_rendered_orbit(tmp_path, capsys, ml_samp
     assert line.startswith(f"{RENDERER}: 3 frames of 40x30 at 30 fps") and line.endswith(f"-> {movie}")
     frames = decoded(movie)
     assert len(frames) == 3
-    for index, azimuth in enumerate((0, 120, 240)):  # a whole turn loops: the last frame is not the first again
+    for index, azimuth in enumerate(
+        (0, 120, 240)
+    ):  # a whole turn loops: the last frame is not the first again
         assert np.array_equal(frames[index], rendered(tmp_path, *flags, "--azimuth", str(azimuth))), index
     assert not frames[0].tobytes() == frames[1].tobytes()
 
@@ -86,11 +88,23 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     volume, tf_path = ml_sample
     tf, bright = keyed_tfs(ml_sample)
     (tmp_path / "bright.json").write_text(json.dumps(bright.to_dict()))
-    scene = {"version": 1, "volume": {"path": str(volume)}, "transfer_function": tf.to_dict(), "renderer": RENDERER,
-             "quality": "default", "size": [32, 32], "movie": {"frames": 3, "fps": 5, "keyframes": [
-                 {"time": 0, "camera": {"azimuth": 0, "elevation": 10}},
-                 {"time": 1, "camera": {"azimuth": 60, "elevation": 30}, "transfer_function": "bright.json"},
-                 {"time": 0, "transfer_function": tf.to_dict()}]}}
+    scene = {
+        "version": 1,
+        "volume": {"path": str(volume)},
+        "transfer_function": tf.to_dict(),
+        "renderer": RENDERER,
+        "quality": "default",
+        "size": [32, 32],
+        "movie": {
+            "frames": 3,
+            "fps": 5,
+            "keyframes": [
+                {"time": 0, "camera": {"azimuth": 0, "elevation": 10}},
+                {"time": 1, "camera": {"azimuth": 60, "elevation": 30}, "transfer_function": "bright.json"},
+                {"time": 0, "transfer_function": tf.to_dict()},
+            ],
+        },
+    }
     (tmp_path / "scene.json").write_text(json.dumps(scene))
     movie = tmp_path / "keys.mp4"
     assert main(["movie", "--scene", str(tmp_path / "scene.json"), "-o", str(movie), "--lossless"]) == 0
@@ -100,7 +114,9 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     middle_tf.write_text(json.dumps(blend_transfer_functions(tf, bright, 0.5).to_dict()))
     # each frame is drawn at the level's settings for its own TF's class, as `volren render` draws
     # that TF: the first two are smooth, the bright one alone is sharp, whose settings differ
-    kinds = [SceneClass.of(load_volume(volume), t) for t in (tf, blend_transfer_functions(tf, bright, 0.5), bright)]
+    kinds = [
+        SceneClass.of(load_volume(volume), t) for t in (tf, blend_transfer_functions(tf, bright, 0.5), bright)
+    ]
     assert [str(k) for k in kinds] == ["uniform/smooth", "uniform/smooth", "uniform/sharp"]
     smooth, sharp = (quality.table().measurement(RENDERER, kind, "default").level for kind in kinds[1:])
     assert (smooth.step, smooth.options) != (sharp.step, sharp.options)
@@ -108,7 +124,9 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
     expected = [
         rendered(tmp_path, *flags, "--tf", str(tf_path), "--azimuth", "0", "--elevation", "10"),
         rendered(tmp_path, *flags, "--tf", str(middle_tf), "--azimuth", "30", "--elevation", "20"),
-        rendered(tmp_path, *flags, "--tf", str(tmp_path / "bright.json"), "--azimuth", "60", "--elevation", "30"),
+        rendered(
+            tmp_path, *flags, "--tf", str(tmp_path / "bright.json"), "--azimuth", "60", "--elevation", "30"
+        ),
     ]
     for index, image in enumerate(expected):
         assert np.array_equal(frames[index], image), index
@@ -116,7 +134,9 @@ def test_scene_keyframes_move_the_camera_and_blend_the_tf(tmp_path, ml_sample):
 
 @pytest.mark.parametrize("explicit", [False, True])
 @pytest.mark.vtk
-def test_a_movie_at_a_level_draws_each_frame_at_its_tf_class_settings(tmp_path, ml_sample, monkeypatch, explicit):
+def test_a_movie_at_a_level_draws_each_frame_at_its_tf_class_settings(
+    tmp_path, ml_sample, monkeypatch, explicit
+):
     """The sharp part of a smooth-to-sharp movie gets the sharp level's settings, set once where the
     class changes; settings that are not a level's (the user's) stay for every frame."""
     from volren.model.animation import Animation, TFKey
@@ -132,11 +152,17 @@ def test_a_movie_at_a_level_draws_each_frame_at_its_tf_class_settings(tmp_path, 
     start = smooth.with_(step=0.3) if explicit else smooth
     drawn: list = []
     set_settings = RendererBase.set_settings
-    monkeypatch.setattr(RendererBase, "set_settings", lambda self, s: (drawn.append(s), set_settings(self, s)))
-    scene = Scene(str(ml_sample[0]), smooth_tf, volume=volume, renderer=RENDERER, settings=start, size=(16, 16))
+    monkeypatch.setattr(
+        RendererBase, "set_settings", lambda self, s: (drawn.append(s), set_settings(self, s))
+    )
+    scene = Scene(
+        str(ml_sample[0]), smooth_tf, volume=volume, renderer=RENDERER, settings=start, size=(16, 16)
+    )
     animation = Animation(frames=5, tf_keys=(TFKey(0.0, smooth_tf), TFKey(1.0, sharp_tf)))
     render_movie(scene, animation, tmp_path / "m.gif", level="default")
-    assert drawn == ([start] if explicit else [smooth, sharp])  # prepared with the scene's; then the sharp frame's
+    assert drawn == (
+        [start] if explicit else [smooth, sharp]
+    )  # prepared with the scene's; then the sharp frame's
 
 
 @pytest.mark.parametrize(
@@ -154,8 +180,16 @@ def test_a_movie_at_a_level_draws_each_frame_at_its_tf_class_settings(tmp_path, 
 def test_bad_movie_requests_are_one_line_errors(tmp_path, capsys, ml_sample, args, message):
     volume, tf = map(str, ml_sample)
     scene = tmp_path / "bad_scene.json"
-    scene.write_text(json.dumps({"version": 1, "volume": {"path": volume}, "transfer_function": json.loads(
-        Path(tf).read_text()), "movie": {"keyframes": [{"time": 3, "camera": {}}]}}))
+    scene.write_text(
+        json.dumps(
+            {
+                "version": 1,
+                "volume": {"path": volume},
+                "transfer_function": json.loads(Path(tf).read_text()),
+                "movie": {"keyframes": [{"time": 3, "camera": {}}]},
+            }
+        )
+    )
     fill = {"tmp": str(tmp_path), "volume": volume, "scene": str(scene)}
     argv = ["movie", *([] if "--scene" in args else [volume]), *(a.format(**fill) for a in args)]
     assert main(argv) == 1
@@ -169,8 +203,16 @@ def test_bad_movie_requests_are_one_line_errors(tmp_path, capsys, ml_sample, arg
 def test_orbit_flag_and_camera_keyframes_conflict(tmp_path, capsys, ml_sample):
     volume, tf = map(str, ml_sample)
     scene = tmp_path / "scene.json"
-    scene.write_text(json.dumps({"version": 1, "volume": {"path": volume}, "transfer_function": json.loads(
-        Path(tf).read_text()), "movie": {"keyframes": [{"time": 0, "camera": {}}]}}))
+    scene.write_text(
+        json.dumps(
+            {
+                "version": 1,
+                "volume": {"path": volume},
+                "transfer_function": json.loads(Path(tf).read_text()),
+                "movie": {"keyframes": [{"time": 0, "camera": {}}]},
+            }
+        )
+    )
     assert main(["movie", "--scene", str(scene), "-o", str(tmp_path / "m.mp4"), "--orbit", "90"]) == 1
     assert "--orbit turns the camera, but the scene's movie has camera keyframes" in capsys.readouterr().err
 
@@ -183,7 +225,9 @@ def test_a_failed_movie_leaves_no_file_and_keeps_an_older_one(tmp_path, ml_sampl
     from volren.movie import render_movie
 
     volume = load_volume(ml_sample[0])
-    scene = Scene(str(ml_sample[0]), TransferFunction1D.ramp(0, 1), volume=volume, renderer=RENDERER, size=(16, 16))
+    scene = Scene(
+        str(ml_sample[0]), TransferFunction1D.ramp(0, 1), volume=volume, renderer=RENDERER, size=(16, 16)
+    )
     target = tmp_path / "kept.gif"
     target.write_bytes(b"an older movie")
 
@@ -219,7 +263,9 @@ def test_a_time_series_renders_a_step_and_moves_through_all_steps(tmp_path, caps
     frames = decoded(movie)
     assert len(frames) == 3
     for index, step in enumerate(steps):
-        np.testing.assert_array_equal(frames[index], rendered(tmp_path, str(step), *flags), err_msg=str(index))
+        np.testing.assert_array_equal(
+            frames[index], rendered(tmp_path, str(step), *flags), err_msg=str(index)
+        )
     assert main(["movie", str(pvd), *flags, "-o", str(movie), "--time-step", "1"]) == 1
     assert "--time-step picks one step" in capsys.readouterr().err
     assert main(["render", str(pvd), *flags, "-o", str(tmp_path / "x.png"), "--time-step", "3"]) == 1
@@ -262,7 +308,9 @@ def test_an_fps_no_movie_can_have_is_refused_naming_fps(tmp_path, capsys, ml_sam
 
 
 @pytest.mark.parametrize("where", ["folder", "unwritable"])
-def test_a_movie_output_that_cannot_be_written_is_one_line_before_rendering(tmp_path, capsys, ml_sample, where):
+def test_a_movie_output_that_cannot_be_written_is_one_line_before_rendering(
+    tmp_path, capsys, ml_sample, where
+):
     import os
 
     volume, tf = map(str, ml_sample)
@@ -270,11 +318,27 @@ def test_a_movie_output_that_cannot_be_written_is_one_line_before_rendering(tmp_
         (tmp_path / "m.mp4").mkdir()
         target, message = tmp_path / "m.mp4", f"{tmp_path / 'm.mp4'}: -o must be a file, not a folder"
     elif os.geteuid() == 0:  # root writes anywhere but in /proc
-        target, message = Path("/proc/volren-test.mp4"), "/proc/volren-test.mp4: cannot write in the folder /proc"
+        target, message = (
+            Path("/proc/volren-test.mp4"),
+            "/proc/volren-test.mp4: cannot write in the folder /proc",
+        )
     else:
         (tmp_path / "locked").mkdir(mode=0o500)
         target, message = tmp_path / "locked" / "m.mp4", "m.mp4: cannot write in the folder"
-    argv = ["movie", volume, "--tf", tf, "--renderer", RENDERER, "--size", "8", "--frames", "2", "-o", str(target)]
+    argv = [
+        "movie",
+        volume,
+        "--tf",
+        tf,
+        "--renderer",
+        RENDERER,
+        "--size",
+        "8",
+        "--frames",
+        "2",
+        "-o",
+        str(target),
+    ]
     assert main(argv) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("volren: error: ") and message in err[0], err
@@ -321,7 +385,8 @@ def test_a_gif_faster_than_it_can_play_is_refused_before_the_first_frame(tmp_pat
     assert main([*argv, "--fps", "240", "-o", str(tmp_path / "m.gif")]) == 1
     assert capsys.readouterr().err.splitlines() == [
         f"volren: error: {tmp_path / 'm.gif'}: a GIF plays at most 50 frames a second (its frames last whole "
-        "hundredths of a second, 2 at least in browsers); for 240 fps write an MP4"]
+        "hundredths of a second, 2 at least in browsers); for 240 fps write an MP4"
+    ]
     assert list(tmp_path.iterdir()) == []
     with movie_writer(tmp_path / "m.gif", GIF_MAX_FPS) as writer:
         for value in (0, 255):

@@ -21,7 +21,9 @@ def test_a_memory_size_that_is_no_size_is_a_usage_error_naming_memory(capsys, co
         main([*command, "--memory", size])
     prog = f"volren {command[0]}"
     assert exc.value.code == 2
-    assert capsys.readouterr().err.splitlines() == [f"{prog}: error: argument --memory: {message} (see {prog} --help)"]
+    assert capsys.readouterr().err.splitlines() == [
+        f"{prog}: error: argument --memory: {message} (see {prog} --help)"
+    ]
 
 
 def test_a_cluster_of_no_workers_is_refused_before_the_input_is_read(tmp_path, capsys):
@@ -30,7 +32,8 @@ def test_a_cluster_of_no_workers_is_refused_before_the_input_is_read(tmp_path, c
     argv = ["render", str(tmp_path / "nowhere.vti"), "-o", str(tmp_path / "x.png"), "--cluster", "local:0"]
     assert main(argv) == 1
     assert capsys.readouterr().err.splitlines() == [
-        "volren: error: --cluster local:N needs N in 1..256 worker processes, got '0'"]
+        "volren: error: --cluster local:N needs N in 1..256 worker processes, got '0'"
+    ]
 
 
 @pytest.mark.parametrize(("command", "overhead", "copies"), [
@@ -43,5 +46,5 @@ def test_memory_help_says_the_peak_is_the_fixed_overhead_plus_memory(capsys, com
     with pytest.raises(SystemExit):
         main([command, "--help"])
     help_text = " ".join(capsys.readouterr().out.split())
-    memory = help_text[help_text.rindex("--memory SIZE"):]
+    memory = help_text[help_text.rindex("--memory SIZE") :]
     assert overhead in memory and copies in memory and "its peak is about that plus SIZE" in memory

@@ -31,10 +31,21 @@ def _render(tmp_path, volume, *flags: str) -> list[str]:
 @pytest.mark.parametrize(
     "flags",
     [
-        ["--step", "0"], ["--step", "-1"], ["--step", "nan"], ["--step", "inf"], ["--step", "1e300"],
-        ["--size", "0"], ["--size", "100000"], ["--size", "10x0"], ["--size", "-5"],
-        ["--zoom", "0"], ["--zoom", "-1"], ["--zoom", "nan"],
-        ["--azimuth", "nan"], ["--elevation", "inf"], ["--elevation", "-inf"],
+        ["--step", "0"],
+        ["--step", "-1"],
+        ["--step", "nan"],
+        ["--step", "inf"],
+        ["--step", "1e300"],
+        ["--size", "0"],
+        ["--size", "100000"],
+        ["--size", "10x0"],
+        ["--size", "-5"],
+        ["--zoom", "0"],
+        ["--zoom", "-1"],
+        ["--zoom", "nan"],
+        ["--azimuth", "nan"],
+        ["--elevation", "inf"],
+        ["--elevation", "-inf"],
     ],
 )
 def test_out_of_domain_values_are_usage_errors_naming_the_flag(tmp_path, capsys, ml_volume, flags):
@@ -56,7 +67,9 @@ def test_out_of_domain_values_are_usage_errors_naming_the_flag(tmp_path, capsys,
         (["--zoom", "1e-300", "--parallel"], ["--zoom", "1e-06"]),
     ],
 )
-def test_absurd_values_are_one_line_errors_naming_the_flag_and_limit(tmp_path, capsys, ml_volume, flags, names):
+def test_absurd_values_are_one_line_errors_naming_the_flag_and_limit(
+    tmp_path, capsys, ml_volume, flags, names
+):
     assert main(_render(tmp_path, ml_volume, *flags)) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("volren: error: "), err
@@ -65,8 +78,12 @@ def test_absurd_values_are_one_line_errors_naming_the_flag_and_limit(tmp_path, c
 
 
 def test_a_scene_step_too_small_names_the_scene(tmp_path, capsys, ml_volume):
-    scene = {"version": 1, "volume": {"path": ml_volume}, "settings": {"step": 1e-9},
-             "transfer_function": TransferFunction1D.ramp(0, 1).to_dict()}
+    scene = {
+        "version": 1,
+        "volume": {"path": ml_volume},
+        "settings": {"step": 1e-9},
+        "transfer_function": TransferFunction1D.ramp(0, 1).to_dict(),
+    }
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(scene))
     assert main(["render", "--scene", str(path), "-o", str(tmp_path / "x.png")]) == 1
@@ -168,12 +185,16 @@ def test_settings_still_refuse_non_positive_steps():
 
 def test_settings_refuse_steps_past_the_longest():
     RenderSettings(step=MAX_STEP)
-    with pytest.raises(VolrenError, match=r"^render setting step must be at most 1000 \(in voxel lengths\), got 1e\+300$"):
+    with pytest.raises(
+        VolrenError, match=r"^render setting step must be at most 1000 \(in voxel lengths\), got 1e\+300$"
+    ):
         RenderSettings(step=1e300)
 
 
 def test_an_empty_renderer_name_is_refused_naming_the_flag(tmp_path, capsys, ml_volume):
     assert main(_render(tmp_path, ml_volume, "--renderer", "")) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["volren: error: --renderer: give a renderer name (see `volren renderers`), got an empty one"]
+    assert err == [
+        "volren: error: --renderer: give a renderer name (see `volren renderers`), got an empty one"
+    ]
     assert not (tmp_path / "x.png").exists()

@@ -33,7 +33,9 @@ class CountingRenderer(RendererBase):
     given: set-ups of a volume, TFs, frames."""
 
     name: ClassVar[str] = NAME
-    capabilities: ClassVar[Capabilities] = Capabilities(kinds={"uniform": KindSupport()}, summary="test double")
+    capabilities: ClassVar[Capabilities] = Capabilities(
+        kinds={"uniform": KindSupport()}, summary="test double"
+    )
     counts: ClassVar[dict[str, int]] = {}
 
     def _count(self, what: str) -> None:
@@ -91,7 +93,9 @@ def frames(monkeypatch) -> list[tuple[int, int]]:
 
 
 def tf(opacity: float) -> TransferFunction1D:
-    return TransferFunction1D.from_dict({"color": [[0, 1, 1, 1], [4, 1, 1, 1]], "opacity": [[0, 0], [4, opacity]]})
+    return TransferFunction1D.from_dict(
+        {"color": [[0, 1, 1, 1], [4, 1, 1, 1]], "opacity": [[0, 0], [4, opacity]]}
+    )
 
 
 VOLUME = UniformVolume(np.arange(5 * 6 * 7, dtype=np.float32).reshape(5, 6, 7) % 5, (1.0, 1.0, 1.0))
@@ -106,12 +110,16 @@ def test_volren_render_goes_through_draw(counting, prepares, frames):
 def test_volren_render_command_goes_through_draw(counting, prepares, frames, tmp_path, capsys):
     path = tmp_path / "v.vti"
     save_volume(VOLUME, path)
-    assert main(["render", str(path), "--renderer", NAME, "--size", "8x6", "-o", str(tmp_path / "o.png")]) == 0
+    assert (
+        main(["render", str(path), "--renderer", NAME, "--size", "8x6", "-o", str(tmp_path / "o.png")]) == 0
+    )
     assert prepares == [NAME] and frames == [(8, 6)]
     assert capsys.readouterr().out.startswith(f"{NAME}: 8x6 in ")
 
 
-def test_volren_movie_prepares_once_and_draws_each_frame_through_draw(counting, prepares, frames, tmp_path, capsys):
+def test_volren_movie_prepares_once_and_draws_each_frame_through_draw(
+    counting, prepares, frames, tmp_path, capsys
+):
     path = tmp_path / "v.vti"
     save_volume(VOLUME, path)
     assert main(["movie", str(path), "--renderer", NAME, "--size", "8", "--frames", "3",
@@ -152,7 +160,9 @@ def test_a_kept_drawing_gives_what_single_renders_give(counting):
                                                       zoom=1.5))  # fmt: skip
 
 
-def test_a_drawing_outside_a_with_block_releases_its_renderer_after_each_frame(counting, prepares, monkeypatch):
+def test_a_drawing_outside_a_with_block_releases_its_renderer_after_each_frame(
+    counting, prepares, monkeypatch
+):
     released: list[str] = []
     monkeypatch.setattr(CountingRenderer, "release", lambda self: released.append(self.name), raising=False)
     scene = Scene(None, tf(0.5), Camera.orbit(VOLUME.bounds), renderer=NAME, size=(4, 4), volume=VOLUME)

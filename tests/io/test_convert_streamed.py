@@ -210,8 +210,12 @@ def test_a_file_shorter_than_its_header_says_is_one_line(tmp_path, no_whole_read
 
 RAW_INPUTS = {  # name: (values, --raw-dtype, --raw-byte-order, the NRRD type of the same values)
     "uint16": (field("<u2"), "ushort", "little", "uint16"),
-    "big-endian float32 with NaN": (np.where(field("f4") > 100, np.nan, field("f4")).astype(">f4"), "float32", "big",
-                                    "float"),
+    "big-endian float32 with NaN": (
+        np.where(field("f4") > 100, np.nan, field("f4")).astype(">f4"),
+        "float32",
+        "big",
+        "float",
+    ),
     "int8 (kept as int16)": (field("i1") - 100, "int8", "little", "signed char"),
 }
 
@@ -239,7 +243,9 @@ def test_a_headerless_raw_input_streams_into_the_pyramid_of_its_nrrd(tmp_path, n
     for a, b in zip(got, expected, strict=True):
         assert a.dtype == b.dtype
         np.testing.assert_array_equal(a, b)
-    assert json.dumps(got_attrs) == json.dumps(expected_attrs).replace("d.nrrd", "d.raw")  # placement and brick ranges
+    assert json.dumps(got_attrs) == json.dumps(expected_attrs).replace(
+        "d.nrrd", "d.raw"
+    )  # placement and brick ranges
 
 
 def test_a_headerless_raw_input_of_the_wrong_size_is_one_line(tmp_path, capsys, no_whole_read):

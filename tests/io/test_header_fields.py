@@ -381,7 +381,9 @@ def test_metaimage_true_false_fields_are_words(tmp_path, value):
     and check the wrong size, so only True and False are accepted."""
     data = grid_values().astype("<i2").tobytes()
     (tmp_path / "v.raw").write_bytes(data)
-    header = "NDims = 3\nDimSize = 8 7 6\nElementType = MET_SHORT\nCompressedData = {}\nElementDataFile = v.raw\n"
+    header = (
+        "NDims = 3\nDimSize = 8 7 6\nElementType = MET_SHORT\nCompressedData = {}\nElementDataFile = v.raw\n"
+    )
     (tmp_path / "v.mhd").write_text(header.format(value))
     fails(tmp_path / "v.mhd", "CompressedData", "must be True or False")
     (tmp_path / "ok.mhd").write_text(header.format("False"))
@@ -430,7 +432,9 @@ def test_nrrd_ascii_reads_as_its_raw_twin(tmp_path):
 
     text = " ".join(str(v) for v in grid_values().reshape(-1)).encode()
     (tmp_path / "text.nrrd").write_bytes((nrrd_header("ascii") + "\n").encode() + text + b"\n")
-    (tmp_path / "raw.nrrd").write_bytes((nrrd_header() + "\n").encode() + grid_values().astype("<i2").tobytes())
+    (tmp_path / "raw.nrrd").write_bytes(
+        (nrrd_header() + "\n").encode() + grid_values().astype("<i2").tobytes()
+    )
     text_volume, raw_volume = load_volume(tmp_path / "text.nrrd"), load_volume(tmp_path / "raw.nrrd")
     assert np.array_equal(text_volume.values, raw_volume.values) and text_volume.values.dtype == np.int16
     assert text_volume.spacing == raw_volume.spacing == SEED_SPACING

@@ -16,20 +16,28 @@ DATA = (np.arange(64) % 251).astype(np.uint8)  # x fastest: values[0, 0, :] == 0
 def write(folder, fmt: str, spacing: str, origin: str):
     (folder / "d.raw").write_bytes(DATA.tobytes())
     if fmt == "mhd":
-        text = (f"ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_UCHAR\n"
-                f"ElementSpacing = {spacing}\nOffset = {origin}\nElementDataFile = d.raw\n")
+        text = (
+            f"ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_UCHAR\n"
+            f"ElementSpacing = {spacing}\nOffset = {origin}\nElementDataFile = d.raw\n"
+        )
     elif fmt == "nhdr":
-        text = (f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nspacings: {spacing}\nencoding: raw\n"
-                f"space origin: ({origin.replace(' ', ',')})\ndata file: d.raw\n")
+        text = (
+            f"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 4 4\nspacings: {spacing}\nencoding: raw\n"
+            f"space origin: ({origin.replace(' ', ',')})\ndata file: d.raw\n"
+        )
     elif fmt == "vtk":
-        text = (f"# vtk DataFile Version 3.0\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 4 4 4\n"
-                f"SPACING {spacing}\nORIGIN {origin}\nPOINT_DATA 64\nSCALARS s unsigned_char 1\n"
-                f"LOOKUP_TABLE default\n{' '.join(map(str, DATA))}\n")
+        text = (
+            f"# vtk DataFile Version 3.0\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 4 4 4\n"
+            f"SPACING {spacing}\nORIGIN {origin}\nPOINT_DATA 64\nSCALARS s unsigned_char 1\n"
+            f"LOOKUP_TABLE default\n{' '.join(map(str, DATA))}\n"
+        )
     else:
-        text = (f'<?xml version="1.0"?>\n<VTKFile type="ImageData" version="0.1" byte_order="LittleEndian">\n'
-                f'<ImageData WholeExtent="0 3 0 3 0 3" Origin="{origin}" Spacing="{spacing}">\n'
-                f'<Piece Extent="0 3 0 3 0 3"><PointData Scalars="s"><DataArray type="UInt8" Name="s" '
-                f'format="ascii">{" ".join(map(str, DATA))}</DataArray></PointData></Piece></ImageData></VTKFile>\n')
+        text = (
+            f'<?xml version="1.0"?>\n<VTKFile type="ImageData" version="0.1" byte_order="LittleEndian">\n'
+            f'<ImageData WholeExtent="0 3 0 3 0 3" Origin="{origin}" Spacing="{spacing}">\n'
+            f'<Piece Extent="0 3 0 3 0 3"><PointData Scalars="s"><DataArray type="UInt8" Name="s" '
+            f'format="ascii">{" ".join(map(str, DATA))}</DataArray></PointData></Piece></ImageData></VTKFile>\n'
+        )
     path = folder / f"grid.{fmt}"
     path.write_text(text)
     return path

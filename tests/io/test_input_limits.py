@@ -21,14 +21,21 @@ def ramp_points(n: int) -> list[list[float]]:
 
 
 def test_tf_points_up_to_the_limit_and_not_beyond():
-    assert len(TransferFunction1D(color=[[0, 1, 1, 1]], opacity=ramp_points(MAX_POINTS)).opacity_points) == MAX_POINTS
-    with pytest.raises(VolrenError, match=f"{MAX_POINTS + 1} points; a transfer function has at most {MAX_POINTS}"):
+    assert (
+        len(TransferFunction1D(color=[[0, 1, 1, 1]], opacity=ramp_points(MAX_POINTS)).opacity_points)
+        == MAX_POINTS
+    )
+    with pytest.raises(
+        VolrenError, match=f"{MAX_POINTS + 1} points; a transfer function has at most {MAX_POINTS}"
+    ):
         TransferFunction1D(color=[[0, 1, 1, 1]], opacity=ramp_points(MAX_POINTS + 1))
 
 
 def widget(i: int) -> TFWidget:
     """Box widgets that differ (no two alike)."""
-    return TFWidget("box", (1, 0, 0), 0.5, value_range=(i / (2 * MAX_WIDGETS), 1.0), gradient_range=(0.0, 1.0))
+    return TFWidget(
+        "box", (1, 0, 0), 0.5, value_range=(i / (2 * MAX_WIDGETS), 1.0), gradient_range=(0.0, 1.0)
+    )
 
 
 def test_2d_widgets_up_to_the_limit_and_not_beyond():
@@ -52,7 +59,10 @@ def test_nesting_depth_skips_strings():
 def test_deeply_nested_json_is_one_line_naming_the_file(tmp_path):
     path = tmp_path / "deep.json"
     path.write_text("[" * 100_000 + "]" * 100_000)
-    with pytest.raises(VolrenError, match=rf"deep\.json: arrays and objects nest 100000 deep; volren reads at most {MAX_DEPTH}"):
+    with pytest.raises(
+        VolrenError,
+        match=rf"deep\.json: arrays and objects nest 100000 deep; volren reads at most {MAX_DEPTH}",
+    ):
         load_transfer_function(path)
     path.write_text("[" * MAX_DEPTH + "]" * MAX_DEPTH)
     assert nesting_depth(path.read_text()) == MAX_DEPTH
@@ -72,8 +82,15 @@ def test_options_of_the_wrong_type_are_one_line(tmp_path, options):
     with pytest.raises(VolrenError, match="render setting options must map names to values"):
         RenderSettings(options=options)
     scene = tmp_path / "s.json"
-    scene.write_text(json.dumps({"version": 1, "transfer_function": {"color": [[0, 1, 1, 1]], "opacity": [[0, 1]]},
-                                 "settings": {"options": options if not isinstance(options, dict) else {"1": 2}}}))
+    scene.write_text(
+        json.dumps(
+            {
+                "version": 1,
+                "transfer_function": {"color": [[0, 1, 1, 1]], "opacity": [[0, 1]]},
+                "settings": {"options": options if not isinstance(options, dict) else {"1": 2}},
+            }
+        )
+    )
     if isinstance(options, dict):
         return  # JSON keys are strings: {1: "x"} cannot come from a file
     with pytest.raises(VolrenError, match=r"s\.json: render setting options must map names to values"):

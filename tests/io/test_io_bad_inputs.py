@@ -117,7 +117,9 @@ def test_nrrd_gzip_data_that_is_not_gzip(tmp_path):
     (tmp_path / "raw.nrrd").write_bytes(header + b"\n" + values)
     fails(tmp_path / "raw.nrrd", "the header says 'encoding: gzip' but the data is not gzip", "but 00 01")
     (tmp_path / "zlib.nrrd").write_bytes(header + b"\n" + zlib.compress(values))
-    fails(tmp_path / "zlib.nrrd", "the data is not gzip (it does not start with gzip's bytes 1f 8b but 78 9c)")
+    fails(
+        tmp_path / "zlib.nrrd", "the data is not gzip (it does not start with gzip's bytes 1f 8b but 78 9c)"
+    )
     (tmp_path / "d.raw").write_bytes(values)
     (tmp_path / "d.nhdr").write_bytes(header + b"data file: d.raw\n")
     fails(tmp_path / "d.nhdr", "the data in d.raw is not gzip")
@@ -142,7 +144,10 @@ def test_vti_extent_smaller_than_its_data(tmp_path, mode, compressor):
     assert load_volume(tmp_path / "v.vti").values.shape == (3, 4, 5)
     text = (tmp_path / "v.vti").read_bytes().replace(b'Extent="0 4 0 3 0 2"', b'Extent="0 4 0 2 0 2"')
     (tmp_path / "v.vti").write_bytes(text)
-    fails(tmp_path / "v.vti", "data array 's' holds 60 values, more than the 45 points x 1 of its piece's Extent")
+    fails(
+        tmp_path / "v.vti",
+        "data array 's' holds 60 values, more than the 45 points x 1 of its piece's Extent",
+    )
 
 
 # ------------------------------------------------------------------------------------ truncation
@@ -218,7 +223,8 @@ def test_truncated_dicom_slice(tmp_path):
     paths = write_series(tmp_path / "series", values, SPACING, ORIGIN)
     paths[2].write_bytes(paths[2].read_bytes()[:-10])
     fails(
-        tmp_path / "series", "slice slice002.dcm: truncated: its pixel element declares 70 bytes, the file holds 60"
+        tmp_path / "series",
+        "slice slice002.dcm: truncated: its pixel element declares 70 bytes, the file holds 60",
     )
     write_series(tmp_path / "mixed", values, SPACING, ORIGIN)
     write_series(tmp_path / "other", values[:, :4, :], SPACING, ORIGIN)
@@ -298,9 +304,22 @@ def test_raw_sizes(tmp_path):
     fails(tmp_path / "cube.raw", "headerless raw data of 8,192 bytes: a 16^3 int16 volume? give shape=(16, 16, 16), "
                                  "dtype='int16'")  # fmt: skip
     (tmp_path / "cube.raw").write_bytes(bytes(256**3))
-    fails(tmp_path / "cube.raw", "16,777,216 bytes: a 256^3 uint8 volume (or 128^3 float64)? give shape=(256, 256, 256)")
-    for alias, dtype in (("uchar", np.uint8), ("MET_SHORT", np.int16), ("float", np.float32), ("unsigned short", np.uint16)):
-        assert load_volume(tmp_path / "v.raw", shape=(5, 5, 8 // np.dtype(dtype).itemsize), dtype=alias).values.dtype == dtype
+    fails(
+        tmp_path / "cube.raw",
+        "16,777,216 bytes: a 256^3 uint8 volume (or 128^3 float64)? give shape=(256, 256, 256)",
+    )
+    for alias, dtype in (
+        ("uchar", np.uint8),
+        ("MET_SHORT", np.int16),
+        ("float", np.float32),
+        ("unsigned short", np.uint16),
+    ):
+        assert (
+            load_volume(
+                tmp_path / "v.raw", shape=(5, 5, 8 // np.dtype(dtype).itemsize), dtype=alias
+            ).values.dtype
+            == dtype
+        )
     fails(tmp_path / "v.raw", "unknown dtype 'quad'; give one of uint8, int8, uint16, int16, uint32, int32, uint64, int64, "
                               "float32, float64 (or a C, NRRD or MetaImage name", shape=(5, 5, 8), dtype="quad")  # fmt: skip
     fails(
@@ -320,7 +339,12 @@ def test_raw_sizes(tmp_path):
     fails(
         tmp_path / "v.raw", "byte_order must be one of", shape=(10, 5, 2), dtype="int16", byte_order="middle"
     )
-    fails(tmp_path / "v.raw", "shape must be three whole numbers from 1 to 2,147,483,647", shape=(10, 20), dtype="int16")
+    fails(
+        tmp_path / "v.raw",
+        "shape must be three whole numbers from 1 to 2,147,483,647",
+        shape=(10, 20),
+        dtype="int16",
+    )
     fails(tmp_path / "v.raw", "shape must be three whole numbers", shape=(10, 20, 1.5), dtype="int16")
     fails(tmp_path / "v.raw", "shape must be three whole numbers", shape=(10, 20, 10**400), dtype="int16")
     with pytest.raises(

@@ -281,8 +281,9 @@ def test_named_and_default_arrays(tmp_path, values_int16):
     np.testing.assert_array_equal(load_volume(tmp_path / "many.vti").values, values_int16 * 2)  # active
     np.testing.assert_array_equal(load_volume(tmp_path / "many.vti", "first").values, values_int16)
     with pytest.raises(
-        VolrenError, match=r"many.vti: no array named 'nope'; available: 'first', 'second', 'vectors:magnitude', "
-        "'vectors:x', 'vectors:y', 'vectors:z'"
+        VolrenError,
+        match=r"many.vti: no array named 'nope'; available: 'first', 'second', 'vectors:magnitude', "
+        "'vectors:x', 'vectors:y', 'vectors:z'",
     ):
         load_volume(tmp_path / "many.vti", "nope")
 

@@ -145,7 +145,9 @@ def test_a_scene_on_a_time_series_reads_its_step_from_the_series_and_saves_it_re
     assert scene.extra["time_series"] == {"path": str(series), "step": 2}
     save_scene(scene, project / "again.json")
     saved = json.loads((project / "again.json").read_text())
-    assert saved["time_series"] == {"path": "series", "step": 2} and saved["volume"]["path"] == "series/t2.vti"
+    assert (
+        saved["time_series"] == {"path": "series", "step": 2} and saved["volume"]["path"] == "series/t2.vti"
+    )
 
 
 @pytest.mark.parametrize(

@@ -65,7 +65,13 @@ def test_versions_below_one_do_not_exist(tmp_path, version):
 
 
 def test_an_opacity_unit_distance_of_true_is_not_a_number(tmp_path):
-    doc = {"version": 1, "kind": "1d", "color": [[0, 1, 1, 1]], "opacity": [[0, 1]], "opacity_unit_distance": True}
+    doc = {
+        "version": 1,
+        "kind": "1d",
+        "color": [[0, 1, 1, 1]],
+        "opacity": [[0, 1]],
+        "opacity_unit_distance": True,
+    }
     fails(write(tmp_path / "unit.json", doc), "opacity_unit_distance must be a number, got True")
 
 
@@ -81,11 +87,18 @@ def test_an_opacity_unit_distance_of_true_is_not_a_number(tmp_path):
         ('"just a string"', "a transfer function must be a JSON object, got str"),
         ({"version": 1, "opacity": [[0, 1]]}, "missing 'color' list"),
         ({"version": 1, "color": "red", "opacity": [[0, 1]]}, "colour points must be numbers"),
-        ({"version": 1, "color": [[0, "1", "0.5", "0"]], "opacity": [[0, 1]]}, "colour points must be numbers, got '1'"),
-        ({"version": 1, "color": [[0, 1, 1, 1]], "opacity": [[0, False], [1, True]]},
-         "opacity points must be numbers, got False"),
-        ({"version": 1, "color": [[0, 1, 1], [1, 1, 1, 1]], "opacity": [[0, 1]]},
-         "colour points must be a non-empty list of 4-tuples"),
+        (
+            {"version": 1, "color": [[0, "1", "0.5", "0"]], "opacity": [[0, 1]]},
+            "colour points must be numbers, got '1'",
+        ),
+        (
+            {"version": 1, "color": [[0, 1, 1, 1]], "opacity": [[0, False], [1, True]]},
+            "opacity points must be numbers, got False",
+        ),
+        (
+            {"version": 1, "color": [[0, 1, 1], [1, 1, 1, 1]], "opacity": [[0, 1]]},
+            "colour points must be a non-empty list of 4-tuples",
+        ),
         (
             {"version": 1, "color": [[0, 1, 1]], "opacity": [[0, 1]]},
             "colour points must be a non-empty list of 4-tuples",
@@ -268,12 +281,22 @@ def smooth_preset(n: int, space: str = "RGB") -> dict:
     t = (x - 1.0) / 999.0
     rgb = np.column_stack([x, 0.5 + 0.5 * np.sin(6 * t), t, 1 - t])
     points = np.column_stack([x, t**2, np.full(n, 0.3), np.full(n, 0.2)])
-    return {"Name": "big", "ColorSpace": space, "RGBPoints": rgb.ravel().tolist(), "Points": points.ravel().tolist()}
+    return {
+        "Name": "big",
+        "ColorSpace": space,
+        "RGBPoints": rgb.ravel().tolist(),
+        "Points": points.ravel().tolist(),
+    }
 
 
 def test_a_large_preset_matches_vtk_through_all_its_nodes(tmp_path):
     preset = smooth_preset(1500, "Lab")
-    preset["RGBPoints"][4 * 7 : 4 * 8] = [preset["RGBPoints"][4 * 6], 0.0, 1.0, 0.0]  # two nodes at one x: VTK keeps the last
+    preset["RGBPoints"][4 * 7 : 4 * 8] = [
+        preset["RGBPoints"][4 * 6],
+        0.0,
+        1.0,
+        0.0,
+    ]  # two nodes at one x: VTK keeps the last
     tf = load_transfer_function(write(tmp_path / "big.json", preset))
     assert_matches_vtk(tf, *vtk_functions(preset["RGBPoints"], preset["Points"], "Lab"), 0.0, 1001.0)
 
@@ -304,14 +327,24 @@ def test_a_preset_that_needs_too_many_points_is_refused_naming_the_file(tmp_path
     monkeypatch.setattr(paraview_presets, "MAX_POINTS", 300, raising=False)
     rng = np.random.default_rng(1)
     x = np.sort(rng.uniform(0, 1, 40))
-    wild = {"Name": "wild", "ColorSpace": "Lab", "RGBPoints": np.column_stack([x, rng.uniform(0, 1, (40, 3))]).ravel().tolist()}
+    wild = {
+        "Name": "wild",
+        "ColorSpace": "Lab",
+        "RGBPoints": np.column_stack([x, rng.uniform(0, 1, (40, 3))]).ravel().tolist(),
+    }
     fails(write(tmp_path / "wild.json", wild), "preset 'wild': its colour map needs more than 300 points")
-    fails(write(tmp_path / "long.json", smooth_preset(301)), "preset 'big': 'RGBPoints' has 301 points; a transfer function has at most 300")
+    fails(
+        write(tmp_path / "long.json", smooth_preset(301)),
+        "preset 'big': 'RGBPoints' has 301 points; a transfer function has at most 300",
+    )
 
 
 def test_a_lab_ciede2000_preset_of_many_points_is_refused(tmp_path):
     """VTK takes about 0.1 s per CIEDE2000 segment on every evaluation."""
-    fails(write(tmp_path / "c.json", smooth_preset(65, "Lab/CIEDE2000")), "65 RGBPoints in the Lab/CIEDE2000 colour space")
+    fails(
+        write(tmp_path / "c.json", smooth_preset(65, "Lab/CIEDE2000")),
+        "65 RGBPoints in the Lab/CIEDE2000 colour space",
+    )
 
 
 def test_nodes_on_straight_lines_are_dropped():

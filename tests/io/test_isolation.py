@@ -34,7 +34,8 @@ def test_a_script_without_a_main_guard_runs_once_and_loads_twice(tmp_path):
     render starts them), goes through a server (not a fork), which must not run the script again."""
     volume, _ = sample_paths("marschner_lobb")
     script = tmp_path / "example.py"
-    script.write_text(textwrap.dedent(f"""\
+    script.write_text(
+        textwrap.dedent(f"""\
         import threading, time
         from volren.io import load_volume
 
@@ -44,8 +45,11 @@ def test_a_script_without_a_main_guard_runs_once_and_loads_twice(tmp_path):
         threading.Thread(target=time.sleep, args=(30,), daemon=True).start()
         second = load_volume({str(volume)!r})
         print((first.values == second.values).all())
-    """))
-    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    """)
+    )
+    done = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=120
+    )
     assert (done.returncode, done.stdout.split(), done.stderr) == (0, ["True"], "")
     assert (tmp_path / "ran.txt").read_text() == "ran\n"
 
@@ -118,7 +122,9 @@ def test_the_server_reads_a_relative_path_in_the_callers_folder_and_environment(
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("VOLREN_ISOLATION_PROBE", "set after the server started")
     assert load_volume("here.vti").dimensions == load_volume(volume).dimensions
-    assert isolation.run_isolated("x", _environment, "VOLREN_ISOLATION_PROBE") == "set after the server started"
+    assert (
+        isolation.run_isolated("x", _environment, "VOLREN_ISOLATION_PROBE") == "set after the server started"
+    )
 
 
 def _environment(name: str) -> str | None:

@@ -79,8 +79,13 @@ def test_load_volume_and_render_take_an_ome_zarr_folder(tmp_path, volume):
     save_ome_zarr(volume, path, chunk=16)
     loaded = load_volume(path)
     np.testing.assert_array_equal(loaded.values, volume.values)
-    tf = {"version": 1, "kind": "1d", "color": [[0, 0.2, 0.4, 1], [4000, 1, 0.8, 0.1]], "opacity": [[0, 0], [4000, 0.6]],
-          "opacity_unit_distance": 4.0}
+    tf = {
+        "version": 1,
+        "kind": "1d",
+        "color": [[0, 0.2, 0.4, 1], [4000, 1, 0.8, 0.1]],
+        "opacity": [[0, 0], [4000, 0.6]],
+        "opacity_unit_distance": 4.0,
+    }
     kwargs = dict(renderer="reference", size=(12, 10), quality=None, step=1.0, tf=tf)
     np.testing.assert_array_equal(volren.render(path, level=0, **kwargs), volren.render(volume, **kwargs))
     # without a level or a TF: the level the view needs, and the default TF of the coarsest level
@@ -142,8 +147,15 @@ def test_time_and_channel_axes_with_one_entry_are_read_and_more_are_refused(tmp_
         group = zarr.open_group(str(tmp_path / name), mode="w", zarr_format=2)
         array = group.create_array("0", shape=shape, chunks=(1, 1, 4, 5, 6), dtype="float32")
         array[:] = np.arange(math.prod(shape), dtype=np.float32).reshape(shape)
-        group.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": a} for a in "tczyx"], "datasets": [
-            {"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1, 1, 3, 2, 1]}]}]}]
+        group.attrs["multiscales"] = [
+            {
+                "version": "0.4",
+                "axes": [{"name": a} for a in "tczyx"],
+                "datasets": [
+                    {"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [1, 1, 3, 2, 1]}]}
+                ],
+            }
+        ]
     one = load_volume(tmp_path / "one.zarr")
     assert one.dimensions == (6, 5, 4) and one.spacing == (1.0, 2.0, 3.0)
     with pytest.raises(VolrenError, match=r"axes \['t', 'c'\] hold \(1, 2\) entries"):
@@ -156,7 +168,9 @@ def test_a_level_too_large_for_memory_is_refused_naming_one_that_fits(tmp_path, 
     path = tmp_path / "cells.zarr"
     save_ome_zarr(volume, path, chunk=8, levels=3)
     monkeypatch.setattr(ome_zarr_io, "MAX_IN_MEMORY_BYTES", 2 * 15 * 10 * 18)
-    with pytest.raises(VolrenError, match="level 0 is 45.5 KiB, more than the 5.3 KiB allowed read whole; level 1 fits"):
+    with pytest.raises(
+        VolrenError, match="level 0 is 45.5 KiB, more than the 5.3 KiB allowed read whole; level 1 fits"
+    ):
         load_level(path, 0)
 
 
@@ -173,7 +187,10 @@ def test_volren_convert_writes_the_pyramid_and_refuses_what_it_cannot(tmp_path, 
     for argv, message in (
         ([str(source), str(out)], "exists; add --force"),
         ([str(source), str(tmp_path / "cells.ome")], "a folder named *.zarr"),
-        ([str(source), str(out), "--force", "--levels", "9"], "--levels 9 is too many: its 37x30x21 grid has at most 4"),
+        (
+            [str(source), str(out), "--force", "--levels", "9"],
+            "--levels 9 is too many: its 37x30x21 grid has at most 4",
+        ),
     ):
         assert main(["convert", *argv]) == 1
         assert message in capsys.readouterr().err
@@ -198,7 +215,9 @@ def test_the_level_drawn_is_the_finest_within_the_memory_allowed(tmp_path, volum
     flags = ["--renderer", "vtk", "--size", "16", "--quality", "default"]
     assert main(["render", str(path), "--level", "1", *flags, "--save-array", str(tmp_path / "a.npy")]) == 0
     capsys.readouterr()
-    assert main(["render", str(path), "--memory", "20KiB", *flags, "--save-array", str(tmp_path / "b.npy")]) == 0
+    assert (
+        main(["render", str(path), "--memory", "20KiB", *flags, "--save-array", str(tmp_path / "b.npy")]) == 0
+    )
     assert "volren: warning: cells.zarr: its full resolution is 45.5 KiB" in capsys.readouterr().err
     np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
     assert main(["render", str(path), *flags, "--memory", "500", "-o", str(tmp_path / "x.png")]) == 1

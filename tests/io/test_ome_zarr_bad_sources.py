@@ -162,7 +162,12 @@ def test_level_and_memory_are_refused_where_no_ome_zarr_input_is_read(image, tmp
     """A scene's own volume is read whole and raw data has no levels: --level or --memory would
     be ignored there."""
     scene = tmp_path / "scene.json"
-    tf = {"version": 1, "kind": "1d", "color": [[0, 0, 0, 1], [1500, 1, 1, 1]], "opacity": [[0, 0], [1500, 0.5]]}
+    tf = {
+        "version": 1,
+        "kind": "1d",
+        "color": [[0, 0, 0, 1], [1500, 1, 1, 1]],
+        "opacity": [[0, 0], [1500, 0.5]],
+    }
     scene.write_text(json.dumps({"version": 1, "volume": {"path": str(image)}, "transfer_function": tf,
                                  "renderer": "reference"}))  # fmt: skip
     for flags, flag in ((["--scene", str(scene), "--level", "1"], "--level"),
@@ -183,7 +188,9 @@ def test_a_broken_chunk_names_it_without_a_class_name(image):
     from volren.io.ome_zarr_io import load_level
 
     (image / "0" / "0.0.1").write_bytes(b"not a chunk")
-    with pytest.raises(VolrenError, match=rf"^{re.escape(str(image))}: level '0', brick 0.0.1: cannot be read: ") as exc:
+    with pytest.raises(
+        VolrenError, match=rf"^{re.escape(str(image))}: level '0', brick 0.0.1: cannot be read: "
+    ) as exc:
         load_level(image, 0)
     assert not CLASS_NAME.search(str(exc.value)), exc.value
     shutil.rmtree(image / "1")
@@ -200,4 +207,5 @@ def test_voxels_placed_beyond_any_camera_are_one_line_naming_the_level(image, re
     code, lines = render(image, "--renderer", "reference")
     assert code == 1 and len(lines) == 1
     assert lines[0].startswith(f"volren: error: {image}: level '{index}': its scale ") and lines[0].endswith(
-        " place voxels beyond +-1e+100"), lines
+        " place voxels beyond +-1e+100"
+    ), lines

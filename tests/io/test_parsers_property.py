@@ -56,7 +56,8 @@ odd = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True), st.integers(), st.text(max_size=4),
 )  # fmt: skip
 anything = st.recursive(
-    odd, lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=3), inner, max_size=3),
+    odd,
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=3), inner, max_size=3),
     max_leaves=8,
 )
 
@@ -194,7 +195,13 @@ def test_paraview_presets(folder, document, name):
 
 @SETTINGS
 @given(document=documents(scene))
-@example(document={"version": 1, "transfer_function": TF, "camera": {"position": [HUGE, 0, 5], "focal_point": [0, 0, 0]}})
+@example(
+    document={
+        "version": 1,
+        "transfer_function": TF,
+        "camera": {"position": [HUGE, 0, 5], "focal_point": [0, 0, 0]},
+    }
+)
 @example(document={"version": 1, "transfer_function": TF, "camera": {"azimuth": HUGE}})
 @example(document={"version": 1, "transfer_function": TF, "movie": {"orbit": HUGE}})
 def test_scene_json(folder, document):
@@ -285,7 +292,9 @@ def read_header_and_own_data(path: Path) -> None:
 
 
 @SETTINGS
-@given(fields=nrrd_fields, data=st.binary(max_size=40), numbers=words(["1", "2.5", "-3", "x", "1e400"], most=30))
+@given(
+    fields=nrrd_fields, data=st.binary(max_size=40), numbers=words(["1", "2.5", "-3", "x", "1e400"], most=30)
+)
 def test_nrrd_headers(folder, fields, data, numbers):
     header = "NRRD0004\n" + "".join(f"{key}: {text}\n" for key, text in fields.items())
     body = numbers.encode() if fields["encoding"] == "ascii" else data

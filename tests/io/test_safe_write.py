@@ -70,7 +70,9 @@ def test_save_image_failing_inside_the_encoder_keeps_the_old_png(tmp_path, monke
 def test_outputs_that_are_inputs_or_each_other_are_refused(tmp_path):
     volume = tmp_path / "v.vti"
     volume.write_bytes(b"data")
-    with pytest.raises(VolrenError, match=r"v\.vti: -o would overwrite the input volume; choose another file$"):
+    with pytest.raises(
+        VolrenError, match=r"v\.vti: -o would overwrite the input volume; choose another file$"
+    ):
         refuse_overwriting_inputs([("-o", str(volume))], [("input volume", str(volume))])
     link = tmp_path / "link.vti"
     link.symlink_to(volume)
@@ -108,7 +110,9 @@ def test_render_refuses_to_overwrite_its_inputs(sample, capsys, which):
 def test_render_refuses_the_scenes_volume_and_force_overrides(sample, tmp_path, capsys):
     volume, tf = sample
     scene = tmp_path / "s.json"
-    scene.write_text(json.dumps({"version": 1, "volume": {"path": "ml.vti"}, "transfer_function": "ml.tf.json"}))
+    scene.write_text(
+        json.dumps({"version": 1, "volume": {"path": "ml.vti"}, "transfer_function": "ml.tf.json"})
+    )
     before = open(volume, "rb").read()
     assert main(["render", "--scene", str(scene), "-o", str(volume), "--size", "8"]) == 1
     assert "would overwrite the scene's volume" in one_error_line(capsys)
@@ -139,7 +143,9 @@ def make_node(path, kind: str) -> None:
 
 @pytest.mark.usefixtures("opengl")
 @pytest.mark.parametrize("flag, name", [("-o", "out.png"), ("--save-array", "out.npy")])
-@pytest.mark.parametrize("kind, is_kind", [("FIFO", stat.S_ISFIFO), ("folder", stat.S_ISDIR), ("device", stat.S_ISCHR)])
+@pytest.mark.parametrize(
+    "kind, is_kind", [("FIFO", stat.S_ISFIFO), ("folder", stat.S_ISDIR), ("device", stat.S_ISCHR)]
+)
 def test_render_refuses_an_output_that_is_not_a_file_and_leaves_it(sample, tmp_path, capsys, flag, name, kind,
                                                                     is_kind):  # fmt: skip
     """A rename replaces whatever has the name: a FIFO or a device (`-o /dev/full`, as root)
@@ -148,8 +154,14 @@ def test_render_refuses_an_output_that_is_not_a_file_and_leaves_it(sample, tmp_p
     target = tmp_path / name
     make_node(target, kind)
     other = ["--save-array", str(tmp_path / "a.npy")] if flag == "-o" else ["-o", str(tmp_path / "a.png")]
-    assert main(["render", str(volume), "--tf", str(tf), "--size", "8", flag, str(target), *other, "--force"]) == 1
-    assert one_error_line(capsys) == f"volren: error: {target}: {flag} must be a file, not a {kind}; choose another path"
+    assert (
+        main(["render", str(volume), "--tf", str(tf), "--size", "8", flag, str(target), *other, "--force"])
+        == 1
+    )
+    assert (
+        one_error_line(capsys)
+        == f"volren: error: {target}: {flag} must be a file, not a {kind}; choose another path"
+    )
     assert is_kind(target.lstat().st_mode) and not (tmp_path / "a.png").exists() and leftovers(tmp_path) == []
 
 
@@ -217,7 +229,9 @@ def test_render_checks_the_folder_a_link_leads_to_before_rendering(sample, tmp_p
     import volren.cli.render_cmd as render_cmd
 
     volume, tf = sample
-    monkeypatch.setattr(render_cmd, "build_scene", lambda args: pytest.fail("loaded before the outputs were checked"))
+    monkeypatch.setattr(
+        render_cmd, "build_scene", lambda args: pytest.fail("loaded before the outputs were checked")
+    )
     link = tmp_path / name
     link.symlink_to(tmp_path / "gone" / name)
     other = ["--save-array", str(tmp_path / "a.npy")] if flag == "-o" else ["-o", str(tmp_path / "a.png")]

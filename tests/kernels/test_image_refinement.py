@@ -89,10 +89,16 @@ def test_faint_silhouettes_are_followed_to_the_pixel():
 
 
 @settings(max_examples=40, deadline=None)
-@given(width=st.integers(1, 40), height=st.integers(1, 40), stride_log=st.integers(0, 6),
-       tolerance=st.floats(0.0, 1.0), seed=st.integers(0, 2**16))
-def test_cast_pixels_are_exact_and_interpolated_ones_lie_between_the_corners(width, height, stride_log, tolerance,
-                                                                             seed):
+@given(
+    width=st.integers(1, 40),
+    height=st.integers(1, 40),
+    stride_log=st.integers(0, 6),
+    tolerance=st.floats(0.0, 1.0),
+    seed=st.integers(0, 2**16),
+)
+def test_cast_pixels_are_exact_and_interpolated_ones_lie_between_the_corners(
+    width, height, stride_log, tolerance, seed
+):
     """On any image: each pixel is cast at most once, cast pixels keep their value, and every
     other pixel lies within the range of the image (convex combination of cast pixels)."""
     rng = np.random.default_rng(seed)
@@ -102,7 +108,9 @@ def test_cast_pixels_are_exact_and_interpolated_ones_lie_between_the_corners(wid
     pixels = cast.cast
     assert count == len(pixels) == len(np.unique(pixels)) <= width * height
     assert np.array_equal(image[pixels], truth[pixels])
-    assert np.all(image >= truth[pixels].min(axis=0) - 1e-12) and np.all(image <= truth[pixels].max(axis=0) + 1e-12)
+    assert np.all(image >= truth[pixels].min(axis=0) - 1e-12) and np.all(
+        image <= truth[pixels].max(axis=0) + 1e-12
+    )
 
 
 def test_the_image_keeps_the_cast_rays_dtype():
@@ -154,4 +162,3 @@ def test_bad_strides(stride):
 @pytest.mark.parametrize("stride", [1, 2, 4, 8, 16, 32, 64])
 def test_strides_are_powers_of_two_up_to_64(stride):
     assert is_stride(stride)
-

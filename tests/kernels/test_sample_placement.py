@@ -45,4 +45,6 @@ def test_pixel_phases():
     np.testing.assert_array_equal(pixel_phases("midpoint", width, height, 7), np.zeros(15))
     expected = [0.0 if (i + j) % 2 == 0 else 0.5 for j in range(height) for i in range(width)]  # row 0 on top
     np.testing.assert_array_equal(pixel_phases("interleaved", width, height, 7), expected)
-    np.testing.assert_array_equal(pixel_phases("random", width, height, 7), np.random.default_rng(7).random(15))
+    np.testing.assert_array_equal(
+        pixel_phases("random", width, height, 7), np.random.default_rng(7).random(15)
+    )

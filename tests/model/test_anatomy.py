@@ -23,7 +23,12 @@ def columns(*vectors) -> np.ndarray:
     [
         (None, "LPS", (False, False, False), ("L", "P", "S")),
         (None, "RAS", (False, False, False), ("R", "A", "S")),
-        (columns([0, 1, 0], [0, 0, -1], [-1, 0, 0]), "LPS", (False, False, False), ("P", "I", "R")),  # sagittal
+        (
+            columns([0, 1, 0], [0, 0, -1], [-1, 0, 0]),
+            "LPS",
+            (False, False, False),
+            ("P", "I", "R"),
+        ),  # sagittal
         (columns([1, 0, 0], [0, 0, -1], [0, 1, 0]), "LPS", (False, False, False), ("L", "I", "P")),  # coronal
         (None, "LPS", (True, False, True), ("R", "P", "I")),  # axes reversed at load
         (columns([0.8, 0.6, 0], [-0.6, 0.8, 0], [0, 0, 1]), "LPS", (False, False, False), None),  # oblique
@@ -32,7 +37,9 @@ def columns(*vectors) -> np.ndarray:
         (None, "XYZ", (False, False, False), None),
     ],
 )
-def test_patient_axes_follow_the_direction_matrix_and_refuse_oblique_images(direction, space, flips, expected):
+def test_patient_axes_follow_the_direction_matrix_and_refuse_oblique_images(
+    direction, space, flips, expected
+):
     assert patient_axes(direction, space, flips) == expected
 
 

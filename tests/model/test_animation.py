@@ -40,7 +40,10 @@ def test_an_explicit_camera_orbits_about_its_view_up_at_constant_distance():
     movie = Animation(frames=4)
     cameras = [movie.camera(i, start, BOUNDS, 1.0) for i in range(4)]
     assert np.allclose([c.distance for c in cameras], start.distance)
-    offset, up = np.subtract(start.position, start.focal_point), np.asarray(start.view_up) / np.linalg.norm(start.view_up)
+    offset, up = (
+        np.subtract(start.position, start.focal_point),
+        np.asarray(start.view_up) / np.linalg.norm(start.view_up),
+    )
     half_turn = 2 * (offset @ up) * up - offset  # 180 degrees about the view-up axis
     assert np.allclose(np.subtract(cameras[2].position, start.focal_point), half_turn)
 
@@ -77,7 +80,8 @@ def _tf1d(points: list[list[float]], colors: list[list[float]], unit: float = 1.
 
 
 curve = st.lists(st.tuples(st.integers(-4, 4), st.floats(0, 1)), min_size=1, max_size=5).map(
-    lambda pts: sorted([[float(x), a] for x, a in pts], key=lambda p: p[0]))
+    lambda pts: sorted([[float(x), a] for x, a in pts], key=lambda p: p[0])
+)
 
 
 @settings(max_examples=60, deadline=None)
@@ -99,8 +103,14 @@ def test_blended_1d_tf_is_the_weighted_sum_everywhere_steps_included(a_pts, b_pt
 
 
 def _tf2d(opacity: float, center: float = 0.5) -> TransferFunction2D:
-    return TransferFunction2D((0, 1), (0, 2), [TFWidget.gaussian((center, 0.5), (0.1, 0.2), (1, 0, 0), opacity),
-                                               TFWidget.box((0.2, 0.4), (0, 1), (0, 1, 0), opacity / 2)])
+    return TransferFunction2D(
+        (0, 1),
+        (0, 2),
+        [
+            TFWidget.gaussian((center, 0.5), (0.1, 0.2), (1, 0, 0), opacity),
+            TFWidget.box((0.2, 0.4), (0, 1), (0, 1, 0), opacity / 2),
+        ],
+    )
 
 
 def test_blended_2d_tf_moves_each_widget_and_refuses_other_widget_sets():
@@ -124,8 +134,16 @@ def test_tf_keyframes_give_the_keyframe_itself_where_it_holds():
 
 def test_from_dict_reads_a_scene_movie():
     tf = TransferFunction1D.ramp(0, 1, 0.5).to_dict()
-    movie = Animation.from_dict({"frames": 10, "fps": 12, "keyframes": [
-        {"time": 1, "camera": {"azimuth": 90}}, {"time": 0, "camera": {"azimuth": 0}, "transfer_function": tf}]})
+    movie = Animation.from_dict(
+        {
+            "frames": 10,
+            "fps": 12,
+            "keyframes": [
+                {"time": 1, "camera": {"azimuth": 90}},
+                {"time": 0, "camera": {"azimuth": 0}, "transfer_function": tf},
+            ],
+        }
+    )
     assert movie.frames == 10 and movie.fps == 12 and [k.time for k in movie.camera_keys] == [0, 1]
     assert len(movie.tf_keys) == 1 and movie.seconds == 10 / 12
 
@@ -144,15 +162,30 @@ def test_from_dict_reads_a_scene_movie():
         ({"keyframes": [{"time": 2, "camera": {}}]}, "keyframe 0: 'time' must be a number in \\[0, 1\\]"),
         ({"keyframes": [{"time": 0, "camera": {"spin": 1}}]}, "keyframe 0: unknown camera keys"),
         ({"keyframes": [{"time": 0, "camera": {}, "zoom": 1}]}, "keyframe 0: unknown keys"),
-        ({"keyframes": [{"time": 0, "transfer_function": {"kind": "3d"}}]}, "keyframe 0: unknown transfer-function"),
+        (
+            {"keyframes": [{"time": 0, "transfer_function": {"kind": "3d"}}]},
+            "keyframe 0: unknown transfer-function",
+        ),
         ({"speed": 1}, "unknown keys \\['speed'\\]"),
         ({"frames": 10**400}, "movie: frames must be a whole number"),
         ({"fps": -(10**400)}, "movie: fps must be a number from 0.01 to 240"),
         ({"orbit": 10**400}, "movie: 'orbit' must be a finite number"),
-        ({"keyframes": [{"time": 10**400, "camera": {}}]}, "keyframe 0: 'time' must be a number in \\[0, 1\\]"),
-        ({"keyframes": [{"time": 0, "camera": {"azimuth": 10**400}}]}, "keyframe 0: camera azimuth must be a finite"),
-        ({"keyframes": [{"time": 0, "camera": {"elevation": -(10**400)}}]}, "keyframe 0: camera elevation must be"),
-        ({"keyframes": [{"time": 0, "camera": {"zoom": 10**400}}]}, "keyframe 0: camera zoom must be a finite"),
+        (
+            {"keyframes": [{"time": 10**400, "camera": {}}]},
+            "keyframe 0: 'time' must be a number in \\[0, 1\\]",
+        ),
+        (
+            {"keyframes": [{"time": 0, "camera": {"azimuth": 10**400}}]},
+            "keyframe 0: camera azimuth must be a finite",
+        ),
+        (
+            {"keyframes": [{"time": 0, "camera": {"elevation": -(10**400)}}]},
+            "keyframe 0: camera elevation must be",
+        ),
+        (
+            {"keyframes": [{"time": 0, "camera": {"zoom": 10**400}}]},
+            "keyframe 0: camera zoom must be a finite",
+        ),
     ],
 )
 def test_from_dict_errors_are_one_line_naming_the_part(data, message):
@@ -169,7 +202,10 @@ def test_from_dict_errors_are_one_line_naming_the_part(data, message):
         ({"orbit_degrees": -(10**400)}, "orbit_degrees must be a finite number"),
         ({"orbit_degrees": "90"}, "orbit_degrees must be a finite number"),
         ({"camera_keys": (CameraKey(10**400, OrbitView()),)}, "keyframe time must be a number in \\[0, 1\\]"),
-        ({"tf_keys": (TFKey(-(10**400), TransferFunction1D.ramp(0, 1)),)}, "keyframe time must be a number in"),
+        (
+            {"tf_keys": (TFKey(-(10**400), TransferFunction1D.ramp(0, 1)),)},
+            "keyframe time must be a number in",
+        ),
     ],
 )
 def test_numbers_beyond_a_float_given_to_animation_are_one_line_errors(fields, message):

@@ -318,7 +318,6 @@ def test_grid_arrays_are_read_only():
     assert "bricks" in repr(grid)
 
 
-
 @pytest.mark.parametrize("shape", [(17, 9, 33), (5, 12, 8), (2, 2, 2), (4, 7, 13)])
 @pytest.mark.parametrize("brick", [1, 3, 4])
 @pytest.mark.parametrize("reach", [1, 2])
@@ -389,5 +388,7 @@ def test_a_2d_tf_of_one_1d_widget_bounds_bricks_as_its_1d_tf():
     grid = BrickGrid.from_array(values, 4)
     tf = TransferFunction1D([[0, 1, 1, 1]], [[0.2, 0.0], [0.5, 0.8], [0.55, 0.1], [0.9, 0.0]])
     tf2 = TransferFunction2D((0.0, 1.0), (0.0, 3.0), [TFWidget.from_1d(tf, (0.0, 3.0))])
-    np.testing.assert_allclose(grid.max_opacity(tf2, pad=0.01), grid.max_opacity(tf, pad=0.01), atol=1e-15, rtol=0)
+    np.testing.assert_allclose(
+        grid.max_opacity(tf2, pad=0.01), grid.max_opacity(tf, pad=0.01), atol=1e-15, rtol=0
+    )
     assert grid.max_opacity(tf).max() > 0.5

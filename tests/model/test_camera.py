@@ -105,12 +105,18 @@ def test_rays_start_on_the_near_plane_through_their_pixel(parallel):
             np.testing.assert_allclose(ndc[..., 2], depth, rtol=0, atol=1e-9)
     if not parallel:
         toward = origins - np.asarray(camera.position)
-        np.testing.assert_allclose(directions, toward / np.linalg.norm(toward, axis=-1, keepdims=True), atol=1e-12)
-    one_origin, one_direction = camera.rays(width, height, x[2, 3], y[2, 3])  # a scalar pixel, as picking asks
+        np.testing.assert_allclose(
+            directions, toward / np.linalg.norm(toward, axis=-1, keepdims=True), atol=1e-12
+        )
+    one_origin, one_direction = camera.rays(
+        width, height, x[2, 3], y[2, 3]
+    )  # a scalar pixel, as picking asks
     assert one_origin.shape == (3,)
     np.testing.assert_allclose(one_direction, directions[2, 3], rtol=0, atol=1e-12)
     row_origins, _ = camera.rays(width, height, x[0], 17.0)  # broadcast: one row
-    np.testing.assert_allclose(row_origins, camera.rays(width, height, x[0], np.full(7, 17.0))[0], rtol=0, atol=0)
+    np.testing.assert_allclose(
+        row_origins, camera.rays(width, height, x[0], np.full(7, 17.0))[0], rtol=0, atol=0
+    )
 
 
 def test_operations_are_rigid_and_invertible():
@@ -120,7 +126,9 @@ def test_operations_are_rigid_and_invertible():
     assert np.isclose(camera.elevation(25).distance, camera.distance)
     assert np.isclose(camera.dolly(2.0).distance, camera.distance / 2)
     moved = camera.pan(1.0, 2.0)
-    assert np.allclose(np.subtract(moved.position, moved.focal_point), np.subtract(camera.position, camera.focal_point))
+    assert np.allclose(
+        np.subtract(moved.position, moved.focal_point), np.subtract(camera.position, camera.focal_point)
+    )
 
 
 def test_round_trip_and_validation():

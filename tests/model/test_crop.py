@@ -49,7 +49,9 @@ def test_mesh_crop_keeps_whole_tetrahedra_inside():
         crop_volume(mesh, (0.2, 0.3, 0.2, 0.3, 0.2, 0.3))
 
 
-@pytest.mark.parametrize("box", [(0, 1, 0, 1, 0), (0, 1, 0, 1, 0, float("nan")), (1, 0, 0, 1, 0, 1), "abcdef"])
+@pytest.mark.parametrize(
+    "box", [(0, 1, 0, 1, 0), (0, 1, 0, 1, 0, float("nan")), (1, 0, 0, 1, 0, 1), "abcdef"]
+)
 def test_malformed_boxes_are_one_line_errors(box):
     with pytest.raises(VolrenError) as info:
         check_box(box)

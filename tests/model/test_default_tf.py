@@ -75,7 +75,9 @@ def test_a_meshs_histogram_weighs_points_by_the_volume_of_their_tetrahedra():
     bins = len(histogram.counts)
     weights = {0.0: (1 / 6 + 3 / 6) / 4 + 1 / 6 / 4, 1.0: 2 * (1 / 6 + 3 / 6) / 4, 4.0: 3 / 6 / 4}
     for value, weight in weights.items():
-        index = min(int(np.searchsorted(histogram.edges, value, side="right")) - 1, bins - 1)  # np.histogram's bin
+        index = min(
+            int(np.searchsorted(histogram.edges, value, side="right")) - 1, bins - 1
+        )  # np.histogram's bin
         assert histogram.counts[index] == pytest.approx(weight)
     assert histogram.counts.sum() == pytest.approx(4 / 6)
 

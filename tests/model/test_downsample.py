@@ -9,8 +9,12 @@ from volren.model.downsample import downsample
 
 
 def _ramp(shape_zyx, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0)):
-    z, y, x = np.meshgrid(*(np.arange(n) * s for n, s in zip(shape_zyx, spacing[::-1], strict=True)), indexing="ij")
-    return UniformVolume((0.5 * x - 2.0 * y + 3.0 * z + 7.0).astype(np.float32), spacing=spacing, origin=origin)
+    z, y, x = np.meshgrid(
+        *(np.arange(n) * s for n, s in zip(shape_zyx, spacing[::-1], strict=True)), indexing="ij"
+    )
+    return UniformVolume(
+        (0.5 * x - 2.0 * y + 3.0 * z + 7.0).astype(np.float32), spacing=spacing, origin=origin
+    )
 
 
 @pytest.mark.parametrize("factor", [2, 4, 8])

@@ -37,10 +37,23 @@ def test_bad_settings(changes, message):
 
 def test_scene_round_trip_with_orbit_and_explicit_camera():
     tf = TransferFunction1D.ramp(0, 10, 0.5)
-    scene = Scene("data/head.mhd", tf, OrbitView(30, 20, 1.5, True), RenderSettings(step=0.3), "v", "reference", (64, 32))
+    scene = Scene(
+        "data/head.mhd",
+        tf,
+        OrbitView(30, 20, 1.5, True),
+        RenderSettings(step=0.3),
+        "v",
+        "reference",
+        (64, 32),
+    )
     again = Scene.from_dict(scene.to_dict())
     assert again.camera == scene.camera and again.settings == scene.settings
-    assert (again.volume_path, again.scalars, again.renderer, again.size) == ("data/head.mhd", "v", "reference", (64, 32))
+    assert (again.volume_path, again.scalars, again.renderer, again.size) == (
+        "data/head.mhd",
+        "v",
+        "reference",
+        (64, 32),
+    )
     camera = Camera.orbit((0, 1, 0, 1, 0, 1), 10, 10, 1)
     explicit = Scene.from_dict(Scene("x.vti", tf, camera).to_dict())
     assert explicit.camera == camera and explicit.resolved_camera() == camera

@@ -178,8 +178,9 @@ def test_repeated_points_with_equal_values_are_merged():
     check_adjacency(jump)
     # -0.0 and 0.0 are the same coordinate
     flipped = np.concatenate([points, np.where(points == 0.0, -0.0, points)])
-    assert np.array_equal(build_mesh(flipped, tets + pick, np.concatenate([values, values])).neighbors,
-                          shared.neighbors)
+    assert np.array_equal(
+        build_mesh(flipped, tets + pick, np.concatenate([values, values])).neighbors, shared.neighbors
+    )
 
 
 def test_gradients_are_exact_for_a_linear_field():

@@ -36,7 +36,9 @@ def test_gaussian_formula():
     w = TFWidget.gaussian((10.0, 2.0), (2.0, 0.5), RED, 0.8)
     # one standard deviation along each axis: exp(-1/2 - 1/2)
     got = w.opacity_at([10.0, 12.0, 8.0, 10.0, 14.0], [2.0, 2.5, 1.5, 3.0, 2.0])
-    np.testing.assert_allclose(got, [0.8, 0.8 * math.exp(-1), 0.8 * math.exp(-1), 0.8 * math.exp(-2), 0.8 * math.exp(-2)], rtol=1e-15)
+    np.testing.assert_allclose(
+        got, [0.8, 0.8 * math.exp(-1), 0.8 * math.exp(-1), 0.8 * math.exp(-2), 0.8 * math.exp(-2)], rtol=1e-15
+    )
 
 
 def test_box_is_constant_inside_closed_intervals_and_zero_outside():
@@ -156,7 +158,9 @@ def test_every_edit_changes_the_version_and_notifies():
     tf.set_opacity_unit_distance(3.0)
     versions += seen
     assert len(seen) == 7 and len(set(versions)) == 8 and versions == sorted(versions)
-    assert tf.value_range == (-1.0, 30.0) and tf.gradient_range == (0.0, 9.0) and tf.opacity_unit_distance == 3.0
+    assert (
+        tf.value_range == (-1.0, 30.0) and tf.gradient_range == (0.0, 9.0) and tf.opacity_unit_distance == 3.0
+    )
     disconnect()
     tf.set_opacity_unit_distance(4.0)
     assert len(seen) == 7
@@ -221,11 +225,17 @@ def test_widgets_are_immutable_and_replace_validates():
     "build, fragment",
     [
         (lambda: TFWidget("circle", RED, 0.5), "unknown widget type 'circle'"),
-        (lambda: TFWidget.gaussian((0, 1), (0, 1), RED, 0.5), "gaussian widget: width (standard deviations) must be positive"),
+        (
+            lambda: TFWidget.gaussian((0, 1), (0, 1), RED, 0.5),
+            "gaussian widget: width (standard deviations) must be positive",
+        ),
         (lambda: TFWidget.gaussian((0, -1), (1, 1), RED, 0.5), "center gradient must be >= 0"),
         (lambda: TFWidget.gaussian((0, 1, 2), (1, 1), RED, 0.5), "center must be a list of 2 numbers"),
         (lambda: TFWidget.gaussian((0, math.nan), (1, 1), RED, 0.5), "center must be finite"),
-        (lambda: TFWidget.box((2, 1), (0, 1), RED, 0.5), "box widget: value_range must be [lo, hi] with lo < hi"),
+        (
+            lambda: TFWidget.box((2, 1), (0, 1), RED, 0.5),
+            "box widget: value_range must be [lo, hi] with lo < hi",
+        ),
         (lambda: TFWidget.box((0, 1), (-1, 1), RED, 0.5), "gradient_range must not start below 0"),
         (lambda: TFWidget.triangle(0, 0, 1, RED, 0.5), "triangle widget: half_width must be positive"),
         (lambda: TFWidget.triangle(0, 1, -1, RED, 0.5), "gradient_max must be positive"),
@@ -261,7 +271,10 @@ def test_dict_round_trip_keeps_unknown_keys():
     assert data["widgets"][0] == {
         "type": "gaussian", "center": [10.0, 2.0], "width": [2.0, 0.5], "color": [1.0, 0.0, 0.0], "opacity": 0.8,
     }  # fmt: skip
-    assert data["widgets"][1]["value_range"] == [5.0, 15.0] and data["widgets"][1]["gradient_range"] == [1.0, 3.0]
+    assert data["widgets"][1]["value_range"] == [5.0, 15.0] and data["widgets"][1]["gradient_range"] == [
+        1.0,
+        3.0,
+    ]
     assert {k: data["widgets"][2][k] for k in ("value", "half_width", "gradient_max")} == {
         "value": 10.0, "half_width": 4.0, "gradient_max": 2.0,
     }  # fmt: skip
@@ -273,7 +286,9 @@ def test_dict_round_trip_keeps_unknown_keys():
     assert back.widgets[1].extra == {"label": "bone"}
     assert back.to_dict() == data
     assert transfer_function_from_dict(data) == tf
-    assert isinstance(transfer_function_from_dict(TransferFunction1D.ramp(0, 1).to_dict()), TransferFunction1D)
+    assert isinstance(
+        transfer_function_from_dict(TransferFunction1D.ramp(0, 1).to_dict()), TransferFunction1D
+    )
 
 
 @pytest.mark.parametrize(
@@ -285,7 +300,10 @@ def test_dict_round_trip_keeps_unknown_keys():
         ({"widgets": [[1, 2]]}, "widget 0: must be a JSON object"),
         ({"widgets": [{"color": [1, 1, 1], "opacity": 1}]}, "widget 0: missing 'type'"),
         ({"widgets": [{"type": "blob"}]}, "widget 0: unknown type 'blob'"),
-        ({"widgets": [{"type": "gaussian", "center": [0, 0], "color": [1, 1, 1], "opacity": 1}]}, "missing 'width'"),
+        (
+            {"widgets": [{"type": "gaussian", "center": [0, 0], "color": [1, 1, 1], "opacity": 1}]},
+            "missing 'width'",
+        ),
         ({"value_range": "all"}, "value_range must be a list of 2 numbers"),
     ],
 )

@@ -22,7 +22,9 @@ def test_kept_dtypes_stay_as_given(dtype):
     assert volume.mean_spacing == 2.0
 
 
-@pytest.mark.parametrize("dtype, kept", [(np.int8, np.int16), (np.int32, np.float64), (np.float16, np.float32)])
+@pytest.mark.parametrize(
+    "dtype, kept", [(np.int8, np.int16), (np.int32, np.float64), (np.float16, np.float32)]
+)
 def test_other_dtypes_are_converted_with_a_note(dtype, kept):
     volume = UniformVolume(np.ones((2, 2, 2), dtype=dtype), name="x.vti")
     assert volume.values.dtype == kept

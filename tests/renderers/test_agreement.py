@@ -156,6 +156,8 @@ def test_rays_inside_face_planes_are_not_lost(azimuth, parallel):
     image = render("vtk", volume, tf, camera)
     error = image_error(image, reference)
     far_off = int(np.count_nonzero(np.abs(image - reference).max(axis=2) > 0.3))
-    print(f"\nvtk along an axis (azimuth {azimuth}, parallel {parallel}): {error}, {far_off} pixels > 0.3 off")
+    print(
+        f"\nvtk along an axis (azimuth {azimuth}, parallel {parallel}): {error}, {far_off} pixels > 0.3 off"
+    )
     assert far_off == 0
     assert error.rmse <= 0.04

@@ -34,7 +34,9 @@ def test_defaults_fill_in_options_not_given():
 
 def test_given_values_are_kept_and_ints_become_floats_for_float_options():
     opts = parse(skip=False, size=16, alpha=1, oversampling=8, mode="midpoint", stride=64, seed=2**70)
-    assert opts["skip"] is False and opts["size"] == 16 and opts["mode"] == "midpoint" and opts["stride"] == 64
+    assert (
+        opts["skip"] is False and opts["size"] == 16 and opts["mode"] == "midpoint" and opts["stride"] == 64
+    )
     assert opts["alpha"] == 1.0 and type(opts["alpha"]) is float
     assert opts["oversampling"] == 8.0 and type(opts["oversampling"]) is float
     assert opts["seed"] == 2**70
@@ -97,14 +99,19 @@ def test_the_help_line_is_derived_from_the_spec():
     assert help_["oversampling"] == "pixels per pixel ['auto' or a number in [0.25, 8]; default auto]"
     assert help_["alpha"] == "opacity that stops a ray [a number in (0, 1]; default 0.999]"
     assert help_["stride"] == "ray spacing [1, 2, 4, 8, 16, 32 or 64; default 1]"
-    assert OptionSpec("mapper", None, "choice", "the mapper", choices=("a", "b")).describe() == \
-        "the mapper [one of 'a', 'b']"
+    assert (
+        OptionSpec("mapper", None, "choice", "the mapper", choices=("a", "b")).describe()
+        == "the mapper [one of 'a', 'b']"
+    )
 
 
 @pytest.mark.parametrize(
     "make, message",
     [
-        (lambda: OptionSpec("size", 8, "int", "entries", low=16), "option size: the default 8 is not an integer >= 16"),
+        (
+            lambda: OptionSpec("size", 8, "int", "entries", low=16),
+            "option size: the default 8 is not an integer >= 16",
+        ),
         (lambda: OptionSpec("mode", "a", "enum", "a mode"), "kind must be one of"),
         (lambda: OptionSpec("mode", "a", "choice", "a mode"), "choices go with kind 'choice'"),
         (lambda: OptionSpec("size", 8, "int", "entries", low=0, low_exclusive=True), "exclusive low bound"),
@@ -117,7 +124,9 @@ def test_a_bad_spec_is_refused_where_it_is_declared(make, message):
 
 def test_a_renderer_class_setting_option_help_by_hand_is_refused():
     with pytest.raises(VolrenError, match="declare `options`"):
-        type("HandHelp", (RendererBase,), {"options": SPECS[:1], "option_help": {"skip": "skip empty bricks"}})
+        type(
+            "HandHelp", (RendererBase,), {"options": SPECS[:1], "option_help": {"skip": "skip empty bricks"}}
+        )
 
 
 # ------------------------------------------------------------------------ the conformance kit
@@ -150,6 +159,9 @@ def test_the_kit_fails_options_parsed_outside_the_spec():
     class HandWrittenHelp(PlainRenderer):
         option_help = {"alpha": "the opacity drawn"}
 
-    assert any("bad values accepted (alpha, volren_kit_no_such_option)" in line for line in _options_check(OwnParsing))
+    assert any(
+        "bad values accepted (alpha, volren_kit_no_such_option)" in line
+        for line in _options_check(OwnParsing)
+    )
     assert any("not declared as a tuple of OptionSpec" in line for line in _options_check(Undeclared))
     assert any("not the one derived from `options`" in line for line in _options_check(HandWrittenHelp))

@@ -40,19 +40,40 @@ def test_volren_render_and_the_api(plain, tmp_path, capsys):
     path = tmp_path / "v.vti"
     save_volume(volume, path)
     out = tmp_path / "out.png"
-    assert main(["render", str(path), "-o", str(out), "--renderer", plain, "--size", "8", "--option", "alpha=0.25"]) == 0
+    assert (
+        main(
+            [
+                "render",
+                str(path),
+                "-o",
+                str(out),
+                "--renderer",
+                plain,
+                "--size",
+                "8",
+                "--option",
+                "alpha=0.25",
+            ]
+        )
+        == 0
+    )
     assert out.exists()
     assert capsys.readouterr().out.startswith("plain: 8x8 in ")
 
 
 def test_the_bench_sweeps_its_quality_axis(plain):
     configs = sweep.configs("uniform", curves=[plain])
-    assert [c.label for c in configs] == ["coarse", "fine"] and [c.settings().step for c in configs] == [1.0, 0.25]
+    assert [c.label for c in configs] == ["coarse", "fine"] and [c.settings().step for c in configs] == [
+        1.0,
+        0.25,
+    ]
     assert sweep.configs("tet", curves=[plain]) == []
     volume = marschner_lobb(9)
     tf = sample_transfer_functions()["marschner_lobb"]
     reference = np.zeros((8, 8, 4), np.float32)
-    row = run_bench.measure(configs[0], volume, tf, lambda a: Camera.orbit(volume.bounds, a), reference, 8, 3, 2.0)
+    row = run_bench.measure(
+        configs[0], volume, tf, lambda a: Camera.orbit(volume.bounds, a), reference, 8, 3, 2.0
+    )
     assert row["renderer"] == plain and row["settings"] == "coarse" and row["samples"] == 64
     assert row["rmse"] > 0
 

@@ -76,7 +76,9 @@ def test_skipping_is_exact_where_data_values_sit_on_a_peaks_foot(pre):
     camera = Camera.orbit(volume.bounds, 40, 25, zoom=1.1)
     options = {"brick_size": 2}
     on, r_on = draw(volume, tf, camera, step=0.5, preintegration=pre, options=options)
-    off, _ = draw(volume, tf, camera, step=0.5, preintegration=pre, options={**options, "empty_space_skipping": False})
+    off, _ = draw(
+        volume, tf, camera, step=0.5, preintegration=pre, options={**options, "empty_space_skipping": False}
+    )
     assert on[..., 3].max() > 0.3 and r_on.last_frame.counters["bricks_empty"] > 0
     faint = (off[..., 3] > 0.0) & (off[..., 3] < 0.05)  # the plateau: not quite transparent in the table
     assert faint.any()
@@ -88,7 +90,9 @@ def test_an_8_bit_volume_draws_as_its_float_copy():
     must not wrap around."""
     z, y, x = np.mgrid[0:12, 0:13, 0:14]
     values = ((np.sin(x / 2.0) * np.cos(y / 3.0) + z / 12.0) * 120 + 100).clip(0, 255).astype(np.uint8)
-    tf = TransferFunction1D([[0, 1, 0.5, 0.2], [255, 0.3, 0.6, 1.0]], [[60, 0.0], [120, 0.8], [200, 0.1]], 2.0)
+    tf = TransferFunction1D(
+        [[0, 1, 0.5, 0.2], [255, 0.3, 0.6, 1.0]], [[60, 0.0], [120, 0.8], [200, 0.1]], 2.0
+    )
     camera = Camera.orbit((0, 13, 0, 12, 0, 11), 30, 20)
     eight, renderer = draw(UniformVolume(values), tf, camera, step=0.5)
     wide, _ = draw(UniformVolume(values.astype(np.float32)), tf, camera, step=0.5)
@@ -241,12 +245,16 @@ def test_adaptive_refinement_casts_fewer_rays_near_the_full_image():
     camera = Camera.orbit(volume.bounds, 25, 35, zoom=1.2)
     w, h = 96, 80
     full, _ = draw(volume, SMOOTH_TF, camera, (w, h))
-    refined, renderer = draw(volume, SMOOTH_TF, camera, (w, h), options={"image_stride": 8, "refine_tolerance": 0.05})
+    refined, renderer = draw(
+        volume, SMOOTH_TF, camera, (w, h), options={"image_stride": 8, "refine_tolerance": 0.05}
+    )
     rays = renderer.last_frame.counters["rays_cast"]
     assert rays < 0.5 * w * h
     err = image_error(refined, full)
     assert err.rmse < 2e-3 and err.max_abs < 0.03
     np.testing.assert_array_equal(refined[..., 3] > 0, full[..., 3] > 0)
-    finer, renderer = draw(volume, SMOOTH_TF, camera, (w, h), options={"image_stride": 8, "refine_tolerance": 0.01})
+    finer, renderer = draw(
+        volume, SMOOTH_TF, camera, (w, h), options={"image_stride": 8, "refine_tolerance": 0.01}
+    )
     assert renderer.last_frame.counters["rays_cast"] > rays
     assert image_error(finer, full).rmse < 0.2 * err.rmse

@@ -60,7 +60,9 @@ def lattice_tets(dims, spacing, kind=6, skip=()):
     for kk, jj, ii in cubes:
         if (ii, jj, kk) in skip:
             continue
-        c = {(a, b, e): ((kk + e) * ny + jj + b) * nx + ii + a for a in (0, 1) for b in (0, 1) for e in (0, 1)}
+        c = {
+            (a, b, e): ((kk + e) * ny + jj + b) * nx + ii + a for a in (0, 1) for b in (0, 1) for e in (0, 1)
+        }
         even = [(0, 0, 0), (1, 1, 0), (1, 0, 1), (0, 1, 1)]
         odd = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)]
         centre, corners = (odd, even) if (ii + jj + kk) % 2 == 0 else (even, odd)
@@ -127,7 +129,9 @@ def test_homogeneous_box_matches_slab_lengths(parallel):
 def test_homogeneous_box_camera_inside():
     vol = UniformVolume(np.full((5, 5, 5), 1.0), spacing=(1.0, 0.5, 2.0))
     tf = TransferFunction1D.constant(0.2, (1.0, 1.0, 1.0), opacity_unit_distance=1.5)
-    cam = Camera(position=(2.0, 1.0, 4.0), focal_point=(2.0, 1.0, 0.0), clipping_range=(0.1, 50.0)).azimuth(20)
+    cam = Camera(position=(2.0, 1.0, 4.0), focal_point=(2.0, 1.0, 0.0), clipping_range=(0.1, 50.0)).azimuth(
+        20
+    )
     rgba, _ = render(vol, tf, cam, 16)
     L = box_path_lengths(cam, 16, 16, vol.bounds)
     np.testing.assert_allclose(rgba[..., 3], 1 - 0.8 ** (L / 1.5), atol=1e-9, rtol=0)
@@ -189,13 +193,17 @@ def test_ramp_linear_opacity_with_kink():
     rgba, _ = render(vol, tf, x_camera(vol, True), 5)
     alpha = 1 - math.exp(-optical_depth_linear_opacity(a_pts, 0.0, vol.bounds[1]) / d)
     np.testing.assert_allclose(rgba[..., 3], alpha, atol=1e-9, rtol=0)
-    np.testing.assert_allclose(rgba[..., :3], alpha * np.array([0.2, 0.7, 1.0]) * np.ones((5, 5, 1)), atol=1e-9)
+    np.testing.assert_allclose(
+        rgba[..., :3], alpha * np.array([0.2, 0.7, 1.0]) * np.ones((5, 5, 1)), atol=1e-9
+    )
 
 
 def test_ramp_opacity_step_is_integrated_exactly():
     """Duplicated control points make a step in opacity: the ray is cut exactly there."""
     vol = ramp_volume()
-    tf = TransferFunction1D([[0, 1, 1, 1]], [[0, 0.1], [1.3, 0.1], [1.3, 0.7], [2.5, 0.7]], opacity_unit_distance=1)
+    tf = TransferFunction1D(
+        [[0, 1, 1, 1]], [[0, 0.1], [1.3, 0.1], [1.3, 0.7], [2.5, 0.7]], opacity_unit_distance=1
+    )
     rgba, _ = render(vol, tf, x_camera(vol, True), 4)
     od = -math.log(0.9) * 1.3 - math.log(0.3) * (vol.bounds[1] - 1.3)
     np.testing.assert_allclose(rgba[..., 3], 1 - math.exp(-od), atol=1e-9, rtol=0)
@@ -428,7 +436,9 @@ def test_invariants_on_random_volumes(seed):
     xs = np.sort(rng.uniform(-4, 8, 5))
     tf = TransferFunction1D(np.column_stack([xs, rng.random((5, 3))]), np.column_stack([xs, rng.random(5)]),
                             opacity_unit_distance=float(rng.uniform(0.1, 3)))  # fmt: skip
-    cam = Camera.orbit(vol.bounds, *rng.uniform(-180, 180, 2), zoom=float(rng.uniform(0.7, 2)), parallel=seed % 2 == 1)
+    cam = Camera.orbit(
+        vol.bounds, *rng.uniform(-180, 180, 2), zoom=float(rng.uniform(0.7, 2)), parallel=seed % 2 == 1
+    )
     for mode in BlendMode:
         for shade in (False, True):
             img, r = render(vol, tf, cam, 12, 10, blend_mode=mode, shade=shade)
@@ -472,6 +482,7 @@ def test_iron_protein_scene():
     if not path.exists():
         pytest.skip(f"{SHARED_MISSING}: {path} not found")
     import pyvista as pv
+
     grid_ = pv.read(path)
     grid_.set_active_scalars("scalars")
     vol = UniformVolume(np.asarray(grid_.active_scalars).reshape(tuple(grid_.dimensions)[::-1]),

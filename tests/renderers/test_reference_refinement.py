@@ -23,12 +23,16 @@ def test_a_1d_tf_is_cut_at_its_breakpoints_in_ray_order():
     tf = TransferFunction1D([[0.0, 1.0, 1.0, 1.0]], [[1.0, 0.0], [2.5, 0.5], [3.5, 0.2]])
     offsets, cuts = compute_cuts(TA, TB, P, G, 2, pack_tf(tf), None, False, 0.0)
     np.testing.assert_array_equal(offsets, [0, 4, 7])
-    np.testing.assert_array_equal(cuts, [1.0, 2.5, 3.5, 4.0, 0.5, 1.5, 2.0])  # the second runs down from s = 4
+    np.testing.assert_array_equal(
+        cuts, [1.0, 2.5, 3.5, 4.0, 0.5, 1.5, 2.0]
+    )  # the second runs down from s = 4
 
 
 def test_a_2d_tf_is_cut_at_its_widgets_value_edges_in_ray_order():
     """|grad s| = 1 lies inside the box's gradient band, so only its value edges cut."""
-    tf = TransferFunction2D((0.0, 4.0), (0.0, 3.0), [TFWidget.box((1.0, 3.0), (0.5, 2.0), (0.1, 0.8, 0.3), 0.4)])
+    tf = TransferFunction2D(
+        (0.0, 4.0), (0.0, 3.0), [TFWidget.box((1.0, 3.0), (0.5, 2.0), (0.1, 0.8, 0.3), 0.4)]
+    )
     offsets, cuts = compute_cuts(TA, TB, P, G, 2, None, pack_tf2d(tf), False, 0.0)
     np.testing.assert_array_equal(offsets, [0, 3, 5])
     np.testing.assert_array_equal(cuts, [1.0, 3.0, 4.0, 1.0, 2.0])

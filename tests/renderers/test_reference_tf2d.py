@@ -70,7 +70,9 @@ def test_kernel_evaluates_1d_widgets_as_the_model():
     tinted = TFWidget("1d", (0.5, 0.8, 1.0), 0.7, gradient_range=(1.0, 3.0), color_points=[[0, 0.2, 0.3, 0.4]],
                       opacity_points=[[0.3, 0], [0.9, 1]])  # fmt: skip
     gaussian = TFWidget.gaussian((0.5, 1.0), (0.3, 0.7), (0.9, 0.2, 0.1), 0.6)
-    tf = TransferFunction2D((-1.0, 2.0), (0.0, 3.0), [gaussian, TFWidget.from_1d(stepped, (0.5, 2.0)), tinted])
+    tf = TransferFunction2D(
+        (-1.0, 2.0), (0.0, 3.0), [gaussian, TFWidget.from_1d(stepped, (0.5, 2.0)), tinted]
+    )
     packed = pack_tf2d(tf)
     rng = np.random.default_rng(1)
     s = np.concatenate([rng.uniform(-2, 3, 600), [0.1, 5.0, 0.5, 1.2]])
@@ -88,7 +90,9 @@ def test_the_2d_tf_made_from_a_1d_tf_renders_the_1d_image(shade):
     draws: both converge to the reference's tolerance (1e-5 per ray), so they agree to about it."""
     vol = marschner_lobb(17)
     lo, hi = vol.value_range
-    tf1 = TransferFunction1D(color_stops(VIRIDIS, lo, hi), [[lo, 0.0], [lo + 0.1 * (hi - lo), 0.0], [hi, 0.6]], 0.1)
+    tf1 = TransferFunction1D(
+        color_stops(VIRIDIS, lo, hi), [[lo, 0.0], [lo + 0.1 * (hi - lo), 0.0], [hi, 0.6]], 0.1
+    )
     tf2 = seeded_2d(tf1, (lo, hi), 1.0)  # gradients above 1 clamp to the top of the band
     cam = Camera.orbit(vol.bounds, 30, 20)
     img1, _ = render(vol, tf1, cam, 24, shade=shade)
@@ -105,7 +109,17 @@ def two_boxes(gmax: float) -> tuple[TransferFunction2D, TransferFunction1D]:
         [TFWidget.box((0.2, 0.45), (0.0, gmax), RED, 0.3), TFWidget.box((0.6, 0.8), (0.0, gmax), BLUE, 0.7)],
         opacity_unit_distance=1.5,
     )
-    opacity = [[0, 0], [0.2, 0], [0.2, 0.3], [0.45, 0.3], [0.45, 0], [0.6, 0], [0.6, 0.7], [0.8, 0.7], [0.8, 0]]
+    opacity = [
+        [0, 0],
+        [0.2, 0],
+        [0.2, 0.3],
+        [0.45, 0.3],
+        [0.45, 0],
+        [0.6, 0],
+        [0.6, 0.7],
+        [0.8, 0.7],
+        [0.8, 0],
+    ]
     tf1 = TransferFunction1D([[0.45, 1, 0, 0], [0.45, 0, 0, 1]], opacity, opacity_unit_distance=1.5)
     return tf2, tf1
 
@@ -176,7 +190,9 @@ def test_ramp_with_shading_matches_the_1d_path():
     """A constant gradient shades every sample alike, so shading keeps both exact."""
     vol = ramp()
     cam = Camera.orbit(vol.bounds, 35, 20)
-    tf2 = TransferFunction2D((0.0, 7.0), (0.0, 6.0), [TFWidget.box((1.0, 5.0), (2.0, 3.0), (0.9, 0.6, 0.3), 0.5)])
+    tf2 = TransferFunction2D(
+        (0.0, 7.0), (0.0, 6.0), [TFWidget.box((1.0, 5.0), (2.0, 3.0), (0.9, 0.6, 0.3), 0.5)]
+    )
     tf1 = TransferFunction1D([[0, 0.9, 0.6, 0.3]], [[1, 0], [1, 0.5], [5, 0.5], [5, 0]])
     img2, _ = render(vol, tf2, cam, 16, shade=True, specular=0.4)
     img1, _ = render(vol, tf1, cam, 16, shade=True, specular=0.4)
@@ -232,14 +248,18 @@ def test_2d_tf_is_refused_on_tets_and_outside_composite():
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
     r = ReferenceRenderer()
     r.set_volume(TetVolume(pts, np.array([[0, 1, 2, 3]]), np.ones(4)))
-    with pytest.raises(VolrenError, match="^renderer reference does not support 2D transfer functions on tet volumes$"):
+    with pytest.raises(
+        VolrenError, match="^renderer reference does not support 2D transfer functions on tet volumes$"
+    ):
         r.set_transfer_function(tf)
     r = ReferenceRenderer()
     vol = random_volume()
     r.set_volume(vol)
     r.set_transfer_function(tf)
     r.set_settings(RenderSettings(blend_mode="maximum"))
-    with pytest.raises(VolrenError, match="has no maximum blend mode with 2D transfer functions on uniform volumes"):
+    with pytest.raises(
+        VolrenError, match="has no maximum blend mode with 2D transfer functions on uniform volumes"
+    ):
         r.render(Camera.orbit(vol.bounds), 4, 4)
     caps = ReferenceRenderer.capabilities
     assert caps.unsupported_reason("uniform", 2, RenderSettings(shade=True)) is None

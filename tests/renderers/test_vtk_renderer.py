@@ -71,12 +71,16 @@ def test_homogeneous_box_matches_the_closed_form(vtk_renderer, mapper, parallel)
     # Interior pixels: 8-bit rounding and the mapper's last partial step. Silhouette pixels may
     # differ by more (a ray that grazes the box), so they are bounded through the RMSE.
     inside = box_path_lengths(camera, 48, 40, volume.bounds) > 2.0
-    print(f"{mapper} parallel={parallel}: rmse {rmse(image, expected):.4f}, interior max {error[inside].max():.4f}")
+    print(
+        f"{mapper} parallel={parallel}: rmse {rmse(image, expected):.4f}, interior max {error[inside].max():.4f}"
+    )
     assert np.median(error[inside]) <= MEDIAN_BOUND[mapper]
     assert rmse(image, expected) < 0.015
 
 
-@pytest.mark.parametrize("mapper, preintegration", [("raycast", False), ("raycast", True), ("projected", False)])
+@pytest.mark.parametrize(
+    "mapper, preintegration", [("raycast", False), ("raycast", True), ("projected", False)]
+)
 def test_homogeneous_tet_box_matches_the_closed_form(vtk_renderer, mapper, preintegration):
     volume = lattice_tets(6, spacing=(1.0, 1.2, 0.8))
     tf = TransferFunction1D.constant(0.3, (1.0, 0.5, 0.25), opacity_unit_distance=1.5)
@@ -88,7 +92,9 @@ def test_homogeneous_tet_box_matches_the_closed_form(vtk_renderer, mapper, prein
     lengths = box_path_lengths(camera, 40, 40, volume.bounds)
     expected = homogeneous_image(lengths, (1.0, 0.5, 0.25), 0.3, 1.5)
     error = np.abs(image - expected)
-    print(f"{mapper} pre={preintegration}: rmse {rmse(image, expected):.4f}, median {np.median(error[lengths > 1]):.4f}")
+    print(
+        f"{mapper} pre={preintegration}: rmse {rmse(image, expected):.4f}, median {np.median(error[lengths > 1]):.4f}"
+    )
     # The extinction conversion (a -> -ln(1 - a)) makes VTK's unstructured mappers draw our
     # model: without it the alpha would be 1 - exp(-0.3 L / 1.5), far below the expected value.
     assert np.median(error[lengths > 1]) < 0.01

@@ -75,7 +75,9 @@ def test_extinction_nodes_keep_linear_interpolation_close(points):
 
 
 def test_steps_stay_steps():
-    tf = TransferFunction1D([[0, 0, 0, 0], [5, 1, 1, 1], [5, 0, 0, 0], [9, 0, 0, 0]], [[0, 0.2], [5, 0.2], [5, 0.8]])
+    tf = TransferFunction1D(
+        [[0, 0, 0, 0], [5, 1, 1, 1], [5, 0, 0, 0], [9, 0, 0, 0]], [[0, 0.2], [5, 0.2], [5, 0.8]]
+    )
     for build in (uniform_functions, unstructured_functions):
         color, opacity = build(tf, 0.0)
         convert = (lambda a: a) if build is uniform_functions else extinction
@@ -106,7 +108,9 @@ def test_the_masked_table_is_the_tf_per_sample_where_all_corners_are_finite():
     xs = -20.0 + (np.arange(MASK_COLUMNS) + 0.5) / MASK_COLUMNS * 140.0
     rgb, alpha = TF.sample(xs)
     np.testing.assert_allclose(table[-1, :, :3], rgb, atol=1e-6)
-    np.testing.assert_allclose(table[-1, :, 3], 1.0 - (1.0 - np.minimum(alpha, MAX_OPACITY)) ** 0.25, atol=1e-6)
+    np.testing.assert_allclose(
+        table[-1, :, 3], 1.0 - (1.0 - np.minimum(alpha, MAX_OPACITY)) ** 0.25, atol=1e-6
+    )
     image = masked_function(TF, (-20.0, 120.0), 0.5)
     assert image.GetDimensions() == (MASK_COLUMNS, MASK_ROWS, 1)
     assert image.GetPointData().GetScalars().GetNumberOfComponents() == 4
@@ -119,8 +123,9 @@ def test_large_tfs_reach_vtk_node_for_node():
     xs = np.linspace(0.0, 1.0, n)
     xs[100] = xs[101]  # a step
     alphas = (np.arange(n) % 2) * 0.5
-    tf = TransferFunction1D(color=np.stack([xs, alphas, 1 - alphas, alphas], axis=1),
-                            opacity=np.stack([xs, alphas], axis=1))
+    tf = TransferFunction1D(
+        color=np.stack([xs, alphas, 1 - alphas, alphas], axis=1), opacity=np.stack([xs, alphas], axis=1)
+    )
     color, opacity = uniform_functions(tf, 0.0)
     assert color.GetSize() == n and opacity.GetSize() == n
     node = [0.0] * 6

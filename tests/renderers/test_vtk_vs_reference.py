@@ -65,7 +65,9 @@ IRONPROT_BOUNDS = {"smooth": 0.002, "opaque": 0.015, "spiky": 0.06}
 
 @pytest.mark.parametrize("style", sorted(IRONPROT_BOUNDS))
 def test_uniform_ironprot(shared_data, reference_folder, style):
-    volume, tf, camera, reference = scene(shared_data, reference_folder, "uniform/ironProt.vtk", f"ironProt-{style}")
+    volume, tf, camera, reference = scene(
+        shared_data, reference_folder, "uniform/ironProt.vtk", f"ironProt-{style}"
+    )
     coarse = image_error(vtk_image(volume, tf, camera, step=0.5), reference)
     fine = image_error(vtk_image(volume, tf, camera, step=0.125), reference)
     print(f"\nironProt-{style} vtk vs reference: step 0.5 {coarse}; step 0.125 {fine}")

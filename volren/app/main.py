@@ -193,7 +193,10 @@ def _screenshot(window, input, tf, scalars, renderer, path: Path, timeout_s: flo
     timer.setSingleShot(True)
     timer.timeout.connect(lambda: finish(1, f"no full-quality frame within {timeout_s:g} s"))
     timer.start(int(timeout_s * 1000))
-    with _guarded(lambda message: finish(3, ""), traceback), _quit_on_sigint(lambda: finish(130, "interrupted")):
+    with (
+        _guarded(lambda message: finish(3, ""), traceback),
+        _quit_on_sigint(lambda: finish(130, "interrupted")),
+    ):
         window.show()
         window.files.open_input(input, tf, scalars, renderer)
         if not outcome:

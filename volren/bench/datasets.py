@@ -54,6 +54,7 @@ def shared_folder(flag: str | os.PathLike | None, required: bool = True) -> Path
         return None
     return shared
 
+
 #: What --quick measures: one small grid and one small mesh, both bundled.
 QUICK_DATASETS = ("marschner_lobb", "hollow_cylinder")
 SAMPLE_CAMERA = (30.0, 20.0, 1.0)
@@ -151,7 +152,9 @@ def hard_datasets() -> dict[str, HardDataset]:
     return {name: HardDataset(name, case.kind) for name, case in CASES.items()}
 
 
-def select(names: Iterable[str] | None, shared: Path | None, quick: bool = False) -> list[Dataset | HardDataset]:
+def select(
+    names: Iterable[str] | None, shared: Path | None, quick: bool = False
+) -> list[Dataset | HardDataset]:
     """The datasets asked for by name (`hard`: every hard scene); by default every shared one and
     every sample (--quick: two samples)."""
     hard = hard_datasets()

@@ -108,7 +108,8 @@ _EARLY_TERMINATION_OFF = ("no_early_termination", "early termination off", {"ear
 
 VARIANTS: dict[str, tuple[Variant, ...]] = {
     "slicer": _two_switches(
-        ("no_empty_space", "empty-space skipping off", {"empty_space_skipping": False}), _EARLY_TERMINATION_OFF
+        ("no_empty_space", "empty-space skipping off", {"empty_space_skipping": False}),
+        _EARLY_TERMINATION_OFF,
     ),
     "tetra": _two_switches(
         ("no_transparent_skip", "transparent cells integrated", {"skip_transparent": False}),

@@ -156,15 +156,32 @@ def _vtk_uniform(steps: Iterable[float]) -> list[Config]:
     return out
 
 
-def _tetra(tables: Iterable[int], short_lengths: bool, refinement: Iterable[tuple[int, float]],
-           tables_refined: Iterable[tuple[int, int]]) -> list[Config]:
+def _tetra(
+    tables: Iterable[int],
+    short_lengths: bool,
+    refinement: Iterable[tuple[int, float]],
+    tables_refined: Iterable[tuple[int, int]],
+) -> list[Config]:
     out = [Config("tetra", table_size=n, table_lengths=TETRA_LENGTHS, skipping=True) for n in tables]
     if short_lengths:  # every table the refinement runs with, at a ray per pixel too (its own error)
-        out += [Config("tetra", table_size=size, table_lengths=lengths, skipping=True)
-                for size, lengths in TETRA_REFINEMENT_TABLES if lengths != TETRA_LENGTHS]
+        out += [
+            Config("tetra", table_size=size, table_lengths=lengths, skipping=True)
+            for size, lengths in TETRA_REFINEMENT_TABLES
+            if lengths != TETRA_LENGTHS
+        ]
     out.append(Config("tetra", table_size=TETRA_TABLE, table_lengths=TETRA_LENGTHS, skipping=False))
-    out += [Config("tetra", table_size=size, table_lengths=lengths, skipping=True, image_stride=stride,
-                   refine_tolerance=tol) for size, lengths in tables_refined for stride, tol in refinement]
+    out += [
+        Config(
+            "tetra",
+            table_size=size,
+            table_lengths=lengths,
+            skipping=True,
+            image_stride=stride,
+            refine_tolerance=tol,
+        )
+        for size, lengths in tables_refined
+        for stride, tol in refinement
+    ]
     return out
 
 
@@ -196,7 +213,9 @@ def configs(
     if curves is not None:
         wanted = set(curves)
         out = [c for c in out if c.curve in wanted]
-        out += [c for name in curves if name not in BUILTIN_CURVES for c in quality_axis(name, kind, given_steps)]
+        out += [
+            c for name in curves if name not in BUILTIN_CURVES for c in quality_axis(name, kind, given_steps)
+        ]
     return _unique(out)
 
 

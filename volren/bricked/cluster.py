@@ -194,7 +194,9 @@ def connect(address: str, timeout: float | None = None) -> Any:
     distributed = require_distributed()
     timeout = CONNECT_TIMEOUT_S if timeout is None else timeout
     if not address.strip():
-        raise VolrenError("--scheduler needs the ADDRESS of a running dask scheduler (e.g. tcp://host:8786), got ''")
+        raise VolrenError(
+            "--scheduler needs the ADDRESS of a running dask scheduler (e.g. tcp://host:8786), got ''"
+        )
     connection_args = distributed.Security().get_connection_args("client")
     if address.startswith("tls://") and connection_args["ssl_context"] is None:
         raise VolrenError(f"--scheduler {address}: a TLS scheduler needs the client's certificate in dask's "
@@ -208,7 +210,9 @@ def connect(address: str, timeout: float | None = None) -> Any:
         return distributed.Client(address, timeout=f"{timeout}s")
     except Exception as exc:  # noqa: BLE001 - a scheduler that answered and then refused (versions, TLS), one line
         reason = " ".join(str(exc).split())[:160] or "no reason given"
-        raise VolrenError(f"--scheduler: the dask scheduler at {address} did not take this client ({reason})") from None
+        raise VolrenError(
+            f"--scheduler: the dask scheduler at {address} did not take this client ({reason})"
+        ) from None
 
 
 def greet_scheduler(address: str, connection_args: Mapping[str, Any], timeout: float) -> None:
@@ -361,7 +365,9 @@ class ClusterRenderer:
             x0, y0, x1, y1 = layer.rect
             over(image[y0:y1, x0:x1], layer.pixels, out=image[y0:y1, x0:x1])
             cost = layer.cost
-            worker_ms[layer.worker] = worker_ms.get(layer.worker, 0.0) + cost.read_ms + cost.render_ms + cost.composite_ms
+            worker_ms[layer.worker] = (
+                worker_ms.get(layer.worker, 0.0) + cost.read_ms + cost.render_ms + cost.composite_ms
+            )
             drawn += cost.drawn
         composite_ms = (time.perf_counter() - t0) * 1000.0
         frame = ClusterFrame(self.layout.n_bricks, drawn, int(np.count_nonzero(~visible)), len(runs), n_workers,
@@ -424,7 +430,11 @@ def render_on_cluster(
     else:
         raise VolrenError("a cluster renders uniform volumes (bricks); this one is tetrahedral")
     _check_draws_bricks(renderer)
-    client = connect(scheduler) if scheduler is not None else local_client(parse_cluster("local" if cluster is None else cluster))
+    client = (
+        connect(scheduler)
+        if scheduler is not None
+        else local_client(parse_cluster("local" if cluster is None else cluster))
+    )
     cluster_renderer = None
     try:
         cluster_renderer = ClusterRenderer(client, spec, renderer, brick)

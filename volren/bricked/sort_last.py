@@ -45,8 +45,13 @@ class BrickedFrame:
 
 
 def brick_layout(source: BrickSource, brick: int) -> BrickLayout:
-    return BrickLayout(tuple(source.dimensions), tuple(source.spacing), tuple(source.origin),  # type: ignore[arg-type]
-                       tuple(source.value_range), int(brick))  # type: ignore[arg-type]
+    return BrickLayout(
+        tuple(source.dimensions),
+        tuple(source.spacing),
+        tuple(source.origin),  # type: ignore[arg-type]
+        tuple(source.value_range),
+        int(brick),
+    )  # type: ignore[arg-type]
 
 
 def visible_bricks(source: BrickSource, layout: BrickLayout, tf, ghost: int) -> NDArray[np.bool_]:
@@ -71,7 +76,9 @@ def check_draws_bricks(renderer: Renderer) -> None:
     support = renderer.capabilities.kinds.get("uniform")
     if support is None or not support.regions:
         name = getattr(renderer, "name", type(renderer).__name__)
-        raise VolrenError(f"renderer {name} does not draw bricks; bricked volumes need one that does (reference, slicer)")
+        raise VolrenError(
+            f"renderer {name} does not draw bricks; bricked volumes need one that does (reference, slicer)"
+        )
 
 
 def draw_run(
@@ -98,7 +105,9 @@ def draw_run(
             t1 = time.perf_counter()
             cost.read_ms += (t1 - t0) * 1000.0
             if has_finite(values):
-                sub = UniformVolume(values, layout.spacing, layout.sub_origin(slices), name=f"{source.name} brick {index}")
+                sub = UniformVolume(
+                    values, layout.spacing, layout.sub_origin(slices), name=f"{source.name} brick {index}"
+                )
                 region = layout.region(brick)
                 renderer.set_volume(sub)
                 renderer.set_transfer_function(tf)

@@ -17,7 +17,9 @@ from volren.bricked.layout import BrickLayout, Index3
 from volren.model.camera import Camera
 
 
-def _split(lo: list[int], hi: list[int]) -> tuple[int, int, tuple[list[int], list[int]], tuple[list[int], list[int]]]:
+def _split(
+    lo: list[int], hi: list[int]
+) -> tuple[int, int, tuple[list[int], list[int]], tuple[list[int], list[int]]]:
     """The k-d split of brick range [lo, hi) (x, y, z): the axis with most bricks, at its middle;
     (axis, cut, low half, high half). Every traversal and partition here uses this one rule, so
     a block of `kd_blocks` is a subtree of `front_to_back`'s traversal."""
@@ -76,5 +78,5 @@ def kd_blocks(layout: BrickLayout, count: int) -> NDArray[np.intp]:
         _, _, low, high = _split(lo, hi)
         pending[largest:largest] = [low, high]
     for n, (lo, hi) in enumerate(pending):
-        blocks[lo[2]:hi[2], lo[1]:hi[1], lo[0]:hi[0]] = n
+        blocks[lo[2] : hi[2], lo[1] : hi[1], lo[0] : hi[0]] = n
     return blocks

@@ -49,7 +49,14 @@ class ZarrFrame:
 #: (2026-12-06): slicer 12 (its float32 texture, normalised through a float64 copy), 30 shaded or
 #: with a 2D TF (gradients too); objectorder 18; reference 8 (float64); shearwarp 7; raycast 5;
 #: vtk 2, 4 shaded.
-RENDERER_COPY_BYTES = {"slicer": 30, "objectorder": 18, "reference": 8, "shearwarp": 8, "raycast": 6, "vtk": 4}
+RENDERER_COPY_BYTES = {
+    "slicer": 30,
+    "objectorder": 18,
+    "reference": 8,
+    "shearwarp": 8,
+    "raycast": 6,
+    "vtk": 4,
+}
 #: A renderer not measured is taken to copy as much as the one that copies most.
 MOST_COPY_BYTES = max(RENDERER_COPY_BYTES.values())
 
@@ -97,7 +104,9 @@ class ZarrInput:
 
     def check_level(self, level: int) -> None:
         if not 0 <= level < len(self.image.levels):
-            raise VolrenError(f"{self.path}: no level {level}; the image has levels 0 to {len(self.image.levels) - 1}")
+            raise VolrenError(
+                f"{self.path}: no level {level}; the image has levels 0 to {len(self.image.levels) - 1}"
+            )
 
     def _finest_drawn_within_budget(self, renderer: str, copies: int) -> int:
         """For a renderer that does not stream bricks: the finest level that it draws within the
@@ -124,11 +133,15 @@ class ZarrInput:
         if support is None or not support.regions:
             if level is None:
                 level = self._finest_drawn_within_budget(renderer, copies)
-            return ZarrFrame(level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))
+            return ZarrFrame(
+                level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget)
+            )
         if level is None:
             level = level_at_quality(self.image.levels, camera, width, height, quality)
         drawn = ome_zarr_io.level_bytes(self.image.levels[level], copies)
         if drawn <= min(self.budget, ome_zarr_io.MAX_IN_MEMORY_BYTES):
-            return ZarrFrame(level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget))
+            return ZarrFrame(
+                level, volume=ome_zarr_io.load_level(self.path, level, name=self.name, memory=self.budget)
+            )
         reserve = brick_reserve(self.image.levels[level], copies)
         return ZarrFrame(level, source=ZarrSource(self.image, level, self.budget, reserve))

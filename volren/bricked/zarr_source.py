@@ -36,14 +36,18 @@ class ZarrSource:
 
     def __init__(self, image: Multiscale, level: int, budget: int, reserve: int = 0) -> None:
         if not 0 <= level < len(image.levels):
-            raise VolrenError(f"{image.path}: no level {level}; the image has levels 0 to {len(image.levels) - 1}")
+            raise VolrenError(
+                f"{image.path}: no level {level}; the image has levels 0 to {len(image.levels) - 1}"
+            )
         self.image = image
         self.level = level
         self.info = info = image.levels[level]
         self.name = image.name
         self.dimensions = tuple(int(n) for n in info.shape[::-1])
         if min(self.dimensions) < 2:
-            raise VolrenError(f"{image.path}: level {info.key!r} is {info.shape[::-1]}: fewer than 2 samples on an axis")
+            raise VolrenError(
+                f"{image.path}: level {info.key!r} is {info.shape[::-1]}: fewer than 2 samples on an axis"
+            )
         self.spacing = info.spacing
         self.origin = info.origin
         chunk = math.prod(info.chunks) * info.dtype.itemsize
@@ -118,7 +122,9 @@ class ZarrSource:
 
     # --------------------------------------------------------------------------- reading
     def _chunk(self, index: tuple[int, ...]) -> NDArray:
-        return self.cache.get(index, lambda: ome_zarr_io.read_brick(self.image, self.level, self._array, index))
+        return self.cache.get(
+            index, lambda: ome_zarr_io.read_brick(self.image, self.level, self._array, index)
+        )
 
     def read(self, slices: tuple[slice, slice, slice]) -> NDArray:
         """The values [z, y, x] of a block, from the chunks it touches."""
@@ -157,7 +163,9 @@ def level_bounds(info: LevelInfo) -> tuple[float, float, float, float, float, fl
     return tuple(out)  # type: ignore[return-value]
 
 
-def level_for_view(levels: Sequence[LevelInfo], camera: Camera, width: int, height: int, pixels: float = 1.0) -> int:
+def level_for_view(
+    levels: Sequence[LevelInfo], camera: Camera, width: int, height: int, pixels: float = 1.0
+) -> int:
     """The coarsest level whose voxels look no larger than `pixels` pixels where the volume comes
     nearest to the camera (0 when the camera is inside it or even level 0 looks coarser).
 

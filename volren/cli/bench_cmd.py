@@ -42,10 +42,15 @@ def add_skip_parser(kinds) -> None:
     """`bench skip`: each skipping technique on and off per renderer (volren.bench.skipping)."""
     k = kinds.add_parser("skip", help="skipping techniques on and off: ms, work counters, image change")
     k.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
-    k.add_argument("--samples", action="store_true", help="the bundled samples instead of the shared datasets")
+    k.add_argument(
+        "--samples", action="store_true", help="the bundled samples instead of the shared datasets"
+    )
     k.add_argument("--datasets", help="comma-separated (default: every shared dataset, or every sample)")
     k.add_argument("--styles", help="TF styles (default smooth,spiky,opaque)")
-    k.add_argument("--renderers", help="comma-separated of slicer, tetra, vtk, shearwarp, objectorder, raycast (default: those installed)")
+    k.add_argument(
+        "--renderers",
+        help="comma-separated of slicer, tetra, vtk, shearwarp, objectorder, raycast (default: those installed)",
+    )
     k.add_argument("--size", type=int, help="image side in pixels (default 512; 128 with --quick)")
     k.add_argument("--frames", type=int, help="timed frames per row, median (default 5; 3 with --quick)")
     k.add_argument("--turn", type=float, default=1.0, help="azimuth degrees between timed frames (0: fixed)")
@@ -80,7 +85,9 @@ def run_skip(args: argparse.Namespace) -> int:
     kinds, scenes = skipping.plan(shared, args.samples, args.datasets, args.styles, args.quick)
     base = RenderSettings(step=args.step, preintegration=args.preintegration)
     print(skipping.HEADER)
-    with tqdm(total=skipping.row_count(kinds, renderers, base), desc="configurations", leave=False, disable=None) as bar:
+    with tqdm(
+        total=skipping.row_count(kinds, renderers, base), desc="configurations", leave=False, disable=None
+    ) as bar:
 
         def report(row: dict) -> None:
             tqdm.write(skipping.markdown_row(row))
@@ -108,14 +115,20 @@ def run_skip(args: argparse.Namespace) -> int:
 # --------------------------------------------------------------------------------------- bench run
 def add_run_parser(kinds) -> None:
     r = kinds.add_parser("run", help="every renderer and quality setting: ms against error, CSV, plots")
-    r.add_argument("--quick", action="store_true",
-                   help="128x128, two bundled samples, 3 frames, a few settings per renderer (for CI)")
+    r.add_argument(
+        "--quick",
+        action="store_true",
+        help="128x128, two bundled samples, 3 frames, a few settings per renderer (for CI)",
+    )
     r.add_argument("--out", default="bench-run", help="folder for runs.csv, <dataset>.png, summary.md")
     r.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED)")
     r.add_argument("--datasets", help="comma-separated (default: every shared dataset and bundled sample)")
     r.add_argument("--tfs", help="TF styles to keep, e.g. smooth,spiky (default: all)")
-    r.add_argument("--renderers", help="curves to run, e.g. slicer,vtk-gpu,tetra,vtk-raycast, or any registered "
-                   "renderer (a plugin: swept along its declared quality axis) (default: the built-in curves)")
+    r.add_argument(
+        "--renderers",
+        help="curves to run, e.g. slicer,vtk-gpu,tetra,vtk-raycast, or any registered "
+        "renderer (a plugin: swept along its declared quality axis) (default: the built-in curves)",
+    )
     r.add_argument("--steps", help="the swept sample steps (default 2,1,0.5,0.25; --quick 2,0.5)")
     r.add_argument("--size", type=int, help="image side in pixels (default 512; --quick 128)")
     r.add_argument("--frames", type=int, help="timed frames per setting, median taken (default 5; --quick 3)")
@@ -189,14 +202,25 @@ def run_run(args: argparse.Namespace) -> int:
 def add_stress_parser(kinds) -> None:
     """`bench stress`: NaN/Inf/out-of-range pixels and error against reference on extreme input."""
     t = kinds.add_parser("stress", help="numerical stability: NaN/Inf/out-of-range counts on extreme input")
-    t.add_argument("--quick", action="store_true", help="a subset of the scenes and tables (well under a minute)")
+    t.add_argument(
+        "--quick", action="store_true", help="a subset of the scenes and tables (well under a minute)"
+    )
     t.add_argument("--out", help="folder to write stress.csv and stress.md into (default: write nothing)")
     t.add_argument("--size", type=int, default=64, help="image side in pixels (default 64)")
-    t.add_argument("--renderers", help="comma-separated renderers besides reference (default: all registered)")
-    t.add_argument("--cases", help="comma-separated globs of scene names, e.g. 'tet-*,*/spike' (default: all)")
+    t.add_argument(
+        "--renderers", help="comma-separated renderers besides reference (default: all registered)"
+    )
+    t.add_argument(
+        "--cases", help="comma-separated globs of scene names, e.g. 'tet-*,*/spike' (default: all)"
+    )
     t.add_argument("--suites", default="images,tables", help="images, tables or both (default: both)")
-    t.add_argument("--eps", type=float, default=None, help="how far a premultiplied colour may exceed its alpha "
-                   "(default 1e-4; 8-bit output rounds by up to 1/255)")
+    t.add_argument(
+        "--eps",
+        type=float,
+        default=None,
+        help="how far a premultiplied colour may exceed its alpha "
+        "(default 1e-4; 8-bit output rounds by up to 1/255)",
+    )
     t.set_defaults(run=run_stress)
 
 
@@ -239,7 +263,9 @@ def run_stress(args: argparse.Namespace) -> int:
             out = Path(args.out)
             out.mkdir(parents=True, exist_ok=True)
             stress.write_csv(rows, out / "stress.csv")
-            (out / "stress.md").write_text(stress.markdown(rows, seconds, args.size, args.quick, work.notes, eps))
+            (out / "stress.md").write_text(
+                stress.markdown(rows, seconds, args.size, args.quick, work.notes, eps)
+            )
         except OSError as exc:
             raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
     bad = stress.problems(rows)
@@ -284,14 +310,18 @@ def run_app(args: argparse.Namespace) -> int:
     print(gestures.HEADER, flush=True)
     for dataset, style in scenes:
         volume, tf = scene_inputs(shared, dataset, style)
-        for row in gestures.markdown_rows(gestures.measure_scene(app, volume, tf, f"{dataset}/{style}", args.seconds)):
+        for row in gestures.markdown_rows(
+            gestures.measure_scene(app, volume, tf, f"{dataset}/{style}", args.seconds)
+        ):
             lines.append(row)
             print(row, flush=True)
     if args.out:
         out = Path(args.out)
         try:
             out.mkdir(parents=True, exist_ok=True)
-            (out / "app.md").write_text(gestures.note(app.platformName(), args.seconds) + "\n\n" + "\n".join(lines) + "\n")
+            (out / "app.md").write_text(
+                gestures.note(app.platformName(), args.seconds) + "\n\n" + "\n".join(lines) + "\n"
+            )
         except OSError as exc:
             raise VolrenError(f"{args.out}: cannot write: {exc.strerror or exc}") from None
     return 0

@@ -22,9 +22,13 @@ def _positive(text: str) -> float:
 def add_parser(sub) -> None:
     p = sub.add_parser("check-renderer", help="run the conformance kit on a registered renderer")
     p.add_argument("name", help="registered renderer name (see `volren renderers`)")
-    p.add_argument("--quick", action="store_true", help="fewer cases (fewer steps and capability combinations)")
+    p.add_argument(
+        "--quick", action="store_true", help="fewer cases (fewer steps and capability combinations)"
+    )
     p.add_argument("--check", action="append", metavar="CHECK", help="run only this check (repeatable)")
-    p.add_argument("--time-limit", type=_positive, default=None, metavar="S", help="seconds per check (default 300)")
+    p.add_argument(
+        "--time-limit", type=_positive, default=None, metavar="S", help="seconds per check (default 300)"
+    )
     p.set_defaults(run=run)
 
 

@@ -10,9 +10,14 @@ import argparse
 def add_cluster_arguments(p: argparse.ArgumentParser) -> None:
     group = p.add_argument_group("rendering on a dask.distributed cluster (sort-last, brick by brick)")
     where = group.add_mutually_exclusive_group()
-    where.add_argument("--cluster", metavar="local[:N]",
-                       help="start a LocalCluster of N worker processes, one thread each (default: one per core)")
-    where.add_argument("--scheduler", metavar="ADDRESS", help="use the running cluster at ADDRESS, e.g. tcp://host:8786")
+    where.add_argument(
+        "--cluster",
+        metavar="local[:N]",
+        help="start a LocalCluster of N worker processes, one thread each (default: one per core)",
+    )
+    where.add_argument(
+        "--scheduler", metavar="ADDRESS", help="use the running cluster at ADDRESS, e.g. tcp://host:8786"
+    )
 
 
 def wants_cluster(args: argparse.Namespace) -> bool:

@@ -81,7 +81,9 @@ def run(args: argparse.Namespace) -> int:
     output = Path(args.output)
     if output.suffix.lower() != ".zarr":
         raise VolrenError(f"{output}: an OME-Zarr image is a folder named *.zarr")
-    refuse_overwriting_inputs([("OUTPUT", output)], [("input", args.input)], kind="folder")  # even with --force
+    refuse_overwriting_inputs(
+        [("OUTPUT", output)], [("input", args.input)], kind="folder"
+    )  # even with --force
     if output.exists() and not args.force:
         raise VolrenError(f"{output}: exists; add --force to replace it")
     check_output(output, "OUTPUT", kind="folder")  # the folder a link leads to, too: before the load
@@ -177,7 +179,9 @@ def _convert_whole(args: argparse.Namespace, output, memory: int | None):
         raise VolrenError(f"{args.input}: a tetrahedral mesh has no bricks; OME-Zarr holds uniform grids")
     _check_levels(args, volume.values.shape)
     with progress_bar(f"{output.name}") as progress:
-        levels = save_ome_zarr(volume, output_target(output, "OUTPUT", "folder"), args.chunks, args.levels, progress)
+        levels = save_ome_zarr(
+            volume, output_target(output, "OUTPUT", "folder"), args.chunks, args.levels, progress
+        )
     return volume.values.shape, volume.values.dtype, levels
 
 

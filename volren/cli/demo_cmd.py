@@ -55,7 +55,9 @@ def run(args: argparse.Namespace) -> int:
             try:
                 with prepared_renderer(name, volume, tf) as renderer:
                     with progress_bar(f"{sample} {name}") as progress:
-                        _, first = render_frame(renderer, camera.azimuth(-10.0), width, height, progress, name)
+                        _, first = render_frame(
+                            renderer, camera.azimuth(-10.0), width, height, progress, name
+                        )
                     image, stats = render_frame(renderer, camera, width, height, label=name)
                 first_ms, ms = first.ms, stats.ms
             except VolrenError as exc:
@@ -63,5 +65,7 @@ def run(args: argparse.Namespace) -> int:
                 failures += 1
                 continue
             io.save_image(image, target)
-            print(f"{sample:16s} {name:10s} {ms:9.1f} ms per frame (first {first_ms:.0f} ms with set-up)  {target}")
+            print(
+                f"{sample:16s} {name:10s} {ms:9.1f} ms per frame (first {first_ms:.0f} ms with set-up)  {target}"
+            )
     return 1 if failures else 0

@@ -60,8 +60,15 @@ class LinePrinter:
         suffix = f" ({origin})" if origin else ""
         print(f"volren: warning: {line}{suffix}", file=self._stream or sys.stderr, flush=True)
 
-    def showwarning(self, message: Any, category: type[Warning], filename: str, lineno: int,
-                    file: Any = None, line: Any = None) -> None:
+    def showwarning(
+        self,
+        message: Any,
+        category: type[Warning],
+        filename: str,
+        lineno: int,
+        file: Any = None,
+        line: Any = None,
+    ) -> None:
         """`warnings.showwarning`'s signature. Our own warnings name what is at fault already;
         another library's gets its category and where it was raised, for a bug report."""
         if issubclass(category, VolrenWarning):

@@ -39,21 +39,27 @@ def _frames(text: str) -> int:
     try:
         return check_frames(int(text), "--frames")
     except (ValueError, VolrenError):
-        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to {MAX_FRAMES:,}, got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected a whole number from 1 to {MAX_FRAMES:,}, got {text!r}"
+        ) from None
 
 
 def _fps(text: str) -> float:
     try:
         return check_fps(finite_float(text), "--fps")
     except (argparse.ArgumentTypeError, VolrenError):
-        raise argparse.ArgumentTypeError(f"expected a number from {MIN_FPS:g} to {MAX_FPS:g}, got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected a number from {MIN_FPS:g} to {MAX_FPS:g}, got {text!r}"
+        ) from None
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("movie", help="render an orbit (or a scene's keyframes) offscreen to MP4 or GIF")
     p.add_argument("-o", "--output", help="movie file to write: .mp4 (H.264) or .gif")
     add_scene_arguments(p)
-    p.add_argument("--frames", type=_frames, help="number of frames (default 120, or the scene's movie.frames)")
+    p.add_argument(
+        "--frames", type=_frames, help="number of frames (default 120, or the scene's movie.frames)"
+    )
     p.add_argument("--fps", type=_fps, help="frames per second (default 30, or the scene's movie.fps)")
     p.add_argument("--orbit", type=finite_float, metavar="DEGREES",
                    help="turn the camera this far about the view-up axis (default 360; a scene's camera keyframes "
@@ -82,7 +88,9 @@ def animation_of(args: argparse.Namespace, scene_movie: object, steps: int | Non
     given = {key: value for key, value in (("frames", args.frames), ("fps", args.fps), ("orbit_degrees", args.orbit))
              if value is not None}  # fmt: skip
     if args.orbit is not None and animation.camera_keys:
-        raise VolrenError(f"{args.scene}: --orbit turns the camera, but the scene's movie has camera keyframes")
+        raise VolrenError(
+            f"{args.scene}: --orbit turns the camera, but the scene's movie has camera keyframes"
+        )
     return replace(animation, **given)
 
 
@@ -95,12 +103,16 @@ def run(args: argparse.Namespace) -> int:
         raise VolrenError("give -o OUT.mp4 or -o OUT.gif")
     check_movie_path(args.output, "-o")
     if args.lossless and not args.output.lower().endswith(".mp4"):
-        raise VolrenError(f"{args.output}: --lossless applies to MP4 movies only (a GIF has 256 colours a frame)")
+        raise VolrenError(
+            f"{args.output}: --lossless applies to MP4 movies only (a GIF has 256 colours a frame)"
+        )
     inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
     check_outputs((("-o", args.output),), inputs, args.force)
     series = input_series(args)
     if series is not None and args.time_step is not None:
-        raise VolrenError(f"--time-step picks one step; a movie of {args.input} runs through all {len(series)}")
+        raise VolrenError(
+            f"--time-step picks one step; a movie of {args.input} runs through all {len(series)}"
+        )
     scene, why, source = build_scene(args)
     check_outputs((("-o", args.output),), [*inputs, ("scene's volume", scene.volume_path)], args.force)
     check_scene_input(args, scene)
@@ -128,7 +140,9 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _level_for_movie(args: argparse.Namespace, scene: Scene, source: DrawInput) -> tuple[Scene, BrickSource | None]:
+def _level_for_movie(
+    args: argparse.Namespace, scene: Scene, source: DrawInput
+) -> tuple[Scene, BrickSource | None]:
     """An OME-Zarr INPUT: the level its first frame needs for every frame, read whole or (larger
     than --memory) streamed brick by brick; (scene, the streamed source or None)."""
     if not source.bricks:

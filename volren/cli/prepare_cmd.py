@@ -15,8 +15,13 @@ import argparse
 def add_parser(sub) -> None:
     p = sub.add_parser("prepare", help="compile the renderers' kernels now, so that first frames do not wait")
     p.add_argument("--renderers", help="comma-separated registered names (default: all)")
-    p.add_argument("--jobs", type=int, default=None, metavar="N",
-                   help="renderers prepared at once, each in its own process (default: one per core)")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        metavar="N",
+        help="renderers prepared at once, each in its own process (default: one per core)",
+    )
     p.set_defaults(run=run)
 
 
@@ -27,10 +32,16 @@ def run(args: argparse.Namespace) -> int:
     from volren.prepare import default_jobs, prepare
     from volren.renderers.registry import registry
 
-    names = registry.names() if not args.renderers else [n.strip() for n in args.renderers.split(",") if n.strip()]
+    names = (
+        registry.names()
+        if not args.renderers
+        else [n.strip() for n in args.renderers.split(",") if n.strip()]
+    )
     unknown = [n for n in names if n not in registry.names()]
     if unknown:
-        raise VolrenError(f"--renderers: unknown renderer {', '.join(unknown)} (registered: {', '.join(registry.names())})")
+        raise VolrenError(
+            f"--renderers: unknown renderer {', '.join(unknown)} (registered: {', '.join(registry.names())})"
+        )
     if args.jobs is not None and args.jobs < 1:
         raise VolrenError(f"--jobs: must be at least 1, not {args.jobs}")
     bar = tqdm(total=len(names), desc="preparing renderers", unit="renderer", leave=False, disable=None)

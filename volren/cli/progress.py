@@ -13,10 +13,20 @@ from volren.renderers.base import ProgressCallback
 
 
 @contextmanager
-def progress_bar(description: str, file: TextIO | None = None, delay: float = 1.0) -> Iterator[ProgressCallback]:
+def progress_bar(
+    description: str, file: TextIO | None = None, delay: float = 1.0
+) -> Iterator[ProgressCallback]:
     """A progress callback drawing a bar on `file` (stderr) when it is a terminal."""
-    bar = tqdm(total=1000, desc=description, delay=delay, leave=False, unit="‰", file=file, disable=None,
-               bar_format="{l_bar}{bar}| {elapsed}<{remaining}")
+    bar = tqdm(
+        total=1000,
+        desc=description,
+        delay=delay,
+        leave=False,
+        unit="‰",
+        file=file,
+        disable=None,
+        bar_format="{l_bar}{bar}| {elapsed}<{remaining}",
+    )
 
     def update(fraction: float) -> None:
         target = int(round(min(max(fraction, 0.0), 1.0) * 1000))
@@ -30,9 +40,13 @@ def progress_bar(description: str, file: TextIO | None = None, delay: float = 1.
 
 
 @contextmanager
-def frame_bar(description: str, frames: int, file: TextIO | None = None, delay: float = 1.0) -> Iterator[ProgressCallback]:
+def frame_bar(
+    description: str, frames: int, file: TextIO | None = None, delay: float = 1.0
+) -> Iterator[ProgressCallback]:
     """A movie's progress callback (the fraction of the movie done), drawing whole frames on `file`."""
-    bar = tqdm(total=frames, desc=description, delay=delay, leave=False, unit="frame", file=file, disable=None)
+    bar = tqdm(
+        total=frames, desc=description, delay=delay, leave=False, unit="frame", file=file, disable=None
+    )
 
     def update(fraction: float) -> None:
         done = int(min(max(fraction, 0.0), 1.0) * frames + 1e-9)

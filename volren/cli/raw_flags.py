@@ -62,7 +62,9 @@ def check_raw_flags(args: argparse.Namespace, command: str) -> None:
     path = Path(args.input)
     if is_series(path):
         if given:
-            raise VolrenError(f"{path}: {given[0]} describes headerless raw data; a time series' steps have headers")
+            raise VolrenError(
+                f"{path}: {given[0]} describes headerless raw data; a time series' steps have headers"
+            )
         return
     if path.is_file() and path.stat().st_size and find_format(path) is None:
         raise VolrenError(f"{path}: {headerless_problem(path, flags=True)}")

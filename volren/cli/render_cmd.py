@@ -66,7 +66,9 @@ def image_size(text: str) -> tuple[int, int]:
     try:
         width, height = parse_size(text)
     except VolrenError:
-        raise argparse.ArgumentTypeError(f"expected W or WxH in pixels (e.g. 512 or 640x480), got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"expected W or WxH in pixels (e.g. 512 or 640x480), got {text!r}"
+        ) from None
     if max(width, height) > MAX_IMAGE_SIDE:
         raise argparse.ArgumentTypeError(f"each side may be at most {MAX_IMAGE_SIDE} pixels, got {text!r}")
     return width, height
@@ -90,8 +92,11 @@ def add_parser(sub) -> None:
     p.add_argument("--save-array", metavar="OUT.npy", help="also save float32 (H, W, 4) RGBA, row 0 on top")
     p.add_argument("--transparent", action="store_true", help="PNG with alpha instead of over black")
     p.add_argument("--force", action="store_true", help="write -o / --save-array even over an input file")
-    p.add_argument("--timings", action="store_true",
-                   help="print the wall time of each stage (start-up, load, set-up, frame, write) on stderr")
+    p.add_argument(
+        "--timings",
+        action="store_true",
+        help="print the wall time of each stage (start-up, load, set-up, frame, write) on stderr",
+    )
     add_cluster_arguments(p)
     p.set_defaults(run=run)
 
@@ -100,10 +105,17 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     """What to render and how: the flags `volren render` and `volren movie` share (`build_scene`)."""
     p.add_argument("input", nargs="?", help="volume file or DICOM folder (optional with --scene)")
     p.add_argument("--scene", help="scene JSON with volume, TF, camera and settings")
-    p.add_argument("--renderer", help="renderer name (see `volren renderers`), or auto (the default: the fastest "
-                   "measured renderer that draws the scene at the quality asked for)")
-    p.add_argument("--quality", choices=LEVELS, help="settings measured for this level (volren renderers lists them; "
-                   "default: default, or the scene file's settings as they are); explicit flags win")
+    p.add_argument(
+        "--renderer",
+        help="renderer name (see `volren renderers`), or auto (the default: the fastest "
+        "measured renderer that draws the scene at the quality asked for)",
+    )
+    p.add_argument(
+        "--quality",
+        choices=LEVELS,
+        help="settings measured for this level (volren renderers lists them; "
+        "default: default, or the scene file's settings as they are); explicit flags win",
+    )
     p.add_argument("--tf", help="transfer function JSON (DESIGN.md format or a ParaView preset)")
     p.add_argument("--time-step", type=int, metavar="N",
                    help="for a time series INPUT (a .pvd, or a folder of volume files): the step to render, from 0 "
@@ -118,8 +130,11 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
                         "slicer takes 16x its bytes), a larger one streams brick by brick within it (renderers that "
                         "draw bricks). The command's fixed overhead comes on top (interpreter, libraries, GL: about "
                         "370 MiB with the slicer): its peak is about that plus SIZE")  # fmt: skip
-    p.add_argument("--scalars", help="the array to render: NAME, or NAME:magnitude / NAME:x (y, z, 0, 1, ...) for a "
-                   "vector's length or one component (a vector shows its magnitude by default)")
+    p.add_argument(
+        "--scalars",
+        help="the array to render: NAME, or NAME:magnitude / NAME:x (y, z, 0, 1, ...) for a "
+        "vector's length or one component (a vector shows its magnitude by default)",
+    )
     p.add_argument("--size", type=image_size, help="image size W or WxH (default 512)")
     p.add_argument("--azimuth", type=finite_float, help="degrees, after the camera reset")
     p.add_argument("--elevation", type=finite_float, help="degrees, after the azimuth")
@@ -185,7 +200,9 @@ def _ome_zarr_image(args: argparse.Namespace, path: str) -> DrawInput | None:
     if not is_ome_zarr_path(path):
         flag = _zarr_flag(args)
         if flag:
-            raise VolrenError(f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL); {path} is not one")
+            raise VolrenError(
+                f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL); {path} is not one"
+            )
         return None
     if args.scalars is not None:
         raise VolrenError(f"{path}: an OME-Zarr image holds one field; --scalars does not apply")
@@ -258,7 +275,9 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None, DrawInput 
         base = scene.camera if isinstance(scene.camera, OrbitView) else OrbitView()
         if args.zoom is not None:
             check_zoom(args.zoom, bool(args.parallel or base.parallel), name="--zoom")
-        scene = replace(scene, camera=replace(base, **{k: v for k, v in orbit_flags.items() if v is not None}))
+        scene = replace(
+            scene, camera=replace(base, **{k: v for k, v in orbit_flags.items() if v is not None})
+        )
     # shading and the blend mode decide what `auto` may pick; step, pre-integration and options win over the level's
     shown = {k: v for k, v in (("shade", args.shade), ("blend_mode", args.blend)) if v is not None}
     if shown:
@@ -348,7 +367,11 @@ def explained(exc: VolrenError, args: argparse.Namespace, scene: Scene, why: str
     when the user did not name it, and naming the input file where the message names nothing."""
     chosen = scene.renderer if args.renderer or not args.scene else None
     if why and f"renderer {scene.renderer} " in f"{exc} ":  # the user did not name it: say who did
-        exc = VolrenError(f"{exc} ".replace(f"renderer {scene.renderer} ", f"renderer {scene.renderer} {CHOSEN_BY_AUTO} ", 1).rstrip())
+        exc = VolrenError(
+            f"{exc} ".replace(
+                f"renderer {scene.renderer} ", f"renderer {scene.renderer} {CHOSEN_BY_AUTO} ", 1
+            ).rstrip()
+        )
     return _naming_the_input(exc, args.scene or scene.volume_path, chosen)
 
 

@@ -31,7 +31,9 @@ def run(args: argparse.Namespace) -> int:
             print(f"{'':12s} {caps.summary}")
         for kind, support in sorted(caps.kinds.items()):
             acc = support.accuracy
-            print(f"{'':12s} accuracy on {kind}: RMSE <= {acc.rmse:g}, features within {acc.position_px:g} px")
+            print(
+                f"{'':12s} accuracy on {kind}: RMSE <= {acc.rmse:g}, features within {acc.position_px:g} px"
+            )
         if caps.quality:
             print(f"{'':12s} quality axis: {' | '.join(level.label for level in caps.quality)}")
         for kind in sorted(caps.kinds):

@@ -45,7 +45,9 @@ class StageClock:
 
     def note_counters(self, counters: Mapping[str, float]) -> None:
         """Keep the renderer's own timings of its first frame (counters ending in `_ms`)."""
-        self.details.update({k.removesuffix("_ms"): v / 1000.0 for k, v in counters.items() if k.endswith("_ms") and v > 0})
+        self.details.update(
+            {k.removesuffix("_ms"): v / 1000.0 for k, v in counters.items() if k.endswith("_ms") and v > 0}
+        )
 
     def line(self) -> str:
         parts = []

@@ -117,7 +117,9 @@ class Drawing:
         resolution, whatever level is drawn)."""
         return self.scene.resolved_camera(self.source.bounds)
 
-    def orbit(self, azimuth: float = 0.0, elevation: float = 0.0, zoom: float = 1.0, parallel: bool = False) -> Camera:
+    def orbit(
+        self, azimuth: float = 0.0, elevation: float = 0.0, zoom: float = 1.0, parallel: bool = False
+    ) -> Camera:
         """The orbit view (reset on the input's bounds, then azimuth, elevation, zoom: the camera
         contract) at the scene's aspect ratio."""
         width, height = self.scene.size
@@ -128,7 +130,9 @@ class Drawing:
         self._keep = True
         return self
 
-    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
         self._keep = False
         self.release()
 
@@ -159,7 +163,9 @@ class Drawing:
             self._volume = volume
         if self._renderer is None:
             scene = self.scene
-            self._renderer = prepare(scene.renderer, volume, scene.transfer_function, scene.settings, self.how)
+            self._renderer = prepare(
+                scene.renderer, volume, scene.transfer_function, scene.settings, self.how
+            )
             self._volume = volume
         return self._renderer
 
@@ -169,7 +175,9 @@ class Drawing:
         if self._keep:
             yield self._prepared(volume)
             return
-        renderer = prepare(self.scene.renderer, volume, self.scene.transfer_function, self.scene.settings, self.how)
+        renderer = prepare(
+            self.scene.renderer, volume, self.scene.transfer_function, self.scene.settings, self.how
+        )
         try:
             yield renderer
         finally:

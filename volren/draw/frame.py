@@ -40,7 +40,10 @@ def draw_prepared(renderer: Renderer, data: FrameData, tf: TransferFunction, cam
     from volren.bricked.sort_last import render_streamed
 
     image, stats = render_streamed(renderer, data.source, tf, camera, width, height, progress)
-    note = data.note[:-1] + f": {stats.counters['bricks_drawn']:.0f} of {stats.counters['bricks']:.0f} bricks drawn)"
+    note = (
+        data.note[:-1]
+        + f": {stats.counters['bricks_drawn']:.0f} of {stats.counters['bricks']:.0f} bricks drawn)"
+    )
     return Drawn(image, stats, note)
 
 

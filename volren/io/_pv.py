@@ -258,7 +258,9 @@ def broken_cells(grid: Any) -> tuple[NDArray[np.bool_], dict[str, int]]:
     conn = np.asarray(grid.cell_connectivity, dtype=np.int64)
     sizes = np.diff(offsets)
     if len(sizes) != len(types) or (offsets.size and (offsets[-1] != conn.size or (sizes < 0).any())):
-        return np.ones(len(types), bool), {"in a cell list that disagrees with its types and offsets": len(types)}
+        return np.ones(len(types), bool), {
+            "in a cell list that disagrees with its types and offsets": len(types)
+        }
     known = np.isin(types, [int(c) for c in pv.CellType])
     expected = np.where((types >= 0) & (types < 256), _SIZE_OF_TYPE[np.clip(types, 0, 255)], -1)
     wrong_size = (expected >= 0) & (sizes != expected)

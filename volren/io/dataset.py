@@ -81,7 +81,11 @@ def array_choices(view: _pv.DatasetView) -> tuple[str, ...]:
             if not _numeric(name, values) or values.ndim > 2:
                 continue
             count = _components(values)
-            named = [name] if count == 1 else [f"{name}:{MAGNITUDE}"] + [f"{name}:{c}" for c in _component_names(count)]
+            named = (
+                [name]
+                if count == 1
+                else [f"{name}:{MAGNITUDE}"] + [f"{name}:{c}" for c in _component_names(count)]
+            )
             choices += [choice for choice in named if choice not in choices]
     return tuple(choices)
 
@@ -138,7 +142,9 @@ def _scalar_field(values: NDArray, name: str, component: str | None, source: str
         raise VolrenError(f"{source}: array '{name}' has shape {values.shape}; volren renders a scalar field")
     if count == 1:
         if component is not None and component not in ("0", "x", MAGNITUDE):
-            raise VolrenError(f"{source}: array '{name}' has one component; there is no component {component!r}")
+            raise VolrenError(
+                f"{source}: array '{name}' has one component; there is no component {component!r}"
+            )
         return values.reshape(-1), name
     names = _component_names(count)
     if component is None or component == MAGNITUDE:
@@ -210,8 +216,14 @@ def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
             spacing[axis] = -spacing[axis]
             values = np.flip(values, axis=2 - axis)
     volume = UniformVolume(
-        np.ascontiguousarray(values), tuple(spacing), tuple(origin), name=name, notes=tuple(notes + grid.info),
-        scalars=grid.scalars, arrays=grid.arrays, patient_axes=anatomy,
+        np.ascontiguousarray(values),
+        tuple(spacing),
+        tuple(origin),
+        name=name,
+        notes=tuple(notes + grid.info),
+        scalars=grid.scalars,
+        arrays=grid.arrays,
+        patient_axes=anatomy,
     )
     _report(volume, notes)
     return volume

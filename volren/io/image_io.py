@@ -74,6 +74,7 @@ def save_array(rgba: ArrayLike, path: str | Path) -> None:
     image = np.asarray(rgba)
     if image.ndim != 3 or image.shape[2] != 4:
         raise VolrenError(f"{path}: an image must be an (H, W, 4) RGBA array, got shape {image.shape}")
+
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
             np.save(f, image.astype(np.float32, copy=False))

@@ -109,7 +109,7 @@ def _forked_child(send: Connection, work: Callable[[], Any]) -> None:
 
 
 def _how_to_read() -> str:
-    """"here" (this process), "fork" or "server" (a fresh interpreter's fork): see the module's
+    """ "here" (this process), "fork" or "server" (a fresh interpreter's fork): see the module's
     docstring."""
     if os.environ.get(_ENV_IN_PROCESS) == "1" or "fork" not in multiprocessing.get_all_start_methods():
         return "here"
@@ -158,7 +158,9 @@ def run_isolated(path: object, load: Callable[..., Any], *args: Any, **kwargs: A
     if how == "fork":
         message = _run_forked(path, functools.partial(load, *args, **kwargs))
     else:
-        message = _run_in_server(path, pickle.dumps((load, args, kwargs, os.getcwd(), dict(os.environ)), protocol=5))
+        message = _run_in_server(
+            path, pickle.dumps((load, args, kwargs, os.getcwd(), dict(os.environ)), protocol=5)
+        )
     status, packed, notes = message
     value = _unpack(*packed)
     for text, category in dict.fromkeys(notes):  # once each: the child recorded every repeat

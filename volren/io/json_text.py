@@ -62,7 +62,10 @@ def read_json(path: Path, lenient: bool = True) -> Any:
     except OSError as exc:
         raise file_error(path, f"cannot read: {exc.strerror}") from None
     if size > MAX_BYTES:
-        raise file_error(path, f"{size / 2**20:.0f} MiB is too large for a volren JSON file (at most {MAX_BYTES >> 20} MiB)")
+        raise file_error(
+            path,
+            f"{size / 2**20:.0f} MiB is too large for a volren JSON file (at most {MAX_BYTES >> 20} MiB)",
+        )
     try:
         text = path.read_text(encoding="utf-8-sig")
     except UnicodeDecodeError as exc:

@@ -78,7 +78,9 @@ def open_mapped(path: Path) -> MappedVolume | None:
         return None
     stored, spacing, origin = geometry
     nx, ny, nz = layout.shape
-    return MappedVolume(path.name, layout.data_file, layout.data_offset, stored, (nz, ny, nx), spacing, origin)
+    return MappedVolume(
+        path.name, layout.data_file, layout.data_offset, stored, (nz, ny, nx), spacing, origin
+    )
 
 
 def open_raw(
@@ -118,7 +120,11 @@ def _nrrd_geometry(path: Path, facts: dict) -> tuple[np.dtype, Triple, Triple] |
     fields, _ = _header(path)
     kinds = fields.get("kinds", "").lower().split()
     spacing = tuple(facts["spacing"])
-    if any(k not in _SPATIAL_KINDS for k in kinds) or "flip_axis" in facts or not is_identity(facts["direction"]):
+    if (
+        any(k not in _SPATIAL_KINDS for k in kinds)
+        or "flip_axis" in facts
+        or not is_identity(facts["direction"])
+    ):
         return None
     if len(spacing) != 3 or min(spacing) <= 0 or "axismins" in fields:
         return None
@@ -144,7 +150,9 @@ def _metaimage_geometry(path: Path) -> tuple[np.dtype, Triple, Triple] | None:
     origin_key = next((k for k in ("offset", "origin", "position") if k in fields), "offset")
     origin = parse_numbers(path, origin_key.capitalize(), fields.get(origin_key)) or (0.0, 0.0, 0.0)
     stored = np.dtype(_MET_TYPES[fields["elementtype"].upper()])
-    msb = (fields.get("elementbyteordermsb") or fields.get("binarydatabyteordermsb") or "false").lower() == "true"
+    msb = (
+        fields.get("elementbyteordermsb") or fields.get("binarydatabyteordermsb") or "false"
+    ).lower() == "true"
     if stored.itemsize > 1:
         stored = stored.newbyteorder(">" if msb else "<")
     return stored, spacing, origin
@@ -184,7 +192,10 @@ class BrickRows:
         if self._row is None or self._row[0] != first:
             self._row = None
             release_free_heap()  # the last row's and its bricks' pages, else kept by a fragmented heap
-            self._row = (first, self._read(slice(first[0], first[0] + self.rows), slice(first[1], first[1] + self.rows)))
+            self._row = (
+                first,
+                self._read(slice(first[0], first[0] + self.rows), slice(first[1], first[1] + self.rows)),
+            )
             self._count(first, self._row[1])
         values = self._row[1]
         return values[z.start - first[0] : z.stop - first[0], y.start - first[1] : y.stop - first[1], x]
@@ -197,7 +208,9 @@ class BrickRows:
         window = np.memmap(volume.data_file, dtype=volume.stored, mode="r", shape=(z1 - z0, ny, nx),
                            offset=volume.offset + z0 * ny * nx * volume.stored.itemsize)  # fmt: skip
         try:
-            values = np.array(window[:, max(y.start, 0) : min(y.stop, ny), :], dtype=volume.stored.newbyteorder("="))
+            values = np.array(
+                window[:, max(y.start, 0) : min(y.stop, ny), :], dtype=volume.stored.newbyteorder("=")
+            )
         finally:
             del window  # unmapped: its pages leave this process
         return normalize_dtype(values, volume.name)[0]

@@ -103,7 +103,9 @@ class MovieWriter:
     def append(self, frame: NDArray[np.uint8]) -> None:
         """Add one (H, W, 3) uint8 frame; every frame must have the first one's size."""
         if frame.dtype != np.uint8 or frame.ndim != 3 or frame.shape[2] != 3:
-            raise VolrenError(f"{self.path}: a movie frame must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}")
+            raise VolrenError(
+                f"{self.path}: a movie frame must be (H, W, 3) uint8, got {frame.shape} {frame.dtype}"
+            )
         if self._shape is not None and frame.shape != self._shape:
             raise VolrenError(f"{self.path}: frame {self.frames} is {frame.shape[1]}x{frame.shape[0]}, the movie "
                               f"{self._shape[1]}x{self._shape[0]}")  # fmt: skip
@@ -124,7 +126,9 @@ class MovieWriter:
         except (OSError, RuntimeError, ValueError, OverflowError) as exc:  # a GIF frame over 655 s
             raise file_error(self.path, f"cannot finish the movie: {_one_line(exc)}") from None
         written = self._frames_written()
-        if not (written == self.frames or (self.path.suffix.lower() == ".gif" and 1 <= written <= self.frames)):
+        if not (
+            written == self.frames or (self.path.suffix.lower() == ".gif" and 1 <= written <= self.frames)
+        ):
             raise file_error(self.path, f"cannot finish the movie: the encoder wrote {written} of its "
                                         f"{self.frames} frames")  # fmt: skip
 

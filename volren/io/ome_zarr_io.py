@@ -82,7 +82,9 @@ def _store_options(where: str) -> dict[str, Any]:
     try:
         import aiohttp
     except ImportError:
-        raise VolrenError(f"{where}: reading over HTTP needs aiohttp, which is not installed: {INSTALL_HINT}") from None
+        raise VolrenError(
+            f"{where}: reading over HTTP needs aiohttp, which is not installed: {INSTALL_HINT}"
+        ) from None
 
     timeout = aiohttp.ClientTimeout(total=None, connect=URL_TIMEOUT_S, sock_read=URL_TIMEOUT_S)
     return {"storage_options": {"client_kwargs": {"timeout": timeout}}}
@@ -230,7 +232,9 @@ def _finite(value: int | float) -> bool:
 
 def _numbers(values: Any, axes: int, what: str) -> list[float]:
     """`axes` finite numbers (bools and text refused: JSON's true is not a scale)."""
-    numeric = isinstance(values, list) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
+    numeric = isinstance(values, list) and all(
+        isinstance(v, int | float) and not isinstance(v, bool) for v in values
+    )
     if not numeric or len(values) != axes or not all(_finite(v) for v in values):
         raise VolrenError(f"its {what} must be a list of {axes} finite numbers, got {_shown(values)}")
     return [float(v) for v in values]
@@ -241,7 +245,9 @@ def _transforms(dataset: Mapping[str, Any], axes: int) -> tuple[list[float], lis
     transforms = dataset.get("coordinateTransformations", [])
     try:
         if not isinstance(transforms, list) or not all(isinstance(t, Mapping) for t in transforms):
-            raise VolrenError(f"its coordinateTransformations must be a list of objects, got {_shown(transforms)}")
+            raise VolrenError(
+                f"its coordinateTransformations must be a list of objects, got {_shown(transforms)}"
+            )
         for transform in transforms:
             kind = transform.get("type")
             if kind == "scale":
@@ -270,7 +276,9 @@ def _level(where: str, dataset: Any, axes: list[str]) -> LevelInfo:
                           "volume (one time point, one channel)")  # fmt: skip
     shape, chunks = tuple(array.shape[leading:]), tuple(array.chunks[leading:])
     if min(shape) < 1 or min(chunks) < 1:
-        raise VolrenError(f"level {key!r}: its shape {shape} and chunk shape {chunks} must have no empty side")
+        raise VolrenError(
+            f"level {key!r}: its shape {shape} and chunk shape {chunks} must have no empty side"
+        )
     scale, translation = _transforms(dataset, len(axes))
     ends = [t + h * (n - 1) for h, t, n in zip(scale[leading:], translation[leading:], shape, strict=True)]
     if not all(abs(v) <= MAX_COORDINATE for v in (*translation[leading:], *ends)):
@@ -301,7 +309,9 @@ def open_multiscale(path: str | Path) -> Multiscale:
         raise VolrenError(f"{where}: {exc}") from None
     except _read_errors() as exc:
         problem = server_problem(exc)
-        raise VolrenError(f"{where}: {problem or 'not a readable OME-Zarr image: ' + read_problem(exc)}") from None
+        raise VolrenError(
+            f"{where}: {problem or 'not a readable OME-Zarr image: ' + read_problem(exc)}"
+        ) from None
     name = meta.get("name")
     shown = str(name) if isinstance(name, str | int) and str(name) else Path(where.rstrip("/")).name
     return Multiscale(where, shown, tuple(levels), ranges, len(axes) - 3)
@@ -311,7 +321,9 @@ def _brick_range(entry: Any) -> tuple[float, float] | None:
     """One stored brick range: None (no finite value) or [min, max], two finite numbers in order."""
     if entry is None:
         return None
-    numeric = isinstance(entry, list) and all(isinstance(v, int | float) and not isinstance(v, bool) for v in entry)
+    numeric = isinstance(entry, list) and all(
+        isinstance(v, int | float) and not isinstance(v, bool) for v in entry
+    )
     if not numeric or len(entry) != 2 or not all(_finite(v) for v in entry) or entry[0] > entry[1]:
         raise VolrenError(f"a brick range must be null or [min, max], got {_shown(entry)}")
     return float(entry[0]), float(entry[1])
@@ -362,7 +374,9 @@ def _check_chunk_files(where: str, levels: Sequence[LevelInfo], ranges: tuple | 
 def _has_chunk_files(folder: Path) -> bool:
     """Whether a local level's folder holds anything but metadata (Zarr v2's dot files, v3's zarr.json)."""
     try:
-        return any(not entry.name.startswith(".") and entry.name != "zarr.json" for entry in os.scandir(folder))
+        return any(
+            not entry.name.startswith(".") and entry.name != "zarr.json" for entry in os.scandir(folder)
+        )
     except OSError:
         return True  # a level kept elsewhere (a link, an archive): nothing to say
 
@@ -384,16 +398,24 @@ def level_bytes(level: LevelInfo, copies_per_voxel: int = 0) -> int:
 def finest_level_within(image: Multiscale, budget: int, copies_per_voxel: int = 0) -> int | None:
     """The finest level whose values (and copies, `level_bytes`) take at most `budget` bytes
     (None: not even the coarsest)."""
-    return next((k for k, level in enumerate(image.levels) if level_bytes(level, copies_per_voxel) <= budget), None)
+    return next(
+        (k for k, level in enumerate(image.levels) if level_bytes(level, copies_per_voxel) <= budget), None
+    )
 
 
-def finest_level_said(image: Multiscale, budget: int, name: str, why: str = "", copies_per_voxel: int = 0) -> int | None:
+def finest_level_said(
+    image: Multiscale, budget: int, name: str, why: str = "", copies_per_voxel: int = 0
+) -> int | None:
     """`finest_level_within`, with a one-line warning (naming `name`, and `why` after it) when
     that is not the full resolution."""
     level = finest_level_within(image, budget, copies_per_voxel)
     if level:
         whole = human_size(level_bytes(image.levels[0]))
-        drawn = f" ({human_size(level_bytes(image.levels[0], copies_per_voxel))} drawn)" if copies_per_voxel else ""
+        drawn = (
+            f" ({human_size(level_bytes(image.levels[0], copies_per_voxel))} drawn)"
+            if copies_per_voxel
+            else ""
+        )
         warnings.warn(f"{name}: its full resolution is {whole}{drawn}, more than the {human_size(budget)} allowed; "
                       f"rendering level {level}, the finest that fits{why}", VolrenWarning, stacklevel=3)  # fmt: skip
     return level
@@ -453,12 +475,16 @@ def read_brick(image: Multiscale, level: int, array: Any, index: tuple[int, ...]
     """The values of brick (chunk) `index` (kz, ky, kx) of `level`, whose zarr array is `array`;
     a brick that cannot be read is a one-line error naming it."""
     info = image.levels[level]
-    where = tuple(slice(k * c, min((k + 1) * c, n)) for k, c, n in zip(index, info.chunks, info.shape, strict=True))
+    where = tuple(
+        slice(k * c, min((k + 1) * c, n)) for k, c, n in zip(index, info.chunks, info.shape, strict=True)
+    )
     try:
         return np.asarray(array[(0,) * image.leading + where])
     except Exception as exc:  # noqa: BLE001 - a codec's error, whatever its type, names the brick
         key = ".".join(str(k) for k in index)
-        raise VolrenError(f"{image.path}: level {info.key!r}, brick {key}: cannot be read: {read_problem(exc)}") from None
+        raise VolrenError(
+            f"{image.path}: level {info.key!r}, brick {key}: cannot be read: {read_problem(exc)}"
+        ) from None
 
 
 def _level_bricks(info: LevelInfo) -> Iterator[tuple[tuple[int, ...], tuple[slice, ...]]]:
@@ -474,7 +500,9 @@ def save_ome_zarr(volume: UniformVolume, path: str | Path, chunk: int = DEFAULT_
                   progress: Progress | None = None) -> int:  # fmt: skip
     """Write `volume` as an OME-Zarr pyramid at `path` (a new folder; an old one is replaced only
     once the new one is complete); returns the number of levels written."""
-    return write_pyramid(volume.values, volume.spacing, volume.origin, volume.name, path, chunk, levels, progress)
+    return write_pyramid(
+        volume.values, volume.spacing, volume.origin, volume.name, path, chunk, levels, progress
+    )
 
 
 def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float], name: str, path: str | Path,
@@ -512,7 +540,9 @@ def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float]
                     brick = np.asarray(values[where])
                 else:  # the block means of the 2x larger block below (its odd last samples left out)
                     release_free_heap()  # the last block's pages, which a fragmented heap would keep
-                    brick = block_mean(np.asarray(below[tuple(slice(2 * w.start, 2 * w.stop) for w in where)]))
+                    brick = block_mean(
+                        np.asarray(below[tuple(slice(2 * w.start, 2 * w.stop) for w in where)])
+                    )
                 array[where] = brick
                 level_ranges.append(value_range(brick))
                 done += 1
@@ -520,12 +550,24 @@ def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float]
                     progress(min(done / total, 1.0))
             below = array
             ranges.append(level_ranges)
-            datasets.append({"path": str(index), "coordinateTransformations": [
-                {"type": "scale", "scale": list(level_spacing[::-1])},
-                {"type": "translation", "translation": list(level_origin[::-1])}]})
-        group.attrs["multiscales"] = [{
-            "version": NGFF_WRITTEN, "name": name, "type": "2x2x2 block mean",
-            "axes": [{"name": a, "type": "space"} for a in "zyx"], "datasets": datasets}]
+            datasets.append(
+                {
+                    "path": str(index),
+                    "coordinateTransformations": [
+                        {"type": "scale", "scale": list(level_spacing[::-1])},
+                        {"type": "translation", "translation": list(level_origin[::-1])},
+                    ],
+                }
+            )
+        group.attrs["multiscales"] = [
+            {
+                "version": NGFF_WRITTEN,
+                "name": name,
+                "type": "2x2x2 block mean",
+                "axes": [{"name": a, "type": "space"} for a in "zyx"],
+                "datasets": datasets,
+            }
+        ]
         group.attrs[VOLREN_KEY] = {"version": 1, "brick_ranges": [[None if r is None else list(r) for r in level]
                                                                     for level in ranges]}  # fmt: skip
     except VolrenError:
@@ -533,7 +575,9 @@ def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float]
         raise
     except (OSError, ValueError) as exc:
         shutil.rmtree(partial, ignore_errors=True)
-        raise VolrenError(f"{path}: cannot write the OME-Zarr image: {' '.join(str(exc).split())[:200]}") from None
+        raise VolrenError(
+            f"{path}: cannot write the OME-Zarr image: {' '.join(str(exc).split())[:200]}"
+        ) from None
     except BaseException:
         shutil.rmtree(partial, ignore_errors=True)
         raise

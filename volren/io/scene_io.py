@@ -85,7 +85,11 @@ def _volume_from_series(data: dict, folder: Path, path: Path) -> None:
     entry = data.get(TIME_SERIES_KEY)
     if entry is None:
         return
-    if not isinstance(entry, Mapping) or not isinstance(entry.get("path"), str) or not _is_step(entry.get("step")):
+    if (
+        not isinstance(entry, Mapping)
+        or not isinstance(entry.get("path"), str)
+        or not _is_step(entry.get("step"))
+    ):
         raise file_error(path, f"'{TIME_SERIES_KEY}' must be an object with a 'path' (a .pvd file or a folder of "
                                "volume files) and a 'step' (an integer from 0)")  # fmt: skip
     try:
@@ -94,7 +98,9 @@ def _volume_from_series(data: dict, folder: Path, path: Path) -> None:
         raise file_error(path, f"time series: {exc}") from None
     step = entry["step"]
     if step >= len(series):
-        raise file_error(path, f"time series step {step}: {series.source.name} has steps 0 to {len(series) - 1}")
+        raise file_error(
+            path, f"time series step {step}: {series.source.name} has steps 0 to {len(series) - 1}"
+        )
     data[TIME_SERIES_KEY] = {**entry, "path": str(series.source)}
     volume = data.get("volume") or {}
     if isinstance(volume, Mapping):  # anything else is `Scene.from_dict`'s to report

@@ -44,7 +44,9 @@ def _natural_key(path: Path) -> list[object]:
 
 
 def _folder_steps(folder: Path) -> list[Path]:
-    return sorted((p for p in folder.iterdir() if p.is_file() and suffix_of(p) in STEP_SUFFIXES), key=_natural_key)
+    return sorted(
+        (p for p in folder.iterdir() if p.is_file() and suffix_of(p) in STEP_SUFFIXES), key=_natural_key
+    )
 
 
 def is_series(path: str | Path) -> bool:
@@ -66,14 +68,16 @@ def _read_pvd(path: Path) -> tuple[list[Path], list[float]]:
     except (ElementTree.ParseError, OSError, UnicodeDecodeError) as exc:
         raise file_error(path, f"not a readable .pvd collection: {' '.join(str(exc).split())}") from None
     if root.tag != "VTKFile" or root.get("type") != "Collection":
-        raise file_error(path, "not a ParaView data collection (expected <VTKFile type=\"Collection\">)")
+        raise file_error(path, 'not a ParaView data collection (expected <VTKFile type="Collection">)')
     entries = root.findall("./Collection/DataSet")
     if not entries:
         raise file_error(path, "the collection lists no data sets")
     if len(entries) > MAX_STEPS:
         raise file_error(path, f"the collection lists {len(entries):,} data sets; at most {MAX_STEPS:,}")
     if any(entry.get("part", "0") != "0" for entry in entries):
-        raise file_error(path, "the collection has several parts per time step; volren reads one volume per step")
+        raise file_error(
+            path, "the collection has several parts per time step; volren reads one volume per step"
+        )
     steps, times = [], []
     for index, entry in enumerate(entries):
         name = entry.get("file")
@@ -82,7 +86,9 @@ def _read_pvd(path: Path) -> tuple[list[Path], list[float]]:
         try:
             time = float(entry.get("timestep", index))
         except ValueError:
-            raise file_error(path, f"data set {index}: timestep {entry.get('timestep')!r} is not a number") from None
+            raise file_error(
+                path, f"data set {index}: timestep {entry.get('timestep')!r} is not a number"
+            ) from None
         if not math.isfinite(time):
             raise file_error(path, f"data set {index}: timestep {entry.get('timestep')!r} is not finite")
         steps.append((path.parent / name).resolve())
@@ -100,7 +106,10 @@ def load_series(path: str | Path) -> TimeSeries:
     if path.is_dir():
         steps = _folder_steps(path)
         if len(steps) < 2:
-            raise file_error(path, f"a time series folder needs two or more volume files ({', '.join(sorted(STEP_SUFFIXES))})")
+            raise file_error(
+                path,
+                f"a time series folder needs two or more volume files ({', '.join(sorted(STEP_SUFFIXES))})",
+            )
         if len(steps) > MAX_STEPS:
             raise file_error(path, f"{len(steps):,} volume files; a time series has at most {MAX_STEPS:,}")
         times = [float(i) for i in range(len(steps))]
@@ -108,7 +117,9 @@ def load_series(path: str | Path) -> TimeSeries:
         steps, times = _read_pvd(path)
         missing = [step for step in steps if not step.is_file()]
         if missing:
-            raise file_error(path, f"{len(missing)} of its {len(steps)} files are missing, e.g. {missing[0].name}")
+            raise file_error(
+                path, f"{len(missing)} of its {len(steps)} files are missing, e.g. {missing[0].name}"
+            )
     else:
         raise VolrenError(f"{path}: not a time series (a .pvd file, or a folder of volume files)")
     return TimeSeries(path, tuple(steps), tuple(times))

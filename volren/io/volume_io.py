@@ -92,7 +92,9 @@ def load_volume(
 
     if is_ome_zarr(path) and shape is None:
         if scalars is not None:
-            raise file_error(path, f"an OME-Zarr image holds one field; there is no array {scalars!r} to choose")
+            raise file_error(
+                path, f"an OME-Zarr image holds one field; there is no array {scalars!r} to choose"
+            )
         return load_ome_zarr(path, level)
     if level is not None:
         raise file_error(path, f"level={level} applies to OME-Zarr images (a .zarr folder or URL) only")

@@ -31,15 +31,26 @@ CastRays = Callable[[NDArray[np.int64]], NDArray[np.floating]]
 def is_stride(stride: object) -> bool:
     """Whether `stride` is a power of two from 1 to 64 (an int, not a bool): the block sizes the
     refinement halves down to single pixels."""
-    return not isinstance(stride, bool) and isinstance(stride, int) and 1 <= stride <= 64 and not stride & (stride - 1)
+    return (
+        not isinstance(stride, bool)
+        and isinstance(stride, int)
+        and 1 <= stride <= 64
+        and not stride & (stride - 1)
+    )
 
 
 #: The rule of a renderer's image_stride option (its OptionSpec).
 STRIDE_RULE = OptionRule(is_stride, "1, 2, 4, 8, 16, 32 or 64")
 
 
-def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance: float,
-                 progress: ProgressCallback | None = None) -> tuple[NDArray[np.floating], int]:
+def refine_image(
+    cast: CastRays,
+    width: int,
+    height: int,
+    stride: int,
+    tolerance: float,
+    progress: ProgressCallback | None = None,
+) -> tuple[NDArray[np.floating], int]:
     """The (height * width, 4) image (in the dtype `cast` returns) and the number of rays cast.
 
     The blocks of each level are `stride` pixels wide (the last row and column of blocks are cut at
@@ -65,8 +76,10 @@ def refine_image(cast: CastRays, width: int, height: int, stride: int, tolerance
 
     x0: NDArray[np.int64]
     y0: NDArray[np.int64]
-    x0, y0 = np.meshgrid(np.arange(0, max(width - 1, 1), stride, dtype=np.int64),
-                         np.arange(0, max(height - 1, 1), stride, dtype=np.int64))
+    x0, y0 = np.meshgrid(
+        np.arange(0, max(width - 1, 1), stride, dtype=np.int64),
+        np.arange(0, max(height - 1, 1), stride, dtype=np.int64),
+    )
     x0, y0 = x0.ravel(), y0.ravel()
     size = stride
     sample(x0, y0, size, 2)  # the blocks' corners

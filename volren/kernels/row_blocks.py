@@ -11,8 +11,14 @@ import numba
 from volren.model.progress import ProgressCallback
 
 
-def run_in_row_blocks(width: int, height: int, blocks: int, chunk_size: int, kernel: Callable[[int, int], None],
-                      progress: ProgressCallback | None) -> None:
+def run_in_row_blocks(
+    width: int,
+    height: int,
+    blocks: int,
+    chunk_size: int,
+    kernel: Callable[[int, int], None],
+    progress: ProgressCallback | None,
+) -> None:
     """Call kernel(first pixel, end pixel) for about `blocks` blocks of whole rows, with numba's
     parallel chunk size set to `chunk_size` meanwhile (rays of one chunk walk similar paths; the
     caller's setting comes back afterwards), and report the fraction of rows done after each."""

@@ -46,7 +46,11 @@ def _packed(points, tets, faces, out):
             ny = uz * vx - ux * vz
             nz = ux * vy - uy * vx
             o = tets[t, f]
-            side = nx * (points[o, 0] - points[a, 0]) + ny * (points[o, 1] - points[a, 1]) + nz * (points[o, 2] - points[a, 2])
+            side = (
+                nx * (points[o, 0] - points[a, 0])
+                + ny * (points[o, 1] - points[a, 1])
+                + nz * (points[o, 2] - points[a, 2])
+            )
             sigma = 1.0 if side > 0.0 else -1.0
             length = math.sqrt(nx * nx + ny * ny + nz * nz)
             scale = sigma / (length if length > 0.0 else 1.0)
@@ -63,5 +67,10 @@ def packed_face_planes(points: NDArray[np.float64], tets: NDArray[np.int64]) -> 
     """(m, 4, 4) inward unit plane equations (N, D) of the faces of `tets` (m, 4): N . x + D is
     the signed distance from face f (opposite vertex f); flat faces get zero planes."""
     out = np.empty((len(tets), 4, 4))
-    _packed(np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(tets, dtype=np.int64), _FACES, out)
+    _packed(
+        np.ascontiguousarray(points, dtype=np.float64),
+        np.ascontiguousarray(tets, dtype=np.int64),
+        _FACES,
+        out,
+    )
     return out

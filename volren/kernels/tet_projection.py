@@ -27,14 +27,17 @@ def ray_far(camera, dirs: np.ndarray) -> np.ndarray:
     return (far - near) / cos
 
 
-def pixel_coordinates(camera, width: int, height: int, points: np.ndarray) -> tuple[np.ndarray, np.ndarray,
-                                                                                     np.ndarray]:
+def pixel_coordinates(
+    camera, width: int, height: int, points: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(px, py, w): points (n, 3) at pixel coordinates (pixel centres at integers, row 0 at the top)
     and their clip w (<= 0: on or behind the eye's plane, where px, py are the points divided by 1)."""
     matrix = camera.projection_matrix(width / height) @ camera.view_matrix()
     n = len(points)
     px, py, w = np.empty(n), np.empty(n), np.empty(n)
-    _pixel_coordinates(np.ascontiguousarray(points, dtype=np.float64), matrix, int(width), int(height), px, py, w)
+    _pixel_coordinates(
+        np.ascontiguousarray(points, dtype=np.float64), matrix, int(width), int(height), px, py, w
+    )
     return px, py, w
 
 
@@ -50,7 +53,9 @@ def _pixel_coordinates(points, m, width, height, px, py, pw):
         py[i] = (1.0 - (m[1, 0] * x + m[1, 1] * y + m[1, 2] * z + m[1, 3]) / w) * 0.5 * height - 0.5
 
 
-def projected_boxes(camera, width: int, height: int, points: np.ndarray, tets: np.ndarray, ok: np.ndarray) -> np.ndarray:
+def projected_boxes(
+    camera, width: int, height: int, points: np.ndarray, tets: np.ndarray, ok: np.ndarray
+) -> np.ndarray:
     """Pixel boxes of the projected tetrahedra whose `ok` is set (see `tet_boxes`)."""
     px, py, w = pixel_coordinates(camera, width, height, points)
     view = camera.view_matrix()

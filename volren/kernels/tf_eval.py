@@ -137,7 +137,9 @@ def mean_extinction(aa, ab, unit):
     e = 0.5 * (wb - wa) / wm
     if abs(e) < 1e-2:
         e2 = e * e
-        mean = -math.log1p(-0.5 * (aa + ab)) + e2 * (1.0 / 6.0 + e2 * (1.0 / 20.0 + e2 * (1.0 / 42.0 + e2 / 72.0)))
+        mean = -math.log1p(-0.5 * (aa + ab)) + e2 * (
+            1.0 / 6.0 + e2 * (1.0 / 20.0 + e2 * (1.0 / 42.0 + e2 / 72.0))
+        )
     else:
         phi_a = wa * math.log1p(-aa) - wa
         phi_b = wb * math.log1p(-ab) - wb

@@ -115,7 +115,9 @@ def blend_views(a: View, b: View, weight: float) -> View:
             view_angle=(1 - weight) * a.view_angle + weight * b.view_angle,
             parallel_scale=(1 - weight) * a.parallel_scale + weight * b.parallel_scale,
         ).orthogonalize_view_up()
-    raise VolrenError("camera keyframes must all be orbit views (azimuth, elevation, zoom) or all explicit cameras")
+    raise VolrenError(
+        "camera keyframes must all be orbit views (azimuth, elevation, zoom) or all explicit cameras"
+    )
 
 
 @dataclass(frozen=True)
@@ -193,7 +195,9 @@ class Animation:
         i, j, weight = _segment(times, self.time(index))
         if weight == 0:  # the keyframe's own TF: frames that hold it share it, and the renderer's tables
             return self.tf_keys[i].transfer_function
-        return blend_transfer_functions(self.tf_keys[i].transfer_function, self.tf_keys[j].transfer_function, weight)
+        return blend_transfer_functions(
+            self.tf_keys[i].transfer_function, self.tf_keys[j].transfer_function, weight
+        )
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Animation:

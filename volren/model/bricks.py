@@ -198,8 +198,10 @@ class BrickGrid:
         vmin, vmax, bad = self.vmin, self.vmax, self.has_nonfinite
         for axis in range(3):
             for _ in range(int(reach)):
-                vmin, vmax, bad = (_shift_reduce(a, f, axis) for a, f in
-                                   ((vmin, np.minimum), (vmax, np.maximum), (bad, np.logical_or)))
+                vmin, vmax, bad = (
+                    _shift_reduce(a, f, axis)
+                    for a, f in ((vmin, np.minimum), (vmax, np.maximum), (bad, np.logical_or))
+                )
         grid = BrickGrid(vmin, vmax, bad, self.brick, self.dimensions, self.spacing, self.origin)
         return grid
 

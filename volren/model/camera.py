@@ -140,7 +140,9 @@ class Camera:
         object.__setattr__(self, "view_up", _vec(self.view_up, "view up"))
         for what, point in (("position", self.position), ("focal point", self.focal_point)):
             if max(map(abs, point)) > MAX_COORDINATE:
-                raise VolrenError(f"camera {what} {list(point)} lies beyond {MAX_COORDINATE:g} from the origin")
+                raise VolrenError(
+                    f"camera {what} {list(point)} lies beyond {MAX_COORDINATE:g} from the origin"
+                )
         if self.view_up == (0.0, 0.0, 0.0):
             raise VolrenError("camera view up is the zero vector; give the direction that is up in the image")
         if np.allclose(self.position, self.focal_point):

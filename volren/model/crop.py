@@ -28,13 +28,19 @@ def check_box(box: Sequence[float]) -> Box:
     try:
         values = tuple(float(v) for v in box)
     except (TypeError, ValueError):
-        raise VolrenError(f"a crop box is six numbers (xmin, xmax, ymin, ymax, zmin, zmax), got {box!r}") from None
+        raise VolrenError(
+            f"a crop box is six numbers (xmin, xmax, ymin, ymax, zmin, zmax), got {box!r}"
+        ) from None
     if len(values) != 6 or not all(math.isfinite(v) for v in values):
-        raise VolrenError(f"a crop box is six finite numbers (xmin, xmax, ymin, ymax, zmin, zmax), got {box!r}")
+        raise VolrenError(
+            f"a crop box is six finite numbers (xmin, xmax, ymin, ymax, zmin, zmax), got {box!r}"
+        )
     for axis in range(3):
         if values[2 * axis] > values[2 * axis + 1]:
-            raise VolrenError(f"crop box: {'xyz'[axis]}min {values[2 * axis]:g} is above {'xyz'[axis]}max "
-                              f"{values[2 * axis + 1]:g}")
+            raise VolrenError(
+                f"crop box: {'xyz'[axis]}min {values[2 * axis]:g} is above {'xyz'[axis]}max "
+                f"{values[2 * axis + 1]:g}"
+            )
     return values  # type: ignore[return-value]
 
 
@@ -69,7 +75,9 @@ def _crop_uniform(volume: UniformVolume, box: Box) -> UniformVolume:
     slices = []
     origin = []
     for axis, n in zip(range(3), (nx, ny, nz), strict=True):
-        first, stop = _index_range(box[2 * axis], box[2 * axis + 1], volume.origin[axis], volume.spacing[axis], n)
+        first, stop = _index_range(
+            box[2 * axis], box[2 * axis + 1], volume.origin[axis], volume.spacing[axis], n
+        )
         slices.append(slice(first, stop))
         origin.append(volume.origin[axis] + first * volume.spacing[axis])
     sx, sy, sz = slices

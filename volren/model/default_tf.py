@@ -117,7 +117,9 @@ def volume_histogram(volume: Volume) -> Histogram:
     weights = np.bincount(volume.tets.reshape(-1), np.repeat(tet_volume / 4, 4), minlength=len(volume.points))
     values = volume.values.astype(np.float64)
     finite = np.isfinite(values)
-    counts, bin_edges = np.histogram(values[finite], DEFAULT_BINS, volume.value_range, weights=weights[finite])
+    counts, bin_edges = np.histogram(
+        values[finite], DEFAULT_BINS, volume.value_range, weights=weights[finite]
+    )
     return Histogram(bin_edges, counts)
 
 
@@ -125,7 +127,10 @@ def default_transfer_function(volume: Volume) -> TransferFunction1D:
     """The TF a volume gets when none is given (see the module docstring), per voxel (or tet edge)."""
     lo, hi = volume.value_range
     if not math.isfinite(hi - lo):  # values near the float64 limits: no histogram has finite bins there
-        color, opacity = color_stops(VIRIDIS, lo, hi), [[lo, 0.0], [lerp(lo, hi, 0.1), 0.0], [hi, CONSTANT_OPACITY]]
+        color, opacity = (
+            color_stops(VIRIDIS, lo, hi),
+            [[lo, 0.0], [lerp(lo, hi, 0.1), 0.0], [hi, CONSTANT_OPACITY]],
+        )
         return TransferFunction1D(color, opacity, volume.characteristic_length)
     if not hi > lo:
         return TransferFunction1D(color_stops(VIRIDIS, lo, lo + 1.0), [[lo, CONSTANT_OPACITY], [lo + 1.0, CONSTANT_OPACITY]],
@@ -134,4 +139,6 @@ def default_transfer_function(volume: Volume) -> TransferFunction1D:
     shape, visible_lo, visible_hi = _shape(volume, histogram.edges, histogram.counts)
     peak = _peak_opacity(volume, shape, histogram.edges, histogram.counts)
     opacity = [[x, a * peak] for x, a in shape]
-    return TransferFunction1D(color_stops(VIRIDIS, visible_lo, visible_hi), opacity, volume.characteristic_length)
+    return TransferFunction1D(
+        color_stops(VIRIDIS, visible_lo, visible_hi), opacity, volume.characteristic_length
+    )

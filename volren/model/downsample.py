@@ -60,7 +60,9 @@ def downsample(volume: UniformVolume, factor: int) -> UniformVolume:
     """`volume` reduced `factor`:1 along each axis (an axis keeps at least 2 samples), with the
     same bounds; `factor` 1 returns `volume` itself."""
     if isinstance(factor, bool) or not isinstance(factor, int) or factor not in FACTORS:
-        raise VolrenError(f"{volume.name}: downsampling factor must be one of {', '.join(map(str, FACTORS))}, got {factor!r}")
+        raise VolrenError(
+            f"{volume.name}: downsampling factor must be one of {', '.join(map(str, FACTORS))}, got {factor!r}"
+        )
     if factor == 1:
         return volume
     values = np.asarray(volume.values, np.float32)
@@ -70,6 +72,8 @@ def downsample(volume: UniformVolume, factor: int) -> UniformVolume:
         values = _halve(values)
     nz, ny, nx = volume.values.shape
     counts = values.shape[::-1]
-    spacing = tuple(s * (n - 1) / (m - 1) for s, n, m in zip(volume.spacing, (nx, ny, nz), counts, strict=True))
+    spacing = tuple(
+        s * (n - 1) / (m - 1) for s, n, m in zip(volume.spacing, (nx, ny, nz), counts, strict=True)
+    )
     return UniformVolume(np.ascontiguousarray(values), spacing=spacing, origin=volume.origin,
                          name=f"{volume.name} (1/{factor})")  # fmt: skip

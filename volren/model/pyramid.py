@@ -70,21 +70,30 @@ def level_shapes(shape: tuple[int, ...], levels: int) -> list[tuple[int, ...]]:
     return shapes
 
 
-def coarser_placement(spacing: Sequence[float], origin: Sequence[float]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def coarser_placement(
+    spacing: Sequence[float], origin: Sequence[float]
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """(spacing, origin) of the level above one placed at `spacing`, `origin`: twice the spacing,
     and the first block mean at the centre of its block, half a fine voxel in."""
     return (tuple(2.0 * h for h in spacing),
             tuple(o + 0.5 * h for o, h in zip(origin, spacing, strict=True)))  # fmt: skip
 
 
-def brick_slices(shape: tuple[int, ...], chunk: int) -> Iterator[tuple[tuple[int, int, int], tuple[slice, ...]]]:
+def brick_slices(
+    shape: tuple[int, ...], chunk: int
+) -> Iterator[tuple[tuple[int, int, int], tuple[slice, ...]]]:
     """(brick index (kz, ky, kx), the brick's slices) over a level, in C order of the brick grid."""
     counts = [math.ceil(n / chunk) for n in shape]
     for kz in range(counts[0]):
         for ky in range(counts[1]):
             for kx in range(counts[2]):
                 index = (kz, ky, kx)
-                yield index, tuple(slice(k * chunk, min((k + 1) * chunk, n)) for k, n in zip(index, shape, strict=True))
+                yield (
+                    index,
+                    tuple(
+                        slice(k * chunk, min((k + 1) * chunk, n)) for k, n in zip(index, shape, strict=True)
+                    ),
+                )
 
 
 def value_range(brick: NDArray) -> tuple[float, float] | None:

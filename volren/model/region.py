@@ -49,7 +49,9 @@ class Region:
         if not all(np.isfinite(v) for v in numbers):
             raise VolrenError(f"a region's box and value range must be finite, got {self}")
         if not all(lo < hi for lo, hi in zip(self.owner_min, self.owner_max)):
-            raise VolrenError(f"a region's owner box must have min < max per axis, got {self.owner_min}..{self.owner_max}")
+            raise VolrenError(
+                f"a region's owner box must have min < max per axis, got {self.owner_min}..{self.owner_max}"
+            )
         if not self.value_range[0] <= self.value_range[1]:
             raise VolrenError(f"a region's value range must have lo <= hi, got {self.value_range}")
 
@@ -76,7 +78,9 @@ class Region:
         region's box (the owner box within the whole box), a pixel wider on every side. The whole
         image when a corner lies behind the eye."""
         lo, hi = self.box
-        corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        corners = np.array(
+            [[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        )
         clip = corners @ (camera.projection_matrix(width / height) @ camera.view_matrix()).T
         if np.any(clip[:, 3] <= 1e-9):
             return 0, 0, width, height

@@ -47,7 +47,12 @@ class OrbitView:
         return Camera.orbit(bounds, self.azimuth, self.elevation, self.zoom, self.parallel, aspect)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"azimuth": self.azimuth, "elevation": self.elevation, "zoom": self.zoom, "parallel": self.parallel}
+        return {
+            "azimuth": self.azimuth,
+            "elevation": self.elevation,
+            "zoom": self.zoom,
+            "parallel": self.parallel,
+        }
 
 
 def camera_from_dict(data: Mapping[str, Any]) -> OrbitView | Camera:
@@ -123,7 +128,9 @@ class Scene:
                 raise VolrenError(f"scene 'volume.{key}' must be a string, got {volume.get(key)!r}")
         if "transfer_function" not in data:
             if data.get("kind") in ("1d", "2d") or "opacity" in data or "widgets" in data:
-                raise VolrenError("this is a transfer function, not a scene: give it with --tf (and the volume as INPUT)")
+                raise VolrenError(
+                    "this is a transfer function, not a scene: give it with --tf (and the volume as INPUT)"
+                )
             raise VolrenError("scene has no 'transfer_function'")
         size = data.get("size", [512, 512])
         if not isinstance(size, Sequence) or isinstance(size, str) or len(size) != 2:

@@ -323,8 +323,9 @@ class FacePlanes:
     usable: NDArray[np.bool_]  # (m,) neither flat nor with a non-finite vertex value
 
 
-def face_planes(points: NDArray, tets: NDArray, values: NDArray, gradients: NDArray,
-                usable: NDArray[np.bool_]) -> FacePlanes:
+def face_planes(
+    points: NDArray, tets: NDArray, values: NDArray, gradients: NDArray, usable: NDArray[np.bool_]
+) -> FacePlanes:
     """`FacePlanes` of the cells `tets` (m, 4) of a mesh."""
     faces = tets[:, FACE_VERTICES]  # (m, 4, 3)
     lo, mid, hi = _sort3(faces[..., 0], faces[..., 1], faces[..., 2])

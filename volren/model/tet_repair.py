@@ -31,7 +31,9 @@ def signed_volumes(points: NDArray, tets: NDArray) -> NDArray[np.float64]:
 FLAT_REL_TOL = 1e-9
 
 
-def flat_cells(six_volumes: NDArray, longest_edges: NDArray, repeated: NDArray[np.bool_]) -> NDArray[np.bool_]:
+def flat_cells(
+    six_volumes: NDArray, longest_edges: NDArray, repeated: NDArray[np.bool_]
+) -> NDArray[np.bool_]:
     """The flat tetrahedra, from 6 * signed volume, the longest edge and whether a vertex repeats;
     relative to the edge length, so the decision does not depend on units."""
     return repeated | (np.abs(six_volumes) <= 6.0 * FLAT_REL_TOL * longest_edges**3)
@@ -73,8 +75,9 @@ def merged_duplicates(points: NDArray, values: NDArray) -> NDArray[np.int64]:
     rows = np.empty((len(points), 4))
     rows[:, :3] = points + 0.0  # -0.0 -> 0.0
     rows[:, 3] = values + 0.0
-    _, first, inverse = np.unique(rows.view(np.dtype((np.void, 32))).ravel(), return_index=True,
-                                  return_inverse=True)
+    _, first, inverse = np.unique(
+        rows.view(np.dtype((np.void, 32))).ravel(), return_index=True, return_inverse=True
+    )
     return first[inverse.ravel()]
 
 

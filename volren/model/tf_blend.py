@@ -81,8 +81,12 @@ def blend_transfer_functions(a: TransferFunction, b: TransferFunction, weight: f
         if len(a.widgets) != len(b.widgets):
             raise VolrenError(f"cannot blend 2D transfer functions with {len(a.widgets)} and {len(b.widgets)} widgets: "
                               "TF keyframes of a 2D TF need the same widgets")  # fmt: skip
-        widgets = [_blend_widgets(p, q, weight, i) for i, (p, q) in enumerate(zip(a.widgets, b.widgets, strict=True))]
+        widgets = [
+            _blend_widgets(p, q, weight, i) for i, (p, q) in enumerate(zip(a.widgets, b.widgets, strict=True))
+        ]
         value_range = _mix(a.value_range, b.value_range, weight)
         gradient_range = _mix(a.gradient_range, b.gradient_range, weight)
         return TransferFunction2D(value_range, gradient_range, widgets, unit, a.extra)
-    raise VolrenError(f"cannot blend a {a.dims}D and a {b.dims}D transfer function: TF keyframes need one kind")
+    raise VolrenError(
+        f"cannot blend a {a.dims}D and a {b.dims}D transfer function: TF keyframes need one kind"
+    )

@@ -123,7 +123,9 @@ class TransferFunction1D(Versioned):
         if not math.isfinite(unit) or unit <= 0:
             raise VolrenError(f"opacity_unit_distance must be positive and finite, got {value!r}")
         if unit < MIN_UNIT_DISTANCE:
-            raise VolrenError(f"opacity_unit_distance {value!r} is absurdly small (at least {MIN_UNIT_DISTANCE:g})")
+            raise VolrenError(
+                f"opacity_unit_distance {value!r} is absurdly small (at least {MIN_UNIT_DISTANCE:g})"
+            )
         return unit
 
     # ------------------------------------------------------------------------------ state

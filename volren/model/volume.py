@@ -129,8 +129,7 @@ class UniformVolume:
         if min(values.shape) < 2:
             nx, ny, nz = values.shape[::-1]
             raise VolrenError(
-                f"{self.name}: volume rendering needs at least 2 samples along each axis, "
-                f"got {nx}x{ny}x{nz}"
+                f"{self.name}: volume rendering needs at least 2 samples along each axis, got {nx}x{ny}x{nz}"
             )
         values, conversion = normalize_dtype(values, self.name)
         values = np.ascontiguousarray(values)
@@ -226,7 +225,9 @@ class TetVolume:
         if tets.ndim != 2 or tets.shape[1] != 4:
             raise VolrenError(f"{self.name}: tets must have shape (m, 4), got {tets.shape}")
         if len(tets) == 0 or len(points) == 0:
-            raise VolrenError(f"{self.name}: the mesh is empty ({len(points)} points, {len(tets)} tetrahedra)")
+            raise VolrenError(
+                f"{self.name}: the mesh is empty ({len(points)} points, {len(tets)} tetrahedra)"
+            )
         if not np.issubdtype(tets.dtype, np.integer):
             raise VolrenError(f"{self.name}: tetrahedron indices must be integers, got {tets.dtype}")
         tets = np.ascontiguousarray(tets, dtype=np.int64)

@@ -6,4 +6,12 @@ Renderers receive `volren.model` objects only; they never import Qt or read file
 from volren.renderers.base import Capabilities, FrameStats, KindSupport, Renderer, RendererBase
 from volren.renderers.registry import RendererRegistry, registry
 
-__all__ = ["Capabilities", "FrameStats", "KindSupport", "Renderer", "RendererBase", "RendererRegistry", "registry"]
+__all__ = [
+    "Capabilities",
+    "FrameStats",
+    "KindSupport",
+    "Renderer",
+    "RendererBase",
+    "RendererRegistry",
+    "registry",
+]

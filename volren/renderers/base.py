@@ -97,7 +97,9 @@ class OptionSpec:
 
     def __post_init__(self) -> None:
         if self.kind not in OPTION_KINDS:
-            raise VolrenError(f"option {self.name}: kind must be one of {', '.join(OPTION_KINDS)}, got {self.kind!r}")
+            raise VolrenError(
+                f"option {self.name}: kind must be one of {', '.join(OPTION_KINDS)}, got {self.kind!r}"
+            )
         if (self.kind == "choice") != bool(self.choices):
             raise VolrenError(f"option {self.name}: choices go with kind 'choice' and only with it")
         if self.low_exclusive and self.kind != "float":
@@ -127,7 +129,7 @@ class OptionSpec:
         return ("an integer" if self.kind == "int" else "a number") + self._range_text()
 
     def _range_text(self) -> str:
-        """" in 16..4096", " in (0, 1]", " >= 0", or "" for no bounds."""
+        """ " in 16..4096", " in (0, 1]", " >= 0", or "" for no bounds."""
         lo, hi = self.low, self.high
         if lo is not None and hi is not None:
             if self.kind == "int":
@@ -542,7 +544,9 @@ class RendererBase(ABC):
             return self._region.value_range
         return self._volume.value_range  # type: ignore[union-attr]
 
-    def ghost_voxels(self, spacing: tuple[float, float, float], camera: Camera, width: int, height: int) -> int:
+    def ghost_voxels(
+        self, spacing: tuple[float, float, float], camera: Camera, width: int, height: int
+    ) -> int:
         """How many voxels beyond a region's box, per face, a frame with these settings reads from
         a volume of this voxel `spacing`: the caller cuts sub-volumes with at least this many. One
         covers trilinear values and central-difference gradients at points inside the box."""
@@ -656,5 +660,7 @@ def render_frame(
         raise VolrenError(f"renderer {name} returned {got}, expected float32 {(height, width, 4)}")
     stats = getattr(renderer, "last_frame", None)
     if not isinstance(stats, FrameStats) or (stats.width, stats.height) != (width, height):
-        raise VolrenError(f"renderer {name} did not describe its frame in last_frame (a FrameStats of {width}x{height})")
+        raise VolrenError(
+            f"renderer {name} did not describe its frame in last_frame (a FrameStats of {width}x{height})"
+        )
     return image, stats

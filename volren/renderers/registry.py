@@ -78,7 +78,9 @@ def check_renderer_class(cls: Any, name: str) -> None:
     if not isinstance(options, tuple) or not all(isinstance(spec, OptionSpec) for spec in options):
         raise VolrenError(f"renderer {name!r} has no `options` tuple of OptionSpec")
     help_ = getattr(cls, "option_help", None)
-    if not isinstance(help_, Mapping) or not all(isinstance(k, str) and isinstance(v, str) for k, v in help_.items()):
+    if not isinstance(help_, Mapping) or not all(
+        isinstance(k, str) and isinstance(v, str) for k, v in help_.items()
+    ):
         raise VolrenError(f"renderer {name!r} has no `option_help` mapping of option names to help text")
 
 

@@ -110,7 +110,9 @@ class CheckContext:
     def accuracy(self, kind: str) -> Accuracy:
         return self.capabilities.kinds[kind].accuracy  # type: ignore[index]
 
-    def feed(self, renderer: Renderer, volume: Volume, tf: TransferFunction, settings: RenderSettings) -> None:
+    def feed(
+        self, renderer: Renderer, volume: Volume, tf: TransferFunction, settings: RenderSettings
+    ) -> None:
         """Give the renderer what changed since its last frame (as the app does)."""
         last = self._inputs.get(id(renderer), (None, None, None))
         if last[2] != settings:
@@ -163,7 +165,9 @@ def check_output(ctx: CheckContext) -> list[Measurement]:
     out = []
     rng = np.random.default_rng(7)
     for kind in ctx.kinds():
-        volume = lattice_volume(kind, lambda x, y, z: rng.random(x.shape) * 8.0 - 2.0, (6, 5, 4), (0.8, 1.0, 1.3))
+        volume = lattice_volume(
+            kind, lambda x, y, z: rng.random(x.shape) * 8.0 - 2.0, (6, 5, 4), (0.8, 1.0, 1.3)
+        )
         tf = TransferFunction1D([[-2, 0.1, 0.2, 1.0], [6, 1.0, 0.5, 0.0]], [[-1, 0.0], [6, 0.9]], 0.5)
         renderer = ctx.renderer()
         w, h = 37, 23
@@ -222,7 +226,9 @@ def clipped_camera(camera: Camera, bounds: Sequence[float], near: float | None, 
     distance from the eye along the view direction, vtkCamera's clipping range); None puts that
     plane a whole depth range in front of the box (near, never below half the eye's distance to the
     box) or behind it (far)."""
-    corners = np.array([[x, y, z] for x in bounds[0:2] for y in bounds[2:4] for z in bounds[4:6]], dtype=np.float64)
+    corners = np.array(
+        [[x, y, z] for x in bounds[0:2] for y in bounds[2:4] for z in bounds[4:6]], dtype=np.float64
+    )
     depth = (corners - np.asarray(camera.position)) @ camera.direction
     d_lo, d_hi = float(depth.min()), float(depth.max())
     span = d_hi - d_lo
@@ -246,12 +252,22 @@ def check_clip(ctx: CheckContext) -> list[Measurement]:
             camera = Camera.orbit(volume.bounds, -35, 25, zoom=1.3, parallel=parallel, aspect=w / h)
             camera = clipped_camera(camera, volume.bounds, near, far)
             if not ctx.capabilities.kinds[kind].clipping:  # type: ignore[index]
-                out.append(_refusal("clip", f"{kind}, {name}, declared not drawn", functools.partial(ctx.draw, renderer, volume, tf, camera, w, h)))
+                out.append(
+                    _refusal(
+                        "clip",
+                        f"{kind}, {name}, declared not drawn",
+                        functools.partial(ctx.draw, renderer, volume, tf, camera, w, h),
+                    )
+                )
                 continue
             image = ctx.draw(renderer, volume, tf, camera, w, h)
             expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, volume.bounds),
                                                  (0.3, 0.8, 0.6), 0.45, 0.6)  # fmt: skip
-            out.append(Measurement("clip", f"{kind}, {name}", "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
+            out.append(
+                Measurement(
+                    "clip", f"{kind}, {name}", "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse
+                )
+            )
     return out
 
 
@@ -262,7 +278,9 @@ def check_ramp(ctx: CheckContext) -> list[Measurement]:
     """s = x viewed along x: constant opacity, colour linear with a kink, against the closed-form
     emission integral (both directions)."""
     out = []
-    tf = TransferFunction1D([[x, c, 1 - c, 0.5] for x, c in RAMP_COLOUR], [[0, 0.3]], opacity_unit_distance=0.6)
+    tf = TransferFunction1D(
+        [[x, c, 1 - c, 0.5] for x, c in RAMP_COLOUR], [[0, 0.3]], opacity_unit_distance=0.6
+    )
     tau = -math.log(1 - 0.3) / 0.6
     for kind in ctx.kinds():
         volume = lattice_volume(kind, lambda x, y, z: x, (6, 4, 3), (0.5, 1.2, 0.9))
@@ -320,7 +338,9 @@ def check_nan(ctx: CheckContext) -> list[Measurement]:
         w, h = 40, 32
         camera = Camera.orbit(volume.bounds, 40, 25, zoom=1.2, aspect=w / h)
         image = ctx.draw(ctx.renderer(), volume, tf, camera, w, h)
-        expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, b), (0.3, 0.6, 0.9), 0.4, 0.7)
+        expected = oracles.homogeneous_image(
+            oracles.box_path_lengths(camera, w, h, b), (0.3, 0.6, 0.9), 0.4, 0.7
+        )
         out.append(Measurement("nan", kind, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
     return out
 
@@ -368,7 +388,9 @@ def check_step(ctx: CheckContext) -> list[Measurement]:
         camera = axis_camera(b, 2, 1.0, 0.3 * (b[3] - b[2]), shift=(0.137, 0.071, 0.0))
         n = 16
         renderer = ctx.renderer()
-        expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, n, n, b), (0.2, 0.8, 0.5), 0.3, 1.0)
+        expected = oracles.homogeneous_image(
+            oracles.box_path_lengths(camera, n, n, b), (0.2, 0.8, 0.5), 0.3, 1.0
+        )
         for step in steps:
             image = ctx.draw(renderer, volume, tf, camera, n, n, RenderSettings(step=step))
             out.append(Measurement("step", f"{kind}, step {step:g}", "RMSE", _rmse(image, expected),
@@ -442,7 +464,9 @@ def check_thin(ctx: CheckContext) -> list[Measurement]:
             n = 24
             image = ctx.draw(renderer, volume, tf, camera, n, n, settings)
             alpha = oracles.tent_sheet_alpha(tf, 2.0, float(direction[2]))
-            expected = np.broadcast_to([colour[0] * alpha, colour[1] * alpha, colour[2] * alpha, alpha], image.shape)
+            expected = np.broadcast_to(
+                [colour[0] * alpha, colour[1] * alpha, colour[2] * alpha, alpha], image.shape
+            )
             off = image_error(image, expected).off
             out.append(Measurement("thin", f"{kind}, tilt {tilt:g}", "pixels off by > 0.1", off, 0))
     return out
@@ -467,10 +491,18 @@ def check_eye_inside(ctx: CheckContext) -> list[Measurement]:
             image = ctx.draw(ctx.renderer(), volume, tf, camera, w, h)
             expected = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, volume.bounds),
                                                  (0.9, 0.4, 0.2), 0.35, 0.8)  # fmt: skip
-            out.append(Measurement("eye_inside", kind, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse))
+            out.append(
+                Measurement("eye_inside", kind, "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse)
+            )
             continue
         renderer = ctx.renderer()
-        out.append(_refusal("eye_inside", f"{kind}, declared not drawn", functools.partial(ctx.draw, renderer, volume, tf, camera, w, h)))
+        out.append(
+            _refusal(
+                "eye_inside",
+                f"{kind}, declared not drawn",
+                functools.partial(ctx.draw, renderer, volume, tf, camera, w, h),
+            )
+        )
     return out
 
 
@@ -484,7 +516,9 @@ def _refusal(check: str, case: str, draw: Callable[[], Any]) -> Measurement:
 
 
 def _kit_scene(kind: str) -> tuple[Volume, TransferFunction1D, Camera]:
-    volume = lattice_volume(kind, lambda x, y, z: np.sin(x) + np.cos(1.3 * y) + 0.5 * z, (8, 7, 6), (0.9, 0.8, 1.0))
+    volume = lattice_volume(
+        kind, lambda x, y, z: np.sin(x) + np.cos(1.3 * y) + 0.5 * z, (8, 7, 6), (0.9, 0.8, 1.0)
+    )
     tf = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.8]], 0.6)
     return volume, tf, Camera.orbit(volume.bounds, 15, 35)
 
@@ -497,7 +531,9 @@ def check_progress(ctx: CheckContext) -> list[Measurement]:
         calls: list[float] = []
         n = 48
         ctx.draw(ctx.renderer(), volume, tf, camera, n, n, progress=calls.append)
-        bad = sum(1 for f in calls if not 0.0 <= f <= 1.0) + sum(1 for a, b in itertools.pairwise(calls) if b < a)
+        bad = sum(1 for f in calls if not 0.0 <= f <= 1.0) + sum(
+            1 for a, b in itertools.pairwise(calls) if b < a
+        )
         out.append(Measurement("progress", f"{kind}, {len(calls)} calls", "out of order or range",
                                bad + (0 if calls else 1), 0))  # fmt: skip
     return out
@@ -522,10 +558,16 @@ def check_cancel(ctx: CheckContext) -> list[Measurement]:
         except _Cancel:
             raised = True
         except Exception as exc:  # noqa: BLE001 - any other outcome is the renderer's fault
-            raise ContractError(f"{kind}: cancelling raised {type(exc).__name__}: {exc} instead of the callback's exception") from None
+            raise ContractError(
+                f"{kind}: cancelling raised {type(exc).__name__}: {exc} instead of the callback's exception"
+            ) from None
         out.append(Measurement("cancel", kind, "cancel exceptions swallowed", 0 if raised else 1, 0))
         after = ctx.draw(renderer, volume, tf, camera, n, n)
-        out.append(Measurement("cancel", f"{kind}, next frame", "max abs change", float(np.abs(after - before).max()), 0.0))
+        out.append(
+            Measurement(
+                "cancel", f"{kind}, next frame", "max abs change", float(np.abs(after - before).max()), 0.0
+            )
+        )
     return out
 
 
@@ -548,7 +590,9 @@ def check_release(ctx: CheckContext) -> list[Measurement]:
             bad += "\n" in str(exc)
             continue
         except Exception as exc:  # noqa: BLE001
-            raise ContractError(f"{name} after release raised {type(exc).__name__}, not VolrenError") from None
+            raise ContractError(
+                f"{name} after release raised {type(exc).__name__}, not VolrenError"
+            ) from None
         raise ContractError(f"{name} after release did not raise")
     return [Measurement("release", kind, "uses after release not refused in one line", bad, 0)]
 
@@ -567,7 +611,9 @@ def check_options(ctx: CheckContext) -> list[Measurement]:
     cls = type(renderer)
     specs = getattr(cls, "options", None)
     if not isinstance(specs, tuple) or not all(isinstance(spec, OptionSpec) for spec in specs):
-        raise ContractError("options are not declared as a tuple of OptionSpec in the class attribute `options`")
+        raise ContractError(
+            "options are not declared as a tuple of OptionSpec in the class attribute `options`"
+        )
     if dict(cls.option_help) != option_help_of(specs):
         raise ContractError("option_help is not the one derived from `options` (option_help_of)")
     renderer.set_settings(RenderSettings(options={s.name: s.default for s in specs if s.default is not None}))
@@ -586,7 +632,9 @@ def check_options(ctx: CheckContext) -> list[Measurement]:
 
 
 def kit_tf_2d() -> TransferFunction2D:
-    return TransferFunction2D((-2.0, 4.0), (0.0, 3.0), [TFWidget.gaussian((1.0, 1.0), (1.0, 1.0), (1, 0.5, 0), 0.6)])
+    return TransferFunction2D(
+        (-2.0, 4.0), (0.0, 3.0), [TFWidget.gaussian((1.0, 1.0), (1.0, 1.0), (1, 0.5, 0), 0.6)]
+    )
 
 
 def contract_combinations(kind_support: Any) -> Iterator[tuple[int, RenderSettings, bool]]:
@@ -637,18 +685,24 @@ def check_capabilities(ctx: CheckContext) -> list[Measurement]:
                 ctx.draw(refusing, volume, tf, camera, 12, 12, settings, progress=calls.append)
             except VolrenError as exc:
                 if calls:
-                    raise ContractError(f"{what} is not claimed but was refused only after work began") from None
+                    raise ContractError(
+                        f"{what} is not claimed but was refused only after work began"
+                    ) from None
                 if "\n" in str(exc):
                     raise ContractError(f"{what}: the refusal is not one line") from None
                 continue
             except Exception as exc:  # noqa: BLE001
-                raise ContractError(f"{what} is not claimed and raised {type(exc).__name__}, not VolrenError") from None
+                raise ContractError(
+                    f"{what} is not claimed and raised {type(exc).__name__}, not VolrenError"
+                ) from None
             raise ContractError(f"{what} is not claimed but rendered")
         out.append(Measurement("capabilities", f"{kind}, {claimed} claimed rendered, {refused} refused",
                                "violations", 0, 0))  # fmt: skip
         if caps.tf_drag_options:  # the app adds them to its previews during TF drags: they must draw
             try:
-                ctx.draw(renderer, volume, tf1, camera, 12, 12, RenderSettings(options=dict(caps.tf_drag_options)))
+                ctx.draw(
+                    renderer, volume, tf1, camera, 12, 12, RenderSettings(options=dict(caps.tf_drag_options))
+                )
             except Exception as exc:  # noqa: BLE001
                 raise ContractError(f"tf_drag_options {dict(caps.tf_drag_options)} failed on {kind}: "
                                     f"{type(exc).__name__}: {exc}") from None  # fmt: skip
@@ -671,7 +725,9 @@ def check_bricks(ctx: CheckContext) -> list[Measurement]:
 
     support = ctx.capabilities.kinds.get("uniform")
     # mean spacing 1: at step 0.5 along z the sample planes fall on the brick faces (every 3 cells)
-    volume = lattice_volume("uniform", lambda x, y, z: np.sin(x) + np.cos(1.3 * y) + 0.5 * z, (8, 7, 6), (1.2, 0.8, 1.0))
+    volume = lattice_volume(
+        "uniform", lambda x, y, z: np.sin(x) + np.cos(1.3 * y) + 0.5 * z, (8, 7, 6), (1.2, 0.8, 1.0)
+    )
     tf = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.3]], 1.0)
     if support is None or not support.regions:
         layout = BrickLayout(volume.dimensions, volume.spacing, volume.origin, volume.value_range, 3)
@@ -683,7 +739,9 @@ def check_bricks(ctx: CheckContext) -> list[Measurement]:
         try:
             set_region(layout.region(layout.brick_at((0, 0, 0))))
         except VolrenError as exc:
-            return [Measurement("bricks", "regions not claimed", "refusal not one line", int("\n" in str(exc)), 0)]
+            return [
+                Measurement("bricks", "regions not claimed", "refusal not one line", int("\n" in str(exc)), 0)
+            ]
         raise ContractError("set_region accepted a region that the capabilities do not claim")
     out = []
     b = volume.bounds

@@ -124,7 +124,9 @@ def sheets() -> Volume:
         normal /= np.linalg.norm(normal)
         centre = rng.uniform(30.0, 65.0, 3)
         dist = (x - centre[0]) * normal[0] + (y - centre[1]) * normal[1] + (z - centre[2]) * normal[2]
-        radial = np.sqrt(np.maximum((x - centre[0]) ** 2 + (y - centre[1]) ** 2 + (z - centre[2]) ** 2 - dist**2, 0.0))
+        radial = np.sqrt(
+            np.maximum((x - centre[0]) ** 2 + (y - centre[1]) ** 2 + (z - centre[2]) ** 2 - dist**2, 0.0)
+        )
         inside_by = np.minimum(thickness / 2.0 - np.abs(dist), 30.0 - radial)
         np.maximum(field, _edge(inside_by), out=field)
     return UniformVolume(_to_uint8(field), name="hard_sheets")

@@ -26,8 +26,10 @@ class ImageError:
     off: int = 0  #: pixels off by more than OFF_THRESHOLD in any channel
 
     def __str__(self) -> str:
-        return (f"RMSE {self.rmse:.5f}, max {self.max_abs:.4f}, PSNR {self.psnr:.1f} dB, "
-                f"{self.off} px off > {OFF_THRESHOLD:g}")
+        return (
+            f"RMSE {self.rmse:.5f}, max {self.max_abs:.4f}, PSNR {self.psnr:.1f} dB, "
+            f"{self.off} px off > {OFF_THRESHOLD:g}"
+        )
 
 
 def image_error(image: NDArray, reference: NDArray) -> ImageError:

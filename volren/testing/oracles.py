@@ -99,7 +99,11 @@ def column_projection(values_zyx: NDArray, mode: str) -> NDArray[np.float64]:
 def pixel_of(camera: Camera, width: int, height: int, point: Sequence[float]) -> tuple[float, float]:
     """Where the camera contract puts a world point: (column, row) in pixels, in the frame where
     pixel (i, j) has its centre at (i, j) and row 0 is the top."""
-    clip = camera.projection_matrix(width / height) @ camera.view_matrix() @ np.append(np.asarray(point, float), 1.0)
+    clip = (
+        camera.projection_matrix(width / height)
+        @ camera.view_matrix()
+        @ np.append(np.asarray(point, float), 1.0)
+    )
     ndc = clip[:3] / clip[3]
     return (ndc[0] + 1.0) / 2.0 * width - 0.5, (1.0 - ndc[1]) / 2.0 * height - 0.5
 

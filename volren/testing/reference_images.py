@@ -35,7 +35,11 @@ def cache_folder() -> Path:
 def volume_digest(volume: Volume) -> str:
     h = hashlib.sha256()
     if isinstance(volume, UniformVolume):
-        h.update(json.dumps([volume.spacing, volume.origin, volume.values.shape, str(volume.values.dtype)]).encode())
+        h.update(
+            json.dumps(
+                [volume.spacing, volume.origin, volume.values.shape, str(volume.values.dtype)]
+            ).encode()
+        )
         h.update(np.ascontiguousarray(volume.values).tobytes())
     else:
         assert isinstance(volume, TetVolume)
@@ -57,8 +61,9 @@ def reference_settings(settings: RenderSettings) -> RenderSettings:
     )
 
 
-def scene_key(volume: Volume, tf: TransferFunction, camera: Camera, width: int, height: int,
-              settings: RenderSettings) -> str:
+def scene_key(
+    volume: Volume, tf: TransferFunction, camera: Camera, width: int, height: int, settings: RenderSettings
+) -> str:
     payload = {
         "reference_version": REFERENCE_VERSION,
         "volume": volume_digest(volume),
@@ -70,9 +75,16 @@ def scene_key(volume: Volume, tf: TransferFunction, camera: Camera, width: int, 
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
 
 
-def reference_image(volume: Volume, tf: TransferFunction, camera: Camera, width: int, height: int,
-                    settings: RenderSettings | None = None, progress: ProgressCallback | None = None,
-                    folder: Path | None = None) -> NDArray[np.float32]:
+def reference_image(
+    volume: Volume,
+    tf: TransferFunction,
+    camera: Camera,
+    width: int,
+    height: int,
+    settings: RenderSettings | None = None,
+    progress: ProgressCallback | None = None,
+    folder: Path | None = None,
+) -> NDArray[np.float32]:
     """The `reference` renderer's image of this scene, from the cache when it was rendered before."""
     settings = reference_settings(settings or RenderSettings())
     folder = folder or cache_folder()

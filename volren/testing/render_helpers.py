@@ -47,8 +47,12 @@ def assert_valid_image(image: NDArray) -> None:
 
 
 def render_checked(
-    make_renderer: Callable[[], R], volume: UniformVolume, tf: TransferFunction1D, camera: Camera,
-    size: tuple[int, int] = (40, 32), **settings: Any,
+    make_renderer: Callable[[], R],
+    volume: UniformVolume,
+    tf: TransferFunction1D,
+    camera: Camera,
+    size: tuple[int, int] = (40, 32),
+    **settings: Any,
 ) -> tuple[NDArray[np.float32], R]:
     """Render `volume` with a fresh renderer and `RenderSettings(**settings)`; check the image
     (`assert_valid_image`) and return it with the renderer (for its counters and last frame)."""
@@ -73,7 +77,9 @@ def clipped_constant_box(
     """A constant box and TF whose image has a closed form (1 - (1 - a)^(L / d_u), L the path
     length), and for each of `CLIPPING_PLANES` (near, far, the camera they cut, its closed-form
     `size` x `size` image); each image differs from the uncut one, so the planes matter."""
-    volume = UniformVolume(np.full((6, 7, 8), 1.0, np.float32), spacing=(0.9, 1.1, 1.0), origin=(0.5, -1.0, 2.0))
+    volume = UniformVolume(
+        np.full((6, 7, 8), 1.0, np.float32), spacing=(0.9, 1.1, 1.0), origin=(0.5, -1.0, 2.0)
+    )
     tf = TransferFunction1D.constant(0.15, (0.4, 0.7, 0.2), opacity_unit_distance=0.7)
     camera = Camera.orbit(volume.bounds, 35, -20, zoom=1.3, parallel=parallel)
 

@@ -42,7 +42,9 @@ class CheckResult:
         if self.error is not None:
             out.append(f"FAIL {self.check.name}: {self.error}")
         elif not self.measurements:
-            out.append(f"FAIL {self.check.name}: measured nothing (the renderer claims no volume kind the kit has scenes for)")
+            out.append(
+                f"FAIL {self.check.name}: measured nothing (the renderer claims no volume kind the kit has scenes for)"
+            )
         return out
 
     def failures(self) -> list[str]:

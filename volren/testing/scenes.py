@@ -39,7 +39,9 @@ def kuhn_tetrahedra(dims: Sequence[int]) -> NDArray[np.int64]:
     nx, ny, nz = dims
     tets = []
     for kk, jj, ii in itertools.product(range(nz - 1), range(ny - 1), range(nx - 1)):
-        corner = {(a, b, c): ((kk + c) * ny + jj + b) * nx + ii + a for a in (0, 1) for b in (0, 1) for c in (0, 1)}
+        corner = {
+            (a, b, c): ((kk + c) * ny + jj + b) * nx + ii + a for a in (0, 1) for b in (0, 1) for c in (0, 1)
+        }
         for order in itertools.permutations(range(3)):
             v = [0, 0, 0]
             path = [corner[tuple(v)]]
@@ -60,8 +62,12 @@ def positively_oriented(points: NDArray, tets: NDArray) -> NDArray:
 
 
 def lattice_volume(
-    kind: str, values: Field | float, dims: Sequence[int], spacing: Triple = (1.0, 1.0, 1.0),
-    origin: Triple = (0.0, 0.0, 0.0), name: str = "kit",
+    kind: str,
+    values: Field | float,
+    dims: Sequence[int],
+    spacing: Triple = (1.0, 1.0, 1.0),
+    origin: Triple = (0.0, 0.0, 0.0),
+    name: str = "kit",
 ) -> Volume:
     """A uniform grid (`kind` "uniform") or a Kuhn-tetrahedralized lattice ("tet") with the point
     values `values(x, y, z)` (or a constant)."""
@@ -79,7 +85,11 @@ def lattice_volume(
 
 
 def axis_camera(
-    bounds: Sequence[float], axis: int, sign: float, scale: float, parallel: bool = True,
+    bounds: Sequence[float],
+    axis: int,
+    sign: float,
+    scale: float,
+    parallel: bool = True,
     shift: Sequence[float] = (0.0, 0.0, 0.0),
 ) -> Camera:
     """A camera on the box's centre line along world `axis` (moved by `shift`), on the `sign`

@@ -84,8 +84,14 @@ def result_of(renderer_class, check_name, **kwargs):
 
 @pytest.mark.parametrize(
     "broken, check",
-    [(StraightAlpha, "output"), (StraightAlpha, "box"), (Flipped, "point"), (StepIgnored, "step"),
-     (CancelSwallowed, "cancel"), (ShadingClaimed, "shading")],  # fmt: skip
+    [
+        (StraightAlpha, "output"),
+        (StraightAlpha, "box"),
+        (Flipped, "point"),
+        (StepIgnored, "step"),
+        (CancelSwallowed, "cancel"),
+        (ShadingClaimed, "shading"),
+    ],  # fmt: skip
 )
 def test_a_broken_copy_fails_the_matching_check(broken, check):
     assert result_of(ExampleRenderer, check).passed

@@ -65,7 +65,9 @@ class ExampleRenderer(RendererBase):
         self._values = np.asarray(volume.values, dtype=np.float64)  # (nz, ny, nx)
 
     # ------------------------------------------------------------------------- geometry
-    def _ray_segments(self, camera: Camera, width: int, height: int) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    def _ray_segments(
+        self, camera: Camera, width: int, height: int
+    ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
         """Origins and directions (N, 3) of the pixel rays, and where each enters and leaves the
         grid's box between the near and far planes (t0 >= t1 for a ray that misses)."""
         origins, directions = camera.pixel_rays(width, height)
@@ -133,7 +135,9 @@ class ExampleRenderer(RendererBase):
         image = rgba.reshape(height, width, 4).astype(np.float32)
         return image, {"samples": float(counts.sum()), "rays": float(len(origins))}
 
-    def _composite(self, rgba: NDArray, transmittance: NDArray, rays: NDArray, values: NDArray, lengths: NDArray) -> None:
+    def _composite(
+        self, rgba: NDArray, transmittance: NDArray, rays: NDArray, values: NDArray, lengths: NDArray
+    ) -> None:
         """Front-to-back over: C += T alpha c, T *= 1 - alpha, for one sample depth."""
         rgb, a = self.transfer_function.sample(values)  # type: ignore[union-attr]
         alpha = np.where(np.isnan(values), 0.0, self._segment_opacity(a, lengths))

@@ -30,5 +30,7 @@ def test_the_classification_table_is_0_or_16_to_65536(table):
 
 @pytest.mark.parametrize("table", [1, 15, 65537, -1])
 def test_other_classification_tables_are_refused_in_one_line(table):
-    with pytest.raises(VolrenError, match=rf"option classification_table must be 0 or an integer in 16..65536, got {table}$"):
+    with pytest.raises(
+        VolrenError, match=rf"option classification_table must be 0 or an integer in 16..65536, got {table}$"
+    ):
         ObjectOrderRenderer().set_settings(RenderSettings(options={"classification_table": table}))

@@ -63,7 +63,9 @@ def test_octree_skipping_changes_no_pixel(parallel, pre):
     camera = Camera.orbit(volume.bounds, 35, 25, parallel=parallel)
     common = {"hidden_volume_removal": False}
     on, r_on = draw(volume, SHELL_TF, camera, preintegration=pre, options={**common, "octree_skipping": True})
-    off, r_off = draw(volume, SHELL_TF, camera, preintegration=pre, options={**common, "octree_skipping": False})
+    off, r_off = draw(
+        volume, SHELL_TF, camera, preintegration=pre, options={**common, "octree_skipping": False}
+    )
     assert r_on.last_frame.counters["cells"] < 0.8 * r_off.last_frame.counters["cells"]
     if pre:  # a segment that starts in a skipped cell fetches its front sample: rounding only
         np.testing.assert_allclose(on, off, atol=1e-6)
@@ -91,8 +93,12 @@ def test_blocks_of_cells_draw_the_cells_image(parallel, settings):
     volume = UniformVolume(values)
     camera = Camera.orbit(volume.bounds, 35, 25, parallel=parallel)
     common = {"hidden_volume_removal": False}
-    blocks, r_blocks = draw(volume, SHELL_TF, camera, (64, 48), **settings, options={**common, "block_pixels": 4096})
-    cells, r_cells = draw(volume, SHELL_TF, camera, (64, 48), **settings, options={**common, "block_pixels": 0})
+    blocks, r_blocks = draw(
+        volume, SHELL_TF, camera, (64, 48), **settings, options={**common, "block_pixels": 4096}
+    )
+    cells, r_cells = draw(
+        volume, SHELL_TF, camera, (64, 48), **settings, options={**common, "block_pixels": 0}
+    )
     c_blocks, c_cells = r_blocks.last_frame.counters, r_cells.last_frame.counters
     if settings.get("blend_mode", BlendMode.COMPOSITE) == BlendMode.COMPOSITE:
         assert c_blocks["nodes"] < 0.5 * c_cells["nodes"]  # the leaf cells were not visited one by one
@@ -116,8 +122,9 @@ def _views(volume, parallel):
 
 # a band of opacity just under the top face (z), where rays that leave through it end their last
 # piece, and one around the middle: segments run out of both into cells that are transparent
-TOP_TF = TransferFunction1D([[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]],
-                            [[1.2, 0.0], [1.5, 0.8], [1.8, 0.0], [2.5, 0.0], [2.8, 0.9]], 1.0)
+TOP_TF = TransferFunction1D(
+    [[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.2, 0.0], [1.5, 0.8], [1.8, 0.0], [2.5, 0.0], [2.8, 0.9]], 1.0
+)
 
 
 @pytest.mark.parametrize("parallel", [False, True])
@@ -131,7 +138,9 @@ def test_one_sided_dilation_skips_cells_and_changes_no_pixel(parallel):
     # and scattered voxels, some on the faces, that only a spike of the TF sees: a ray's last
     # piece then often ends on a visible point of a face outside its last sample's cell
     spots = (np.random.default_rng(5).random((12, 13, 14)) < 0.03).astype(np.float32)
-    spike = TransferFunction1D([[0, 1, 0.5, 0.2], [1, 0.3, 0.6, 1.0]], [[0.0, 0.0], [0.05, 0.0], [0.5, 1.0]], 0.5)
+    spike = TransferFunction1D(
+        [[0, 1, 0.5, 0.2], [1, 0.3, 0.6, 1.0]], [[0.0, 0.0], [0.05, 0.0], [0.5, 1.0]], 0.5
+    )
     options = {"hidden_volume_removal": False}
     for vol, tf in ((volume, TOP_TF), (UniformVolume(spots, spacing=(1.0, 0.8, 1.2)), spike)):
         for camera in _views(vol, parallel):
@@ -167,7 +176,8 @@ def test_the_reach_is_one_sided_only_where_it_is_cheap_and_exact():
     flat = UniformVolume(volume.values, spacing=(1.0, 1.0, 0.01))
     # step 2 (in the smallest spacing) spans two cells along z
     assert reach(flat, Camera.orbit(flat.bounds, 35, 25, parallel=True), 2.0) == Reach.both_ways(
-        tuple(int(np.ceil(2.0 * flat.characteristic_length / s - 1e-9)) for s in flat.spacing))
+        tuple(int(np.ceil(2.0 * flat.characteristic_length / s - 1e-9)) for s in flat.spacing)
+    )
     far = reach(volume, distant_camera_cut_by_far_plane(volume.bounds, 0.45, True), 0.5)
     assert far == Reach.both_ways((1, 1, 1))
 
@@ -189,7 +199,9 @@ def test_the_ray_table_holds_the_cameras_pixel_rays(parallel):
     assert rays.direction.shape == ((1, 3) if parallel else (width * height, 3))
     np.testing.assert_allclose(rays.origin, (near - origin) / spacing, atol=1e-9)
     np.testing.assert_allclose(np.broadcast_to(rays.world_direction, directions.shape), directions, atol=1e-9)
-    np.testing.assert_allclose(np.broadcast_to(rays.direction, directions.shape), directions / spacing, atol=1e-9)
+    np.testing.assert_allclose(
+        np.broadcast_to(rays.direction, directions.shape), directions / spacing, atol=1e-9
+    )
     np.testing.assert_allclose(rays.inverse * rays.direction, 1.0, atol=1e-12)
     upper = (np.asarray(volume.dimensions) - 1.0) * spacing
     with np.errstate(divide="ignore"):
@@ -273,7 +285,9 @@ def test_a_grid_two_samples_thick_renders_along_every_axis():
         tf = TransferFunction1D([[0, 1, 0.5, 0.2]], [[0, 0.2], [1, 0.9]], 0.3)
         for parallel in (False, True):
             for pre in (False, True):
-                image, _ = draw(volume, tf, Camera.orbit(volume.bounds, 30, 20, parallel=parallel), preintegration=pre)
+                image, _ = draw(
+                    volume, tf, Camera.orbit(volume.bounds, 30, 20, parallel=parallel), preintegration=pre
+                )
                 assert image[..., 3].max() > 0
 
 
@@ -297,7 +311,9 @@ def test_nan_cells_are_transparent_and_the_rest_draws():
     tf = TransferFunction1D.constant(0.4, (0.3, 0.6, 0.9))
     for mode in ("composite", "maximum", "minimum", "average"):
         for pre in (False, True) if mode == "composite" else (False,):
-            image, _ = draw(volume, tf, Camera.orbit(volume.bounds, 30, 20), blend_mode=mode, preintegration=pre)
+            image, _ = draw(
+                volume, tf, Camera.orbit(volume.bounds, 30, 20), blend_mode=mode, preintegration=pre
+            )
             assert image[..., 3].max() > 0.1
 
 
@@ -384,5 +400,5 @@ def test_the_dilated_ranges_are_the_min_and_max_over_each_box(shape, window):
     for take_max, reduce in ((True, np.max), (False, np.min)):
         got = _dilate(a, window, take_max)
         for k, j, i in np.ndindex(shape):
-            box = a[max(k - bz, 0):k + az + 1, max(j - by, 0):j + ay + 1, max(i - bx, 0):i + ax + 1]
+            box = a[max(k - bz, 0) : k + az + 1, max(j - by, 0) : j + ay + 1, max(i - bx, 0) : i + ax + 1]
             assert got[k, j, i] == reduce(box)

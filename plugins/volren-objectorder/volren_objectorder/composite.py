@@ -490,7 +490,20 @@ def _pixel_pre(ray, kk, thi, blk, grid, rays, tables, frame, shading, state, scr
                 _segment(rgba, p, Sample(sf, fd_f, sp_f), Sample(s, fd, sp), t - tp, h, shade, tables)
         if kk == ns - 1 and finite:  # from the last sample to the ray's exit point
             t_end = ray_end(t0, first, h, ns, last)
-            _edge(ray, t_end, Sample(s, fd, sp), t_end - t, False, grid, ro, tables, frame, shading, rgba, scratch)
+            _edge(
+                ray,
+                t_end,
+                Sample(s, fd, sp),
+                t_end - t,
+                False,
+                grid,
+                ro,
+                tables,
+                frame,
+                shading,
+                rgba,
+                scratch,
+            )
         prev_s[p] = s
         prev_k[p] = kk
         prev_fd[p] = fd
@@ -517,7 +530,9 @@ def _pixel_project(ray, kk, tlo, thi, c8, frame, acc):
         if te < tx and ns > 0:
             for end in range(2):
                 tt = te if end == 0 else tx
-                v = _trilinear_at(c8, 0, _clamp01(ox + tt * dx), _clamp01(oy + tt * dy), _clamp01(oz + tt * dz))
+                v = _trilinear_at(
+                    c8, 0, _clamp01(ox + tt * dx), _clamp01(oy + tt * dy), _clamp01(oz + tt * dz)
+                )
                 if mode == MAXIMUM:
                     acc[p, 0] = max(acc[p, 0], v)
                 else:
@@ -653,9 +668,13 @@ def _block(at, rect, r0, grid, view, rays, tables, frame, shading, state, occlus
                 hx, hy, hz = _half_vector(rwd, dp, shading)
             ray = PixelRay(p, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns)
             if post_path:
-                kk, taken, sat = _pixel_post(ray, kk, thi, blk, use_post, tables, frame, shading, rgba, scratch)
+                kk, taken, sat = _pixel_post(
+                    ray, kk, thi, blk, use_post, tables, frame, shading, rgba, scratch
+                )
             elif mode == COMPOSITE:
-                kk, taken, sat = _pixel_pre(ray, kk, thi, blk, grid, rays, tables, frame, shading, state, scratch)
+                kk, taken, sat = _pixel_pre(
+                    ray, kk, thi, blk, grid, rays, tables, frame, shading, state, scratch
+                )
             else:
                 kk, taken, sat = _pixel_project(ray, kk, tlo, thi, c8, frame, acc)
             n_samples += taken
@@ -713,7 +732,9 @@ def _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, oc
     block_pixels = frame.block_pixels if mode == COMPOSITE else 0  # maximum, minimum, average: cell by cell
     rows = r1 - r0
     hom_init(hom, hl, hoff, hcols, rows, width)
-    for p in range(r0 * width, r1 * width):  # the band's pixels start clear (buffers are reused across frames)
+    for p in range(
+        r0 * width, r1 * width
+    ):  # the band's pixels start clear (buffers are reused across frames)
         rgba[p, 0] = 0.0
         rgba[p, 1] = 0.0
         rgba[p, 2] = 0.0
@@ -742,7 +763,9 @@ def _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, oc
         j = stack[top, 2]
         k = stack[top, 3]
         # level 0's counts are the leaf bits of level 1 (pushed only when visible), but a one-cell grid's root
-        count = 1 if lv == 0 and levels > 1 else counts[offsets[lv] + (k * shapes[lv, 1] + j) * shapes[lv, 2] + i]
+        count = (
+            1 if lv == 0 and levels > 1 else counts[offsets[lv] + (k * shapes[lv, 1] + j) * shapes[lv, 2] + i]
+        )
         if count == 0:
             continue
         c0, c1, q0, q1, own = _node_rect(view, grid, lv, i, j, k, r0, r1)

@@ -335,8 +335,12 @@ class MinMaxOctree:
             # counts stay unwritten: writing them cost an opacity edit on bonsai 64 MB and ~50 ms
             counts[self.offsets[1] : self.offsets[2]] = _BITS_SET[leaves.reshape(-1)]
         for level in range(2, self.levels):
-            _reduce_counts(counts[self.offsets[level - 1] : self.offsets[level]], self.shapes[level - 1],
-                           counts[self.offsets[level] : self.offsets[level + 1]], self.shapes[level])
+            _reduce_counts(
+                counts[self.offsets[level - 1] : self.offsets[level]],
+                self.shapes[level - 1],
+                counts[self.offsets[level] : self.offsets[level + 1]],
+                self.shapes[level],
+            )
         result = Classification(key, counts, self.offsets, self.shapes, leaves)
         if len(self._cache) > 8:
             self._cache.clear()

@@ -47,7 +47,9 @@ class RayTable:
     #: (P, 3) index units per world unit along the ray; (1, 3), one row for every pixel, under a parallel
     #: projection (so are `inverse` and `world_direction`: 9 of a pixel's 15 numbers not written per frame)
     direction: NDArray[np.float64]
-    inverse: NDArray[np.float64]  #: (P, 3) or (1, 3) 1 / direction (inf along a zero component): divide-free slab tests
+    inverse: NDArray[
+        np.float64
+    ]  #: (P, 3) or (1, 3) 1 / direction (inf along a zero component): divide-free slab tests
     world_direction: NDArray[np.float64]  #: (P, 3) or (1, 3) unit world direction (shading's view vector)
     t0: NDArray[np.float64]  #: (P,) where the ray enters (world length from the origin)
     count: NDArray[np.int32]  #: (P,) samples (segments) of the ray
@@ -135,7 +137,9 @@ def _fill_rays(camera, box, h, offsets, out):
             t0 = max(t_in, 0.0)
             t1 = min(t_out, t_far)
             length = t1 - t0 if t1 > t0 else 0.0
-            count, first, last = ray_segments(length, h, (offsets[p] - t0 * inv_h) % 1.0)  # planes from the origin
+            count, first, last = ray_segments(
+                length, h, (offsets[p] - t0 * inv_h) % 1.0
+            )  # planes from the origin
             t0_out[p] = t0 if count > 0 else 0.0
             count_out[p] = count
             first_out[p] = first
@@ -154,7 +158,12 @@ def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h:
         o, d, i, w = reuse.origin, reuse.direction, reuse.inverse, reuse.world_direction
         t0, first, last, count = reuse.t0, reuse.first, reuse.last, reuse.count
     else:
-        o, d, i, w = np.empty((p, 3)), np.empty((per_pixel, 3)), np.empty((per_pixel, 3)), np.empty((per_pixel, 3))
+        o, d, i, w = (
+            np.empty((p, 3)),
+            np.empty((per_pixel, 3)),
+            np.empty((per_pixel, 3)),
+            np.empty((per_pixel, 3)),
+        )
         t0, first, last = np.empty(p), np.empty(p), np.empty(p)
         count = np.empty(p, np.int32)
     near, far = camera.clipping_range

@@ -65,30 +65,62 @@ from volren_objectorder.patterns import (
 #: 0 (classify every sample exactly) or a table of 16 entries or more.
 CLASSIFICATION_TABLE_RULE = OptionRule(lambda n: n == 0 or 16 <= n <= 65536, "0 or an integer in 16..65536")
 OPTIONS: tuple[OptionSpec, ...] = (
-    OptionSpec("octree_skipping", True, "bool",
-               "skip octree nodes the TF makes transparent (the image is the same, except where a pre-integration "
-               "table too coarse for the TF leaks opacity into values the TF makes transparent: skipped, that leak "
-               "is left out)"),
-    OptionSpec("hidden_volume_removal", True, "bool",
-               "stop pixels at termination_alpha and skip octree nodes whose footprint lies on finished pixels "
-               "(hierarchical occlusion map; composite only)"),
-    OptionSpec("termination_alpha", 0.999, "float", "opacity at which a pixel counts as opaque", low=0.5, high=1.0),
-    OptionSpec("depth_offsets", "interleaved", "choice",
-               "where each pixel's sample segments start, each sampled at its middle: 'interleaved' (phase 0 and 1/2 "
-               "of a step on a checkerboard, the seed's), 'midpoint' (all on the same planes), 'random' (seeded; "
-               "also the jitter setting)", choices=OFFSET_MODES),
+    OptionSpec(
+        "octree_skipping",
+        True,
+        "bool",
+        "skip octree nodes the TF makes transparent (the image is the same, except where a pre-integration "
+        "table too coarse for the TF leaks opacity into values the TF makes transparent: skipped, that leak "
+        "is left out)",
+    ),
+    OptionSpec(
+        "hidden_volume_removal",
+        True,
+        "bool",
+        "stop pixels at termination_alpha and skip octree nodes whose footprint lies on finished pixels "
+        "(hierarchical occlusion map; composite only)",
+    ),
+    OptionSpec(
+        "termination_alpha", 0.999, "float", "opacity at which a pixel counts as opaque", low=0.5, high=1.0
+    ),
+    OptionSpec(
+        "depth_offsets",
+        "interleaved",
+        "choice",
+        "where each pixel's sample segments start, each sampled at its middle: 'interleaved' (phase 0 and 1/2 "
+        "of a step on a checkerboard, the seed's), 'midpoint' (all on the same planes), 'random' (seeded; "
+        "also the jitter setting)",
+        choices=OFFSET_MODES,
+    ),
     OptionSpec("jitter_seed", 0, "int", "seed of the random depth offsets", low=0, high=2**63 - 1),
     OptionSpec("table_size", 256, "int", "entries per axis of the pre-integration table", low=16, high=4096),
-    OptionSpec("classification_table", 4096, "int",
-               "entries of the post-classification table, colour and opacity per full step (0: classify every "
-               "sample exactly, a search and an exp and a log each)", rule=CLASSIFICATION_TABLE_RULE),
-    OptionSpec("band_rows", 32, "int", "image rows per parallel band (smaller bands are used for small images)",
-               low=1, high=4096),
-    OptionSpec("block_pixels", 36, "int",
-               "draw the 2 x 2 x 2 cells under an octree node as one block (one footprint, one load of their 27 grid "
-               "points, one slab test per pixel) when its footprint has at most this many pixels, none of them "
-               "finished, and 4 of its cells or more are visible; compositing only; the image is the same (0: cell "
-               "by cell)", low=0, high=65536),
+    OptionSpec(
+        "classification_table",
+        4096,
+        "int",
+        "entries of the post-classification table, colour and opacity per full step (0: classify every "
+        "sample exactly, a search and an exp and a log each)",
+        rule=CLASSIFICATION_TABLE_RULE,
+    ),
+    OptionSpec(
+        "band_rows",
+        32,
+        "int",
+        "image rows per parallel band (smaller bands are used for small images)",
+        low=1,
+        high=4096,
+    ),
+    OptionSpec(
+        "block_pixels",
+        36,
+        "int",
+        "draw the 2 x 2 x 2 cells under an octree node as one block (one footprint, one load of their 27 grid "
+        "points, one slab test per pixel) when its footprint has at most this many pixels, none of them "
+        "finished, and 4 of its cells or more are visible; compositing only; the image is the same (0: cell "
+        "by cell)",
+        low=0,
+        high=65536,
+    ),
 )
 
 _MODES = {BlendMode.COMPOSITE: K.COMPOSITE, BlendMode.MAXIMUM: K.MAXIMUM, BlendMode.MINIMUM: K.MINIMUM,
@@ -308,7 +340,9 @@ class ObjectOrderRenderer(RendererBase):
             bands = order[g0 : g0 + group]
             old = numba.set_parallel_chunksize(1)
             try:
-                K.render_bands(bands, band_rows, grid, octree, view, ray_set, tables, frame, shading, state, stats)
+                K.render_bands(
+                    bands, band_rows, grid, octree, view, ray_set, tables, frame, shading, state, stats
+                )
             finally:
                 numba.set_parallel_chunksize(old)
             if progress is not None:

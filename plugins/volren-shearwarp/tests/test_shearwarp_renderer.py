@@ -40,7 +40,9 @@ draw = partial(render_checked, ShearWarpRenderer)
 
 # ---------------------------------------------------------------------------------- geometry
 @pytest.mark.parametrize("parallel", [False, True])
-@pytest.mark.parametrize("azimuth, elevation", [(0, 0), (90, 0), (0, 90), (45, 0), (45, 35.26), (30, 20), (-120, -50)])
+@pytest.mark.parametrize(
+    "azimuth, elevation", [(0, 0), (90, 0), (0, 90), (45, 0), (45, 35.26), (30, 20), (-120, -50)]
+)
 def test_a_bright_voxel_lands_where_the_camera_projects_it(parallel, azimuth, elevation):
     """The factorization and the warp are exact: one bright lattice point's blob is centred on the
     camera's projection of it (axis-aligned, 45 degree and body-diagonal views, both projections)."""
@@ -158,8 +160,11 @@ def test_fewer_pixels_per_voxel_draw_a_coarser_draft_of_the_same_image(pre):
 
 @pytest.mark.parametrize(
     "dtype, kept",
-    [pytest.param(np.uint8, np.uint8, marks=pytest.mark.slow),  # about 6 s: compiles the uint8 kernels
-     (np.uint16, np.float32), (np.int16, np.float32)],
+    [
+        pytest.param(np.uint8, np.uint8, marks=pytest.mark.slow),  # about 6 s: compiles the uint8 kernels
+        (np.uint16, np.float32),
+        (np.int16, np.float32),
+    ],
 )
 def test_8_bit_volumes_keep_their_type_in_the_axis_copies_and_draw_as_float32_ones(dtype, kept, monkeypatch):
     """uint8 data stays uint8 in the three copies (a quarter of float32's memory), and every path
@@ -196,10 +201,14 @@ def test_empty_space_skipping_changes_no_pixel(parallel, step, azimuth, pixels_p
     order running both ways), and with intermediate pixels wider than voxels. At step 2 the runs'
     blocks span 4 cells per unit of shear, which on 16 cells leaves little to skip: 31 there."""
     volume = field((16, 16, 16) if step < 2 else (31, 31, 31))
-    tf = TransferFunction1D([[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.4, 0.0], [1.6, 0.7], [2.0, 0.0]], 1.0)
+    tf = TransferFunction1D(
+        [[-2, 1, 0.5, 0.2], [4, 0.3, 0.6, 1.0]], [[1.4, 0.0], [1.6, 0.7], [2.0, 0.0]], 1.0
+    )
     camera = Camera.orbit(volume.bounds, azimuth, 25, parallel=parallel)
     options = {"oversampling": 0.25, "pixels_per_voxel": pixels_per_voxel}
-    on, r_on = draw(volume, tf, camera, preintegration=True, step=step, options=options | {"empty_space_skipping": True})
+    on, r_on = draw(
+        volume, tf, camera, preintegration=True, step=step, options=options | {"empty_space_skipping": True}
+    )
     off, r_off = draw(volume, tf, camera, preintegration=True, step=step,
                       options=options | {"empty_space_skipping": False})  # fmt: skip
     assert factorize(camera, volume, 40, 32, 0.25, min_scale=pixels_per_voxel).scale == pixels_per_voxel
@@ -254,7 +263,9 @@ def test_blocks_of_rows_draw_every_row_as_one_row_at_a_time_does(monkeypatch, se
     values = rng.uniform(0.0, 0.4, (20, 22, 24)).astype(np.float32)
     values[5:9, 6:12, 4:14] += 2.0
     volume = UniformVolume(values)
-    tf = TransferFunction1D([[0, 1, 0.6, 0.2], [2.4, 0.2, 0.5, 1.0]], [[0.1, 0.0], [0.4, 0.3], [2.0, 1.0]], 1.0)
+    tf = TransferFunction1D(
+        [[0, 1, 0.6, 0.2], [2.4, 0.2, 0.5, 1.0]], [[0.1, 0.0], [0.4, 0.3], [2.0, 1.0]], 1.0
+    )
     camera = Camera.orbit(volume.bounds, 30, 20)
     behind_the_centre = float(np.linalg.norm(np.subtract(camera.position, camera.focal_point))) + 2.0
     camera = replace(camera, clipping_range=(1.0, behind_the_centre))
@@ -308,7 +319,11 @@ def test_block_ranges_are_the_anchored_blocks_vertex_ranges(extent):
     for k, (k0, k1) in enumerate(pairs):
         for j in range(nb - 1 + extent):
             for i in range(na - 1 + extent):
-                block = values[[k0, k1], max(j - extent, 0) : min(j + 1, nb - 1) + 1, max(i - extent, 0) : min(i + 1, na - 1) + 1]
+                block = values[
+                    [k0, k1],
+                    max(j - extent, 0) : min(j + 1, nb - 1) + 1,
+                    max(i - extent, 0) : min(i + 1, na - 1) + 1,
+                ]
                 finite = block[np.isfinite(block)]
                 if finite.size == 0:
                     assert (bmin[k, j, i], bmax[k, j, i]) == (RANGE_BINS - 1, 0)
@@ -558,7 +573,9 @@ def test_shading_takes_every_renderers_threshold_on_an_anisotropic_grid(monkeypa
     thresholds = []
 
     def spy(*args, **kwargs):
-        thresholds.append(inspect.signature(real.py_func).bind(*args, **kwargs).arguments["light"].gradient_threshold)
+        thresholds.append(
+            inspect.signature(real.py_func).bind(*args, **kwargs).arguments["light"].gradient_threshold
+        )
         return real(*args, **kwargs)
 
     monkeypatch.setattr(module, "composite_slabs", spy)
@@ -638,7 +655,9 @@ def test_planes_clear_of_the_volume_keep_the_fast_path_and_the_image():
     near, far = camera.clipping_range
     image, renderer = draw(volume, SMOOTH_TF, camera, preintegration=True)
     assert renderer.last_frame.counters["clipped"] == 0.0
-    wider, renderer = draw(volume, SMOOTH_TF, replace(camera, clipping_range=(near / 2, far * 2)), preintegration=True)
+    wider, renderer = draw(
+        volume, SMOOTH_TF, replace(camera, clipping_range=(near / 2, far * 2)), preintegration=True
+    )
     assert renderer.last_frame.counters["clipped"] == 0.0
     assert np.array_equal(image, wider)
 

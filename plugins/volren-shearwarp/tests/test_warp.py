@@ -44,7 +44,9 @@ def oracle(inter: np.ndarray, hom: np.ndarray, sign: float, a0: float, b0: float
 @pytest.mark.parametrize("cubic", [True, False])
 @pytest.mark.parametrize("projective", [False, True, "horizon"])
 @pytest.mark.parametrize("pattern", ["dense", "sparse", "cluster"])
-def test_the_warp_is_the_oracle_inside_and_at_the_edges(cubic: bool, projective: bool | str, pattern: str) -> None:
+def test_the_warp_is_the_oracle_inside_and_at_the_edges(
+    cubic: bool, projective: bool | str, pattern: str
+) -> None:
     """Also on a sparse image (3 % of its pixels drawn, the rest transparent black), where the warp
     skips the pixels whose taps are all empty (`empty_taps`): a tap window one pixel too small
     would lose the lone pixels' footprints; on one small drawn patch, whose rim's pixels must keep

@@ -48,7 +48,9 @@ class Intermediate(NamedTuple):
     """The intermediate image and its per-pixel buffers (reused from frame to frame)."""
 
     rgba: np.ndarray  #: (h, w, 4) premultiplied RGBA float32
-    buf_x: np.ndarray  #: table coordinate at the back of the pixel's last segment (Schulze et al.'s buffer slice)
+    buf_x: (
+        np.ndarray
+    )  #: table coordinate at the back of the pixel's last segment (Schulze et al.'s buffer slice)
     buf_d: np.ndarray  #: ... its diffuse factor, when shading
     buf_s: np.ndarray  #: ... its specular term, when shading
     buf_len: np.ndarray  #: length so far of a jittered segment open across slabs, in whole segments

@@ -324,7 +324,9 @@ class ClassifiedVolume:
 
     def __post_init__(self) -> None:
         # the compositing kernels test segments for NaN only when the volume has one (a test per segment)
-        self.has_nan = bool(np.isnan(self.volume.values).any()) if self.volume.values.dtype.kind == "f" else False
+        self.has_nan = (
+            bool(np.isnan(self.volume.values).any()) if self.volume.values.dtype.kind == "f" else False
+        )
 
     def copy(self, axis: int) -> AxisCopy:
         found = self.copies.get(axis)
@@ -339,7 +341,9 @@ class ClassifiedVolume:
             self.copy_ms[axis] = (time.perf_counter() - start) * 1000.0
         return found
 
-    def runs(self, axis: int, support: OpacitySupport, extent: int = 1, pairs: NDArray[np.int64] | None = None) -> Runs:
+    def runs(
+        self, axis: int, support: OpacitySupport, extent: int = 1, pairs: NDArray[np.int64] | None = None
+    ) -> Runs:
         """The runs of `axis` for `support` and `extent` over the slabs `pairs` (`slab_pairs` of the
         compositing order; default every slice), rebuilt only when the support changed."""
         copy = self.copy(axis)

@@ -416,7 +416,9 @@ def _fast_span(geom, slab, line, p0, p1, rgba, buf_x, stamp, skip, tables, termi
 def _first_past(alpha, beta, bound, strict, p):
     """The first pixel p' (searching around the guess p) with alpha + beta p' >= bound (> bound
     when strict), beta > 0: exact in the same arithmetic the kernels use."""
-    while p > -(1 << 30) and (alpha + beta * (p - 1) > bound or (not strict and alpha + beta * (p - 1) == bound)):
+    while p > -(1 << 30) and (
+        alpha + beta * (p - 1) > bound or (not strict and alpha + beta * (p - 1) == bound)
+    ):
         p -= 1
     while alpha + beta * p < bound or (strict and alpha + beta * p == bound):
         p += 1
@@ -711,9 +713,13 @@ def composite_slabs(geom, m0, m1, image, tables, runs, termination, light, view,
                         a_s = starts[run]
                         a_e = ends[run]
                         if a_s > 0:
-                            lo_p = max(lo_p, _first_past(af0, afs, a_s - moved, False, _guess(af0, afs, a_s - moved)))
+                            lo_p = max(
+                                lo_p, _first_past(af0, afs, a_s - moved, False, _guess(af0, afs, a_s - moved))
+                            )
                         if a_e < na - 1 + extent:
-                            hi_p = min(hi_p, _first_past(af0, afs, a_e - moved, False, _guess(af0, afs, a_e - moved)))
+                            hi_p = min(
+                                hi_p, _first_past(af0, afs, a_e - moved, False, _guess(af0, afs, a_e - moved))
+                            )
                         if lo_p >= hi_p:
                             continue
                         covered += hi_p - lo_p
@@ -790,11 +796,15 @@ def composite_slabs(geom, m0, m1, image, tables, runs, termination, light, view,
                                     df = buf_d[q, p]
                                     sf = buf_s[q, p]
                             else:
-                                xf = _plane_value(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), lo, scale)
+                                xf = _plane_value(
+                                    vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf), lo, scale
+                                )
                                 if shading:
                                     df, sf = _plane_light(vol, kf, kb, w0, af + w0 * (ab - af), bf + w0 * (bb - bf),
                                                           inv_sp, light, hx, hy, hz)  # fmt: skip
-                            xb = _plane_value(vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), lo, scale)
+                            xb = _plane_value(
+                                vol, kf, kb, w1, af + w1 * (ab - af), bf + w1 * (bb - bf), lo, scale
+                            )
                             db = 1.0
                             sb = 0.0
                             if shading:

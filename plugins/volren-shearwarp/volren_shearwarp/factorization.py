@@ -102,7 +102,9 @@ class Factorization:
         point on the plane is not ahead of the eye (D0 <= 0) is empty."""
         near, far = camera.clipping_range
         bounds = volume.bounds
-        corners = np.array([[x, y, z] for x in bounds[0:2] for y in bounds[2:4] for z in bounds[4:6]], np.float64)
+        corners = np.array(
+            [[x, y, z] for x in bounds[0:2] for y in bounds[2:4] for z in bounds[4:6]], np.float64
+        )
         view = np.asarray(camera.direction, np.float64)
         depth = (corners - np.asarray(camera.position, np.float64)) @ view
         if near <= depth.min() and far >= depth.max():
@@ -155,7 +157,7 @@ def choose_axis(camera: Camera, volume: UniformVolume) -> tuple[int, float]:
             continue
         rel = corners - eye
         others = [i for i in range(3) if i != c]
-        shear = float(np.max(np.abs(rel[:, others]) / np.abs(rel[:, c:c + 1])))
+        shear = float(np.max(np.abs(rel[:, others]) / np.abs(rel[:, c : c + 1])))
         if best is None or shear < best[0]:
             best = (shear, c)
     if best is None:

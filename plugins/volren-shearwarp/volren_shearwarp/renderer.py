@@ -126,37 +126,86 @@ TURNING_SPAN = 2.0
 MAX_POOL_LENGTHS = 512
 
 OPTIONS: tuple[OptionSpec, ...] = (
-    OptionSpec("oversampling", "auto", "float",
-               "intermediate-image pixels per output pixel along each axis (at least `pixels_per_voxel` per voxel "
-               "is kept), or 'auto': from the TF's sharpness (`auto_oversampling`), 0.5 for a translucent TF up to "
-               "2 for one that makes a voxel opaque", low=0.25, high=8.0, words=("auto",)),
-    OptionSpec("pixels_per_voxel", 1.0, "float",
-               "the fewest intermediate-image pixels per voxel along each axis: 1 resolves every voxel; below 1 a "
-               "draft that samples each slice more coarsely than its voxels (as VTK's image sample distance casts "
-               "fewer rays than pixels), at about its square of the compositing: on translucent TFs where a voxel "
-               "covers more than one output pixel", low=0.25, high=1.0),
-    OptionSpec("table_size", "auto", "int",
-               "entries per axis of the pre-integration table / classification LUT, or 'auto': 128 for a "
-               "translucent TF, 256 otherwise (`auto_table_size`)", low=16, high=4096, words=("auto",)),
-    OptionSpec("lookup", "nearest", "choice",
-               "table lookup (the seed's two variants; nearest: 3x cheaper, RMSE within 0.0005 of bilinear on the "
-               "shared scenes at 256 entries)", choices=("nearest", "bilinear")),
-    OptionSpec("warp_filter", "cubic", "choice", "the warp's resampling of the intermediate image: 'cubic' "
-               "(Catmull-Rom) or 'bilinear'", choices=("cubic", "bilinear")),
+    OptionSpec(
+        "oversampling",
+        "auto",
+        "float",
+        "intermediate-image pixels per output pixel along each axis (at least `pixels_per_voxel` per voxel "
+        "is kept), or 'auto': from the TF's sharpness (`auto_oversampling`), 0.5 for a translucent TF up to "
+        "2 for one that makes a voxel opaque",
+        low=0.25,
+        high=8.0,
+        words=("auto",),
+    ),
+    OptionSpec(
+        "pixels_per_voxel",
+        1.0,
+        "float",
+        "the fewest intermediate-image pixels per voxel along each axis: 1 resolves every voxel; below 1 a "
+        "draft that samples each slice more coarsely than its voxels (as VTK's image sample distance casts "
+        "fewer rays than pixels), at about its square of the compositing: on translucent TFs where a voxel "
+        "covers more than one output pixel",
+        low=0.25,
+        high=1.0,
+    ),
+    OptionSpec(
+        "table_size",
+        "auto",
+        "int",
+        "entries per axis of the pre-integration table / classification LUT, or 'auto': 128 for a "
+        "translucent TF, 256 otherwise (`auto_table_size`)",
+        low=16,
+        high=4096,
+        words=("auto",),
+    ),
+    OptionSpec(
+        "lookup",
+        "nearest",
+        "choice",
+        "table lookup (the seed's two variants; nearest: 3x cheaper, RMSE within 0.0005 of bilinear on the "
+        "shared scenes at 256 entries)",
+        choices=("nearest", "bilinear"),
+    ),
+    OptionSpec(
+        "warp_filter",
+        "cubic",
+        "choice",
+        "the warp's resampling of the intermediate image: 'cubic' (Catmull-Rom) or 'bilinear'",
+        choices=("cubic", "bilinear"),
+    ),
     OptionSpec("empty_space_skipping", True, "bool", "skip the runs of cells the TF makes transparent"),
     OptionSpec("early_termination", True, "bool", "stop compositing pixels once opaque"),
-    OptionSpec("termination_alpha", 0.995, "float", "opacity at which a pixel counts as opaque", low=0.5, high=1.0),
-    OptionSpec("opacity_correction", True, "bool",
-               "correct each segment's opacity (and colour) to its length, 1 - (1 - a)^(d / d_u) (false draws every "
-               "slab as if d_u long: the seed's 'NC' column, for measuring what the correction costs, not for use)"),
-    OptionSpec("length_ratio", LENGTH_RATIO, "float",
-               "under perspective, the ratio between neighbouring segment lengths that get their own table: a "
-               "segment's opacity is off by at most (ratio - 1) / 2 of its optical depth; coarser makes fewer "
-               "tables per TF", low=1.001, high=1.25),
-    OptionSpec("jitter_seed", 0, "int", "seed of the per-pixel sample offsets drawn with the `jitter` setting", low=0),
-    OptionSpec("downsample", 1, "choice",
-               "render a copy of the volume reduced this many times along each axis (`volren.model.downsample`): a "
-               "draft at about 1/factor^3 of the compositing", choices=tuple(DOWNSAMPLE_FACTORS)),
+    OptionSpec(
+        "termination_alpha", 0.995, "float", "opacity at which a pixel counts as opaque", low=0.5, high=1.0
+    ),
+    OptionSpec(
+        "opacity_correction",
+        True,
+        "bool",
+        "correct each segment's opacity (and colour) to its length, 1 - (1 - a)^(d / d_u) (false draws every "
+        "slab as if d_u long: the seed's 'NC' column, for measuring what the correction costs, not for use)",
+    ),
+    OptionSpec(
+        "length_ratio",
+        LENGTH_RATIO,
+        "float",
+        "under perspective, the ratio between neighbouring segment lengths that get their own table: a "
+        "segment's opacity is off by at most (ratio - 1) / 2 of its optical depth; coarser makes fewer "
+        "tables per TF",
+        low=1.001,
+        high=1.25,
+    ),
+    OptionSpec(
+        "jitter_seed", 0, "int", "seed of the per-pixel sample offsets drawn with the `jitter` setting", low=0
+    ),
+    OptionSpec(
+        "downsample",
+        1,
+        "choice",
+        "render a copy of the volume reduced this many times along each axis (`volren.model.downsample`): a "
+        "draft at about 1/factor^3 of the compositing",
+        choices=tuple(DOWNSAMPLE_FACTORS),
+    ),
 )
 
 _MODES = {BlendMode.MAXIMUM: MAXIMUM, BlendMode.MINIMUM: MINIMUM, BlendMode.AVERAGE: AVERAGE}
@@ -219,7 +268,9 @@ def strided_order(order: NDArray[np.int64], stride: int) -> tuple[NDArray[np.int
     return np.ascontiguousarray(picked, dtype=np.int64), frac
 
 
-def _level(preintegrated: bool, step: float, oversampling: float, pixels_per_voxel: float | None = None) -> QualityLevel:
+def _level(
+    preintegrated: bool, step: float, oversampling: float, pixels_per_voxel: float | None = None
+) -> QualityLevel:
     """A quality level at a fixed `oversampling`, for drafts also `pixels_per_voxel` (below one: intermediate
     pixels wider than voxels, `factorize`'s min_scale), labelled as the benchmarks and this
     package's own `quality_levels.json` name it."""
@@ -299,7 +350,9 @@ class ShearWarpRenderer(RendererBase):
     def __init__(self) -> None:
         super().__init__()
         self._classified: ClassifiedVolume | None = None
-        self._coarse: dict[int, tuple[UniformVolume, ClassifiedVolume]] = {}  # by downsampling factor, made on demand
+        self._coarse: dict[
+            int, tuple[UniformVolume, ClassifiedVolume]
+        ] = {}  # by downsampling factor, made on demand
         self._support: tuple[tuple, OpacitySupport] | None = None
         self._pools: dict[str, TablePool] = {}
         self._buffers: dict[str, NDArray] = {}
@@ -405,8 +458,11 @@ class ShearWarpRenderer(RendererBase):
             geom = SlabGeometry(values, has_nan, order, np.ones(len(order)), planes, fac.alpha_a, fac.beta_a,
                                 fac.alpha_b, fac.beta_b, rows, ROW_BLOCK, 1.0 / fac.spacing)  # fmt: skip
             clip = Clipping(clipping, clip_lo, clip_hi)
-            self._blocks(progress, len(order), lambda m0, m1: project_slabs(
-                geom, m0, m1, acc, _MODES[settings.blend_mode], lengths, clip))
+            self._blocks(
+                progress,
+                len(order),
+                lambda m0, m1: project_slabs(geom, m0, m1, acc, _MODES[settings.blend_mode], lengths, clip),
+            )
             hit = acc[..., 1] > 0
             value = np.where(hit, acc[..., 0], 0.0)
             if settings.blend_mode is BlendMode.AVERAGE:
@@ -424,7 +480,11 @@ class ShearWarpRenderer(RendererBase):
                 progress(1.0)
             counters.update(samples=0.0, empty_pixels_skipped=0.0, pixels_terminated=0.0, table_lengths=0.0)
             return np.zeros((height, width, 4), np.float32), counters
-        stride = 1 if clipping or settings.jitter else slice_stride(settings.step, spacing_c, volume.characteristic_length, len(order))
+        stride = (
+            1
+            if clipping or settings.jitter
+            else slice_stride(settings.step, spacing_c, volume.characteristic_length, len(order))
+        )
         order, slab_frac = strided_order(order, stride)
         counters.update(slices=float(len(order)), slice_stride=float(stride))
         pairs, run_slab = slab_pairs(order)  # the runs number slabs by their lower slice
@@ -458,14 +518,18 @@ class ShearWarpRenderer(RendererBase):
             # the batch that makes missing tables also makes every length from the axial one to TURNING_SPAN x it:
             # a camera turning about the volume then rarely waits for tables (without, bonsai turning 2 degrees a
             # frame needed a batch every 2-3 frames, about 9 ms a frame)
-            ax_lo, ax_hi = grid_ids(spacing_c * per_slab, TURNING_SPAN * spacing_c * per_slab, reference, ratio)
+            ax_lo, ax_hi = grid_ids(
+                spacing_c * per_slab, TURNING_SPAN * spacing_c * per_slab, reference, ratio
+            )
             # ... but not at a TF's first frame: a TF drag makes a new TF every frame, and with the batch each of
             # bonsai's drag previews made twice the lengths it needed (tables 30 ms of 80 a preview; 15 ms without)
             extra = [grid_length(i, reference, ratio)
                      for i in range(min(id_lo, ax_lo) - GRID_MARGIN, max(id_hi, ax_hi) + GRID_MARGIN + 1)
                      ] if pool.slots else None  # fmt: skip
             slots = pool.gather(tf, n, lo, hi, grid, extra)
-            pixel_slots(col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm, ratio), slots, layers)
+            pixel_slots(
+                col_d2, row_d2, dc2, slot_bounds(id_lo, id_hi, reference, inv_norm, ratio), slots, layers
+            )
         else:
             grid = [fac.slab_length * per_slab]
             layers[0, 0] = pool.gather(tf, n, lo, hi, grid)[0]
@@ -528,7 +592,9 @@ class ShearWarpRenderer(RendererBase):
         jittered = Jitter(jitter, offsets_u)
 
         def block(m0: int, m1: int) -> None:
-            composite_slabs(geom, m0, m1, intermediate, tables, run_set, termination, shade, view, clip, jittered)
+            composite_slabs(
+                geom, m0, m1, intermediate, tables, run_set, termination, shade, view, clip, jittered
+            )
 
         self._blocks(progress, len(order), block)
         image = self._warp(rgba, fac, width, height, opts)
@@ -537,10 +603,16 @@ class ShearWarpRenderer(RendererBase):
                         pixels_terminated=float(totals[2]), runs=1.0 if use_runs else 0.0)  # fmt: skip
         return image, counters
 
-    def _blocks(self, progress: ProgressCallback | None, slices: int, run: Callable[[int, int], None]) -> None:
+    def _blocks(
+        self, progress: ProgressCallback | None, slices: int, run: Callable[[int, int], None]
+    ) -> None:
         """Slices 1.. in blocks of about BLOCK_MS, progress after each (the callback may raise: it propagates)."""
         spent = 0.0
-        count = FIRST_BLOCKS if self._slab_ms is None else min(MAX_BLOCKS, max(1, round(self._slab_ms / BLOCK_MS)))
+        count = (
+            FIRST_BLOCKS
+            if self._slab_ms is None
+            else min(MAX_BLOCKS, max(1, round(self._slab_ms / BLOCK_MS)))
+        )
         edges = np.unique(np.linspace(1, max(slices, 1), count + 1).round().astype(int))
         if len(edges) < 2:
             edges = np.array([1, max(slices, 1)])
@@ -563,5 +635,13 @@ class ShearWarpRenderer(RendererBase):
               opts: Mapping[str, Any]) -> NDArray[np.float32]:  # fmt: skip
         wm = fac.warp
         assert (wm.width, wm.height) == (width, height)
-        return warp(inter, wm.homography, wm.sign, fac.origin_ab, fac.scale, width, height,
-                    opts["warp_filter"] == "cubic")
+        return warp(
+            inter,
+            wm.homography,
+            wm.sign,
+            fac.origin_ab,
+            fac.scale,
+            width,
+            height,
+            opts["warp_filter"] == "cubic",
+        )

@@ -48,7 +48,9 @@ def pixel_slots(col_d2, row_d2, dc2, bounds, slot_of_id, out):
     halfway in ratio between neighbouring grid lengths): lengths vary slowly along a row, so
     this is a comparison or two per pixel instead of a logarithm."""
     last = slot_of_id.shape[0] - 1
-    for q in range(out.shape[0]):  # serial: about a millisecond, less than a parallel barrier costs under load
+    for q in range(
+        out.shape[0]
+    ):  # serial: about a millisecond, less than a parallel barrier costs under load
         i = 0
         for p in range(out.shape[1]):
             s = col_d2[p] + row_d2[q] + dc2
@@ -59,7 +61,9 @@ def pixel_slots(col_d2, row_d2, dc2, bounds, slot_of_id, out):
             out[q, p] = slot_of_id[i]
 
 
-def slot_bounds(id_lo: int, id_hi: int, reference: float, inv_norm: float, ratio: float) -> NDArray[np.float64]:
+def slot_bounds(
+    id_lo: int, id_hi: int, reference: float, inv_norm: float, ratio: float
+) -> NDArray[np.float64]:
     """The `bounds` of `pixel_slots` for grid indices id_lo..id_hi."""
     halfway = reference * ratio ** (np.arange(id_lo, id_hi, dtype=np.float64) + 0.5)
     return (halfway / inv_norm) ** 2
@@ -110,11 +114,15 @@ class TablePool:
         return np.array([self.slots[x] for x in lengths], np.int32)
 
     @staticmethod
-    def _store(pool: NDArray[np.float32] | None, base: int, tables: NDArray[np.float32]) -> NDArray[np.float32]:
+    def _store(
+        pool: NDArray[np.float32] | None, base: int, tables: NDArray[np.float32]
+    ) -> NDArray[np.float32]:
         """`tables` written at slots base.., the pool grown by doubling (not copied every frame)."""
         need = base + len(tables)
         if pool is None or pool.shape[0] < need:
-            grown = np.empty((max(need, 2 * (0 if pool is None else pool.shape[0]), 4),) + tables[0].shape, np.float32)
+            grown = np.empty(
+                (max(need, 2 * (0 if pool is None else pool.shape[0]), 4),) + tables[0].shape, np.float32
+            )
             if pool is not None:
                 grown[:base] = pool[:base]
             pool = grown

@@ -29,7 +29,12 @@ def _weights(f, cubic):
         return 0.0, 1.0 - f, f, 0.0
     f2 = f * f
     f3 = f2 * f
-    return (-0.5 * f3 + f2 - 0.5 * f, 1.5 * f3 - 2.5 * f2 + 1.0, -1.5 * f3 + 2.0 * f2 + 0.5 * f, 0.5 * f3 - 0.5 * f2)
+    return (
+        -0.5 * f3 + f2 - 0.5 * f,
+        1.5 * f3 - 2.5 * f2 + 1.0,
+        -1.5 * f3 + 2.0 * f2 + 0.5 * f,
+        0.5 * f3 - 0.5 * f2,
+    )
 
 
 @njit(nogil=True, cache=True, inline="always", error_model="numpy", fastmath=True)
@@ -62,12 +67,19 @@ def empty_taps(inter, empty):
     ih, iw = inter.shape[0], inter.shape[1]
     along = np.empty((ih, iw), np.uint8)
     for q in prange(ih):
-        drawn = np.empty(iw + 3, np.uint8)  # drawn[p + 1]: pixel p is not transparent black; 0 beyond the edges
+        drawn = np.empty(
+            iw + 3, np.uint8
+        )  # drawn[p + 1]: pixel p is not transparent black; 0 beyond the edges
         drawn[0] = 0
         drawn[iw + 1] = 0
         drawn[iw + 2] = 0
         for p in range(iw):
-            drawn[p + 1] = (inter[q, p, 0] != 0.0) | (inter[q, p, 1] != 0.0) | (inter[q, p, 2] != 0.0) | (inter[q, p, 3] != 0.0)
+            drawn[p + 1] = (
+                (inter[q, p, 0] != 0.0)
+                | (inter[q, p, 1] != 0.0)
+                | (inter[q, p, 2] != 0.0)
+                | (inter[q, p, 3] != 0.0)
+            )
         for p in range(iw):
             along[q, p] = drawn[p] | drawn[p + 1] | drawn[p + 2] | drawn[p + 3]
     for q in prange(ih):

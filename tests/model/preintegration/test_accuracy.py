@@ -18,7 +18,9 @@ def composite(front: np.ndarray, back: np.ndarray) -> np.ndarray:
     return front + (1.0 - front[..., 3:4]) * back.astype(np.float64)
 
 
-@pytest.mark.parametrize("n, oversampling", [(2, 1), (2, 3), (3, 1), (3, 3), (17, 1), (17, 3), (64, 1), (64, 3), (512, 1)])
+@pytest.mark.parametrize(
+    "n, oversampling", [(2, 1), (2, 3), (3, 1), (3, 3), (17, 1), (17, 3), (64, 1), (64, 3), (512, 1)]
+)
 def test_subrange_integration_matches_brute_force(n, oversampling):
     """Lum et al.'s O(n^2) method computes the same table as compositing every entry's bins."""
     tf = spiky()

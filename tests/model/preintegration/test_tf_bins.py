@@ -51,7 +51,9 @@ def test_atom_means_are_exact():
 
 def test_bin_means_match_dense_sampling():
     tf = TransferFunction1D(
-        [[0, 1, 0, 0], [0.4, 0, 1, 0], [1, 0, 0, 1]], [[0, 0], [0.25, 0.8], [0.5, 0.1], [0.5, 0.6], [1, 0.3]], 0.5
+        [[0, 1, 0, 0], [0.4, 0, 1, 0], [1, 0, 0, 1]],
+        [[0, 0], [0.25, 0.8], [0.5, 0.1], [0.5, 0.6], [1, 0.3]],
+        0.5,
     )
     bins = tf_bins(tf, -0.1, 1.1, 12)
     edges = np.linspace(-0.1, 1.1, 13)
@@ -62,7 +64,9 @@ def test_bin_means_match_dense_sampling():
         rgb, _ = tf.sample(x)
         assert bins.tau[k] == pytest.approx(tau.mean(), rel=1e-8)
         if tau.mean() > 0:
-            np.testing.assert_allclose(bins.color[k], (rgb * tau[:, None]).mean(0) / tau.mean(), rtol=1e-7, atol=1e-9)
+            np.testing.assert_allclose(
+                bins.color[k], (rgb * tau[:, None]).mean(0) / tau.mean(), rtol=1e-7, atol=1e-9
+            )
 
 
 def test_narrow_spike_keeps_its_weight_and_colour():

@@ -80,7 +80,10 @@ def test_composite_matches_reference(scene, path, changes, bound):
 def test_error_falls_with_step(scene):
     volume, tf, camera = scene
     reference, _ = render("reference", volume, tf, RenderSettings(), camera)
-    errors = [rmse(render("slicer", volume, tf, RenderSettings(step=s), camera)[0], reference) for s in (2.0, 1.0, 0.5)]
+    errors = [
+        rmse(render("slicer", volume, tf, RenderSettings(step=s), camera)[0], reference)
+        for s in (2.0, 1.0, 0.5)
+    ]
     assert errors[0] > errors[1] > errors[2]
 
 
@@ -93,7 +96,9 @@ def test_homogeneous_block_is_step_invariant(path, preintegration):
     volume = UniformVolume(np.full((10, 12, 14), 7.0, dtype=np.float32), spacing=(1.0, 0.8, 1.3))
     tf = TransferFunction1D(color=[[0, 0.9, 0.5, 0.2]], opacity=[[0, 0.3]], opacity_unit_distance=2.0)
     camera = Camera.orbit(volume.bounds, 35, 25, 1.2)
-    expected = homogeneous_image(box_path_lengths(camera, SIZE, SIZE, volume.bounds), (0.9, 0.5, 0.2), 0.3, 2.0)
+    expected = homogeneous_image(
+        box_path_lengths(camera, SIZE, SIZE, volume.bounds), (0.9, 0.5, 0.2), 0.3, 2.0
+    )
     for step in (1.0, 0.5, 0.3):
         settings = RenderSettings(step=step, preintegration=preintegration, options=exact(path=path))
         image, _ = render("slicer", volume, tf, settings, camera)
@@ -180,8 +185,13 @@ def test_skipping_is_honest(path, preintegration):
     alpha = 0.99
     images, counters = {}, {}
     for on in (False, True):
-        options = {"path": path, "early_termination": on, "empty_space_skipping": on, "brick_size": 4,
-                   "termination_alpha": alpha}
+        options = {
+            "path": path,
+            "early_termination": on,
+            "empty_space_skipping": on,
+            "brick_size": 4,
+            "termination_alpha": alpha,
+        }
         settings = RenderSettings(step=0.5, preintegration=preintegration, options=options)
         images[on], counters[on] = render("slicer", volume, tf, settings, camera)
     assert images[False][..., 3].max() > alpha
@@ -201,8 +211,9 @@ def test_skipping_never_drops_a_preintegrated_segment_between_bricks():
     images = {}
     for on in (False, True):
         options = {"early_termination": False, "empty_space_skipping": on, "brick_size": 8}
-        images[on], _ = render("slicer", volume, tf, RenderSettings(step=1.0, preintegration=True, options=options),
-                               camera)
+        images[on], _ = render(
+            "slicer", volume, tf, RenderSettings(step=1.0, preintegration=True, options=options), camera
+        )
     assert images[False][..., 3].max() > 0.1
     assert np.abs(images[True] - images[False]).max() < 1e-6
 
@@ -210,7 +221,13 @@ def test_skipping_never_drops_a_preintegrated_segment_between_bricks():
 # ---------------------------------------------------------------------------------- paths
 @pytest.mark.parametrize(
     "changes",
-    [{}, {"preintegration": True}, {"shade": True}, {"preintegration": True, "shade": True}, {"jitter": True}],
+    [
+        {},
+        {"preintegration": True},
+        {"shade": True},
+        {"preintegration": True, "shade": True},
+        {"jitter": True},
+    ],
 )
 def test_paths_agree(scene, changes):
     """The march and the slice paths visit the same sample points."""
@@ -227,7 +244,9 @@ def test_paths_agree(scene, changes):
 def test_jitter_is_seeded(scene):
     volume, tf, camera = scene
     images = [
-        render("slicer", volume, tf, RenderSettings(step=2.0, jitter=True, options={"jitter_seed": seed}), camera)[0]
+        render(
+            "slicer", volume, tf, RenderSettings(step=2.0, jitter=True, options={"jitter_seed": seed}), camera
+        )[0]
         for seed in (1, 1, 2)
     ]
     plain, _ = render("slicer", volume, tf, RenderSettings(step=2.0), camera)
@@ -299,7 +318,11 @@ def test_nothing_is_uploaded_again_when_only_the_camera_or_tf_changes(scene):
         tf.set_opacity_points([[tf.value_range[0], 0.0], [tf.value_range[1], 0.3]])
         renderer.render(camera, 32, 32)
         counters = renderer.last_frame.counters
-        assert (counters["uploaded_volume"], counters["uploaded_tables"], counters["uploaded_brick_mask"]) == (0, 1, 1)
+        assert (
+            counters["uploaded_volume"],
+            counters["uploaded_tables"],
+            counters["uploaded_brick_mask"],
+        ) == (0, 1, 1)
         renderer.set_settings(RenderSettings(preintegration=True, shade=True))
         renderer.render(camera, 32, 32)
         assert renderer.uploads["gradient"] == 1 and renderer.uploads["volume"] == 1
@@ -351,9 +374,11 @@ def test_renderers_sharing_a_thread_keep_their_own_context(scene):
     volume, tf, camera = scene
     settings = [RenderSettings(), RenderSettings(preintegration=True, options={"path": "slices"})]
     alone = [render("slicer", volume, tf, s, camera, 32)[0] for s in settings]
-    with prepared_renderer("slicer", volume, tf, settings[0]) as first, \
-            prepared_renderer("slicer", volume, tf, settings[1]) as second, \
-            prepared_renderer("vtk", volume, tf) as vtk_renderer:
+    with (
+        prepared_renderer("slicer", volume, tf, settings[0]) as first,
+        prepared_renderer("slicer", volume, tf, settings[1]) as second,
+        prepared_renderer("vtk", volume, tf) as vtk_renderer,
+    ):
         for _ in range(2):
             images = [first.render(camera, 32, 32), second.render(camera, 32, 32)]
             vtk_renderer.render(camera, 32, 32)
@@ -429,8 +454,11 @@ def test_2d_tf_skips_bricks_its_widgets_cannot_reach():
     values = np.zeros((16, 16, 32), dtype=np.float32)
     values[..., 16:] = np.linspace(0, 100, 16)[None, None, :]
     grid = BrickGrid.from_array(values, 8)
-    tf = TransferFunction2D(value_range=(0, 100), gradient_range=(0, 10),
-                            widgets=[TFWidget.box((60, 100), (0, 10), (1, 1, 1), 1.0)])
+    tf = TransferFunction2D(
+        value_range=(0, 100),
+        gradient_range=(0, 10),
+        widgets=[TFWidget.box((60, 100), (0, 10), (1, 1, 1), 1.0)],
+    )
     visible = grid.visible(tf)
     assert visible[..., 3].all() and not visible[..., :2].any()
     # The bound is exact for one widget: the box's peak wherever the brick's range meets it.
@@ -472,7 +500,9 @@ def test_a_volume_replaced_between_frames_frees_its_texture():
         renderer.set_transfer_function(tf)
         grown = []
         for step in range(40):
-            renderer.set_volume(UniformVolume(rng.random((96, 96, 96), dtype=np.float32)))  # 3.4 MiB a texture
+            renderer.set_volume(
+                UniformVolume(rng.random((96, 96, 96), dtype=np.float32))
+            )  # 3.4 MiB a texture
             renderer.render(Camera.orbit((0, 95, 0, 95, 0, 95)), 8, 8)
             if step in (9, 39):
                 grown.append(resident_mb())

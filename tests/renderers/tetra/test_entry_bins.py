@@ -76,14 +76,14 @@ def test_row_blocks_match_brute_force(seed: int) -> None:
     listed = 0
     for p in range(WIDTH * HEIGHT):
         expected = _brute_force(px, py, behind, triangles, cells, p % WIDTH, p // WIDTH)
-        assert list(cand[offsets[p]:offsets[p + 1]]) == expected, p
+        assert list(cand[offsets[p] : offsets[p + 1]]) == expected, p
         listed += len(expected)
     assert listed > WIDTH * HEIGHT  # the scene does cover pixels, many of them twice
     # a block of rows lists the same as those rows of the whole image
     o2, c2 = bin_triangles(faces, 7, 19)
     a, b = 7 * WIDTH, 19 * WIDTH
-    assert np.array_equal(o2, offsets[a:b + 1] - offsets[a])
-    assert np.array_equal(c2, cand[offsets[a]:offsets[b]])
+    assert np.array_equal(o2, offsets[a : b + 1] - offsets[a])
+    assert np.array_equal(c2, cand[offsets[a] : offsets[b]])
 
 
 @pytest.mark.parametrize("tile", [1, 4, 8, 64])
@@ -97,7 +97,7 @@ def test_sparse_pixels_through_tiles_match_row_blocks(seed: int, tile: int) -> N
         o, c = bin_triangles_at(faces, bin_tiles(faces, tile), pixels, tile)
         assert len(o) == count + 1
         for j, p in enumerate(pixels):
-            assert np.array_equal(c[o[j]:o[j + 1]], cand[offsets[p]:offsets[p + 1]])
+            assert np.array_equal(c[o[j] : o[j + 1]], cand[offsets[p] : offsets[p + 1]])
 
 
 def test_tiles_hold_exactly_the_faces_whose_box_meets_them() -> None:
@@ -108,10 +108,17 @@ def test_tiles_hold_exactly_the_faces_whose_box_meets_them() -> None:
     assert len(offsets) == tiles_x * tiles_y + 1
     for b in range(tiles_x * tiles_y):
         bx, by = b % tiles_x, b // tiles_x
-        expected = [i for i, (_, x0, x1, y0, y1) in enumerate(faces.boxes)
-                    if x0 <= x1 and y0 <= y1 and x0 <= bx * tile + tile - 1 and x1 >= bx * tile
-                    and y0 <= by * tile + tile - 1 and y1 >= by * tile]
-        assert list(members[offsets[b]:offsets[b + 1]]) == expected
+        expected = [
+            i
+            for i, (_, x0, x1, y0, y1) in enumerate(faces.boxes)
+            if x0 <= x1
+            and y0 <= y1
+            and x0 <= bx * tile + tile - 1
+            and x1 >= bx * tile
+            and y0 <= by * tile + tile - 1
+            and y1 >= by * tile
+        ]
+        assert list(members[offsets[b] : offsets[b + 1]]) == expected
 
 
 def test_pixel_coordinates_follow_the_camera() -> None:
@@ -119,8 +126,14 @@ def test_pixel_coordinates_follow_the_camera() -> None:
     pixel's centre; a point behind the eye is flagged."""
     camera = Camera(position=(1.0, 2.0, 9.0), focal_point=(0.5, 0.0, 0.0), view_up=(0.0, 1.0, 0.2))
     origins, dirs = camera.rays(WIDTH, HEIGHT, np.array([3, 30]), np.array([5, 20]))
-    points = np.concatenate([[camera.focal_point], origins + 2.0 * dirs, origins + 7.5 * dirs,
-                             [2.0 * np.array(camera.position) - camera.focal_point]])
+    points = np.concatenate(
+        [
+            [camera.focal_point],
+            origins + 2.0 * dirs,
+            origins + 7.5 * dirs,
+            [2.0 * np.array(camera.position) - camera.focal_point],
+        ]
+    )
     px, py, w = pixel_coordinates(camera, WIDTH, HEIGHT, points)
     assert np.allclose([px[0], py[0]], [(WIDTH - 1) / 2, (HEIGHT - 1) / 2], atol=1e-9)
     assert np.allclose(px[1:5], [3, 30, 3, 30], atol=1e-9) and np.allclose(py[1:5], [5, 20, 5, 20], atol=1e-9)

@@ -21,7 +21,9 @@ _FIVE_EVEN = [(0, 1, 2, 4), (3, 1, 2, 7), (5, 1, 4, 7), (6, 2, 4, 7), (1, 2, 4, 
 _FIVE_ODD = [(1, 0, 3, 5), (2, 0, 3, 6), (4, 0, 5, 6), (7, 3, 5, 6), (0, 3, 5, 6)]
 
 
-def cube_grid(n: int, scheme: str, field=lambda x, y, z: x + 2 * y + 3 * z) -> tuple[TetVolume, UniformVolume]:
+def cube_grid(
+    n: int, scheme: str, field=lambda x, y, z: x + 2 * y + 3 * z
+) -> tuple[TetVolume, UniformVolume]:
     """n^3 unit cubes split into tetrahedra (Kuhn's 6 or alternating 5), and the same field on
     the uniform grid of their corners."""
     k, j, i = np.mgrid[0 : n + 1, 0 : n + 1, 0 : n + 1]
@@ -98,8 +100,13 @@ def test_rays_through_vertices_and_edges(scheme):
     mesh, _ = cube_grid(n, scheme, field=lambda x, y, z: 0 * x + 5.0)
     tf = TransferFunction1D(color=[[0, 0.2, 0.9, 0.5]], opacity=[[0, 0.3]], opacity_unit_distance=1.5)
     pixels = 2 * n + 1  # centres at the vertices and the midpoints between them
-    camera = Camera(position=(1.5, 1.5, 10.0), focal_point=(1.5, 1.5, 1.5), parallel=True,
-                    parallel_scale=n * pixels / (pixels - 1) / 2.0, clipping_range=(1.0, 20.0))
+    camera = Camera(
+        position=(1.5, 1.5, 10.0),
+        focal_point=(1.5, 1.5, 1.5),
+        parallel=True,
+        parallel_scale=n * pixels / (pixels - 1) / 2.0,
+        clipping_range=(1.0, 20.0),
+    )
     origins, _ = camera.pixel_rays(pixels, pixels)
     assert np.allclose(origins[..., 0] * 2, np.round(origins[..., 0] * 2))  # on vertices and edges
     image, counters = render("tetra", mesh, tf, camera, pixels, options={"backend": "cpu"})
@@ -116,7 +123,9 @@ def test_holes_from_nonfinite_and_flat_cells():
     """Cells with a NaN value are holes: rays leave the mesh there and re-enter beyond."""
     mesh, _ = cube_grid(3, "kuhn", field=lambda x, y, z: 0 * x + 2.0)
     values = mesh.values.copy()
-    centre = np.argmin(np.linalg.norm(mesh.points - 1.5, axis=1) + 10 * (np.abs(mesh.points - 1) > 0.5).any(axis=1))
+    centre = np.argmin(
+        np.linalg.norm(mesh.points - 1.5, axis=1) + 10 * (np.abs(mesh.points - 1) > 0.5).any(axis=1)
+    )
     values[centre] = np.nan  # an interior vertex: its cells become a hole
     holed = TetVolume(mesh.points, mesh.tets, values)
     tf = TransferFunction1D(color=[[0, 1, 1, 1]], opacity=[[0, 0.2], [4, 0.2]])
@@ -135,16 +144,21 @@ def test_early_termination_and_transparent_cells(grids):
     opaque = TransferFunction1D(color=[[0, 1, 1, 1]], opacity=[[0, 0.0], [10, 0.0], [11, 1.0], [24, 1.0]])
     images, counters = {}, {}
     for alpha in (1.0, 0.99):
-        images[alpha], counters[alpha] = render("tetra", kuhn, opaque, camera, options={"termination_alpha": alpha})
+        images[alpha], counters[alpha] = render(
+            "tetra", kuhn, opaque, camera, options={"termination_alpha": alpha}
+        )
     assert images[1.0][..., 3].max() > 0.99
     assert np.abs(images[1.0] - images[0.99]).max() <= 0.01 + 1e-6
     assert counters[0.99]["cells_integrated"] < counters[1.0]["cells_integrated"]
     assert counters[1.0]["cells_transparent"] > 0
     # without the skip every cell walked through is integrated; the transparent ones add (almost)
     # nothing: only the table's interpolation next to the opacity ramp
-    every, every_counters = render("tetra", kuhn, opaque, camera, options={"termination_alpha": 1.0,
-                                                                          "skip_transparent": False})
-    assert every_counters["cells_integrated"] == every_counters["cell_steps"] > counters[1.0]["cells_integrated"]
+    every, every_counters = render(
+        "tetra", kuhn, opaque, camera, options={"termination_alpha": 1.0, "skip_transparent": False}
+    )
+    assert (
+        every_counters["cells_integrated"] == every_counters["cell_steps"] > counters[1.0]["cells_integrated"]
+    )
     assert every_counters["cells_transparent"] == 0
     assert np.abs(every - images[1.0]).max() < 0.01
 
@@ -155,9 +169,11 @@ def shells() -> tuple[TetVolume, TransferFunction1D]:
     range has whole-number ends, so a transparent cell's values stay 0.4 (almost 4 table bins) away
     from any opacity, and the table gives it exactly nothing: skipping it changes no pixel."""
     mesh, _ = cube_grid(6, "kuhn", field=lambda x, y, z: (x - 3.0) ** 2 + (y - 3.0) ** 2 + (z - 3.0) ** 2)
-    tf = TransferFunction1D(color=[[0, 0.9, 0.5, 0.1], [27, 0.2, 0.6, 1.0]],
-                            opacity=[[0, 0], [2.4, 0], [3, 0.5], [3.6, 0], [12.4, 0], [14, 0.8], [15.6, 0]],
-                            opacity_unit_distance=2.0)
+    tf = TransferFunction1D(
+        color=[[0, 0.9, 0.5, 0.1], [27, 0.2, 0.6, 1.0]],
+        opacity=[[0, 0], [2.4, 0], [3, 0.5], [3.6, 0], [12.4, 0], [14, 0.8], [15.6, 0]],
+        opacity_unit_distance=2.0,
+    )
     return mesh, tf
 
 
@@ -165,9 +181,17 @@ def shell_cameras(mesh: TetVolume) -> dict[str, tuple[Camera, int]]:
     """A perspective view, and a parallel view down z with a pixel centre on every vertex column
     and edge midpoint: rays run along the edges where visible and transparent cells meet."""
     pixels = 2 * 6 + 1
-    along_edges = Camera(position=(3.0, 3.0, 20.0), focal_point=(3.0, 3.0, 3.0), parallel=True,
-                         parallel_scale=6 * pixels / (pixels - 1) / 2.0, clipping_range=(1.0, 40.0))
-    return {"perspective": (Camera.orbit(mesh.bounds, 30, 20, 1.0), SIZE), "along_edges": (along_edges, pixels)}
+    along_edges = Camera(
+        position=(3.0, 3.0, 20.0),
+        focal_point=(3.0, 3.0, 3.0),
+        parallel=True,
+        parallel_scale=6 * pixels / (pixels - 1) / 2.0,
+        clipping_range=(1.0, 40.0),
+    )
+    return {
+        "perspective": (Camera.orbit(mesh.bounds, 30, 20, 1.0), SIZE),
+        "along_edges": (along_edges, pixels),
+    }
 
 
 @pytest.mark.parametrize("view", ["perspective", "along_edges"])
@@ -179,8 +203,9 @@ def test_rays_jump_over_transparent_cells(view):
     mesh, tf = shells()
     camera, size = shell_cameras(mesh)[view]
     jumped, jumped_counters = render("tetra", mesh, tf, camera, size, options={"backend": "cpu"})
-    walked, walked_counters = render("tetra", mesh, tf, camera, size,
-                                     options={"backend": "cpu", "skip_transparent": False})
+    walked, walked_counters = render(
+        "tetra", mesh, tf, camera, size, options={"backend": "cpu", "skip_transparent": False}
+    )
     reference, _ = render("reference", mesh, tf, camera, size)
     assert reference[..., 3].max() > 0.3
     assert np.abs(jumped - walked).max() < 1e-6  # measured: 0 (bit-identical)
@@ -215,8 +240,15 @@ def test_tf_edits_keep_the_walk_set_while_the_visible_cells_stay():
 
 
 def refined(volume, tf, camera, size, stride, tolerance, **settings):
-    return render("tetra", volume, tf, camera, size, options={"backend": "cpu", "image_stride": stride,
-                                                              "refine_tolerance": tolerance}, **settings)
+    return render(
+        "tetra",
+        volume,
+        tf,
+        camera,
+        size,
+        options={"backend": "cpu", "image_stride": stride, "refine_tolerance": tolerance},
+        **settings,
+    )
 
 
 @pytest.mark.parametrize("mode", ["composite", "maximum", "average"])
@@ -244,8 +276,9 @@ def test_adaptive_refinement_with_the_eye_inside_the_mesh(grids):
     """Rays that start in the cells the near plane cuts, and boundary faces behind the eye (listed
     in every pixel), reach the refined pixels' entry lists as they reach the full image's."""
     kuhn, _, _, tf, _, _ = grids
-    camera = Camera(position=(2.1, 1.9, 1.2), focal_point=(2.0, 2.0, 4.0), view_angle=60.0,
-                    clipping_range=(0.05, 20.0))
+    camera = Camera(
+        position=(2.1, 1.9, 1.2), focal_point=(2.0, 2.0, 4.0), view_angle=60.0, clipping_range=(0.05, 20.0)
+    )
     full, _ = render("tetra", kuhn, tf, camera, 64, options={"backend": "cpu"})
     image, counters = refined(kuhn, tf, camera, 64, 8, 0.0)
     assert full[..., 3].min() > 0.05  # every ray starts in the mesh
@@ -277,12 +310,17 @@ def test_projections_match_the_reference(grids, mode):
 
 def test_bad_options(grids):
     kuhn, _, _, tf, camera, _ = grids
-    for options, message in (({"integration": "fast"}, "integration"), ({"table_size": 1}, "table_size"),
-                             ({"termination_alpha": 0}, "termination_alpha"),
-                             ({"skip_transparent": "no"}, "skip_transparent"), ({"image_stride": 3}, "image_stride"),
-                             ({"image_stride": 0}, "image_stride"), ({"refine_tolerance": -0.1}, "refine_tolerance"),
-                             ({"refine_tolerance": "low"}, "refine_tolerance"),
-                             ({"backend": "gl", "image_stride": 4}, "cpu backend only")):
+    for options, message in (
+        ({"integration": "fast"}, "integration"),
+        ({"table_size": 1}, "table_size"),
+        ({"termination_alpha": 0}, "termination_alpha"),
+        ({"skip_transparent": "no"}, "skip_transparent"),
+        ({"image_stride": 3}, "image_stride"),
+        ({"image_stride": 0}, "image_stride"),
+        ({"refine_tolerance": -0.1}, "refine_tolerance"),
+        ({"refine_tolerance": "low"}, "refine_tolerance"),
+        ({"backend": "gl", "image_stride": 4}, "cpu backend only"),
+    ):
         with pytest.raises(VolrenError, match=message):
             render("tetra", kuhn, tf, camera, 8, options=options)
 

@@ -28,7 +28,9 @@ CPU = {"backend": "cpu"}
 def both(volume, tf, camera, size=48, options=None, **settings):
     """(GL image, CPU image, GL counters, CPU counters)."""
     gl, gl_counters = render("tetra", volume, tf, camera, size, options={**GL, **(options or {})}, **settings)
-    cpu, cpu_counters = render("tetra", volume, tf, camera, size, options={**CPU, **(options or {})}, **settings)
+    cpu, cpu_counters = render(
+        "tetra", volume, tf, camera, size, options={**CPU, **(options or {})}, **settings
+    )
     return gl, cpu, gl_counters, cpu_counters
 
 
@@ -67,10 +69,17 @@ def test_rays_through_vertices_and_edges(scheme):
     mesh, _ = cube_grid(n, scheme, field=lambda x, y, z: 0 * x + 5.0)
     tf = TransferFunction1D(color=[[0, 0.2, 0.9, 0.5]], opacity=[[0, 0.3]], opacity_unit_distance=1.5)
     pixels = 2 * n + 1
-    camera = Camera(position=(1.5, 1.5, 10.0), focal_point=(1.5, 1.5, 1.5), parallel=True,
-                    parallel_scale=n * pixels / (pixels - 1) / 2.0, clipping_range=(1.0, 20.0))
+    camera = Camera(
+        position=(1.5, 1.5, 10.0),
+        focal_point=(1.5, 1.5, 1.5),
+        parallel=True,
+        parallel_scale=n * pixels / (pixels - 1) / 2.0,
+        clipping_range=(1.0, 20.0),
+    )
     image, counters = render("tetra", mesh, tf, camera, pixels, options=GL)
-    expected = homogeneous_image(box_path_lengths(camera, pixels, pixels, mesh.bounds), (0.2, 0.9, 0.5), 0.3, 1.5)
+    expected = homogeneous_image(
+        box_path_lengths(camera, pixels, pixels, mesh.bounds), (0.2, 0.9, 0.5), 0.3, 1.5
+    )
     assert np.isfinite(image).all() and counters["walks_cut"] == 0
     assert np.abs(image[1:-1, 1:-1] - expected[1:-1, 1:-1]).max() < 1e-4
 
@@ -79,8 +88,9 @@ def test_rays_along_axes_at_an_angle_of_the_grid():
     """A perspective view straight down a row of vertices: the central ray runs along a line of edges."""
     mesh, _ = cube_grid(3, "five", field=lambda x, y, z: 0 * x + 5.0)
     tf = TransferFunction1D(color=[[0, 0.2, 0.9, 0.5]], opacity=[[0, 0.3]], opacity_unit_distance=1.5)
-    camera = Camera(position=(1.0, 2.0, 12.0), focal_point=(1.0, 2.0, 1.5), view_angle=30.0,
-                    clipping_range=(1.0, 30.0))
+    camera = Camera(
+        position=(1.0, 2.0, 12.0), focal_point=(1.0, 2.0, 1.5), view_angle=30.0, clipping_range=(1.0, 30.0)
+    )
     gl, cpu, gl_counters, _ = both(mesh, tf, camera, 33)
     assert gl_counters["walks_cut"] == 0
     assert np.abs(gl - cpu).max() < 2e-4
@@ -120,11 +130,15 @@ def test_early_termination_and_transparent_cells(kuhn):
     assert np.abs(gl_all - cpu_all).max() < 2e-4
     assert np.abs(gl_all - gl_stop).max() <= 0.01 + 1e-6
     assert counters_stop["cells_integrated"] < counters_all["cells_integrated"]
-    gl_every, cpu_every, counters_every, _ = both(mesh, opaque, camera, options={"termination_alpha": 1.0,
-                                                                                 "skip_transparent": False})
+    gl_every, cpu_every, counters_every, _ = both(
+        mesh, opaque, camera, options={"termination_alpha": 1.0, "skip_transparent": False}
+    )
     # every step is integrated but the zero-length ones around edges
     assert counters_all["cells_integrated"] < counters_every["cells_integrated"]
-    assert counters_every["cell_steps"] - counters_every["cells_integrated"] <= 0.001 * counters_every["cell_steps"]
+    assert (
+        counters_every["cell_steps"] - counters_every["cells_integrated"]
+        <= 0.001 * counters_every["cell_steps"]
+    )
     assert np.abs(gl_every - cpu_every).max() < 2e-4
 
 
@@ -142,14 +156,17 @@ def test_rays_jump_over_transparent_cells(view):
     assert np.abs(gl - gl_every).max() < 2e-4
     assert gl_counters["cell_steps"] < 0.9 * every_counters["cell_steps"]
     if view == "perspective":  # along the edges, float32 rounds the zero-length steps around them differently
-        assert abs(gl_counters["cell_steps"] - cpu_counters["cell_steps"]) <= 0.01 * cpu_counters["cell_steps"]
+        assert (
+            abs(gl_counters["cell_steps"] - cpu_counters["cell_steps"]) <= 0.01 * cpu_counters["cell_steps"]
+        )
 
 
 def test_an_eye_inside_the_mesh(kuhn):
     """Rays start inside the cells the near plane cuts."""
     mesh, tf, _ = kuhn
-    camera = Camera(position=(2.1, 1.9, 1.2), focal_point=(2.0, 2.0, 4.0), view_angle=60.0,
-                    clipping_range=(0.05, 20.0))
+    camera = Camera(
+        position=(2.1, 1.9, 1.2), focal_point=(2.0, 2.0, 4.0), view_angle=60.0, clipping_range=(0.05, 20.0)
+    )
     gl, cpu, _, _ = both(mesh, tf, camera)
     reference, _ = render("reference", mesh, tf, camera)
     assert cpu[..., 3].min() > 0.05  # every ray starts in the mesh

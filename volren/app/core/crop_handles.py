@@ -97,7 +97,13 @@ def seen_end_on(camera: Camera, box: Sequence[float], face: int) -> bool:
 
 
 def handle_at(
-    camera: Camera, aspect: float, rect: Rect, box: Sequence[float], x: float, y: float, radius: float = PICK_RADIUS
+    camera: Camera,
+    aspect: float,
+    rect: Rect,
+    box: Sequence[float],
+    x: float,
+    y: float,
+    radius: float = PICK_RADIUS,
 ) -> int | None:
     """The face whose handle is within `radius` pixels of (x, y), the closest one (the nearer to the
     viewer on a tie), leaving out faces seen end-on; None when there is none."""

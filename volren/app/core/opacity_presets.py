@@ -64,7 +64,9 @@ def robust_range(volume: Volume) -> tuple[float, float]:
     cumulative = np.cumsum(histogram.counts)
     if cumulative[-1] == 0:
         return volume.value_range
-    lo, hi = (float(np.interp(p / 100 * cumulative[-1], cumulative, histogram.edges[1:])) for p in MR_PERCENTILES)
+    lo, hi = (
+        float(np.interp(p / 100 * cumulative[-1], cumulative, histogram.edges[1:])) for p in MR_PERCENTILES
+    )
     return (lo, hi) if hi > lo else volume.value_range
 
 

@@ -52,7 +52,9 @@ def project_points(camera: Camera, aspect: float, rect: Rect, points: ArrayLike)
     return pixels
 
 
-def outline_segments(camera: Camera, aspect: float, rect: Rect, bounds: Sequence[float]) -> NDArray[np.float64]:
+def outline_segments(
+    camera: Camera, aspect: float, rect: Rect, bounds: Sequence[float]
+) -> NDArray[np.float64]:
     """The box `bounds`'s edges on screen, (m, 2, 2): start and end pixel of each visible edge,
     cut at the near plane (m < 12 when some edges lie wholly behind it)."""
     clip = clip_coordinates(camera, aspect, bounds_corners(bounds))

@@ -60,13 +60,22 @@ def preview_choice(renderer: str, kind: SceneClass, tf_dims: int, settings: Rend
         caps = capabilities(name)
         return caps.tf_drag_options if tf_dragged and caps is not None else None
 
-    if level_of(renderer, kind, settings) is not None or renderer in NOT_AUTO:  # reference: a frame takes seconds
+    if (
+        level_of(renderer, kind, settings) is not None or renderer in NOT_AUTO
+    ):  # reference: a frame takes seconds
+
         def can_draw(name: str) -> bool:
             caps = capabilities(name)
             at = at_level(name, kind, PREVIEW_LEVEL, settings)
-            return caps is not None and at is not None and caps.unsupported_reason(kind.kind, tf_dims, at) is None
+            return (
+                caps is not None
+                and at is not None
+                and caps.unsupported_reason(kind.kind, tf_dims, at) is None
+            )
 
-        fastest = next((name for name in ranked(kind, PREVIEW_LEVEL, names, speed_only=True) if can_draw(name)), None)
+        fastest = next(
+            (name for name in ranked(kind, PREVIEW_LEVEL, names, speed_only=True) if can_draw(name)), None
+        )
         if fastest is not None and fastest != renderer:
             at = at_level(fastest, kind, PREVIEW_LEVEL, settings)
             assert at is not None

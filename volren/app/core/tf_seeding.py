@@ -25,7 +25,9 @@ def _reaching(points: NDArray[np.float64], lo: float, hi: float) -> NDArray[np.f
     return np.concatenate([first[: int(lo < points[0, 0])], points, last[: int(hi > points[-1, 0])]])
 
 
-def seeded_2d(tf: TransferFunction1D, value_range: tuple[float, float], gradient_max: float) -> TransferFunction2D:
+def seeded_2d(
+    tf: TransferFunction1D, value_range: tuple[float, float], gradient_max: float
+) -> TransferFunction2D:
     """A 2D TF over `value_range` x [0, gradient_max] that draws what `tf` draws, at every gradient."""
     lo, hi = value_range
     profile = TransferFunction1D(_reaching(tf.color_points, lo, hi), _reaching(tf.opacity_points, lo, hi))

@@ -54,7 +54,14 @@ VIEW_DIRECTIONS: tuple[ViewDirection, ...] = (
 
 
 #: The anatomical views, in 3D Slicer's order, and the side each looks from.
-ANATOMICAL_SIDES = {"A": "anterior", "P": "posterior", "L": "left", "R": "right", "S": "superior", "I": "inferior"}
+ANATOMICAL_SIDES = {
+    "A": "anterior",
+    "P": "posterior",
+    "L": "left",
+    "R": "right",
+    "S": "superior",
+    "I": "inferior",
+}
 
 
 def _toward(letter: str, patient_axes: Sequence[str]) -> tuple[float, float, float]:

@@ -24,7 +24,7 @@ def path_row(parent: QWidget, path: str, browse: Callable[[], None]) -> tuple[QL
 
 
 def size_row(parent: QWidget, width_box: QSpinBox, height_box: QSpinBox) -> QHBoxLayout:
-    """"`width_box` x `height_box` pixels", in one row."""
+    """ "`width_box` x `height_box` pixels", in one row."""
     row = QHBoxLayout()
     row.addWidget(width_box)
     row.addWidget(QLabel("x", parent))

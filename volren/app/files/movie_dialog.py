@@ -58,7 +58,9 @@ class MovieFields:
             return None
         ints = (fields.width, fields.height, fields.frames)
         numbers = (fields.fps, fields.orbit)
-        if not all(type(v) is int for v in ints) or not all(type(v) in (int, float) and math.isfinite(v) for v in numbers):
+        if not all(type(v) is int for v in ints) or not all(
+            type(v) in (int, float) and math.isfinite(v) for v in numbers
+        ):
             return None
         return fields if isinstance(fields.lossless, bool) else None
 

@@ -27,7 +27,9 @@ class ReadSignals(QObject):
 class ReadTask(QRunnable):
     """`read()` on a pool thread; its volume or its failure (naming `source`) reported under `key`."""
 
-    def __init__(self, key: object, source: str | Path, read: Callable[[], object], signals: ReadSignals) -> None:
+    def __init__(
+        self, key: object, source: str | Path, read: Callable[[], object], signals: ReadSignals
+    ) -> None:
         super().__init__()
         self._key, self._source, self._read, self._signals = key, source, read, signals
 

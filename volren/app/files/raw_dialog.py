@@ -104,7 +104,9 @@ class RawDialog(QDialog):
     def _update(self) -> None:
         needed = self.needed_bytes()
         fits = needed == self.file_bytes
-        self.check.setText(f"{needed:,} bytes needed; the file holds {self.file_bytes:,}" + ("" if fits else " (no match)"))
+        self.check.setText(
+            f"{needed:,} bytes needed; the file holds {self.file_bytes:,}" + ("" if fits else " (no match)")
+        )
         self.buttons.button(QDialogButtonBox.Ok).setEnabled(fits)
 
     def parameters(self) -> dict[str, Any]:

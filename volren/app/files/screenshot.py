@@ -99,7 +99,9 @@ def render_job(
     job: ScreenshotJob, factory: RendererFactory = _registry_factory, progress: ProgressCallback | None = None
 ) -> NDArray[np.float32]:
     """The premultiplied RGBA frame of `job`, from a renderer made for it and released after."""
-    return draw(VolumeInput(job.volume), _job_scene(job), job.camera, progress, how=_preparation(factory)).image
+    return draw(
+        VolumeInput(job.volume), _job_scene(job), job.camera, progress, how=_preparation(factory)
+    ).image
 
 
 def write_job(job: ScreenshotJob, image: NDArray[np.float32]) -> None:

@@ -180,7 +180,9 @@ class DatasetInfoPanel(StatePanel):
         if volume is None:
             why = "Open a volume first"
         elif len(choices) > 1:
-            why = "The scalar field to render: another array of the file, or a vector's magnitude or component"
+            why = (
+                "The scalar field to render: another array of the file, or a vector's magnitude or component"
+            )
         elif volume.arrays:
             why = "The file holds this one scalar field"
         else:

@@ -28,7 +28,9 @@ JITTER_TIP = "Start each ray at a random offset: trades wood-grain artefacts for
 class SamplingPanel(StatePanel):
     """Step (0.05..4) with its length in world units, pre-integration and jitter checkboxes."""
 
-    watches = frozenset({"settings", "volume", "renderer"})  # a renderer switch brings its quality level's step
+    watches = frozenset(
+        {"settings", "volume", "renderer"}
+    )  # a renderer switch brings its quality level's step
 
     def __init__(self, state: ViewState, parent: QWidget | None = None) -> None:
         super().__init__(state, parent)
@@ -57,7 +59,11 @@ class SamplingPanel(StatePanel):
         settings = self.state.settings
         self.step.refresh()
         volume = self.state.volume
-        unit = "smallest voxel spacing" if volume is None or volume.kind == "uniform" else "mean tetrahedron edge"
+        unit = (
+            "smallest voxel spacing"
+            if volume is None or volume.kind == "uniform"
+            else "mean tetrahedron edge"
+        )
         length = f" = {settings.step * volume.characteristic_length:.4g} world units" if volume else ""
         self.step_length.setText(f"× {unit}{length}")
         with signals_blocked(self.preintegration, self.jitter):

@@ -67,7 +67,9 @@ class OverlaySettings:
         return tuple(f.name for f in fields(cls))
 
 
-def draw_outline(painter: QPainter, camera: Camera, aspect: float, rect: Rect, bounds: Sequence[float]) -> None:
+def draw_outline(
+    painter: QPainter, camera: Camera, aspect: float, rect: Rect, bounds: Sequence[float]
+) -> None:
     """The 12 edges of `bounds`, 1-pixel white lines without antialiasing (crisp on any frame)."""
     segments = outline_segments(camera, aspect, rect, bounds)
     painter.save()
@@ -142,7 +144,9 @@ def draw_axes(painter: QPainter, camera: Camera, widget_height: float) -> None:
 def legend_bar_rect(widget_width: float, widget_height: float) -> QRectF:
     """The colour bar's rectangle: at the right edge, centred vertically."""
     height = min(LEGEND_HEIGHT_SHARE * widget_height, LEGEND_MAX_HEIGHT)
-    return QRectF(widget_width - LEGEND_MARGIN - LEGEND_WIDTH, (widget_height - height) / 2.0, LEGEND_WIDTH, height)
+    return QRectF(
+        widget_width - LEGEND_MARGIN - LEGEND_WIDTH, (widget_height - height) / 2.0, LEGEND_WIDTH, height
+    )
 
 
 def legend_samples(tf: TransferFunction1D, rows: int) -> tuple[np.ndarray, np.ndarray, tuple[float, float]]:
@@ -186,6 +190,10 @@ def draw_legend(painter: QPainter, tf: TransferFunction, widget_width: float, wi
     painter.drawPolyline(QPolygonF([QPointF(float(x), float(y)) for x, y in zip(xs, ys, strict=True)]))
     painter.setPen(LEGEND_TEXT_COLOR)
     metrics = painter.fontMetrics()
-    for text, y in zip(range_texts((lo, hi)), (bar.top() - 4.0 - metrics.height(), bar.bottom() + 4.0), strict=True):
-        painter.drawText(QRectF(bar.right() - 200.0, y, 200.0, metrics.height()), Qt.AlignRight | Qt.AlignVCenter, text)
+    for text, y in zip(
+        range_texts((lo, hi)), (bar.top() - 4.0 - metrics.height(), bar.bottom() + 4.0), strict=True
+    ):
+        painter.drawText(
+            QRectF(bar.right() - 200.0, y, 200.0, metrics.height()), Qt.AlignRight | Qt.AlignVCenter, text
+        )
     painter.restore()

@@ -66,7 +66,9 @@ class Frame:
     full: bool
     rgb: NDArray[np.uint8]
     camera: Camera
-    settings: RenderSettings | None = None  #: what it was drawn with (previews may be cheaper than the state's)
+    settings: RenderSettings | None = (
+        None  #: what it was drawn with (previews may be cheaper than the state's)
+    )
     setup: bool = False  #: its time includes a renderer set-up (a new renderer or volume)
     tf_changed: bool = False  #: the renderer was given a new TF for it (its tables, an error estimate)
     volume: Volume | None = None  #: what it drew (the crop applied), to tell a frame of the current state
@@ -230,8 +232,19 @@ class RenderWorker(QObject):
         )
         rgb = to_png_pixels(image, request.background)
         return Frame(
-            request.serial, request.renderer, request.width, request.height, stats.ms, request.full, rgb, request.camera,
-            request.settings, setup, tf_changed, request.volume, request.tf_key,
+            request.serial,
+            request.renderer,
+            request.width,
+            request.height,
+            stats.ms,
+            request.full,
+            rgb,
+            request.camera,
+            request.settings,
+            setup,
+            tf_changed,
+            request.volume,
+            request.tf_key,
         )
 
     def _release(self, name: str) -> None:

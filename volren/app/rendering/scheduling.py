@@ -69,13 +69,17 @@ class FrameScheduler(QObject):
         self._preview: tuple[tuple, tuple[str, RenderSettings]] | None = None  # (inputs, preview) last made
         self._warmed: tuple[str, int] | None = None  # (renderer, id(volume)) last warmed up for previews
         self._cost_keys: tuple[RenderSettings | None, str] | None = None  # (settings, its repr) last asked
-        self._pending_final: tuple[int, tuple] | None = None  # (coarse frame's serial, the still frame's request)
+        self._pending_final: tuple[int, tuple] | None = (
+            None  # (coarse frame's serial, the still frame's request)
+        )
         self._timer = QTimer(self)
         self._timer.setSingleShot(True)
         self._timer.setInterval(settle_ms)
         self._timer.timeout.connect(self.request_full)
         self._requested_any = False
-        self._last_full: tuple | None = None  # what the newest full frame asked for, while nothing else was asked
+        self._last_full: tuple | None = (
+            None  # what the newest full frame asked for, while nothing else was asked
+        )
         self._unsubscribe = state.subscribe(self._on_change)
 
     def _on_change(self, change: Change) -> None:
@@ -135,10 +139,15 @@ class FrameScheduler(QObject):
         refused = self._refusing_the_view(names)
         # the kind (with the TF's class) and the renderers refusing this view compared by value
         inputs = (s.renderer, kind, s.settings, dragged, dims, refused)
-        if self._preview is None or any(a is not b and not (isinstance(a, str | frozenset) and a == b)
-                                        for a, b in zip(self._preview[0], inputs, strict=True)):
+        if self._preview is None or any(
+            a is not b and not (isinstance(a, str | frozenset) and a == b)
+            for a, b in zip(self._preview[0], inputs, strict=True)
+        ):
             usable = [n for n in names if n not in refused or n == s.renderer]
-            self._preview = (inputs, preview_choice(s.renderer, kind, dims, s.settings, usable, self._capabilities, dragged))
+            self._preview = (
+                inputs,
+                preview_choice(s.renderer, kind, dims, s.settings, usable, self._capabilities, dragged),
+            )
         return self._preview[1]
 
     def _refusing_the_view(self, names: list[str]) -> frozenset[str]:
@@ -162,7 +171,10 @@ class FrameScheduler(QObject):
         if request.renderer == self._state.renderer:
             return
         caps = self._capabilities(request.renderer)
-        if caps is None or caps.camera_reason(request.volume.kind, request.camera, request.volume.bounds) is None:
+        if (
+            caps is None
+            or caps.camera_reason(request.volume.kind, request.camera, request.volume.bounds) is None
+        ):
             self._failed_previewers.add(request.renderer)
         self._preview = None  # chosen again, without it
         self._last_full = None
@@ -222,7 +234,17 @@ class FrameScheduler(QObject):
             settings = still_settings(settings, self._capabilities(renderer))
             # a gesture that rested before it ended asks twice for the same full frame: once when input
             # went quiet, again on release; the second would redraw what is already on screen
-            key = (s.renderer, id(volume), id(tf), tf.version, s.settings, s.camera, width, height, s.background)
+            key = (
+                s.renderer,
+                id(volume),
+                id(tf),
+                tf.version,
+                s.settings,
+                s.camera,
+                width,
+                height,
+                s.background,
+            )
             if key == self._last_full:
                 return None  # and a refinement under way for it still ends in its still frame
             self._last_full = key
@@ -232,12 +254,26 @@ class FrameScheduler(QObject):
             width, height = preview_size(width, height, self.current_preview_scale(preview))
         self._requested_any = True
         self._pending_final = None  # this request replaces a refinement under way
-        request = (renderer, volume, s.transfer_function, settings, s.camera, width, height, full, s.background)
+        request = (
+            renderer,
+            volume,
+            s.transfer_function,
+            settings,
+            s.camera,
+            width,
+            height,
+            full,
+            s.background,
+        )
         if full:
             coarse = self.preview(tf_dragged=False)
-            if coarse != (renderer, settings) and self._worth_refining(width * height, (renderer, settings), coarse):
+            if coarse != (renderer, settings) and self._worth_refining(
+                width * height, (renderer, settings), coarse
+            ):
                 # progressive refinement: the whole view at the preview's renderer and settings first
-                serial = self._service.submit(coarse[0], *request[1:3], coarse[1], *request[4:7], False, s.background)
+                serial = self._service.submit(
+                    coarse[0], *request[1:3], coarse[1], *request[4:7], False, s.background
+                )
                 self._pending_final = (serial, request)
                 return serial
         return self._service.submit(*request)

@@ -304,7 +304,9 @@ class Viewport(QWidget):
         if cam is None or volume is None or delta == 0:
             return super().wheelEvent(event)
         with self._state.interaction():
-            self._state.set_camera(interaction.dolly(cam, interaction.wheel_dolly_factor(delta), volume.bounds))
+            self._state.set_camera(
+                interaction.dolly(cam, interaction.wheel_dolly_factor(delta), volume.bounds)
+            )
         event.accept()
 
     def keyPressEvent(self, event: QKeyEvent) -> None:

@@ -36,7 +36,9 @@ class TransferFunctionPanel(QWidget):
         self.tabs.addTab(self.editor_1d, "1D: value")
         self.tabs.addTab(self.editor_2d, "2D: value x gradient")
         self.tabs.setTabToolTip(0, "Colour and opacity by data value, over the value histogram")
-        self.tabs.setTabToolTip(1, "Opacity widgets over the value x gradient-magnitude histogram (book ch. 10)")
+        self.tabs.setTabToolTip(
+            1, "Opacity widgets over the value x gradient-magnitude histogram (book ch. 10)"
+        )
 
         self.undo_button = QToolButton(self)
         self.undo_button.setDefaultAction(history.stack.createUndoAction(self, "Undo"))

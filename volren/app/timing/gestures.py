@@ -30,14 +30,32 @@ import numpy as np
 from volren.app.timing.drive import application, drive_at_60hz, wait
 
 #: `application` is the QApplication a measurement runs in (`drive`), named here for `volren bench app`.
-__all__ = ["HEADER", "TARGETS", "VIEWPORT", "GestureTiming", "SceneTiming", "StallProbe", "application",
-           "markdown_rows", "measure_scene", "note", "run_gesture", "settle"]
+__all__ = [
+    "HEADER",
+    "TARGETS",
+    "VIEWPORT",
+    "GestureTiming",
+    "SceneTiming",
+    "StallProbe",
+    "application",
+    "markdown_rows",
+    "measure_scene",
+    "note",
+    "run_gesture",
+    "settle",
+]
 
 #: The viewport the interaction targets were set on: a maximised window on a 1080p screen.
 VIEWPORT = (947, 896)
 #: (previews per second, their share of the pixels, release -> full frame ms, GUI stall ms,
 #: end of loading -> first full frame ms): what each gesture and an opening must reach.
-TARGETS = {"previews_per_s": 10.0, "preview_share": 0.25, "release_ms": 600.0, "stall_ms": 50.0, "open_ms": 1500.0}
+TARGETS = {
+    "previews_per_s": 10.0,
+    "preview_share": 0.25,
+    "release_ms": 600.0,
+    "stall_ms": 50.0,
+    "open_ms": 1500.0,
+}
 #: The GUI thread's stall probe ticks this often (ms).
 TICK_MS = 5
 
@@ -110,7 +128,9 @@ def _share(frame) -> float:
     return frame.width * frame.height / (VIEWPORT[0] * VIEWPORT[1])
 
 
-def run_gesture(app, window, name: str, step: Callable[[int], None], seconds: float, timeout_s: float) -> GestureTiming:
+def run_gesture(
+    app, window, name: str, step: Callable[[int], None], seconds: float, timeout_s: float
+) -> GestureTiming:
     """`step(k)` at 60 Hz for `seconds` inside an interaction, then release; what the person saw."""
     state, stall = window.state, StallProbe()
     shown: list[tuple[float, object]] = []
@@ -180,7 +200,9 @@ def measure_scene(app, volume, tf, scene: str, seconds: float = 3.0, timeout_s: 
         window.files.apply_loaded(LoadedInput(volume, tf))
         serial = window.service.latest_serial
         full: list[float] = []
-        window.fullFrameShown.connect(lambda f: full.append(time.perf_counter()) if f.serial >= serial else None)
+        window.fullFrameShown.connect(
+            lambda f: full.append(time.perf_counter()) if f.serial >= serial else None
+        )
         if not wait(app, lambda: bool(full), timeout_s):
             raise TimeoutError(f"{scene}: no first frame within {timeout_s:g} s")
         open_ms, open_stall = (full[0] - start) * 1000.0, stall.stop()
@@ -212,13 +234,17 @@ def measure_scene(app, volume, tf, scene: str, seconds: float = 3.0, timeout_s: 
         two_d = state.transfer_function
         if two_d.dims == 2:
             (lo, hi), (_, gmax) = two_d.value_range, two_d.gradient_range
-            blob = TFWidget.gaussian((lo + 0.5 * (hi - lo), 0.5 * gmax), (0.08 * (hi - lo), 0.3 * gmax), (1.0, 0.6, 0.2), 0.5)
+            blob = TFWidget.gaussian(
+                (lo + 0.5 * (hi - lo), 0.5 * gmax), (0.08 * (hi - lo), 0.3 * gmax), (1.0, 0.6, 0.2), 0.5
+            )
             index = two_d.add_widget(blob)
             settle(app, window, timeout_s)  # the renderer that draws 2D TFs, set up
 
             def move(k: int) -> None:
                 center = (lo + (0.3 + 0.4 * _swing(k)) * (hi - lo), 0.5 * gmax)
-                two_d.replace_widget(index, TFWidget.gaussian(center, (0.08 * (hi - lo), 0.3 * gmax), (1.0, 0.6, 0.2), 0.5))
+                two_d.replace_widget(
+                    index, TFWidget.gaussian(center, (0.08 * (hi - lo), 0.3 * gmax), (1.0, 0.6, 0.2), 0.5)
+                )
 
             gestures.append(run_gesture(app, window, "2D widget", move, seconds, timeout_s))
         return SceneTiming(scene, renderer, open_ms, open_stall, tuple(gestures))

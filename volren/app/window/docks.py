@@ -58,7 +58,9 @@ class DockHost(Protocol):
     def width(self) -> int: ...
     def addDockWidget(self, area: Qt.DockWidgetArea, dock: QDockWidget) -> None: ...
     def tabifyDockWidget(self, first: QDockWidget, second: QDockWidget) -> None: ...
-    def resizeDocks(self, docks: list[QDockWidget], sizes: list[int], orientation: Qt.Orientation) -> None: ...
+    def resizeDocks(
+        self, docks: list[QDockWidget], sizes: list[int], orientation: Qt.Orientation
+    ) -> None: ...
 
 
 def _titled(title: str, panel: QWidget) -> QWidget:
@@ -102,7 +104,9 @@ class Docks:
         self.dataset = DatasetInfoPanel(state)
         self.dataset.arrayChosen.connect(window.files.show_array)
 
-        self.tf_dock = self._dock("Transfer function", "tf-dock", _scrolled(self.tf_panel), Qt.RightDockWidgetArea)
+        self.tf_dock = self._dock(
+            "Transfer function", "tf-dock", _scrolled(self.tf_panel), Qt.RightDockWidgetArea
+        )
         settings = QWidget()
         layout = QVBoxLayout(settings)
         layout.setContentsMargins(2, 2, 2, 2)
@@ -115,8 +119,12 @@ class Docks:
         ):
             layout.addWidget(_titled(title, panel))
         layout.addStretch(1)
-        self.settings_dock = self._dock("Rendering", "settings-dock", _scrolled(settings), Qt.LeftDockWidgetArea)
-        self.dataset_dock = self._dock("Dataset", "dataset-dock", _scrolled(self.dataset), Qt.LeftDockWidgetArea)
+        self.settings_dock = self._dock(
+            "Rendering", "settings-dock", _scrolled(settings), Qt.LeftDockWidgetArea
+        )
+        self.dataset_dock = self._dock(
+            "Dataset", "dataset-dock", _scrolled(self.dataset), Qt.LeftDockWidgetArea
+        )
         window.tabifyDockWidget(self.settings_dock, self.dataset_dock)
         self.settings_dock.raise_()
 
@@ -162,7 +170,9 @@ class Docks:
         widths = [d.width() * budget / used for d in docks]
         short = sum(max(DOCK_MIN_WIDTH - w, 0.0) for w in widths)  # what the minimums add back,
         room = sum(w - DOCK_MIN_WIDTH for w in widths if w > DOCK_MIN_WIDTH)  # taken from the wider ones
-        widths = [DOCK_MIN_WIDTH if w <= DOCK_MIN_WIDTH else w - short * (w - DOCK_MIN_WIDTH) / room for w in widths]
+        widths = [
+            DOCK_MIN_WIDTH if w <= DOCK_MIN_WIDTH else w - short * (w - DOCK_MIN_WIDTH) / room for w in widths
+        ]
         window.resizeDocks(docks, [max(DOCK_MIN_WIDTH, int(w)) for w in widths], Qt.Horizontal)
 
     # ------------------------------------------------------------------ capabilities
@@ -176,8 +186,9 @@ class Docks:
                 continue
             if support is not None and 2 in support.tf_dims:
                 return None
-        return f"No renderer draws 2D transfer functions on {'tetrahedral' if kind == 'tet' else kind} volumes"
-
+        return (
+            f"No renderer draws 2D transfer functions on {'tetrahedral' if kind == 'tet' else kind} volumes"
+        )
 
     def _on_change(self, change: Change) -> None:
         # a TF edit matters only when it changes the TF's dimension: during a drag, refreshing

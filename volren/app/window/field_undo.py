@@ -49,7 +49,9 @@ class FieldUndoKeys(QObject):
         """Every spin box and line edit under `roots` (a spin box's own line edit through it)."""
         for root in roots:
             fields: list[QWidget] = list(root.findChildren(QAbstractSpinBox))
-            fields += [e for e in root.findChildren(QLineEdit) if not isinstance(e.parentWidget(), QAbstractSpinBox)]
+            fields += [
+                e for e in root.findChildren(QLineEdit) if not isinstance(e.parentWidget(), QAbstractSpinBox)
+            ]
             for field in fields:
                 field.installEventFilter(self)
                 edit = _line_edit(field)

@@ -100,12 +100,18 @@ class FileActions(QObject):
     def _build_actions(self) -> None:
         window = self._window
         self.open_action = QAction("&Open…", window, shortcut=QKeySequence.Open, triggered=self._open_dialog)
-        self.open_action.setToolTip("Open a volume, a scene or a transfer function (or drop a file on the window)")
+        self.open_action.setToolTip(
+            "Open a volume, a scene or a transfer function (or drop a file on the window)"
+        )
         self.open_folder_action = QAction("Open &Folder…", window, triggered=self._open_folder_dialog)
-        self.open_folder_action.setToolTip("Open a DICOM series, or a folder of volume files as a time series")
+        self.open_folder_action.setToolTip(
+            "Open a DICOM series, or a folder of volume files as a time series"
+        )
         self.recent_menu = RecentFilesMenu(self.recent, window)
         self.recent_menu.fileChosen.connect(self.open_input)
-        self.cancel_action = QAction("Cancel", window, shortcut=QKeySequence(Qt.Key_Escape), triggered=self.cancel)
+        self.cancel_action = QAction(
+            "Cancel", window, shortcut=QKeySequence(Qt.Key_Escape), triggered=self.cancel
+        )
         self.cancel_action.setToolTip("Stop loading and keep what is shown  [Esc]")
         self.cancel_action.setEnabled(False)
 
@@ -224,7 +230,9 @@ class FileActions(QObject):
         assert volume is not None
         tf = self._tf_by_field.get((loaded.volume_path, volume.scalars)) or loaded.transfer_function
         renderer = None if self._renderers.auto else state.renderer  # `auto` chooses again for the new field
-        settings = None if self._level_shown() is not None else state.settings  # the level, for the renderer drawing
+        settings = (
+            None if self._level_shown() is not None else state.settings
+        )  # the level, for the renderer drawing
         return replace(loaded, camera=state.camera, settings=settings, renderer=renderer,
                        transfer_function=tf, crop=state.crop, background=state.background)  # fmt: skip
 

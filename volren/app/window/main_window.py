@@ -87,7 +87,9 @@ class MainWindow(QMainWindow):
         self.viewport = Viewport(self.state, self)
         self.setCentralWidget(self.viewport)
         self.service = RenderService(self, renderer_factory)
-        self.scheduler = FrameScheduler(self.state, self.service, self.viewport.pixel_size, self, registry=registry)
+        self.scheduler = FrameScheduler(
+            self.state, self.service, self.viewport.pixel_size, self, registry=registry
+        )
         status_bar = self.statusBar()
         settings = settings if settings is not None else app_settings()
         recent = RecentFiles(settings, parent=self)
@@ -103,7 +105,15 @@ class MainWindow(QMainWindow):
         self.movies = MovieActions(self, self.state, self.viewport, renderer_factory, self.report_error, recent.folder,
                                    settings)  # fmt: skip
         self.files = FileActions(
-            self, self.state, self.viewport, self.renderers, self.scenes, recent, load, self.report_error, self.time
+            self,
+            self.state,
+            self.viewport,
+            self.renderers,
+            self.scenes,
+            recent,
+            load,
+            self.report_error,
+            self.time,
         )
         self.addAction(self.files.cancel_action)  # its Esc shortcut works without a menu entry
 
@@ -131,10 +141,14 @@ class MainWindow(QMainWindow):
     # ------------------------------------------------------------------ construction
     def _build_view_actions(self) -> None:
         self.quit_action = QAction("&Quit", self, shortcut=QKeySequence.Quit, triggered=self.close)
-        self.reset_action = QAction("&Reset view", self, shortcut=QKeySequence("R"), triggered=self.reset_view)
+        self.reset_action = QAction(
+            "&Reset view", self, shortcut=QKeySequence("R"), triggered=self.reset_view
+        )
         self.reset_action.setToolTip("Reset the camera (azimuth 30, elevation 20, zoom 1)  [R]")
         #: View > View direction and the toolbar's "+X" ... "-Z": ParaView's view-direction buttons.
-        self.view_direction_actions = {view.name: self._view_direction_action(view) for view in VIEW_DIRECTIONS}
+        self.view_direction_actions = {
+            view.name: self._view_direction_action(view) for view in VIEW_DIRECTIONS
+        }
         #: View > View direction > A, P, L, R, S, I: where the data says how the patient lies.
         self.anatomical_actions = {letter: self._anatomical_action(letter) for letter in ANATOMICAL_SIDES}
         #: View > Outline, Orientation axes, Colour legend: the viewport's overlays, by `OverlaySettings` name.
@@ -189,7 +203,9 @@ class MainWindow(QMainWindow):
         self.crop_handles_action = self.view_menu.addAction("Edit crop box")
         self.crop_handles_action.setCheckable(True)
         self.crop_handles_action.setChecked(self.viewport.crop_handles)
-        self.crop_handles_action.setToolTip("Show the crop box with a handle on each face; drag a handle to crop")
+        self.crop_handles_action.setToolTip(
+            "Show the crop box with a handle on each face; drag a handle to crop"
+        )
         self.crop_handles_action.toggled.connect(self.viewport.set_crop_handles)
 
         self.toolbar = QToolBar("Main", self)
@@ -224,7 +240,9 @@ class MainWindow(QMainWindow):
             axes = getattr(self.state.volume, "patient_axes", None)
             for letter, action in self.anatomical_actions.items():
                 action.setEnabled(axes is not None)
-                action.setToolTip(anatomical_view(letter, axes).description if axes else NO_PATIENT_ORIENTATION)
+                action.setToolTip(
+                    anatomical_view(letter, axes).description if axes else NO_PATIENT_ORIENTATION
+                )
         self.renderers.on_state_change(change)
         self.quality.on_state_change(change)
 

@@ -47,12 +47,16 @@ class MovieActions(FileJobActions):
         self._state = state
         self._viewport = viewport
         self._settings = settings
-        self._fields = movie_dialog.MovieFields.from_json(settings.value(FIELDS_KEY)) if settings is not None else None
+        self._fields = (
+            movie_dialog.MovieFields.from_json(settings.value(FIELDS_KEY)) if settings is not None else None
+        )
         self._frames = 0
         self.action = QAction("Export &Movie…", window, triggered=self._dialog)
         self.action.setToolTip("Render an orbit of the view into an MP4 or GIF movie")
 
-    def export(self, path: PathArg, width: int, height: int, animation: Animation, lossless: bool = False) -> bool:
+    def export(
+        self, path: PathArg, width: int, height: int, animation: Animation, lossless: bool = False
+    ) -> bool:
         """Record `animation` from the current view at `width` x `height` with the current renderer
         in the background (`saved` or a reported error follow); False when it cannot even start."""
         try:

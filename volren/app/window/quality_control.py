@@ -34,7 +34,9 @@ class QualityControl:
         self.chooser = QComboBox(parent)
         self.chooser.setObjectName("quality-chooser")
         self.chooser.addItems([CUSTOM, *LEVELS])
-        self.chooser.setToolTip("Settings measured for this renderer at each quality level (volren renderers)")
+        self.chooser.setToolTip(
+            "Settings measured for this renderer at each quality level (volren renderers)"
+        )
         self.chooser.activated.connect(self._chosen)
         self._applying = False
         self.refresh()
@@ -44,7 +46,9 @@ class QualityControl:
         if volume is None:
             return None
         kind = SceneClass.of(volume, self._state.transfer_function)
-        return quality.table().measurement(self._state.renderer, kind, level)  # looked up now: tests swap the table
+        return quality.table().measurement(
+            self._state.renderer, kind, level
+        )  # looked up now: tests swap the table
 
     def refresh(self) -> None:
         """Enable the levels measured for the renderer and volume shown; show which one the settings are."""

@@ -105,7 +105,12 @@ class RendererControl:
             self._status_bar.showMessage("; ".join(notes), 15000)
 
     def choose_for(
-        self, volume: Volume, tf: TransferFunction, settings: RenderSettings, wanted: str, requested: str | None
+        self,
+        volume: Volume,
+        tf: TransferFunction,
+        settings: RenderSettings,
+        wanted: str,
+        requested: str | None,
     ) -> tuple[str, list[str]]:
         """The renderer for a volume about to be shown, and notes for the status bar.
 
@@ -138,7 +143,9 @@ class RendererControl:
         return chosen or wanted, notes
 
     @staticmethod
-    def _measured(volume: Volume, tf: TransferFunction, settings: RenderSettings) -> Callable[[list[str]], str | None]:
+    def _measured(
+        volume: Volume, tf: TransferFunction, settings: RenderSettings
+    ) -> Callable[[list[str]], str | None]:
         """`auto`'s measured choice among the usable renderers for this scene (None: none measured)."""
 
         def fastest(usable: list[str]) -> str | None:
@@ -242,7 +249,10 @@ class RendererControl:
 
         def refuses_view(name: str) -> bool:
             try:
-                return self._registry.capabilities(name).camera_reason(volume.kind, camera, volume.bounds) is not None
+                return (
+                    self._registry.capabilities(name).camera_reason(volume.kind, camera, volume.bounds)
+                    is not None
+                )
             except VolrenError:
                 return True
 

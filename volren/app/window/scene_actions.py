@@ -105,7 +105,9 @@ class SceneActions:
 
         volume = self._state.volume
         assert volume is not None
-        target = scene_path.with_name(f"{scene_path.stem}.volume.{'vti' if volume.kind == 'uniform' else 'vtu'}")
+        target = scene_path.with_name(
+            f"{scene_path.stem}.volume.{'vti' if volume.kind == 'uniform' else 'vtu'}"
+        )
         io.save_volume(volume, target)
         self._volume_path, self._volume_scalars = str(target.absolute()), None
         return self._volume_path

@@ -72,7 +72,9 @@ class ScreenshotActions(FileJobActions):
         return True
 
     def _dialog(self) -> None:
-        choice = screenshot_dialog.ask_screenshot(self._window, self._proposed_path(), self._viewport.pixel_size())
+        choice = screenshot_dialog.ask_screenshot(
+            self._window, self._proposed_path(), self._viewport.pixel_size()
+        )
         if choice is None:
             return
         self._path = choice.path

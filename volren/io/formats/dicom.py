@@ -517,8 +517,15 @@ def read(path: Path, inspection: Inspection) -> Grid:
     slices, dz, origin, direction = _geometry(path, slices, notes)
     dy, dx = slices[0].pixel_spacing or (1.0, 1.0)
     values = _values(path, slices, info)
-    return Grid(values, (dx, dy, dz), tuple(float(v) for v in origin), direction, notes, info,  # type: ignore[arg-type]
-                space="LPS")  # DICOM's patient coordinate system
+    return Grid(
+        values,
+        (dx, dy, dz),
+        tuple(float(v) for v in origin),
+        direction,
+        notes,
+        info,  # type: ignore[arg-type]
+        space="LPS",
+    )  # DICOM's patient coordinate system
 
 
 DICOM = FileFormat("DICOM series", (".dcm",), inspect, read=read, array_name=ARRAY_NAME)

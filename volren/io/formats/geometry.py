@@ -37,8 +37,13 @@ def parse_numbers(path: Path, field: str, text: str | None, count: int = 3) -> T
     return values  # type: ignore[return-value]
 
 
-def check_declared(path: Path, spacing: Triple | None, origin: Triple | None, spacing_field: str = "spacing",
-                   origin_field: str = "origin") -> dict[str, Triple]:
+def check_declared(
+    path: Path,
+    spacing: Triple | None,
+    origin: Triple | None,
+    spacing_field: str = "spacing",
+    origin_field: str = "origin",
+) -> dict[str, Triple]:
     """The facts to keep ({'declared_spacing': ..}); a one-line error for a value no grid can have."""
     facts: dict[str, Triple] = {}
     if spacing is not None:

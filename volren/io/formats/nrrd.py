@@ -134,7 +134,8 @@ def _geometry(fields: dict[str, str], dims: tuple[int, ...]) -> dict:
         "space": NRRD_SPACES.get(fields.get("space", "").strip().lower()),  # a patient system, if named
         # three spatial axes: as declared (checked in `inspect`; negative mirrors the axis); else
         # the first three, NaN for non-spatial ones (vector components) made 1
-        "spacing": tuple(float(s) for s in spacing[:3]) if len(dims) == 3 and first_is_spatial
+        "spacing": tuple(float(s) for s in spacing[:3])
+        if len(dims) == 3 and first_is_spatial
         else tuple(float(s) if s > 0 else 1.0 for s in spacing[:3]),
         "sizes": dims,
         "unsplit": first_is_spatial and vtk_splits_first and len(spacing) == 3,
@@ -172,7 +173,12 @@ def inspect(path: Path) -> Inspection:
             f"malformed NRRD space directions {quote(fields['spacedirections'])}: one finite, non-zero "
             "vector (or 'none') per axis, spanning a volume",
         ) from None
-    if len(dims) == 3 and len(facts["spacing"]) == 3 and "spacings" in fields and "spacedirections" not in fields:
+    if (
+        len(dims) == 3
+        and len(facts["spacing"]) == 3
+        and "spacings" in fields
+        and "spacedirections" not in fields
+    ):
         declared_spacing = facts["spacing"]
     else:
         declared_spacing = None
@@ -183,9 +189,7 @@ def inspect(path: Path) -> Inspection:
         # VTK flips its rows: our y, or our z when it took our x for vector components
         facts["flip_axis"] = 0 if facts["unsplit"] else 1
         facts["left_handed_space"] = fields["space"]
-    facts["swap_bytes"] = (
-        encoding in _GZIP and fields.get("endian") == "big" and _TYPE_SIZES[type_name] > 1
-    )
+    facts["swap_bytes"] = encoding in _GZIP and fields.get("endian") == "big" and _TYPE_SIZES[type_name] > 1
     layout = DataLayout(dims, type_name, nbytes)
     data_name = fields.get("datafile", "")
     if header_end < 0 and not data_name:
@@ -243,7 +247,9 @@ def _text_inspection(path: Path, fields: dict[str, str], dims: tuple[int, ...], 
     spatial axes of scalars."""
     data_name = fields.get("datafile", "")
     if data_name.upper().startswith("LIST") or " " in data_name:
-        raise file_error(path, f"ASCII data in several files ({quote(data_name)}) is not supported; give one data file")
+        raise file_error(
+            path, f"ASCII data in several files ({quote(data_name)}) is not supported; give one data file"
+        )
     kinds = fields.get("kinds", "").lower().split()
     if len(dims) not in (2, 3) or any(k not in _SPATIAL_KINDS for k in kinds):
         raise file_error(
@@ -282,19 +288,30 @@ def read(path: Path, inspection: Inspection) -> Grid | None:
                 f.readline()
             text = f.read()
     except OSError as exc:
-        raise file_error(path, f"cannot read its ASCII data {quote(str(data_file))}: {exc.strerror}") from None
+        raise file_error(
+            path, f"cannot read its ASCII data {quote(str(data_file))}: {exc.strerror}"
+        ) from None
     try:
         numbers = np.fromstring(text, dtype=np.float64, sep=" ")  # in C: no Python object per number
     except ValueError:
         raise file_error(path, "its ASCII data holds a word that is not a number") from None
     if numbers.size < expected:
-        raise file_error(path, f"truncated: its ASCII data has {numbers.size:,} numbers, the sizes declare {expected:,}")
+        raise file_error(
+            path, f"truncated: its ASCII data has {numbers.size:,} numbers, the sizes declare {expected:,}"
+        )
     if numbers.size > expected:
-        raise file_error(path, f"its ASCII data has {numbers.size:,} numbers, more than the {expected:,} the sizes declare")
+        raise file_error(
+            path, f"its ASCII data has {numbers.size:,} numbers, more than the {expected:,} the sizes declare"
+        )
     dtype = _text_dtype(type_name)
     if dtype.kind in "iu":
         info = np.iinfo(dtype)
-        bad = ~np.isfinite(numbers) | (numbers != np.round(numbers)) | (numbers < info.min) | (numbers > info.max)
+        bad = (
+            ~np.isfinite(numbers)
+            | (numbers != np.round(numbers))
+            | (numbers < info.min)
+            | (numbers > info.max)
+        )
         if bad.any():
             at = int(np.argmax(bad))
             raise file_error(path, f"ASCII number {at + 1:,} ({numbers[at]:g}) is not a {type_name}")
@@ -302,7 +319,9 @@ def read(path: Path, inspection: Inspection) -> Grid | None:
     values = numbers.astype(dtype).reshape(nz, ny, nx)
     origin = inspection.facts.get("origin") or (0.0, 0.0, 0.0)
     spacing = inspection.facts["spacing"] if len(sizes) == 3 else (*inspection.facts["spacing"][:2], 1.0)
-    return Grid(values, spacing, origin, inspection.facts.get("direction"), space=inspection.facts.get("space"))
+    return Grid(
+        values, spacing, origin, inspection.facts.get("direction"), space=inspection.facts.get("space")
+    )
 
 
 def check_output(path: Path, view: DatasetView, result: ReadResult, inspection: Inspection) -> DatasetView:

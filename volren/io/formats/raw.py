@@ -17,7 +17,18 @@ from volren.io.formats.base import Grid
 from volren.io.limits import check_memory, product
 
 _BYTE_ORDERS = {"little": "<", "big": ">", "native": "="}
-_NUMPY_NAMES = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "uint64", "int64", "float32", "float64")
+_NUMPY_NAMES = (
+    "uint8",
+    "int8",
+    "uint16",
+    "int16",
+    "uint32",
+    "int32",
+    "uint64",
+    "int64",
+    "float32",
+    "float64",
+)
 #: The C, NRRD and MetaImage names people copy from headers, by their numpy name: C's 'float' and
 #: 'int' have 4 bytes, where numpy alone would read 8.
 _HEADER_NAMES = {
@@ -89,7 +100,9 @@ def _shape(path: Path, shape: Sequence[int]) -> tuple[int, int, int]:
         items = []
     if len(items) != 3 or not all(_is_whole(n) and 0 < n <= MAX_SIDE for n in items):
         shown = repr(shape) if len(repr(shape)) <= 60 else repr(shape)[:57] + "..."
-        raise file_error(path, f"shape must be three whole numbers from 1 to {MAX_SIDE:,} (nx, ny, nz), got {shown}")
+        raise file_error(
+            path, f"shape must be three whole numbers from 1 to {MAX_SIDE:,} (nx, ny, nz), got {shown}"
+        )
     return tuple(int(n) for n in items)  # type: ignore[return-value]
 
 

@@ -82,7 +82,9 @@ def inspect(path: Path) -> Inspection:
             raise file_error(path, "not a legacy VTK file (it does not start with '# vtk DataFile Version')")
         version = first[len("# vtk DataFile Version") :].strip()
         if not re.fullmatch(r"[1-5]\.\d", version):
-            raise file_error(path, f"unknown legacy VTK file version {quote(version)} (volren reads 1.0 to 5.1)")
+            raise file_error(
+                path, f"unknown legacy VTK file version {quote(version)} (volren reads 1.0 to 5.1)"
+            )
         f.readline(4096)  # the title: free text
         mode = lines.next("ASCII/BINARY line")[0].upper()
         if mode not in ("ASCII", "BINARY"):
@@ -212,7 +214,9 @@ def _check_ascii_cells(path: Path, block: bytes, n_cells: int, n_ids: int) -> No
         return
     numbers = _numbers(text, n_ids)
     if len(numbers) < n_ids:
-        raise file_error(path, f"truncated: the CELLS line declares {n_ids:,} numbers, {len(numbers):,} follow")
+        raise file_error(
+            path, f"truncated: the CELLS line declares {n_ids:,} numbers, {len(numbers):,} follow"
+        )
     per_cell = n_ids // n_cells if n_cells else 0
     if per_cell and n_ids % n_cells == 0 and (numbers[::per_cell] == per_cell - 1).all():
         return  # the usual case: cells of one size (all tetrahedra), checked without a loop
@@ -220,12 +224,14 @@ def _check_ascii_cells(path: Path, block: bytes, n_cells: int, n_ids: int) -> No
     for _ in range(n_cells):
         if position >= n_ids or numbers[position] < 1:
             raise file_error(
-                path, f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list does not add up"
+                path,
+                f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list does not add up",
             )
         position += 1 + int(numbers[position])
     if position != n_ids:
         raise file_error(
-            path, f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list holds {position:,}"
+            path,
+            f"the CELLS line declares {n_cells:,} cells in {n_ids:,} numbers; the list holds {position:,}",
         )
 
 

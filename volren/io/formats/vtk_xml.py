@@ -86,7 +86,9 @@ def _check_attributes(path: Path, head: str) -> None:
             raise file_error(path, f"data array {name!r} has NumberOfComponents={components!r}")
         layout = _attr(tag, "format")
         if layout is not None and layout not in _FORMATS:
-            raise file_error(path, f"data array {name!r} has format={layout!r}; expected {', '.join(_FORMATS)}")
+            raise file_error(
+                path, f"data array {name!r} has format={layout!r}; expected {', '.join(_FORMATS)}"
+            )
         offset = _attr(tag, "offset")
         if offset is not None and not offset.isdigit():
             raise file_error(path, f"data array {name!r} has offset={offset!r}")

@@ -72,7 +72,9 @@ def interpolate_in_length(
 ) -> NDArray[np.float64]:
     """RGBA of segments (front index, back index, length) from a 3D table built on `axis.lengths`,
     as the module docstring describes; float64, shape of the broadcast arguments + (4,)."""
-    front, back, length = np.broadcast_arrays(np.asarray(front), np.asarray(back), np.asarray(length, dtype=float))
+    front, back, length = np.broadcast_arrays(
+        np.asarray(front), np.asarray(back), np.asarray(length, dtype=float)
+    )
     u = axis.position(length)
     k0 = np.minimum(np.floor(u).astype(np.int64), axis.count - 1)
     k1 = np.minimum(k0 + 1, axis.count - 1)

@@ -163,7 +163,9 @@ def _spec(
     if isinstance(oversampling, bool) or not isinstance(oversampling, (int, np.integer)) or oversampling < 1:
         raise VolrenError(f"oversampling must be an integer >= 1, got {oversampling!r}")
     if oversampling * (n - 1) > MAX_BINS:
-        raise VolrenError(f"n_t - 1 = oversampling (n - 1) = {oversampling * (n - 1)} exceeds {MAX_BINS} bins")
+        raise VolrenError(
+            f"n_t - 1 = oversampling (n - 1) = {oversampling * (n - 1)} exceeds {MAX_BINS} bins"
+        )
     try:
         lo, hi = (float(v) for v in (tf.value_range if value_range is None else value_range))
     except (TypeError, ValueError):
@@ -302,5 +304,7 @@ def preintegrate_approximate(
     bins = tf_bins(tf, spec.lo, spec.hi, spec.bins)
     diag_tau, diag_color = point_values(tf, spec.values())
     out = np.empty((spec.n, spec.n, 4), dtype=np.float32)
-    integral_function_table(bins.tau, bins.color, spec.oversampling, spec.n, spec.lengths[0], diag_tau, diag_color, out)
+    integral_function_table(
+        bins.tau, bins.color, spec.oversampling, spec.n, spec.lengths[0], diag_tau, diag_color, out
+    )
     return out

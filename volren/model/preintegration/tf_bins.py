@@ -54,7 +54,9 @@ def _i0(e: NDArray[np.float64]) -> NDArray[np.float64]:
     """(1/2) * integral over v in [-1, 1] of ln(1 + e v)."""
     small = np.abs(e) < _SERIES_LIMIT
     e2 = np.where(small, e * e, 0.0)
-    series = -e2 * (1 / 6 + e2 * (1 / 20 + e2 * (1 / 42 + e2 * (1 / 72 + e2 * (1 / 110 + e2 * (1 / 156 + e2 / 210))))))
+    series = -e2 * (
+        1 / 6 + e2 * (1 / 20 + e2 * (1 / 42 + e2 * (1 / 72 + e2 * (1 / 110 + e2 * (1 / 156 + e2 / 210)))))
+    )
     el = np.where(small, 0.5, e)  # any value where the closed form is not used
     closed = ((1 + el) * np.log1p(el) - (1 - el) * np.log1p(-el)) / (2 * el) - 1
     return np.where(small, series, closed)
@@ -65,7 +67,9 @@ def _i1(e: NDArray[np.float64]) -> NDArray[np.float64]:
     small = np.abs(e) < _SERIES_LIMIT
     es = np.where(small, e, 0.0)
     e2 = es * es
-    series = es * (1 / 3 + e2 * (1 / 15 + e2 * (1 / 35 + e2 * (1 / 63 + e2 * (1 / 99 + e2 * (1 / 143 + e2 / 195))))))
+    series = es * (
+        1 / 3 + e2 * (1 / 15 + e2 * (1 / 35 + e2 * (1 / 63 + e2 * (1 / 99 + e2 * (1 / 143 + e2 / 195)))))
+    )
     el = np.where(small, 0.5, e)
     closed = (2 * el - (1 - el * el) * (np.log1p(el) - np.log1p(-el))) / (4 * el * el)
     return np.where(small, series, closed)
@@ -130,7 +134,9 @@ def tf_bins(tf: TransferFunction1D, lo: float, hi: float, count: int) -> TFBins:
         owner = np.clip(np.searchsorted(edges, x0, side="right") - 1, 0, count - 1)
         share = (x1 - x0) / bin_width[owner]  # fractions of a bin: no overflow for huge ranges
         tau = np.bincount(owner, weights=share * m0, minlength=count)  # type: ignore[assignment]  # float with weights; numpy's stubs say int
-        q = np.stack([np.bincount(owner, weights=share * m1[:, c], minlength=count) for c in range(3)], axis=1)
+        q = np.stack(
+            [np.bincount(owner, weights=share * m1[:, c], minlength=count) for c in range(3)], axis=1
+        )
     unit = tf.opacity_unit_distance
     tau /= unit
     q /= unit

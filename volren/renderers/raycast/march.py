@@ -131,7 +131,17 @@ def _value(vol, px, py, pz):
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _box_exit(ray, lx, ly, lz, hx, hy, hz):
     """Where the `IndexRay` ray (origin o, direction d, 1 / d = i) leaves the index box [l, h]."""
-    ox, oy, oz, dx, dy, dz, ix, iy, iz = ray.ox, ray.oy, ray.oz, ray.dx, ray.dy, ray.dz, ray.ix, ray.iy, ray.iz
+    ox, oy, oz, dx, dy, dz, ix, iy, iz = (
+        ray.ox,
+        ray.oy,
+        ray.oz,
+        ray.dx,
+        ray.dy,
+        ray.dz,
+        ray.ix,
+        ray.iy,
+        ray.iz,
+    )
     te = math.inf
     if dx > 0.0:
         te = min(te, (hx - ox) * ix)
@@ -477,14 +487,22 @@ def project(vol, view, h, mode, acc):
     weight; weight 0: no finite value met). The same midpoint samples as `march` (the average is
     their length-weighted mean); maximum and minimum also read every point where the ray crosses a
     grid plane and its ends, where a trilinear field's extremes along the ray lie on grid lines."""
-    width, height, view_dir, t_far_eye, phases = view.width, view.height, view.view_dir, view.far_depth, view.phases
+    width, height, view_dir, t_far_eye, phases = (
+        view.width,
+        view.height,
+        view.view_dir,
+        view.far_depth,
+        view.phases,
+    )
     nz, ny, nx = vol.shape
     ux, uy, uz = nx - 1.0, ny - 1.0, nz - 1.0
     for yy in prange(height):
         ny_ = 1.0 - (yy + 0.5) / height * 2.0
         for xx in range(width):
             p = yy * width + xx
-            ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(view, xx, ny_, ux, uy, uz)
+            ox, oy, oz, dx, dy, dz, ix, iy, iz, wx, wy, wz, t_in, t_out, miss = _pixel_ray(
+                view, xx, ny_, ux, uy, uz
+            )
             t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
             t0 = max(t_in, 0.0)
             t1 = min(t_out, t_far)

@@ -49,30 +49,60 @@ from volren.renderers.raycast.step_choice import largest_step_within, sample_siz
 OFFSET_MODES = ("interleaved", "midpoint")
 OPTIONS: tuple[OptionSpec, ...] = (
     OptionSpec("brick_size", 4, "int", "cells per brick edge for empty-space skipping", low=1, high=64),
-    OptionSpec("empty_space_skipping", True, "bool", "skip bricks the TF makes transparent (the image is the same)"),
-    OptionSpec("termination_alpha", 0.999, "float", "opacity at which a ray stops (1 never stops early)",
-               low=0.5, high=1.0),
-    OptionSpec("depth_offsets", "interleaved", "choice",
-               "where each pixel's segments start: 'interleaved' (phase 0 and 1/2 of a step on a checkerboard) or "
-               "'midpoint' (all on the same planes); the jitter setting gives seeded random phases",
-               choices=OFFSET_MODES),
+    OptionSpec(
+        "empty_space_skipping", True, "bool", "skip bricks the TF makes transparent (the image is the same)"
+    ),
+    OptionSpec(
+        "termination_alpha",
+        0.999,
+        "float",
+        "opacity at which a ray stops (1 never stops early)",
+        low=0.5,
+        high=1.0,
+    ),
+    OptionSpec(
+        "depth_offsets",
+        "interleaved",
+        "choice",
+        "where each pixel's segments start: 'interleaved' (phase 0 and 1/2 of a step on a checkerboard) or "
+        "'midpoint' (all on the same planes); the jitter setting gives seeded random phases",
+        choices=OFFSET_MODES,
+    ),
     OptionSpec("jitter_seed", 0, "int", "seed of the random phases", low=0, high=2**63 - 1),
     OptionSpec("table_size", 256, "int", "entries per axis of the pre-integration table", low=16, high=4096),
-    OptionSpec("classification_table", 4096, "int", "entries of the post-classification table", low=16, high=65536),
-    OptionSpec("image_stride", 1, "int",
-               "1: a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, rays every "
-               "`image_stride` pixels first, more only where neighbouring rays differ by more than "
-               "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features "
-               "thinner than the stride between rays that agree are missed; composite only)",
-               rule=STRIDE_RULE),
-    OptionSpec("refine_tolerance", 0.02, "float",
-               "with image_stride > 1: the largest difference in any premultiplied RGBA channel between a block's "
-               "corner rays that is interpolated instead of cast", low=0.0, high=1.0),
-    OptionSpec("target_error", 0.0, "float",
-               "0: march at the settings' step; above 0 (composite only): the largest step of step x 2^(-k/8), "
-               "k = 0..24, whose RMSE over the image's root mean square (0.01: 1 %), estimated on the rays of a "
-               "~64x64 image of the view against a march 16x finer than step, is at most this; chosen at the "
-               "first frame of a TF and volume", low=0.0, high=1.0),
+    OptionSpec(
+        "classification_table", 4096, "int", "entries of the post-classification table", low=16, high=65536
+    ),
+    OptionSpec(
+        "image_stride",
+        1,
+        "int",
+        "1: a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, rays every "
+        "`image_stride` pixels first, more only where neighbouring rays differ by more than "
+        "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features "
+        "thinner than the stride between rays that agree are missed; composite only)",
+        rule=STRIDE_RULE,
+    ),
+    OptionSpec(
+        "refine_tolerance",
+        0.02,
+        "float",
+        "with image_stride > 1: the largest difference in any premultiplied RGBA channel between a block's "
+        "corner rays that is interpolated instead of cast",
+        low=0.0,
+        high=1.0,
+    ),
+    OptionSpec(
+        "target_error",
+        0.0,
+        "float",
+        "0: march at the settings' step; above 0 (composite only): the largest step of step x 2^(-k/8), "
+        "k = 0..24, whose RMSE over the image's root mean square (0.01: 1 %), estimated on the rays of a "
+        "~64x64 image of the view against a march 16x finer than step, is at most this; chosen at the "
+        "first frame of a TF and volume",
+        low=0.0,
+        high=1.0,
+    ),
 )
 #: Tiles per progress call.
 TILES_PER_CALL = 1024
@@ -83,7 +113,9 @@ PIXEL_CHUNK = 16
 MarchArgs = tuple[NDArray[Any], EmptyBricks, PixelView, Classification, float]
 
 
-def _march_listed(args: MarchArgs, pixels: NDArray[np.int64]) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+def _march_listed(
+    args: MarchArgs, pixels: NDArray[np.int64]
+) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
     """(premultiplied RGBA (n, 4), (samples, jumps) (n, 2)) of the listed pixels' rays (`march_pixels`)."""
     rgba = np.empty((len(pixels), 4), np.float32)
     counts = np.zeros((len(pixels), 2), np.int64)
@@ -118,20 +150,44 @@ class RaycastRenderer(RendererBase):
             QualityLevel("step 0.5, pre-integrated", step=0.5, preintegration=True),
             QualityLevel("step 0.25", step=0.25, preintegration=False),
             QualityLevel("step 0.25, pre-integrated", step=0.25, preintegration=True),
-            QualityLevel("step 1, refine 8/0.02", step=1.0, preintegration=False,
-                         options={"image_stride": 8, "refine_tolerance": 0.02}),
-            QualityLevel("step 0.5, refine 4/0.01", step=0.5, preintegration=False,
-                         options={"image_stride": 4, "refine_tolerance": 0.01}),
+            QualityLevel(
+                "step 1, refine 8/0.02",
+                step=1.0,
+                preintegration=False,
+                options={"image_stride": 8, "refine_tolerance": 0.02},
+            ),
+            QualityLevel(
+                "step 0.5, refine 4/0.01",
+                step=0.5,
+                preintegration=False,
+                options={"image_stride": 4, "refine_tolerance": 0.01},
+            ),
             # sharp TFs (thin shells, opaque surfaces): a fine step, most rays interpolated, small bricks
-            QualityLevel("step 0.25, refine 8/0.02", step=0.25, preintegration=False,
-                         options={"image_stride": 8, "refine_tolerance": 0.02}),
-            QualityLevel("step 0.25, refine 8/0.02, bricks 2", step=0.25, preintegration=False,
-                         options={"image_stride": 8, "refine_tolerance": 0.02, "brick_size": 2}),
+            QualityLevel(
+                "step 0.25, refine 8/0.02",
+                step=0.25,
+                preintegration=False,
+                options={"image_stride": 8, "refine_tolerance": 0.02},
+            ),
+            QualityLevel(
+                "step 0.25, refine 8/0.02, bricks 2",
+                step=0.25,
+                preintegration=False,
+                options={"image_stride": 8, "refine_tolerance": 0.02, "brick_size": 2},
+            ),
             # the step chosen per TF and volume from an error estimate (`step_choice`), 2 to 0.25
-            QualityLevel("error 1 %, refine 8/0.02", step=2.0, preintegration=False,
-                         options={"target_error": 0.01, "image_stride": 8, "refine_tolerance": 0.02}),
-            QualityLevel("error 0.4 %, refine 4/0.01", step=2.0, preintegration=False,
-                         options={"target_error": 0.004, "image_stride": 4, "refine_tolerance": 0.01}),
+            QualityLevel(
+                "error 1 %, refine 8/0.02",
+                step=2.0,
+                preintegration=False,
+                options={"target_error": 0.01, "image_stride": 8, "refine_tolerance": 0.02},
+            ),
+            QualityLevel(
+                "error 0.4 %, refine 4/0.01",
+                step=2.0,
+                preintegration=False,
+                options={"target_error": 0.004, "image_stride": 4, "refine_tolerance": 0.01},
+            ),
             QualityLevel("error 0.2 %", step=2.0, preintegration=False, options={"target_error": 0.002}),
         ),
     )
@@ -143,7 +199,9 @@ class RaycastRenderer(RendererBase):
         self._grid: tuple[tuple[int, int], BrickGrid] | None = None
         self._empty: tuple[tuple, NDArray[np.int32]] | None = None
         self._phases: tuple[tuple, NDArray[np.float64]] | None = None
-        self._step: tuple[tuple, tuple[float, float]] | None = None  # (TF and settings, (step, its estimated error))
+        self._step: tuple[tuple, tuple[float, float]] | None = (
+            None  # (TF and settings, (step, its estimated error))
+        )
 
     def _volume_changed(self) -> None:
         volume = self.volume
@@ -214,7 +272,9 @@ class RaycastRenderer(RendererBase):
         empty = args[1].distance
         stride = int(opts["image_stride"])
         if stride > 1:
-            image, samples, jumps, rays = self._refined(args, width, height, stride, opts["refine_tolerance"], progress)
+            image, samples, jumps, rays = self._refined(
+                args, width, height, stride, opts["refine_tolerance"], progress
+            )
         else:
             image, samples, jumps = self._every_pixel(args, width, height, progress)
             rays = width * height

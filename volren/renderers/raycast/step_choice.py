@@ -44,7 +44,9 @@ def candidate_steps(coarsest: float) -> list[float]:
     return [coarsest * 2.0 ** (-k / 8.0) for k in range(CANDIDATES)]
 
 
-def largest_step_within(march: Callable[[float], NDArray], coarsest: float, target: float) -> tuple[float, float]:
+def largest_step_within(
+    march: Callable[[float], NDArray], coarsest: float, target: float
+) -> tuple[float, float]:
     """(step, its estimated relative RMSE): a candidate step whose rays differ from the fine
     march's by at most `target` times the fine rays' root mean square while the next coarser
     candidate's do not, found by bisection (the error grows with the step), or the finest candidate

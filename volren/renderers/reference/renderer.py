@@ -102,10 +102,22 @@ class ReferenceRenderer(RendererBase):
         ),
     )
     options: ClassVar[tuple[OptionSpec, ...]] = (
-        OptionSpec("tolerance", DEFAULT_TOLERANCE, "float",
-                   "per-ray convergence tolerance, max abs RGBA change between levels", low=0.0, low_exclusive=True),
-        OptionSpec("max_levels", DEFAULT_MAX_LEVELS, "int", "most refinement levels per ray, each halving the step",
-                   low=2, high=24),
+        OptionSpec(
+            "tolerance",
+            DEFAULT_TOLERANCE,
+            "float",
+            "per-ray convergence tolerance, max abs RGBA change between levels",
+            low=0.0,
+            low_exclusive=True,
+        ),
+        OptionSpec(
+            "max_levels",
+            DEFAULT_MAX_LEVELS,
+            "int",
+            "most refinement levels per ray, each halving the step",
+            low=2,
+            high=24,
+        ),
     )
 
     def __init__(self) -> None:
@@ -174,7 +186,9 @@ class ReferenceRenderer(RendererBase):
             grid = GridBox(values, org, sp, blo, bhi)
 
             def kernel(a: int, b: int) -> None:
-                render_uniform(origins[a:b], dirs[a:b], tfar[a:b], grid, tf_1d, tf_2d, spar, quad, out[a:b], stats[a:b])
+                render_uniform(
+                    origins[a:b], dirs[a:b], tfar[a:b], grid, tf_1d, tf_2d, spar, quad, out[a:b], stats[a:b]
+                )
 
         else:
             mesh, _ = prepared

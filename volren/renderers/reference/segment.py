@@ -43,7 +43,9 @@ def segment_rgba(
     for k, (front, back) in enumerate(zip(fronts, backs, strict=True)):
         poly = np.array([[front, (back - front) / length, 0.0, 0.0]])
         intervals = RayIntervals(ta, tb, poly, shading, 1)
-        r, g, b, a, _, _, converged, _ = integrate_ray(intervals, quad, packed, None, _NO_SHADING, 0.0, 0.0, 1.0)
+        r, g, b, a, _, _, converged, _ = integrate_ray(
+            intervals, quad, packed, None, _NO_SHADING, 0.0, 0.0, 1.0
+        )
         if not converged:
             raise VolrenError(f"the segment integral from {front} to {back} did not converge to {tol}")
         out[k] = (r, g, b, a)

@@ -36,7 +36,13 @@ def render_tets(rays, cells, tf, spar, quad, out, stats):
     cells, integrated as the `Quadrature` quad says with the `ShadeParams` spar: out (n, 4) RGBA;
     stats (n, 5) = samples, level, unconverged, subdivision cap hits, intervals."""
     orig, dirs, tfar, offsets, cand = rays.origins, rays.directions, rays.far, rays.offsets, rays.candidates
-    normals, anchors, sigma, tvals, grads = cells.normals, cells.anchors, cells.sigma, cells.values, cells.gradients
+    normals, anchors, sigma, tvals, grads = (
+        cells.normals,
+        cells.anchors,
+        cells.sigma,
+        cells.values,
+        cells.gradients,
+    )
     n = orig.shape[0]
     shading = spar.on
     for q in prange(n):

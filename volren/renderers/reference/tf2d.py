@@ -79,7 +79,6 @@ GAUSSIAN_REACH = 6.0
 TRIANGLE_MIN_SCALE = 1.0 / 64.0
 
 
-
 class PackedTF2D(NamedTuple):
     """A 2D TF as the kernels read it (`pack_tf2d`)."""
 

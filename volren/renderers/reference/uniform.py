@@ -57,7 +57,14 @@ def trilinear_cubic(corners, start, rate, out):
     cyz = v011 - v010 - v001 + v000
     cxyz = v111 - v110 - v101 - v011 + v100 + v010 + v001 - v000
     out[0] = (
-        v000 + cx * x0 + cy * y0 + cz * z0 + cxy * x0 * y0 + cxz * x0 * z0 + cyz * y0 * z0 + cxyz * x0 * y0 * z0
+        v000
+        + cx * x0
+        + cy * y0
+        + cz * z0
+        + cxy * x0 * y0
+        + cxz * x0 * z0
+        + cyz * y0 * z0
+        + cxyz * x0 * y0 * z0
     )
     out[1] = (
         cx * ax
@@ -68,7 +75,9 @@ def trilinear_cubic(corners, start, rate, out):
         + cyz * (y0 * az + ay * z0)
         + cxyz * (ax * y0 * z0 + x0 * ay * z0 + x0 * y0 * az)
     )
-    out[2] = cxy * ax * ay + cxz * ax * az + cyz * ay * az + cxyz * (ax * ay * z0 + ax * y0 * az + x0 * ay * az)
+    out[2] = (
+        cxy * ax * ay + cxz * ax * az + cyz * ay * az + cxyz * (ax * ay * z0 + ax * y0 * az + x0 * ay * az)
+    )
     out[3] = cxyz * ax * ay * az
 
 

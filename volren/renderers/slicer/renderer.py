@@ -92,20 +92,47 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         ),
     )
     options: ClassVar[tuple[OptionSpec, ...]] = (
-        OptionSpec("path", "march", "choice", "march: a compute shader walks the slice planes per pixel, with early "
-                   "termination and brick skipping; slices: the planes as blended polygons", choices=PATHS),
-        OptionSpec("table_size", 512, "int", "entries per axis of the pre-integration table", low=2, high=4096),
+        OptionSpec(
+            "path",
+            "march",
+            "choice",
+            "march: a compute shader walks the slice planes per pixel, with early "
+            "termination and brick skipping; slices: the planes as blended polygons",
+            choices=PATHS,
+        ),
+        OptionSpec(
+            "table_size", 512, "int", "entries per axis of the pre-integration table", low=2, high=4096
+        ),
         OptionSpec("empty_space_skipping", True, "bool", "skip bricks whose values map to zero opacity"),
-        OptionSpec("early_termination", True, "bool", "stop a ray once its opacity reaches termination_alpha"),
-        OptionSpec("termination_alpha", 0.999, "float", "opacity at which early termination stops a ray",
-                   low=0.0, high=1.0, low_exclusive=True),
+        OptionSpec(
+            "early_termination", True, "bool", "stop a ray once its opacity reaches termination_alpha"
+        ),
+        OptionSpec(
+            "termination_alpha",
+            0.999,
+            "float",
+            "opacity at which early termination stops a ray",
+            low=0.0,
+            high=1.0,
+            low_exclusive=True,
+        ),
         OptionSpec("brick_size", 8, "int", "cells per brick edge for empty-space skipping", low=1),
         OptionSpec("jitter_seed", 1, "int", "seed of the per-pixel jitter when jitter is on", low=1),
-        OptionSpec("termination_interval", 16, "int", "slices between early-termination passes in the slices path",
-                   low=1),
-        OptionSpec("volume_format", "float", "choice", "float: the volume as normalised float32; native: 8-bit data "
-                   "as an 8-bit texture (a quarter of the memory; Mesa llvmpipe then rounds every interpolated value)",
-                   choices=("float", "native")),
+        OptionSpec(
+            "termination_interval",
+            16,
+            "int",
+            "slices between early-termination passes in the slices path",
+            low=1,
+        ),
+        OptionSpec(
+            "volume_format",
+            "float",
+            "choice",
+            "float: the volume as normalised float32; native: 8-bit data "
+            "as an 8-bit texture (a quarter of the memory; Mesa llvmpipe then rounds every interpolated value)",
+            choices=("float", "native"),
+        ),
     )
 
     def __init__(self) -> None:
@@ -195,7 +222,11 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         if not (self._settings.preintegration and self._settings.blend_mode == BlendMode.COMPOSITE):
             return 1
         spacing = tuple(float(h) for h in spacing)
-        reach = float(self._settings.step) * float(np.mean(spacing)) / (self._min_cosine(camera, width, height) * min(spacing))
+        reach = (
+            float(self._settings.step)
+            * float(np.mean(spacing))
+            / (self._min_cosine(camera, width, height) * min(spacing))
+        )
         return int(math.floor(reach)) + 2
 
     # --------------------------------------------------------------------------- volume
@@ -206,9 +237,11 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
 
     def _ensure_volume(self, opts: Mapping[str, Any]) -> textures.VolumeTexture:
         native = opts["volume_format"] == "native"
-        if self._volume_tex is not None and (self._volume_info is None or (self._volume_info.dtype == "f1") != (
-            native and self._uniform_volume().values.dtype == np.uint8
-        )):
+        if self._volume_tex is not None and (
+            self._volume_info is None
+            or (self._volume_info.dtype == "f1")
+            != (native and self._uniform_volume().values.dtype == np.uint8)
+        ):
             self._drop(self._volume_tex)
             self._volume_tex = None
         if self._volume_tex is None:
@@ -221,7 +254,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                     f"slicer: the volume is {nx}x{ny}x{nz}, but this OpenGL driver allows 3D textures "
                     f"of at most {limit} per side"
                 )
-            tex = self._context().texture3d((nx, ny, nz), 1, np.ascontiguousarray(info.data), dtype=info.dtype)
+            tex = self._context().texture3d(
+                (nx, ny, nz), 1, np.ascontiguousarray(info.data), dtype=info.dtype
+            )
             tex.repeat_x = tex.repeat_y = tex.repeat_z = False
             self._volume_tex = self._track(tex)
             self._volume_info = info
@@ -279,7 +314,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                 self._drop(obj)
         ctx = self._context()
         if name == "march_reader":  # reads a rectangle of the march target back
-            value: Any = self._track(ctx.framebuffer(color_attachments=[self._target("march", width, height)]))
+            value: Any = self._track(
+                ctx.framebuffer(color_attachments=[self._target("march", width, height)])
+            )
             self._targets[name] = (key, value)
             return value
         colour = self._track(ctx.texture((width, height), 4, dtype="f4"))
@@ -353,7 +390,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         assert tf is not None
         spacing = self._spacing()
         region = self._region
-        bounds = region.whole_bounds if region is not None else volume.bounds  # where rays enter, planes anchor
+        bounds = (
+            region.whole_bounds if region is not None else volume.bounds
+        )  # where rays enter, planes anchor
         box_min = np.array(bounds[0::2])
         box_max = np.array(bounds[1::2])
         dims = np.array(volume.dimensions, dtype=np.float64)
@@ -399,7 +438,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
 
                 front_tex = self._table("light_front", key, front)
                 back_tex = self._table(
-                    "light_back", key, lambda: pair.get("back", textures.lighting_textures(tf, lo, hi, n, spacing)[1])
+                    "light_back",
+                    key,
+                    lambda: pair.get("back", textures.lighting_textures(tf, lo, hi, n, spacing)[1]),
                 )
                 front_tex.use(location=unit)
                 back_tex.use(location=unit + 1)
@@ -407,15 +448,20 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                 self._set(program, "u_preint_back", unit + 1)
                 unit += 2
             else:
-                tex = self._table("preint", (tf.version, lo, hi, n, spacing),
-                                  lambda: textures.preintegration_table(tf, lo, hi, n, spacing))
+                tex = self._table(
+                    "preint",
+                    (tf.version, lo, hi, n, spacing),
+                    lambda: textures.preintegration_table(tf, lo, hi, n, spacing),
+                )
                 tex.use(location=unit)
                 self._set(program, "u_preint", unit)
                 unit += 1
             self._set(program, "u_preint_size", float(n))
         elif mode == 2:
             n_values, n_gradients = TF2D_TABLE_SIZE
-            tex = self._table("tf2d", (tf.version, lo, hi), lambda: textures.tf2d_table(tf, lo, hi, n_values, n_gradients))
+            tex = self._table(
+                "tf2d", (tf.version, lo, hi), lambda: textures.tf2d_table(tf, lo, hi, n_values, n_gradients)
+            )
             tex.use(location=unit)
             self._set(program, "u_tf2d", unit)
             self._set(program, "u_tf2d_size", (float(n_values), float(n_gradients)))
@@ -465,7 +511,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         if self._region is not None and opts["path"] != "march":
             raise VolrenError("slicer: drawing a brick of a bricked volume needs the option path=march")
         if self._settings.preintegration and getattr(self._tf, "dims", 1) == 2:
-            raise VolrenError("slicer: pre-integration needs a 1D transfer function; switch it off for 2D TFs")
+            raise VolrenError(
+                "slicer: pre-integration needs a 1D transfer function; switch it off for 2D TFs"
+            )
         defines = self._defines(opts)
         counters: dict[str, float] = {}
         before = dict(self.uploads)
@@ -518,8 +566,14 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             self._ctx.memory_barrier()
         lanes = np.frombuffer(buffer.read(), dtype=np.uint32).reshape(_STAT_LANES, 4).astype(np.int64)
         samples, brick_steps, terminated, hit = lanes.sum(axis=0)
-        counters.update(samples=int(samples), brick_steps=int(brick_steps), rays_terminated=int(terminated),
-                        rays_hit=int(hit), passes=1, gpu_ms=query.elapsed / 1e6)
+        counters.update(
+            samples=int(samples),
+            brick_steps=int(brick_steps),
+            rays_terminated=int(terminated),
+            rays_hit=int(hit),
+            passes=1,
+            gpu_ms=query.elapsed / 1e6,
+        )
         if (x0, gl_y0, x1, gl_y1) == (0, 0, width, height):
             return np.frombuffer(image.read(), dtype=np.float32).reshape(height, width, 4)
         # A brick's rectangle, flipped into a zero image with row 0 at the top (the one full-size
@@ -555,8 +609,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         else:
             # Grow the box so that the planes before it own the entry segments (slice.frag.glsl).
             margin = 2.5 * spacing / self._min_cosine(camera, width, height)
-            stack = slice_polygons(clip_min - margin, clip_max + margin, view_dir, spacing, anchor=box_min,
-                                   back_to_front=False)
+            stack = slice_polygons(
+                clip_min - margin, clip_max + margin, view_dir, spacing, anchor=box_min, back_to_front=False
+            )
             vertices = triangle_fan(stack).positions
             starts = np.concatenate([[0], np.cumsum((stack.counts - 2) * 3)])
         fbo, term_fbo, colour, _ = self._target("slices", width, height)
@@ -598,7 +653,11 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                 fbo.use()
                 query = ctx.query(samples=True)
                 with query:
-                    vao.render(moderngl.TRIANGLES, vertices=int(starts[last] - starts[first]), first=int(starts[first]))
+                    vao.render(
+                        moderngl.TRIANGLES,
+                        vertices=int(starts[last] - starts[first]),
+                        first=int(starts[first]),
+                    )
                 queries.append(query)
                 passes += 1
                 if term is not None and last < n_slices:
@@ -614,8 +673,13 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             vbo.release()
         fragments = sum(q.samples for q in queries)
         per_fragment = 2 if (defines["CLASSIFY"] == 1 or not composite) else 1
-        counters.update(fragments=fragments, samples=fragments * per_fragment, passes=passes,
-                        slices=n_slices, termination_passes=terminated)
+        counters.update(
+            fragments=fragments,
+            samples=fragments * per_fragment,
+            passes=passes,
+            slices=n_slices,
+            termination_passes=terminated,
+        )
         ctx.disable(moderngl.BLEND | moderngl.DEPTH_TEST)
         raw = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(height, width, 4)
         return raw

@@ -55,8 +55,9 @@ def value_range(volume: UniformVolume, whole: tuple[float, float] | None = None)
 HALF_EXACT = 2048
 
 
-def volume_texture(volume: UniformVolume, native: bool = False,
-                   whole: tuple[float, float] | None = None) -> VolumeTexture:
+def volume_texture(
+    volume: UniformVolume, native: bool = False, whole: tuple[float, float] | None = None
+) -> VolumeTexture:
     """The texel data for `volume`:
     - integer data within +-2048 (all 8-bit data): its own values as half floats, exact, half the
       memory of float32 (and faster to filter on llvmpipe);
@@ -83,8 +84,9 @@ def volume_texture(volume: UniformVolume, native: bool = False,
     return VolumeTexture(normalised, "f4", (1.0, 0.0), lo, hi)
 
 
-def gradient_texture(volume: UniformVolume,
-                     whole: tuple[float, float] | None = None) -> tuple[NDArray[np.float16], float]:
+def gradient_texture(
+    volume: UniformVolume, whole: tuple[float, float] | None = None
+) -> tuple[NDArray[np.float16], float]:
     """Central differences in world units at the grid points, one-sided at the borders (the
     reference's gradient), as half floats (nz, ny, nx, 3) divided by the returned scale (from the
     value range: `whole`, the whole volume's, for a brick, so every brick rounds alike)."""

@@ -42,17 +42,35 @@ class EntryFaces:
     margin: float
 
 
-def project_faces(px: NDArray, py: NDArray, behind: NDArray, triangles: NDArray, cells: NDArray, width: int,
-                  height: int, margin: float = MARGIN) -> EntryFaces:
+def project_faces(
+    px: NDArray,
+    py: NDArray,
+    behind: NDArray,
+    triangles: NDArray,
+    cells: NDArray,
+    width: int,
+    height: int,
+    margin: float = MARGIN,
+) -> EntryFaces:
     """The entry faces `triangles` (k, 3 vertex ids) with their vertices at pixel coordinates
     (px, py), `behind` where a vertex lies behind the eye."""
     tri = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
     boxes = np.empty((len(tri), 5), np.int64)
     edges = np.empty((len(tri), 3, 3))
-    _project(np.ascontiguousarray(px, dtype=np.float64), np.ascontiguousarray(py, dtype=np.float64),
-             np.ascontiguousarray(behind, dtype=np.bool_), tri, int(width), int(height), float(margin), boxes, edges)
-    return EntryFaces(boxes, edges, np.ascontiguousarray(cells, dtype=np.int64), int(width), int(height),
-                      float(margin))
+    _project(
+        np.ascontiguousarray(px, dtype=np.float64),
+        np.ascontiguousarray(py, dtype=np.float64),
+        np.ascontiguousarray(behind, dtype=np.bool_),
+        tri,
+        int(width),
+        int(height),
+        float(margin),
+        boxes,
+        edges,
+    )
+    return EntryFaces(
+        boxes, edges, np.ascontiguousarray(cells, dtype=np.int64), int(width), int(height), float(margin)
+    )
 
 
 @njit(nogil=True, cache=True)
@@ -67,8 +85,15 @@ def _project(px, py, behind, tri, width, height, margin, boxes, edges):
         boxes[i, 0] = whole
         if whole:
             boxes[i, 1], boxes[i, 2], boxes[i, 3], boxes[i, 4] = 0, width - 1, 0, height - 1
-        elif not (math.isfinite(lo_x) and math.isfinite(hi_x) and math.isfinite(lo_y) and math.isfinite(hi_y)):
-            boxes[i, 1], boxes[i, 2], boxes[i, 3], boxes[i, 4] = 0, -1, 0, -1  # a non-finite vertex: no pixels
+        elif not (
+            math.isfinite(lo_x) and math.isfinite(hi_x) and math.isfinite(lo_y) and math.isfinite(hi_y)
+        ):
+            boxes[i, 1], boxes[i, 2], boxes[i, 3], boxes[i, 4] = (
+                0,
+                -1,
+                0,
+                -1,
+            )  # a non-finite vertex: no pixels
         else:
             boxes[i, 1] = max(0, int(math.ceil(max(lo_x, -1.0))))
             boxes[i, 2] = min(width - 1, int(math.floor(min(hi_x, width))))
@@ -185,8 +210,9 @@ def _bin_pixels(boxes, edges, cells, width, pixels, margin, tile, tile_offsets, 
     return offsets, cand
 
 
-def bin_triangles_at(faces: EntryFaces, tiles: tuple[NDArray, NDArray], pixels: NDArray[np.int64],
-                     tile: int = TILE) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+def bin_triangles_at(
+    faces: EntryFaces, tiles: tuple[NDArray, NDArray], pixels: NDArray[np.int64], tile: int = TILE
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """The lists of some pixels (row-major indices), in their order; `tiles` from `bin_tiles`."""
     return _bin_pixels(faces.boxes, faces.edges, faces.cells, faces.width, pixels, faces.margin, tile, *tiles)
 

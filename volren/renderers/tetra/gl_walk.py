@@ -85,19 +85,31 @@ class GLMesh:
     """The mesh as the shaders read it (float32, coordinates relative to `centre`)."""
 
     centre: NDArray[np.float64]
-    planes: NDArray[np.float32]      # (m * 4, 4) inward unit normal and offset per face
-    neighbours: NDArray[np.int32]    # (m, 4): 4 * next cell + its face; -1 where the ray leaves the mesh
-    fields: NDArray[np.float32]      # (m * 2, 4): (gradient, value at corner 0), (corner 0, visible); see set_tables
-    tolerance: float                 # world units: 2e-6 of the mesh's size (float32 rounding)
+    planes: NDArray[np.float32]  # (m * 4, 4) inward unit normal and offset per face
+    neighbours: NDArray[np.int32]  # (m, 4): 4 * next cell + its face; -1 where the ray leaves the mesh
+    fields: NDArray[
+        np.float32
+    ]  # (m * 2, 4): (gradient, value at corner 0), (corner 0, visible); see set_tables
+    tolerance: float  # world units: 2e-6 of the mesh's size (float32 rounding)
 
 
-def gl_mesh(points: NDArray, tets: NDArray, neighbours: NDArray, neighbour_faces: NDArray, packed: NDArray,
-            tvals: NDArray, grads: NDArray, ok: NDArray) -> GLMesh:
+def gl_mesh(
+    points: NDArray,
+    tets: NDArray,
+    neighbours: NDArray,
+    neighbour_faces: NDArray,
+    packed: NDArray,
+    tvals: NDArray,
+    grads: NDArray,
+    ok: NDArray,
+) -> GLMesh:
     """`GLMesh` from the CPU walk's arrays (`TetraRenderer._prepare`)."""
     m = len(tets)
     if m >= MAX_CELLS:
-        raise VolrenError(f"tetra: the GL walk takes at most {MAX_CELLS - 1} cells, this mesh has {m}; "
-                          "use the option backend=cpu")
+        raise VolrenError(
+            f"tetra: the GL walk takes at most {MAX_CELLS - 1} cells, this mesh has {m}; "
+            "use the option backend=cpu"
+        )
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre = (lo + hi) / 2.0
     # Shift the planes in float64, then round: -(D + N.c) rounds to exactly the neighbour's value.
@@ -113,7 +125,9 @@ def gl_mesh(points: NDArray, tets: NDArray, neighbours: NDArray, neighbour_faces
     return GLMesh(
         centre=centre,
         planes=np.ascontiguousarray(planes, dtype=np.float32).reshape(-1, 4),
-        neighbours=np.ascontiguousarray(np.where(across_ok, 4 * neighbours + neighbour_faces, -1), dtype=np.int32),
+        neighbours=np.ascontiguousarray(
+            np.where(across_ok, 4 * neighbours + neighbour_faces, -1), dtype=np.int32
+        ),
         fields=np.ascontiguousarray(fields.reshape(-1, 4), dtype=np.float32),
         tolerance=2e-6 * max(size, 1e-30),
     )
@@ -134,14 +148,14 @@ def entry_face_vertices(mesh: GLMesh, points: NDArray, walked: WalkedCells) -> N
 class WalkParameters:
     """What a frame needs besides the camera (see `walk.comp.glsl`'s uniforms)."""
 
-    blend: int                 # traversal.COMPOSITE ... AVERAGE
-    shade: ShadeParams         # volren.kernels.shading.shade_params
-    lo: float                  # table index = (value - lo) * scale
+    blend: int  # traversal.COMPOSITE ... AVERAGE
+    shade: ShadeParams  # volren.kernels.shading.shade_params
+    lo: float  # table index = (value - lo) * scale
     scale: float
     lmax: float
     termination: float
     max_steps: int
-    jump: bool = False         # walk only the visible cells (`walked_cells`): leave at a transparent one
+    jump: bool = False  # walk only the visible cells (`walked_cells`): leave at a transparent one
 
 
 class GLWalk(GLObjectOwner):
@@ -170,8 +184,9 @@ class GLWalk(GLObjectOwner):
             try:
                 self._ctx = moderngl.create_standalone_context(backend="egl", require=430)
             except Exception as exc:  # noqa: BLE001 - moderngl raises plain Exceptions
-                raise VolrenError(f"tetra: the GL walk needs OpenGL 4.3 compute shaders ({exc}); "
-                                  "use the option backend=cpu") from None
+                raise VolrenError(
+                    f"tetra: the GL walk needs OpenGL 4.3 compute shaders ({exc}); use the option backend=cpu"
+                ) from None
         return self._ctx
 
     @property
@@ -194,9 +209,12 @@ class GLWalk(GLObjectOwner):
         key = (name, tuple(sorted((defines or {}).items())))
         if key not in self._programs:
             if name == "entry_faces":
-                program = compile_program(self.context(), vertex=load_shader("entry_faces.vert.glsl", {}, [SHADER_DIR]),
-                                          geometry=load_shader("entry_faces.geom.glsl", {}, [SHADER_DIR]),
-                                          fragment=load_shader("entry_faces.frag.glsl", {}, [SHADER_DIR]))
+                program = compile_program(
+                    self.context(),
+                    vertex=load_shader("entry_faces.vert.glsl", {}, [SHADER_DIR]),
+                    geometry=load_shader("entry_faces.geom.glsl", {}, [SHADER_DIR]),
+                    fragment=load_shader("entry_faces.frag.glsl", {}, [SHADER_DIR]),
+                )
             else:
                 source = load_shader(f"{name}.comp.glsl", defines or {}, [SHADER_DIR])
                 program = compile_program(self.context(), compute=source)
@@ -212,7 +230,9 @@ class GLWalk(GLObjectOwner):
             for buffer in self._mesh_buffers.values():
                 self._drop(buffer)
             self._mesh = mesh
-            self._mesh_buffers = {name: self._buffer(getattr(mesh, name)) for name in ("planes", "neighbours", "fields")}
+            self._mesh_buffers = {
+                name: self._buffer(getattr(mesh, name)) for name in ("planes", "neighbours", "fields")
+            }
         self._keys["mesh"] = key
         self._keys.pop("faces", None)
         self._keys.pop("tables", None)
@@ -229,8 +249,12 @@ class GLWalk(GLObjectOwner):
                 for obj in self._faces[:2]:
                     self._drop(obj)
             buffer = self._buffer(vertices)
-            array = self._track(ctx.vertex_array(self._program("entry_faces"),
-                                                 [(buffer, "3f 4f 1u", "in_position", "in_plane", "in_candidate")]))
+            array = self._track(
+                ctx.vertex_array(
+                    self._program("entry_faces"),
+                    [(buffer, "3f 4f 1u", "in_position", "in_plane", "in_candidate")],
+                )
+            )
             self._faces = (buffer, array, len(vertices))
         self._keys["faces"] = key
 
@@ -269,8 +293,9 @@ class GLWalk(GLObjectOwner):
             held = self._frame[name] = self._track(self._ctx.buffer(reserve=max(nbytes, 16)))
         return held
 
-    def render(self, camera: Camera, width: int, height: int, params: WalkParameters, near_cells: tuple | None
-               ) -> tuple[NDArray[np.float32], dict[str, float]]:
+    def render(
+        self, camera: Camera, width: int, height: int, params: WalkParameters, near_cells: tuple | None
+    ) -> tuple[NDArray[np.float32], dict[str, float]]:
         """(H * W, 4) float32 per pixel, row 0 at the top, and the frame's counters.
 
         near_cells: (cells, boxes (k, 4) x0, x1, y0, y1) the near plane cuts, or None."""
@@ -284,7 +309,9 @@ class GLWalk(GLObjectOwner):
             counters.bind_to_storage_buffer(6)
             pixels = width * height
             self._frame_buffer("counts", 4 * pixels).bind_to_storage_buffer(4)
-            world_to_clip = camera.projection_matrix(width / height) @ camera.view_matrix() @ _translation(mesh.centre)
+            world_to_clip = (
+                camera.projection_matrix(width / height) @ camera.view_matrix() @ _translation(mesh.centre)
+            )
             while True:
                 self._frame_buffer("slots", 4 * self._slots * pixels).bind_to_storage_buffer(5)
                 with bin_query:
@@ -325,7 +352,9 @@ class GLWalk(GLObjectOwner):
         program["u_count"].value = pixels
         _dispatch(program, math.ceil(pixels / CLEAR_GROUP))
 
-    def _bin(self, camera: Camera, width: int, height: int, world_to_clip: NDArray, near_cells: tuple | None) -> None:
+    def _bin(
+        self, camera: Camera, width: int, height: int, world_to_clip: NDArray, near_cells: tuple | None
+    ) -> None:
         """Fill the entry lists: the facing boundary faces through the rasterizer, then the near cells."""
         import moderngl
 
@@ -346,7 +375,9 @@ class GLWalk(GLObjectOwner):
             # the new one first, bound, then the old one freed: moderngl rebinds the framebuffer that
             # was bound when it makes one, and binding a freed one is GL_INVALID_OPERATION
             old = (self._frame.get("target"), self._frame.get("target_colour"))
-            colour = self._frame["target_colour"] = self._track(ctx.renderbuffer((width, height), 1, dtype="f1"))
+            colour = self._frame["target_colour"] = self._track(
+                ctx.renderbuffer((width, height), 1, dtype="f1")
+            )
             target = self._frame["target"] = self._track(ctx.framebuffer(color_attachments=[colour]))
             target.color_mask = (False, False, False, False)
             target.use()
@@ -369,10 +400,14 @@ class GLWalk(GLObjectOwner):
             _set(near, "u_slots", self._slots)
             _dispatch(near, math.ceil(len(cells) / NEAR_GROUP))
 
-    def _walk(self, camera: Camera, width: int, height: int, world_to_clip: NDArray, p: WalkParameters) -> None:
+    def _walk(
+        self, camera: Camera, width: int, height: int, world_to_clip: NDArray, p: WalkParameters
+    ) -> None:
         mesh = self._mesh
         assert mesh is not None
-        program = self._program("walk", {"BLEND": p.blend, "SHADE": int(bool(p.shade.on)), "JUMP": int(p.jump)})
+        program = self._program(
+            "walk", {"BLEND": p.blend, "SHADE": int(bool(p.shade.on)), "JUMP": int(p.jump)}
+        )
         buffers = self._mesh_buffers
         for name, binding in (("planes", 0), ("neighbours", 1), ("fields", 2)):
             buffers[name].bind_to_storage_buffer(binding)
@@ -388,7 +423,11 @@ class GLWalk(GLObjectOwner):
         _set(program, "u_termination", p.termination if p.termination < 1.0 else 2.0)
         _set(program, "u_max_steps", p.max_steps)
         light = p.shade
-        _set(program, "u_phong", (float(light.ambient), float(light.diffuse), float(light.specular), float(light.power)))
+        _set(
+            program,
+            "u_phong",
+            (float(light.ambient), float(light.diffuse), float(light.specular), float(light.power)),
+        )
         _set(program, "u_gradient_threshold", float(light.gradient_threshold))
         _set(program, "u_light", (float(light.lx), float(light.ly), float(light.lz)))
         program.run(math.ceil(width / LOCAL), math.ceil(height / LOCAL), 1)
@@ -407,8 +446,9 @@ class GLWalk(GLObjectOwner):
         self._slots = SLOTS
 
 
-def near_plane_cells(camera: Camera, width: int, height: int, points: NDArray, tets: NDArray, ok: NDArray,
-                     bounds: NDArray) -> tuple | None:
+def near_plane_cells(
+    camera: Camera, width: int, height: int, points: NDArray, tets: NDArray, ok: NDArray, bounds: NDArray
+) -> tuple | None:
     """(cells, pixel boxes) of the usable cells the near plane cuts, or None when it cuts none.
     The common case (the eye outside the mesh's box) costs eight dot products."""
     view = camera.view_matrix()

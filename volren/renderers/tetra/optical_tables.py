@@ -31,7 +31,9 @@ def _split(table, first_length, depth, ratio):
                     ratio[k, i, j, c] = np.float64(table[k, i, j, c]) / a if a > 0.0 else 0.0
 
 
-def optical_tables(table: NDArray[np.floating], first_length: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def optical_tables(
+    table: NDArray[np.floating], first_length: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(depth (n, n, 1): optical depth per unit length from the first length layer, ratio (L, n, n, 3):
     premultiplied colour over opacity, 0 where the opacity is 0) of a table (L, n, n, 4)."""
     layers, n = table.shape[0], table.shape[1]

@@ -68,8 +68,12 @@ from volren.renderers.tetra.traversal import (
 from volren.renderers.tetra.walk_inputs import SegmentTable, TetCells, WalkedSet, WalkOptions
 from volren.renderers.tetra.walked_cells import WalkedCells, walked_cells
 
-_MODES = {BlendMode.COMPOSITE: COMPOSITE, BlendMode.MAXIMUM: MAXIMUM, BlendMode.MINIMUM: MINIMUM,
-          BlendMode.AVERAGE: AVERAGE}
+_MODES = {
+    BlendMode.COMPOSITE: COMPOSITE,
+    BlendMode.MAXIMUM: MAXIMUM,
+    BlendMode.MINIMUM: MINIMUM,
+    BlendMode.AVERAGE: AVERAGE,
+}
 #: Row blocks per frame (progress calls).
 BLOCKS = 8
 #: Rays per parallel work item.
@@ -95,7 +99,10 @@ class TetraRenderer(RendererBase):
         summary="cell-to-cell ray casting through tetrahedra (numba, or compute shaders on a GPU) with 3D "
         "pre-integration tables",
         quality=(
-            QualityLevel("refine 64/1, table 64", options={"image_stride": 64, "refine_tolerance": 1.0, "table_size": 64}),
+            QualityLevel(
+                "refine 64/1, table 64",
+                options={"image_stride": 64, "refine_tolerance": 1.0, "table_size": 64},
+            ),
             QualityLevel("refine 16/0.1", options={"image_stride": 16, "refine_tolerance": 0.1}),
             QualityLevel("table 64", options={"table_size": 64}),
             QualityLevel("table 256 (default)"),
@@ -108,23 +115,52 @@ class TetraRenderer(RendererBase):
     options: ClassVar[tuple[OptionSpec, ...]] = (
         OptionSpec("table_size", 256, "int", "value entries per axis of the 3D table", low=2),
         OptionSpec("table_lengths", 32, "int", "segment-length layers of the 3D table", low=1),
-        OptionSpec("termination_alpha", 0.999, "float", "opacity at which a ray stops (1 never stops early)",
-                   low=0.0, high=1.0, low_exclusive=True),
-        OptionSpec("max_steps", 100_000, "int", "most cells one walk may take before it is cut and counted", low=1),
-        OptionSpec("skip_transparent", True, "bool",
-                   "skip cells whose value range the TF maps to zero opacity: composite rays jump from a "
-                   "transparent run to the next visible cell (false walks and integrates every cell, for comparison)"),
-        OptionSpec("backend", "auto", "choice",
-                   "auto: the GL compute-shader walk on a hardware GPU, else numba on the CPU; cpu; gl (OpenGL 4.3 "
-                   "compute shaders, also on Mesa llvmpipe)", choices=("auto", "cpu", "gl")),
-        OptionSpec("image_stride", 1, "int",
-                   "1: a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, rays every "
-                   "`image_stride` pixels first, more only where neighbouring rays differ by more than "
-                   "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features "
-                   "thinner than the stride between rays that agree are missed; cpu backend)", rule=STRIDE_RULE),
-        OptionSpec("refine_tolerance", 0.02, "float",
-                   "with image_stride > 1: the largest difference in any premultiplied RGBA channel between a "
-                   "block's corner rays that is interpolated instead of cast", low=0.0, high=1.0),
+        OptionSpec(
+            "termination_alpha",
+            0.999,
+            "float",
+            "opacity at which a ray stops (1 never stops early)",
+            low=0.0,
+            high=1.0,
+            low_exclusive=True,
+        ),
+        OptionSpec(
+            "max_steps", 100_000, "int", "most cells one walk may take before it is cut and counted", low=1
+        ),
+        OptionSpec(
+            "skip_transparent",
+            True,
+            "bool",
+            "skip cells whose value range the TF maps to zero opacity: composite rays jump from a "
+            "transparent run to the next visible cell (false walks and integrates every cell, for comparison)",
+        ),
+        OptionSpec(
+            "backend",
+            "auto",
+            "choice",
+            "auto: the GL compute-shader walk on a hardware GPU, else numba on the CPU; cpu; gl (OpenGL 4.3 "
+            "compute shaders, also on Mesa llvmpipe)",
+            choices=("auto", "cpu", "gl"),
+        ),
+        OptionSpec(
+            "image_stride",
+            1,
+            "int",
+            "1: a ray through every pixel; 2 to 64 (a power of two): adaptive refinement, rays every "
+            "`image_stride` pixels first, more only where neighbouring rays differ by more than "
+            "refine_tolerance or at silhouettes, the rest interpolated (faster on smooth images; features "
+            "thinner than the stride between rays that agree are missed; cpu backend)",
+            rule=STRIDE_RULE,
+        ),
+        OptionSpec(
+            "refine_tolerance",
+            0.02,
+            "float",
+            "with image_stride > 1: the largest difference in any premultiplied RGBA channel between a "
+            "block's corner rays that is interpolated instead of cast",
+            low=0.0,
+            high=1.0,
+        ),
     )
 
     def __init__(self) -> None:
@@ -135,8 +171,12 @@ class TetraRenderer(RendererBase):
         self._corner: NDArray | None = None
         self._table_key: tuple | None = None
         self._table: tuple | None = None
-        self._cell_ranges: tuple[NDArray, NDArray, NDArray] | None = None  # (the cells' corner values, lo, hi)
-        self._visible_walk: tuple[NDArray[np.bool_], WalkedCells] | None = None  # (visible cells, their walk set)
+        self._cell_ranges: tuple[NDArray, NDArray, NDArray] | None = (
+            None  # (the cells' corner values, lo, hi)
+        )
+        self._visible_walk: tuple[NDArray[np.bool_], WalkedCells] | None = (
+            None  # (visible cells, their walk set)
+        )
         self._walk_version = 0  # which walk set the GL walk's entry faces hold
         self._gl: GLWalk | None = None
         self._generation = 0  # which volume the GL walk's buffers hold
@@ -182,7 +222,9 @@ class TetraRenderer(RendererBase):
             usable = walked_cells(usable_cells, tets, neighbors, packed)
             self._mesh = mesh
             self._planes = (tets, neighbors, fields, packed, usable)
-            self._corner = np.ascontiguousarray(mesh.points[tets[:, 0]])  # where each cell's linear field is anchored
+            self._corner = np.ascontiguousarray(
+                mesh.points[tets[:, 0]]
+            )  # where each cell's linear field is anchored
         assert self._planes is not None
         return self._mesh, self._planes
 
@@ -207,8 +249,9 @@ class TetraRenderer(RendererBase):
         b = np.asarray(mesh.bounds, dtype=np.float64)
         return 1e-12 * float(np.linalg.norm(b[1::2] - b[0::2]) + np.abs(b).max())
 
-    def _entry_candidates(self, camera: Camera, width: int, height: int, mesh: PreparedMesh, tets: NDArray,
-                          walked: WalkedCells) -> tuple[EntryFaces, NDArray[np.int64]]:
+    def _entry_candidates(
+        self, camera: Camera, width: int, height: int, mesh: PreparedMesh, tets: NDArray, walked: WalkedCells
+    ) -> tuple[EntryFaces, NDArray[np.int64]]:
         """Where rays can enter the mesh: the boundary faces turned towards the eye, projected to
         pixels (`entry_bins`), and the cells the near plane cuts (pixel boxes by cell id, x0 = -1:
         none; no rows when it cuts none), where rays start inside the mesh."""
@@ -221,7 +264,9 @@ class TetraRenderer(RendererBase):
         px, py, w = pixel_coordinates(camera, width, height, mesh.points)
         faces = project_faces(px, py, ~(w > 0), triangles[facing], cell[facing], width, height)
         near_cells = np.zeros((0, 4), np.int64)
-        cut = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
+        cut = near_plane_cells(
+            camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds)
+        )
         if cut is not None:
             near_cells = np.full((len(tets), 4), -1, np.int64)
             near_cells[cut[0]] = cut[1]
@@ -259,8 +304,7 @@ class TetraRenderer(RendererBase):
             depth, ratio = optical_tables(table, axis.lengths[0])
             cell_lo, cell_hi = self._cell_value_ranges()
             visible = _visible_cells(tf, cell_lo, cell_hi)
-            self._table = (depth, ratio, lo,
-                           (n - 1) / (hi - lo), lmax, visible)
+            self._table = (depth, ratio, lo, (n - 1) / (hi - lo), lmax, visible)
             self._table_key = key
         assert self._table is not None
         return self._table
@@ -297,12 +341,18 @@ class TetraRenderer(RendererBase):
         walked = self._walked_cells(usable, visible if jump else None)
         if self._uses_gl(opts):
             walk = self._gl_walk(mesh, tets, neighbors, packed, tvals, grads, usable)
-            walk.set_tables((self._generation, self._table_key, opts["skip_transparent"]), depth[..., 0], ratio,
-                            visible)
-            walk.set_entry_faces((self._generation, self._walk_version if jump else None), walked, mesh.points)
-            params = WalkParameters(mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]),
-                                    jump)
-            near = near_plane_cells(camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds))
+            walk.set_tables(
+                (self._generation, self._table_key, opts["skip_transparent"]), depth[..., 0], ratio, visible
+            )
+            walk.set_entry_faces(
+                (self._generation, self._walk_version if jump else None), walked, mesh.points
+            )
+            params = WalkParameters(
+                mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]), jump
+            )
+            near = near_plane_cells(
+                camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds)
+            )
             out, counters = walk.render(camera, width, height, params, near)  # float32: no copy to float64
             counters.update(entries_dropped=0.0, rays_cast=float(width * height))
             rgba = self._pixels(out, mode)
@@ -311,7 +361,9 @@ class TetraRenderer(RendererBase):
         else:
             entries = self._entry_candidates(camera, width, height, mesh, tets, walked)
             assert self._corner is not None
-            cells = TetCells(neighbors, packed, tvals, grads, self._corner, usable.cells, self._on_plane(mesh))
+            cells = TetCells(
+                neighbors, packed, tvals, grads, self._corner, usable.cells, self._on_plane(mesh)
+            )
             options = WalkOptions(mode, float(opts["termination_alpha"]), int(opts["max_steps"]))
             rgba, counters = self._render_cpu(camera, width, height, progress, opts, entries, cells,
                                               WalkedSet(walked.boundary, walked.cells, visible),
@@ -333,14 +385,26 @@ class TetraRenderer(RendererBase):
         rgb, alpha = self._tf.sample(np.where(found, out[:, 0], np.nan))  # type: ignore[union-attr]
         return np.concatenate([rgb * alpha[:, None], alpha[:, None]], axis=1)
 
-    def _gl_walk(self, mesh: PreparedMesh, tets: NDArray, neighbors: NDArray, packed: NDArray, tvals: NDArray,
-                 grads: NDArray, usable: WalkedCells) -> GLWalk:
+    def _gl_walk(
+        self,
+        mesh: PreparedMesh,
+        tets: NDArray,
+        neighbors: NDArray,
+        packed: NDArray,
+        tvals: NDArray,
+        grads: NDArray,
+        usable: WalkedCells,
+    ) -> GLWalk:
         """The GL walk, holding this volume's mesh."""
         if self._gl is None:
             self._gl = GLWalk()
         if self._gl.mesh_key != self._generation:
-            self._gl.set_mesh(self._generation, gl_mesh(mesh.points, tets, neighbors, self._neighbor_faces, packed,
-                                                        tvals, grads, usable.cells))
+            self._gl.set_mesh(
+                self._generation,
+                gl_mesh(
+                    mesh.points, tets, neighbors, self._neighbor_faces, packed, tvals, grads, usable.cells
+                ),
+            )
         return self._gl
 
     def _render_cpu(self, camera: Camera, width: int, height: int, progress: ProgressCallback | None,
@@ -390,7 +454,9 @@ class TetraRenderer(RendererBase):
                 return self._pixels(walk(origins, dirs, offsets, cand, np.empty((len(pixels), 4))), mode)
 
             with parallel_chunk_size(CHUNK_SIZE):
-                rgba, rays = refine_image(cast, width, height, stride, float(opts["refine_tolerance"]), progress)
+                rgba, rays = refine_image(
+                    cast, width, height, stride, float(opts["refine_tolerance"]), progress
+                )
         counters = {
             "cell_steps": float(totals[0]),
             "cells_integrated": float(totals[1]),

@@ -46,9 +46,8 @@ RAY_BLOCK = 16
 
 @njit(nogil=True, cache=True)
 def _bilinear(table, i0, j0, fi, fj, c):
-    return (
-        (1.0 - fi) * ((1.0 - fj) * table[i0, j0, c] + fj * table[i0, j0 + 1, c])
-        + fi * ((1.0 - fj) * table[i0 + 1, j0, c] + fj * table[i0 + 1, j0 + 1, c])
+    return (1.0 - fi) * ((1.0 - fj) * table[i0, j0, c] + fj * table[i0, j0 + 1, c]) + fi * (
+        (1.0 - fj) * table[i0 + 1, j0, c] + fj * table[i0 + 1, j0 + 1, c]
     )
 
 
@@ -74,9 +73,15 @@ def integrate_segment(table, s_front, s_back, length):
     k0 = min(int(u), layers - 1)
     k1 = min(k0 + 1, layers - 1)
     w = u - k0
-    r = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 0) + w * _bilinear(colour_ratio[k1], i0, j0, fi, fj, 0)
-    g = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 1) + w * _bilinear(colour_ratio[k1], i0, j0, fi, fj, 1)
-    b = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 2) + w * _bilinear(colour_ratio[k1], i0, j0, fi, fj, 2)
+    r = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 0) + w * _bilinear(
+        colour_ratio[k1], i0, j0, fi, fj, 0
+    )
+    g = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 1) + w * _bilinear(
+        colour_ratio[k1], i0, j0, fi, fj, 1
+    )
+    b = (1.0 - w) * _bilinear(colour_ratio[k0], i0, j0, fi, fj, 2) + w * _bilinear(
+        colour_ratio[k1], i0, j0, fi, fj, 2
+    )
     return r * alpha, g * alpha, b * alpha, alpha
 
 
@@ -144,7 +149,13 @@ def _entries(q, rays, cells, boundary, ts, ids, svals):
     ox, oy, oz = rays.origins[q, 0], rays.origins[q, 1], rays.origins[q, 2]
     dx, dy, dz = rays.directions[q, 0], rays.directions[q, 1], rays.directions[q, 2]
     tmax, offsets, cand = rays.far[q], rays.offsets, rays.candidates
-    planes, tvals, grads, corner, on_plane = cells.planes, cells.values, cells.gradients, cells.corner, cells.on_plane
+    planes, tvals, grads, corner, on_plane = (
+        cells.planes,
+        cells.values,
+        cells.gradients,
+        cells.corner,
+        cells.on_plane,
+    )
     count = 0
     dropped = 0
     for c in range(offsets[q], offsets[q + 1]):
@@ -177,8 +188,12 @@ def _entries(q, rays, cells, boundary, ts, ids, svals):
         if t0 < 0.0:
             continue
         # the linear field at the entry point, from the cell's first vertex and its gradient
-        s0 = (tvals[t, 0] + grads[t, 0] * (ox + t0 * dx - corner[t, 0]) + grads[t, 1] * (oy + t0 * dy - corner[t, 1])
-              + grads[t, 2] * (oz + t0 * dz - corner[t, 2]))
+        s0 = (
+            tvals[t, 0]
+            + grads[t, 0] * (ox + t0 * dx - corner[t, 0])
+            + grads[t, 1] * (oy + t0 * dy - corner[t, 1])
+            + grads[t, 2] * (oz + t0 * dz - corner[t, 2])
+        )
         if count == ts.shape[0]:
             dropped += 1
             continue
@@ -207,7 +222,13 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
     that it goes around an edge or a vertex at zero length as always, and ends where it would run
     through a cell outside `walkable`."""
     orig, dirs, tfar, offsets = rays.origins, rays.directions, rays.far, rays.offsets
-    neighbors, planes, grads, ok, on_plane = cells.neighbors, cells.planes, cells.gradients, cells.usable, cells.on_plane
+    neighbors, planes, grads, ok, on_plane = (
+        cells.neighbors,
+        cells.planes,
+        cells.gradients,
+        cells.usable,
+        cells.on_plane,
+    )
     boundary, walkable, visible = walked.boundary, walked.walkable, walked.visible
     mode, termination, max_steps = options.mode, options.termination, options.max_steps
     n = orig.shape[0]
@@ -274,14 +295,19 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
                                 total += length
                             else:
                                 v = max(s_in, s_out) if mode == MAXIMUM else min(s_in, s_out)
-                                if not found or (mode == MAXIMUM and v > best) or (mode == MINIMUM and v < best):
+                                if (
+                                    not found
+                                    or (mode == MAXIMUM and v > best)
+                                    or (mode == MINIMUM and v < best)
+                                ):
                                     best = v
                             found = True
                         elif visible[t]:
                             r, g, b, a = integrate_segment(table, s_in, s_out, length)
                             if sp.on:
-                                diffuse, specular = blinn_phong_factors(grads[t, 0], grads[t, 1], grads[t, 2], hx, hy, hz,
-                                                                        sp)
+                                diffuse, specular = blinn_phong_factors(
+                                    grads[t, 0], grads[t, 1], grads[t, 2], hx, hy, hz, sp
+                                )
                                 r = min(r * diffuse + specular * a, a)
                                 g = min(g * diffuse + specular * a, a)
                                 b = min(b * diffuse + specular * a, a)

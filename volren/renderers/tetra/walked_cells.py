@@ -24,11 +24,11 @@ FACE_CORNERS = np.array([[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]])
 class WalkedCells:
     """Cells a walk may enter and the faces where it enters or leaves them."""
 
-    cells: NDArray[np.bool_]        # (m,) the cell belongs to the set
-    boundary: NDArray[np.bool_]     # (m, 4) the face has no cell of the set across it
-    face_cells: NDArray[np.int64]   # (f,) cell of each boundary face
-    face_index: NDArray[np.int64]   # (f,) which of its faces (0-3)
-    triangles: NDArray[np.int64]    # (f, 3) its corners (point ids)
+    cells: NDArray[np.bool_]  # (m,) the cell belongs to the set
+    boundary: NDArray[np.bool_]  # (m, 4) the face has no cell of the set across it
+    face_cells: NDArray[np.int64]  # (f,) cell of each boundary face
+    face_index: NDArray[np.int64]  # (f,) which of its faces (0-3)
+    triangles: NDArray[np.int64]  # (f, 3) its corners (point ids)
     face_planes: NDArray[np.float64]  # (f, 4) its inward plane (the cell's packed plane)
 
 

@@ -116,7 +116,9 @@ def _ug_zsweep(settings) -> Any:
 
 def _ug_projected(settings) -> Any:
     if settings.preintegration:
-        raise VolrenError("the vtk projected-tetrahedra mapper has no pre-integration; use mapper=raycast or zsweep")
+        raise VolrenError(
+            "the vtk projected-tetrahedra mapper has no pre-integration; use mapper=raycast or zsweep"
+        )
     return _vtk.vtkOpenGLProjectedTetrahedraMapper()
 
 
@@ -127,7 +129,11 @@ MAPPERS: dict[str, tuple[str, MapperFactory, frozenset[BlendMode]]] = {
     "auto": ("uniform", _gpu, CONTRACT_BLEND_MODES),  # resolved to gpu or fixed_point per context
     "smart": ("uniform", _smart, CONTRACT_BLEND_MODES),
     "gpu": ("uniform", _gpu, CONTRACT_BLEND_MODES),
-    "fixed_point": ("uniform", _fixed_point, frozenset({BlendMode.COMPOSITE, BlendMode.MAXIMUM, BlendMode.MINIMUM})),
+    "fixed_point": (
+        "uniform",
+        _fixed_point,
+        frozenset({BlendMode.COMPOSITE, BlendMode.MAXIMUM, BlendMode.MINIMUM}),
+    ),
     "raycast": ("tet", _ug_raycast, frozenset({BlendMode.COMPOSITE})),
     "zsweep": ("tet", _ug_zsweep, frozenset({BlendMode.COMPOSITE})),
     "projected": ("tet", _ug_projected, frozenset({BlendMode.COMPOSITE})),
@@ -158,8 +164,12 @@ class VtkRenderer(RendererBase):
             # (measured on the kit's eye_inside scene, 0.025 allowed: RMSE 0.58 for the ray caster,
             # which draws nothing, 0.13 zsweep, 0.087 projected) and where a clipping plane cuts the
             # mesh (the kit's clip check: RMSE 0.40-0.43 near, 0.040 far), so such views are refused
-            "tet": KindSupport(preintegration=True, accuracy=Accuracy(rmse=0.025, position_px=0.4), eye_inside=False,
-                               clipping=False),
+            "tet": KindSupport(
+                preintegration=True,
+                accuracy=Accuracy(rmse=0.025, position_px=0.4),
+                eye_inside=False,
+                clipping=False,
+            ),
         },
         quality=(
             QualityLevel("step 2", step=2.0),
@@ -172,9 +182,14 @@ class VtkRenderer(RendererBase):
     )
     options: ClassVar[tuple[OptionSpec, ...]] = (
         # None: the volume kind's default (DEFAULT_MAPPER)
-        OptionSpec("mapper", None, "choice", "uniform: auto (default: gpu where supported, else fixed_point), smart "
-                   "(VTK's own sample distance), gpu, fixed_point; tetrahedra: raycast (default), zsweep, projected",
-                   choices=tuple(MAPPERS)),
+        OptionSpec(
+            "mapper",
+            None,
+            "choice",
+            "uniform: auto (default: gpu where supported, else fixed_point), smart "
+            "(VTK's own sample distance), gpu, fixed_point; tetrahedra: raycast (default), zsweep, projected",
+            choices=tuple(MAPPERS),
+        ),
     )
 
     def __init__(self) -> None:
@@ -369,7 +384,9 @@ class VtkRenderer(RendererBase):
         if messages.errors:
             raise VolrenError(f"VTK failed to render: {messages.errors[0].text[:300]}")
         if pixels.GetNumberOfTuples() != width * height:
-            raise VolrenError(f"VTK returned {pixels.GetNumberOfTuples()} pixels for a {width}x{height} frame")
+            raise VolrenError(
+                f"VTK returned {pixels.GetNumberOfTuples()} pixels for a {width}x{height} frame"
+            )
         rgba = _vtk.vtk_to_numpy(pixels).reshape(height, width, 4)[::-1]
         image = rgba.astype(np.float32) / np.float32(255.0)
         # Rounding each 8-bit channel on its own can leave colour one step above alpha, which no

@@ -121,8 +121,9 @@ def _transparent_below(xs: NDArray, alphas: NDArray, tf: TransferFunction1D, dat
     return xs, alphas
 
 
-def _functions(color_x: NDArray, rgb: NDArray, opacity_x: NDArray,
-               opacity_y: NDArray) -> tuple[vtkColorTransferFunction, vtkPiecewiseFunction]:
+def _functions(
+    color_x: NDArray, rgb: NDArray, opacity_x: NDArray, opacity_y: NDArray
+) -> tuple[vtkColorTransferFunction, vtkPiecewiseFunction]:
     """VTK functions with these nodes, keeping two nodes at one x (a step in the TF stays a step).
 
     The nodes go in as whole arrays: VTK sorts its nodes after every AddPoint / AddRGBPoint, which
@@ -131,7 +132,9 @@ def _functions(color_x: NDArray, rgb: NDArray, opacity_x: NDArray,
     color.SetColorSpaceToRGB()
     color.AllowDuplicateScalarsOn()
     x = np.ascontiguousarray(color_x, dtype=np.float64)
-    color.AddRGBPoints(numpy_to_vtk(x, deep=1), numpy_to_vtk(np.ascontiguousarray(rgb, dtype=np.float64), deep=1))
+    color.AddRGBPoints(
+        numpy_to_vtk(x, deep=1), numpy_to_vtk(np.ascontiguousarray(rgb, dtype=np.float64), deep=1)
+    )
     opacity = vtkPiecewiseFunction()
     opacity.AllowDuplicateScalarsOn()
     pairs = np.ascontiguousarray(np.stack([opacity_x, opacity_y], axis=1), dtype=np.float64).ravel()
@@ -212,7 +215,9 @@ def unstructured_functions(
     return _functions(xs, rgb, xs, extinction)
 
 
-def masked_table(tf: TransferFunction1D, scalar_range: tuple[float, float], sample_distance: float) -> NDArray:
+def masked_table(
+    tf: TransferFunction1D, scalar_range: tuple[float, float], sample_distance: float
+) -> NDArray:
     """(MASK_ROWS, MASK_COLUMNS, 4) float32 RGBA of the 2D TF over (value, finite): our TF sampled at
     the texel centres of the scalar range in the top row, with the opacity of one sample step
     `sample_distance` long; zero in every other row (module docstring)."""
@@ -226,7 +231,9 @@ def masked_table(tf: TransferFunction1D, scalar_range: tuple[float, float], samp
     return table
 
 
-def masked_function(tf: TransferFunction1D, scalar_range: tuple[float, float], sample_distance: float) -> vtkImageData:
+def masked_function(
+    tf: TransferFunction1D, scalar_range: tuple[float, float], sample_distance: float
+) -> vtkImageData:
     """`masked_table` as the vtkImageData that vtkVolumeProperty.SetTransferFunction2D takes."""
     table = masked_table(tf, scalar_range, sample_distance)
     image = vtkImageData()

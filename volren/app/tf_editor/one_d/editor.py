@@ -141,7 +141,9 @@ class TransferFunction1DEditor(QWidget):
         self.preset_box.setToolTip("Replace the colours with a colour map over the current value range")
         self.preset_box.currentIndexChanged.connect(self._on_preset_chosen)
         self.tissue_box = QComboBox(self)
-        self.tissue_box.setSizeAdjustPolicy(QComboBox.AdjustToMinimumContentsLength)  # names are long; the dock is narrow
+        self.tissue_box.setSizeAdjustPolicy(
+            QComboBox.AdjustToMinimumContentsLength
+        )  # names are long; the dock is narrow
         self.tissue_box.setMinimumContentsLength(10)
         self.tissue_box.addItem(TISSUE_PLACEHOLDER)
         self.tissue_box.addItems(OPACITY_PRESET_NAMES)
@@ -150,7 +152,9 @@ class TransferFunction1DEditor(QWidget):
         self.shift_slider = QSlider(Qt.Horizontal, self)
         self.shift_slider.setRange(-SHIFT_STEPS, SHIFT_STEPS)
         self.shift_slider.setPageStep(10)
-        self.shift_slider.setToolTip("Slide the whole transfer function (colours and opacity) along the value axis")
+        self.shift_slider.setToolTip(
+            "Slide the whole transfer function (colours and opacity) along the value axis"
+        )
         self.shift_slider.valueChanged.connect(self._on_shift_moved)
         self.shift_slider.sliderPressed.connect(self._state.begin_interaction)
         self.shift_slider.sliderReleased.connect(self._state.end_interaction)
@@ -514,7 +518,12 @@ class TransferFunction1DEditor(QWidget):
 
     def _left_by_slider(self, tf: TransferFunction | None) -> bool:
         """Whether `tf` is as the shift slider last left it (no edit since)."""
-        return tf is not None and self._shifted is not None and self._shifted[0] is tf and self._shifted[1] == tf.version
+        return (
+            tf is not None
+            and self._shifted is not None
+            and self._shifted[0] is tf
+            and self._shifted[1] == tf.version
+        )
 
     def _show_shift(self, offset: float) -> None:
         self._shift_applied = offset
@@ -548,7 +557,9 @@ class TransferFunction1DEditor(QWidget):
         from volren.api import default_transfer_function
 
         previous = self._state.replaced_transfer_function(1)
-        self._state.set_transfer_function(previous if previous is not None else default_transfer_function(volume))
+        self._state.set_transfer_function(
+            previous if previous is not None else default_transfer_function(volume)
+        )
 
     def open_file(self, path: str | Path) -> bool:
         """Put the TF in `path` into the state; False (and errorOccurred) if it cannot be read.

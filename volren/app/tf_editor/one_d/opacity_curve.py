@@ -50,7 +50,9 @@ class OpacityCurve(PointCanvas):
         self._log_counts = True
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(2 * MARGIN + 40, TOP + BOTTOM + 40)
-        self.setToolTip("Opacity: click to add a point, drag to move it, right-click or Delete to remove it; wheel: zoom")
+        self.setToolTip(
+            "Opacity: click to add a point, drag to move it, right-click or Delete to remove it; wheel: zoom"
+        )
 
     def sizeHint(self) -> QSize:
         return QSize(300, 150)
@@ -189,7 +191,15 @@ class OpacityCurve(PointCanvas):
             return
         text = palette.color(QPalette.Text)
         ratio = self.devicePixelRatioF()
-        key = (id(self._histogram), self._log_counts, self._axis, self.width(), self.height(), text.rgba(), ratio)
+        key = (
+            id(self._histogram),
+            self._log_counts,
+            self._axis,
+            self.width(),
+            self.height(),
+            text.rgba(),
+            ratio,
+        )
         if self._histogram_layer is None or self._histogram_layer[0] != key:
             layer = QPixmap(round(self.width() * ratio), round(self.height() * ratio))
             layer.setDevicePixelRatio(ratio)

@@ -17,7 +17,7 @@ from volren.model.transfer_function import TransferFunction1D
 
 
 class PointEntry(QWidget):
-    """"Point: value [ ] opacity [ ]" for the curve's selected point (disabled without one)."""
+    """ "Point: value [ ] opacity [ ]" for the curve's selected point (disabled without one)."""
 
     def __init__(self, curve: OpacityCurve, parent: QWidget | None = None) -> None:
         super().__init__(parent)

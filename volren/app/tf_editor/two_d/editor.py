@@ -59,7 +59,9 @@ _MESSAGE_1D = (
     "The transfer function is 1D. A 2D transfer function assigns colour and opacity over value and "
     "gradient magnitude, which separates the boundaries between materials from the materials."
 )
-_USE_2D_TIP = "Switch to a 2D transfer function that draws what the 1D one draws (a band over every gradient magnitude)"
+_USE_2D_TIP = (
+    "Switch to a 2D transfer function that draws what the 1D one draws (a band over every gradient magnitude)"
+)
 _MESSAGE_NO_VOLUME = "Open a volume to edit a 2D transfer function over its values and gradient magnitudes."
 
 
@@ -334,7 +336,9 @@ class TransferFunction2DEditor(QWidget):
                 tf = seeded_2d(old, (lo, hi), gmax)
             else:
                 unit = old.opacity_unit_distance if old is not None else 1.0
-                tf = TransferFunction2D((lo, hi), (0.0, gmax), [geometry.boundary_triangle((lo, hi), gmax)], unit)
+                tf = TransferFunction2D(
+                    (lo, hi), (0.0, gmax), [geometry.boundary_triangle((lo, hi), gmax)], unit
+                )
         except VolrenError as exc:
             self.errorOccurred.emit("Cannot create a 2D transfer function", str(exc))
             return
