@@ -533,6 +533,21 @@ def test_resting_before_release_draws_one_full_frame_not_two(loaded_window, qtbo
         w.reset_view()
 
 
+def test_the_release_asks_for_the_full_frame_without_waiting_for_quiet_input(loaded_window, qtbot):
+    """A release ends the gesture: the full frame is requested then, not after the settle time
+    that only a drag resting before its release waits for (set to a minute here)."""
+    w = loaded_window
+    w.scheduler._timer.setInterval(60_000)
+    window = w.viewport.window().windowHandle()
+    c = w.viewport.mapTo(w, w.viewport.rect().center())
+    qtbot.mousePress(window, Qt.LeftButton, pos=c)
+    for i in range(1, 4):
+        qtbot.mouseMove(window, c + QPoint(8 * i, 2 * i))
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        qtbot.mouseRelease(window, Qt.LeftButton, pos=c + QPoint(24, 6))
+    assert w.state.camera is not None
+
+
 def test_the_quality_chooser_applies_the_measured_settings_and_a_switch_drops_foreign_options(
     make_window, sample, qtbot, monkeypatch
 ):

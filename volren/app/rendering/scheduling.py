@@ -4,8 +4,8 @@ Interactive changes (a drag in progress) get an immediate preview frame with at 
 the pixels (half of each side, scaled up for display; fewer when the renderer is slow, so that a
 preview stays within about 80 ms) and cheaper settings (`preview_settings`: the `interactive`
 quality level, and cheap TF tables while a TF is dragged), and restart a short settle timer; when no
-input has come for `settle_ms`, one full-quality frame follows, and none again for the same
-request (a gesture that rests before its release asks twice). Every other change (a new volume,
+input has come for `settle_ms` (a gesture resting before its release), or at once when the
+gesture ends, one full-quality frame follows, and none again for the same request. Every other change (a new volume,
 another renderer, a reset view) asks for a full-quality frame at once. A full-quality frame
 measured slower than REFINE_AFTER_MS comes after a coarse frame of the whole view at the preview
 settings (progressive refinement: something sharp at once, the exact frame when it is ready).
@@ -83,9 +83,9 @@ class FrameScheduler(QObject):
         self._unsubscribe = state.subscribe(self._on_change)
 
     def _on_change(self, change: Change) -> None:
-        if change.what == "interaction":  # a gesture ended: full quality once input is quiet
+        if change.what == "interaction":  # a gesture ended (a release): full quality at once
             self._tf_dragged = False
-            self._timer.start()
+            self.request_full()
         elif change.interactive:
             self._tf_dragged = change.what == "tf"
             self.request_preview()
