@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from os import PathLike
 from typing import Any
@@ -23,6 +23,7 @@ from volren.draw import (
 )
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.clip_region import ClipRegion, check_box
 from volren.model.default_tf import default_transfer_function
 from volren.model.scene import Scene
 from volren.model.settings import RenderSettings, is_finite
@@ -107,6 +108,8 @@ def drawing(
     level: int | None = None,
     cluster: str | None = None,
     scheduler: str | None = None,
+    clip_planes: Sequence[Any] = (),
+    crop: Sequence[float] | None = None,
     **settings: Any,
 ) -> Drawing:
     """What `render` draws, ready for many frames: the input read, `auto` and the quality resolved
@@ -114,6 +117,8 @@ def drawing(
     the renderer is prepared once, on the first frame, and kept: ``d.frame(d.orbit(azimuth=a))``
     draws another view and ``d.set_transfer_function(tf)`` another TF without preparing the
     volume again (`volren.draw.Drawing`)."""
+    if clip_planes or crop is not None:
+        settings["clip"] = ClipRegion(tuple(clip_planes), None if crop is None else check_box(crop))
     source = _open_input(volume, scalars, memory, level)
     vol = source.stand_in()
     transfer = as_transfer_function(tf, vol)
@@ -152,6 +157,8 @@ def render(
     level: int | None = None,
     cluster: str | None = None,
     scheduler: str | None = None,
+    clip_planes: Sequence[Any] = (),
+    crop: Sequence[float] | None = None,
     **settings: Any,
 ) -> NDArray[np.float32]:
     """Render offscreen; returns float32 (H, W, 4) premultiplied RGBA over black, row 0 on top.
@@ -164,13 +171,17 @@ def render(
     apply; other keyword arguments are RenderSettings fields (step, preintegration, shade,
     blend_mode, options, ...) and win over the level's.
 
+    `clip_planes` ((origin, normal) pairs in world units, at most six) keep the side each normal
+    points to, and `crop` (xmin, xmax, ymin, ymax, zmin, zmax) the inside of a box: rays are cut
+    to the kept region exactly (`RenderSettings.clip`), and `auto` picks a renderer that clips.
+
     An OME-Zarr path draws as `volren render` does (`volren.draw.ZarrImageInput`): the `level`
     given, else the full resolution (the level the view needs at quality draft and interactive),
     read whole within `memory` (bytes or "2GB"; default 8 GB) or streamed brick by brick. `cluster` ("local" or "local:N") or `scheduler` (an address) draws
     the bricks on a dask.distributed cluster (`volren.bricked.cluster`).
     """
     ready = drawing(volume, tf, renderer, size, azimuth, elevation, zoom, parallel, camera, scalars, quality, memory,
-                    level, cluster, scheduler, **settings)  # fmt: skip
+                    level, cluster, scheduler, clip_planes, crop, **settings)  # fmt: skip
     return ready.frame(progress=progress).image
 
 

@@ -134,11 +134,11 @@ def test_the_apps_screenshot_and_movie_go_through_draw(counting, prepares, frame
     from volren.app.files.screenshot import ScreenshotJob, render_job
 
     job = ScreenshotJob(tmp_path / "s.png", 6, 4, NAME, VOLUME, tf(0.5), RenderSettings(), Camera.orbit(VOLUME.bounds),
-                        (0.0, 0.0, 0.0))  # fmt: skip
+                        (0.0, 0.0, 0.0), VOLUME.bounds)  # fmt: skip
     image = render_job(job)
     assert prepares == [NAME] and frames == [(6, 4)] and float(image[0, 0, 3]) == 0.5
     movie = ScreenshotJob(tmp_path / "m.gif", 6, 4, NAME, VOLUME, tf(0.5), RenderSettings(),
-                          Camera.orbit(VOLUME.bounds), (0.0, 0.0, 0.0))  # fmt: skip
+                          Camera.orbit(VOLUME.bounds), (0.0, 0.0, 0.0), VOLUME.bounds)  # fmt: skip
     record_job(MovieJob(movie, Animation(frames=2)))
     assert prepares == [NAME, NAME] and frames == [(6, 4)] * 3
 
@@ -185,7 +185,7 @@ def test_a_frame_that_breaks_the_contract_is_refused_on_every_path(counting, mon
 
     monkeypatch.setattr(CountingRenderer, "render", float64_frame)
     job = ScreenshotJob("s.png", 6, 4, NAME, VOLUME, tf(0.5), RenderSettings(), Camera.orbit(VOLUME.bounds),
-                        (0.0, 0.0, 0.0))  # fmt: skip
+                        (0.0, 0.0, 0.0), VOLUME.bounds)  # fmt: skip
     with pytest.raises(VolrenError, match=f"renderer {NAME} returned float64"):
         render_job(job)
     with pytest.raises(VolrenError, match=f"renderer {NAME} returned float64"):

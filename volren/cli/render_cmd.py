@@ -21,6 +21,7 @@ from volren.cli.stage_clock import StageClock
 from volren.draw import Drawing, DrawInput, VolumeInput, Watch
 from volren.errors import VolrenError
 from volren.model.camera import check_zoom
+from volren.model.clip_region import MAX_PLANES, Box, ClipPlane, ClipRegion, check_box
 from volren.model.scene import OrbitView, Scene
 from volren.model.settings import MAX_SAMPLES_PER_RAY, MAX_STEP, BlendMode
 from volren.quality import DEFAULT_LEVEL, LEVELS
@@ -56,6 +57,22 @@ def step_length(text: str) -> float:
     if value > MAX_STEP:
         raise argparse.ArgumentTypeError(f"expected at most {MAX_STEP:g} (voxel lengths), got {text!r}")
     return value
+
+
+def clip_plane(text: str) -> ClipPlane:
+    """An argparse type for --clip: OX,OY,OZ,NX,NY,NZ, a point of the plane and its normal."""
+    try:
+        return ClipPlane.parse(text)
+    except VolrenError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def crop_box(text: str) -> Box:
+    """An argparse type for --crop: XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX in world units."""
+    try:
+        return check_box(text.split(","))
+    except VolrenError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def image_size(text: str) -> tuple[int, int]:
@@ -148,6 +165,11 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preintegration", action=argparse.BooleanOptionalAction, help="pre-integrated TF")
     p.add_argument("--shade", action=argparse.BooleanOptionalAction, help="Blinn-Phong shading")
     p.add_argument("--blend", choices=[m.value for m in BlendMode], help="blend mode (default composite)")
+    p.add_argument("--clip", type=clip_plane, action="append", default=[], metavar="OX,OY,OZ,NX,NY,NZ",
+                   help=f"keep the side of the plane through point O that normal N points to (world units; "
+                        f"repeatable, at most {MAX_PLANES}; added to a scene's planes)")  # fmt: skip
+    p.add_argument("--crop", type=crop_box, metavar="XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX",
+                   help="keep the inside of this box (world units; replaces a scene's crop box)")  # fmt: skip
     p.add_argument(
         "--option", action="append", default=[], metavar="KEY=VALUE", help="renderer-specific option"
     )
@@ -280,6 +302,11 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None, DrawInput 
         )
     # shading and the blend mode decide what `auto` may pick; step, pre-integration and options win over the level's
     shown = {k: v for k, v in (("shade", args.shade), ("blend_mode", args.blend)) if v is not None}
+    if args.clip or args.crop:  # clipping decides it too
+        clip = scene.settings.clip
+        if len(clip.planes) + len(args.clip) > MAX_PLANES:
+            raise VolrenError(f"--clip: at most {MAX_PLANES} clip planes, the scene's included")
+        shown["clip"] = ClipRegion((*clip.planes, *args.clip), args.crop or clip.box)
     if shown:
         scene = replace(scene, settings=scene.settings.with_(**shown))
     scene, why = _at_quality(args, scene, source)

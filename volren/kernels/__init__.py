@@ -11,7 +11,8 @@ internals; what several of them need lives here, neutral, and is tested on its o
 - `sample_placement`: a ray caster's midpoint rule (segments cut at a per-pixel phase);
 - `tet_projection`: tetrahedra projected to pixel boxes and binned per pixel;
 - `tet_clipping`: a ray clipped against one tetrahedron's face planes, exact at shared faces;
-- `box_clipping`: a ray clipped to a box (slab test).
+- `box_clipping`: a ray clipped to a box (slab test);
+- `clip_planes`: a ray clipped to the kept side of the clip region's planes (`RenderSettings.clip`);
 - `ray_block`: a block of pixel rays with their candidate cells, as one kernel parameter.
 
 The tetrahedra's face planes themselves are part of the one mesh preparation,

@@ -1,6 +1,6 @@
 """A block of pixel rays with the cells each may meet, as one kernel parameter.
 
-Why: the mesh renderers (tetra's walk, the reference's clipping) hand their kernels the same five
+Why: the mesh renderers (tetra's walk, the reference's clipping) hand their kernels the same six
 arrays per block of rows; numba types a `typing.NamedTuple` as a named tuple (arrays as members,
 fields read by name in nopython mode, cached kernels keep working while the class is defined at
 module level), so they travel together and cannot be passed one place off.
@@ -25,3 +25,5 @@ class BinnedRays(NamedTuple):
     #: ray q's candidates are candidates[offsets[q]:offsets[q + 1]] (cell ids)
     offsets: NDArray[np.int64]
     candidates: NDArray[np.int64]
+    #: (m, 4) world half-spaces the rays are clipped to (`volren.kernels.clip_planes`)
+    planes: NDArray[np.float64]

@@ -17,31 +17,8 @@ from typing import cast
 import numpy as np
 
 from volren.errors import VolrenError
+from volren.model.clip_region import Box, check_box
 from volren.model.volume import TetVolume, UniformVolume, Volume
-
-#: (xmin, xmax, ymin, ymax, zmin, zmax) in world units, VTK's order.
-Box = tuple[float, float, float, float, float, float]
-
-
-def check_box(box: Sequence[float]) -> Box:
-    """`box` as six finite floats with min <= max per axis, or a one-line VolrenError."""
-    try:
-        values = tuple(float(v) for v in box)
-    except (TypeError, ValueError):
-        raise VolrenError(
-            f"a crop box is six numbers (xmin, xmax, ymin, ymax, zmin, zmax), got {box!r}"
-        ) from None
-    if len(values) != 6 or not all(math.isfinite(v) for v in values):
-        raise VolrenError(
-            f"a crop box is six finite numbers (xmin, xmax, ymin, ymax, zmin, zmax), got {box!r}"
-        )
-    for axis in range(3):
-        if values[2 * axis] > values[2 * axis + 1]:
-            raise VolrenError(
-                f"crop box: {'xyz'[axis]}min {values[2 * axis]:g} is above {'xyz'[axis]}max "
-                f"{values[2 * axis + 1]:g}"
-            )
-    return values  # type: ignore[return-value]
 
 
 def covers(box: Box, bounds: Sequence[float]) -> bool:

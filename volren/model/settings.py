@@ -9,6 +9,7 @@ from enum import StrEnum
 from typing import Any
 
 from volren.errors import VolrenError
+from volren.model.clip_region import NO_CLIP, ClipRegion
 
 #: Most samples a ray may take across a volume's diagonal at the chosen `step`. The renderers that
 #: march (vtk, slicer, reference, plugins) silently draw a black image or run for hours far beyond
@@ -58,12 +59,16 @@ class RenderSettings:
     blend_mode: BlendMode = BlendMode.COMPOSITE
     jitter: bool = False
     options: Mapping[str, Any] = field(default_factory=dict)
+    #: The kept region (oblique planes and a crop box), rays clipped to it analytically; renderers
+    #: whose capabilities say `clip_region` honour it, `render_frame` refuses the others.
+    clip: ClipRegion = NO_CLIP
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "blend_mode", BlendMode.parse(self.blend_mode))
         if not isinstance(self.options, Mapping) or not all(isinstance(k, str) for k in self.options):
             raise VolrenError(f"render setting options must map names to values, got {self.options!r:.80}")
         object.__setattr__(self, "options", dict(self.options))
+        object.__setattr__(self, "clip", ClipRegion.from_dict(self.clip))
         for name in ("step", "ambient", "diffuse", "specular", "specular_power"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float):
@@ -91,6 +96,10 @@ class RenderSettings:
         data = asdict(self)
         data["blend_mode"] = str(self.blend_mode)
         data["options"] = dict(self.options)
+        if self.clip.is_empty:  # files without clipping stay as older versions wrote them
+            del data["clip"]
+        else:
+            data["clip"] = self.clip.to_dict()
         return data
 
     @classmethod

@@ -298,6 +298,10 @@ class KindSupport:
     #: Honours near and far planes that cut the volume (a camera zoomed into it, planes placed by
     #: hand; the kit's `clip` check). False: such a frame is refused like an eye inside.
     clipping: bool = True
+    #: Honours `RenderSettings.clip` (oblique planes and a crop box), each ray clipped to the kept
+    #: region analytically (the kit's `clip_region` check). False: a clipped scene is refused with a
+    #: one-line VolrenError, and `auto` passes the renderer over for it.
+    clip_region: bool = False
 
 
 @dataclass(frozen=True)
@@ -342,6 +346,8 @@ class Capabilities:
                 return f"has no pre-integration of 2D transfer functions on {volume_kind} volumes"
             if settings.shade and not support.shading:
                 return f"has no shading for {volume_kind} volumes"
+            if not settings.clip.is_empty and not support.clip_region:
+                return f"does not clip {volume_kind} volumes to planes or a crop box"
             if settings.blend_mode not in support.blend_modes:
                 modes = ", ".join(sorted(str(m) for m in support.blend_modes))
                 return f"has no {settings.blend_mode} blend mode for {volume_kind} volumes (only {modes})"
@@ -380,6 +386,8 @@ class Capabilities:
                 extras.append("shading")
             if s.regions:
                 extras.append("bricks")
+            if s.clip_region:
+                extras.append("clip planes")
             extras.append("blend " + "/".join(sorted(str(m) for m in s.blend_modes)))
             modes_2d = s.blend_modes_2d & s.blend_modes
             if 2 in s.tf_dims and modes_2d != s.blend_modes:

@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.clip_region import ClipPlane, ClipRegion
 from volren.model.scene_class import SceneClass
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
@@ -268,6 +269,59 @@ def check_clip(ctx: CheckContext) -> list[Measurement]:
                     "clip", f"{kind}, {name}", "RMSE", _rmse(image, expected), ctx.accuracy(kind).rmse
                 )
             )
+    return out
+
+
+#: Clip-region cases: (name, parallel, planes as (origin, normal) in fractions of the box, crop box
+#: in fractions of the box or None). Each cuts the box's image where the camera sees the cut.
+CLIP_REGION_CASES = (
+    ("perspective, one oblique plane", False, (((0.5, 0.45, 0.5), (1.0, 0.6, -0.4)),), None),
+    ("parallel, a wedge of two planes", True, (((0.4, 0.5, 0.5), (0.3, 1.0, 0.2)), ((0.6, 0.5, 0.5), (-1.0, 0.2, 0.5))), None),
+    ("perspective, a plane and a crop box", False, (((0.5, 0.5, 0.5), (-0.2, 0.4, 1.0)),), (0.1, 0.8, 0.2, 0.9, 0.0, 0.7)),
+    ("parallel, a crop box", True, (), (0.25, 0.9, 0.0, 0.6, 0.15, 1.0)),
+)  # fmt: skip
+#: The cases a quick run keeps.
+CLIP_REGION_QUICK = ("perspective, one oblique plane", "perspective, a plane and a crop box")
+
+
+def _clip_region_of(
+    bounds: Sequence[float], planes: Sequence[Any], box: Sequence[float] | None
+) -> ClipRegion:
+    """A clip region given in fractions of `bounds` (xmin, xmax, ...), in world units."""
+    lo = np.asarray(bounds[0::2], dtype=np.float64)
+    span = np.asarray(bounds[1::2], dtype=np.float64) - lo
+    world = [ClipPlane(tuple(lo + span * np.asarray(o)), tuple(np.asarray(n) / span)) for o, n in planes]
+    crop = None if box is None else tuple(lo[a // 2] + span[a // 2] * box[a] for a in range(6))
+    return ClipRegion(tuple(world), crop)  # type: ignore[arg-type]
+
+
+def check_clip_region(ctx: CheckContext) -> list[Measurement]:
+    """A homogeneous box cut by oblique planes and a crop box (`RenderSettings.clip`): the kept
+    part is drawn with a flat cut, against 1 - (1 - a)^(L / d_u) with L the length of each ray in
+    the kept region; a renderer whose kind does not declare `clip_region` refuses such a frame."""
+    out = []
+    tf = TransferFunction1D.constant(0.45, (0.8, 0.5, 0.3), opacity_unit_distance=0.5)
+    cases = [c for c in CLIP_REGION_CASES if not ctx.quick or c[0] in CLIP_REGION_QUICK]
+    for kind in ctx.kinds():
+        volume = _box(kind)
+        renderer = ctx.renderer()
+        for name, parallel, planes, box in cases:
+            w, h = 48, 40
+            camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.3, parallel=parallel, aspect=w / h)
+            region = _clip_region_of(volume.bounds, planes, box)
+            settings = RenderSettings(clip=region)
+            if not ctx.capabilities.kinds[kind].clip_region:  # type: ignore[index]
+                out.append(_refusal("clip_region", f"{kind}, {name}, declared not drawn",
+                                    functools.partial(ctx.draw, renderer, volume, tf, camera, w, h, settings)))  # fmt: skip
+                continue
+            image = ctx.draw(renderer, volume, tf, camera, w, h, settings)
+            lengths = oracles.box_path_lengths(camera, w, h, volume.bounds, region.half_spaces())
+            expected = oracles.homogeneous_image(lengths, (0.8, 0.5, 0.3), 0.45, 0.5)
+            whole = oracles.homogeneous_image(oracles.box_path_lengths(camera, w, h, volume.bounds),
+                                              (0.8, 0.5, 0.3), 0.45, 0.5)  # fmt: skip
+            assert _rmse(expected, whole) > 0.03, name  # the cut shows
+            out.append(Measurement("clip_region", f"{kind}, {name}", "RMSE", _rmse(image, expected),
+                                   ctx.accuracy(kind).rmse))  # fmt: skip
     return out
 
 
@@ -781,7 +835,7 @@ class Check:
 
 CHECKS: Sequence[Check] = tuple(
     Check(fn.__name__.removeprefix("check_"), fn)
-    for fn in (check_output, check_empty, check_box, check_clip, check_ramp, check_projection, check_nan, check_point,
+    for fn in (check_output, check_empty, check_box, check_clip, check_clip_region, check_ramp, check_projection, check_nan, check_point,
                check_step, check_thin, check_shading, check_eye_inside, check_progress, check_cancel, check_release,
                check_capabilities, check_options, check_bricks)
 )  # fmt: skip

@@ -21,8 +21,15 @@ from volren.model.volume import UniformVolume
 MAX_OPACITY = 1.0 - 1e-6
 
 
-def box_path_lengths(camera: Camera, width: int, height: int, bounds: Sequence[float]) -> NDArray[np.float64]:
-    """Length (H, W) of each pixel-centre ray inside the box, between the near and far planes."""
+def box_path_lengths(
+    camera: Camera,
+    width: int,
+    height: int,
+    bounds: Sequence[float],
+    half_spaces: NDArray[np.float64] | None = None,
+) -> NDArray[np.float64]:
+    """Length (H, W) of each pixel-centre ray inside the box, between the near and far planes, and
+    on the kept side (a x + b y + c z + d >= 0) of every row of `half_spaces` ((m, 4), world)."""
     origins, directions = camera.pixel_rays(width, height)
     lo = np.asarray(bounds[0::2], dtype=np.float64)
     hi = np.asarray(bounds[1::2], dtype=np.float64)
@@ -37,6 +44,14 @@ def box_path_lengths(camera: Camera, width: int, height: int, bounds: Sequence[f
     t_far = (far - near) / (directions @ camera.direction)
     start = np.maximum(t_min.max(axis=-1), 0.0)
     end = np.minimum(t_max.min(axis=-1), t_far)
+    for a, b, c, d in np.zeros((0, 4)) if half_spaces is None else np.asarray(half_spaces, np.float64):
+        at_origin = origins @ (a, b, c) + d
+        rate = directions @ (a, b, c)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            crossing = -at_origin / rate
+        start = np.where(rate > 0, np.maximum(start, crossing), start)
+        end = np.where(rate < 0, np.minimum(end, crossing), end)
+        end = np.where((rate == 0) & (at_origin < 0), -np.inf, end)
     return np.maximum(end - start, 0.0)
 
 

@@ -17,6 +17,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Literal
 
+from volren.app.core.crop_handles import shown_box
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.crop import Box, check_box, covers, crop_volume
@@ -54,6 +55,18 @@ def default_camera(volume: Volume, aspect: float = 1.0, parallel: bool = False) 
     """The camera the scenes use (Camera.orbit with 30/20/1), fitted to the viewport's aspect."""
     azimuth, elevation, zoom = DEFAULT_VIEW
     return Camera.orbit(volume.bounds, azimuth, elevation, zoom, parallel, aspect)
+
+
+def renderer_clips(renderer: str, kind: str) -> bool:
+    """Whether the registered `renderer` clips volumes of `kind` to planes and a box
+    (`KindSupport.clip_region`); False for one that does not import."""
+    from volren.renderers.registry import registry
+
+    try:
+        support = registry.capabilities(renderer).kinds.get(kind)  # type: ignore[call-overload]
+    except Exception:  # noqa: BLE001 - a plugin that does not import clips nothing
+        return False
+    return bool(support is not None and support.clip_region)
 
 
 class ViewState:
@@ -140,7 +153,9 @@ class ViewState:
 
     @property
     def render_volume(self) -> Volume | None:
-        """What the renderers draw: the volume cut to the crop box (made once per box)."""
+        """The volume cut to the crop box (made once per box): what is shown, for its bounds (view
+        directions, picking, the dataset facts), and what a renderer that does not clip draws
+        (`frame_inputs`)."""
         volume, box = self._volume, self._crop
         if volume is None or box is None:
             return volume
@@ -149,6 +164,41 @@ class ViewState:
         cropped = crop_volume(volume, box)
         self._cropped = (volume, box, cropped)
         return cropped
+
+    @property
+    def shown_bounds(self) -> Box | None:
+        """The bounds of what is drawn (None: nothing is): the crop box cut to the volume's bounds
+        where the renderer clips, else the bounds of the cut volume (`render_volume`)."""
+        volume = self._volume
+        if volume is None or self._crop is None:
+            return None if volume is None else volume.bounds
+        if self.clips():
+            return shown_box(self._crop, volume.bounds)
+        shown = self.render_volume
+        assert shown is not None
+        return shown.bounds
+
+    def clips(self, renderer: str | None = None) -> bool:
+        """Whether `renderer` (default: the state's) clips the shown volume's kind to planes and a
+        box (`renderer_clips`)."""
+        return self._volume is not None and renderer_clips(renderer or self._renderer, self._volume.kind)
+
+    def with_crop(self, settings: RenderSettings) -> RenderSettings:
+        """`settings` with the crop box as their clip box (the oblique planes kept)."""
+        if self._crop is None or settings.clip.box == self._crop:
+            return settings
+        return settings.with_(clip=settings.clip.with_box(self._crop))
+
+    def frame_inputs(self, renderer: str, settings: RenderSettings) -> tuple[Volume | None, RenderSettings]:
+        """(volume, settings) that `renderer` draws this view with, from `settings` (its still or
+        preview settings): a renderer that clips gets the whole volume and the crop box as a clip
+        box, so a moved face changes two numbers per ray and nothing it prepared (Real-Time Volume
+        Graphics, section 15.1); another gets the volume cut to the box (`render_volume`)."""
+        if self._crop is None:
+            return self._volume, settings
+        if self.clips(renderer):
+            return self._volume, self.with_crop(settings)
+        return self.render_volume, settings
 
     @property
     def camera(self) -> Camera | None:
@@ -190,7 +240,7 @@ class ViewState:
             crop = check_box(crop)
             if covers(crop, volume.bounds):
                 crop = None
-            else:
+            elif not renderer_clips(renderer or self._renderer, volume.kind):
                 cropped = (volume, crop, crop_volume(volume, crop))
         self._volume = volume
         self._crop = crop
@@ -212,7 +262,7 @@ class ViewState:
         camera, settings, renderer, the crop box where it still cuts the new volume) stays."""
         self._volume = volume
         self._cropped = None
-        if self._crop is not None:
+        if self._crop is not None and not self.clips():
             try:
                 self._cropped = (volume, self._crop, crop_volume(volume, self._crop))
             except VolrenError:  # the step's bounds moved away from the box: show it whole
@@ -272,7 +322,7 @@ class ViewState:
             if self._volume is not None:
                 if covers(box, self._volume.bounds):
                     box = None
-                else:  # cut now: errors surface here, not in the render thread
+                elif not self.clips():  # cut now: errors surface here, not in the render thread
                     self._cropped = (self._volume, box, crop_volume(self._volume, box))
         if box == self._crop:
             return

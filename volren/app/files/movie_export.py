@@ -45,7 +45,7 @@ def record_job(job: MovieJob, factory: RendererFactory = _registry_factory,
 
     view = job.view
     with job_drawing(view, factory) as drawing:
-        record_movie(drawing.renderer, job.animation, view.camera, view.tf, view.volume.bounds, (view.width, view.height),
+        record_movie(drawing.renderer, job.animation, view.camera, view.tf, view.bounds, (view.width, view.height),
                      view.path, view.background, job.lossless, progress, view.renderer)  # fmt: skip
     return str(view.path)
 

@@ -48,12 +48,15 @@ class ScreenshotJob:
     settings: RenderSettings
     camera: Camera
     background: tuple[float, float, float]
+    #: the bounds of what is drawn (the crop box's part of the volume's): a movie orbits around them
+    bounds: tuple[float, ...]
 
     @classmethod
     def of_view(cls, state: ViewState, path: PathArg, width: int, height: int) -> ScreenshotJob:
         """The job for what `state` shows now (cropped volume included); VolrenError if nothing is."""
-        volume, tf, camera = state.render_volume, state.transfer_function, state.camera
-        if volume is None or tf is None or camera is None:
+        volume, settings = state.frame_inputs(state.renderer, state.settings)
+        tf, camera, bounds = state.transfer_function, state.camera, state.shown_bounds
+        if volume is None or tf is None or camera is None or bounds is None:
             raise VolrenError("nothing to render: open a volume first")
         if width < 1 or height < 1:
             raise VolrenError(f"a screenshot needs a positive size, got {width} x {height}")
@@ -64,9 +67,10 @@ class ScreenshotJob:
             state.renderer,
             volume,
             tf.copy(),
-            state.settings,
+            settings,
             camera,
             state.background,
+            tuple(bounds),
         )
 
 

@@ -82,8 +82,12 @@ def array_label(choice: str) -> str:
     return f"{name} ({component})" if sep and name else choice
 
 
-def volume_facts(volume: Volume, shown: Volume | None = None) -> list[tuple[str, str]]:
-    """(label, text) rows describing `volume`; `shown` is what cropping leaves of it, if cropped."""
+def volume_facts(
+    volume: Volume, shown: Volume | None = None, crop: Sequence[float] | None = None
+) -> list[tuple[str, str]]:
+    """(label, text) rows describing `volume`; `shown` is what cropping leaves of it, if cropped,
+    or `crop` the box it is cropped to (a mesh's cut is not counted in cells while a face is
+    dragged: that is the renderer's work, not the window's)."""
     rows = [("Name", volume.name)]
     if volume.scalars:
         rows.append(("Array", array_label(volume.scalars)))
@@ -113,6 +117,8 @@ def volume_facts(volume: Volume, shown: Volume | None = None) -> list[tuple[str,
     ]
     if shown is not None and shown is not volume:
         rows.append(("Cropped to", _size(shown)))
+    elif crop is not None:
+        rows.append(("Cropped to", _bounds(crop)))
     return rows
 
 
@@ -201,7 +207,10 @@ class DatasetInfoPanel(StatePanel):
             self.notes_label.hide()
             self.notes_list.hide()
             return
-        for label, text in volume_facts(volume, self.state.render_volume):
+        uniform = isinstance(volume, UniformVolume)  # a grid's cut is a view of its samples: cheap
+        shown = self.state.render_volume if uniform else None
+        crop = None if uniform or self.state.crop is None else self.state.shown_bounds
+        for label, text in volume_facts(volume, shown, crop):
             value = _fact_label(label, text, self)
             self.form.addRow(label, value)
             self._values[label] = value

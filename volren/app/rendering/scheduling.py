@@ -24,6 +24,7 @@ from volren.app.core.frame_sizes import FrameCost, adaptive_preview_scale, previ
 from volren.app.core.preview_settings import preview_choice, still_settings
 from volren.app.core.state import Change, ViewState
 from volren.app.rendering.render_service import Frame, RenderRequest, RenderService
+from volren.model.clip_region import NO_CLIP
 from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
 from volren.renderers.base import Capabilities
@@ -118,10 +119,11 @@ class FrameScheduler(QObject):
         frames' and has not seen this volume, so that the next gesture's first preview comes at
         once instead of after its set-up (shearwarp's first bonsai preview took 0.7 s)."""
         s = self._state
-        volume, tf = s.render_volume, s.transfer_function
+        renderer, settings = self.preview(tf_dragged=False)
+        volume, settings = s.frame_inputs(renderer, settings)
+        tf = s.transfer_function
         if volume is None or tf is None:
             return
-        renderer, settings = self.preview(tf_dragged=False)
         key = (renderer, id(volume))
         if renderer != s.renderer and key != self._warmed:
             self._warmed = key
@@ -138,12 +140,14 @@ class FrameScheduler(QObject):
             if self._registry is not None else [s.renderer]  # fmt: skip
         refused = self._refusing_the_view(names)
         # the kind (with the TF's class) and the renderers refusing this view compared by value
-        inputs = (s.renderer, kind, s.settings, dragged, dims, refused)
+        inputs = (s.renderer, kind, s.settings, dragged, dims, refused, s.crop is not None)
         if self._preview is None or any(
             a is not b and not (isinstance(a, str | frozenset) and a == b)
             for a, b in zip(self._preview[0], inputs, strict=True)
         ):
             usable = [n for n in names if n not in refused or n == s.renderer]
+            if s.crop is not None and s.clips():  # previews clip too: a crop drag prepares nothing again
+                usable = [n for n in usable if s.clips(n)]
             self._preview = (
                 inputs,
                 preview_choice(s.renderer, kind, dims, s.settings, usable, self._capabilities, dragged),
@@ -155,7 +159,7 @@ class FrameScheduler(QObject):
         a clipping plane through it: `Capabilities.camera_reason`); they preview again once the
         camera is back where they can."""
         s = self._state
-        volume, camera = s.render_volume, s.camera
+        volume, camera = s.volume, s.camera  # what a clipping renderer is given
         if volume is None or camera is None:
             return frozenset()
         refused = set()
@@ -189,9 +193,11 @@ class FrameScheduler(QObject):
             return None
 
     def _cost_key(self, renderer: str, settings: RenderSettings | None) -> tuple[str, str]:
-        """Frame costs are kept per renderer and settings (by repr: options are a dict)."""
+        """Frame costs are kept per renderer and settings (by repr: options are a dict), whatever
+        is clipped (a clip plane's drag must not start the cost model again at every step)."""
         if self._cost_keys is None or self._cost_keys[0] is not settings:
-            self._cost_keys = (settings, repr(settings))
+            unclipped = settings.with_(clip=NO_CLIP) if settings is not None else None
+            self._cost_keys = (settings, repr(unclipped))
         return renderer, self._cost_keys[1]
 
     def _cost(self, frame: tuple[str, RenderSettings], tf_changed: bool) -> FrameCost | None:
@@ -226,8 +232,6 @@ class FrameScheduler(QObject):
         width, height = self._viewport_size()
         if s.volume is None or s.transfer_function is None or s.camera is None or width < 1 or height < 1:
             return None
-        volume = s.render_volume
-        assert volume is not None
         tf = s.transfer_function
         renderer, settings = s.renderer, s.settings
         if full:
@@ -236,7 +240,8 @@ class FrameScheduler(QObject):
             # went quiet, again on release; the second would redraw what is already on screen
             key = (
                 s.renderer,
-                id(volume),
+                id(s.volume),
+                s.crop,
                 id(tf),
                 tf.version,
                 s.settings,
@@ -254,6 +259,8 @@ class FrameScheduler(QObject):
             width, height = preview_size(width, height, self.current_preview_scale(preview))
         self._requested_any = True
         self._pending_final = None  # this request replaces a refinement under way
+        volume, settings = s.frame_inputs(renderer, settings)
+        assert volume is not None
         request = (
             renderer,
             volume,
@@ -271,8 +278,9 @@ class FrameScheduler(QObject):
                 width * height, (renderer, settings), coarse
             ):
                 # progressive refinement: the whole view at the preview's renderer and settings first
+                coarse_volume, coarse_settings = s.frame_inputs(*coarse)
                 serial = self._service.submit(
-                    coarse[0], *request[1:3], coarse[1], *request[4:7], False, s.background
+                    coarse[0], coarse_volume, tf, coarse_settings, *request[4:7], False, s.background
                 )
                 self._pending_final = (serial, request)
                 return serial

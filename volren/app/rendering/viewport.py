@@ -147,10 +147,10 @@ class Viewport(QWidget):
     def _paint_overlays(self, painter: QPainter, target: QRectF) -> None:
         """The overlays that are on, over the frame drawn in `target` (the frame's camera and aspect)."""
         assert self._frame is not None
-        camera, volume, tf = self._frame.camera, self._state.render_volume, self._state.transfer_function
-        if self.overlays.outline and volume is not None:
+        camera, bounds, tf = self._frame.camera, self._state.shown_bounds, self._state.transfer_function
+        if self.overlays.outline and bounds is not None:
             rect = (target.x(), target.y(), target.width(), target.height())
-            draw_outline(painter, camera, self._frame.width / self._frame.height, rect, volume.bounds)
+            draw_outline(painter, camera, self._frame.width / self._frame.height, rect, bounds)
         view = self._handle_view()
         if view is not None:
             draw_crop_handles(painter, *view, hot=self._hot_face)

@@ -251,9 +251,9 @@ class MainWindow(QMainWindow):
 
     def look_along(self, view: ViewDirection) -> None:
         """Turn the camera to look along `view` at the drawn (cropped) volume's centre, same distance."""
-        volume, camera = self.state.render_volume, self.state.camera
-        if volume is not None and camera is not None:
-            self.state.set_camera(look_along(camera, view, volume.bounds))
+        bounds, camera = self.state.shown_bounds, self.state.camera
+        if bounds is not None and camera is not None:
+            self.state.set_camera(look_along(camera, view, bounds))
 
     def _on_frame(self, frame: Frame) -> None:
         self.viewport.show_frame(frame)

@@ -24,6 +24,7 @@ import math
 
 from numba import njit, prange
 
+from volren.kernels.clip_planes import clip_to_planes
 from volren.kernels.sample_placement import ray_segment, ray_segments
 from volren.renderers.raycast.march_inputs import IndexRay
 
@@ -287,8 +288,7 @@ def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
     b = 0.0
     a = 0.0
     t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
-    t0 = max(t_in, 0.0)
-    t1 = min(t_out, t_far)
+    t0, t1 = clip_to_planes(ox, oy, oz, dx, dy, dz, view.planes, max(t_in, 0.0), min(t_out, t_far))
     ns = 0
     first = 0.0
     last = 0.0
@@ -504,8 +504,7 @@ def project(vol, view, h, mode, acc):
                 view, xx, ny_, ux, uy, uz
             )
             t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
-            t0 = max(t_in, 0.0)
-            t1 = min(t_out, t_far)
+            t0, t1 = clip_to_planes(ox, oy, oz, dx, dy, dz, view.planes, max(t_in, 0.0), min(t_out, t_far))
             value = -math.inf if mode == MAXIMUM else (math.inf if mode == MINIMUM else 0.0)
             weight = 0.0
             if not miss and t1 > t0:

@@ -30,6 +30,8 @@ class PixelView(NamedTuple):
     far_depth: float
     #: each pixel's segment phase in steps (`volren.kernels.sample_placement.pixel_phases`)
     phases: NDArray[np.float64]
+    #: (m, 4) half-spaces in index space that rays are clipped to (`volren.kernels.clip_planes`)
+    planes: NDArray[np.float64]
 
 
 class Classification(NamedTuple):

@@ -104,6 +104,8 @@ OPTIONS: tuple[OptionSpec, ...] = (
         high=1.0,
     ),
 )
+#: The clip planes of a view that clips nothing.
+NO_PLANES = np.zeros((0, 4), np.float64)
 #: Tiles per progress call.
 TILES_PER_CALL = 1024
 #: Pixels handed to a thread at a time when adaptive refinement asks for scattered pixels.
@@ -135,6 +137,7 @@ class RaycastRenderer(RendererBase):
                 preintegration=True,
                 blend_modes=frozenset(BlendMode),
                 accuracy=Accuracy(rmse=0.02, position_px=0.05),
+                clip_region=True,
             )
         },
         backend="cpu",
@@ -258,7 +261,8 @@ class RaycastRenderer(RendererBase):
         origin = np.asarray(volume.origin, dtype=np.float64)
         spacing = np.asarray(volume.spacing, dtype=np.float64)
         view_dir = np.asarray(camera.direction, dtype=np.float64)
-        view = PixelView(inv, width, height, origin, spacing, view_dir, float(far - near), phases)
+        planes = settings.clip.half_spaces_in_grid(origin, spacing)
+        view = PixelView(inv, width, height, origin, spacing, view_dir, float(far - near), phases, planes)
         if mode != BlendMode.COMPOSITE:
             return self._project(tf, mode, view, h)
         pre = bool(settings.preintegration)
@@ -326,7 +330,8 @@ class RaycastRenderer(RendererBase):
         if self._step is None or self._step[0] != key:
             width, height = sample_size(view.width, view.height)
             phases = pixel_phases(phase_mode, width, height, opts["jitter_seed"])
-            sampled = view._replace(width=width, height=height, phases=phases)
+            # the step serves the TF and the data, whatever is clipped: a plane's drag keeps it
+            sampled = view._replace(width=width, height=height, phases=phases, planes=NO_PLANES)
             pixels = np.arange(width * height, dtype=np.int64)
 
             def march(h: float) -> NDArray[np.float32]:

@@ -46,6 +46,8 @@ class GridBox(NamedTuple):
     spacing: NDArray[np.float64]
     lo: NDArray[np.float64]
     hi: NDArray[np.float64]
+    #: (m, 4) world half-spaces rays are clipped to besides the box (`volren.kernels.clip_planes`)
+    planes: NDArray[np.float64]
 
 
 class CellPlanes(NamedTuple):

@@ -79,6 +79,7 @@ _SUPPORT = KindSupport(
     # the per-ray tolerance bounds the max abs error; the kit measures RMSE up to 2e-8 (float32
     # rounding) and the point 0.09 px off (the blob's own asymmetry in perspective)
     accuracy=Accuracy(rmse=DEFAULT_TOLERANCE, position_px=0.15),
+    clip_region=True,
 )
 #: Uniform grids also take 2D TFs (composite only: `tf2d`), and draw bricks (the ray clipped to
 #: the brick's box: the integral is exact, so no sample anchoring is needed).
@@ -175,6 +176,7 @@ class ReferenceRenderer(RendererBase):
         out = np.zeros((n, 4))
         stats = np.zeros((n, 5), np.int64)
         extra: dict[str, float] = {}
+        clip = settings.clip.half_spaces()
 
         if isinstance(vol, UniformVolume):
             values, org, sp, blo, bhi, _ = prepared
@@ -183,7 +185,7 @@ class ReferenceRenderer(RendererBase):
 
         if isinstance(vol, UniformVolume):
             tf_1d, tf_2d = (None, tf) if two_d else (tf, None)
-            grid = GridBox(values, org, sp, blo, bhi)
+            grid = GridBox(values, org, sp, blo, bhi, clip)
 
             def kernel(a: int, b: int) -> None:
                 render_uniform(
@@ -201,7 +203,7 @@ class ReferenceRenderer(RendererBase):
             def kernel(a: int, b: int) -> None:
                 offsets, cand = bin_rows(boxes, width, a // width, b // width)
                 extra["candidates"] += len(cand)
-                render_tets(BinnedRays(origins[a:b], dirs[a:b], tfar[a:b], offsets, cand), cells, tf, spar, quad,
+                render_tets(BinnedRays(origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, clip), cells, tf, spar, quad,
                             out[a:b], stats[a:b])  # fmt: skip
 
         run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, kernel, progress)

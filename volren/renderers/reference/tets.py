@@ -13,7 +13,8 @@ How:
 3. Per pixel ray (`render_tets`), each candidate is clipped against its four face planes in
    float64 (`volren.kernels.tet_clipping.clip_tet`: the ray is partitioned exactly at shared
    faces, and exactly one cell owns a ray lying in a face), giving an interval with the value at
-   its entry and the slope ds/dt = grad s . d.
+   its entry and the slope ds/dt = grad s . d, cut to the part of the ray the clip region keeps
+   (the field is linear in the cell, so the value at a cut is exact).
 4. The intervals are sorted by entry (stable, so ties keep mesh order), and
    `refinement.integrate_ray` integrates them front to back; gaps (outside a non-convex mesh)
    contribute nothing.
@@ -24,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from volren.kernels.clip_planes import clip_to_planes
 from volren.kernels.tet_clipping import clip_tet
 from volren.renderers.reference.ray_inputs import RayIntervals
 from volren.renderers.reference.ray_integral import store_pixel
@@ -56,6 +58,9 @@ def render_tets(rays, cells, tf, spar, quad, out, stats):
             continue
         ox, oy, oz = orig[q, 0], orig[q, 1], orig[q, 2]
         dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+        keep0, keep1 = clip_to_planes(ox, oy, oz, dx, dy, dz, rays.planes, 0.0, tfar[q])
+        if not keep1 > keep0:
+            continue
         t0s = np.empty(k)
         t1s = np.empty(k)
         s0s = np.empty(k)
@@ -64,7 +69,11 @@ def render_tets(rays, cells, tf, spar, quad, out, stats):
         for c in range(k):
             t = cand[c0 + c]
             hit, t0, t1, s0 = clip_tet(t, ox, oy, oz, dx, dy, dz, tfar[q], normals, anchors, sigma, tvals)
-            if hit:
+            if hit and t1 > keep0 and t0 < keep1:  # the cell's interval cut to the kept one
+                if t0 < keep0:
+                    s0 += (grads[t, 0] * dx + grads[t, 1] * dy + grads[t, 2] * dz) * (keep0 - t0)
+                    t0 = keep0
+                t1 = min(t1, keep1)
                 t0s[m] = t0
                 t1s[m] = t1
                 s0s[m] = s0

@@ -4,8 +4,9 @@ Why: the uniform path must produce the exact integral of DESIGN.md's model over 
 interpolant, independently of any sampling choice a GPU renderer makes.
 
 How, per pixel ray (origin on the near plane, unit direction d):
-1. Clip the ray to the box of the point bounds with the slab test, and to [0, t_far] (the near and
-   far clipping planes, as a GPU ray caster does). Nothing outside the box is ever sampled.
+1. Clip the ray to the box of the point bounds with the slab test, to [0, t_far] (the near and
+   far clipping planes, as a GPU ray caster does) and to the clip region's planes. Nothing outside
+   the box is ever sampled.
 2. Walk the cells the ray crosses: the crossings with the grid planes x = x_i, y = y_j, z = z_k
    are merged in order, each crossing time computed from its plane index (no accumulated
    stepping error). The cell of an interval is taken from its midpoint, so rays running exactly
@@ -33,6 +34,7 @@ import numpy as np
 from numba import njit, prange
 
 from volren.kernels.box_clipping import clip_box
+from volren.kernels.clip_planes import clip_to_planes
 from volren.renderers.reference.ray_inputs import RayIntervals
 from volren.renderers.reference.ray_integral import store_pixel
 from volren.renderers.reference.refinement import integrate_ray
@@ -208,6 +210,7 @@ def render_uniform(orig, dirs, tfar, grid, tf, tf2d, spar, quad, out, stats):
         ox, oy, oz = orig[p, 0], orig[p, 1], orig[p, 2]
         dx, dy, dz = dirs[p, 0], dirs[p, 1], dirs[p, 2]
         t0, t1 = clip_box(ox, oy, oz, dx, dy, dz, lo, hi, 0.0, tfar[p])
+        t0, t1 = clip_to_planes(ox, oy, oz, dx, dy, dz, grid.planes, t0, t1)
         for c in range(4):
             out[p, c] = 0.0
         for c in range(5):

@@ -92,6 +92,7 @@ class TetraRenderer(RendererBase):
                 blend_modes=frozenset(BlendMode),
                 # kit (volren check-renderer tetra): RMSE up to 1.5e-6, the point 0.09 px off
                 accuracy=Accuracy(rmse=1e-4, position_px=0.15),
+                clip_region=True,
             )
         },
         backend="cpu/opengl",
@@ -311,11 +312,16 @@ class TetraRenderer(RendererBase):
 
     # ------------------------------------------------------------------------------ render
     def _uses_gl(self, opts: Mapping[str, Any]) -> bool:
-        """The GL walk when asked for, or on `auto` with a ray per pixel and a
+        """The GL walk when asked for, or on `auto` with a ray per pixel, nothing clipped and a
         hardware GPU (on Mesa llvmpipe numba keeps float64, progress per block of rows and adaptive
         refinement: `docs/tetra-benchmark.md`)."""
+        clipped = not self.settings.clip.is_empty
         if opts["backend"] == "auto":
-            return opts["image_stride"] == 1 and gpu_renderer() is not None
+            return opts["image_stride"] == 1 and not clipped and gpu_renderer() is not None
+        if opts["backend"] == "gl" and clipped:
+            raise VolrenError(
+                "renderer tetra: backend gl does not clip to planes or a crop box yet; use backend=cpu"
+            )
         return opts["backend"] == "gl"
 
     def _render(
@@ -417,12 +423,13 @@ class TetraRenderer(RendererBase):
         faces, near_cells = entries
         mode = options.mode
         totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
+        clip = self.settings.clip.half_spaces()
 
         def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray, out: NDArray) -> NDArray:
             """The rays' walk output into `out` (n, 4); the counters summed into `totals`."""
             stats = np.zeros((len(origins), 4), np.int64)
             rays = BinnedRays(np.ascontiguousarray(origins), np.ascontiguousarray(dirs),
-                              np.ascontiguousarray(ray_far(camera, dirs)), offsets, cand)  # fmt: skip
+                              np.ascontiguousarray(ray_far(camera, dirs)), offsets, cand, clip)  # fmt: skip
             cast_rays(rays, cells, walked, table, options, sp, out, stats)
             totals[:4] += stats.sum(axis=0)
             totals[4] += np.count_nonzero(stats[:, 0])

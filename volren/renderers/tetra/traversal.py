@@ -24,6 +24,9 @@ Per pixel ray:
    cells the TF makes visible (`walked_cells`): the entry faces are then the visible cells'
    boundary faces, and a walk ends where it would run through a transparent cell, so the next entry
    jumps over the transparent run. A ray stops once its opacity reaches the termination threshold.
+5. Clipping: each ray is cut to the part the clip region keeps (`volren.kernels.clip_planes`, the
+   far plane included); a cell segment across a cut is integrated from the linear field's value at
+   the cut, so the cut surface is flat inside the cells, not their jagged boundary.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from volren.kernels.clip_planes import clip_to_planes
 from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
 
 COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
@@ -245,6 +249,10 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
                 continue
             ox, oy, oz = orig[q, 0], orig[q, 1], orig[q, 2]
             dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
+            # the part of the ray the clip region keeps, the far plane included
+            keep0, keep1 = clip_to_planes(ox, oy, oz, dx, dy, dz, rays.planes, 0.0, tfar[q])
+            if not keep1 > keep0:
+                continue
             count, dropped = _entries(q, rays, cells, boundary, ts, ids, svals)
             stats[q, 3] = dropped
             if count == 0:
@@ -268,6 +276,8 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
                     break
                 if ts[e] < t_done:
                     continue
+                if ts[e] >= keep1:
+                    break
                 t = ids[e]
                 t_in = ts[e]
                 s_in = svals[e]
@@ -278,23 +288,27 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
                         break
                     if t_out < t_in:
                         t_out = t_in
-                    if t_out > tfar[q]:
-                        t_out = tfar[q]
+                    if t_out > keep1:
+                        t_out = keep1
                     if t_out > t_in and not walkable[t]:
                         t_out = t_in  # the ray leaves the walked cells here
                         break
                     # the field is linear in the cell: exact along the ray from the entry value
-                    s_out = s_in + (grads[t, 0] * dx + grads[t, 1] * dy + grads[t, 2] * dz) * (t_out - t_in)
-                    length = t_out - t_in
+                    slope = grads[t, 0] * dx + grads[t, 1] * dy + grads[t, 2] * dz
+                    s_out = s_in + slope * (t_out - t_in)
+                    # what the clip region keeps of the segment: cut at keep0 in front
+                    t_kept = max(t_in, keep0)
+                    s_kept = s_in + slope * (t_kept - t_in) if t_kept > t_in else s_in
+                    length = t_out - t_kept
                     steps += 1
                     walked += 1
                     if length > 0.0:
                         if mode != COMPOSITE:
                             if mode == AVERAGE:
-                                integral += 0.5 * (s_in + s_out) * length
+                                integral += 0.5 * (s_kept + s_out) * length
                                 total += length
                             else:
-                                v = max(s_in, s_out) if mode == MAXIMUM else min(s_in, s_out)
+                                v = max(s_kept, s_out) if mode == MAXIMUM else min(s_kept, s_out)
                                 if (
                                     not found
                                     or (mode == MAXIMUM and v > best)
@@ -303,7 +317,7 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
                                     best = v
                             found = True
                         elif visible[t]:
-                            r, g, b, a = integrate_segment(table, s_in, s_out, length)
+                            r, g, b, a = integrate_segment(table, s_kept, s_out, length)
                             if sp.on:
                                 diffuse, specular = blinn_phong_factors(
                                     grads[t, 0], grads[t, 1], grads[t, 2], hx, hy, hz, sp
@@ -319,7 +333,7 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
                             if 1.0 - trans >= termination:
                                 done = True
                                 break
-                    if t_out >= tfar[q]:
+                    if t_out >= keep1:
                         done = True
                         break
                     nb = neighbors[t, face]

@@ -7,6 +7,8 @@ from vtkmodules.vtkCommonDataModel import (
     vtkCellArray,
     vtkImageData,
     vtkPiecewiseFunction,
+    vtkPlane,
+    vtkPlaneCollection,
     vtkUnstructuredGrid,
 )
 from vtkmodules.vtkRenderingCore import (
@@ -38,6 +40,8 @@ except ImportError:  # pragma: no cover - depends on the VTK build
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401,E402  (registers the OpenGL factories)
 
 __all__ = [
+    "vtkPlane",
+    "vtkPlaneCollection",
     "VTK_TETRA",
     "numpy_to_vtk",
     "numpy_to_vtkIdTypeArray",

@@ -1,0 +1,105 @@
+"""Clipping in the renderers that declare `clip_region`: exact cuts against closed forms, the
+choice of `auto`, and the work a moved plane does not redo. (The conformance kit's `clip_region`
+check covers the composite closed form and the refusals on every registered renderer.)"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import volren
+from volren.model import Camera, RenderSettings, TransferFunction1D
+from volren.model.clip_region import ClipPlane, ClipRegion
+from volren.renderers.base import render_frame
+from volren.renderers.registry import registry
+from volren.testing import oracles
+from volren.testing.scenes import lattice_volume
+
+CLIPPING = [pytest.param(name, kind) for name, kind in
+            (("raycast", "uniform"), ("reference", "uniform"), ("reference", "tet"), ("tetra", "tet"))]  # fmt: skip
+
+
+def _kept_interval(origins, directions, far, bounds, rows):
+    """(t0, t1) per ray: the box, the near and far planes and every half-space row, in numpy."""
+    lo, hi = np.asarray(bounds[0::2]), np.asarray(bounds[1::2])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ta, tb = (lo - origins) / directions, (hi - origins) / directions
+    t0 = np.maximum(np.minimum(ta, tb).max(axis=-1), 0.0)
+    t1 = np.minimum(np.maximum(ta, tb).min(axis=-1), far)
+    for a, b, c, d in rows:
+        f, g = origins @ (a, b, c) + d, directions @ (a, b, c)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cross = -f / g
+        t0 = np.where(g > 0, np.maximum(t0, cross), t0)
+        t1 = np.where(g < 0, np.minimum(t1, cross), t1)
+    return t0, t1
+
+
+@pytest.mark.parametrize(("name", "kind"), CLIPPING)
+def test_a_maximum_projection_of_a_ramp_peaks_exactly_on_the_cut(name, kind):
+    """s = x + 0.5 y is linear along every ray, so its maximum over the kept part of a ray lies at
+    one of the kept interval's ends: the value there is the closed form, to float precision."""
+    volume = lattice_volume(kind, lambda x, y, z: x + 0.5 * y, (9, 8, 7), (0.8, 1.0, 1.2), (-1.0, 0.5, 2.0))
+    lo, hi = np.asarray(volume.bounds[0::2]), np.asarray(volume.bounds[1::2])
+    centre = (lo + hi) / 2
+    region = ClipRegion(
+        (ClipPlane(tuple(centre), (-1.0, 0.3, 0.4)),), (lo[0], hi[0], lo[1], hi[1], lo[2], centre[2] + 1)
+    )
+    tf = TransferFunction1D([[-2, 0, 0, 0], [12, 1, 1, 1]], [[-2, 0.2], [12, 1.0]], 1.0)
+    w = h = 36
+    camera = Camera.orbit(volume.bounds, 35, 25, zoom=1.2)
+    renderer = registry.create(name)
+    renderer.set_volume(volume)
+    renderer.set_transfer_function(tf)
+    renderer.set_settings(RenderSettings(blend_mode="maximum", clip=region))
+    image, _ = render_frame(renderer, camera, w, h)
+
+    origins, directions = camera.pixel_rays(w, h)
+    near, far = camera.clipping_range
+    t_far = (far - near) / (directions @ camera.direction)
+    t0, t1 = _kept_interval(origins, directions, t_far, volume.bounds, region.half_spaces())
+    hit = t1 > t0 + 1e-6
+    ends = [origins + t[..., None] * directions for t in (t0, t1)]
+    peak = np.maximum(*(p[..., 0] + 0.5 * p[..., 1] for p in ends))
+    expected = np.where(hit[..., None], oracles.projection_rgba(tf, np.where(hit, peak, 0.0)), 0.0)
+    edge = np.zeros_like(hit)  # pixels whose ray grazes the kept region's boundary
+    edge[1:-1, 1:-1] = np.any([np.roll(hit, s, axis=a) != hit for a in (0, 1) for s in (1, -1)], axis=0)[
+        1:-1, 1:-1
+    ]
+    assert hit.sum() > 200 and (~hit).sum() > 200
+    assert np.abs(image - expected)[~edge].max() < 1e-4
+
+
+def test_auto_picks_a_renderer_that_clips():
+    volume = lattice_volume("uniform", lambda x, y, z: x, (8, 8, 8))
+    for kind in ("uniform", "tet"):
+        volume = lattice_volume(kind, lambda x, y, z: x + y, (6, 6, 6))
+        ready = volren.drawing(volume, size=32, clip_planes=[((2.0, 2.0, 2.0), (1.0, 0.0, 0.0))])
+        assert registry.capabilities(ready.scene.renderer).kinds[kind].clip_region
+        assert ready.scene.settings.clip.planes == (ClipPlane((2.0, 2.0, 2.0), (1.0, 0.0, 0.0)),)
+        image = volren.render(volume, size=32, crop=(0, 2.5, 0, 5, 0, 5), azimuth=90)
+        assert image[..., 3].max() > 0
+
+
+def test_a_renderer_that_does_not_clip_refuses_in_one_line():
+    volume = lattice_volume("tet", lambda x, y, z: x, (5, 5, 5))
+    with pytest.raises(volren.VolrenError, match="renderer vtk does not clip tet volumes") as exc:
+        volren.render(volume, renderer="vtk", size=16, clip_planes=[((1, 1, 1), (0, 0, 1))])
+    assert "\n" not in str(exc.value)
+
+
+def test_moving_a_plane_keeps_raycasts_chosen_step_and_bricks():
+    """A drag moves a plane every frame: the step search (hundreds of ms) and the brick
+    classification serve the TF and the data and must not run again."""
+    volume = lattice_volume("uniform", lambda x, y, z: np.sin(x) * np.cos(y) + z / 9, (24, 24, 24))
+    renderer = registry.create("raycast")
+    renderer.set_volume(volume)
+    renderer.set_transfer_function(TransferFunction1D.ramp(-1.0, 3.0))
+    camera = Camera.orbit(volume.bounds, 20, 10)
+    for x in (4.0, 9.0, 15.0):
+        clip = ClipRegion((ClipPlane((x, 0.0, 0.0), (1.0, 0.0, 0.0)),))
+        renderer.set_settings(RenderSettings(step=1.0, clip=clip, options={"target_error": 0.01}))
+        render_frame(renderer, camera, 32, 32)
+        if x == 4.0:
+            step, bricks = renderer._step, renderer._empty
+        assert renderer._step is step and renderer._empty is bricks
