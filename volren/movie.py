@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import statistics
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -22,6 +22,7 @@ from volren.errors import VolrenError
 from volren.io.image_io import to_png_pixels
 from volren.io.movie_io import movie_writer
 from volren.model.animation import Animation, View
+from volren.model.clip_region import NO_CLIP
 from volren.model.scene import Scene
 from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
@@ -80,7 +81,10 @@ def render_movie(
             animation.camera(i, scene.camera, place, scene.size[0] / scene.size[1])
             for i in range(animation.frames)
         ]
-        scene, _ = resolve_scene(scene, VolumeInput(volume), None, cameras=cameras)
+        clipped = scene.settings.clip
+        choosing = replace(scene, settings=scene.settings.with_(clip=animation.clips_anywhere(clipped)))
+        scene, _ = resolve_scene(choosing, VolumeInput(volume), None, cameras=cameras)
+        scene = replace(scene, settings=scene.settings.with_(clip=clipped))
     volumes = None if not steps else _step_volumes(steps, animation.frames, scene.scalars)
     with Drawing(VolumeInput(volume), scene) as drawing:
         return record_movie(drawing.renderer, animation, scene.camera, scene.transfer_function, bounds or volume.bounds,
@@ -174,6 +178,7 @@ def record_movie(
     tf = start_tf
     settings_of = _settings_by_class(renderer, label or getattr(renderer, "name", None), level, start_tf)
     settings = getattr(renderer, "settings", None)
+    start_clip = settings.clip if settings is not None else NO_CLIP
     frame_data = FrameData(source=source)
     if source is None:
         _check_views(renderer, animation, start_view, bounds, width / height, label)
@@ -191,6 +196,11 @@ def record_movie(
             if frame_tf is not tf:
                 renderer.set_transfer_function(frame_tf)
                 tf = frame_tf
+            if animation.clip_keys:  # planes move between keyframes: two numbers per ray, no tables
+                current = renderer.settings  # type: ignore[attr-defined]
+                frame_clip = animation.clip(index, start_clip)
+                if frame_clip != current.clip:
+                    renderer.set_settings(current.with_(clip=frame_clip))
             camera = animation.camera(index, start_view, bounds, width / height)
             within = None if progress is None else _within_frame(progress, index, frames)
             image, stats, _ = draw_prepared(renderer, frame_data, tf, camera, width, height, within, label)

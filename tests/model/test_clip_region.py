@@ -80,3 +80,13 @@ def test_settings_without_clipping_write_no_clip_key():
     assert "clip" not in RenderSettings().to_dict()
     assert RenderSettings().clip is NO_CLIP or RenderSettings().clip.is_empty
     assert RenderSettings.from_dict({"clip": {"planes": []}}).clip.is_empty
+
+
+def test_a_plane_switched_off_clips_nothing_but_is_kept_in_the_file():
+    off = ClipPlane((0, 0, 0), (1, 0, 0), enabled=False)
+    region = ClipRegion((off,))
+    assert region.is_empty and region.half_spaces().shape == (0, 4)
+    settings = RenderSettings(clip=region)
+    assert settings.to_dict()["clip"] == {"planes": [{"origin": [0.0, 0.0, 0.0], "normal": [1.0, 0.0, 0.0],
+                                                      "enabled": False}]}  # fmt: skip
+    assert RenderSettings.from_dict(settings.to_dict()) == settings

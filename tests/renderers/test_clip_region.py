@@ -103,3 +103,64 @@ def test_moving_a_plane_keeps_raycasts_chosen_step_and_bricks():
         if x == 4.0:
             step, bricks = renderer._step, renderer._empty
         assert renderer._step is step and renderer._empty is bricks
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("path", ["march", "slices"])
+@pytest.mark.parametrize("preintegration", [False, True])
+def test_the_slicers_two_paths_cut_a_homogeneous_box_exactly(path, preintegration):
+    """Both of the slicer's paths (a compute march and blended polygons) narrow each ray, or each
+    fragment's segment, to the kept region in the shader: the cut lies on the plane, not on a
+    slice, at every step."""
+    volume = lattice_volume("uniform", 1.0, (6, 5, 7), (0.9, 1.1, 0.8), (0.5, -1.0, 2.0))
+    lo, hi = np.asarray(volume.bounds[0::2]), np.asarray(volume.bounds[1::2])
+    region = ClipRegion(
+        (ClipPlane(tuple((lo + hi) / 2), (1.0, 0.7, -0.5)),), (lo[0], hi[0], lo[1], hi[1], 2.5, hi[2])
+    )
+    tf = TransferFunction1D.constant(0.4, (0.2, 0.9, 0.5), opacity_unit_distance=0.6)
+    camera = Camera.orbit(volume.bounds, 25, 30, zoom=1.2)
+    renderer = registry.create("slicer")
+    renderer.set_volume(volume)
+    renderer.set_transfer_function(tf)
+    settings = RenderSettings(step=1.3, preintegration=preintegration, clip=region, options={"path": path})
+    renderer.set_settings(settings)
+    image, _ = render_frame(renderer, camera, 40, 40)
+    lengths = oracles.box_path_lengths(camera, 40, 40, volume.bounds, region.half_spaces())
+    expected = oracles.homogeneous_image(lengths, (0.2, 0.9, 0.5), 0.4, 0.6)
+    assert np.sqrt(np.mean((image - expected) ** 2)) < 1e-4
+
+
+@pytest.mark.gl
+def test_tetras_gl_walk_cuts_a_homogeneous_mesh_exactly():
+    """The compute-shader walk (a hardware GPU's default; here llvmpipe) cuts rays as the CPU walk
+    does, in the mesh's coordinates moved to its centre."""
+    volume = lattice_volume("tet", 1.0, (5, 6, 5), (0.9, 1.1, 0.8), (40.0, -1.0, 2.0))
+    lo, hi = np.asarray(volume.bounds[0::2]), np.asarray(volume.bounds[1::2])
+    region = ClipRegion(
+        (ClipPlane(tuple((lo + hi) / 2), (1.0, -0.7, 0.5)),), (lo[0], hi[0], lo[1], 3.0, lo[2], hi[2])
+    )
+    tf = TransferFunction1D.constant(0.4, (0.2, 0.9, 0.5), opacity_unit_distance=0.6)
+    camera = Camera.orbit(volume.bounds, 25, 30, zoom=1.2)
+    renderer = registry.create("tetra")
+    renderer.set_volume(volume)
+    renderer.set_transfer_function(tf)
+    renderer.set_settings(RenderSettings(clip=region, options={"backend": "gl"}))
+    image, _ = render_frame(renderer, camera, 40, 40)
+    lengths = oracles.box_path_lengths(camera, 40, 40, volume.bounds, region.half_spaces())
+    expected = oracles.homogeneous_image(lengths, (0.2, 0.9, 0.5), 0.4, 0.6)
+    assert np.sqrt(np.mean((image - expected) ** 2)) < 1e-4
+
+
+def test_cached_reference_images_are_keyed_on_the_clip_region(tmp_path):
+    """The cache kept the reference's settings without the clip region: a clipped scene's reference
+    came back uncut (from the cache or drawn uncut)."""
+    from volren.testing.reference_images import reference_image
+
+    volume = lattice_volume("uniform", lambda x, y, z: x + y, (5, 5, 5))
+    tf = TransferFunction1D.ramp(0.0, 8.0)
+    camera = Camera.orbit(volume.bounds, 20, 10)
+    cut = RenderSettings(clip=ClipRegion((ClipPlane((2.0, 2.0, 2.0), (1.0, 0.0, 0.0)),)))
+    whole = reference_image(volume, tf, camera, 16, 16, folder=tmp_path)
+    clipped = reference_image(volume, tf, camera, 16, 16, cut, folder=tmp_path)
+    assert len(list(tmp_path.glob("*.npy"))) == 2
+    assert clipped[..., 3].sum() < 0.8 * whole[..., 3].sum()

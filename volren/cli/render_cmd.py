@@ -167,9 +167,11 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--blend", choices=[m.value for m in BlendMode], help="blend mode (default composite)")
     p.add_argument("--clip", type=clip_plane, action="append", default=[], metavar="OX,OY,OZ,NX,NY,NZ",
                    help=f"keep the side of the plane through point O that normal N points to (world units; "
-                        f"repeatable, at most {MAX_PLANES}; added to a scene's planes)")  # fmt: skip
+                        f"repeatable, at most {MAX_PLANES}; added to a scene's planes; --clip=-1,... when the first number "
+                        f"is negative)")  # fmt: skip
     p.add_argument("--crop", type=crop_box, metavar="XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX",
-                   help="keep the inside of this box (world units; replaces a scene's crop box)")  # fmt: skip
+                   help="keep the inside of this box (world units; replaces a scene's crop box; --crop=-1,... when the "
+                        "first number is negative)")  # fmt: skip
     p.add_argument(
         "--option", action="append", default=[], metavar="KEY=VALUE", help="renderer-specific option"
     )

@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.clip_region import ClipRegion, blend_clip_regions
 from volren.model.scene import OrbitView, camera_from_dict
 from volren.model.settings import is_finite
 from volren.model.tf_blend import blend_transfer_functions
@@ -50,6 +51,12 @@ class CameraKey:
 class TFKey:
     time: float
     transfer_function: TransferFunction
+
+
+@dataclass(frozen=True)
+class ClipKey:
+    time: float
+    clip: ClipRegion
 
 
 def check_frames(frames: Any, what: str = "frames") -> int:
@@ -130,12 +137,14 @@ class Animation:
     orbit_degrees: float = 360.0
     camera_keys: tuple[CameraKey, ...] = ()
     tf_keys: tuple[TFKey, ...] = ()
+    #: the clip region (planes and box) through the movie: none, the scene's settings' throughout
+    clip_keys: tuple[ClipKey, ...] = ()
 
     def __post_init__(self) -> None:
         check_frames(self.frames)
         check_fps(self.fps)
         _orbit(self.orbit_degrees, "orbit_degrees")
-        keys: tuple[CameraKey | TFKey, ...] = (*self.camera_keys, *self.tf_keys)
+        keys: tuple[CameraKey | TFKey | ClipKey, ...] = (*self.camera_keys, *self.tf_keys, *self.clip_keys)
         for key in keys:
             _check_time(key.time, "keyframe time")
         views = {isinstance(key.view, OrbitView) for key in self.camera_keys}
@@ -149,6 +158,9 @@ class Animation:
             raise VolrenError("TF keyframes must all be 1D or all 2D transfer functions")
         object.__setattr__(self, "camera_keys", tuple(sorted(self.camera_keys, key=lambda k: k.time)))
         object.__setattr__(self, "tf_keys", tuple(sorted(self.tf_keys, key=lambda k: k.time)))
+        object.__setattr__(self, "clip_keys", tuple(sorted(self.clip_keys, key=lambda k: k.time)))
+        if len({len(key.clip.planes) for key in self.clip_keys}) > 1:
+            raise VolrenError("clip keyframes must all hold the same number of planes")
 
     @property
     def seconds(self) -> float:
@@ -199,6 +211,19 @@ class Animation:
             self.tf_keys[i].transfer_function, self.tf_keys[j].transfer_function, weight
         )
 
+    def clip(self, index: int, start: ClipRegion) -> ClipRegion:
+        """Frame `index`'s clip region; `start` (the scene's) when there are no clip keyframes."""
+        if not self.clip_keys:
+            return start
+        times = [key.time for key in self.clip_keys]
+        i, j, weight = _segment(times, self.time(index))
+        return blend_clip_regions(self.clip_keys[i].clip, self.clip_keys[j].clip, weight)
+
+    def clips_anywhere(self, start: ClipRegion) -> ClipRegion:
+        """A region some frame clips to (the first key that clips anything), else `start`: what
+        choosing a renderer for the whole movie must allow for."""
+        return next((key.clip for key in self.clip_keys if not key.clip.is_empty), start)
+
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Animation:
         """A scene file's "movie" object: frames, fps, orbit (degrees) and keyframes, each with a
@@ -219,13 +244,13 @@ class Animation:
         keyframes = data.get("keyframes", [])
         if not isinstance(keyframes, list):
             raise VolrenError(f"'keyframes' must be a list, got {type(keyframes).__name__}")
-        camera_keys, tf_keys = [], []
+        camera_keys, tf_keys, clip_keys = [], [], []
         for index, key in enumerate(keyframes):
-            if not isinstance(key, Mapping) or not ({"camera", "transfer_function"} & set(key)):
-                raise VolrenError(f"keyframe {index} must be an object with 'time' and a 'camera' and/or a "
-                                  "'transfer_function'")  # fmt: skip
+            if not isinstance(key, Mapping) or not ({"camera", "transfer_function", "clip"} & set(key)):
+                raise VolrenError(f"keyframe {index} must be an object with 'time' and a 'camera', a "
+                                  "'transfer_function' and/or a 'clip'")  # fmt: skip
             try:
-                extra = set(key) - {"time", "camera", "transfer_function"}
+                extra = set(key) - {"time", "camera", "transfer_function", "clip"}
                 if extra:
                     raise VolrenError(f"unknown keys {sorted(extra)}")
                 time = _check_time(key.get("time"))
@@ -233,6 +258,8 @@ class Animation:
                     camera_keys.append(CameraKey(time, camera_from_dict(key["camera"])))
                 if "transfer_function" in key:
                     tf_keys.append(TFKey(time, transfer_function_from_dict(key["transfer_function"])))
+                if "clip" in key:
+                    clip_keys.append(ClipKey(time, ClipRegion.from_dict(key["clip"])))
             except VolrenError as exc:
                 raise VolrenError(f"keyframe {index}: {exc}") from None
         return cls(
@@ -241,6 +268,7 @@ class Animation:
             orbit_degrees=_orbit(data.get("orbit", 360.0)),
             camera_keys=tuple(camera_keys),
             tf_keys=tuple(tf_keys),
+            clip_keys=tuple(clip_keys),
         )
 
 

@@ -69,11 +69,14 @@ def _triple(values: Any, what: str) -> Triple:
 @dataclass(frozen=True)
 class ClipPlane:
     """A plane through `origin` (world units) keeping the side `normal` points to (the other side
-    when `invert`). The normal need not be unit length, but must not be zero."""
+    when `invert`). The normal need not be unit length, but must not be zero. A plane that is not
+    `enabled` clips nothing and is kept only so that switching it on again brings it back (the
+    app's plane list)."""
 
     origin: Triple
     normal: Triple
     invert: bool = False
+    enabled: bool = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "origin", _triple(self.origin, "origin"))
@@ -82,8 +85,11 @@ class ClipPlane:
         if not (length > 0.0 and math.isfinite(length)):
             raise VolrenError(f"a clip plane's normal must not be zero, got {self.normal!r:.60}")
         object.__setattr__(self, "normal", normal)
-        if not isinstance(self.invert, bool):
-            raise VolrenError(f"a clip plane's invert must be true or false, got {self.invert!r:.40}")
+        for name in ("invert", "enabled"):
+            if not isinstance(getattr(self, name), bool):
+                raise VolrenError(
+                    f"a clip plane's {name} must be true or false, got {getattr(self, name)!r:.40}"
+                )
 
     def half_space(self) -> tuple[float, float, float, float]:
         """(a, b, c, d) with a unit (a, b, c): the kept points satisfy a x + b y + c z + d >= 0."""
@@ -96,18 +102,20 @@ class ClipPlane:
         data: dict[str, Any] = {"origin": list(self.origin), "normal": list(self.normal)}
         if self.invert:
             data["invert"] = True
+        if not self.enabled:
+            data["enabled"] = False
         return data
 
     @classmethod
     def from_dict(cls, data: Any) -> ClipPlane:
         if not isinstance(data, Mapping):
             raise VolrenError(f"a clip plane is an object with 'origin' and 'normal', got {data!r:.60}")
-        unknown = set(data) - {"origin", "normal", "invert"}
+        unknown = set(data) - {"origin", "normal", "invert", "enabled"}
         if unknown or "origin" not in data or "normal" not in data:
             raise VolrenError(
-                f"a clip plane has 'origin', 'normal' and optional 'invert', got keys {sorted(data)}"
+                f"a clip plane has 'origin', 'normal' and optional 'invert' and 'enabled', got keys {sorted(data)}"
             )
-        return cls(data["origin"], data["normal"], data.get("invert", False))
+        return cls(data["origin"], data["normal"], data.get("invert", False), data.get("enabled", True))
 
     @classmethod
     def parse(cls, text: str) -> ClipPlane:
@@ -143,13 +151,13 @@ class ClipRegion:
 
     @property
     def is_empty(self) -> bool:
-        """True when nothing is clipped."""
-        return not self.planes and self.box is None
+        """True when nothing is clipped (no box, and no plane switched on)."""
+        return self.box is None and not any(p.enabled for p in self.planes)
 
     def half_spaces(self) -> NDArray[np.float64]:
         """(m, 4) rows (a, b, c, d): the kept points satisfy a x + b y + c z + d >= 0 for every row
         (the planes, then the box's faces that are finite)."""
-        rows = [p.half_space() for p in self.planes]
+        rows = [p.half_space() for p in self.planes if p.enabled]
         if self.box is not None:
             for axis in range(3):
                 unit = [0.0, 0.0, 0.0]
@@ -208,3 +216,32 @@ def _plane_from(value: Any) -> ClipPlane:
     if isinstance(value, Sequence) and not isinstance(value, str) and len(value) == 2:
         return ClipPlane(value[0], value[1])
     raise VolrenError(f"a clip plane is (origin, normal) or {{'origin', 'normal'}}, got {value!r:.60}")
+
+
+def blend_clip_regions(a: ClipRegion, b: ClipRegion, weight: float) -> ClipRegion:
+    """The region `weight` of the way from `a` to `b` (a movie between two clip keyframes): each
+    plane's point moves on a straight line and its unit normal turns between the two (normalised
+    linear blend), the box's sides move linearly; switches (invert, enabled) and a box present in
+    only one key follow the nearer key. Both keys hold the same number of planes."""
+    if len(a.planes) != len(b.planes):
+        raise VolrenError(
+            f"clip keyframes must hold the same number of planes, got {len(a.planes)} and {len(b.planes)}"
+        )
+    if weight <= 0.0:
+        return a
+    if weight >= 1.0:
+        return b
+    near = a if weight < 0.5 else b
+    planes = []
+    for pa, pb, pn in zip(a.planes, b.planes, near.planes, strict=True):
+        origin = (1.0 - weight) * np.asarray(pa.origin) + weight * np.asarray(pb.origin)
+        na = np.asarray(pa.normal) / np.linalg.norm(pa.normal)
+        nb = np.asarray(pb.normal) / np.linalg.norm(pb.normal)
+        normal = (1.0 - weight) * na + weight * nb
+        if not np.linalg.norm(normal) > 1e-12:  # opposite normals half-way: keep the nearer key's
+            normal = np.asarray(pn.normal, dtype=np.float64)
+        planes.append(ClipPlane(tuple(origin), tuple(normal), pn.invert, pn.enabled))  # type: ignore[arg-type]
+    box = near.box
+    if a.box is not None and b.box is not None:
+        box = tuple((1.0 - weight) * np.asarray(a.box) + weight * np.asarray(b.box))  # type: ignore[assignment]
+    return ClipRegion(tuple(planes), box)

@@ -96,7 +96,9 @@ class RenderSettings:
         data = asdict(self)
         data["blend_mode"] = str(self.blend_mode)
         data["options"] = dict(self.options)
-        if self.clip.is_empty:  # files without clipping stay as older versions wrote them
+        if (
+            not self.clip.planes and self.clip.box is None
+        ):  # files without clipping stay as older versions wrote them
             del data["clip"]
         else:
             data["clip"] = self.clip.to_dict()

@@ -50,7 +50,8 @@ def volume_digest(volume: Volume) -> str:
 
 
 def reference_settings(settings: RenderSettings) -> RenderSettings:
-    """The settings that matter to the converged reference: appearance, not sampling or tables."""
+    """The settings that matter to the converged reference: appearance and the clip region, not
+    sampling or tables."""
     return RenderSettings(
         shade=settings.shade,
         ambient=settings.ambient,
@@ -58,6 +59,7 @@ def reference_settings(settings: RenderSettings) -> RenderSettings:
         specular=settings.specular,
         specular_power=settings.specular_power,
         blend_mode=settings.blend_mode,
+        clip=settings.clip,
     )
 
 

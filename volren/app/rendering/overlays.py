@@ -1,5 +1,6 @@
 """The viewport's overlays: the volume's outline, the orientation axes, the colour legend, and
-the crop box's edges and face handles while the box is edited in the view.
+the crop box's edges and face handles while the box is edited in the view, and a clip plane's outline
+and handles while it is.
 
 Why painted by the viewport rather than rendered: they must never cost a frame. Each paint draws
 them with QPainter over the frame image (a dozen lines, three arms, and a strip and a curve of a
@@ -20,8 +21,11 @@ from PyQt5.QtCore import QLineF, QPointF, QRectF, Qt
 from PyQt5.QtGui import QColor, QFont, QImage, QPainter, QPen, QPolygonF
 
 from volren.app.core.crop_handles import face_axis, handle_depths, handle_pixels
-from volren.app.core.overlay_geometry import Rect, outline_segments, triad_arms
+from volren.app.core.overlay_geometry import Rect, outline_segments, project_points, triad_arms
+from volren.app.core.plane_handles import handle_points as plane_handle_points
+from volren.app.core.plane_handles import plane_polygon
 from volren.model.camera import Camera
+from volren.model.clip_region import ClipPlane
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction
 
@@ -105,6 +109,37 @@ def draw_crop_handles(painter: QPainter, camera: Camera, aspect: float, rect: Re
         radius = HOT_HANDLE_RADIUS if face == hot else HANDLE_RADIUS
         painter.setBrush(handle_color(face, face == hot))
         painter.drawEllipse(QPointF(float(x), float(y)), radius, radius)
+    painter.restore()
+
+
+#: A clip plane's outline and arrow while its handles are shown: cyan, apart from the amber crop box.
+CLIP_PLANE_COLOR = QColor(80, 220, 255)
+
+
+def draw_plane_handles(painter: QPainter, camera: Camera, aspect: float, rect: Rect, plane: ClipPlane,
+                       bounds: Sequence[float], hot: str | None = None) -> None:  # fmt: skip
+    """A clip plane's outline across the volume's box, the arrow of its kept side's normal, a disc
+    at its centre (move) and one at the arrow's tip (turn); `hot` ("move" or "turn") larger and
+    lighter."""
+    polygon = project_points(camera, aspect, rect, plane_polygon(plane, bounds))
+    handles = project_points(camera, aspect, rect, plane_handle_points(plane, bounds))
+    painter.save()
+    painter.setRenderHint(QPainter.Antialiasing, True)
+    painter.setPen(QPen(CLIP_PLANE_COLOR, 1.5))
+    points = [QPointF(float(x), float(y)) for x, y in polygon if np.isfinite(x) and np.isfinite(y)]
+    if len(points) >= 3:
+        painter.drawPolygon(QPolygonF(points))
+    (cx, cy), (tx, ty) = handles
+    if all(np.isfinite(v) for v in (cx, cy, tx, ty)):
+        painter.drawLine(QLineF(cx, cy, tx, ty))
+    painter.setPen(QPen(HANDLE_RIM_COLOR, 1.0))
+    for kind, (x, y) in zip(("move", "turn"), handles, strict=True):
+        if np.isfinite(x) and np.isfinite(y):
+            radius = HOT_HANDLE_RADIUS if kind == hot else HANDLE_RADIUS
+            painter.setBrush(
+                CLIP_PLANE_COLOR.lighter(HOT_HANDLE_LIGHTER) if kind == hot else CLIP_PLANE_COLOR
+            )
+            painter.drawEllipse(QPointF(float(x), float(y)), radius, radius)
     painter.restore()
 
 

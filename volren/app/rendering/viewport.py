@@ -14,6 +14,11 @@ Over the frame it paints the overlays of `rendering.overlays` (outline, orientat
 legend), each paint, with the camera the frame was rendered with; `set_overlay` toggles one and
 only repaints.
 
+`set_clip_handles(index)` (View > Edit clip plane, for the plane selected in the clipping panel)
+paints that plane's outline across the volume with a handle at its centre, dragged to move the
+plane along its normal, and one at the tip of its normal, dragged to turn it (Shift: to the
+nearest axis) (`core.plane_handles`), as one interaction each.
+
 `set_crop_handles(True)` (View > Edit crop box) also paints the crop box (the whole volume when
 nothing is cropped) with a handle on each face (`core.crop_handles`). A plain left-press on a
 handle then drags that face along its axis instead of rotating, as one interaction: the state's
@@ -42,6 +47,8 @@ from PyQt5.QtWidgets import QSizePolicy, QWidget
 from volren.app.core import interaction
 from volren.app.core.crop_handles import FaceDrag, handle_at, minimum_thickness, shown_box
 from volren.app.core.overlay_geometry import Rect
+from volren.app.core.plane_handles import PlaneDrag
+from volren.app.core.plane_handles import handle_at as plane_handle_at
 from volren.app.core.state import ViewState
 from volren.app.rendering.overlays import (
     OverlaySettings,
@@ -49,10 +56,12 @@ from volren.app.rendering.overlays import (
     draw_crop_handles,
     draw_legend,
     draw_outline,
+    draw_plane_handles,
 )
 from volren.app.rendering.render_service import Frame
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.clip_region import ClipPlane, ClipRegion
 from volren.model.crop import Box
 
 _GESTURES = {Qt.LeftButton: "rotate", Qt.RightButton: "dolly", Qt.MiddleButton: "pan"}
@@ -83,6 +92,10 @@ class Viewport(QWidget):
         self._hot_face: int | None = None
         #: Whether the crop box and its face handles are shown (and draggable); see `set_crop_handles`.
         self.crop_handles = False
+        #: The clip plane (its index in the settings' planes) whose handles are shown, or None.
+        self.clip_plane: int | None = None
+        self._plane_drag: PlaneDrag | None = None
+        self._hot_plane_handle: str | None = None
         self.placeholder = "No volume"
         #: The overlays drawn over frames; change them through `set_overlay`.
         self.overlays = OverlaySettings()
@@ -154,6 +167,9 @@ class Viewport(QWidget):
         view = self._handle_view()
         if view is not None:
             draw_crop_handles(painter, *view, hot=self._hot_face)
+        plane_view = self._plane_view()
+        if plane_view is not None:
+            draw_plane_handles(painter, *plane_view, hot=self._hot_plane_handle)
         if self.overlays.axes:
             draw_axes(painter, camera, self.height())
         if self.overlays.legend and tf is not None:
@@ -191,6 +207,71 @@ class Viewport(QWidget):
         rect = (target.x(), target.y(), target.width(), target.height())
         aspect = self._frame.width / self._frame.height
         return self._frame.camera, aspect, rect, shown_box(self._state.crop, volume.bounds)
+
+    # ------------------------------------------------------------------ clip plane handles
+    def set_clip_handles(self, index: int | None) -> None:
+        """Show the handles of clip plane `index` (of the settings' planes), or none (a repaint)."""
+        if index != self.clip_plane:
+            self.clip_plane = index
+            self._hot_plane_handle = None
+            self.update()
+
+    def _plane_view(self) -> tuple[Camera, float, Rect, ClipPlane, tuple[float, ...]] | None:
+        """The camera, aspect, frame rectangle, plane and volume bounds the plane's handles are
+        drawn with; None while they are hidden."""
+        planes, volume = self._state.settings.clip.planes, self._state.volume
+        index = self.clip_plane
+        if index is None or self._frame is None or volume is None or not 0 <= index < len(planes):
+            return None
+        target = self._target_rect()
+        rect = (target.x(), target.y(), target.width(), target.height())
+        return (
+            self._frame.camera,
+            self._frame.width / self._frame.height,
+            rect,
+            planes[index],
+            tuple(volume.bounds),
+        )
+
+    def _start_plane_drag(self, pos: QPoint) -> bool:
+        view = self._plane_view()
+        if view is None:
+            return False
+        kind = plane_handle_at(*view, pos.x() + 0.5, pos.y() + 0.5)
+        drag = None if kind is None else PlaneDrag.start_at(kind, *view)
+        if drag is None:
+            return False
+        self._plane_drag = drag
+        self._face_drag_from = pos
+        self._drag_button = Qt.LeftButton
+        self._hot_plane_handle = kind
+        self.setCursor(QCursor(Qt.ClosedHandCursor if kind == "turn" else _SIZE_CURSORS[drag.cursor()]))
+        self._state.begin_interaction()
+        return True
+
+    def _drag_plane(self, pos: QPoint, snap: bool) -> None:
+        drag, index = self._plane_drag, self.clip_plane
+        assert drag is not None
+        settings = self._state.settings
+        planes = list(settings.clip.planes)
+        if index is None or not 0 <= index < len(planes):
+            return  # the plane went (undo, a scene loaded) mid-drag
+        planes[index] = drag.plane_for(
+            pos.x() - self._face_drag_from.x(), pos.y() - self._face_drag_from.y(), snap
+        )
+        self._state.set_settings(settings.with_(clip=ClipRegion(tuple(planes), settings.clip.box)))
+        self.update()
+
+    def _hover_plane(self, pos: QPoint) -> bool:
+        """Light the plane handle under `pos`; whether there is one."""
+        view = self._plane_view()
+        kind = None if view is None else plane_handle_at(*view, pos.x() + 0.5, pos.y() + 0.5)
+        if kind != self._hot_plane_handle:
+            self._hot_plane_handle = kind
+            self.update()
+        if kind is not None:
+            self.setCursor(QCursor(Qt.OpenHandCursor))
+        return kind is not None
 
     def _face_drag_at(self, pos: QPoint) -> FaceDrag | None:
         """The drag a press at `pos` would start: a handle there that is not seen end-on."""
@@ -256,6 +337,9 @@ class Viewport(QWidget):
             event.accept()
             return
         plain_left = event.button() == Qt.LeftButton and not event.modifiers() & Qt.ShiftModifier
+        if self._drag_button is None and plain_left and self._start_plane_drag(event.pos()):
+            event.accept()
+            return
         if self._drag_button is None and plain_left and self._start_face_drag(event.pos()):
             event.accept()
             return
@@ -271,13 +355,22 @@ class Viewport(QWidget):
         event.accept()
 
     def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        if self._plane_drag is not None:
+            self._drag_plane(event.pos(), bool(event.modifiers() & Qt.ShiftModifier))
+            event.accept()
+            return
         if self._face_drag is not None:
             self._drag_face(event.pos())
             event.accept()
             return
         if self._drag_gesture is None:
-            if self.crop_handles and self._drag_button is None:
-                self._hover(event.pos())
+            if self._drag_button is None and not (
+                self.clip_plane is not None and self._hover_plane(event.pos())
+            ):
+                if self.crop_handles:
+                    self._hover(event.pos())
+                elif self.clip_plane is not None:
+                    self.unsetCursor()
             return super().mouseMoveEvent(event)
         pos = event.pos()
         dx, dy = pos.x() - self._last_pos.x(), pos.y() - self._last_pos.y()
@@ -293,6 +386,9 @@ class Viewport(QWidget):
         self._drag_gesture = None
         dragged_face = self._face_drag is not None
         self._face_drag = None
+        if self._plane_drag is not None:
+            self._plane_drag = None
+            self.unsetCursor()
         self._state.end_interaction()
         if dragged_face or self.crop_handles:
             self._hover(event.pos())

@@ -27,6 +27,7 @@ from volren.app.core.state import Change, ViewState
 from volren.app.panels import (
     BackgroundPanel,
     BlendPanel,
+    ClippingPanel,
     CropPanel,
     DatasetInfoPanel,
     LightingPanel,
@@ -100,6 +101,7 @@ class Docks:
         self.sampling = SamplingPanel(state)
         self.blend = BlendPanel(state)
         self.crop = CropPanel(state)
+        self.clipping = ClippingPanel(state)
         self.background = BackgroundPanel(state)
         self.dataset = DatasetInfoPanel(state)
         self.dataset.arrayChosen.connect(window.files.show_array)
@@ -115,6 +117,7 @@ class Docks:
             ("Sampling", self.sampling),
             ("Blend mode", self.blend),
             ("Crop box", self.crop),
+            ("Clip planes", self.clipping),
             ("Background", self.background),
         ):
             layout.addWidget(_titled(title, panel))

@@ -123,6 +123,7 @@ class MainWindow(QMainWindow):
             status_bar.addPermanentWidget(widget)
         status_bar.addPermanentWidget(self.renderers.frame_label)
         self.docks = Docks(self)
+        self.docks.clipping.plane_list.currentRowChanged.connect(lambda _row: self._show_clip_handles())
         self.drops = FileDrops(self)
         self.drops.dropped.connect(self.files.open_input)
         self.installEventFilter(self.drops)
@@ -207,6 +208,14 @@ class MainWindow(QMainWindow):
             "Show the crop box with a handle on each face; drag a handle to crop"
         )
         self.crop_handles_action.toggled.connect(self.viewport.set_crop_handles)
+        #: View > Edit clip plane: the selected clip plane's handles over the frame (`_show_clip_handles`).
+        self.clip_handles_action = self.view_menu.addAction("Edit clip plane")
+        self.clip_handles_action.setCheckable(True)
+        self.clip_handles_action.setToolTip(
+            "Show the clip plane selected in the Clip planes panel with a handle at its centre (drag: move "
+            "it along its normal) and one at its normal's tip (drag: turn it; Shift: to the nearest axis)"
+        )
+        self.clip_handles_action.toggled.connect(lambda _on: self._show_clip_handles())
 
         self.toolbar = QToolBar("Main", self)
         self.toolbar.setObjectName("main-toolbar")
@@ -245,6 +254,11 @@ class MainWindow(QMainWindow):
                 )
         self.renderers.on_state_change(change)
         self.quality.on_state_change(change)
+
+    def _show_clip_handles(self) -> None:
+        """The selected clip plane's handles in the view while View > Edit clip plane is on."""
+        on = self.clip_handles_action.isChecked()
+        self.viewport.set_clip_handles(self.docks.clipping.selected() if on else None)
 
     def reset_view(self) -> None:
         self.state.reset_camera(self.viewport.aspect())

@@ -59,6 +59,8 @@ TF2D_TABLE_SIZE = (512, 256)
 _BLEND_CODES = {BlendMode.COMPOSITE: 0, BlendMode.MAXIMUM: 1, BlendMode.MINIMUM: 2, BlendMode.AVERAGE: 3}
 _ALL_MODES = frozenset(BlendMode)
 _LOCAL_SIZE = 8
+#: Rows of the clip region the shaders take (common.glsl's MAX_CLIP): six planes and a box's faces.
+MAX_CLIP_ROWS = 12
 #: Lanes of the march path's work counters (march.comp.glsl), 4 uint32 each.
 _STAT_LANES = 1024
 _COUNTER_BYTES = 16 * _STAT_LANES
@@ -79,6 +81,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                 # between samples), the point 0.02 px off
                 accuracy=Accuracy(rmse=0.03, position_px=0.1),
                 regions=True,
+                clip_region=True,
             )
         },
         backend="opengl",
@@ -378,6 +381,15 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             "REGION": int(self._region is not None),
         }
 
+    def _bind_clip(self, program: Any) -> None:
+        """The clip region's half-spaces (world) for `clip_interval` in common.glsl."""
+        rows = self._settings.clip.half_spaces()
+        clip = np.zeros((MAX_CLIP_ROWS, 4), np.float32)
+        clip[: len(rows)] = rows
+        if "u_clip" in program:
+            program["u_clip"].write(clip.tobytes())
+        self._set(program, "u_clip_count", len(rows))
+
     def _set(self, program: Any, name: str, value: Any) -> None:
         if name in program:
             program[name].value = value
@@ -415,6 +427,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         self._set(program, "u_spacing", spacing)
         self._set(program, "u_jitter_seed", int(opts["jitter_seed"]) if s.jitter else 0)
         self._set(program, "u_light", tuple(-view_dir))
+        self._bind_clip(program)
         if region is not None:
             self._set(program, "u_owner_min", region.owner_min)
             self._set(program, "u_owner_max", region.owner_max)

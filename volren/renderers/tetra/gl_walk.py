@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -144,6 +144,10 @@ def entry_face_vertices(mesh: GLMesh, points: NDArray, walked: WalkedCells) -> N
     return vertices.ravel()
 
 
+#: Rows of the clip region the walk takes (clip_planes.glsl's MAX_CLIP): six planes and a box's faces.
+MAX_CLIP_ROWS = 12
+
+
 @dataclass(frozen=True)
 class WalkParameters:
     """What a frame needs besides the camera (see `walk.comp.glsl`'s uniforms)."""
@@ -156,6 +160,8 @@ class WalkParameters:
     termination: float
     max_steps: int
     jump: bool = False  # walk only the visible cells (`walked_cells`): leave at a transparent one
+    #: (m, 4) world half-spaces of the clip region (`RenderSettings.clip`), m <= MAX_CLIP_ROWS
+    clip: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 4)))
 
 
 class GLWalk(GLObjectOwner):
@@ -422,6 +428,12 @@ class GLWalk(GLObjectOwner):
         _set(program, "u_tolerance", mesh.tolerance)
         _set(program, "u_termination", p.termination if p.termination < 1.0 else 2.0)
         _set(program, "u_max_steps", p.max_steps)
+        # the shader's world is the mesh's, moved by -centre (float precision far from the origin)
+        clip = np.zeros((MAX_CLIP_ROWS, 4), np.float32)
+        clip[: len(p.clip), :3] = p.clip[:, :3]
+        clip[: len(p.clip), 3] = p.clip[:, 3] + p.clip[:, :3] @ np.asarray(mesh.centre, dtype=np.float64)
+        _set(program, "u_clip", clip.tobytes())
+        _set(program, "u_clip_count", len(p.clip))
         light = p.shade
         _set(
             program,

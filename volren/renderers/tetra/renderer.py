@@ -312,16 +312,11 @@ class TetraRenderer(RendererBase):
 
     # ------------------------------------------------------------------------------ render
     def _uses_gl(self, opts: Mapping[str, Any]) -> bool:
-        """The GL walk when asked for, or on `auto` with a ray per pixel, nothing clipped and a
+        """The GL walk when asked for, or on `auto` with a ray per pixel and a
         hardware GPU (on Mesa llvmpipe numba keeps float64, progress per block of rows and adaptive
         refinement: `docs/tetra-benchmark.md`)."""
-        clipped = not self.settings.clip.is_empty
         if opts["backend"] == "auto":
-            return opts["image_stride"] == 1 and not clipped and gpu_renderer() is not None
-        if opts["backend"] == "gl" and clipped:
-            raise VolrenError(
-                "renderer tetra: backend gl does not clip to planes or a crop box yet; use backend=cpu"
-            )
+            return opts["image_stride"] == 1 and gpu_renderer() is not None
         return opts["backend"] == "gl"
 
     def _render(
@@ -353,9 +348,8 @@ class TetraRenderer(RendererBase):
             walk.set_entry_faces(
                 (self._generation, self._walk_version if jump else None), walked, mesh.points
             )
-            params = WalkParameters(
-                mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]), jump
-            )
+            params = WalkParameters(mode, sp, lo, scale, lmax, float(opts["termination_alpha"]), int(opts["max_steps"]),
+                                    jump, settings.clip.half_spaces())  # fmt: skip
             near = near_plane_cells(
                 camera, width, height, mesh.points, tets, walked.cells, np.asarray(mesh.bounds)
             )

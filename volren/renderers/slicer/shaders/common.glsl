@@ -54,6 +54,8 @@ float jitter_fraction(uvec2 pixel) {
 
 // Parameter interval of the ray inside the closed box (t0 > t1 when it misses). An axis the ray
 // runs parallel to constrains nothing when the ray lies within the slab (the reference's test).
+#include "clip_planes.glsl"
+
 vec2 box_interval(vec3 origin, vec3 dir, vec3 lo, vec3 hi) {
     float t_enter = -3.0e38;
     float t_exit = 3.0e38;

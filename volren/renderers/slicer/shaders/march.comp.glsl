@@ -38,8 +38,9 @@ void main() {
     float t_far;
     pixel_ray(u_clip_to_world, ndc, origin, dir, t_far);
     vec2 span = box_interval(origin, dir, u_box_min, u_box_max);
-    float t0 = max(span.x, 0.0);
-    float t1 = min(span.y, t_far);
+    vec2 kept = clip_interval(origin, dir, vec2(max(span.x, 0.0), min(span.y, t_far)));
+    float t0 = kept.x;
+    float t1 = kept.y;
 #if COMPOSITE
     vec4 result = vec4(0.0);
 #elif BLEND == 3

@@ -1,6 +1,6 @@
 #version 330
 // The slice path: one fragment per (pixel, slice plane k) classifies the ray's segment from plane
-// k + jitter to plane k + 1 + jitter, clipped to the box. The polygons are cut from a box grown by
+// k + jitter to plane k + 1 + jitter, clipped to the box and the clip region. The polygons are cut from a box grown by
 // two plane spacings along the ray, so the planes just before the box own the segment from where
 // the ray enters to its first plane, and no pixel depends on rasterizing a polygon edge exactly.
 // Blending is front to back ("under") for composite, MAX for maximum and minimum (-v), ADD for
@@ -25,7 +25,7 @@ void main() {
     // Ray parameters relative to this fragment's point.
     float ta = (round(plane) + jitter - plane) * dt;
     float tb = ta + dt;
-    vec2 inside = box_interval(v_world, dir, u_box_min, u_box_max);
+    vec2 inside = clip_interval(v_world, dir, box_interval(v_world, dir, u_box_min, u_box_max));
     ta = max(ta, inside.x);
     tb = min(tb, inside.y);
     if (!(tb > ta)) discard;

@@ -17,6 +17,7 @@
 #include "mesh.glsl"
 #include "lists.glsl"
 #include "pixel_ray.glsl"
+#include "clip_planes.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(std430, binding = 11) writeonly buffer Result { vec4 result[]; };  // row 0 at the top
@@ -126,6 +127,10 @@ vec4 cast_ray(ivec2 pixel) {
     vec3 o, d;
     float t_max;
     pixel_ray(u_clip_to_world, ndc, o, d, t_max);
+    // the part of the ray the clip region keeps: the walk ends at its exit, segments start at its entry
+    vec2 keep = clip_interval(o, d, vec2(0.0, t_max));
+    if (!(keep.y > keep.x)) return vec4(0.0);
+    t_max = keep.y;
     vec3 h = u_light - d;
     h = dot(h, h) > 0.0 ? normalize(h) : h;
 
@@ -201,13 +206,16 @@ vec4 cast_ray(ivec2 pixel) {
             }
 #endif
             vec3 gradient = fields[2u * c].xyz;
-            float s_out = s_in + dot(gradient, d) * (t_out - t_in);
-            float len = t_out - t_in;
+            float slope = dot(gradient, d);
+            float s_out = s_in + slope * (t_out - t_in);
+            float t_kept = max(t_in, keep.x);  // a segment across the clip region's entry: its kept part
+            float s_kept = t_kept > t_in ? s_in + slope * (t_kept - t_in) : s_in;
+            float len = t_out - t_kept;
             steps += 1u;
             if (len > 0.0) {
 #if BLEND == 0
                 if (visible) {
-                    vec4 rgba = integrate_segment(s_in, s_out, len);
+                    vec4 rgba = integrate_segment(s_kept, s_out, len);
 #if SHADE
                     vec2 k = shade_factors(gradient, h);
                     rgba.rgb = min(rgba.rgb * k.x + k.y * rgba.a, vec3(rgba.a));
@@ -221,11 +229,11 @@ vec4 cast_ray(ivec2 pixel) {
                     }
                 }
 #elif BLEND == 3
-                integral += 0.5 * (s_in + s_out) * len;
+                integral += 0.5 * (s_kept + s_out) * len;
                 total += len;
                 found = true;
 #else
-                float v = BLEND == 1 ? max(s_in, s_out) : min(s_in, s_out);
+                float v = BLEND == 1 ? max(s_kept, s_out) : min(s_kept, s_out);
                 if (!found || (BLEND == 1 && v > best) || (BLEND == 2 && v < best)) best = v;
                 found = true;
 #endif
