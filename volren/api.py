@@ -110,6 +110,7 @@ def drawing(
     scheduler: str | None = None,
     clip_planes: Sequence[Any] = (),
     crop: Sequence[float] | None = None,
+    clip_cap: bool = False,
     **settings: Any,
 ) -> Drawing:
     """What `render` draws, ready for many frames: the input read, `auto` and the quality resolved
@@ -118,7 +119,7 @@ def drawing(
     draws another view and ``d.set_transfer_function(tf)`` another TF without preparing the
     volume again (`volren.draw.Drawing`)."""
     if clip_planes or crop is not None:
-        settings["clip"] = ClipRegion(tuple(clip_planes), None if crop is None else check_box(crop))
+        settings["clip"] = ClipRegion(tuple(clip_planes), None if crop is None else check_box(crop), clip_cap)
     source = _open_input(volume, scalars, memory, level)
     vol = source.stand_in()
     transfer = as_transfer_function(tf, vol)
@@ -159,6 +160,7 @@ def render(
     scheduler: str | None = None,
     clip_planes: Sequence[Any] = (),
     crop: Sequence[float] | None = None,
+    clip_cap: bool = False,
     **settings: Any,
 ) -> NDArray[np.float32]:
     """Render offscreen; returns float32 (H, W, 4) premultiplied RGBA over black, row 0 on top.
@@ -173,7 +175,8 @@ def render(
 
     `clip_planes` ((origin, normal) pairs in world units, at most six) keep the side each normal
     points to, and `crop` (xmin, xmax, ymin, ymax, zmin, zmax) the inside of a box: rays are cut
-    to the kept region exactly (`RenderSettings.clip`), and `auto` picks a renderer that clips.
+    to the kept region exactly (`RenderSettings.clip`), and `auto` picks a renderer that clips;
+    `clip_cap=True` draws the cut faces opaque in the TF's colour there (`ClipRegion.cap`).
 
     An OME-Zarr path draws as `volren render` does (`volren.draw.ZarrImageInput`): the `level`
     given, else the full resolution (the level the view needs at quality draft and interactive),
@@ -181,7 +184,7 @@ def render(
     the bricks on a dask.distributed cluster (`volren.bricked.cluster`).
     """
     ready = drawing(volume, tf, renderer, size, azimuth, elevation, zoom, parallel, camera, scalars, quality, memory,
-                    level, cluster, scheduler, clip_planes, crop, **settings)  # fmt: skip
+                    level, cluster, scheduler, clip_planes, crop, clip_cap, **settings)  # fmt: skip
     return ready.frame(progress=progress).image
 
 

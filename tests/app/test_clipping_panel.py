@@ -96,3 +96,13 @@ def test_a_plane_added_under_a_renderer_that_cannot_clip_switches_to_one_that_ca
     assert shown.args[0].renderer == state.renderer
     assert shown.args[0].settings.clip.planes == state.settings.clip.planes
     assert isinstance(state.settings.clip.planes[0], ClipPlane)
+
+
+def test_the_cut_faces_box_sets_the_cap_and_plane_edits_keep_it(panel, state):
+    panel.add_plane()
+    panel.cap.setChecked(True)
+    assert state.settings.clip.cap and state.settings.clip.caps
+    panel.invert_plane()
+    assert state.settings.clip.cap
+    panel.cap.setChecked(False)
+    assert not state.settings.clip.cap

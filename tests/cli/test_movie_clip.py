@@ -82,3 +82,29 @@ def test_clip_keyframes_with_different_plane_counts_are_refused_in_one_line():
     keys = [{"time": 0, "clip": _plane(0.0)}, {"time": 1, "clip": {"planes": []}}]
     with pytest.raises(VolrenError, match="movie: clip keyframes must all hold the same number of planes"):
         Animation.from_dict({"frames": 2, "keyframes": keys})
+
+
+def test_clip_cap_draws_the_cut_faces_and_needs_a_cut(tmp_path, capsys):
+    volume, tf = sample_paths("marschner_lobb")
+    plain, capped = tmp_path / "plain.npy", tmp_path / "capped.npy"
+    flags = [
+        str(volume),
+        "--tf",
+        str(tf),
+        "--size",
+        "24",
+        "--renderer",
+        "raycast",
+        "--clip=0,0,0,-1,0,0",
+        "--azimuth",
+        "60",
+    ]
+    assert main(["render", *flags, "--save-array", str(plain)]) == 0
+    assert main(["render", *flags, "--clip-cap", "--save-array", str(capped)]) == 0
+    assert (np.load(capped)[..., 3] == 1.0).sum() > (np.load(plain)[..., 3] == 1.0).sum() + 20
+    capsys.readouterr()
+    assert main(["render", str(volume), "--clip-cap", "-o", str(tmp_path / "x.png")]) == 1
+    assert (
+        capsys.readouterr().err.strip()
+        == "volren: error: --clip-cap: give --clip or --crop (there is nothing cut to cap)"
+    )

@@ -34,3 +34,18 @@ def test_a_ray_parallel_to_a_plane_is_kept_whole_or_lost_whole():
 
 def test_no_planes_leave_the_interval_as_it_was():
     assert clip_to_planes(0.0, 0.0, 0.0, 1.0, 0.0, 0.0, np.zeros((0, 4)), 0.5, 2.5) == (0.5, 2.5)
+
+
+def test_the_entering_plane_is_the_one_that_moved_the_entry_last():
+    from volren.kernels.clip_planes import clip_entry
+
+    planes = np.array(
+        [[1.0, 0.0, 0.0, -1.0], [1.0, 0.0, 0.0, -2.0], [-1.0, 0.0, 0.0, 5.0]]
+    )  # x >= 1, x >= 2, x <= 5
+    assert clip_entry(0.0, 0.0, 0.0, 1.0, 0.0, 0.0, planes, 0.0, 10.0) == (2.0, 5.0, 1)
+    assert clip_entry(0.0, 0.0, 0.0, 1.0, 0.0, 0.0, planes, 3.0, 10.0) == (
+        3.0,
+        5.0,
+        -1,
+    )  # entered before the planes
+    assert clip_entry(9.0, 0.0, 0.0, -1.0, 0.0, 0.0, planes, 0.0, 10.0) == (4.0, 7.0, 2)

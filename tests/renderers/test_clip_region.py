@@ -164,3 +164,33 @@ def test_cached_reference_images_are_keyed_on_the_clip_region(tmp_path):
     clipped = reference_image(volume, tf, camera, 16, 16, cut, folder=tmp_path)
     assert len(list(tmp_path.glob("*.npy"))) == 2
     assert clipped[..., 3].sum() < 0.8 * whole[..., 3].sum()
+
+
+@pytest.mark.parametrize(("name", "kind"), [("reference", "uniform"), ("reference", "tet"), ("tetra", "tet")])
+def test_a_shaded_cut_face_is_lit_by_the_planes_normal(name, kind):
+    """Parallel view, headlight: the half vector is the light, so a face of normal n shows
+    c (ambient + diffuse |n.L|) + specular |n.L|^power (two-sided Blinn-Phong, DESIGN's shading)."""
+    volume = lattice_volume(kind, lambda x, y, z: x + 0.5 * y, (6, 5, 5))
+    tf = TransferFunction1D([[0.0, 0.2, 0.8, 0.4], [8.0, 0.9, 0.3, 0.6]], [[0.0, 0.5], [8.0, 0.5]], 1.0)
+    camera = Camera.orbit(volume.bounds, 20, 15, parallel=True)
+    normal = np.array([-0.8, -0.3, -0.5])
+    region = ClipRegion((ClipPlane((2.5, 2.0, 2.0), tuple(normal)),), cap=True)
+    settings = RenderSettings(shade=True, clip=region)
+    renderer = registry.create(name)
+    renderer.set_volume(volume)
+    renderer.set_transfer_function(tf)
+    renderer.set_settings(settings)
+    image, _ = render_frame(renderer, camera, 32, 32)
+    through, entry = oracles.entered_through_a_plane(camera, 32, 32, volume.bounds, region.half_spaces())
+    rgb, _ = tf.sample(entry[..., 0] + 0.5 * entry[..., 1])
+    ndl = abs(float(normal @ camera.direction)) / np.linalg.norm(normal)
+    lit = np.clip(
+        rgb * (settings.ambient + settings.diffuse * ndl) + settings.specular * ndl**settings.specular_power,
+        0,
+        1,
+    )
+    inner = np.zeros_like(through)
+    inner[1:-1, 1:-1] = np.all([np.roll(through, s, a) for a in (0, 1) for s in (1, -1)], axis=0)[1:-1, 1:-1]
+    faces = inner & through
+    assert faces.sum() > 50
+    assert np.abs(image[faces][:, :3] - lit[faces]).max() < 1e-5 and np.all(image[faces][:, 3] == 1.0)

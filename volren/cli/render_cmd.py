@@ -169,6 +169,9 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"keep the side of the plane through point O that normal N points to (world units; "
                         f"repeatable, at most {MAX_PLANES}; added to a scene's planes; --clip=-1,... when the first number "
                         f"is negative)")  # fmt: skip
+    p.add_argument("--clip-cap", action="store_true", default=None,
+                   help="draw the cut faces of --clip and --crop opaque, in the TF's colour there (lit with the "
+                        "plane's normal when shading)")  # fmt: skip
     p.add_argument("--crop", type=crop_box, metavar="XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX",
                    help="keep the inside of this box (world units; replaces a scene's crop box; --crop=-1,... when the "
                         "first number is negative)")  # fmt: skip
@@ -304,11 +307,15 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None, DrawInput 
         )
     # shading and the blend mode decide what `auto` may pick; step, pre-integration and options win over the level's
     shown = {k: v for k, v in (("shade", args.shade), ("blend_mode", args.blend)) if v is not None}
-    if args.clip or args.crop:  # clipping decides it too
+    if args.clip or args.crop or args.clip_cap:  # clipping decides it too
         clip = scene.settings.clip
         if len(clip.planes) + len(args.clip) > MAX_PLANES:
             raise VolrenError(f"--clip: at most {MAX_PLANES} clip planes, the scene's included")
-        shown["clip"] = ClipRegion((*clip.planes, *args.clip), args.crop or clip.box)
+        shown["clip"] = ClipRegion(
+            (*clip.planes, *args.clip), args.crop or clip.box, bool(args.clip_cap or clip.cap)
+        )
+        if args.clip_cap and shown["clip"].is_empty:
+            raise VolrenError("--clip-cap: give --clip or --crop (there is nothing cut to cap)")
     if shown:
         scene = replace(scene, settings=scene.settings.with_(**shown))
     scene, why = _at_quality(args, scene, source)

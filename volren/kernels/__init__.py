@@ -13,6 +13,7 @@ internals; what several of them need lives here, neutral, and is tested on its o
 - `tet_clipping`: a ray clipped against one tetrahedron's face planes, exact at shared faces;
 - `box_clipping`: a ray clipped to a box (slab test);
 - `clip_planes`: a ray clipped to the kept side of the clip region's planes (`RenderSettings.clip`);
+- `cut_faces`: the opaque face where a ray enters the clip region through a plane (`ClipRegion.cap`);
 - `ray_block`: a block of pixel rays with their candidate cells, as one kernel parameter.
 
 The tetrahedra's face planes themselves are part of the one mesh preparation,

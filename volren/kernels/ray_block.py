@@ -1,7 +1,6 @@
 """A block of pixel rays with the cells each may meet, as one kernel parameter.
 
-Why: the mesh renderers (tetra's walk, the reference's clipping) hand their kernels the same six
-arrays per block of rows; numba types a `typing.NamedTuple` as a named tuple (arrays as members,
+Why: the mesh renderers (tetra's walk, the reference's clipping) hand their kernels the same arrays per block of rows; numba types a `typing.NamedTuple` as a named tuple (arrays as members,
 fields read by name in nopython mode, cached kernels keep working while the class is defined at
 module level), so they travel together and cannot be passed one place off.
 """
@@ -27,3 +26,5 @@ class BinnedRays(NamedTuple):
     candidates: NDArray[np.int64]
     #: (m, 4) world half-spaces the rays are clipped to (`volren.kernels.clip_planes`)
     planes: NDArray[np.float64]
+    #: draw the cut faces where rays enter through a plane (`volren.kernels.cut_faces`)
+    cap: bool

@@ -134,10 +134,18 @@ class ClipPlane:
 
 @dataclass(frozen=True)
 class ClipRegion:
-    """The kept region: inside every plane's kept side and inside `box` (None: no box)."""
+    """The kept region: inside every plane's kept side and inside `box` (None: no box).
+
+    `cap` draws the cut faces opaque (Real-Time Volume Graphics, section 15.4: a clip surface
+    that reads as a surface): where a ray enters the kept region through a plane or a face of the
+    box, not through the volume's own boundary or the near plane, it meets a surface there of the
+    TF's colour at the value at that point, opaque where the TF's opacity there is above zero
+    (elsewhere the ray goes on), lit with the plane's normal when shading is on. Composite only.
+    """
 
     planes: tuple[ClipPlane, ...] = ()
     box: Box | None = None
+    cap: bool = False
 
     def __post_init__(self) -> None:
         if isinstance(self.planes, ClipPlane) or not isinstance(self.planes, Sequence):
@@ -148,6 +156,8 @@ class ClipRegion:
         object.__setattr__(self, "planes", planes)
         if self.box is not None:
             object.__setattr__(self, "box", check_box(self.box))
+        if not isinstance(self.cap, bool):
+            raise VolrenError(f"'clip.cap' must be true or false, got {self.cap!r:.40}")
 
     @property
     def is_empty(self) -> bool:
@@ -183,12 +193,19 @@ class ClipRegion:
         return np.all(pts @ rows[:, :3].T + rows[:, 3] >= 0.0, axis=1)
 
     def with_box(self, box: Box | None) -> ClipRegion:
-        return ClipRegion(self.planes, box)
+        return ClipRegion(self.planes, box, self.cap)
+
+    @property
+    def caps(self) -> bool:
+        """Whether cut faces are drawn: `cap` asked for and something is cut."""
+        return self.cap and not self.is_empty
 
     def to_dict(self) -> dict[str, Any]:
         data: dict[str, Any] = {"planes": [p.to_dict() for p in self.planes]}
         if self.box is not None:
             data["box"] = list(self.box)
+        if self.cap:
+            data["cap"] = True
         return data
 
     @classmethod
@@ -197,13 +214,13 @@ class ClipRegion:
             return data
         if not isinstance(data, Mapping):
             raise VolrenError(f"'clip' must be an object with 'planes' and 'box', got {data!r:.60}")
-        unknown = set(data) - {"planes", "box"}
+        unknown = set(data) - {"planes", "box", "cap"}
         if unknown:
-            raise VolrenError(f"unknown clip keys {sorted(unknown)}; use planes, box")
+            raise VolrenError(f"unknown clip keys {sorted(unknown)}; use planes, box, cap")
         planes = data.get("planes", [])
         if not isinstance(planes, Sequence) or isinstance(planes, str):
             raise VolrenError(f"'clip.planes' must be a list, got {planes!r:.60}")
-        return cls(tuple(ClipPlane.from_dict(p) for p in planes), data.get("box"))
+        return cls(tuple(ClipPlane.from_dict(p) for p in planes), data.get("box"), data.get("cap", False))
 
 
 NO_CLIP = ClipRegion()
@@ -244,4 +261,4 @@ def blend_clip_regions(a: ClipRegion, b: ClipRegion, weight: float) -> ClipRegio
     box = near.box
     if a.box is not None and b.box is not None:
         box = tuple((1.0 - weight) * np.asarray(a.box) + weight * np.asarray(b.box))  # type: ignore[assignment]
-    return ClipRegion(tuple(planes), box)
+    return ClipRegion(tuple(planes), box, near.cap)

@@ -302,6 +302,9 @@ class KindSupport:
     #: region analytically (the kit's `clip_region` check). False: a clipped scene is refused with a
     #: one-line VolrenError, and `auto` passes the renderer over for it.
     clip_region: bool = False
+    #: Draws the cut faces opaque when the clip region asks for it (`ClipRegion.cap`; the kit's
+    #: `clip_cap` check). False: such a scene is refused and passed over as above.
+    clip_cap: bool = False
 
 
 @dataclass(frozen=True)
@@ -348,6 +351,8 @@ class Capabilities:
                 return f"has no shading for {volume_kind} volumes"
             if not settings.clip.is_empty and not support.clip_region:
                 return f"does not clip {volume_kind} volumes to planes or a crop box"
+            if settings.clip.caps and not support.clip_cap:
+                return f"does not draw cut faces (clip caps) on {volume_kind} volumes"
             if settings.blend_mode not in support.blend_modes:
                 modes = ", ".join(sorted(str(m) for m in support.blend_modes))
                 return f"has no {settings.blend_mode} blend mode for {volume_kind} volumes (only {modes})"

@@ -325,6 +325,70 @@ def check_clip_region(ctx: CheckContext) -> list[Measurement]:
     return out
 
 
+#: Cut-face cases: (name, parallel, planes, crop box) as `CLIP_REGION_CASES`, each keeping a side
+#: that faces away from the camera (so rays enter through the cut) and a box inside the volume.
+CLIP_CAP_CASES = (
+    ("perspective, one oblique plane", False, (((0.5, 0.45, 0.5), (-1.0, -0.6, 0.4)),), None),
+    ("parallel, a plane and a crop box", True, (((0.55, 0.5, 0.5), (-0.6, -0.3, 0.5)),), (0.05, 0.9, 0.1, 0.95, 0.08, 0.8)),
+    ("perspective, a crop box", False, (), (0.3, 0.85, 0.05, 0.7, 0.1, 0.75)),
+)  # fmt: skip
+
+
+def _inner_pixels(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Pixels whose four neighbours have the same `mask` value as they do: away from an edge of
+    the cut, where a ray grazing it may fall either way in float precision."""
+    inner = np.zeros_like(mask)
+    same = np.all([np.roll(mask, s, axis=a) == mask for a in (0, 1) for s in (1, -1)], axis=0)
+    inner[1:-1, 1:-1] = same[1:-1, 1:-1]
+    return inner
+
+
+def check_clip_cap(ctx: CheckContext) -> list[Measurement]:
+    """Cut faces (`ClipRegion.cap`): a box of s = x + y / 2 with a constant opacity, cut by oblique
+    planes and a crop box inside it. Where a ray enters the kept part through a plane or a box
+    face it shows the TF's colour at the entry point, opaque; elsewhere (a ray that enters through
+    the volume's boundary) no face is drawn. Against the closed form on pixels away from the
+    cut's edges; a renderer whose kind does not declare `clip_cap` refuses the frame."""
+    out = []
+    tf = TransferFunction1D([[0.0, 0.1, 0.9, 0.3], [8.0, 0.9, 0.2, 0.7]], [[0.0, 0.3], [8.0, 0.3]], 0.6)
+    cases = CLIP_CAP_CASES[:1] if ctx.quick else CLIP_CAP_CASES
+    for kind in ctx.kinds():
+        volume = lattice_volume(
+            kind, lambda x, y, z: x + 0.5 * y, (5, 4, 4), (0.7, 1.1, 0.9), (1.0, 0.5, 2.0)
+        )
+        renderer = ctx.renderer()
+        for name, parallel, planes, box in cases:
+            w, h = 48, 40
+            camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.3, parallel=parallel, aspect=w / h)
+            region = replace(_clip_region_of(volume.bounds, planes, box), cap=True)
+            settings = RenderSettings(clip=region)
+            if not ctx.capabilities.kinds[kind].clip_cap:  # type: ignore[index]
+                out.append(_refusal("clip_cap", f"{kind}, {name}, declared not drawn",
+                                    functools.partial(ctx.draw, renderer, volume, tf, camera, w, h, settings)))  # fmt: skip
+                continue
+            image = ctx.draw(renderer, volume, tf, camera, w, h, settings)
+            through, entry = oracles.entered_through_a_plane(
+                camera, w, h, volume.bounds, region.half_spaces()
+            )
+            rgb, _ = tf.sample(entry[..., 0] + 0.5 * entry[..., 1])
+            inner = _inner_pixels(through)
+            faces = inner & through
+            assert faces.sum() > 100, name  # the faces show
+            expected = np.concatenate([rgb, np.ones(rgb.shape[:-1] + (1,))], axis=-1)
+            error = float(np.sqrt(np.mean((image[faces] - expected[faces]) ** 2)))
+            out.append(
+                Measurement("clip_cap", f"{kind}, {name}, faces", "RMSE", error, ctx.accuracy(kind).rmse)
+            )
+            lengths = oracles.box_path_lengths(camera, w, h, volume.bounds, region.half_spaces())
+            volume_only = inner & ~through & (lengths > 0)  # rays that enter through the volume's boundary
+            if volume_only.sum() > 100:
+                opaque = float(np.mean(image[volume_only][:, 3] > 0.999))  # their short paths are translucent
+                out.append(
+                    Measurement("clip_cap", f"{kind}, {name}, no face", "share drawn opaque", opaque, 0.0)
+                )
+    return out
+
+
 RAMP_COLOUR = [(0.3, 0.1), (1.4, 0.9), (2.0, 0.3)]
 
 
@@ -835,7 +899,7 @@ class Check:
 
 CHECKS: Sequence[Check] = tuple(
     Check(fn.__name__.removeprefix("check_"), fn)
-    for fn in (check_output, check_empty, check_box, check_clip, check_clip_region, check_ramp, check_projection, check_nan, check_point,
+    for fn in (check_output, check_empty, check_box, check_clip, check_clip_region, check_clip_cap, check_ramp, check_projection, check_nan, check_point,
                check_step, check_thin, check_shading, check_eye_inside, check_progress, check_cancel, check_release,
                check_capabilities, check_options, check_bricks)
 )  # fmt: skip

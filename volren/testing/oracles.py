@@ -55,6 +55,34 @@ def box_path_lengths(
     return np.maximum(end - start, 0.0)
 
 
+def entered_through_a_plane(
+    camera: Camera, width: int, height: int, bounds: Sequence[float], half_spaces: NDArray[np.float64]
+) -> tuple[NDArray[np.bool_], NDArray[np.float64]]:
+    """(H, W) whether each pixel-centre ray enters the part of the box kept by `half_spaces`
+    through one of them (where a cut face is drawn) rather than through the box or the near plane,
+    and (H, W, 3) the entry points."""
+    origins, directions = camera.pixel_rays(width, height)
+    lo = np.asarray(bounds[0::2], dtype=np.float64)
+    hi = np.asarray(bounds[1::2], dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (lo - origins) / directions
+        t2 = (hi - origins) / directions
+    box_in = np.maximum(np.nanmax(np.minimum(t1, t2), axis=-1), 0.0)
+    near, far = camera.clipping_range
+    end = np.minimum(np.nanmin(np.maximum(t1, t2), axis=-1), (far - near) / (directions @ camera.direction))
+    start = box_in.copy()
+    for a, b, c, d in np.asarray(half_spaces, np.float64):
+        at_origin = origins @ (a, b, c) + d
+        rate = directions @ (a, b, c)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            crossing = -at_origin / rate
+        start = np.where(rate > 0, np.maximum(start, crossing), start)
+        end = np.where(rate < 0, np.minimum(end, crossing), end)
+        end = np.where((rate == 0) & (at_origin < 0), -np.inf, end)
+    through = (start > box_in) & (end > start)
+    return through, origins + start[..., None] * directions
+
+
 def homogeneous_image(
     lengths: NDArray, rgb: Sequence[float], opacity: float, unit_distance: float
 ) -> NDArray[np.float64]:

@@ -17,6 +17,7 @@ from functools import partial
 import numpy as np
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import (
+    QCheckBox,
     QGridLayout,
     QHBoxLayout,
     QLabel,
@@ -99,6 +100,12 @@ class ClippingPanel(StatePanel):
                 self._gesture.attach_spin_box(spin)
                 grid.addWidget(spin, row + 1, column + 1)
                 self.spins.append(spin)
+        self.cap = QCheckBox("Cut faces", self)
+        self.cap.setToolTip(
+            "Draw where the planes and the crop box cut the volume as an opaque face in the TF's colour "
+            "there, lit by the plane when shading is on"
+        )
+        self.cap.toggled.connect(self._on_cap)
         self.position = QSlider(Qt.Horizontal, self)
         self.position.setRange(0, POSITION_TICKS)
         self.position.setToolTip("Move the selected plane along its normal across the volume")
@@ -113,6 +120,7 @@ class ClippingPanel(StatePanel):
         row.addWidget(QLabel("Position", self))
         row.addWidget(self.position, 1)
         layout.addLayout(row)
+        layout.addWidget(self.cap)
         self.refresh()
 
     # ------------------------------------------------------------------ what the state holds
@@ -125,6 +133,9 @@ class ClippingPanel(StatePanel):
         return row if 0 <= row < len(self.planes) else None
 
     def refresh(self) -> None:
+        with signals_blocked(self.cap):
+            self.cap.setChecked(self.state.settings.clip.cap)
+        self.cap.setEnabled(self.state.volume is not None)
         planes = self.planes
         row = self.plane_list.currentRow()
         with signals_blocked(self.plane_list):
@@ -162,7 +173,7 @@ class ClippingPanel(StatePanel):
 
     # ------------------------------------------------------------------ edits
     def _set_planes(self, planes: tuple[ClipPlane, ...]) -> None:
-        clip = ClipRegion(planes, self.state.settings.clip.box)
+        clip = ClipRegion(planes, self.state.settings.clip.box, self.state.settings.clip.cap)
         self._gesture.apply(lambda: self.state.set_settings(self.state.settings.with_(clip=clip)))
 
     def _replace(self, index: int, plane: ClipPlane) -> None:
@@ -203,6 +214,11 @@ class ClippingPanel(StatePanel):
         camera = self.state.camera
         if camera is not None:
             self.set_normal(tuple(float(v) for v in camera.direction))  # type: ignore[arg-type]
+
+    def _on_cap(self, on: bool) -> None:
+        clip = self.state.settings.clip
+        if on != clip.cap:
+            self.state.set_settings(self.state.settings.with_(clip=ClipRegion(clip.planes, clip.box, on)))
 
     def _on_item_changed(self, item: QListWidgetItem) -> None:
         index = self.plane_list.row(item)

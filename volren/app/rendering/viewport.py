@@ -259,7 +259,9 @@ class Viewport(QWidget):
         planes[index] = drag.plane_for(
             pos.x() - self._face_drag_from.x(), pos.y() - self._face_drag_from.y(), snap
         )
-        self._state.set_settings(settings.with_(clip=ClipRegion(tuple(planes), settings.clip.box)))
+        self._state.set_settings(
+            settings.with_(clip=ClipRegion(tuple(planes), settings.clip.box, settings.clip.cap))
+        )
         self.update()
 
     def _hover_plane(self, pos: QPoint) -> bool:

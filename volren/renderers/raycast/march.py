@@ -24,7 +24,7 @@ import math
 
 from numba import njit, prange
 
-from volren.kernels.clip_planes import clip_to_planes
+from volren.kernels.clip_planes import clip_entry, clip_to_planes
 from volren.kernels.sample_placement import ray_segment, ray_segments
 from volren.renderers.raycast.march_inputs import IndexRay
 
@@ -226,6 +226,24 @@ def _classify(s, sb, length, classes):
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
+def _cut_face(classes, s):
+    """(r, g, b, visible) of an opaque cut face at value s (`ClipRegion.cap`): the TF's colour there
+    (`Classification.post`), visible where its opacity is above zero and s is finite."""
+    post = classes.post
+    n = post.shape[0]
+    if not math.isfinite(s):
+        return 0.0, 0.0, 0.0, False
+    fi = min(max((s - classes.lo) * classes.scale, 0.0), n - 1.0)
+    i0 = min(int(fi), n - 2)
+    w = fi - i0
+    a = post[i0, 3] + w * (post[i0 + 1, 3] - post[i0, 3])
+    r = post[i0, 0] + w * (post[i0 + 1, 0] - post[i0, 0])
+    g = post[i0, 1] + w * (post[i0 + 1, 1] - post[i0, 1])
+    b = post[i0, 2] + w * (post[i0 + 1, 2] - post[i0, 2])
+    return r, g, b, a > 0.0
+
+
+@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _pixel_ray(view, xx, ny_, ux, uy, uz):
     """Pixel (xx, row at NDC y ny_)'s ray of the `PixelView` view in grid-index space: origin on the
     near plane, direction in index units per world unit, its inverse, the unit world direction,
@@ -288,7 +306,11 @@ def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
     b = 0.0
     a = 0.0
     t_far = t_far_eye / (wx * view_dir[0] + wy * view_dir[1] + wz * view_dir[2])
-    t0, t1 = clip_to_planes(ox, oy, oz, dx, dy, dz, view.planes, max(t_in, 0.0), min(t_out, t_far))
+    t0, t1, entering = clip_entry(ox, oy, oz, dx, dy, dz, view.planes, max(t_in, 0.0), min(t_out, t_far))
+    if classes.cap and entering >= 0 and not miss and t1 > t0:  # the ray meets a cut face first
+        cr, cg, cb, visible = _cut_face(classes, _value(vol, ox + t0 * dx, oy + t0 * dy, oz + t0 * dz))
+        if visible:
+            return cr, cg, cb, 1.0, 1, 0
     ns = 0
     first = 0.0
     last = 0.0

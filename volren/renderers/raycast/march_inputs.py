@@ -39,7 +39,8 @@ class Classification(NamedTuple):
     middle value, or pre-integrated from `table` by its two end values (Engel et al. 2001)."""
 
     preintegrated: bool
-    #: (n, 4) colour and opacity per step at n values evenly spaced from lo (unused pre-integrated)
+    #: (n, 4) colour and opacity per step at n values evenly spaced from lo (pre-integrated: only for
+    #: cut faces, else unused)
     post: NDArray[np.float64]
     #: (n, n, 4) premultiplied colour and opacity of a step from value i to value j (unused post-classified)
     table: NDArray[np.float32]
@@ -48,6 +49,8 @@ class Classification(NamedTuple):
     #: a value s sits at table entry (s - lo) * scale
     lo: float
     scale: float
+    #: draw cut faces (`ClipRegion.cap`): `post`'s colour where its opacity is above zero, opaque
+    cap: bool
 
 
 class EmptyBricks(NamedTuple):

@@ -138,6 +138,7 @@ class RaycastRenderer(RendererBase):
                 blend_modes=frozenset(BlendMode),
                 accuracy=Accuracy(rmse=0.02, position_px=0.05),
                 clip_region=True,
+                clip_cap=True,
             )
         },
         backend="cpu",
@@ -302,17 +303,17 @@ class RaycastRenderer(RendererBase):
         lo, hi = spanning(lo, hi)
         table = np.zeros((2, 2, 4), np.float32)
         post = np.zeros((2, 4))
+        cap = self.settings.clip.caps
+        n = int(opts["table_size"] if pre else opts["classification_table"])
         if pre:
-            n = int(opts["table_size"])
             table = preintegrate(tf, n, step=h, value_range=(lo, hi))
-        else:
-            n = int(opts["classification_table"])
+        if not pre or cap:  # pre-integrated, the cut faces read it at the same entries
             rgb, a = tf.sample(np.linspace(lo, hi, n))
             alpha = -np.expm1(h / tf.opacity_unit_distance * np.log1p(-np.minimum(a, K.MAX_OPACITY)))
             post = np.ascontiguousarray(np.concatenate([rgb, alpha[:, None]], axis=1), dtype=np.float64)
         table = table.view()  # read-only, as a cached table is: numba compiles a kernel once per
         table.flags.writeable = False  # combination of writable and read-only arrays
-        classes = Classification(pre, post, table, float(h), float(lo), float((n - 1) / (hi - lo)))
+        classes = Classification(pre, post, table, float(h), float(lo), float((n - 1) / (hi - lo)), cap)
         term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
         empty = self._empty_bricks(tf, brick, bool(opts["empty_space_skipping"]), reach, (hi - lo) / (n - 1))
         assert self._values is not None

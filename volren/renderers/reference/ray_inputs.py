@@ -48,6 +48,8 @@ class GridBox(NamedTuple):
     hi: NDArray[np.float64]
     #: (m, 4) world half-spaces rays are clipped to besides the box (`volren.kernels.clip_planes`)
     planes: NDArray[np.float64]
+    #: draw the cut faces where rays enter through a plane (`volren.kernels.cut_faces`)
+    cap: bool
 
 
 class CellPlanes(NamedTuple):

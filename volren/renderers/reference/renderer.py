@@ -32,7 +32,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from volren.errors import VolrenWarning
+from volren.errors import VolrenError, VolrenWarning
 from volren.kernels.ray_block import BinnedRays
 from volren.kernels.row_blocks import run_in_row_blocks
 from volren.kernels.shading import shade_params
@@ -80,6 +80,7 @@ _SUPPORT = KindSupport(
     # rounding) and the point 0.09 px off (the blob's own asymmetry in perspective)
     accuracy=Accuracy(rmse=DEFAULT_TOLERANCE, position_px=0.15),
     clip_region=True,
+    clip_cap=True,
 )
 #: Uniform grids also take 2D TFs (composite only: `tf2d`), and draw bricks (the ray clipped to
 #: the brick's box: the integral is exact, so no sample anchoring is needed).
@@ -177,6 +178,9 @@ class ReferenceRenderer(RendererBase):
         stats = np.zeros((n, 5), np.int64)
         extra: dict[str, float] = {}
         clip = settings.clip.half_spaces()
+        caps = settings.clip.caps and mode == _MODES[BlendMode.COMPOSITE]
+        if caps and two_d:
+            raise VolrenError("reference: cut faces (clip caps) need a 1D transfer function")
 
         if isinstance(vol, UniformVolume):
             values, org, sp, blo, bhi, _ = prepared
@@ -185,7 +189,7 @@ class ReferenceRenderer(RendererBase):
 
         if isinstance(vol, UniformVolume):
             tf_1d, tf_2d = (None, tf) if two_d else (tf, None)
-            grid = GridBox(values, org, sp, blo, bhi, clip)
+            grid = GridBox(values, org, sp, blo, bhi, clip, caps)
 
             def kernel(a: int, b: int) -> None:
                 render_uniform(
@@ -203,7 +207,7 @@ class ReferenceRenderer(RendererBase):
             def kernel(a: int, b: int) -> None:
                 offsets, cand = bin_rows(boxes, width, a // width, b // width)
                 extra["candidates"] += len(cand)
-                render_tets(BinnedRays(origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, clip), cells, tf, spar, quad,
+                render_tets(BinnedRays(origins[a:b], dirs[a:b], tfar[a:b], offsets, cand, clip, caps), cells, tf, spar, quad,
                             out[a:b], stats[a:b])  # fmt: skip
 
         run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, kernel, progress)

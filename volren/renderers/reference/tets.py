@@ -25,7 +25,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from volren.kernels.clip_planes import clip_to_planes
+from volren.kernels.clip_planes import clip_entry
+from volren.kernels.cut_faces import cut_face
 from volren.kernels.tet_clipping import clip_tet
 from volren.renderers.reference.ray_inputs import RayIntervals
 from volren.renderers.reference.ray_integral import store_pixel
@@ -58,9 +59,10 @@ def render_tets(rays, cells, tf, spar, quad, out, stats):
             continue
         ox, oy, oz = orig[q, 0], orig[q, 1], orig[q, 2]
         dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
-        keep0, keep1 = clip_to_planes(ox, oy, oz, dx, dy, dz, rays.planes, 0.0, tfar[q])
+        keep0, keep1, entering = clip_entry(ox, oy, oz, dx, dy, dz, rays.planes, 0.0, tfar[q])
         if not keep1 > keep0:
             continue
+        face_value = np.nan  # the value where the ray enters through a plane, inside a cell
         t0s = np.empty(k)
         t1s = np.empty(k)
         s0s = np.empty(k)
@@ -70,9 +72,10 @@ def render_tets(rays, cells, tf, spar, quad, out, stats):
             t = cand[c0 + c]
             hit, t0, t1, s0 = clip_tet(t, ox, oy, oz, dx, dy, dz, tfar[q], normals, anchors, sigma, tvals)
             if hit and t1 > keep0 and t0 < keep1:  # the cell's interval cut to the kept one
-                if t0 < keep0:
+                if t0 <= keep0:
                     s0 += (grads[t, 0] * dx + grads[t, 1] * dy + grads[t, 2] * dz) * (keep0 - t0)
                     t0 = keep0
+                    face_value = s0
                 t1 = min(t1, keep1)
                 t0s[m] = t0
                 t1s[m] = t1
@@ -81,6 +84,13 @@ def render_tets(rays, cells, tf, spar, quad, out, stats):
                 m += 1
         if m == 0:
             continue
+        if rays.cap and entering >= 0:  # an opaque cut face first
+            n = rays.planes[entering]
+            r, g, b, visible = cut_face(tf, face_value, n[0], n[1], n[2], spar, dx, dy, dz)
+            if visible:
+                out[q, 0], out[q, 1], out[q, 2], out[q, 3] = r, g, b, 1.0
+                stats[q, 4] = m
+                continue
         order = np.argsort(t0s[:m], kind="mergesort")
         ta = np.empty(m)
         tb = np.empty(m)

@@ -34,7 +34,8 @@ import numpy as np
 from numba import njit, prange
 
 from volren.kernels.box_clipping import clip_box
-from volren.kernels.clip_planes import clip_to_planes
+from volren.kernels.clip_planes import clip_entry
+from volren.kernels.cut_faces import cut_face
 from volren.renderers.reference.ray_inputs import RayIntervals
 from volren.renderers.reference.ray_integral import store_pixel
 from volren.renderers.reference.refinement import integrate_ray
@@ -193,6 +194,26 @@ def build_intervals(o, d, t_in, t_out, grid, shading, ta, tb, P, G):
     return m
 
 
+@njit(nogil=True, cache=True)
+def value_at(grid, x, y, z):
+    """The trilinear interpolant of the `GridBox` grid at world point (x, y, z) inside its box; NaN
+    where a corner of the cell is not finite."""
+    V, org, sp = grid.values, grid.origin, grid.spacing
+    nz, ny, nx = V.shape
+    u = min(max((x - org[0]) / sp[0], 0.0), nx - 1.0)
+    v = min(max((y - org[1]) / sp[1], 0.0), ny - 1.0)
+    w = min(max((z - org[2]) / sp[2], 0.0), nz - 1.0)
+    i = min(int(u), nx - 2)
+    j = min(int(v), ny - 2)
+    k = min(int(w), nz - 2)
+    fx, fy, fz = u - i, v - j, w - k
+    c00 = V[k, j, i] + fx * (V[k, j, i + 1] - V[k, j, i])
+    c10 = V[k, j + 1, i] + fx * (V[k, j + 1, i + 1] - V[k, j + 1, i])
+    c01 = V[k + 1, j, i] + fx * (V[k + 1, j, i + 1] - V[k + 1, j, i])
+    c11 = V[k + 1, j + 1, i] + fx * (V[k + 1, j + 1, i + 1] - V[k + 1, j + 1, i])
+    return (c00 + fy * (c10 - c00)) + fz * ((c01 + fy * (c11 - c01)) - (c00 + fy * (c10 - c00)))
+
+
 @njit(nogil=True, parallel=True, cache=True)
 def render_uniform(orig, dirs, tfar, grid, tf, tf2d, spar, quad, out, stats):
     """One block of rays (origins, directions, far-plane parameters) through the `GridBox` grid,
@@ -210,13 +231,20 @@ def render_uniform(orig, dirs, tfar, grid, tf, tf2d, spar, quad, out, stats):
         ox, oy, oz = orig[p, 0], orig[p, 1], orig[p, 2]
         dx, dy, dz = dirs[p, 0], dirs[p, 1], dirs[p, 2]
         t0, t1 = clip_box(ox, oy, oz, dx, dy, dz, lo, hi, 0.0, tfar[p])
-        t0, t1 = clip_to_planes(ox, oy, oz, dx, dy, dz, grid.planes, t0, t1)
+        t0, t1, entering = clip_entry(ox, oy, oz, dx, dy, dz, grid.planes, t0, t1)
         for c in range(4):
             out[p, c] = 0.0
         for c in range(5):
             stats[p, c] = 0
         if not (t1 > t0):
             continue
+        if grid.cap and entering >= 0 and tf is not None:  # an opaque cut face first
+            n = grid.planes[entering]
+            s = value_at(grid, ox + t0 * dx, oy + t0 * dy, oz + t0 * dz)
+            r, g, b, visible = cut_face(tf, s, n[0], n[1], n[2], spar, dx, dy, dz)
+            if visible:
+                out[p, 0], out[p, 1], out[p, 2], out[p, 3] = r, g, b, 1.0
+                continue
         ta = np.empty(cap)
         tb = np.empty(cap)
         P = np.empty((cap, 4))

@@ -32,11 +32,13 @@ from volren.kernels.row_blocks import parallel_chunk_size, run_in_row_blocks
 from volren.kernels.shading import ShadeParams, shade_params
 from volren.kernels.tet_planes import packed_face_planes
 from volren.kernels.tet_projection import bin_rows, pixel_coordinates, ray_far
+from volren.kernels.tf_eval import pack_tf
 from volren.kernels.visible_ranges import visible_ranges
 from volren.model.camera import Camera
 from volren.model.preintegration import LengthAxis, preintegrate
 from volren.model.settings import BlendMode
 from volren.model.tet_mesh import PreparedMesh, prepare_mesh
+from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import TetVolume
 from volren.renderers.base import (
     Accuracy,
@@ -93,6 +95,7 @@ class TetraRenderer(RendererBase):
                 # kit (volren check-renderer tetra): RMSE up to 1.5e-6, the point 0.09 px off
                 accuracy=Accuracy(rmse=1e-4, position_px=0.15),
                 clip_region=True,
+                clip_cap=True,
             )
         },
         backend="cpu/opengl",
@@ -315,8 +318,11 @@ class TetraRenderer(RendererBase):
         """The GL walk when asked for, or on `auto` with a ray per pixel and a
         hardware GPU (on Mesa llvmpipe numba keeps float64, progress per block of rows and adaptive
         refinement: `docs/tetra-benchmark.md`)."""
+        caps = self.settings.clip.caps  # cut faces: on the CPU walk only
         if opts["backend"] == "auto":
-            return opts["image_stride"] == 1 and gpu_renderer() is not None
+            return opts["image_stride"] == 1 and not caps and gpu_renderer() is not None
+        if opts["backend"] == "gl" and caps:
+            raise VolrenError("renderer tetra: backend gl draws no cut faces (clip caps); use backend=cpu")
         return opts["backend"] == "gl"
 
     def _render(
@@ -418,13 +424,17 @@ class TetraRenderer(RendererBase):
         mode = options.mode
         totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
         clip = self.settings.clip.half_spaces()
+        caps = self.settings.clip.caps
+        tf = self.transfer_function
+        assert isinstance(tf, TransferFunction1D)
+        packed_tf = pack_tf(tf)
 
         def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray, out: NDArray) -> NDArray:
             """The rays' walk output into `out` (n, 4); the counters summed into `totals`."""
             stats = np.zeros((len(origins), 4), np.int64)
             rays = BinnedRays(np.ascontiguousarray(origins), np.ascontiguousarray(dirs),
-                              np.ascontiguousarray(ray_far(camera, dirs)), offsets, cand, clip)  # fmt: skip
-            cast_rays(rays, cells, walked, table, options, sp, out, stats)
+                              np.ascontiguousarray(ray_far(camera, dirs)), offsets, cand, clip, caps)  # fmt: skip
+            cast_rays(rays, cells, walked, table, packed_tf, options, sp, out, stats)
             totals[:4] += stats.sum(axis=0)
             totals[4] += np.count_nonzero(stats[:, 0])
             return out

@@ -26,7 +26,9 @@ Per pixel ray:
    jumps over the transparent run. A ray stops once its opacity reaches the termination threshold.
 5. Clipping: each ray is cut to the part the clip region keeps (`volren.kernels.clip_planes`, the
    far plane included); a cell segment across a cut is integrated from the linear field's value at
-   the cut, so the cut surface is flat inside the cells, not their jagged boundary.
+   the cut, so the cut surface is flat inside the cells, not their jagged boundary. With cut faces
+   (`ClipRegion.cap`) the cell holding the point where a ray enters through a plane gives the
+   value there, and an opaque face of the TF's colour ends the ray (`volren.kernels.cut_faces`).
 """
 
 from __future__ import annotations
@@ -36,7 +38,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from volren.kernels.clip_planes import clip_to_planes
+from volren.kernels.clip_planes import clip_entry
+from volren.kernels.cut_faces import cut_face
 from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
 
 COMPOSITE, MAXIMUM, MINIMUM, AVERAGE = 0, 1, 2, 3
@@ -215,9 +218,9 @@ def _entries(q, rays, cells, boundary, ts, ids, svals):
 
 
 @njit(nogil=True, parallel=True, cache=True)
-def cast_rays(rays, cells, walked, table, options, sp, out, stats):
+def cast_rays(rays, cells, walked, table, tf, options, sp, out, stats):
     """One block of `BinnedRays` rays through the `TetCells` cells, integrated with the
-    `SegmentTable` table as the `WalkOptions` options say, lit by the `ShadeParams` sp: out (n, 4) premultiplied RGBA (for
+    `SegmentTable` table as the `WalkOptions` options say (the `PackedTF` tf colours cut faces), lit by the `ShadeParams` sp: out (n, 4) premultiplied RGBA (for
     maximum / minimum / average: the value in out[:, 0] and 1 in out[:, 1] where the ray met data);
     stats (n, 4) = cell steps, cells integrated, walks cut at max_steps, entries dropped.
 
@@ -250,9 +253,10 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
             ox, oy, oz = orig[q, 0], orig[q, 1], orig[q, 2]
             dx, dy, dz = dirs[q, 0], dirs[q, 1], dirs[q, 2]
             # the part of the ray the clip region keeps, the far plane included
-            keep0, keep1 = clip_to_planes(ox, oy, oz, dx, dy, dz, rays.planes, 0.0, tfar[q])
+            keep0, keep1, entering = clip_entry(ox, oy, oz, dx, dy, dz, rays.planes, 0.0, tfar[q])
             if not keep1 > keep0:
                 continue
+            face_pending = rays.cap and entering >= 0 and mode == COMPOSITE  # a cut face at keep0
             count, dropped = _entries(q, rays, cells, boundary, ts, ids, svals)
             stats[q, 3] = dropped
             if count == 0:
@@ -302,6 +306,16 @@ def cast_rays(rays, cells, walked, table, options, sp, out, stats):
                     length = t_out - t_kept
                     steps += 1
                     walked += 1
+                    if (
+                        face_pending and t_in <= keep0 < t_out
+                    ):  # the cell where the ray enters through a plane
+                        face_pending = False
+                        pn = rays.planes[entering]
+                        fr, fg, fb, seen = cut_face(tf, s_kept, pn[0], pn[1], pn[2], sp, dx, dy, dz)
+                        if seen:  # opaque: nothing behind it shows
+                            cr, cg, cb, trans = fr, fg, fb, 0.0
+                            done = True
+                            break
                     if length > 0.0:
                         if mode != COMPOSITE:
                             if mode == AVERAGE:
