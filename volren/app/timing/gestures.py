@@ -12,7 +12,9 @@ inside an interaction, as the viewport, the TF editors and the crop handles do:
 - **TF point**: the 1D TF's highest opacity point slides along the value axis;
 - **2D widget**: after "Use a 2D transfer function" (the 1D TF as a 2D band) a Gaussian widget
   added over it moves along the value axis;
-- **crop face**: the crop box's upper x face moves inwards and back.
+- **crop face**: the crop box's upper x face moves inwards and back;
+- **clip plane**: an oblique clip plane through the volume moves along its normal and back (the
+  clipping panel's position slider, the view's plane handle).
 
 The GUI thread's stall is the largest gap between the ticks of a 5 ms timer on it, less 5 ms:
 whatever holds the thread (or the interpreter's lock) that long delays every click and repaint.
@@ -229,6 +231,7 @@ def measure_scene(app, volume, tf, scene: str, seconds: float = 3.0, timeout_s: 
 
         gestures.append(run_gesture(app, window, "crop face", crop, seconds, timeout_s))
         state.set_crop(None)
+        gestures.append(_clip_plane_gesture(app, window, volume, seconds, timeout_s))
         editor = window.docks.tf_panel.editor_2d
         editor.use_2d_transfer_function()
         two_d = state.transfer_function
@@ -253,6 +256,30 @@ def measure_scene(app, volume, tf, scene: str, seconds: float = 3.0, timeout_s: 
         window.close()
         window.deleteLater()
         app.processEvents()
+
+
+def _clip_plane_gesture(app, window, volume, seconds: float, timeout_s: float) -> GestureTiming:
+    """An oblique plane through the centre, moved along its normal from a quarter of the volume's
+    depth along it to three quarters and back; the plane removed after."""
+    from volren.model.clip_region import ClipPlane, ClipRegion
+
+    state = window.state
+    lo = np.asarray(volume.bounds[0::2], dtype=np.float64)
+    hi = np.asarray(volume.bounds[1::2], dtype=np.float64)
+    normal = np.array([1.0, 0.6, -0.4]) / np.linalg.norm([1.0, 0.6, -0.4])
+    plain = state.settings
+
+    def move(k: int) -> None:
+        origin = lo + (hi - lo) * (0.25 + 0.5 * _swing(k))
+        plane = ClipPlane(tuple(float(v) for v in origin), tuple(float(v) for v in normal))
+        state.set_settings(plain.with_(clip=ClipRegion((plane,), plain.clip.box)))
+
+    move(0)
+    settle(app, window, timeout_s)  # a renderer that clips, set up
+    timing = run_gesture(app, window, "clip plane", move, seconds, timeout_s)
+    state.set_settings(plain)
+    settle(app, window, timeout_s)
+    return timing
 
 
 HEADER = ("| scene | auto's renderer | open -> first full frame ms | gesture | previews/s | preview pixels "
