@@ -59,6 +59,11 @@ def value_histogram(volume: Volume, bins: int = DEFAULT_BINS) -> Histogram:
     return found
 
 
+def cached_value_histogram(volume: Volume, bins: int = DEFAULT_BINS) -> Histogram | None:
+    """`value_histogram(volume, bins)` when it was computed before, else None (no work)."""
+    return _cache.get(volume, {}).get(bins)
+
+
 def compute_histogram(values: NDArray, bins: int, value_range: tuple[float, float]) -> Histogram:
     """np.histogram's bins and counts for the finite `values`, faster for 8- and 16-bit integers."""
     lo, hi = float(value_range[0]), float(value_range[1])

@@ -50,6 +50,7 @@ from volren.app.core.colormap_presets import PRESET_NAMES, apply_preset
 from volren.app.core.opacity_presets import OPACITY_PRESET_NAMES, preset_problem, preset_transfer_function
 from volren.app.core.state import Change, ViewState
 from volren.app.qt_subscription import subscribe_while_alive
+from volren.app.tf_editor.one_d.background_histogram import BackgroundHistogram
 from volren.app.tf_editor.one_d.color_bar import ColorBar
 from volren.app.tf_editor.one_d.color_entry import ColorEntry
 from volren.app.tf_editor.one_d.opacity_curve import OpacityCurve
@@ -59,7 +60,8 @@ from volren.app.tf_editor.one_d.preset_browser import PresetBrowser, swatch_imag
 from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction
-from volren.model.value_histogram import DEFAULT_BINS, Histogram, compute_histogram, value_histogram
+from volren.model.value_histogram import DEFAULT_BINS, Histogram, compute_histogram
+from volren.model.volume import Volume
 
 TF_FILTER = "Transfer functions: volren or ParaView preset JSON (*.json);;All files (*)"
 PRESET_PLACEHOLDER = "Colour map…"
@@ -127,6 +129,8 @@ class TransferFunction1DEditor(QWidget):
         self._state = state
         self._shown_tf: TransferFunction | None = None
         self._last_folder = ""
+        self._histograms = BackgroundHistogram(self)
+        self._histograms.ready.connect(self._histogram_ready)
         self._build()
         self._unsubscribe = subscribe_while_alive(state, self, "_on_state_change")
         self._set_volume()
@@ -300,8 +304,14 @@ class TransferFunction1DEditor(QWidget):
         self._zoom = None  # another data range: start from all of it
         self._zoom_histogram = None
         self._rebin_timer.stop()
-        self.curve.set_histogram(None if volume is None else value_histogram(volume))
+        self.curve.set_histogram(None if volume is None else self._histograms.request(volume))
         self._refresh_tissue_presets(volume)
+
+    def _histogram_ready(self, volume: Volume, histogram: Histogram) -> None:
+        """A large volume's histogram, computed in the background (`BackgroundHistogram`), shown
+        unless another volume or a zoomed view came meanwhile."""
+        if volume is self._state.volume and self._zoom is None:
+            self.curve.set_histogram(histogram)
 
     def _refresh_tissue_presets(self, volume) -> None:
         """Presets that do not fit the data (CT ones on non-CT values) disabled, saying why."""
@@ -437,11 +447,11 @@ class TransferFunction1DEditor(QWidget):
             return
         if self._zoom is None:
             self._rebin_timer.stop()
-            self.curve.set_histogram(value_histogram(volume))
+            self.curve.set_histogram(self._histograms.request(volume))
             return
         shown = self.curve.histogram
         if shown is None or not shown.edges[0] <= view.lo or not view.hi <= shown.edges[-1]:
-            self.curve.set_histogram(value_histogram(volume))  # coarse, but all there meanwhile
+            self.curve.set_histogram(self._histograms.request(volume))  # coarse, but all there meanwhile
         self._rebin_timer.start()
 
     def update_histogram(self) -> None:
@@ -453,7 +463,7 @@ class TransferFunction1DEditor(QWidget):
             return
         view = self._zoom
         if view is None:
-            self.curve.set_histogram(value_histogram(volume))
+            self.curve.set_histogram(self._histograms.request(volume))
             return
         cached = self._zoom_histogram
         if cached is None or cached[0] is not volume or cached[1] != view:
