@@ -199,8 +199,10 @@ class Unprojection(NamedTuple):
 
 
 class IndexBox(NamedTuple):
-    """The volume's grid: world origin and spacing, and its upper corner in index space."""
+    """The volume's grid: world origin and spacing, its upper corner in index space, and the clip
+    region's half-spaces in index space (`ClipRegion.half_spaces_in_grid`; (0, 4): none)."""
 
     origin: np.ndarray
     spacing: np.ndarray
     upper: np.ndarray
+    planes: np.ndarray

@@ -11,7 +11,8 @@ perspective views alike (each pixel has its own direction).
 
 Sample positions (world length t along the unit ray from its origin on the near plane), a ray
 caster's midpoint rule (`volren.kernels.sample_placement`, shared with the ray caster): the ray is
-clipped to the grid's box and the near and far planes, [t0, t1]; it is cut into segments of the
+clipped to the grid's box, the near and far planes and the clip region's half-spaces
+(`volren.kernels.clip_planes`), [t0, t1]; it is cut into segments of the
 step h at the boundaries t = (phase + j) h, counted from the ray's origin on the near plane (under
 a parallel projection: view-aligned planes shared by all pixels; the first segment, `first` long,
 and the last, `last` long, are cut by the box); each segment has one sample, at its middle,
@@ -32,11 +33,14 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import NDArray
 
+from volren.kernels.clip_planes import clip_to_planes
 from volren.kernels.sample_placement import ray_segment, ray_segments
 from volren.model import Camera, UniformVolume
 from volren_objectorder.bundles import IndexBox, Rays, Unprojection
 
 OFFSET_MODES = ("interleaved", "midpoint", "random")
+#: The clip planes of a view that clips nothing.
+NO_PLANES = np.zeros((0, 4), np.float64)
 
 
 @dataclass
@@ -60,14 +64,15 @@ class RayTable:
 @njit(nogil=True, cache=True, parallel=True)
 def _fill_rays(camera, box, h, offsets, out):
     """Every pixel's ray as `Camera.pixel_rays` makes it (unproject the pixel centre at NDC depth
-    -1 and 1, `Unprojection`), clipped to the box [0, upper] (`IndexBox`) and the clipping planes,
+    -1 and 1, `Unprojection`), clipped to the box [0, upper] (`IndexBox`), the near and far planes and the
+    clip region's half-spaces (`IndexBox.planes`),
     with its samples at step h (offsets: each pixel's sample phase), into the `Rays` out.
 
     Speed: a row's unprojection is affine in the pixel's x up to the two homogeneous divisions, and
     each division by a per-frame or per-pixel constant is one reciprocal (16 divisions a pixel were
     most of a 512 x 512 table's 11 ms)."""
     inv, width, height, view_dir, t_far_eye = camera
-    grid_origin, spacing, upper = box
+    grid_origin, spacing, upper, planes = box
     o_out, d_out, w_out, i_out, t0_out, count_out, first_out, last_out = out
     inv_sp0, inv_sp1, inv_sp2 = 1.0 / spacing[0], 1.0 / spacing[1], 1.0 / spacing[2]
     inv_h = 1.0 / h
@@ -134,8 +139,12 @@ def _fill_rays(camera, box, h, offsets, out):
                     t_in = max(t_in, min(ta, tb))
                     t_out = min(t_out, max(ta, tb))
             t_far = t_far_eye / (dx * view_dir[0] + dy * view_dir[1] + dz * view_dir[2])
-            t0 = max(t_in, 0.0)
-            t1 = min(t_out, t_far)
+            # the clip region narrows the ray here, so that every later stage sees the clipped ray: the
+            # segments keep their planes (the phase below counts from the origin) and only the first
+            # and last are shortened to the cut (Real-Time Volume Graphics, section 15.1)
+            t0, t1 = clip_to_planes(o_out[p, 0], o_out[p, 1], o_out[p, 2], d_out[0 if shared else p, 0],
+                                    d_out[0 if shared else p, 1], d_out[0 if shared else p, 2], planes,
+                                    max(t_in, 0.0), min(t_out, t_far))  # fmt: skip
             length = t1 - t0 if t1 > t0 else 0.0
             count, first, last = ray_segments(
                 length, h, (offsets[p] - t0 * inv_h) % 1.0
@@ -147,8 +156,10 @@ def _fill_rays(camera, box, h, offsets, out):
 
 
 def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h: float,
-              offsets: NDArray[np.float64], reuse: RayTable | None = None) -> RayTable:  # fmt: skip
+              offsets: NDArray[np.float64], reuse: RayTable | None = None,
+              planes: NDArray[np.float64] = NO_PLANES) -> RayTable:  # fmt: skip
     """Every pixel's ray (through its centre, origin on the near plane) and its samples at step h,
+    clipped to the half-spaces `planes` ((m, 4) rows in grid-index space, `ClipRegion.half_spaces_in_grid`),
     written into `reuse`'s arrays when it has as many pixels: freshly allocated arrays (30 MB at
     512 x 512) cost a page fault per 4 KB on first touch, a third of a fast frame."""
     inv = np.linalg.inv(camera.projection_matrix(width / height) @ camera.view_matrix())
@@ -169,7 +180,8 @@ def ray_table(camera: Camera, volume: UniformVolume, width: int, height: int, h:
     near, far = camera.clipping_range
     _fill_rays(Unprojection(inv, width, height, np.asarray(camera.direction, dtype=np.float64), far - near),
                IndexBox(np.asarray(volume.origin, dtype=np.float64), np.asarray(volume.spacing, dtype=np.float64),
-                        np.asarray(volume.dimensions, dtype=np.float64) - 1.0),
+                        np.asarray(volume.dimensions, dtype=np.float64) - 1.0,
+                        np.ascontiguousarray(planes, dtype=np.float64)),
                float(h), offsets, Rays(o, d, w, i, t0, count, first, last))  # fmt: skip
     return RayTable(o, d, i, w, t0, count, first, last)
 

@@ -127,20 +127,23 @@ _MODES = {BlendMode.COMPOSITE: K.COMPOSITE, BlendMode.MAXIMUM: K.MAXIMUM, BlendM
           BlendMode.AVERAGE: K.AVERAGE}  # fmt: skip
 
 
-def segment_reach(camera: Camera, volume: UniformVolume, rays: RayTable, h: float) -> Reach:
+def segment_reach(
+    camera: Camera, volume: UniformVolume, rays: RayTable, h: float, clipped: bool = False
+) -> Reach:
     """The cells a pre-integrated segment ending in a cell can take its values from this frame: a
     segment's front lies up to h back along its ray, so along an axis the window runs toward
     lower indices only where every ray runs toward higher ones (and the other way round); the faces
     the rays leave through get the box both ways (a last sample's piece runs on to the exit point),
     and so does every cell when the far plane cuts the volume (rays then end inside it) or when a
-    step spans more than one cell along an axis."""
+    step spans more than one cell along an axis, and when a clip region cuts the rays (they end inside the
+    volume wherever a plane lies: both ways whatever the planes, so moving one keeps the classification)."""
     cells = tuple(int(math.ceil(h / s - 1e-9)) for s in volume.spacing)
     if max(cells) > 1:
         # a step longer than a cell (anisotropic spacing, coarse steps): the rim's brute-force box
         # would grow with the step cubed (spacing 1:100 at step 0.5: boxes of 3 x 3 x 69 cells on
         # most of the grid), the separable dilation both ways does not
         return Reach.both_ways(cells)  # type: ignore[arg-type]
-    if camera.depth_range(volume.bounds)[1] >= camera.clipping_range[1]:
+    if clipped or camera.depth_range(volume.bounds)[1] >= camera.clipping_range[1]:
         return Reach.both_ways(cells)  # type: ignore[arg-type]
     rising, falling = direction_signs(rays.direction, rays.count)
     window = tuple((c if up else 0, c if down else 0) for c, up, down in zip(cells, rising, falling))
@@ -171,6 +174,7 @@ class ObjectOrderRenderer(RendererBase):
                 # NaN box: a sample next to the NaN cells stands for its whole step), 0.0063 elsewhere
                 # (the ramp), the point 0.024 px off
                 accuracy=Accuracy(rmse=0.02, position_px=0.05),
+                clip_region=True,
             )
         },
         backend="cpu",
@@ -236,7 +240,8 @@ class ObjectOrderRenderer(RendererBase):
             return octree.classify(None)
         volume = self.volume
         assert isinstance(volume, UniformVolume)
-        return octree.classify(tf, segment_reach(camera, volume, rays, h) if pre else Reach())
+        clipped = not self.settings.clip.is_empty
+        return octree.classify(tf, segment_reach(camera, volume, rays, h, clipped) if pre else Reach())
 
     def _render(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
@@ -256,8 +261,10 @@ class ObjectOrderRenderer(RendererBase):
         hvr = bool(opts["hidden_volume_removal"]) and composite
 
         offset_mode = "random" if settings.jitter else opts["depth_offsets"]
+        origin = np.asarray(volume.origin, dtype=np.float64)
+        planes = settings.clip.half_spaces_in_grid(origin, np.asarray(volume.spacing, dtype=np.float64))
         rays = ray_table(camera, volume, width, height, h, self._offsets(offset_mode, width, height, opts["jitter_seed"]),
-                         self._rays)  # fmt: skip
+                         self._rays, planes)  # fmt: skip
         self._rays = rays
         cls = self._classification(tf, composite, bool(opts["octree_skipping"]), pre, h, camera, rays)
         M = screen_matrix(camera, volume, width, height)

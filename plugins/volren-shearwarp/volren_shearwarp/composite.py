@@ -18,7 +18,8 @@ Per scanline and slab:
    they are walked).
 2. The segment of each ray inside the slab, clipped to the slice rectangle (rays that enter or
    leave through a side face cross part of a slab) and, when a clipping plane cuts the volume,
-   to the ray's interval between the near and far planes (values then taken at the cut).
+   to the ray's interval between the near and far planes and on the kept side of the clip region's
+   planes (values then taken at the cut).
 3. `sub` sub-planes per slab (the render setting `step`): plane w in [0, 1) between slices kf and
    kb is sampled by interpolating bilinear samples of both slices at the ray's point, which is
    trilinear interpolation; w = 0 is a bilinear sample of one slice. The value at the back of a
@@ -588,7 +589,8 @@ def composite_slabs(geom, m0, m1, image, tables, runs, termination, light, view,
     corrected to their part like clipped ones).
 
     With `Clipping` (clip), pixel (q, p)'s ray is drawn only for u in [clip_lo[q, p], clip_hi[q, p]]
-    (`Factorization.clip_limits`; slab m spans u in [m - 1, m]): the fast spans keep the pixels
+    (`Factorization.clip_limits`, `region_limits`; slab m spans u from |order[m - 1] - order[0]| to
+    |order[m] - order[0]|, [m - 1, m] without a stride): the fast spans keep the pixels
     whose whole slab lies inside, the general way takes the rest (a segment cut by a plane sampled
     at the cut and corrected to its part, one wholly outside skipped).
 
@@ -655,6 +657,10 @@ def composite_slabs(geom, m0, m1, image, tables, runs, termination, light, view,
             kb = order[m]
             slab = run_slab[m]
             whole = slab_frac[m]
+            # the slab's span of u (slices behind the front one), for the clip limits
+            u_f = float(abs(kf - order[0]))
+            u_b = float(abs(kb - order[0]))
+            u_span = u_b - u_f
             af0 = alpha_a[kf]
             afs = beta_a[kf]
             ab0 = alpha_a[kb]
@@ -727,9 +733,9 @@ def composite_slabs(geom, m0, m1, image, tables, runs, termination, light, view,
                     f1 = min(max(in_hi, f0), hi_p)
                     if clipping:  # only pixels whose whole slab lies between the planes (an interval: the
                         # clip limits are monotonic along a row); the others go the general way
-                        while f0 < f1 and not (clip_lo[q, f0] <= m - 1 and clip_hi[q, f0] >= m):
+                        while f0 < f1 and not (clip_lo[q, f0] <= u_f and clip_hi[q, f0] >= u_b):
                             f0 += 1
-                        while f1 > f0 and not (clip_lo[q, f1 - 1] <= m - 1 and clip_hi[q, f1 - 1] >= m):
+                        while f1 > f0 and not (clip_lo[q, f1 - 1] <= u_f and clip_hi[q, f1 - 1] >= u_b):
                             f1 -= 1
                     if f1 > f0:
                         c, t = _fast_span(geom, SlabMap(kf, kb, af0, afs, ab0, abs_), Scanline(q, m - 1, ibf, fbf, ibb, fbb),
@@ -751,9 +757,9 @@ def composite_slabs(geom, m0, m1, image, tables, runs, termination, light, view,
                         t0, t1 = _clip(bf, bb, top_b, t0, t1)
                         v0 = 0.0
                         v1 = 1.0
-                        if clipping:  # the near and far planes, as this slab's parameter
-                            v0 = clip_lo[q, p] - (m - 1)
-                            v1 = clip_hi[q, p] - (m - 1)
+                        if clipping:  # the near and far planes and the clip region, as this slab's parameter
+                            v0 = (clip_lo[q, p] - u_f) / u_span
+                            v1 = (clip_hi[q, p] - u_f) / u_span
                             t0 = max(t0, v0)
                             t1 = min(t1, v1)
                         if t1 <= t0:

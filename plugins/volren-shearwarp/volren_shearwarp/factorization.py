@@ -128,6 +128,44 @@ class Factorization:
         hi = np.where(ahead, (far - d0) / safe, -np.inf)
         return np.ascontiguousarray(lo), np.ascontiguousarray(hi)
 
+    def region_limits(self, half_spaces: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+        """Where each intermediate ray lies on the kept side of every half-space row (a, b, c, d) of
+        `half_spaces` ((m, 4), grid-index x, y, z: `ClipRegion.half_spaces_in_grid`): (lo, hi), each
+        (height, width), an interval of u = |c - c0| as `clip_limits`' (empty where lo >= hi).
+
+        Why an interval: a ray is a straight line in index space and u is linear along it (it crosses
+        slice k at (alpha_a[k] + beta_a[k] p, alpha_b[k] + beta_b[k] q, k), under perspective too), so
+        a x + b y + c z + d is linear in u; its values on the front and back slices give the crossing
+        exactly, and the kept region, an intersection of half-spaces, is convex (Real-Time Volume
+        Graphics, section 15.1). A ray parallel to a plane is kept whole or lost whole."""
+        lo = np.full((self.height, self.width), -np.inf)
+        hi = np.full((self.height, self.width), np.inf)
+        k0, k1 = int(self.order[0]), int(self.order[-1])
+        u0, u1 = abs(k0 - self.plane), abs(k1 - self.plane)
+        for row in np.asarray(half_spaces, np.float64).reshape(-1, 4):
+            f0 = self._crossing_values(row, k0)
+            rate = (self._crossing_values(row, k1) - f0) / (u1 - u0) if u1 != u0 else np.zeros_like(f0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cross = u0 - f0 / rate
+            lo = np.where(rate > 0.0, np.maximum(lo, cross), lo)
+            hi = np.where(rate < 0.0, np.minimum(hi, cross), hi)
+            lost = (rate == 0.0) & (f0 < 0.0)
+            lo = np.where(lost, np.inf, lo)
+            hi = np.where(lost, -np.inf, hi)
+        return np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+
+    def _crossing_values(self, row: NDArray[np.float64], k: int) -> NDArray[np.float64]:
+        """(height, width): a x + b y + c z + d of `row` (grid-index x, y, z) where each intermediate ray
+        crosses slice k, separable in the pixel's column and row as the slice maps are."""
+        ra, rb, rc = row[list(self.perm)]
+        col = ra * (self.alpha_a[k] + self.beta_a[k] * np.arange(self.width, dtype=np.float64))
+        line = (
+            rb * (self.alpha_b[k] + self.beta_b[k] * np.arange(self.height, dtype=np.float64))
+            + rc * k
+            + row[3]
+        )
+        return line[:, None] + col[None, :]
+
 
 def index_frame(volume: UniformVolume) -> tuple[NDArray, NDArray, NDArray]:
     """(origin, spacing, dims as floats) in x, y, z order."""

@@ -36,6 +36,11 @@ ray the depth is linear in the slice index, so each ray keeps an interval of sli
 `Camera.orbit` or `reset_clipping_range`) does compositing take those intervals: segments wholly
 between the planes stay on the fast path, the few that a plane cuts go the general way (sampled at
 the cut and corrected to their part), those outside are skipped; the default frame runs as before.
+A clip region (`RenderSettings.clip`: oblique planes and a crop box) narrows the same intervals
+(`Factorization.region_limits`: a plane's value is linear in u along a ray), so its cut is flat, each
+cut segment sampled at the cut and corrected to its kept part; unlike the near and far planes it
+keeps the slice stride (a slab of several slices maps u through its own), so neither the step, the
+tables nor the runs depend on where the planes are.
 
 Jitter (the `jitter` setting): each intermediate pixel's samples move off the slices by a seeded
 offset in [0, 1) of the plane spacing (`jitter_seed`), so that slice-aligned sampling artifacts turn
@@ -45,7 +50,7 @@ it leaves. Maximum, minimum and average are exact along the piecewise-linear ray
 
 Counters: samples (segments composited), rays (intermediate pixels), empty_pixels_skipped (pixel
 slabs skipped by the runs), pixels_terminated, slices (composited), slice_stride, planes_per_slab, intermediate_width /
-_height, table_lengths, clipped (1 when the near or far plane cut the volume).
+_height, table_lengths, clipped (1 when the near or far plane or a clip region cut the volume).
 """
 
 from __future__ import annotations
@@ -85,7 +90,7 @@ from volren_shearwarp.bundles import (
 )
 from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport, slab_pairs
 from volren_shearwarp.composite import AVERAGE, MAXIMUM, MINIMUM, composite_slabs, project_slabs
-from volren_shearwarp.factorization import Factorization, factorize
+from volren_shearwarp.factorization import Factorization, factorize, index_frame
 from volren_shearwarp.tables import (
     GRID_MARGIN,
     LENGTH_RATIO,
@@ -257,6 +262,19 @@ def slice_stride(step: float, slice_spacing: float, unit: float, slices: int) ->
     return max(1, min(stride, MAX_SLICE_STRIDE, slices - 1))
 
 
+def _with_region(fac: Factorization, limits: tuple[NDArray, NDArray] | None,
+                 half_spaces: NDArray[np.float64]) -> tuple[NDArray, NDArray] | None:  # fmt: skip
+    """The near and far planes' intervals of u per intermediate ray (`Factorization.clip_limits`, None:
+    every ray whole) narrowed to the clip region's half-spaces (`Factorization.region_limits`); None
+    when neither clips."""
+    if len(half_spaces) == 0:
+        return limits
+    lo, hi = fac.region_limits(half_spaces)
+    if limits is not None:
+        lo, hi = np.maximum(lo, limits[0]), np.minimum(hi, limits[1])
+    return np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+
+
 def strided_order(order: NDArray[np.int64], stride: int) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
     """Every stride-th slice of the compositing order, the last slice kept, and each slab's length
     in whole slabs (index m: the slab between entries m - 1 and m; below 1 only for a short last one)."""
@@ -307,6 +325,7 @@ class ShearWarpRenderer(RendererBase):
                 accuracy=Accuracy(rmse=0.01, position_px=0.1),
                 # from inside, the slices lie on both sides of the eye along every axis (`choose_axis`)
                 eye_inside=False,
+                clip_region=True,
             )
         },
         backend="cpu",
@@ -444,6 +463,8 @@ class ShearWarpRenderer(RendererBase):
         order = fac.order
         rows = _rows(fac.height)
         limits = fac.clip_limits(camera, volume)  # None unless the near or far plane cuts the volume
+        near_far = limits is not None
+        limits = _with_region(fac, limits, settings.clip.half_spaces_in_grid(*index_frame(volume)[:2]))
         clipping = limits is not None
         clip_lo, clip_hi = limits if limits is not None else (np.zeros((1, 1)), np.zeros((1, 1)))
         counters: dict[str, float] = {
@@ -482,7 +503,7 @@ class ShearWarpRenderer(RendererBase):
             return np.zeros((height, width, 4), np.float32), counters
         stride = (
             1
-            if clipping or settings.jitter
+            if near_far or settings.jitter
             else slice_stride(settings.step, spacing_c, volume.characteristic_length, len(order))
         )
         order, slab_frac = strided_order(order, stride)
