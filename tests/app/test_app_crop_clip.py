@@ -33,7 +33,7 @@ def test_a_renderer_that_clips_gets_the_whole_volume_and_the_box_as_its_clip_box
     assert volume is s.volume
     assert settings.clip == ClipRegion(planes.clip.planes, BOX)  # the oblique planes kept
     assert s.shown_bounds == BOX
-    volume, settings = s.frame_inputs("slicer", s.settings)  # does not clip: the cut volume
+    volume, settings = s.frame_inputs("example", s.settings)  # does not clip: the cut volume
     assert volume is s.render_volume and volume.dimensions == (6, 9, 7)  # snapped out to samples
     assert settings.clip.box is None
 
