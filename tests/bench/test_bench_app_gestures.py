@@ -41,7 +41,13 @@ def test_the_gesture_table_times_every_gesture_with_the_renderer_auto_picks(qapp
     timing = app_gestures.measure_scene(qapp, marschner_lobb(17), sample_transfer_functions()["marschner_lobb"].copy(),
                                         "ml", seconds=0.5)  # fmt: skip
     assert timing.renderer not in ("", "auto") and math.isfinite(timing.open_ms) and timing.open_ms > 0
-    assert [g.gesture for g in timing.gestures] == ["rotate", "TF point", "crop face", "clip plane", "2D widget"]
+    assert [g.gesture for g in timing.gestures] == [
+        "rotate",
+        "TF point",
+        "crop face",
+        "clip plane",
+        "2D widget",
+    ]
     for g in timing.gestures:
         assert g.release_ms > 0 and g.stall_ms >= 0 and 0 <= g.preview_share <= 0.25 + 1e-3, g
         assert g.still_renderer != "-"
