@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
+import sys
 import time
 
 import numpy as np
@@ -82,7 +84,9 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     shared = shared_folder(args.shared)
     size = args.size
-    print(f"size {size}x{size}, {args.frames} frames each (medians), `default` quality level")
+    command = " ".join(["python -m benchmarks.clipping", *(argv if argv is not None else sys.argv[1:])])
+    print(f"From `{command}`: {size}x{size}, medians of {args.frames} frames, each renderer at its `default` "
+          f"quality level; load average at the start {' '.join(f'{v:.2f}' for v in os.getloadavg())}.")  # fmt: skip
     print()
     print(
         "| dataset | TF | renderer | RMSE uncut | RMSE 1 plane | RMSE 3 planes | ms uncut | 1 plane / uncut | 3 planes / uncut |"
@@ -115,6 +119,8 @@ def main(argv: list[str] | None = None) -> None:
                 print(f"| {dataset} | {style} | {name} | {rmse['none']:.5f} | {rmse['1 plane']:.5f} | "
                       f"{rmse['3 planes']:.5f} | {ms['none']:.1f} | {ms['1 plane'] / ms['none']:.2f} | "
                       f"{ms['3 planes'] / ms['none']:.2f} |", flush=True)  # fmt: skip
+    print()
+    print(f"Load average at the end {' '.join(f'{v:.2f}' for v in os.getloadavg())}.")
 
 
 if __name__ == "__main__":

@@ -78,6 +78,12 @@ SECTIONS = (
         "point samples, however exact its rays? (`python -m benchmarks.resampling_floor`)",
     ),
     (
+        "clipping.md",
+        "Clipping: error and cost of oblique planes",
+        "Does a clipped frame stay as close to `reference` (drawn with the same planes) as the uncut one, and does "
+        "it cost no more? (`python -m benchmarks.clipping`)",
+    ),
+    (
         "app.md",
         "Desktop app responsiveness",
         "Does each gesture follow the hand: previews per second, release to full "

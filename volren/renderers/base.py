@@ -392,7 +392,7 @@ class Capabilities:
             if s.regions:
                 extras.append("bricks")
             if s.clip_region:
-                extras.append("clip planes")
+                extras.append("clip planes" + (" and cut faces" if s.clip_cap else ""))
             extras.append("blend " + "/".join(sorted(str(m) for m in s.blend_modes)))
             modes_2d = s.blend_modes_2d & s.blend_modes
             if 2 in s.tf_dims and modes_2d != s.blend_modes:
