@@ -21,16 +21,17 @@ from volren.model.volume import UniformVolume
 MAX_OPACITY = 1.0 - 1e-6
 
 
-def box_path_lengths(
-    camera: Camera,
-    width: int,
-    height: int,
+def kept_interval(
+    origins: NDArray[np.float64],
+    directions: NDArray[np.float64],
+    far: NDArray[np.float64],
     bounds: Sequence[float],
     half_spaces: NDArray[np.float64] | None = None,
-) -> NDArray[np.float64]:
-    """Length (H, W) of each pixel-centre ray inside the box, between the near and far planes, and
-    on the kept side (a x + b y + c z + d >= 0) of every row of `half_spaces` ((m, 4), world)."""
-    origins, directions = camera.pixel_rays(width, height)
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """(start, end, box start) per ray (origins and unit directions (..., 3), far-plane parameters
+    (...)): the ray parameters of the part inside the box, from the near plane (t = 0) to `far`,
+    on the kept side (a x + b y + c z + d >= 0) of every row of `half_spaces` ((m, 4), world); and
+    where it enters the box alone. An empty part has end <= start."""
     lo = np.asarray(bounds[0::2], dtype=np.float64)
     hi = np.asarray(bounds[1::2], dtype=np.float64)
     inside = (origins >= lo) & (origins <= hi)
@@ -40,10 +41,9 @@ def box_path_lengths(
     parallel_to_slab = directions == 0
     t_min = np.where(parallel_to_slab, np.where(inside, -np.inf, np.inf), np.minimum(t1, t2))
     t_max = np.where(parallel_to_slab, np.where(inside, np.inf, -np.inf), np.maximum(t1, t2))
-    near, far = camera.clipping_range
-    t_far = (far - near) / (directions @ camera.direction)
-    start = np.maximum(t_min.max(axis=-1), 0.0)
-    end = np.minimum(t_max.min(axis=-1), t_far)
+    box_start = np.maximum(t_min.max(axis=-1), 0.0)
+    start = box_start.copy()
+    end = np.minimum(t_max.min(axis=-1), far)
     for a, b, c, d in np.zeros((0, 4)) if half_spaces is None else np.asarray(half_spaces, np.float64):
         at_origin = origins @ (a, b, c) + d
         rate = directions @ (a, b, c)
@@ -52,6 +52,26 @@ def box_path_lengths(
         start = np.where(rate > 0, np.maximum(start, crossing), start)
         end = np.where(rate < 0, np.minimum(end, crossing), end)
         end = np.where((rate == 0) & (at_origin < 0), -np.inf, end)
+    return start, end, box_start
+
+
+def _camera_rays(camera: Camera, width: int, height: int) -> tuple[NDArray, NDArray, NDArray]:
+    """Pixel-centre rays (origins on the near plane, unit directions) and their far-plane parameters."""
+    origins, directions = camera.pixel_rays(width, height)
+    near, far = camera.clipping_range
+    return origins, directions, (far - near) / (directions @ camera.direction)
+
+
+def box_path_lengths(
+    camera: Camera,
+    width: int,
+    height: int,
+    bounds: Sequence[float],
+    half_spaces: NDArray[np.float64] | None = None,
+) -> NDArray[np.float64]:
+    """Length (H, W) of each pixel-centre ray inside the box, between the near and far planes, and
+    on the kept side of every row of `half_spaces` (`kept_interval`)."""
+    start, end, _ = kept_interval(*_camera_rays(camera, width, height), bounds, half_spaces)
     return np.maximum(end - start, 0.0)
 
 
@@ -61,25 +81,9 @@ def entered_through_a_plane(
     """(H, W) whether each pixel-centre ray enters the part of the box kept by `half_spaces`
     through one of them (where a cut face is drawn) rather than through the box or the near plane,
     and (H, W, 3) the entry points."""
-    origins, directions = camera.pixel_rays(width, height)
-    lo = np.asarray(bounds[0::2], dtype=np.float64)
-    hi = np.asarray(bounds[1::2], dtype=np.float64)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1 = (lo - origins) / directions
-        t2 = (hi - origins) / directions
-    box_in = np.maximum(np.nanmax(np.minimum(t1, t2), axis=-1), 0.0)
-    near, far = camera.clipping_range
-    end = np.minimum(np.nanmin(np.maximum(t1, t2), axis=-1), (far - near) / (directions @ camera.direction))
-    start = box_in.copy()
-    for a, b, c, d in np.asarray(half_spaces, np.float64):
-        at_origin = origins @ (a, b, c) + d
-        rate = directions @ (a, b, c)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            crossing = -at_origin / rate
-        start = np.where(rate > 0, np.maximum(start, crossing), start)
-        end = np.where(rate < 0, np.minimum(end, crossing), end)
-        end = np.where((rate == 0) & (at_origin < 0), -np.inf, end)
-    through = (start > box_in) & (end > start)
+    origins, directions, far = _camera_rays(camera, width, height)
+    start, end, box_start = kept_interval(origins, directions, far, bounds, half_spaces)
+    through = (start > box_start) & (end > start)
     return through, origins + start[..., None] * directions
 
 
