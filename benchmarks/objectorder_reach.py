@@ -35,8 +35,9 @@ SCENES = (
 )
 
 
-def _both_ways(camera, volume, rays, h: float) -> oo.Reach:
-    """The reach before the one-sided rule: the box of cells a step spans, both ways along every axis."""
+def _both_ways(camera, volume, rays, h: float, clipped: bool = False) -> oo.Reach:
+    """The reach before the one-sided rule: the box of cells a step spans, both ways along every axis
+    (what the renderer's rule gives a clipped frame too)."""
     return oo.Reach.both_ways(tuple(int(math.ceil(h / s - 1e-9)) for s in volume.spacing))  # type: ignore[arg-type]
 
 

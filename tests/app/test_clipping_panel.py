@@ -84,11 +84,13 @@ def test_the_position_slider_moves_the_plane_along_its_normal_as_one_gesture(pan
     assert panel.position.value() == round(0.25 * POSITION_TICKS)
 
 
-def test_a_plane_added_under_a_renderer_that_cannot_clip_switches_to_one_that_can(make_window, sample, qtbot):
+def test_a_plane_added_under_a_renderer_that_cannot_clip_switches_to_one_that_can(
+    make_window, fake_renderers, sample, qtbot
+):
     window = make_window()
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        window.files.apply_loaded(sample, "shearwarp")
-    assert not registry.capabilities("shearwarp").kinds["uniform"].clip_region
+        window.files.apply_loaded(sample, "fake")
+    assert not registry.capabilities("fake").kinds["uniform"].clip_region
     with qtbot.waitSignal(window.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as shown:
         window.docks.clipping.add_plane()
     state = window.state

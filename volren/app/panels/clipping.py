@@ -32,10 +32,14 @@ from PyQt5.QtWidgets import (
 from volren.app.core.plane_handles import extent_along
 from volren.app.core.state import ViewState
 from volren.app.panels.base import StatePanel, signals_blocked
-from volren.app.panels.controls import Gesture, GestureSpinBox
+from volren.app.panels.controls import Gesture, GestureSpinBox, set_range_showing
 from volren.app.panels.crop import decimals_for
 from volren.model.clip_region import MAX_PLANES, ClipPlane, ClipRegion
 
+#: The axis buttons' width and the number fields' least width (pixels): the panel shares the
+#: Rendering dock with the crop box and must fit its width.
+NARROW_BUTTON = 36
+SPIN_MIN_WIDTH = 40
 #: Ticks of the position slider across the volume's extent along the normal.
 POSITION_TICKS = 1000
 AXIS_NORMALS = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
@@ -78,11 +82,13 @@ class ClippingPanel(StatePanel):
         presets.addWidget(QLabel("Normal:", self))
         for name, normal in AXIS_NORMALS.items():
             button = QPushButton(name, self)
+            button.setMaximumWidth(NARROW_BUTTON)
             button.setToolTip(f"Turn the selected plane to face +{name.lower()}")
             button.clicked.connect(partial(self.set_normal, normal))
             presets.addWidget(button)
             self.axis_buttons[name] = button
         self.view_button = QPushButton("View", self)
+        self.view_button.setMaximumWidth(int(1.5 * NARROW_BUTTON))
         self.view_button.setToolTip("Turn the selected plane to face away from the eye (cut the near part)")
         self.view_button.clicked.connect(self.face_view)
         presets.addWidget(self.view_button)
@@ -95,7 +101,8 @@ class ClippingPanel(StatePanel):
             grid.addWidget(QLabel(what, self), row + 1, 0)
             for column in range(3):
                 spin = GestureSpinBox(self)
-                spin.setRange(-1e9, 1e9)
+                spin.setMinimumWidth(SPIN_MIN_WIDTH)  # the range sets the hint: six of them must fit ~260 px
+                spin.setRange(-1.0, 1.0)
                 spin.valueChanged.connect(self._on_spin)
                 self._gesture.attach_spin_box(spin)
                 grid.addWidget(spin, row + 1, column + 1)
@@ -160,10 +167,19 @@ class ClippingPanel(StatePanel):
         if index is None or volume is None:
             return
         plane = self.planes[index]
-        decimals = decimals_for(max(np.subtract(volume.bounds[1::2], volume.bounds[0::2])))
-        for spin, value in zip(self.spins, (*plane.origin, *plane.normal), strict=True):
+        extent = float(max(np.subtract(volume.bounds[1::2], volume.bounds[0::2])))
+        decimals = decimals_for(extent)
+        for axis, spin in enumerate(self.spins):
+            value = (*plane.origin, *plane.normal)[axis]
             with signals_blocked(spin):
-                spin.setDecimals(decimals)
+                spin.setDecimals(decimals if axis < 3 else 3)
+                if axis < 3:  # a point within the volume's extent around it; a normal's components in [-1, 1]
+                    lo, hi = float(volume.bounds[2 * axis]), float(volume.bounds[2 * axis + 1])
+                    set_range_showing(spin, lo - extent, hi + extent, value)
+                    spin.setSingleStep(extent / 100.0 or 1.0)
+                else:
+                    set_range_showing(spin, -1.0, 1.0, value)
+                    spin.setSingleStep(0.05)
                 spin.setValue(value)
         lo, hi = extent_along(volume.bounds, plane.normal)
         n = np.asarray(plane.normal) / np.linalg.norm(plane.normal)
