@@ -55,11 +55,32 @@ def kept_interval(
     return start, end, box_start
 
 
-def _camera_rays(camera: Camera, width: int, height: int) -> tuple[NDArray, NDArray, NDArray]:
-    """Pixel-centre rays (origins on the near plane, unit directions) and their far-plane parameters."""
+def pixel_kept_intervals(
+    camera: Camera,
+    width: int,
+    height: int,
+    bounds: Sequence[float],
+    half_spaces: NDArray[np.float64] | None = None,
+) -> tuple[
+    NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
+]:
+    """(origins, directions, start, end, box start): `kept_interval` of every pixel-centre ray of
+    `camera` (origins on the near plane, unit directions, (H, W, 3)), the far plane included."""
     origins, directions = camera.pixel_rays(width, height)
     near, far = camera.clipping_range
-    return origins, directions, (far - near) / (directions @ camera.direction)
+    start, end, box_start = kept_interval(
+        origins, directions, (far - near) / (directions @ camera.direction), bounds, half_spaces
+    )
+    return origins, directions, start, end, box_start
+
+
+def at_an_edge(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Pixels (not on the image's border) with a 4-neighbour of another `mask` value: where a ray
+    grazing the edge of a region may fall either way in float precision."""
+    differs = np.any([np.roll(mask, s, axis=a) != mask for a in (0, 1) for s in (1, -1)], axis=0)
+    edge = np.zeros_like(mask)
+    edge[1:-1, 1:-1] = differs[1:-1, 1:-1]
+    return edge
 
 
 def box_path_lengths(
@@ -71,7 +92,7 @@ def box_path_lengths(
 ) -> NDArray[np.float64]:
     """Length (H, W) of each pixel-centre ray inside the box, between the near and far planes, and
     on the kept side of every row of `half_spaces` (`kept_interval`)."""
-    start, end, _ = kept_interval(*_camera_rays(camera, width, height), bounds, half_spaces)
+    _, _, start, end, _ = pixel_kept_intervals(camera, width, height, bounds, half_spaces)
     return np.maximum(end - start, 0.0)
 
 
@@ -81,8 +102,9 @@ def entered_through_a_plane(
     """(H, W) whether each pixel-centre ray enters the part of the box kept by `half_spaces`
     through one of them (where a cut face is drawn) rather than through the box or the near plane,
     and (H, W, 3) the entry points."""
-    origins, directions, far = _camera_rays(camera, width, height)
-    start, end, box_start = kept_interval(origins, directions, far, bounds, half_spaces)
+    origins, directions, start, end, box_start = pixel_kept_intervals(
+        camera, width, height, bounds, half_spaces
+    )
     through = (start > box_start) & (end > start)
     return through, origins + start[..., None] * directions
 

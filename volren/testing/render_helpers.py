@@ -95,3 +95,24 @@ def clipped_constant_box(
         assert image_error(expected, whole).rmse > 0.03  # the planes matter
         cases.append((near, far, clipped, expected))
     return volume, tf, cases
+
+
+def ramp_maximum_on_cut(
+    camera: Camera,
+    width: int,
+    height: int,
+    bounds: Sequence[float],
+    half_spaces: NDArray[np.float64],
+    tf: TransferFunction1D,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """(expected image, pixels to compare) of a maximum projection of s = x + y / 2 over each
+    ray's kept part (`oracles.pixel_kept_intervals`): s is linear along a ray, so its maximum
+    lies at an end of the kept interval; the pixels compared leave out those at the edge of the
+    kept region (`oracles.at_an_edge`). Asserts that both hit and missed rays are many."""
+    origins, directions, t0, t1, _ = oracles.pixel_kept_intervals(camera, width, height, bounds, half_spaces)
+    hit = t1 > t0 + 1e-6
+    ends = [origins + t[..., None] * directions for t in (t0, t1)]
+    peak = np.maximum(*(p[..., 0] + 0.5 * p[..., 1] for p in ends))
+    expected = np.where(hit[..., None], oracles.projection_rgba(tf, np.where(hit, peak, 0.0)), 0.0)
+    assert hit.sum() > 200 and (~hit).sum() > 200
+    return expected, ~oracles.at_an_edge(hit)

@@ -15,7 +15,7 @@ from volren.kernels.sample_placement import pixel_phases
 from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.model.clip_region import ClipPlane, ClipRegion
 from volren.testing import image_error, oracles
-from volren.testing.render_helpers import SHELL_TF, field, render_checked
+from volren.testing.render_helpers import SHELL_TF, field, ramp_maximum_on_cut, render_checked
 from volren.testing.scenes import lattice_volume
 
 draw = partial(render_checked, ObjectOrderRenderer)
@@ -105,20 +105,8 @@ def test_a_maximum_projection_of_a_ramp_peaks_exactly_on_the_cut(parallel):
     camera = Camera.orbit(volume.bounds, 35, 25, zoom=1.2, parallel=parallel)
     image, _ = draw(volume, tf, camera, (w, h), blend_mode="maximum", clip=region)
 
-    origins, directions = camera.pixel_rays(w, h)
-    near, far = camera.clipping_range
-    t_far = (far - near) / (directions @ camera.direction)
-    t0, t1 = oracles.kept_interval(origins, directions, t_far, volume.bounds, region.half_spaces())[:2]
-    hit = t1 > t0 + 1e-6
-    ends = [origins + t[..., None] * directions for t in (t0, t1)]
-    peak = np.maximum(*(p[..., 0] + 0.5 * p[..., 1] for p in ends))
-    expected = np.where(hit[..., None], oracles.projection_rgba(tf, np.where(hit, peak, 0.0)), 0.0)
-    edge = np.zeros_like(hit)  # pixels whose ray grazes the kept region's boundary
-    edge[1:-1, 1:-1] = np.any([np.roll(hit, s, axis=a) != hit for a in (0, 1) for s in (1, -1)], axis=0)[
-        1:-1, 1:-1
-    ]
-    assert hit.sum() > 200 and (~hit).sum() > 200
-    assert np.abs(image - expected)[~edge].max() < 1e-4
+    expected, compared = ramp_maximum_on_cut(camera, w, h, volume.bounds, region.half_spaces(), tf)
+    assert np.abs(image - expected)[compared].max() < 1e-4
 
 
 @pytest.mark.parametrize("parallel", [False, True])
