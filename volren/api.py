@@ -120,6 +120,8 @@ def drawing(
     volume again (`volren.draw.Drawing`)."""
     if clip_planes or crop is not None:
         settings["clip"] = ClipRegion(tuple(clip_planes), None if crop is None else check_box(crop), clip_cap)
+    elif clip_cap:
+        raise VolrenError("clip_cap: give clip_planes or crop (there is nothing cut to cap)")
     source = _open_input(volume, scalars, memory, level)
     vol = source.stand_in()
     transfer = as_transfer_function(tf, vol)

@@ -61,6 +61,13 @@ def test_a_renderer_that_does_not_clip_refuses_in_one_line():
     assert "\n" not in str(exc.value)
 
 
+def test_a_cap_with_nothing_cut_is_refused_in_one_line_as_on_the_command_line():
+    volume = lattice_volume("uniform", lambda x, y, z: x, (5, 5, 5))
+    with pytest.raises(volren.VolrenError, match="clip_cap: give clip_planes or crop") as exc:
+        volren.render(volume, size=16, clip_cap=True)
+    assert "\n" not in str(exc.value)
+
+
 def test_moving_a_plane_keeps_raycasts_chosen_step_and_bricks():
     """A drag moves a plane every frame: the step search (hundreds of ms) and the brick
     classification serve the TF and the data and must not run again."""

@@ -28,6 +28,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
@@ -141,30 +142,37 @@ class Factorization:
         lo = np.full((self.height, self.width), -np.inf)
         hi = np.full((self.height, self.width), np.inf)
         k0, k1 = int(self.order[0]), int(self.order[-1])
-        u0, u1 = abs(k0 - self.plane), abs(k1 - self.plane)
         for row in np.asarray(half_spaces, np.float64).reshape(-1, 4):
-            f0 = self._crossing_values(row, k0)
-            rate = (self._crossing_values(row, k1) - f0) / (u1 - u0) if u1 != u0 else np.zeros_like(f0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                cross = u0 - f0 / rate
-            lo = np.where(rate > 0.0, np.maximum(lo, cross), lo)
-            hi = np.where(rate < 0.0, np.minimum(hi, cross), hi)
-            lost = (rate == 0.0) & (f0 < 0.0)
-            lo = np.where(lost, np.inf, lo)
-            hi = np.where(lost, -np.inf, hi)
-        return np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+            # a x + b y + c z + d where the ray crosses slice k: affine in the pixel's column and row
+            ra, rb, rc = row[list(self.perm)]
+            front = (ra * self.alpha_a[k0] + rb * self.alpha_b[k0] + rc * k0 + row[3],
+                     ra * self.beta_a[k0], rb * self.beta_b[k0])  # fmt: skip
+            back = (ra * self.alpha_a[k1] + rb * self.alpha_b[k1] + rc * k1 + row[3],
+                    ra * self.beta_a[k1], rb * self.beta_b[k1])  # fmt: skip
+            _narrow_to_half_space(
+                lo, hi, front, back, float(abs(k0 - self.plane)), float(abs(k1 - self.plane))
+            )
+        return lo, hi
 
-    def _crossing_values(self, row: NDArray[np.float64], k: int) -> NDArray[np.float64]:
-        """(height, width): a x + b y + c z + d of `row` (grid-index x, y, z) where each intermediate ray
-        crosses slice k, separable in the pixel's column and row as the slice maps are."""
-        ra, rb, rc = row[list(self.perm)]
-        col = ra * (self.alpha_a[k] + self.beta_a[k] * np.arange(self.width, dtype=np.float64))
-        line = (
-            rb * (self.alpha_b[k] + self.beta_b[k] * np.arange(self.height, dtype=np.float64))
-            + rc * k
-            + row[3]
-        )
-        return line[:, None] + col[None, :]
+
+@njit(nogil=True, cache=True, error_model="numpy")
+def _narrow_to_half_space(lo: NDArray, hi: NDArray, front: tuple[float, float, float],
+                          back: tuple[float, float, float], u0: float, u1: float) -> None:  # fmt: skip
+    """Narrows each intermediate ray's interval of u, (lo, hi) in place, to the side of one plane
+    where its value is positive; `front` and `back` give that value on the first and last slice of
+    the compositing order (at u0 and u1) as (constant, per column, per row)."""
+    for q in range(lo.shape[0]):
+        for p in range(lo.shape[1]):
+            f0 = front[0] + front[1] * p + front[2] * q
+            f1 = back[0] + back[1] * p + back[2] * q
+            rate = (f1 - f0) / (u1 - u0) if u1 != u0 else 0.0
+            if rate > 0.0:
+                lo[q, p] = max(lo[q, p], u0 - f0 / rate)
+            elif rate < 0.0:
+                hi[q, p] = min(hi[q, p], u0 - f0 / rate)
+            elif f0 < 0.0:  # parallel to the plane and on its cut side: lost whole
+                lo[q, p] = np.inf
+                hi[q, p] = -np.inf
 
 
 def index_frame(volume: UniformVolume) -> tuple[NDArray, NDArray, NDArray]:
