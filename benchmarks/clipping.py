@@ -81,7 +81,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--styles", default=",".join(STYLES))
     parser.add_argument("--renderers", default="", help="comma-separated (default: every one that clips)")
     parser.add_argument("--frames", type=int, default=3)
+    parser.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                        help="a renderer option over its level's (repeatable; e.g. oversampling=6)")  # fmt: skip
     args = parser.parse_args(argv)
+    extra = {key: json.loads(value) for key, _, value in (o.partition("=") for o in args.option)}
     shared = shared_folder(args.shared)
     size = args.size
     command = " ".join(["python -m benchmarks.clipping", *(argv if argv is not None else sys.argv[1:])])
@@ -112,6 +115,8 @@ def main(argv: list[str] | None = None) -> None:
                 if name == "reference" or support is None or not support.clip_region:
                     continue
                 base = at_level(name, kind, "default", RenderSettings()) or RenderSettings()
+                if extra:
+                    base = base.with_(options={**base.options, **extra})
                 settings = {cut: base.with_(clip=region) for cut, region in regions.items()}
                 with prepared_renderer(name, volume, tf, base) as renderer:
                     ms, images = interleaved_ms(renderer, settings, camera, size, args.frames)

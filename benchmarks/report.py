@@ -84,6 +84,12 @@ SECTIONS = (
         "it cost no more? (`python -m benchmarks.clipping`)",
     ),
     (
+        "tf2d.md",
+        "2D transfer functions against reference",
+        "How close do the renderers that draw 2D TFs (value x gradient magnitude) come to `reference`, and at "
+        "what cost? (`python -m benchmarks.tf2d`)",
+    ),
+    (
         "app.md",
         "Desktop app responsiveness",
         "Does each gesture follow the hand: previews per second, release to full "

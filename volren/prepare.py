@@ -56,7 +56,7 @@ def _volumes(kind: str) -> Iterator[Volume]:
 
 def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Camera, bool]]]]:
     """Per small volume, the (TF, settings, camera, optional) of every combination `name`'s
-    capabilities claim, then of every level of its quality axis with a 1D TF: a level's options
+    capabilities claim, then of every level of its quality axis with a 1D TF (and a 2D one where claimed): a level's options
     (adaptive image refinement, an error target) reach kernels the default settings never do, and
     `volren render`'s default level is one of them (with them compiled at the first frame, a fresh
     install's first refined tetra frame took 2.0 s instead of 0.7). A level is optional: one that
@@ -73,8 +73,12 @@ def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Came
             claimed = [(tf1 if dims == 1 else tf2, settings, camera, False)
                        for dims, settings, is_claimed in contract_combinations(support) if is_claimed
                        for camera in cameras]  # fmt: skip
+            tfs = (tf1, tf2) if 2 in support.tf_dims else (tf1,)  # a 2D TF runs kernels of its own
             levels = [
-                (tf1, level.apply(), camera, True) for level in capabilities.quality for camera in cameras
+                (tf, level.apply(), camera, True)
+                for level in capabilities.quality
+                for tf in tfs
+                for camera in cameras
             ]
             yield volume, claimed + levels
 

@@ -124,6 +124,44 @@ def test_a_long_frame_gives_way_to_a_newer_request(qtbot, scene, monkeypatch):
     assert [f.serial for f in frames] == [second], f"frame {first} was finished although superseded"
 
 
+def test_a_long_preview_is_shown_although_newer_previews_wait(qtbot, scene, monkeypatch):
+    """Previews slower than the requests of a drag (a 2D TF's): each one is finished and shown, not
+    abandoned for the next preview, or the drag shows nothing and the cost model never learns."""
+    import volren.app.rendering.render_service as rs
+
+    monkeypatch.setattr(rs, "INTERRUPT_AFTER_S", 0.02)  # every 60 ms frame counts as long
+    service = RenderService(factory=lambda name: SlowRenderer())
+    volume, tf, camera = scene
+    frames = []
+    service.frameReady.connect(frames.append)
+    try:
+        for i in range(30):
+            service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(i), 8, 8, full=False)
+            qtbot.wait(10)
+        shown_during_drag = len(frames)
+    finally:
+        service.shutdown()
+    assert shown_during_drag >= 2, f"only {shown_during_drag} previews shown during a 0.3 s drag"
+
+
+def test_a_long_preview_gives_way_to_the_full_frame_after_release(qtbot, scene, monkeypatch):
+    import volren.app.rendering.render_service as rs
+
+    monkeypatch.setattr(rs, "INTERRUPT_AFTER_S", 0.02)
+    service = RenderService(factory=lambda name: SlowRenderer())
+    volume, tf, camera = scene
+    frames = []
+    service.frameReady.connect(frames.append)
+    try:
+        preview = service.submit("slow", volume, tf, RenderSettings(), camera, 8, 8, full=False)
+        qtbot.wait(35)  # the preview is running, past the threshold
+        full = service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(5), 8, 8, full=True)
+        qtbot.waitUntil(lambda: any(f.serial == full for f in frames), timeout=5000)
+    finally:
+        service.shutdown()
+    assert [f.serial for f in frames] == [full], f"preview {preview} was finished although released"
+
+
 def test_slow_frames_report_progress(qtbot, scene, monkeypatch):
     import volren.app.rendering.render_service as rs
 

@@ -79,7 +79,7 @@ class Frame:
 WARM_SIZE = 8
 #: Frames slower than this report their progress, at most this often.
 PROGRESS_INTERVAL_S = 0.25
-#: A frame is abandoned for a newer request only after it ran this long since its first progress
+#: A frame is abandoned for a newer request (`_Mailbox.overtakes`) only after it ran this long since its first progress
 #: report. Interrupting every frame that a newer request overtakes would starve a continuous drag
 #: (requests at 60 Hz, frames at 20 Hz: nothing would ever be shown); a short frame is finished and
 #: shown, a slow one (the reference renderer) gives way. Counted from the first report, not the
@@ -113,6 +113,17 @@ class _Mailbox:
     def waiting(self) -> bool:
         with self._lock:
             return self._request is not None or self.closed
+
+    def overtakes(self, running: RenderRequest) -> bool:
+        """Whether what waits should stop the `running` frame: a full frame gives way to any newer
+        request, a preview only to a full frame (or to closing). A preview that gave way to the
+        next preview would starve a drag whose previews take longer than its requests come (a 2D
+        TF's, 0.4-1 s at first): none would be shown, and the frame cost model, which sizes
+        previews from the ones finished, would never learn to make them smaller."""
+        with self._lock:
+            if self.closed:
+                return True
+            return self._request is not None and (running.full or self._request.full)
 
     def close(self) -> None:
         with self._lock:
@@ -221,7 +232,11 @@ class RenderWorker(QObject):
             now = time.perf_counter()
             if not first_report:
                 first_report.append(now)
-            if fraction < 1.0 and now - first_report[0] > INTERRUPT_AFTER_S and self._mailbox.waiting():
+            if (
+                fraction < 1.0
+                and now - first_report[0] > INTERRUPT_AFTER_S
+                and self._mailbox.overtakes(request)
+            ):
                 raise _Superseded()
             if now - last_report[0] > PROGRESS_INTERVAL_S:  # only slow frames, and not too often
                 last_report[0] = now

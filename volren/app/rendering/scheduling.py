@@ -65,7 +65,7 @@ class FrameScheduler(QObject):
         self.preview_scale = preview_scale
         self.preview_budget_ms = PREVIEW_BUDGET_MS
         # per renderer, settings (repr: options are a dict) and whether the frame had a new TF
-        self._costs: dict[tuple[str, str, bool], FrameCost] = {}
+        self._costs: dict[tuple[str, str, int, bool], FrameCost] = {}
         self._tf_dragged = False  # the gesture in progress drags the TF
         self._preview: tuple[tuple, tuple[str, RenderSettings]] | None = None  # (inputs, preview) last made
         self._warmed: tuple[str, int] | None = None  # (renderer, id(volume)) last warmed up for previews
@@ -192,13 +192,14 @@ class FrameScheduler(QObject):
         except Exception:  # noqa: BLE001 - a plugin that does not import draws no previews
             return None
 
-    def _cost_key(self, renderer: str, settings: RenderSettings | None) -> tuple[str, str]:
-        """Frame costs are kept per renderer and settings (by repr: options are a dict), whatever
-        is clipped (a clip plane's drag must not start the cost model again at every step)."""
+    def _cost_key(self, renderer: str, settings: RenderSettings | None) -> tuple[str, str, int]:
+        """Frame costs are kept per renderer, settings (by repr: options are a dict) and TF
+        dimension, whatever is clipped (a clip plane's drag must not start the cost model again at every step)."""
         if self._cost_keys is None or self._cost_keys[0] is not settings:
             unclipped = settings.with_(clip=NO_CLIP) if settings is not None else None
             self._cost_keys = (settings, repr(unclipped))
-        return renderer, self._cost_keys[1]
+        tf = self._state.transfer_function  # a 2D TF's frames read gradients: 2-7x dearer than a 1D TF's
+        return renderer, self._cost_keys[1], tf.dims if tf is not None else 1
 
     def _cost(self, frame: tuple[str, RenderSettings], tf_changed: bool) -> FrameCost | None:
         """What frames of (renderer, settings) cost, with a new TF each or not, as the frame asked

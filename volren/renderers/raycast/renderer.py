@@ -17,16 +17,17 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+from volren.errors import VolrenError
 from volren.kernels.image_refinement import STRIDE_RULE, refine_image
 from volren.kernels.row_blocks import parallel_chunk_size
 from volren.kernels.sample_placement import pixel_phases
-from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
+from volren.model import BlendMode, Camera, TransferFunction1D, TransferFunction2D, UniformVolume
 from volren.model.bricks import BrickGrid
 from volren.model.preintegration import preintegrate
 from volren.model.settings import check_step
@@ -41,6 +42,7 @@ from volren.renderers.base import (
     RendererBase,
 )
 from volren.renderers.raycast import march as K
+from volren.renderers.raycast import march2d as K2
 from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, PixelView
 from volren.renderers.raycast.occupancy import empty_distance
 from volren.renderers.raycast.step_cache import remembered_step
@@ -115,13 +117,25 @@ PIXEL_CHUNK = 16
 MarchArgs = tuple[NDArray[Any], EmptyBricks, PixelView, Classification, float]
 
 
+#: The kernels a frame runs: (every pixel in tiles, listed pixels), 1D (`march`) or 2D (`march2d`).
+Kernels = tuple[Callable[..., None], Callable[..., None]]
+KERNELS_1D: Kernels = (K.march, K.march_pixels)
+KERNELS_2D: Kernels = (K2.march2d, K2.march2d_pixels)
+#: Entries of a 2D TF's table along value and gradient magnitude (as the slicer's).
+TABLE_2D = (512, 256)
+#: The step (in characteristic lengths) of a 2D TF's frames at a level that targets an error: the
+#: step search models 1D TFs only. At 0.25 the 2D march's RMSE against `reference` equals the
+#: slicer's default on every scene of `python -m benchmarks.tf2d` (0.5 is 1.5-5x the slicer's).
+STEP_2D = 0.25
+
+
 def _march_listed(
-    args: MarchArgs, pixels: NDArray[np.int64]
+    args: tuple, pixels: NDArray[np.int64], kernels: Kernels = KERNELS_1D
 ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
     """(premultiplied RGBA (n, 4), (samples, jumps) (n, 2)) of the listed pixels' rays (`march_pixels`)."""
     rgba = np.empty((len(pixels), 4), np.float32)
     counts = np.zeros((len(pixels), 2), np.int64)
-    K.march_pixels(*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
+    kernels[1](*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
     return rgba, counts
 
 
@@ -133,7 +147,7 @@ class RaycastRenderer(RendererBase):
     capabilities: ClassVar[Capabilities] = Capabilities(
         kinds={
             "uniform": KindSupport(
-                tf_dims=frozenset({1}),
+                tf_dims=frozenset({1, 2}),  # 2D: composite, post-classified (`march2d`)
                 preintegration=True,
                 blend_modes=frozenset(BlendMode),
                 accuracy=Accuracy(rmse=0.02, position_px=0.05),
@@ -206,6 +220,10 @@ class RaycastRenderer(RendererBase):
         self._step: tuple[tuple, tuple[float, float]] | None = (
             None  # (TF and settings, (step, its estimated error))
         )
+        self._gradients: K2.Gradients2D | None = None  # the grid points' gradients, for 2D TFs
+        self._table2d: tuple[tuple, NDArray[np.float32], NDArray[np.int8]] | None = (
+            None  # (TF version, table, kinds)
+        )
 
     def _volume_changed(self) -> None:
         volume = self.volume
@@ -215,6 +233,7 @@ class RaycastRenderer(RendererBase):
         self._grid = None
         self._empty = None
         self._step = None
+        self._gradients = None
 
     def release(self) -> None:
         self._values = self._grid = self._empty = self._phases = None
@@ -245,7 +264,7 @@ class RaycastRenderer(RendererBase):
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         volume = self.volume
         tf = self.transfer_function
-        assert isinstance(volume, UniformVolume) and isinstance(tf, TransferFunction1D)
+        assert isinstance(volume, UniformVolume) and isinstance(tf, TransferFunction1D | TransferFunction2D)
         assert self._values is not None
         settings = self.settings
         opts = self.opts
@@ -264,6 +283,12 @@ class RaycastRenderer(RendererBase):
         view_dir = np.asarray(camera.direction, dtype=np.float64)
         planes = settings.clip.half_spaces_in_grid(origin, spacing)
         view = PixelView(inv, width, height, origin, spacing, view_dir, float(far - near), phases, planes)
+        if isinstance(tf, TransferFunction2D):  # composite, post-classified (the capabilities)
+            if settings.clip.caps:
+                raise VolrenError("raycast: cut faces (clip caps) need a 1D transfer function")
+            if opts["target_error"] > 0:  # no error-targeted step for 2D TFs: the measured one
+                h = min(h, STEP_2D * volume.characteristic_length)
+            return self._render_2d(tf, h, opts, view, progress)
         if mode != BlendMode.COMPOSITE:
             return self._project(tf, mode, view, h)
         pre = bool(settings.preintegration)
@@ -347,9 +372,68 @@ class RaycastRenderer(RendererBase):
             self._step = (key, remembered_step(self._values, scene, search))
         return self._step[1]
 
+    def _render_2d(self, tf: TransferFunction2D, h: float, opts: Mapping[str, Any], view: PixelView,
+                   progress: ProgressCallback | None) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
+        """A frame with a 2D TF (`march2d`): the march at the settings' step (the error-targeted step
+        is chosen for 1D TFs), every pixel or adaptively refined."""
+        volume = self.volume
+        assert isinstance(volume, UniformVolume) and self._values is not None
+        if self._gradients is None:
+            self._gradients = K2.gradients(self._values, volume.spacing)
+        lo, hi = spanning(*tf.value_range)
+        gmax = float(tf.gradient_range[1])
+        key = (id(tf), tf.version, lo, hi)
+        if self._table2d is None or self._table2d[0] != key:
+            nv, ng = TABLE_2D
+            values = np.linspace(lo, hi, nv)[None, :]
+            magnitudes = np.linspace(0.0, gmax, ng)[:, None]
+            rgb, alpha = tf.sample(values, magnitudes)  # extinction as `tf.extinction`, sampled once
+            tau = -np.log1p(-np.minimum(alpha, K.MAX_OPACITY)) / tf.opacity_unit_distance
+            table = np.ascontiguousarray(np.concatenate([rgb, tau[..., None]], axis=-1), dtype=np.float32)
+            self._table2d = (key, table, K2.interval_kinds(table))
+        table, kinds = self._table2d[1], self._table2d[2]
+        nv, ng = table.shape[1], table.shape[0]
+        tab = K2.Table2D(
+            table, float(lo), float((nv - 1) / (hi - lo)), float((ng - 1) / gmax), float(h), kinds
+        )
+        empty = self._empty_bricks_2d(
+            table, lo, hi, int(opts["brick_size"]), bool(opts["empty_space_skipping"])
+        )
+        term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
+        args = (self._values, self._gradients, EmptyBricks(empty, int(opts["brick_size"])), view, tab, term)
+        stride = int(opts["image_stride"])
+        if stride > 1:
+            image, samples, jumps, rays = self._refined(args, view.width, view.height, stride,
+                                                        opts["refine_tolerance"], progress, KERNELS_2D)  # fmt: skip
+        else:
+            image, samples, jumps = self._every_pixel(args, view.width, view.height, progress, KERNELS_2D)
+            rays = view.width * view.height
+        return image, {"samples": float(samples), "jumps": float(jumps), "rays_cast": float(rays),
+                       "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size)}  # fmt: skip
+
+    def _empty_bricks_2d(self, table: NDArray[np.float32], lo: float, hi: float, brick: int,
+                         skipping: bool) -> NDArray[np.int32]:  # fmt: skip
+        """Each brick's distance to the nearest brick to sample (`occupancy`) under a 2D TF's table: a
+        brick is visible where the table has extinction at any gradient magnitude for a value in its
+        range (widened by one entry either side: the table interpolates between entries)."""
+        volume = self.volume
+        assert isinstance(volume, UniformVolume)
+        if self._grid is None or self._grid[0] != (brick, 0):
+            self._grid = ((brick, 0), BrickGrid.from_volume(volume, brick, 0))
+        grid = self._grid[1]
+        if not skipping:
+            return empty_distance(np.ones(grid.shape, dtype=bool))
+        nv = table.shape[1]
+        seen = np.concatenate([[0], np.cumsum(table[..., 3].max(axis=0) > 0.0)])
+        scale = (nv - 1) / (hi - lo)
+        first = np.clip(np.floor((grid.vmin - lo) * scale) - 1, 0, nv - 1).astype(np.int64)
+        last = np.clip(np.ceil((grid.vmax - lo) * scale) + 1, 0, nv - 1).astype(np.int64)
+        visible = (seen[last + 1] - seen[first] > 0) & ~grid.empty
+        return empty_distance(visible)
+
     @staticmethod
-    def _every_pixel(args: MarchArgs, width: int, height: int, progress: ProgressCallback | None
-                     ) -> tuple[NDArray[np.float32], int, int]:  # fmt: skip
+    def _every_pixel(args: tuple, width: int, height: int, progress: ProgressCallback | None,
+                     kernels: Kernels = KERNELS_1D) -> tuple[NDArray[np.float32], int, int]:  # fmt: skip
         """(image, samples, jumps): a ray through every pixel, in tiles."""
         image = np.empty((height, width, 4), np.float32)
         n_tiles = ((width + K.TILE - 1) // K.TILE) * ((height + K.TILE - 1) // K.TILE)
@@ -357,21 +441,22 @@ class RaycastRenderer(RendererBase):
         order = np.arange(n_tiles, dtype=np.int64)
         with parallel_chunk_size(1):  # tiles differ widely in cost: one at a time
             for start in range(0, n_tiles, TILES_PER_CALL):
-                K.march(*args, order[start : start + TILES_PER_CALL], image.reshape(-1, 4), counts)
+                kernels[0](*args, order[start : start + TILES_PER_CALL], image.reshape(-1, 4), counts)
                 if progress is not None:
                     progress(min(1.0, (start + TILES_PER_CALL) / n_tiles))
         samples, jumps = counts.sum(axis=0)
         return image, int(samples), int(jumps)
 
     @staticmethod
-    def _refined(args: MarchArgs, width: int, height: int, stride: int, tolerance: float,
-                 progress: ProgressCallback | None) -> tuple[NDArray[np.float32], int, int, int]:  # fmt: skip
+    def _refined(args: tuple, width: int, height: int, stride: int, tolerance: float,
+                 progress: ProgressCallback | None,
+                 kernels: Kernels = KERNELS_1D) -> tuple[NDArray[np.float32], int, int, int]:  # fmt: skip
         """(image, samples, jumps, rays cast): adaptive image refinement (`refine_image`), rays cast
         where a block's corner rays disagree, the rest interpolated."""
         totals = np.zeros(2, np.int64)
 
         def cast(pixels: NDArray[np.int64]) -> NDArray[np.float32]:
-            rgba, counts = _march_listed(args, pixels)
+            rgba, counts = _march_listed(args, pixels, kernels)
             totals[:] += counts.sum(axis=0)
             return rgba
 
