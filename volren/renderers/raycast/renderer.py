@@ -125,7 +125,7 @@ KERNELS_2D: Kernels = (K2.march2d, K2.march2d_pixels)
 TABLE_2D = (512, 256)
 #: The step (in characteristic lengths) of a 2D TF's frames at a level that targets an error: the
 #: step search models 1D TFs only. At 0.25 the 2D march's RMSE against `reference` equals the
-#: slicer's default on every scene of `python -m benchmarks.tf2d` (0.5 is 1.5-5x the slicer's).
+#: slicer's default on every scene of `python -m benchmarks.tf2d` (0.5 is 1.3-9.1x the slicer's).
 STEP_2D = 0.25
 
 
