@@ -483,11 +483,18 @@ def test_a_2d_tf_from_a_band_tf_switches_to_a_renderer_that_draws_it(make_window
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.files.apply_loaded(LoadedInput(sample.volume, band, source="band"))
     assert w.state.settings.preintegration  # the band level
+    submitted = []  # every frame asked for: none may go to a renderer that refuses it (a race with the fix)
+    submit = w.service.submit
+    w.service.submit = lambda name, volume, tf, settings, *rest: (
+        submitted.append((name, tf.dims, settings)), submit(name, volume, tf, settings, *rest))[1]  # fmt: skip
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS) as blocker:
         w.docks.tf_panel.editor_2d.use_2d_transfer_function()
     assert w.state.transfer_function.dims == 2 and blocker.args[0].renderer == w.state.renderer
     caps = w.registry.capabilities(w.state.renderer)
     assert caps.unsupported_reason("uniform", 2, w.state.settings) is None
+    refused = [(name, dims) for name, dims, settings in submitted
+               if w.registry.capabilities(name).unsupported_reason("uniform", dims, settings) is not None]  # fmt: skip
+    assert submitted and refused == []
     assert error_boxes == []
 
 
@@ -679,7 +686,8 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
 ):
     """Issue 22, progressive refinement: when the still frame is measured slow and the preview
     settings are at most half its cost, the whole view comes first at the preview settings, then
-    the still frame; one that is cheap comes alone."""
+    the still frame; one that is cheap comes alone, and so does one whose coarse frame would itself
+    take seconds."""
     from volren.app.rendering.render_service import Frame
 
     table_256 = {"table_size": 256}
@@ -708,6 +716,16 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
     assert [(f.full, (f.width, f.height), f.settings.step) for f in frames] == [
         (False, (width, height), 0.5), (True, (width, height), 0.25)]  # fmt: skip
     assert frames[1].camera == frames[0].camera == w.state.camera
+
+    # a coarse frame of seconds would only delay the still frame: it comes alone
+    w.scheduler._costs.clear()
+    for settings, ms in ((still, 14000.0), (coarse, 8000.0)):
+        w.scheduler.note_frame(Frame(0, "fake_drag", width, height, ms, True, np.zeros((1, 1, 3), np.uint8),
+                                     w.state.camera, settings))  # fmt: skip
+    frames.clear()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.state.set_camera(w.state.camera.azimuth(5.0))
+    assert [f.full for f in frames] == [True]
 
 
 def test_frames_with_a_new_tf_size_the_tf_drags_previews_only(make_window, fake_renderers, sample, qtbot):

@@ -37,6 +37,10 @@ PREVIEW_SCALE = 0.5
 #: A still frame measured slower than this (ms) comes after a coarse frame of the whole view at the
 #: preview settings (progressive refinement), when that costs at most half as much.
 REFINE_AFTER_MS = 400.0
+#: ... and when the coarse frame itself comes soon: the screen already shows the gesture's last
+#: preview, so a coarse frame of seconds only delays the still frame (a 2D TF on bonsai: 8 s of
+#: coarse frame before a 14 s still frame, release to full frame 19.5 s).
+COARSE_MAX_MS = 250.0
 #: What a preview frame may cost; slower renderers get coarser previews. 80 ms (12.5 fps, above the
 #: 10 fps a drag needs): at 50 ms objectorder's bonsai previews were 3 % of the pixels at 17 fps.
 PREVIEW_BUDGET_MS = 80.0
@@ -70,6 +74,8 @@ class FrameScheduler(QObject):
         self._preview: tuple[tuple, tuple[str, RenderSettings]] | None = None  # (inputs, preview) last made
         self._warmed: tuple[str, int] | None = None  # (renderer, id(volume)) last warmed up for previews
         self._cost_keys: tuple[RenderSettings | None, str] | None = None  # (settings, its repr) last asked
+        self._tf_dims = 1  # of the TF last seen: a change of dimension may change renderer or settings
+        self._detached = False
         self._pending_final: tuple[int, tuple] | None = (
             None  # (coarse frame's serial, the still frame's request)
         )
@@ -84,6 +90,16 @@ class FrameScheduler(QObject):
         self._unsubscribe = state.subscribe(self._on_change)
 
     def _on_change(self, change: Change) -> None:
+        tf = self._state.transfer_function
+        dims = tf.dims if tf is not None else self._tf_dims
+        if dims != self._tf_dims and not change.interactive:
+            # a 1D TF turned 2D (or back): the renderer control may move to another renderer or drop
+            # pre-integration in the listeners after this one; a frame asked for now would go to a
+            # renderer that refuses it (an error box for a state that lasts microseconds)
+            self._tf_dims = dims
+            self._timer.stop()
+            QTimer.singleShot(0, self._request_full_if_attached)
+            return
         if change.what == "interaction":  # a gesture ended (a release): full quality at once
             self._tf_dragged = False
             self.request_full()
@@ -290,12 +306,13 @@ class FrameScheduler(QObject):
     def _worth_refining(self, pixels: int, still_frame: tuple[str, RenderSettings],
                         coarse_frame: tuple[str, RenderSettings]) -> bool:  # fmt: skip
         """Whether a still frame is slow enough (REFINE_AFTER_MS, as measured for its settings) and
-        the coarse one cheap enough (at most half of it) to show the coarse one first."""
+        the coarse one cheap enough (at most half of it, and at most COARSE_MAX_MS) to show the
+        coarse one first."""
         still_ms = self._predicted_ms(still_frame, pixels)
         if still_ms is None:
             return False
         cheap_ms = self._predicted_ms(coarse_frame, pixels) or 0.0
-        return still_ms > REFINE_AFTER_MS and cheap_ms <= 0.5 * still_ms
+        return still_ms > REFINE_AFTER_MS and cheap_ms <= min(0.5 * still_ms, COARSE_MAX_MS)
 
     def _predicted_ms(self, frame: tuple[str, RenderSettings], pixels: int) -> float | None:
         """What a frame of `pixels` by (renderer, settings) costs, from that pair's frames (None: none yet)."""
@@ -309,7 +326,12 @@ class FrameScheduler(QObject):
             request, self._pending_final = self._pending_final[1], None
             self._service.submit(*request)
 
+    def _request_full_if_attached(self) -> None:
+        if not self._detached:
+            self.request_full()
+
     def detach(self) -> None:
         """Stop listening (the window is closing)."""
+        self._detached = True
         self._timer.stop()
         self._unsubscribe()
