@@ -117,10 +117,15 @@ PIXEL_CHUNK = 16
 MarchArgs = tuple[NDArray[Any], EmptyBricks, PixelView, Classification, float]
 
 
-#: The kernels a frame runs: (every pixel in tiles, listed pixels), 1D (`march`) or 2D (`march2d`).
+#: The kernels a frame runs: (every pixel in tiles, listed pixels).
 Kernels = tuple[Callable[..., None], Callable[..., None]]
-KERNELS_1D: Kernels = (K.march, K.march_pixels)
-KERNELS_2D: Kernels = (K2.march2d, K2.march2d_pixels)
+
+
+def _kernels(two_d: bool) -> Kernels:
+    """The 1D march's kernels (`march`) or the 2D TF's (`march2d`), looked up when a frame runs."""
+    return (K2.march2d, K2.march2d_pixels) if two_d else (K.march, K.march_pixels)
+
+
 #: Entries of a 2D TF's table along value and gradient magnitude (as the slicer's).
 TABLE_2D = (512, 256)
 #: The step (in characteristic lengths) of a 2D TF's frames at a level that targets an error: the
@@ -130,12 +135,12 @@ STEP_2D = 0.25
 
 
 def _march_listed(
-    args: tuple, pixels: NDArray[np.int64], kernels: Kernels = KERNELS_1D
+    args: tuple, pixels: NDArray[np.int64], two_d: bool = False
 ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
     """(premultiplied RGBA (n, 4), (samples, jumps) (n, 2)) of the listed pixels' rays (`march_pixels`)."""
     rgba = np.empty((len(pixels), 4), np.float32)
     counts = np.zeros((len(pixels), 2), np.int64)
-    kernels[1](*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
+    _kernels(two_d)[1](*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
     return rgba, counts
 
 
@@ -404,9 +409,9 @@ class RaycastRenderer(RendererBase):
         stride = int(opts["image_stride"])
         if stride > 1:
             image, samples, jumps, rays = self._refined(args, view.width, view.height, stride,
-                                                        opts["refine_tolerance"], progress, KERNELS_2D)  # fmt: skip
+                                                        opts["refine_tolerance"], progress, True)  # fmt: skip
         else:
-            image, samples, jumps = self._every_pixel(args, view.width, view.height, progress, KERNELS_2D)
+            image, samples, jumps = self._every_pixel(args, view.width, view.height, progress, True)
             rays = view.width * view.height
         return image, {"samples": float(samples), "jumps": float(jumps), "rays_cast": float(rays),
                        "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size)}  # fmt: skip
@@ -433,7 +438,7 @@ class RaycastRenderer(RendererBase):
 
     @staticmethod
     def _every_pixel(args: tuple, width: int, height: int, progress: ProgressCallback | None,
-                     kernels: Kernels = KERNELS_1D) -> tuple[NDArray[np.float32], int, int]:  # fmt: skip
+                     two_d: bool = False) -> tuple[NDArray[np.float32], int, int]:  # fmt: skip
         """(image, samples, jumps): a ray through every pixel, in tiles."""
         image = np.empty((height, width, 4), np.float32)
         n_tiles = ((width + K.TILE - 1) // K.TILE) * ((height + K.TILE - 1) // K.TILE)
@@ -441,7 +446,7 @@ class RaycastRenderer(RendererBase):
         order = np.arange(n_tiles, dtype=np.int64)
         with parallel_chunk_size(1):  # tiles differ widely in cost: one at a time
             for start in range(0, n_tiles, TILES_PER_CALL):
-                kernels[0](*args, order[start : start + TILES_PER_CALL], image.reshape(-1, 4), counts)
+                _kernels(two_d)[0](*args, order[start : start + TILES_PER_CALL], image.reshape(-1, 4), counts)
                 if progress is not None:
                     progress(min(1.0, (start + TILES_PER_CALL) / n_tiles))
         samples, jumps = counts.sum(axis=0)
@@ -450,13 +455,13 @@ class RaycastRenderer(RendererBase):
     @staticmethod
     def _refined(args: tuple, width: int, height: int, stride: int, tolerance: float,
                  progress: ProgressCallback | None,
-                 kernels: Kernels = KERNELS_1D) -> tuple[NDArray[np.float32], int, int, int]:  # fmt: skip
+                 two_d: bool = False) -> tuple[NDArray[np.float32], int, int, int]:  # fmt: skip
         """(image, samples, jumps, rays cast): adaptive image refinement (`refine_image`), rays cast
         where a block's corner rays disagree, the rest interpolated."""
         totals = np.zeros(2, np.int64)
 
         def cast(pixels: NDArray[np.int64]) -> NDArray[np.float32]:
-            rgba, counts = _march_listed(args, pixels, kernels)
+            rgba, counts = _march_listed(args, pixels, two_d)
             totals[:] += counts.sum(axis=0)
             return rgba
 
