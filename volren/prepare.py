@@ -56,11 +56,11 @@ def _volumes(kind: str) -> Iterator[Volume]:
 
 def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Camera, bool]]]]:
     """Per small volume, the (TF, settings, camera, optional) of every combination `name`'s
-    capabilities claim, then of every level of its quality axis with a 1D TF (and a 2D one where claimed): a level's options
-    (adaptive image refinement, an error target) reach kernels the default settings never do, and
-    `volren render`'s default level is one of them (with them compiled at the first frame, a fresh
-    install's first refined tetra frame took 2.0 s instead of 0.7). A level is optional: one that
-    does not apply to this kind of volume is passed over."""
+    capabilities claim, then of every level of its quality axis with a 1D TF (and a 2D one where
+    claimed): a level's options (adaptive image refinement, an error target) reach kernels the
+    default settings never do, and `volren render`'s default level is one of them (with them
+    compiled at the first frame, a fresh install's first refined tetra frame took 2.0 s instead of
+    0.7). A level is optional: one that does not apply to this kind of volume is passed over."""
     from volren.renderers.registry import registry
 
     capabilities = registry.capabilities(name)

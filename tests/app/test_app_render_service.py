@@ -89,24 +89,32 @@ def test_newest_request_wins_and_the_renderer_stays_on_one_thread(qtbot, scene):
     assert kinds.count("volume") == 1 and kinds.count("tf") == 1, "unchanged inputs were sent again"
 
 
-def test_a_continuous_drag_still_shows_frames(qtbot, scene):
-    """Requests every 10 ms, frames of 60 ms: each frame finishes and is shown (a newer request
-    waiting must not abandon a short frame, or a drag would show nothing until it stops)."""
+def _previews_shown_during_a_drag(qtbot, scene, requests: int) -> int:
+    """Preview requests every 10 ms to `SlowRenderer` (60 ms a frame): the frames shown meanwhile."""
     service = RenderService(factory=lambda name: SlowRenderer())
     volume, tf, camera = scene
     frames = []
     service.frameReady.connect(frames.append)
     try:
-        for i in range(60):
+        for i in range(requests):
             service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(i), 8, 8, full=False)
             qtbot.wait(10)
-        shown_during_drag = len(frames)
+        return len(frames)
     finally:
         service.shutdown()
+
+
+def test_a_continuous_drag_still_shows_frames(qtbot, scene):
+    """Requests every 10 ms, frames of 60 ms: each frame finishes and is shown (a newer request
+    waiting must not abandon a short frame, or a drag would show nothing until it stops)."""
+    shown_during_drag = _previews_shown_during_a_drag(qtbot, scene, 60)
     assert shown_during_drag >= 4, f"only {shown_during_drag} frames shown during a 0.6 s drag"
 
 
-def test_a_long_frame_gives_way_to_a_newer_request(qtbot, scene, monkeypatch):
+@pytest.mark.parametrize("first_full", [True, False], ids=["full frame", "preview"])
+def test_a_long_frame_gives_way_to_a_newer_full_frame(qtbot, scene, monkeypatch, first_full):
+    """A full frame or a preview that runs long is abandoned for the full frame asked for after it
+    (a release's): only the newer one is shown."""
     import volren.app.rendering.render_service as rs
 
     monkeypatch.setattr(rs, "INTERRUPT_AFTER_S", 0.02)  # the 60 ms frame counts as long
@@ -115,9 +123,9 @@ def test_a_long_frame_gives_way_to_a_newer_request(qtbot, scene, monkeypatch):
     frames = []
     service.frameReady.connect(frames.append)
     try:
-        first = service.submit("slow", volume, tf, RenderSettings(), camera, 8, 8)
+        first = service.submit("slow", volume, tf, RenderSettings(), camera, 8, 8, full=first_full)
         qtbot.wait(35)  # the first frame is running, past the threshold
-        second = service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(5), 8, 8)
+        second = service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(5), 8, 8, full=True)
         qtbot.waitUntil(lambda: any(f.serial == second for f in frames), timeout=5000)
     finally:
         service.shutdown()
@@ -130,36 +138,8 @@ def test_a_long_preview_is_shown_although_newer_previews_wait(qtbot, scene, monk
     import volren.app.rendering.render_service as rs
 
     monkeypatch.setattr(rs, "INTERRUPT_AFTER_S", 0.02)  # every 60 ms frame counts as long
-    service = RenderService(factory=lambda name: SlowRenderer())
-    volume, tf, camera = scene
-    frames = []
-    service.frameReady.connect(frames.append)
-    try:
-        for i in range(30):
-            service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(i), 8, 8, full=False)
-            qtbot.wait(10)
-        shown_during_drag = len(frames)
-    finally:
-        service.shutdown()
+    shown_during_drag = _previews_shown_during_a_drag(qtbot, scene, 30)
     assert shown_during_drag >= 2, f"only {shown_during_drag} previews shown during a 0.3 s drag"
-
-
-def test_a_long_preview_gives_way_to_the_full_frame_after_release(qtbot, scene, monkeypatch):
-    import volren.app.rendering.render_service as rs
-
-    monkeypatch.setattr(rs, "INTERRUPT_AFTER_S", 0.02)
-    service = RenderService(factory=lambda name: SlowRenderer())
-    volume, tf, camera = scene
-    frames = []
-    service.frameReady.connect(frames.append)
-    try:
-        preview = service.submit("slow", volume, tf, RenderSettings(), camera, 8, 8, full=False)
-        qtbot.wait(35)  # the preview is running, past the threshold
-        full = service.submit("slow", volume, tf, RenderSettings(), camera.azimuth(5), 8, 8, full=True)
-        qtbot.waitUntil(lambda: any(f.serial == full for f in frames), timeout=5000)
-    finally:
-        service.shutdown()
-    assert [f.serial for f in frames] == [full], f"preview {preview} was finished although released"
 
 
 def test_slow_frames_report_progress(qtbot, scene, monkeypatch):

@@ -703,13 +703,17 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
         w.state.set_camera(w.state.camera.azimuth(5.0))  # measured cheap: no refinement
     assert [f.full for f in frames] == [True]
 
-    # what the scheduler has measured, as if the still frames took 900 ms and the coarse ones 200 ms
     width, height = w.viewport.pixel_size()
     still, coarse = w.state.settings, w.scheduler.preview()[1]
-    w.scheduler._costs.clear()  # forget the fake renderer's real (instant) frames
-    for settings, ms in ((still, 900.0), (coarse, 200.0)):
-        w.scheduler.note_frame(Frame(0, "fake_drag", width, height, ms, True, np.zeros((1, 1, 3), np.uint8),
-                                     w.state.camera, settings))  # fmt: skip
+
+    def measured(still_ms: float, coarse_ms: float) -> None:
+        """What the scheduler has measured, as if the still and the coarse frames took that long."""
+        w.scheduler._costs.clear()  # forget the fake renderer's real (instant) frames
+        for settings, ms in ((still, still_ms), (coarse, coarse_ms)):
+            w.scheduler.note_frame(Frame(0, "fake_drag", width, height, ms, True, np.zeros((1, 1, 3), np.uint8),
+                                         w.state.camera, settings))  # fmt: skip
+
+    measured(900.0, 200.0)
     frames.clear()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.state.set_camera(w.state.camera.azimuth(5.0))
@@ -717,11 +721,7 @@ def test_a_slow_still_frame_is_refined_from_a_coarse_frame_of_the_whole_view(
         (False, (width, height), 0.5), (True, (width, height), 0.25)]  # fmt: skip
     assert frames[1].camera == frames[0].camera == w.state.camera
 
-    # a coarse frame of seconds would only delay the still frame: it comes alone
-    w.scheduler._costs.clear()
-    for settings, ms in ((still, 14000.0), (coarse, 8000.0)):
-        w.scheduler.note_frame(Frame(0, "fake_drag", width, height, ms, True, np.zeros((1, 1, 3), np.uint8),
-                                     w.state.camera, settings))  # fmt: skip
+    measured(14000.0, 8000.0)  # a coarse frame of seconds would only delay the still frame: it comes alone
     frames.clear()
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
         w.state.set_camera(w.state.camera.azimuth(5.0))

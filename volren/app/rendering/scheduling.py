@@ -75,7 +75,6 @@ class FrameScheduler(QObject):
         self._warmed: tuple[str, int] | None = None  # (renderer, id(volume)) last warmed up for previews
         self._cost_keys: tuple[RenderSettings | None, str] | None = None  # (settings, its repr) last asked
         self._tf_dims = 1  # of the TF last seen: a change of dimension may change renderer or settings
-        self._detached = False
         self._pending_final: tuple[int, tuple] | None = (
             None  # (coarse frame's serial, the still frame's request)
         )
@@ -83,6 +82,11 @@ class FrameScheduler(QObject):
         self._timer.setSingleShot(True)
         self._timer.setInterval(settle_ms)
         self._timer.timeout.connect(self.request_full)
+        #: a full frame asked for once the state's other listeners have run (`_on_change`)
+        self._after_listeners = QTimer(self)
+        self._after_listeners.setSingleShot(True)
+        self._after_listeners.setInterval(0)
+        self._after_listeners.timeout.connect(self.request_full)
         self._requested_any = False
         self._last_full: tuple | None = (
             None  # what the newest full frame asked for, while nothing else was asked
@@ -98,7 +102,7 @@ class FrameScheduler(QObject):
             # renderer that refuses it (an error box for a state that lasts microseconds)
             self._tf_dims = dims
             self._timer.stop()
-            QTimer.singleShot(0, self._request_full_if_attached)
+            self._after_listeners.start()
             return
         if change.what == "interaction":  # a gesture ended (a release): full quality at once
             self._tf_dragged = False
@@ -326,12 +330,8 @@ class FrameScheduler(QObject):
             request, self._pending_final = self._pending_final[1], None
             self._service.submit(*request)
 
-    def _request_full_if_attached(self) -> None:
-        if not self._detached:
-            self.request_full()
-
     def detach(self) -> None:
         """Stop listening (the window is closing)."""
-        self._detached = True
         self._timer.stop()
+        self._after_listeners.stop()
         self._unsubscribe()
