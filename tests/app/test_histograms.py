@@ -23,7 +23,7 @@ def test_float_volume_counts_only_finite_values():
     assert hist.counts.sum() == values.size - 3
 
 
-@pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.uint16])
+@pytest.mark.parametrize("dtype", [np.int8, np.uint8, np.int16, np.uint16])
 @pytest.mark.parametrize("bins", [1, 7, 256])
 def test_integer_volumes_match_np_histogram(dtype, bins):
     info = np.iinfo(dtype)
@@ -40,10 +40,20 @@ def test_integer_volumes_match_np_histogram(dtype, bins):
 def test_integer_path_is_chunked_without_changing_counts(monkeypatch):
     import volren.model.value_histogram as histograms
 
-    monkeypatch.setattr(histograms, "_CHUNK", 100)  # many chunks for 990 values
+    monkeypatch.setattr(histograms, "_TALLY_CHUNK", 100)  # many chunks for 990 values
     values = np.arange(990, dtype=np.int16).reshape(9, 10, 11) - 400
     hist = compute_histogram(values, 13, (-400.0, 589.0))
     np.testing.assert_array_equal(hist.counts, np.histogram(values, 13, (-400.0, 589.0))[0])
+
+
+@pytest.mark.parametrize("dtype", [np.int8, np.uint8, np.int16, np.uint16])
+def test_integer_extremes_and_values_outside_the_range(dtype):
+    info = np.iinfo(dtype)
+    values = np.array([info.min, info.min + 1, -1, 0, 1, 2, 100, info.max - 1, info.max], np.int64)
+    values = values[(values >= info.min) & (values <= info.max)].astype(dtype)
+    for value_range in ((float(info.min), float(info.max)), (0.0, 100.0), (0.5, 2.5)):
+        hist = compute_histogram(values, 3, value_range)
+        np.testing.assert_array_equal(hist.counts, np.histogram(values.astype(np.float64), 3, value_range)[0])
 
 
 def test_tet_volume_uses_point_values():
