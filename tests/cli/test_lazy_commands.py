@@ -66,3 +66,17 @@ def test_a_command_does_not_import_the_other_commands():
     others = [f"volren.cli.{module}" for _, module, _ in cli_main.COMMANDS if module != "prepare_cmd"]
     assert [m for m in others if m in loaded] == []
     assert "volren.bench.datasets" not in loaded and "volren.draw" not in loaded
+
+
+def freeze_count_after(call: str) -> int:
+    """gc.get_freeze_count() in a new interpreter after `call` (a call of main) ran."""
+    code = (f"import gc, sys\nfrom volren.cli.main import main\nsys.argv = ['volren', '--version']\n"
+            f"try:\n    {call}\nexcept SystemExit:\n    pass\nprint(gc.get_freeze_count())")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return int(done.stdout.splitlines()[-1])
+
+
+def test_the_program_leaves_its_objects_to_the_os_and_a_caller_keeps_its_collector():
+    assert freeze_count_after("main()") > 0
+    assert freeze_count_after("main(['--version'])") == 0

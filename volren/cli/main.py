@@ -9,6 +9,7 @@ stray VTK output print as one line each, once (`volren.cli.messages`).
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import sys
 from collections.abc import Sequence
@@ -68,7 +69,25 @@ def command_named(argv: Sequence[str]) -> str | None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else list(argv)
+    """Run the command in `argv` (default: the program's arguments) and return its exit status."""
+    if argv is None:
+        try:
+            return _run(sys.argv[1:])
+        finally:
+            _leave_objects_to_the_os()
+    return _run(list(argv))
+
+
+def _leave_objects_to_the_os() -> None:
+    """Exclude every object alive now from the interpreter's collections at exit. Tearing down what
+    numba and VTK built took 0.3-0.45 s of a one-shot render's wall time on 2 cores (measured with
+    `/usr/bin/time` against the same process ending after `gc.freeze`); the operating system frees
+    the process's memory anyway, and atexit handlers still run. Only for the program itself: a caller
+    of `main(argv)` keeps its collector."""
+    gc.freeze()
+
+
+def _run(argv: list[str]) -> int:
     parser = build_parser(command_named(argv), every=False)
     args = parser.parse_args(argv)
     try:
