@@ -755,6 +755,27 @@ def test_frames_with_a_new_tf_size_the_tf_drags_previews_only(make_window, fake_
     assert w.scheduler.current_preview_scale(preview) == pytest.approx(0.1)
 
 
+def test_first_previews_at_new_settings_are_sized_from_the_renderers_other_frames(make_window, fake_renderers,
+                                                                                   sample, qtbot):  # fmt: skip
+    """A renderer that draws previews at settings it has drawn no frame at yet (raycast's first 2D
+    previews) sizes them from its frames at other settings of the same TF dimension (its still
+    frames), not at a quarter of the pixels for want of a cost."""
+    from volren.app.rendering.render_service import Frame
+
+    w = make_window()
+    with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
+        w.files.apply_loaded(sample, "fake")
+    width, height = w.viewport.pixel_size()
+    preview = w.scheduler.preview(tf_dragged=False)
+    finer = preview[1].with_(step=preview[1].step / 2)  # the still frames' settings, in effect
+    w.scheduler._costs.clear()  # forget the fake renderer's real (instant) frames
+    assert w.scheduler.current_preview_scale(preview) == w.scheduler.preview_scale  # nothing measured
+    budget = w.scheduler.preview_budget_ms
+    w.scheduler.note_frame(Frame(0, preview[0], width, height, 100.0 * budget, True, np.zeros((1, 1, 3), np.uint8),
+                                 w.state.camera, finer))  # fmt: skip
+    assert w.scheduler.current_preview_scale(preview) == pytest.approx(0.1)  # 1 % of the pixels: the budget
+
+
 def window_previewing_with(make_window, monkeypatch, qtbot, sample, preview: str):
     """A window showing `fake_drag`'s still frame of `sample`, with `preview` measured faster than
     `fake_drag` at `interactive` (so it draws the previews while it can)."""

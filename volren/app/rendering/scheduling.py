@@ -227,7 +227,18 @@ class FrameScheduler(QObject):
         pays for what the renderer keeps per TF (raycast's step choice, 0.1 s on bonsai), and
         rotation previews sized from the TF edits' frames were 17 % of the pixels at 18 fps."""
         key = self._cost_key(*frame)
-        return self._costs.get((*key, tf_changed)) or self._costs.get((*key, not tf_changed))
+        found = self._costs.get((*key, tf_changed)) or self._costs.get((*key, not tf_changed))
+        return found or self._cost_at_other_settings(key)
+
+    def _cost_at_other_settings(self, key: tuple[str, str, int]) -> FrameCost | None:
+        """The renderer's frames at other settings of the same TF dimension: its still frames, when
+        it draws previews too and has drawn none yet at their settings. Why: a still frame costs at
+        least what a preview does per pixel, so the first previews fit the budget (raycast's first 2D
+        previews, sized at a quarter of the pixels for want of a cost, took 2-3 s each on bonsai)."""
+        renderer, _, dims = key
+        return next(
+            (cost for (name, _, d, _), cost in self._costs.items() if name == renderer and d == dims), None
+        )
 
     def current_preview_scale(self, preview: tuple[str, RenderSettings] | None = None) -> float:
         """The side scale of the next preview, from what frames of its renderer and settings cost
