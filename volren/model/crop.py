@@ -47,21 +47,27 @@ def crop_volume(volume: Volume, box: Sequence[float]) -> Volume:
     return _crop_mesh(volume, box)
 
 
-def _crop_uniform(volume: UniformVolume, box: Box) -> UniformVolume:
+def cropped_dimensions(volume: UniformVolume, box: Sequence[float]) -> tuple[int, int, int]:
+    """The (nx, ny, nz) samples `crop_volume` keeps of a grid, without cutting it (no copy of its values)."""
+    first_stop = _index_ranges(volume, check_box(box))
+    return cast(tuple[int, int, int], tuple(stop - first for first, stop in first_stop))
+
+
+def _index_ranges(volume: UniformVolume, box: Box) -> list[tuple[int, int]]:
+    """(first, one past last) sample index inside the box along x, y and z."""
     nz, ny, nx = volume.values.shape
-    slices = []
-    origin = []
-    for axis, n in zip(range(3), (nx, ny, nz), strict=True):
-        first, stop = _index_range(
-            box[2 * axis], box[2 * axis + 1], volume.origin[axis], volume.spacing[axis], n
-        )
-        slices.append(slice(first, stop))
-        origin.append(volume.origin[axis] + first * volume.spacing[axis])
-    sx, sy, sz = slices
+    return [_index_range(box[2 * axis], box[2 * axis + 1], volume.origin[axis], volume.spacing[axis], n)
+            for axis, n in zip(range(3), (nx, ny, nz), strict=True)]  # fmt: skip
+
+
+def _crop_uniform(volume: UniformVolume, box: Box) -> UniformVolume:
+    ranges = _index_ranges(volume, box)
+    sx, sy, sz = (slice(first, stop) for first, stop in ranges)
+    origin = tuple(volume.origin[axis] + ranges[axis][0] * volume.spacing[axis] for axis in range(3))
     return UniformVolume(
         volume.values[sz, sy, sx],
         spacing=volume.spacing,
-        origin=cast(tuple[float, float, float], tuple(origin)),
+        origin=cast(tuple[float, float, float], origin),
         name=volume.name,
     )
 
