@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import stat
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -76,8 +77,11 @@ def test_window_opens_on_sample_and_shows_first_full_frame(loaded_window, error_
     assert error_boxes == []
 
 
-def drag(qtbot, widget, button, start: QPoint, moves: list[QPoint]) -> None:
-    """Press, move and release on `widget` (positions in its coordinates), as real input does.
+def drag(
+    qtbot, widget, button, start: QPoint, moves: list[QPoint], holding: Callable[[], bool] | None = None
+) -> None:
+    """Press, move and release on `widget` (positions in its coordinates), as real input does; with
+    `holding`, the button is held after the moves until it returns True (a person who pauses).
 
     The events go to the widget's QWindow: in Qt 5 QTest's QWidget overload of mouseMove only
     moves the cursor, which delivers nothing on the offscreen platform, whereas the QWindow
@@ -92,6 +96,8 @@ def drag(qtbot, widget, button, start: QPoint, moves: list[QPoint]) -> None:
     qtbot.mousePress(window, button, pos=to_window(start))
     for p in moves:
         qtbot.mouseMove(window, to_window(p))
+    if holding is not None:
+        qtbot.waitUntil(holding, timeout=FRAME_TIMEOUT_MS)
     qtbot.mouseRelease(window, button, pos=to_window(moves[-1]))
 
 
@@ -101,8 +107,10 @@ def test_drag_rotates_with_preview_frames_then_one_full_frame(loaded_window, qtb
     frames = []
     w.frameShown.connect(frames.append)
     c = w.viewport.rect().center()
+    moves = [c + QPoint(10 * i, 3 * i) for i in range(1, 6)]
+    previewed = lambda: any(not f.full for f in frames)  # noqa: E731 - held until a preview shows
     with qtbot.waitSignal(w.fullFrameShown, timeout=FRAME_TIMEOUT_MS):
-        drag(qtbot, w.viewport, Qt.LeftButton, c, [c + QPoint(10 * i, 3 * i) for i in range(1, 6)])
+        drag(qtbot, w.viewport, Qt.LeftButton, c, moves, holding=previewed)
     after = w.state.camera
     assert not np.allclose(after.position, before.position), "left-drag did not rotate"
     assert np.allclose(after.focal_point, before.focal_point)

@@ -52,3 +52,18 @@ def test_a_sharp_tf_visible_on_a_narrow_part_of_the_range_is_a_band_tf():
     assert TFClass.of(hump, (0.0, 100.0)) == TFClass.SMOOTH
     assert TFClass.of_features(SHARP_TF, BAND_TF) == TFClass.SHARP
     assert SceneClass.of(SimpleNamespace(kind="uniform", value_range=(0.0, 100.0)), peak) == BAND
+
+
+def test_a_tfs_class_is_kept_until_its_opacity_points_change(monkeypatch):
+    from volren.model import TransferFunction1D, tf_class
+
+    grey = [[0, 1, 1, 1], [100, 1, 1, 1]]
+    monkeypatch.setattr(tf_class, "_classes", {})  # none kept from other tests
+    tf = TransferFunction1D(grey, [[0, 0.0], [100, 0.5]])
+    assert TFClass.of(tf, (0.0, 100.0)) == TFClass.SMOOTH
+    computed = []
+    monkeypatch.setattr(tf_class, "tf_sharpness", lambda *a: computed.append(a) or tf_sharpness(*a))
+    assert TFClass.of(tf, (0.0, 100.0)) == TFClass.SMOOTH and computed == []  # kept
+    tf.set_opacity_points([[0, 0.0], [48, 0.0], [50, 0.9], [52, 0.0], [100, 0.0]])  # the same TF, edited
+    assert TFClass.of(tf, (0.0, 100.0)) == TFClass.BAND and len(computed) == 1
+    assert TFClass.of(tf, (0.0, 10000.0)) == TFClass.BAND and len(computed) == 2  # another value range

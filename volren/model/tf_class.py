@@ -36,6 +36,9 @@ SHARP_TF = 30.0
 #: within it on every spiky TF, up to 0.9x; 1.55-1.9x over it on three of the four opaque TFs and
 #: 1.42x on phantom_ct's).
 BAND_TF = 0.1
+#: Classes kept by (opacity points, value range): the app asks for a TF's class 7 times per settings change
+#: (0.7 ms each, 5 ms of the GUI thread at every step of a clip plane's drag).
+_KEPT_CLASSES = 256
 
 
 class TFClass(Enum):
@@ -54,10 +57,24 @@ class TFClass(Enum):
 
     @classmethod
     def of(cls, tf: object, value_range: tuple[float, float]) -> TFClass | None:
-        """The class of a 1D TF over data spanning `value_range`; None for other TFs."""
-        sharpness = tf_sharpness(tf, value_range)
-        visible = tf_visible_fraction(tf, value_range)
-        return cls.of_features(sharpness, visible) if sharpness is not None and visible is not None else None
+        """The class of a 1D TF over data spanning `value_range`; None for other TFs. Kept by the TF's
+        opacity points, all that it depends on: an edited TF is classed again."""
+        if not isinstance(tf, TransferFunction1D):
+            return None
+        key = (tf.opacity_points.tobytes(), float(value_range[0]), float(value_range[1]))
+        found = _classes.get(key)
+        if found is None:
+            sharpness = tf_sharpness(tf, value_range)
+            visible = tf_visible_fraction(tf, value_range)
+            assert sharpness is not None and visible is not None  # a 1D TF's
+            found = cls.of_features(sharpness, visible)
+            if len(_classes) >= _KEPT_CLASSES:
+                _classes.clear()
+            _classes[key] = found
+        return found
+
+
+_classes: dict[tuple[bytes, float, float], TFClass] = {}
 
 
 def tf_sharpness(tf: object, value_range: tuple[float, float]) -> float | None:
