@@ -111,6 +111,40 @@ def import_seconds(args: list[str], env: dict[str, str], out: Path) -> tuple[flo
     return sum(s for _, s in top), sorted(top, key=lambda item: -item[1])[:5]
 
 
+#: A new interpreter's numba: its import, raycast's kernel module, and the first call of its march on a
+#: 2x2x2 grid (numba loads the cached machine code and its own typing registries then); seconds of each.
+_NUMBA_PROBE = """
+import time
+start = time.perf_counter()
+import numpy as np
+import numba
+numba_s = time.perf_counter() - start
+start = time.perf_counter()
+from volren.renderers.raycast import march
+from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, PixelView
+module_s = time.perf_counter() - start
+view = PixelView(np.eye(4), 2, 2, np.zeros(3), np.ones(3), np.array([0.0, 0.0, 1.0]), 10.0, np.zeros(4),
+                 np.zeros((0, 4)))
+classes = Classification(False, np.zeros((16, 4)), np.zeros((2, 2, 4), np.float32), 1.0, 0.0, 1.0, False)
+start = time.perf_counter()
+march.march(np.zeros((2, 2, 2), np.uint8), EmptyBricks(np.zeros((1, 1, 1), np.int32), 4), view, classes, 0.99,
+            np.zeros(1, np.int64), np.zeros((4, 4), np.float32), np.zeros((1, 2), np.int64))
+print(numba_s, module_s, time.perf_counter() - start)
+"""
+
+
+def numba_fixed_seconds(env: dict[str, str]) -> tuple[float, float, float]:
+    """(import numba, import raycast's kernels, their first call) in a new interpreter: what a one-shot
+    raycast render pays before its first sample, and `--renderer vtk` does not."""
+    done = subprocess.run(
+        [sys.executable, "-c", _NUMBA_PROBE], env=env, capture_output=True, text=True, check=False
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"the numba probe failed: {done.stderr.strip()[-300:]}")
+    numba_s, module_s, first_call_s = (float(x) for x in done.stdout.split())
+    return numba_s, module_s, first_call_s
+
+
 def _with_renderer(flags: list[str], renderer: str) -> list[str]:
     return flags if renderer == DEFAULT else [*flags, "--renderer", renderer]
 
@@ -190,6 +224,12 @@ def measure(args: argparse.Namespace) -> int:
     say()
     say(f"imports of `volren render` ({label}, {renderer}; `-X importtime`, top-level modules' cumulative): "
         f"{total:.2f} s; slowest: " + ", ".join(f"{name} {s:.2f} s" for name, s in slowest))  # fmt: skip
+    numba_s, module_s, first_call_s = numba_fixed_seconds(dict(os.environ))
+    say()
+    say(f"numba's fixed cost in a new interpreter (`benchmarks.oneshot.numba_fixed_seconds`): import numba "
+        f"{numba_s:.2f} s, raycast's kernel module {module_s:.2f} s, the first call of its march on a 2x2x2 grid "
+        f"(the cached machine code loaded) {first_call_s:.2f} s; {numba_s + module_s + first_call_s:.2f} s in all, "
+        "paid by every one-shot render that draws with a numba kernel and by none with `--renderer vtk`.")  # fmt: skip
     if args.out:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)

@@ -125,6 +125,12 @@ SECTIONS = (
         "first run than the next? (`python -m benchmarks.oneshot`)",
     ),
     (
+        "packet_probe.md",
+        "The kernels' ceiling on this CPU",
+        "How fast does one core march rays here, in numba and in C, one ray at a time and in packets of 8, "
+        "and what does that leave of bonsai's frame? (`python -m benchmarks.packet_probe`)",
+    ),
+    (
         "gpu.md",
         "On a GPU",
         "How fast are the OpenGL renderers on a real GPU, at what error? "

@@ -322,3 +322,14 @@ def test_timings_print_each_stage_and_the_renderers_own_parts(tmp_path, capsys):
     top = sum(v for k, v in stages.items() if ":" not in k and k != "total")
     assert stages["total"] == pytest.approx(top, abs=0.02)
     assert stages["frame: prepare"] + stages["frame: tables"] <= stages["frame"] + 0.01
+
+
+def test_the_one_shot_benchmark_times_numbas_fixed_cost_in_a_new_interpreter():
+    """`benchmarks.oneshot.numba_fixed_seconds`: numba's import, raycast's kernel module and its first
+    call, each a real time of a child process that ran the march (not a default when it fails)."""
+    import os
+
+    from benchmarks.oneshot import numba_fixed_seconds
+
+    numba_s, module_s, first_call_s = numba_fixed_seconds(dict(os.environ))
+    assert 0.0 < numba_s < 60.0 and 0.0 < module_s < 60.0 and 0.0 < first_call_s < 600.0
