@@ -184,7 +184,7 @@ def _swing(k: int, period: int = 60) -> float:
 
 def measure_scene(app, volume, tf, scene: str, seconds: float = 3.0, timeout_s: float = 120.0) -> SceneTiming:
     """Open `volume` with `tf` (renderer `auto`) at VIEWPORT; time the opening and each gesture."""
-    from volren.app.core.loading import LoadedInput
+    from volren.app.core.loading import LoadedInput, prepare_for_rendering
     from volren.app.window.main_window import MainWindow
     from volren.model.transfer_function import TransferFunction1D
     from volren.model.transfer_function_2d import TFWidget
@@ -195,6 +195,7 @@ def measure_scene(app, volume, tf, scene: str, seconds: float = 3.0, timeout_s: 
     window.errorReported.connect(lambda _t, m: errors.append(m))
     window.viewport.setFixedSize(*VIEWPORT)
     window.show()
+    prepare_for_rendering(volume)  # the app's loader does it in its thread, before the volume is shown
     try:
         stall = StallProbe()
         stall.start()
