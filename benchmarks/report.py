@@ -125,6 +125,12 @@ SECTIONS = (
         "first run than the next? (`python -m benchmarks.oneshot`)",
     ),
     (
+        "step_search.md",
+        "What raycast's step search costs",
+        "How long does the search for the step of a level's error target take against the frame it "
+        "serves, on a new TF? (`python -m benchmarks.step_search`)",
+    ),
+    (
         "packet_probe.md",
         "The kernels' ceiling on this CPU",
         "How fast does one core march rays here, in numba and in C, one ray at a time and in packets of 8, "
