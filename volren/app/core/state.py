@@ -153,9 +153,9 @@ class ViewState:
 
     @property
     def render_volume(self) -> Volume | None:
-        """The volume cut to the crop box (made once per box): what is shown, for its bounds (view
-        directions, picking, the dataset facts), and what a renderer that does not clip draws
-        (`frame_inputs`)."""
+        """The volume cut to the crop box (made once per box, a copy of its samples): what is shown,
+        for picking and for the bounds of a renderer that does not clip (`shown_bounds`), and what
+        such a renderer draws (`frame_inputs`). The Dataset panel counts a grid's cut without it."""
         volume, box = self._volume, self._crop
         if volume is None or box is None:
             return volume
