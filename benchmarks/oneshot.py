@@ -128,7 +128,7 @@ view = PixelView(np.eye(4), 2, 2, np.zeros(3), np.ones(3), np.array([0.0, 0.0, 1
 classes = Classification(False, np.zeros((16, 4)), np.zeros((2, 2, 4), np.float32), 1.0, 0.0, 1.0, False)
 start = time.perf_counter()
 march.march(np.zeros((2, 2, 2), np.uint8), EmptyBricks(np.zeros((1, 1, 1), np.int32), 4), view, classes, 0.99,
-            np.zeros(1, np.int64), np.zeros((4, 4), np.float32), np.zeros((1, 2), np.int64))
+            np.zeros(1, np.int64), np.zeros((4, 4), np.float32), np.zeros((1, 4), np.int64))
 print(numba_s, module_s, time.perf_counter() - start)
 """
 

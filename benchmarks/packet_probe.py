@@ -243,13 +243,17 @@ def measure(scene: Scene, lib: ctypes.CDLL | None, repeats: int) -> list[tuple[s
     return [(name, samples[name], best[name], images[name]) for name in runs]
 
 
-def raycast_rate(scene: Scene, repeats: int) -> tuple[int, float]:
-    """(samples, best seconds) of volren's raycast on the scene's field and TF: one thread, no skipping."""
+def raycast_rate(scene: Scene, repeats: int, numba_kernels: bool = False) -> tuple[int, float]:
+    """(samples, best seconds) of volren's raycast on the scene's field and TF: one thread, no
+    skipping; its C march where it builds, or numba's."""
+    from contextlib import nullcontext
+
     import numba
 
     import volren
     from volren.model.transfer_function import TransferFunction1D
     from volren.model.volume import UniformVolume
+    from volren.renderers.raycast.march_native import numba_only
 
     values = np.linspace(0.0, 1.0, scene.tf.shape[0])
     tf = TransferFunction1D(
@@ -258,9 +262,10 @@ def raycast_rate(scene: Scene, repeats: int) -> tuple[int, float]:
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
+        kernels = numba_only() if numba_kernels else nullcontext()
         drawing = volren.drawing(UniformVolume(scene.vol), tf, renderer="raycast", size=(512, 512), azimuth=30,
                                  elevation=20, step=0.5, options={"empty_space_skipping": False, "target_error": 0.0})  # fmt: skip
-        with drawing:
+        with kernels, drawing:
             drawing.frame()
             best = float("inf")
             for _ in range(repeats):
@@ -314,7 +319,8 @@ def main(argv: list[str] | None = None) -> int:
           f"{gathers_in(_packet)} vector gathers in its assembly")  # fmt: skip
     if lib is None:
         print("no C compiler found: the C rows are left out")
-    ray_samples, ray_seconds = raycast_rate(scene, args.repeats)
+    marches = {"volren raycast, C march": raycast_rate(scene, args.repeats),
+               "volren raycast, numba march": raycast_rate(scene, args.repeats, numba_kernels=True)}  # fmt: skip
     top = max(samples / seconds for _, samples, seconds, _ in rows)
     first = rows[0][3]
     print("\n| loop | samples | ms | M samples/s | of the fastest | largest difference from numba, one ray |")
@@ -323,9 +329,10 @@ def main(argv: list[str] | None = None) -> int:
         rate = samples / seconds
         print(f"| {name} | {samples} | {seconds * 1e3:.1f} | {rate / 1e6:.1f} | {rate / top:.2f} | "
               f"{float(np.abs(image - first).max()):.1e} |")  # fmt: skip
-    rate = ray_samples / ray_seconds
-    print(f"| volren raycast, 512x512, no skipping | {ray_samples} | {ray_seconds * 1e3:.1f} | {rate / 1e6:.1f} | "
-          f"{rate / top:.2f} | (other rays) |")  # fmt: skip
+    for name, (ray_samples, ray_seconds) in marches.items():
+        rate = ray_samples / ray_seconds
+        print(f"| {name}, 512x512, no skipping | {ray_samples} | {ray_seconds * 1e3:.1f} | {rate / 1e6:.1f} | "
+              f"{rate / top:.2f} | (other rays) |")  # fmt: skip
     if args.shared is not None:
         print("\n" + bonsai_floor(args.shared, top, args.repeats))
     return 0

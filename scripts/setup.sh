@@ -25,6 +25,8 @@ packages=(
   libxcb-image0 libxcb-keysyms1 libxcb-randr0 libxcb-render0 libxcb-render-util0 libxcb-shape0
   libxcb-shm0 libxcb-sync1 libxcb-util1 libxcb-xfixes0 libxcb-xinerama0 libxcb-xkb1
   libdbus-1-3 libfontconfig1 libfreetype6 libglib2.0-0
+  # a C compiler for raycast's C march (volren/kernels/native.py; without one, numba's draws)
+  gcc libc6-dev
 )
 if [ "$with_tests" = 1 ]; then
   packages+=(xvfb xauth)
@@ -106,11 +108,11 @@ if [ "${installed%% *}" != "$hash" ] || { [ "$extras" != app,movie,zarr,cluster 
   echo "$hash $extras" > "$stamp"
 fi
 
-# Compile the renderers' kernels now rather than at the first frame (numba caches them on disk;
-# `volren prepare`), once per change of the sources: a fresh install's first `tetra` or `reference`
+# Compile the renderers' kernels now rather than at the first frame (numba caches them on disk, and
+# the C kernels' libraries are cached too; `volren prepare`), once per change of the sources: a fresh install's first `tetra` or `reference`
 # frame otherwise waits 40-55 s. A renderer that cannot be prepared (no OpenGL) is reported, not fatal.
 prepared=.venv/.volren-prepared
-sources=$( { find volren plugins -name '*.py' -not -path '*/tests/*' | LC_ALL=C sort | xargs cat; cat "$stamp"; } | sha256sum | cut -d' ' -f1)
+sources=$( { find volren plugins \( -name '*.py' -o -name '*.c' \) -not -path '*/tests/*' | LC_ALL=C sort | xargs cat; cat "$stamp"; } | sha256sum | cut -d' ' -f1)
 if [ "$(cat "$prepared" 2>/dev/null || true)" != "$sources" ]; then
   echo "setup: compiling the renderers' kernels (volren prepare; once per change of the sources)"
   if .venv/bin/volren prepare; then

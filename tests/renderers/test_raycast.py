@@ -12,11 +12,12 @@ from volren.errors import VolrenError
 from volren.kernels.sample_placement import pixel_phases
 from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.renderers.raycast import RaycastRenderer
-from volren.renderers.raycast import march as K
 from volren.renderers.raycast.occupancy import empty_distance
 from volren.testing import image_error, oracles
 from volren.testing.reference_images import reference_image
 from volren.testing.render_helpers import SHELL_TF, SMOOTH_TF, field, render_checked
+
+from .raycast_backends import use_backend
 
 SPIKE_TF = TransferFunction1D(
     [[-2, 1, 0.6, 0.2], [4, 0.2, 0.6, 1.0]], [[1.50, 0.0], [1.52, 1.0], [1.54, 0.0]], 0.5
@@ -207,32 +208,31 @@ def test_bad_options_are_one_line_errors(options):
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.parametrize("backend", ["numba", "c"])
 @pytest.mark.parametrize("pre", [False, True])
-def test_rays_for_listed_pixels_are_the_tiles_rays(pre):
+def test_rays_for_listed_pixels_are_the_tiles_rays(pre, backend, monkeypatch):
     """`march_pixels` (what adaptive refinement casts) draws each listed pixel exactly as the tiled
-    march does, in any order."""
+    march does, in any order, in numba and in C."""
+    module = use_backend(backend, monkeypatch)
     volume = field()
     camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.2, parallel=False)
     w, h = 40, 32
     full, renderer = draw(volume, SHELL_TF, camera, (w, h), preintegration=pre)
     calls = []
-    real = K.march_pixels
+    real = module.march_pixels
 
     def spy(*args):
         calls.append(args)
         return real(*args)
 
-    K.march_pixels = spy
-    try:
-        refined, _ = draw(volume, SHELL_TF, camera, (w, h), preintegration=pre,
-                          options={"image_stride": 4, "refine_tolerance": 0.0})  # fmt: skip
-    finally:
-        K.march_pixels = real
+    monkeypatch.setattr(module, "march_pixels", spy)
+    refined, _ = draw(volume, SHELL_TF, camera, (w, h), preintegration=pre,
+                      options={"image_stride": 4, "refine_tolerance": 0.0})  # fmt: skip
     assert calls
     *inputs, pixels, out, counts = calls[0]
     picked = np.random.default_rng(1).permutation(w * h)[:200]
     rgba = np.empty((200, 4), np.float32)
-    K.march_pixels(*inputs, picked, rgba, np.zeros((200, 2), np.int64))
+    real(*inputs, picked, rgba, np.zeros((200, 4), np.int64))
     np.testing.assert_array_equal(np.minimum(rgba[:, :3], rgba[:, 3:]), full.reshape(-1, 4)[picked, :3])
     np.testing.assert_array_equal(rgba[:, 3], full.reshape(-1, 4)[picked, 3])
 
@@ -258,3 +258,52 @@ def test_adaptive_refinement_casts_fewer_rays_near_the_full_image():
     )
     assert renderer.last_frame.counters["rays_cast"] > rays
     assert image_error(finer, full).rmse < 0.2 * err.rmse
+
+
+@pytest.mark.parametrize("backend", ["numba", "c"])
+@pytest.mark.parametrize("parallel", [False, True])
+def test_the_counters_account_for_every_segment(backend, parallel, monkeypatch):
+    """Post-classified with no early termination, every segment of every ray is sampled or skipped:
+    skipping on, samples + segments skipped is the sample count with skipping off (where none is
+    skipped); each ray that stops early is counted, and only those."""
+    module = use_backend(backend, monkeypatch)
+    volume = field((20, 22, 24))
+    camera = Camera.orbit(volume.bounds, 50, -20, zoom=1.1, parallel=parallel)
+    never = {"termination_alpha": 1.0}
+    _, on = draw(volume, SHELL_TF, camera, step=0.5, options={**never, "brick_size": 2})
+    _, off = draw(
+        volume, SHELL_TF, camera, step=0.5, options={**never, "brick_size": 2, "empty_space_skipping": False}
+    )
+    c_on, c_off = on.last_frame.counters, off.last_frame.counters
+    assert c_off["segments_skipped"] == 0 and c_on["segments_skipped"] > 0
+    assert c_on["samples"] + c_on["segments_skipped"] == c_off["samples"]
+    assert c_on["rays_terminated"] == c_off["rays_terminated"] == 0
+    # each pixel's ray alone (`march_pixels`, on the frame's own inputs): terminated exactly where it
+    # took fewer samples than the same ray that never stops, and only where it became opaque
+    opaque = TransferFunction1D(
+        [[-2, 1, 1, 1], [4, 1, 1, 1]], [[-2, 0.0], [1.0, 0.0], [1.5, 1.0], [4, 1.0]], 0.5
+    )
+    w, h = 24, 20
+    pixels = np.arange(w * h, dtype=np.int64)
+    counts, inputs = {}, []
+    real = module.march
+
+    def spy(*args):
+        inputs.append(args[:5])
+        return real(*args)
+
+    monkeypatch.setattr(module, "march", spy)
+    for term in (0.9, 1.0):
+        inputs.clear()
+        _, renderer = draw(volume, opaque, camera, (w, h), step=0.5, options={"termination_alpha": term})
+        rgba = np.empty((w * h, 4), np.float32)
+        counts[term] = np.zeros((w * h, 4), np.int64)
+        module.march_pixels(*inputs[0], pixels, rgba, counts[term])
+        if term == 0.9:
+            alpha = rgba[:, 3]
+            assert renderer.last_frame.counters["rays_terminated"] == counts[term][:, 3].sum()
+    stopped = counts[0.9][:, 3] == 1
+    assert stopped.sum() > 0.2 * w * h
+    np.testing.assert_array_equal(stopped, counts[0.9][:, 0] < counts[1.0][:, 0])
+    assert np.all(alpha[stopped] >= 0.9)
+    assert np.all(counts[1.0][:, 3] == 0)

@@ -15,6 +15,8 @@ internals; what several of them need lives here, neutral, and is tested on its o
 - `clip_planes`: a ray clipped to the kept side of the clip region's planes (`RenderSettings.clip`);
 - `cut_faces`: the opaque face where a ray enters the clip region through a plane (`ClipRegion.cap`);
 - `ray_block`: a block of pixel rays with their candidate cells, as one kernel parameter.
+- `native`: a C source built with the machine's compiler on first use and loaded with ctypes
+  (a renderer keeps a numba kernel for machines where none builds).
 
 The tetrahedra's face planes themselves are part of the one mesh preparation,
 `volren.model.tet_mesh.prepare_mesh` (`PreparedMesh.planes`). Each renderer keeps its own

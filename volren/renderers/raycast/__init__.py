@@ -1,4 +1,5 @@
-"""`raycast`: an image-order ray caster on the CPU (numba) for uniform grids."""
+"""`raycast`: an image-order ray caster on the CPU for uniform grids (its 1D march in C where a
+compiler is found, `march_native`, else numba's, `march`)."""
 
 from pathlib import Path
 

@@ -38,6 +38,9 @@ TILE = 8
 MAX_OPACITY = 1.0 - 1e-6
 #: Post-classified segments of visible bricks held back before they are composited (`_composite_post`)
 MAX_RUN = 64
+#: The columns of a march's counts, per tile or listed pixel: samples taken, distance jumps, segments
+#: skipped in empty bricks, rays that became opaque before their last segment.
+COUNTS = ("samples", "jumps", "skipped", "terminated")
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
@@ -288,10 +291,11 @@ def _pixel_ray(view, xx, ny_, ux, uy, uz):
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
-    """(r, g, b, a, samples, jumps): pixel column xx's ray at NDC y ny_ of the `PixelView` view
-    marched front to back through the `EmptyBricks` bricks (premultiplied, not yet clamped), with
-    the `Classification` classes, stopping once a reaches `term`; `shift`: log2 of the brick
-    size, or -1."""
+    """(r, g, b, a, samples, jumps, skipped, terminated): pixel column xx's ray at NDC y ny_ of the
+    `PixelView` view marched front to back through the `EmptyBricks` bricks (premultiplied, not yet
+    clamped), with the `Classification` classes, stopping once a reaches `term`; `shift`: log2 of
+    the brick size, or -1. `skipped`: the segments before the ray stopped that lay in empty bricks;
+    `terminated`: 1 where the ray became opaque before its last segment."""
     empty, B = bricks.distance, bricks.size
     view_dir, t_far_eye = view.view_dir, view.far_depth
     pre, h = classes.preintegrated, classes.step
@@ -310,7 +314,7 @@ def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
     if classes.cap and entering >= 0 and not miss and t1 > t0:  # the ray meets a cut face first
         cr, cg, cb, visible = _cut_face(classes, _value(vol, ox + t0 * dx, oy + t0 * dy, oz + t0 * dz))
         if visible:
-            return cr, cg, cb, 1.0, 1, 0
+            return cr, cg, cb, 1.0, 1, 0, 0, 0
     ns = 0
     first = 0.0
     last = 0.0
@@ -322,6 +326,8 @@ def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
     have_front = False
     ra = 0  # post-classified: segments [ra, rb) lie in a run of visible bricks, not yet composited
     rb = 0
+    stop = ns  # the segment after the one that made the ray opaque
+    visited = 0  # pre-integrated: segments looked up (`taken` counts their end values)
     while k < ns:
         # (re)start the brick walk at segment k's key point
         tk, lk = ray_segment(t0, first, last, h, ns, k)
@@ -350,10 +356,11 @@ def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
                 # it: walk no further first): composite it
                 r, g, b, a, n_run = _composite_post(vol, classes, ray, ra, rb, r, g, b, a, term)
                 taken += n_run
-                ra = rb
                 if a >= term:
+                    stop = ra + n_run
                     k = ns
                     break
+                ra = rb
             if d > 1:  # empty bricks all around: leave their box in one jump if that skips
                 e = d - 1
                 tb_ = _box_exit(ray, (bi - e) * B, (bj - e) * B, (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B,
@@ -393,6 +400,7 @@ def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
                         sb = s
                     taken += 1
                     k += 1
+                    visited += 1
                     cr, cg, cb, ca = _classify(s, sb, lk, classes)
                     if ca > 0.0:
                         tr = 1.0 - a
@@ -401,6 +409,7 @@ def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
                         b += tr * cb
                         a += tr * ca
                         if a >= term:
+                            stop = k
                             k = ns
                             break
             else:  # an empty brick: its segments add nothing
@@ -431,7 +440,10 @@ def _ray(vol, bricks, shift, view, xx, ny_, phase, classes, term):
     if rb > ra and a < term:
         r, g, b, a, n_run = _composite_post(vol, classes, ray, ra, rb, r, g, b, a, term)
         taken += n_run
-    return r, g, b, a, taken, jumps
+        if a >= term:
+            stop = ra + n_run
+    skipped = stop - (visited if pre else taken)
+    return r, g, b, a, taken, jumps, skipped, 1 if stop < ns else 0
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
@@ -459,7 +471,7 @@ def _store(out, p, r, g, b, a):
 def march(vol, bricks, view, classes, term, tiles, out, counts):
     """Render the tiles `tiles` (indices into the image's TILE x TILE tiles, row-major) of the
     `PixelView` view into `out` ((height * width, 4), premultiplied RGBA, row 0 at the top);
-    `counts[tile]` = (samples, jumps). `bricks`: `EmptyBricks`; `classes`: `Classification`; a
+    `counts[tile]` = (samples, jumps, segments skipped, rays terminated early) (`COUNTS`). `bricks`: `EmptyBricks`; `classes`: `Classification`; a
     ray stops once its opacity reaches `term`. (`view.inverse` unprojects pixel centres at NDC depth
     -1 and 1, as `Camera.pixel_rays` does.)"""
     width, height, phases = view.width, view.height, view.phases
@@ -471,31 +483,41 @@ def march(vol, bricks, view, classes, term, tiles, out, counts):
         y_start = (tile // tiles_x) * TILE
         taken = 0
         jumps = 0
+        skipped = 0
+        stopped = 0
         for yy in range(y_start, min(y_start + TILE, height)):
             ny_ = 1.0 - (yy + 0.5) / height * 2.0
             for xx in range(x_start, min(x_start + TILE, width)):
                 p = yy * width + xx
-                r, g, b, a, n, j = _ray(vol, bricks, shift, view, xx, ny_, phases[p], classes, term)
+                r, g, b, a, n, j, sk, st = _ray(vol, bricks, shift, view, xx, ny_, phases[p], classes, term)
                 taken += n
                 jumps += j
+                skipped += sk
+                stopped += st
                 _store(out, p, r, g, b, a)
         counts[tile, 0] = taken
         counts[tile, 1] = jumps
+        counts[tile, 2] = skipped
+        counts[tile, 3] = stopped
 
 
 @njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
 def march_pixels(vol, bricks, view, classes, term, pixels, out, counts):
     """As `march`, for the listed pixels (row-major indices) only: out[q] and counts[q] are pixel
-    pixels[q]'s colour and (samples, jumps). Adaptive image refinement asks for scattered pixels."""
+    pixels[q]'s colour and counts. Adaptive image refinement asks for scattered pixels."""
     width, height, phases = view.width, view.height, view.phases
     shift = _brick_shift(bricks.size)
     for q in prange(pixels.shape[0]):
         p = pixels[q]
         yy = p // width
         ny_ = 1.0 - (yy + 0.5) / height * 2.0
-        r, g, b, a, n, j = _ray(vol, bricks, shift, view, p - yy * width, ny_, phases[p], classes, term)
+        r, g, b, a, n, j, sk, st = _ray(
+            vol, bricks, shift, view, p - yy * width, ny_, phases[p], classes, term
+        )
         counts[q, 0] = n
         counts[q, 1] = j
+        counts[q, 2] = sk
+        counts[q, 3] = st
         _store(out, q, r, g, b, a)
 
 

@@ -133,7 +133,8 @@ def _bilinear(table, j0, i0, wj, wi, c):
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
 def _ray2d(vol, grad, bricks, shift, view, xx, ny_, phase, tab, term):
-    """(r, g, b, a, samples, jumps) of pixel column xx's ray at NDC y ny_ (as `march._ray`)."""
+    """(r, g, b, a, samples, jumps, skipped, terminated) of pixel column xx's ray at NDC y ny_ (as
+    `march._ray`)."""
     empty, B = bricks.distance, bricks.size
     h = tab.step
     nz, ny, nx = vol.shape
@@ -148,8 +149,9 @@ def _ray2d(vol, grad, bricks, shift, view, xx, ny_, phase, tab, term):
     a = 0.0
     taken = 0
     jumps = 0
+    skipped = 0
     if miss or not t1 > t0:
-        return r, g, b, a, taken, jumps
+        return r, g, b, a, taken, jumps, skipped, 0
     ns, first, last = ray_segments(t1 - t0, h, (phase - t0 / h) % 1.0)
     ray = IndexRay(ox, oy, oz, dx, dy, dz, ix, iy, iz, t0, first, last, ns)
     k = 0
@@ -169,7 +171,9 @@ def _ray2d(vol, grad, bricks, shift, view, xx, ny_, phase, tab, term):
             e = d - 1
             te = _box_exit(ray, (bi - e) * B, (bj - e) * B, (bk - e) * B, (bi + 1 + e) * B, (bj + 1 + e) * B,
                            (bk + 1 + e) * B)  # fmt: skip
-            k = max(_first_segment_past(te, t0, first, h, False), k + 1)
+            kn = max(_first_segment_past(te, t0, first, h, False), k + 1)
+            skipped += min(kn, ns) - k
+            k = kn
             jumps += 1
             continue
         k += 1
@@ -186,7 +190,7 @@ def _ray2d(vol, grad, bricks, shift, view, xx, ny_, phase, tab, term):
             a += tr * ca
             if a >= term:
                 break
-    return r, g, b, a, taken, jumps
+    return r, g, b, a, taken, jumps, skipped, 1 if k < ns else 0
 
 
 @njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
@@ -201,16 +205,24 @@ def march2d(vol, grad, bricks, view, tab, term, tiles, out, counts):
         y_start = (tile // tiles_x) * TILE
         taken = 0
         jumps = 0
+        skipped = 0
+        stopped = 0
         for yy in range(y_start, min(y_start + TILE, height)):
             ny_ = 1.0 - (yy + 0.5) / height * 2.0
             for xx in range(x_start, min(x_start + TILE, width)):
                 p = yy * width + xx
-                r, g, b, a, n, j = _ray2d(vol, grad, bricks, shift, view, xx, ny_, phases[p], tab, term)
+                r, g, b, a, n, j, sk, st = _ray2d(
+                    vol, grad, bricks, shift, view, xx, ny_, phases[p], tab, term
+                )
                 taken += n
                 jumps += j
+                skipped += sk
+                stopped += st
                 _store(out, p, r, g, b, a)
         counts[tile, 0] = taken
         counts[tile, 1] = jumps
+        counts[tile, 2] = skipped
+        counts[tile, 3] = stopped
 
 
 @njit(nogil=True, cache=True, parallel=True, fastmath=FAST)
@@ -222,9 +234,13 @@ def march2d_pixels(vol, grad, bricks, view, tab, term, pixels, out, counts):
         p = pixels[q]
         yy = p // width
         ny_ = 1.0 - (yy + 0.5) / height * 2.0
-        r, g, b, a, n, j = _ray2d(vol, grad, bricks, shift, view, p - yy * width, ny_, phases[p], tab, term)
+        r, g, b, a, n, j, sk, st = _ray2d(
+            vol, grad, bricks, shift, view, p - yy * width, ny_, phases[p], tab, term
+        )
         counts[q, 0] = n
         counts[q, 1] = j
+        counts[q, 2] = sk
+        counts[q, 3] = st
         _store(out, q, r, g, b, a)
 
 

@@ -1,4 +1,4 @@
-"""The `raycast` renderer: image-order ray casting of uniform grids on the CPU (numba).
+"""The `raycast` renderer: image-order ray casting of uniform grids on the CPU (C or numba).
 
 Why: with no GPU, a ray per pixel marched front to back is the cheapest way to a ray caster's image
 when cells project to about a pixel: it pays per sample, stops a ray once it is opaque, and skips
@@ -43,6 +43,7 @@ from volren.renderers.base import (
 )
 from volren.renderers.raycast import march as K
 from volren.renderers.raycast import march2d as K2
+from volren.renderers.raycast import march_native
 from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, PixelView
 from volren.renderers.raycast.occupancy import empty_distance
 from volren.renderers.raycast.step_cache import remembered_step
@@ -121,9 +122,12 @@ MarchArgs = tuple[NDArray[Any], EmptyBricks, PixelView, Classification, float]
 Kernels = tuple[Callable[..., None], Callable[..., None]]
 
 
-def _kernels(two_d: bool) -> Kernels:
-    """The 1D march's kernels (`march`) or the 2D TF's (`march2d`), looked up when a frame runs."""
-    return (K2.march2d, K2.march2d_pixels) if two_d else (K.march, K.march_pixels)
+def _kernels(two_d: bool, values: NDArray[Any]) -> Kernels:
+    """The 1D march's kernels, in C where they build (`march_native`) else numba's (`march`), or
+    the 2D TF's (`march2d`), looked up when a frame runs."""
+    if two_d:
+        return K2.march2d, K2.march2d_pixels
+    return march_native.kernels(values) or (K.march, K.march_pixels)
 
 
 #: Entries of a 2D TF's table along value and gradient magnitude (as the slicer's).
@@ -134,13 +138,20 @@ TABLE_2D = (512, 256)
 STEP_2D = 0.25
 
 
+def _counters(totals: NDArray[np.int64]) -> dict[str, float]:
+    """A frame's counters from its march's totals (`march.COUNTS`): samples taken, distance jumps,
+    segments skipped in empty bricks, rays terminated early."""
+    names = {"skipped": "segments_skipped", "terminated": "rays_terminated"}
+    return {names.get(name, name): float(total) for name, total in zip(K.COUNTS, totals, strict=True)}
+
+
 def _march_listed(
     args: tuple, pixels: NDArray[np.int64], two_d: bool = False
 ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
-    """(premultiplied RGBA (n, 4), (samples, jumps) (n, 2)) of the listed pixels' rays (`march_pixels`)."""
+    """(premultiplied RGBA (n, 4), counts (n, 4): `march.COUNTS`) of the listed pixels' rays (`march_pixels`)."""
     rgba = np.empty((len(pixels), 4), np.float32)
-    counts = np.zeros((len(pixels), 2), np.int64)
-    _kernels(two_d)[1](*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
+    counts = np.zeros((len(pixels), len(K.COUNTS)), np.int64)
+    _kernels(two_d, args[0])[1](*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
     return rgba, counts
 
 
@@ -161,7 +172,8 @@ class RaycastRenderer(RendererBase):
             )
         },
         backend="cpu",
-        summary="image-order ray casting (numba): brick skipping with distance jumps, early ray termination, "
+        summary="image-order ray casting (C with AVX2 where it builds, else numba): brick skipping with distance "
+        "jumps, early ray termination, "
         "adaptive image refinement, the step chosen from an error target",
         # a TF drag's previews march at the level's coarsest step instead of estimating the error per edit
         tf_drag_options={"target_error": 0.0},
@@ -234,7 +246,7 @@ class RaycastRenderer(RendererBase):
         volume = self.volume
         assert isinstance(volume, UniformVolume)
         raw = volume.values  # 8-bit volumes stay 8-bit (a quarter of the memory, measured as fast)
-        self._values = np.ascontiguousarray(raw if raw.dtype == np.uint8 else raw.astype(np.float32))
+        self._values = march_native.padded(raw if raw.dtype == np.uint8 else raw.astype(np.float32))
         self._grid = None
         self._empty = None
         self._step = None
@@ -307,13 +319,13 @@ class RaycastRenderer(RendererBase):
         empty = args[1].distance
         stride = int(opts["image_stride"])
         if stride > 1:
-            image, samples, jumps, rays = self._refined(
+            image, totals, rays = self._refined(
                 args, width, height, stride, opts["refine_tolerance"], progress
             )
         else:
-            image, samples, jumps = self._every_pixel(args, width, height, progress)
+            image, totals = self._every_pixel(args, width, height, progress)
             rays = width * height
-        return image, {"samples": float(samples), "jumps": float(jumps), "rays_cast": float(rays),
+        return image, {**_counters(totals), "rays_cast": float(rays),
                        "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size), **chosen}  # fmt: skip
 
     def _march_args(self, tf: TransferFunction1D, h: float, pre: bool, opts: Mapping[str, Any],
@@ -408,12 +420,12 @@ class RaycastRenderer(RendererBase):
         args = (self._values, self._gradients, EmptyBricks(empty, int(opts["brick_size"])), view, tab, term)
         stride = int(opts["image_stride"])
         if stride > 1:
-            image, samples, jumps, rays = self._refined(args, view.width, view.height, stride,
-                                                        opts["refine_tolerance"], progress, True)  # fmt: skip
+            image, totals, rays = self._refined(args, view.width, view.height, stride,
+                                                opts["refine_tolerance"], progress, True)  # fmt: skip
         else:
-            image, samples, jumps = self._every_pixel(args, view.width, view.height, progress, True)
+            image, totals = self._every_pixel(args, view.width, view.height, progress, True)
             rays = view.width * view.height
-        return image, {"samples": float(samples), "jumps": float(jumps), "rays_cast": float(rays),
+        return image, {**_counters(totals), "rays_cast": float(rays),
                        "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size)}  # fmt: skip
 
     def _empty_bricks_2d(self, table: NDArray[np.float32], lo: float, hi: float, brick: int,
@@ -438,27 +450,27 @@ class RaycastRenderer(RendererBase):
 
     @staticmethod
     def _every_pixel(args: tuple, width: int, height: int, progress: ProgressCallback | None,
-                     two_d: bool = False) -> tuple[NDArray[np.float32], int, int]:  # fmt: skip
-        """(image, samples, jumps): a ray through every pixel, in tiles."""
+                     two_d: bool = False) -> tuple[NDArray[np.float32], NDArray[np.int64]]:  # fmt: skip
+        """(image, the counts' totals): a ray through every pixel, in tiles."""
         image = np.empty((height, width, 4), np.float32)
         n_tiles = ((width + K.TILE - 1) // K.TILE) * ((height + K.TILE - 1) // K.TILE)
-        counts = np.zeros((n_tiles, 2), np.int64)
+        counts = np.zeros((n_tiles, len(K.COUNTS)), np.int64)
         order = np.arange(n_tiles, dtype=np.int64)
+        kernel = _kernels(two_d, args[0])[0]
         with parallel_chunk_size(1):  # tiles differ widely in cost: one at a time
             for start in range(0, n_tiles, TILES_PER_CALL):
-                _kernels(two_d)[0](*args, order[start : start + TILES_PER_CALL], image.reshape(-1, 4), counts)
+                kernel(*args, order[start : start + TILES_PER_CALL], image.reshape(-1, 4), counts)
                 if progress is not None:
                     progress(min(1.0, (start + TILES_PER_CALL) / n_tiles))
-        samples, jumps = counts.sum(axis=0)
-        return image, int(samples), int(jumps)
+        return image, counts.sum(axis=0)
 
     @staticmethod
     def _refined(args: tuple, width: int, height: int, stride: int, tolerance: float,
                  progress: ProgressCallback | None,
-                 two_d: bool = False) -> tuple[NDArray[np.float32], int, int, int]:  # fmt: skip
-        """(image, samples, jumps, rays cast): adaptive image refinement (`refine_image`), rays cast
+                 two_d: bool = False) -> tuple[NDArray[np.float32], NDArray[np.int64], int]:  # fmt: skip
+        """(image, the counts' totals, rays cast): adaptive image refinement (`refine_image`), rays cast
         where a block's corner rays disagree, the rest interpolated."""
-        totals = np.zeros(2, np.int64)
+        totals = np.zeros(len(K.COUNTS), np.int64)
 
         def cast(pixels: NDArray[np.int64]) -> NDArray[np.float32]:
             rgba, counts = _march_listed(args, pixels, two_d)
@@ -468,7 +480,7 @@ class RaycastRenderer(RendererBase):
         with parallel_chunk_size(PIXEL_CHUNK):
             rgba, rays = refine_image(cast, width, height, stride, float(tolerance), progress)
         image = rgba.astype(np.float32, copy=False).reshape(height, width, 4)
-        return image, int(totals[0]), int(totals[1]), rays
+        return image, totals, rays
 
     def _project(self, tf: TransferFunction1D, mode: BlendMode, view: PixelView,
                  h: float) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip

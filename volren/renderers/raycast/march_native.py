@@ -1,0 +1,204 @@
+"""raycast's 1D march in C (`march.c`), called as the numba kernels `march` and `march_pixels` are.
+
+Why: the C build samples eight segments of a ray at a time with AVX2 gathers, which numba does not
+emit here (`benchmarks.packet_probe`); where the library cannot be built or loaded
+(`volren.kernels.native`: no compiler, ``VOLREN_NATIVE=0``) or a grid is too large for its 32-bit
+gather offsets, `kernels` returns None and the numba kernels draw, the same image up to float
+rounding.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from volren.kernels import native
+from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, PixelView
+
+SOURCE = Path(__file__).with_name("march.c")
+#: Bytes readable past an 8-bit grid's last value: the vector path reads 32 bits at a value's offset.
+SLACK = 4
+#: The vector path's offsets into the grid are 32-bit.
+MAX_VALUES = 2**31 - 1 - SLACK
+
+_i64 = ctypes.c_int64
+_f64 = ctypes.c_double
+_ptr = ctypes.c_void_p
+
+
+class _Grid(ctypes.Structure):
+    _fields_ = [("values", _ptr), ("nx", _i64), ("ny", _i64), ("nz", _i64), ("is_float", ctypes.c_int32)]
+
+
+class _Bricks(ctypes.Structure):
+    _fields_ = [("distance", _ptr), ("nbx", _i64), ("nby", _i64), ("nbz", _i64), ("size", _i64)]
+
+
+class _View(ctypes.Structure):
+    _fields_ = [("inverse", _ptr), ("width", _i64), ("height", _i64), ("grid_origin", _f64 * 3),
+                ("spacing", _f64 * 3), ("view_dir", _f64 * 3), ("far_depth", _f64), ("phases", _ptr),
+                ("planes", _ptr), ("n_planes", _i64)]  # fmt: skip
+
+
+class _Classes(ctypes.Structure):
+    _fields_ = [("preintegrated", ctypes.c_int32), ("cap", ctypes.c_int32), ("post", _ptr), ("post32", _ptr),
+                ("n_post", _i64), ("table", _ptr), ("n_table", _i64), ("step", _f64), ("lo", _f64),
+                ("scale", _f64)]  # fmt: skip
+
+
+def padded(values: NDArray[Any]) -> NDArray[Any]:
+    """`values` C-contiguous, an 8-bit grid with `SLACK` readable bytes after its last value (the
+    vector path reads four bytes at a time)."""
+    if values.dtype != np.uint8:
+        return np.ascontiguousarray(values)
+    buffer = np.zeros(values.size + SLACK, np.uint8)
+    buffer[: values.size] = values.reshape(-1)
+    return buffer[: values.size].reshape(values.shape)
+
+
+def _library() -> ctypes.CDLL | None:
+    """The built library with its functions typed, or None."""
+    lib = native.load(SOURCE)
+    if lib is None:
+        return None
+    if not getattr(lib, "_volren_typed", False):
+        common = [_ptr, _ptr, _ptr, _ptr, _f64, _ptr, _i64, _ptr, _ptr, ctypes.c_int]
+        lib.march_tiles.argtypes = common
+        lib.march_pixels.argtypes = [*common, _i64]
+        lib.march_tiles.restype = lib.march_pixels.restype = ctypes.c_int
+        lib.has_vector_path.restype = ctypes.c_int
+        lib._volren_typed = True
+    return lib
+
+
+def _address(array: NDArray[Any]) -> int:
+    return int(array.ctypes.data)
+
+
+class _Frame:
+    """The C structures of one call's arguments, holding the arrays they point into."""
+
+    def __init__(self, values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification):
+        nz, ny, nx = values.shape
+        self.arrays = [
+            np.ascontiguousarray(a, dtype=t)
+            for a, t in (
+                (bricks.distance, np.int8),
+                (view.inverse, np.float64),
+                (view.phases, np.float64),
+                (view.planes, np.float64),
+                (classes.post, np.float64),
+                (classes.post, np.float32),
+                (classes.table, np.float32),
+            )  # fmt: skip
+        ]
+        distance, inverse, phases, planes, post, post32, table = self.arrays
+        self.values = values
+        self.grid = _Grid(_address(values), nx, ny, nz, 1 if values.dtype == np.float32 else 0)
+        nbz, nby, nbx = distance.shape
+        self.bricks = _Bricks(_address(distance), nbx, nby, nbz, int(bricks.size))
+        self.view = _View(_address(inverse), int(view.width), int(view.height),
+                          (_f64 * 3)(*map(float, view.grid_origin)), (_f64 * 3)(*map(float, view.spacing)),
+                          (_f64 * 3)(*map(float, view.view_dir)), float(view.far_depth), _address(phases),
+                          _address(planes), planes.shape[0])  # fmt: skip
+        self.classes = _Classes(int(classes.preintegrated), int(classes.cap), _address(post), _address(post32),
+                                post.shape[0], _address(table), table.shape[0], float(classes.step),
+                                float(classes.lo), float(classes.scale))  # fmt: skip
+
+    def pointers(self) -> list[Any]:
+        return [ctypes.byref(self.grid), ctypes.byref(self.bricks), ctypes.byref(self.view),
+                ctypes.byref(self.classes)]  # fmt: skip
+
+
+def _checked(out: NDArray[Any], counts: NDArray[Any], n: int) -> None:
+    """The outputs as the C code writes them: float32 RGBA and int64 counts, C-contiguous."""
+    if out.dtype != np.float32 or not out.flags.c_contiguous or out.shape[-1] != 4:
+        raise ValueError("the C march writes C-contiguous float32 RGBA")
+    if (
+        counts.dtype != np.int64
+        or not counts.flags.c_contiguous
+        or counts.shape[1:] != (4,)
+        or len(counts) < n
+    ):
+        raise ValueError("the C march writes C-contiguous int64 counts, four per row (`march.COUNTS`)")
+
+
+def march(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification, term: float,
+          tiles: NDArray[np.int64], out: NDArray[np.float32], counts: NDArray[np.int64]) -> None:  # fmt: skip
+    """As numba's `march.march`: the tiles into `out`, their counts (`march.COUNTS`) into `counts`."""
+    lib = _library()
+    assert lib is not None
+    tiles = np.ascontiguousarray(tiles, dtype=np.int64)
+    _checked(out, counts, 0)
+    frame = _Frame(values, bricks, view, classes)
+    lib.march_tiles(*frame.pointers(), float(term), _address(tiles), len(tiles), _address(out), _address(counts),
+                    numba.get_num_threads())  # fmt: skip
+
+
+def march_pixels(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification, term: float,
+                 pixels: NDArray[np.int64], out: NDArray[np.float32], counts: NDArray[np.int64],
+                 chunk: int = 16) -> None:  # fmt: skip
+    """As numba's `march.march_pixels`: out[q] and counts[q] are pixels[q]'s."""
+    lib = _library()
+    assert lib is not None
+    pixels = np.ascontiguousarray(pixels, dtype=np.int64)
+    _checked(out, counts, len(pixels))
+    frame = _Frame(values, bricks, view, classes)
+    lib.march_pixels(*frame.pointers(), float(term), _address(pixels), len(pixels), _address(out), _address(counts),
+                     numba.get_num_threads(), int(chunk))  # fmt: skip
+
+
+#: Frames drawn meanwhile use numba's kernels (`numba_only`).
+_NUMBA_ONLY = [False]
+
+
+@contextmanager
+def numba_only() -> Iterator[None]:
+    """raycast's frames use numba's kernels meanwhile (benchmarks and tests compare the two)."""
+    before = _NUMBA_ONLY[0]
+    _NUMBA_ONLY[0] = True
+    try:
+        yield
+    finally:
+        _NUMBA_ONLY[0] = before
+
+
+def kernels(values: NDArray[Any]) -> tuple[Any, Any] | None:
+    """(march, march_pixels) in C for this grid, or None where the numba kernels must draw it:
+    `numba_only` is on, the library is not available, the grid is too large for 32-bit offsets,
+    its values are neither 8-bit nor float32, or an 8-bit grid lacks the slack `padded` gives."""
+    if _NUMBA_ONLY[0]:
+        return None
+    if (
+        values.dtype not in (np.uint8, np.float32)
+        or values.size > MAX_VALUES
+        or not values.flags.c_contiguous
+    ):
+        return None
+    if values.dtype == np.uint8 and not _has_slack(values):
+        return None
+    if _library() is None:
+        return None
+    return march, march_pixels
+
+
+def _has_slack(values: NDArray[Any]) -> bool:
+    """Whether `SLACK` bytes past the grid's last value lie inside the array that owns its memory."""
+    owner = values.base
+    if not isinstance(owner, np.ndarray):
+        return False
+    end = _address(values) + values.nbytes + SLACK
+    return _address(owner) <= _address(values) and end <= _address(owner) + owner.nbytes
+
+
+def vector_path() -> bool:
+    """Whether the C march is available and built with the eight-sample vector path."""
+    lib = _library()
+    return lib is not None and bool(lib.has_vector_path())
