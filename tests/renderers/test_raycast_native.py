@@ -182,3 +182,40 @@ def test_a_built_library_is_reused_from_the_cache(monkeypatch, tmp_path):
         assert built[0].stat().st_mtime_ns == stamp
     finally:
         native.load.cache_clear()
+
+
+def _render_in_a_new_process(tmp_path, env_extra):
+    """(return code, stderr, whether numba was imported) of `volren render` on the bundled
+    marschner_lobb sample with raycast, in a new interpreter."""
+    import os
+    import subprocess
+    import sys
+
+    from volren.samples import sample_paths
+
+    volume, tf = sample_paths("marschner_lobb")
+    code = (
+        "import sys\n"
+        "from volren.cli.main import main\n"
+        "code = main(sys.argv[1:])\n"
+        "print('numba' in sys.modules)\n"
+        "sys.exit(code)\n"
+    )
+    args = ["render", str(volume), "--tf", str(tf), "-o", str(tmp_path / "out.png"), "--size", "24",
+            "--renderer", "raycast"]  # fmt: skip
+    result = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=300,
+                            env={**os.environ, **env_extra})  # fmt: skip
+    return result.returncode, result.stderr, result.stdout.splitlines()[-1] == "True"
+
+
+def test_a_frame_the_c_march_draws_does_not_import_numba(tmp_path):
+    """numba's import and first call cost a one-shot render about a second (`benchmarks.oneshot`):
+    with the C march, a 1D frame at the default level needs none of it; without, numba draws."""
+    if march_native._library() is None:
+        pytest.skip("no C compiler here: the numba kernels draw")
+    code, err, numba_loaded = _render_in_a_new_process(tmp_path, {})
+    assert code == 0, err
+    assert not numba_loaded
+    code, err, numba_loaded = _render_in_a_new_process(tmp_path, {"VOLREN_NATIVE": "0"})
+    assert code == 0, err
+    assert numba_loaded

@@ -21,26 +21,13 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from volren.model.option_rule import OptionRule
+from volren.kernels.image_stride import STRIDE_RULE, is_stride
 from volren.model.progress import ProgressCallback
+
+__all__ = ["STRIDE_RULE", "CastRays", "is_stride", "refine_image"]
 
 #: cast(pixel indices, sorted, row-major) -> (n, 4) premultiplied RGBA of those pixels.
 CastRays = Callable[[NDArray[np.int64]], NDArray[np.floating]]
-
-
-def is_stride(stride: object) -> bool:
-    """Whether `stride` is a power of two from 1 to 64 (an int, not a bool): the block sizes the
-    refinement halves down to single pixels."""
-    return (
-        not isinstance(stride, bool)
-        and isinstance(stride, int)
-        and 1 <= stride <= 64
-        and not stride & (stride - 1)
-    )
-
-
-#: The rule of a renderer's image_stride option (its OptionSpec).
-STRIDE_RULE = OptionRule(is_stride, "1, 2, 4, 8, 16, 32 or 64")
 
 
 def refine_image(

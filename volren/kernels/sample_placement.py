@@ -19,9 +19,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
-from numpy.typing import NDArray
+
+from volren.kernels.pixel_phases import pixel_phases
+
+__all__ = ["SLIVER", "pixel_phases", "ray_segment", "ray_segments", "segment_length"]
 
 #: A segment shorter than this many steps is a sliver: it adds no sample.
 SLIVER = 1e-9
@@ -57,13 +59,3 @@ def ray_segment(t0, first, last, h, count, k):
     if k == 0:
         return t0, first
     return t0 + first + (k - 1) * h, segment_length(first, last, h, count, k)
-
-
-def pixel_phases(mode: str, width: int, height: int, seed: int) -> NDArray[np.float64]:
-    """The phase in [0, 1) of every pixel's segment boundaries (row-major, row 0 at the top)."""
-    if mode == "midpoint":
-        return np.zeros(width * height)
-    if mode == "interleaved":
-        jj, ii = np.mgrid[0:height, 0:width]
-        return np.where((ii + jj) % 2 == 0, 0.0, 0.5).reshape(-1)
-    return np.random.default_rng(seed).random(width * height)

@@ -255,9 +255,10 @@ INLINE int composite_one(const Classes *c, double s, double lk, Pixel *p, double
  * double (as the scalar march), cell indices clamped as `value` clamps them (so every read lies in
  * the array, whatever a lane's position), the interpolation in single precision */
 INLINE __m256 run_values8(const Grid *g, int is_float, const IndexRay *ray, double base, double h, int64_t kk0) {
-    const __m256d lanes_lo = _mm256_set_pd(3.0, 2.0, 1.0, 0.0), lanes_hi = _mm256_set_pd(7.0, 6.0, 5.0, 4.0);
-    const __m256d vh = _mm256_set1_pd(h), vbase = _mm256_set1_pd(base + (double)kk0 * h);
-    /* tm = base + (kk0 + j) h, within rounding of the scalar march's base + kk h */
+    const double k = (double)kk0;
+    const __m256d lanes_lo = _mm256_set_pd(k + 3.0, k + 2.0, k + 1.0, k), lanes_hi = _mm256_set_pd(k + 7.0, k + 6.0, k + 5.0, k + 4.0);
+    const __m256d vh = _mm256_set1_pd(h), vbase = _mm256_set1_pd(base);
+    /* tm = base + kk h for each segment kk, the same whichever lane and chunk it falls in */
     __m256d t_lo = _mm256_fmadd_pd(lanes_lo, vh, vbase), t_hi = _mm256_fmadd_pd(lanes_hi, vh, vbase);
     __m256 f[3];
     __m256i cell[3];
@@ -357,10 +358,14 @@ INLINE int64_t composite_post(const Grid *g, int is_float, const Classes *c, con
         kk = 1;
     }
 #ifdef __AVX2__
+    /* every whole segment (h long) eight at a time, the last chunk's lanes past the run masked: a
+     * segment's colour is the same whichever run and chunk holds it, so skipping changes no pixel */
     int64_t whole_end = kb < ns - 1 ? kb : ns - 1; /* segments [kk, whole_end) are h long */
     float cr[8], cg[8], cb[8], ca[8];
-    for (; kk + 8 <= whole_end; kk += 8) {
-        int visible = run_classes8(c, run_values8(g, is_float, ray, base, h, kk), cr, cg, cb, ca);
+    for (int64_t k0 = kk; k0 < whole_end; k0 += 8) {
+        kk = k0;
+        int lanes = whole_end - kk < 8 ? (1 << (whole_end - kk)) - 1 : 0xff;
+        int visible = run_classes8(c, run_values8(g, is_float, ray, base, h, kk), cr, cg, cb, ca) & lanes;
         while (visible) { /* front to back over the lanes with opacity */
             int j = __builtin_ctz(visible);
             visible &= visible - 1;
@@ -372,6 +377,7 @@ INLINE int64_t composite_post(const Grid *g, int is_float, const Classes *c, con
             if (p->a >= term) return kk + j + 1 - ka;
         }
     }
+    kk = kk > whole_end ? kk : whole_end; /* past the whole segments, where the chunks ended */
 #endif
     for (; kk < kb; kk++) {
         double tm;

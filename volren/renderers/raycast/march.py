@@ -26,21 +26,18 @@ from numba import njit, prange
 
 from volren.kernels.clip_planes import clip_entry, clip_to_planes
 from volren.kernels.sample_placement import ray_segment, ray_segments
-from volren.renderers.raycast.march_inputs import IndexRay
+from volren.model.transfer_function import MAX_OPACITY
+from volren.renderers.raycast.march_inputs import COUNTS, TILE, IndexRay
+
+__all__ = ["COUNTS", "FAST", "MAX_OPACITY", "TILE", "march", "march_pixels", "project"]
 
 #: numba's fast-math flags that keep non-finite values visible (they add nothing): fused multiply-add,
 #: reciprocals, signed zeros, approximate functions took 13-15 % off a frame on the smooth TFs of
 #: ironProt and bonsai (interleaved in one process, same image). Not 'nnan' or 'ninf', and not
 #: 'reassoc' either: with it NaN and Inf samples leaked into the image (the kit's NaN check).
 FAST = {"contract", "nsz", "arcp", "afn"}
-#: tiles of TILE x TILE pixels are handed to threads one at a time (neighbouring rays share cache lines)
-TILE = 8
-MAX_OPACITY = 1.0 - 1e-6
 #: Post-classified segments of visible bricks held back before they are composited (`_composite_post`)
 MAX_RUN = 64
-#: The columns of a march's counts, per tile or listed pixel: samples taken, distance jumps, segments
-#: skipped in empty bricks, rays that became opaque before their last segment.
-COUNTS = ("samples", "jumps", "skipped", "terminated")
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)

@@ -14,6 +14,12 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+#: Tiles of TILE x TILE pixels are handed to threads one at a time (neighbouring rays share cache lines).
+TILE = 8
+#: The columns of a march's counts, per tile or listed pixel: samples taken, distance jumps, segments
+#: skipped in empty bricks, rays that became opaque before their last segment.
+COUNTS = ("samples", "jumps", "skipped", "terminated")
+
 
 class PixelView(NamedTuple):
     """One frame's pixel rays, as the kernels unproject them (`march._pixel_ray`)."""

@@ -10,12 +10,13 @@ rounding.
 from __future__ import annotations
 
 import ctypes
+import os
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -76,6 +77,23 @@ def _library() -> ctypes.CDLL | None:
         lib.has_vector_path.restype = ctypes.c_int
         lib._volren_typed = True
     return lib
+
+
+def threads() -> int:
+    """The threads a frame runs on: numba's count where numba is loaded (the app and the benchmarks
+    set it), else $NUMBA_NUM_THREADS, else the cores this process may run on. numba is not imported
+    for it: a frame the C march draws must not pay numba's import."""
+    numba = sys.modules.get("numba")
+    if numba is not None:
+        return int(numba.get_num_threads())
+    try:
+        return max(1, int(os.environ["NUMBA_NUM_THREADS"]))
+    except (KeyError, ValueError):
+        pass
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
 
 
 def _address(array: NDArray[Any]) -> int:
@@ -139,7 +157,7 @@ def march(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: C
     _checked(out, counts, 0)
     frame = _Frame(values, bricks, view, classes)
     lib.march_tiles(*frame.pointers(), float(term), _address(tiles), len(tiles), _address(out), _address(counts),
-                    numba.get_num_threads())  # fmt: skip
+                    threads())  # fmt: skip
 
 
 def march_pixels(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification, term: float,
@@ -152,7 +170,7 @@ def march_pixels(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, cla
     _checked(out, counts, len(pixels))
     frame = _Frame(values, bricks, view, classes)
     lib.march_pixels(*frame.pointers(), float(term), _address(pixels), len(pixels), _address(out), _address(counts),
-                     numba.get_num_threads(), int(chunk))  # fmt: skip
+                     threads(), int(chunk))  # fmt: skip
 
 
 #: Frames drawn meanwhile use numba's kernels (`numba_only`).

@@ -17,20 +17,20 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Mapping
-from typing import Any, ClassVar
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
-from volren.kernels.image_refinement import STRIDE_RULE, refine_image
-from volren.kernels.row_blocks import parallel_chunk_size
-from volren.kernels.sample_placement import pixel_phases
+from volren.kernels.image_stride import STRIDE_RULE
+from volren.kernels.pixel_phases import pixel_phases
 from volren.model import BlendMode, Camera, TransferFunction1D, TransferFunction2D, UniformVolume
 from volren.model.bricks import BrickGrid
-from volren.model.preintegration import preintegrate
 from volren.model.settings import check_step
+from volren.model.transfer_function import MAX_OPACITY
 from volren.model.volume import spanning
 from volren.renderers.base import (
     Accuracy,
@@ -41,13 +41,14 @@ from volren.renderers.base import (
     QualityLevel,
     RendererBase,
 )
-from volren.renderers.raycast import march as K
-from volren.renderers.raycast import march2d as K2
 from volren.renderers.raycast import march_native
-from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, PixelView
+from volren.renderers.raycast.march_inputs import COUNTS, TILE, Classification, EmptyBricks, PixelView
 from volren.renderers.raycast.occupancy import empty_distance
 from volren.renderers.raycast.step_cache import remembered_step
 from volren.renderers.raycast.step_choice import largest_step_within, sample_size
+
+if TYPE_CHECKING:
+    from volren.renderers.raycast.march2d import Gradients2D
 
 OFFSET_MODES = ("interleaved", "midpoint")
 OPTIONS: tuple[OptionSpec, ...] = (
@@ -122,12 +123,33 @@ MarchArgs = tuple[NDArray[Any], EmptyBricks, PixelView, Classification, float]
 Kernels = tuple[Callable[..., None], Callable[..., None]]
 
 
-def _kernels(two_d: bool, values: NDArray[Any]) -> Kernels:
-    """The 1D march's kernels, in C where they build (`march_native`) else numba's (`march`), or
-    the 2D TF's (`march2d`), looked up when a frame runs."""
+def _kernels(two_d: bool, values: NDArray[Any]) -> tuple[Kernels, bool]:
+    """(kernels, whether they are numba's): the 1D march's, in C where they build (`march_native`)
+    else numba's (`march`), or the 2D TF's (`march2d`), looked up when a frame runs. numba's modules
+    are imported only here: a frame the C march draws does not pay numba's import and first call."""
+    native = None if two_d else march_native.kernels(values)
+    if native is not None:
+        return native, False
     if two_d:
-        return K2.march2d, K2.march2d_pixels
-    return march_native.kernels(values) or (K.march, K.march_pixels)
+        from volren.renderers.raycast import march2d
+
+        return (march2d.march2d, march2d.march2d_pixels), True
+    from volren.renderers.raycast import march
+
+    return (march.march, march.march_pixels), True
+
+
+@contextmanager
+def _chunks(numba_kernels: bool, size: int) -> Iterator[None]:
+    """numba's parallel chunk size set to `size` meanwhile where numba's kernels draw (the C march
+    takes tiles from a shared counter of its own)."""
+    if not numba_kernels:
+        yield
+        return
+    from volren.kernels.row_blocks import parallel_chunk_size
+
+    with parallel_chunk_size(size):
+        yield
 
 
 #: Entries of a 2D TF's table along value and gradient magnitude (as the slicer's).
@@ -142,7 +164,7 @@ def _counters(totals: NDArray[np.int64]) -> dict[str, float]:
     """A frame's counters from its march's totals (`march.COUNTS`): samples taken, distance jumps,
     segments skipped in empty bricks, rays terminated early."""
     names = {"skipped": "segments_skipped", "terminated": "rays_terminated"}
-    return {names.get(name, name): float(total) for name, total in zip(K.COUNTS, totals, strict=True)}
+    return {names.get(name, name): float(total) for name, total in zip(COUNTS, totals, strict=True)}
 
 
 def _march_listed(
@@ -150,8 +172,10 @@ def _march_listed(
 ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
     """(premultiplied RGBA (n, 4), counts (n, 4): `march.COUNTS`) of the listed pixels' rays (`march_pixels`)."""
     rgba = np.empty((len(pixels), 4), np.float32)
-    counts = np.zeros((len(pixels), len(K.COUNTS)), np.int64)
-    _kernels(two_d, args[0])[1](*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
+    counts = np.zeros((len(pixels), len(COUNTS)), np.int64)
+    (_, listed), numba_kernels = _kernels(two_d, args[0])
+    with _chunks(numba_kernels, PIXEL_CHUNK):
+        listed(*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
     return rgba, counts
 
 
@@ -237,7 +261,7 @@ class RaycastRenderer(RendererBase):
         self._step: tuple[tuple, tuple[float, float]] | None = (
             None  # (TF and settings, (step, its estimated error))
         )
-        self._gradients: K2.Gradients2D | None = None  # the grid points' gradients, for 2D TFs
+        self._gradients: Gradients2D | None = None  # the grid points' gradients, for 2D TFs
         self._table2d: tuple[tuple, NDArray[np.float32], NDArray[np.int8]] | None = (
             None  # (TF version, table, kinds)
         )
@@ -348,10 +372,12 @@ class RaycastRenderer(RendererBase):
         cap = self.settings.clip.caps
         n = int(opts["table_size"] if pre else opts["classification_table"])
         if pre:
+            from volren.model.preintegration import preintegrate  # numba's: imported when a frame needs it
+
             table = preintegrate(tf, n, step=h, value_range=(lo, hi))
         if not pre or cap:  # pre-integrated, the cut faces read it at the same entries
             rgb, a = tf.sample(np.linspace(lo, hi, n))
-            alpha = -np.expm1(h / tf.opacity_unit_distance * np.log1p(-np.minimum(a, K.MAX_OPACITY)))
+            alpha = -np.expm1(h / tf.opacity_unit_distance * np.log1p(-np.minimum(a, MAX_OPACITY)))
             post = np.ascontiguousarray(np.concatenate([rgb, alpha[:, None]], axis=1), dtype=np.float64)
         table = table.view()  # read-only, as a cached table is: numba compiles a kernel once per
         table.flags.writeable = False  # combination of writable and read-only arrays
@@ -381,10 +407,16 @@ class RaycastRenderer(RendererBase):
                 return _march_listed(self._march_args(tf, h, pre, opts, sampled), pixels)[0]
 
             def search() -> tuple[float, float]:
-                with parallel_chunk_size(PIXEL_CHUNK):
-                    return largest_step_within(march, coarsest, opts["target_error"])
+                return largest_step_within(march, coarsest, opts["target_error"])
 
-            scene = (key, phase_mode, opts["jitter_seed"], sampled[:7])  # the view: `step_cache`
+            # the view (`step_cache`), and which march searches (C and numba agree to float rounding only)
+            scene = (
+                key,
+                phase_mode,
+                opts["jitter_seed"],
+                sampled[:7],
+                march_native.kernels(self._values) is not None,
+            )
             assert self._values is not None
             self._step = (key, remembered_step(self._values, scene, search))
         return self._step[1]
@@ -393,6 +425,8 @@ class RaycastRenderer(RendererBase):
                    progress: ProgressCallback | None) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
         """A frame with a 2D TF (`march2d`): the march at the settings' step (the error-targeted step
         is chosen for 1D TFs), every pixel or adaptively refined."""
+        from volren.renderers.raycast import march2d as K2
+
         volume = self.volume
         assert isinstance(volume, UniformVolume) and self._values is not None
         if self._gradients is None:
@@ -405,7 +439,7 @@ class RaycastRenderer(RendererBase):
             values = np.linspace(lo, hi, nv)[None, :]
             magnitudes = np.linspace(0.0, gmax, ng)[:, None]
             rgb, alpha = tf.sample(values, magnitudes)  # extinction as `tf.extinction`, sampled once
-            tau = -np.log1p(-np.minimum(alpha, K.MAX_OPACITY)) / tf.opacity_unit_distance
+            tau = -np.log1p(-np.minimum(alpha, MAX_OPACITY)) / tf.opacity_unit_distance
             table = np.ascontiguousarray(np.concatenate([rgb, tau[..., None]], axis=-1), dtype=np.float32)
             self._table2d = (key, table, K2.interval_kinds(table))
         table, kinds = self._table2d[1], self._table2d[2]
@@ -453,11 +487,11 @@ class RaycastRenderer(RendererBase):
                      two_d: bool = False) -> tuple[NDArray[np.float32], NDArray[np.int64]]:  # fmt: skip
         """(image, the counts' totals): a ray through every pixel, in tiles."""
         image = np.empty((height, width, 4), np.float32)
-        n_tiles = ((width + K.TILE - 1) // K.TILE) * ((height + K.TILE - 1) // K.TILE)
-        counts = np.zeros((n_tiles, len(K.COUNTS)), np.int64)
+        n_tiles = ((width + TILE - 1) // TILE) * ((height + TILE - 1) // TILE)
+        counts = np.zeros((n_tiles, len(COUNTS)), np.int64)
         order = np.arange(n_tiles, dtype=np.int64)
-        kernel = _kernels(two_d, args[0])[0]
-        with parallel_chunk_size(1):  # tiles differ widely in cost: one at a time
+        (kernel, _), numba_kernels = _kernels(two_d, args[0])
+        with _chunks(numba_kernels, 1):  # tiles differ widely in cost: one at a time
             for start in range(0, n_tiles, TILES_PER_CALL):
                 kernel(*args, order[start : start + TILES_PER_CALL], image.reshape(-1, 4), counts)
                 if progress is not None:
@@ -470,15 +504,16 @@ class RaycastRenderer(RendererBase):
                  two_d: bool = False) -> tuple[NDArray[np.float32], NDArray[np.int64], int]:  # fmt: skip
         """(image, the counts' totals, rays cast): adaptive image refinement (`refine_image`), rays cast
         where a block's corner rays disagree, the rest interpolated."""
-        totals = np.zeros(len(K.COUNTS), np.int64)
+        from volren.kernels.image_refinement import refine_image
+
+        totals = np.zeros(len(COUNTS), np.int64)
 
         def cast(pixels: NDArray[np.int64]) -> NDArray[np.float32]:
             rgba, counts = _march_listed(args, pixels, two_d)
             totals[:] += counts.sum(axis=0)
             return rgba
 
-        with parallel_chunk_size(PIXEL_CHUNK):
-            rgba, rays = refine_image(cast, width, height, stride, float(tolerance), progress)
+        rgba, rays = refine_image(cast, width, height, stride, float(tolerance), progress)
         image = rgba.astype(np.float32, copy=False).reshape(height, width, 4)
         return image, totals, rays
 
@@ -488,6 +523,8 @@ class RaycastRenderer(RendererBase):
         opacity of the projected value, no opacity where no finite value was met)."""
         width, height = view.width, view.height
         acc = np.empty((width * height, 2))
+        from volren.renderers.raycast import march as K
+
         code = {BlendMode.MAXIMUM: K.MAXIMUM, BlendMode.MINIMUM: K.MINIMUM, BlendMode.AVERAGE: K.AVERAGE}[
             mode
         ]

@@ -82,15 +82,16 @@ def array_digest(values: NDArray) -> str:
 
 
 def code_digest() -> str:
-    """SHA-256 of the sources of the ray caster and its kernels and of numba's and numpy's versions."""
+    """SHA-256 of the sources of the ray caster (its C march too) and its kernels and of numba's and
+    numpy's versions (numba's read from its metadata: a frame the C march draws does not import it)."""
     global _code
     if _code is None:
-        import numba
+        from importlib.metadata import version
 
         here = Path(__file__).resolve().parent
-        digest = hashlib.sha256(f"{FORMAT_VERSION}|{numba.__version__}|{np.__version__}".encode())
+        digest = hashlib.sha256(f"{FORMAT_VERSION}|{version('numba')}|{np.__version__}".encode())
         for folder in (here, here.parent.parent / "kernels"):
-            for path in sorted(folder.glob("*.py")):
+            for path in sorted([*folder.glob("*.py"), *folder.glob("*.c")]):
                 digest.update(path.name.encode() + b"\0")
                 try:
                     digest.update(path.read_bytes())
