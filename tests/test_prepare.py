@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import faulthandler
+import os
 
 import numpy as np
 import pytest
@@ -10,7 +11,7 @@ import pytest
 from volren.cli.main import main
 from volren.errors import VolrenError
 from volren.model import BlendMode, RenderSettings
-from volren.prepare import _prepare_in_processes, prepare, prepare_renderer
+from volren.prepare import _prepare_in_processes, _volumes, prepare, prepare_renderer
 from volren.renderers.base import Capabilities, KindSupport, OptionSpec, QualityLevel, RendererBase
 from volren.renderers.registry import registry
 
@@ -140,3 +141,31 @@ def test_jobs_below_one_is_a_one_line_error(capsys):
     assert main(["prepare", "--renderers", "example", "--jobs", "0"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--jobs: must be at least 1" in err
+
+
+def test_a_renderer_that_draws_with_c_kernels_compiles_their_numba_stand_ins_too():
+    """raycast's 1D frames draw with its C march where a compiler is found: prepare draws its scenes
+    again with the C kernels off, so that numba's march, which grids the C march cannot take draw
+    with, is compiled at set-up too; the environment is left as it was."""
+    from volren.kernels import native
+    from volren.renderers.raycast import march_native
+
+    if march_native._library() is None:
+        pytest.skip("no C compiler here: there is one pass")
+    seen = []
+    real = march_native.kernels
+
+    def spy(values):
+        found = real(values)
+        seen.append(found is not None)
+        return found
+
+    before = os.environ.get("VOLREN_NATIVE")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(march_native, "kernels", spy)
+        patch.setattr("volren.prepare._volumes", lambda kind: iter([next(_volumes(kind))]))
+        result = prepare_renderer("raycast")
+    assert result.error is None
+    assert True in seen and False in seen  # frames with the C march, then with numba's
+    assert os.environ.get("VOLREN_NATIVE") == before
+    assert native.handed_out() > 0

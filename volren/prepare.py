@@ -85,10 +85,34 @@ def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Came
 
 def prepare_renderer(name: str) -> Prepared:
     """Draw every claimed combination and quality level with renderer `name` (one renderer per volume, as the app keeps
-    one); an error stops it and is reported in one line."""
-    from volren.renderers.registry import registry
+    one); an error stops it and is reported in one line. A renderer that drew with C kernels
+    (`volren.kernels.native`) draws everything a second time with them off, so that the numba kernels they stand
+    in for are compiled too (a grid they cannot take, and ``VOLREN_NATIVE=0``, draw with those)."""
+    from volren.kernels import native
 
     start = time.perf_counter()
+    frames = 0
+    try:
+        before = native.handed_out()
+        frames += _draw_scenes(name, numba_only=False)
+        if native.handed_out() > before:
+            frames += _draw_scenes(name, numba_only=True)
+    except VolrenError as exc:
+        return Prepared(name, time.perf_counter() - start, frames, str(exc))
+    except Exception as exc:  # noqa: BLE001 - a plugin's failure is reported, never fatal to set-up
+        return Prepared(
+            name, time.perf_counter() - start, frames, f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+        )
+    return Prepared(name, time.perf_counter() - start, frames)
+
+
+def _draw_scenes(name: str, numba_only: bool) -> int:
+    """How many frames `prepare_renderer`'s scenes drew with `name`, with the C kernels off where `numba_only`."""
+    from volren.renderers.registry import registry
+
+    before = os.environ.get("VOLREN_NATIVE")
+    if numba_only:
+        os.environ["VOLREN_NATIVE"] = "0"
     frames = 0
     try:
         for volume, frames_of_volume in _scenes(name):
@@ -107,13 +131,12 @@ def prepare_renderer(name: str) -> Prepared:
                     frames += 1
             finally:
                 renderer.release()
-    except VolrenError as exc:
-        return Prepared(name, time.perf_counter() - start, frames, str(exc))
-    except Exception as exc:  # noqa: BLE001 - a plugin's failure is reported, never fatal to set-up
-        return Prepared(
-            name, time.perf_counter() - start, frames, f"{type(exc).__name__}: {' '.join(str(exc).split())}"
-        )
-    return Prepared(name, time.perf_counter() - start, frames)
+    finally:
+        if before is None:
+            os.environ.pop("VOLREN_NATIVE", None)
+        else:
+            os.environ["VOLREN_NATIVE"] = before
+    return frames
 
 
 def default_jobs() -> int:

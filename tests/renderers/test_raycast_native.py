@@ -155,7 +155,7 @@ def test_no_compiler_or_a_failed_build_leaves_numba_in_charge(monkeypatch, tmp_p
     source = tmp_path / "broken.c"
     source.write_text("this is not C\n")
     monkeypatch.setenv("VOLREN_NATIVE_CACHE", str(tmp_path / "cache"))
-    native.load.cache_clear()
+    native._load.cache_clear()
     try:
         assert native.load(source) is None  # the build fails: no library, no exception
         assert not list((tmp_path / "cache").glob("*"))  # and no half-written file is left
@@ -164,24 +164,24 @@ def test_no_compiler_or_a_failed_build_leaves_numba_in_charge(monkeypatch, tmp_p
         monkeypatch.setenv("VOLREN_NATIVE", "0")
         assert not native.enabled()
     finally:
-        native.load.cache_clear()
+        native._load.cache_clear()
 
 
 def test_a_built_library_is_reused_from_the_cache(monkeypatch, tmp_path):
     if native.compiler() is None:
         pytest.skip("no C compiler here")
     monkeypatch.setenv("VOLREN_NATIVE_CACHE", str(tmp_path))
-    native.load.cache_clear()
+    native._load.cache_clear()
     try:
         assert native.load(march_native.SOURCE) is not None
         built = list(tmp_path.glob("march-*.so"))
         assert len(built) == 1
         stamp = built[0].stat().st_mtime_ns
-        native.load.cache_clear()
+        native._load.cache_clear()
         assert native.load(march_native.SOURCE) is not None
         assert built[0].stat().st_mtime_ns == stamp
     finally:
-        native.load.cache_clear()
+        native._load.cache_clear()
 
 
 def _render_in_a_new_process(tmp_path, env_extra):

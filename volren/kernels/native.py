@@ -58,10 +58,28 @@ def compiler() -> str | None:
     return os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
 
 
-@cache
+#: How many times `load` has handed out a library in this process (`volren prepare` asks whether a
+#: renderer drew with C kernels).
+_handed_out = [0]
+
+
+def handed_out() -> int:
+    """How many times `load` has returned a library in this process."""
+    return _handed_out[0]
+
+
 def load(source: Path) -> ctypes.CDLL | None:
     """The shared library built from the C file `source` for this CPU, built now unless cached;
     None where the C kernels are off, no compiler is found or the build fails."""
+    lib = _load(source)
+    if lib is not None:
+        _handed_out[0] += 1
+    return lib
+
+
+@cache
+def _load(source: Path) -> ctypes.CDLL | None:
+    """`load`, once per source and process."""
     if not enabled():
         return None
     cc = compiler()

@@ -190,9 +190,9 @@ def numba_only() -> Iterator[None]:
 
 def kernels(values: NDArray[Any]) -> tuple[Any, Any] | None:
     """(march, march_pixels) in C for this grid, or None where the numba kernels must draw it:
-    `numba_only` is on, the library is not available, the grid is too large for 32-bit offsets,
+    `numba_only` is on, ``VOLREN_NATIVE`` is 0 (read at each frame), the library is not available, the grid is too large for 32-bit offsets,
     its values are neither 8-bit nor float32, or an 8-bit grid lacks the slack `padded` gives."""
-    if _NUMBA_ONLY[0]:
+    if _NUMBA_ONLY[0] or not native.enabled():
         return None
     if (
         values.dtype not in (np.uint8, np.float32)
