@@ -14,6 +14,7 @@ terminated early) with its samples per second per core.
 from __future__ import annotations
 
 import argparse
+import datetime
 import os
 import time
 from collections.abc import Iterator
@@ -84,18 +85,29 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", type=int, default=5, help="frames per kernel and scene (default 5)")
     parser.add_argument("--size", type=int, default=512)
     parser.add_argument("--scenes", help="comma-separated names to keep (e.g. bonsai/smooth,hard_tubes/hard)")
+    parser.add_argument(
+        "--out", help="also write the table to this Markdown file (docs/bench/native_march.md)"
+    )
     args = parser.parse_args(argv)
     from volren.renderers.raycast.march_native import vector_path
 
     shared = shared_folder(args.shared, required=False)
     keep = set(args.scenes.split(",")) if args.scenes else None
     cores = os.cpu_count() or 1
-    print(f"raycast's C march ({'AVX2 vector path' if vector_path() else 'no C library: numba only'}) against "
-          f"numba's; {args.size}x{args.size}, no options, median of {args.frames} turning frames each, "
-          f"{cores} cores")  # fmt: skip
-    print("\n| scene | numba ms | C ms | numba / C | largest difference | M samples | segments skipped | "
-          "rays terminated early | C M samples/s per core |")  # fmt: skip
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    lines: list[str] = []
+
+    def say(line: str = "") -> None:
+        lines.append(line)
+        print(line, flush=True)
+
+    say(f"Measured {datetime.date.today()} by `python -m benchmarks.native_march --shared ../shared --frames "
+        f"{args.frames}`: raycast's C march ({'AVX2 vector path' if vector_path() else 'no C library: numba only'}) "
+        f"against numba's; {args.size}x{args.size}, no options, median of {args.frames} turning frames each, "
+        f"{cores} cores.")  # fmt: skip
+    say()
+    say("| scene | numba ms | C ms | numba / C | largest difference | M samples | segments skipped | "
+        "rays terminated early | C M samples/s per core |")  # fmt: skip
+    say("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     ratios = []
     for name, volume, tf in scenes(shared):
         if keep is not None and name not in keep:
@@ -104,12 +116,15 @@ def main(argv: list[str] | None = None) -> int:
         ratio = row["numba_ms"] / row["c_ms"]
         ratios.append(ratio)
         rate = row["samples"] / (row["c_ms"] / 1e3) / cores / 1e6
-        print(f"| {name} | {row['numba_ms']:.0f} | {row['c_ms']:.0f} | {ratio:.2f} | {row['diff']:.1e} | "
-              f"{row['samples'] / 1e6:.2f} | {row['skipped'] / 1e6:.2f} M | {row['terminated'] / max(row['rays'], 1):.0%} | "
-              f"{rate:.1f} |")  # fmt: skip
+        say(f"| {name} | {row['numba_ms']:.0f} | {row['c_ms']:.0f} | {ratio:.2f} | {row['diff']:.1e} | "
+            f"{row['samples'] / 1e6:.2f} | {row['skipped'] / 1e6:.2f} M | {row['terminated'] / max(row['rays'], 1):.0%} | "
+            f"{rate:.1f} |")  # fmt: skip
     if ratios:
-        print(f"\nnumba / C over {len(ratios)} scenes: median {np.median(ratios):.2f}, "
-              f"range {min(ratios):.2f}-{max(ratios):.2f}")  # fmt: skip
+        say()
+        say(f"numba / C over {len(ratios)} scenes: median {np.median(ratios):.2f}, "
+            f"range {min(ratios):.2f}-{max(ratios):.2f}.")  # fmt: skip
+    if args.out:
+        Path(args.out).write_text("\n".join(lines) + "\n")
     return 0
 
 

@@ -54,6 +54,12 @@ SECTIONS = (
         "same load (`python -m benchmarks.defaults_ab`)",
     ),
     (
+        "fastest_peer.md",
+        "No options against VTK's fastest setting at our error",
+        "How does a render with no options compare with the quickest VTK mapper and step (fixed point or the GPU "
+        "ray caster on llvmpipe) that reaches its error? (`python -m benchmarks.fastest_peer`)",
+    ),
+    (
         "plugins.md",
         "The plugin renderers (shear-warp, object order)",
         "How do the papers' CPU algorithms compare with VTK and the slicer at equal error, and with the papers' tables?",
@@ -135,6 +141,12 @@ SECTIONS = (
         "The kernels' ceiling on this CPU",
         "How fast does one core march rays here, in numba and in C, one ray at a time and in packets of 8, "
         "and what does that leave of bonsai's frame? (`python -m benchmarks.packet_probe`)",
+    ),
+    (
+        "native_march.md",
+        "raycast's C march against its numba march",
+        "How much faster is the C march than numba's, and do they draw the same image? "
+        "(`python -m benchmarks.native_march`)",
     ),
     (
         "gpu.md",
