@@ -98,6 +98,18 @@ def _load(source: Path) -> ctypes.CDLL | None:
         return None
 
 
+def _drop_older(target: Path) -> None:
+    """Remove the libraries built from earlier versions of the same source (best effort: a process
+    that loaded one keeps its mapping)."""
+    stem = target.name.rsplit("-", 1)[0]
+    for old in target.parent.glob(f"{stem}-*.so"):
+        if old != target and old.name.count("-") == target.name.count("-"):
+            try:
+                old.unlink()
+            except OSError:
+                pass
+
+
 def _build(cc: str, flags: tuple[str, ...], source: Path, target: Path) -> bool:
     """Compile `source` into `target` through a temporary file in its folder, renamed into place
     (two processes building at once each leave a whole library); False where it fails."""
@@ -113,6 +125,7 @@ def _build(cc: str, flags: tuple[str, ...], source: Path, target: Path) -> bool:
         if done.returncode != 0:
             return False
         os.replace(tmp, target)
+        _drop_older(target)
         return True
     except (OSError, subprocess.SubprocessError):
         return False
