@@ -18,16 +18,16 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import os
 import statistics
 import time
 from contextlib import ExitStack
-from pathlib import Path
 
 from benchmarks._cli import run
 from benchmarks.quality_levels import VTK_DEFAULT, _configs
+from benchmarks.scene_table import parser as table_parser
+from benchmarks.scene_table import scene_table
 from volren.api import prepared_renderer
-from volren.bench.datasets import Dataset, sample_datasets, shared_datasets, shared_folder
+from volren.bench.datasets import Dataset
 from volren.model import RenderSettings
 from volren.model.scene_class import SceneClass
 from volren.quality import resolve
@@ -78,43 +78,18 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
 
 
 def measure(args: argparse.Namespace) -> int:
-    shared = shared_folder(args.shared, required=False)
-    found = {**(shared_datasets(shared) if shared else {}), **sample_datasets()}
-    names = args.datasets.split(",") if args.datasets else list(found)
-    lines = [f"Measured {datetime.date.today()} by `python -m benchmarks.defaults_ab --shared ../shared --frames "
+    intro = (f"Measured {datetime.date.today()} by `python -m benchmarks.defaults_ab --shared ../shared --frames "
              f"{args.frames}`: {args.size}x{args.size}, per scene the median of {args.frames} turning frames of each "
-             "renderer, the two renderers' frames interleaved; RMSE at the scene's view against `reference`.",
-             "", f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}", "",
-             "| scene | auto's choice (no options) | ours ms | VTK's default ms | VTK / ours | our RMSE "
-             "| VTK's RMSE | ours / VTK's |", "|---|---|---:|---:|---:|---:|---:|---:|"]  # fmt: skip
-    for line in lines:
-        print(line)
-    for name in names:
-        d = found[name]
-        volume = d.load()
-        for style, tf in d.transfer_functions():
-            lines.append(scene_row(d, volume, style, tf, args.size, args.frames))
-            print(lines[-1], flush=True)
-    lines += ["", f"load average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}"]
-    print(lines[-1])
-    if args.out:
-        Path(args.out).write_text("\n".join(lines) + "\n")
-    return 0
+             "renderer, the two renderers' frames interleaved; RMSE at the scene's view against `reference`.")  # fmt: skip
+    header = ("| scene | auto's choice (no options) | ours ms | VTK's default ms | VTK / ours | our RMSE "
+              "| VTK's RMSE | ours / VTK's |", "|---|---|---:|---:|---:|---:|---:|---:|")  # fmt: skip
+    return scene_table(args, intro, header, scene_row)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m benchmarks.defaults_ab", description=__doc__.split("\n")[0]
+    parser = table_parser(
+        "python -m benchmarks.defaults_ab", __doc__.split("\n")[0], 7, "docs/bench/defaults_ab.md"
     )
-    parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED; without "
-                                         "it, the bundled samples only)")  # fmt: skip
-    parser.add_argument("--datasets", default="", help="comma-separated datasets (default: every one)")
-    parser.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
-    parser.add_argument(
-        "--frames", type=int, default=7, help="timed frame pairs per scene, median (default 7)"
-    )
-    parser.add_argument("--out", help="also write the table to this Markdown file (BENCHMARKS.md's fragment: "
-                                      "docs/bench/defaults_ab.md)")  # fmt: skip
     return run(measure, parser, argv)
 
 

@@ -18,15 +18,15 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import os
 import statistics
 import time
 from contextlib import ExitStack
-from pathlib import Path
 
 from benchmarks._cli import run
+from benchmarks.scene_table import parser as table_parser
+from benchmarks.scene_table import scene_table
 from volren.api import prepared_renderer
-from volren.bench.datasets import Dataset, sample_datasets, shared_datasets, shared_folder
+from volren.bench.datasets import Dataset
 from volren.bench.sweep import Config
 from volren.errors import VolrenError
 from volren.model import RenderSettings
@@ -103,44 +103,19 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
 
 
 def measure(args: argparse.Namespace) -> int:
-    shared = shared_folder(args.shared, required=False)
-    found = {**(shared_datasets(shared) if shared else {}), **sample_datasets()}
-    names = args.datasets.split(",") if args.datasets else list(found)
-    lines = [f"Measured {datetime.date.today()} by `python -m benchmarks.fastest_peer --shared ../shared --frames "
-             f"{args.frames}{' --datasets ' + args.datasets if args.datasets else ''}`: {args.size}x{args.size}; "
-             "per scene `auto`'s choice with no options against the quickest VTK setting whose RMSE against "
-             f"`reference` is at most ours, the median of {args.frames} turning frames of each, interleaved.",
-             "", f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}", "",
-             "| scene | ours | ours ms | our RMSE | VTK's fastest at our error | its ms | its RMSE | its ms / ours "
-             "| VTK's quickest at any error (one frame) |", "|---|---|---:|---:|---|---:|---:|---:|---|"]  # fmt: skip
-    for line in lines:
-        print(line)
-    for name in names:
-        d = found[name]
-        volume = d.load()
-        for style, tf in d.transfer_functions():
-            lines.append(scene_row(d, volume, style, tf, args.size, args.frames))
-            print(lines[-1], flush=True)
-    lines += ["", f"load average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}"]
-    print(lines[-1])
-    if args.out:
-        Path(args.out).write_text("\n".join(lines) + "\n")
-    return 0
+    intro = (f"Measured {datetime.date.today()} by `python -m benchmarks.fastest_peer --shared ../shared --frames "
+             f"{args.frames}{' --datasets ' + args.datasets if args.datasets else ''}`: {args.size}x{args.size}; per "
+             "scene `auto`'s choice with no options against the quickest VTK setting whose RMSE against `reference` "
+             f"is at most ours, the median of {args.frames} turning frames of each, interleaved.")  # fmt: skip
+    header = ("| scene | ours | ours ms | our RMSE | VTK's fastest at our error | its ms | its RMSE | its ms / ours "
+              "| VTK's quickest at any error (one frame) |", "|---|---|---:|---:|---|---:|---:|---:|---|")  # fmt: skip
+    return scene_table(args, intro, header, scene_row)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m benchmarks.fastest_peer", description=__doc__.split("\n")[0]
+    parser = table_parser(
+        "python -m benchmarks.fastest_peer", __doc__.split("\n")[0], 5, "docs/bench/fastest_peer.md"
     )
-    parser.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED; without "
-                                         "it, the bundled samples only)")  # fmt: skip
-    parser.add_argument("--datasets", default="", help="comma-separated datasets (default: every one)")
-    parser.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
-    parser.add_argument(
-        "--frames", type=int, default=5, help="timed frame pairs per scene, median (default 5)"
-    )
-    parser.add_argument("--out", help="also write the table to this Markdown file (BENCHMARKS.md's fragment: "
-                                      "docs/bench/fastest_peer.md)")  # fmt: skip
     return run(measure, parser, argv)
 
 

@@ -167,21 +167,8 @@ INLINE double box_exit(const IndexRay *r, double lx, double ly, double lz, doubl
     return te;
 }
 
-/* post-classified colour and opacity at value s (opacity per step), interpolated in the table */
-INLINE double post_lookup(const Classes *c, double s, double *r, double *g, double *b) {
-    const double *post = c->post;
-    int64_t n = c->n_post;
-    double fi = MIN(MAX((s - c->lo) * c->scale, 0.0), (double)n - 1.0);
-    int64_t i0 = (int64_t)fi;
-    if (i0 > n - 2) i0 = n - 2;
-    double w = fi - (double)i0;
-    const double *p = post + 4 * i0;
-    *r = p[0] + w * (p[4] - p[0]);
-    *g = p[1] + w * (p[5] - p[1]);
-    *b = p[2] + w * (p[6] - p[2]);
-    return p[3] + w * (p[7] - p[3]);
-}
-
+/* post-classified opacity at value s (per step), interpolated in the table between entries i0 and
+ * i0 + 1 with weight w (both returned for the colour) */
 INLINE double post_alpha(const Classes *c, double s, int64_t *i0_out, double *w_out) {
     const double *post = c->post;
     int64_t n = c->n_post;
@@ -191,6 +178,18 @@ INLINE double post_alpha(const Classes *c, double s, int64_t *i0_out, double *w_
     double w = fi - (double)i0;
     *i0_out = i0, *w_out = w;
     return post[4 * i0 + 3] + w * (post[4 * i0 + 7] - post[4 * i0 + 3]);
+}
+
+/* post-classified colour and opacity at value s (opacity per step), interpolated in the table */
+INLINE double post_lookup(const Classes *c, double s, double *r, double *g, double *b) {
+    int64_t i0;
+    double w;
+    double a = post_alpha(c, s, &i0, &w);
+    const double *p = c->post + 4 * i0;
+    *r = p[0] + w * (p[4] - p[0]);
+    *g = p[1] + w * (p[5] - p[1]);
+    *b = p[2] + w * (p[6] - p[2]);
+    return a;
 }
 
 /* `_classify`: premultiplied (r, g, b, a) of a segment `length` long */
@@ -507,6 +506,31 @@ INLINE int walk_step(Walk *w) {
     return (uint64_t)w->brick[ax] < (uint64_t)w->count[ax];
 }
 
+/* Where a jump out of the box of empty bricks around the walk's brick lands (every brick within
+ * d - 1 of it is empty): the first segment whose key point lies past the box's exit. */
+INLINE int64_t past_empty_box(const Walk *w, const IndexRay *ray, int d, int64_t B, double inv_h, int pre) {
+    double e = (double)(d - 1);
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = ((double)w->brick[a] - e) * (double)B;
+        hi[a] = ((double)w->brick[a] + 1 + e) * (double)B;
+    }
+    double tb = box_exit(ray, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    return first_segment_past(tb, ray->t0, ray->first, inv_h, pre);
+}
+
+/* A run's segments from ra to the last whose middle lies before t composited onto p
+ * (`composite_post`); returns the segment after them, adds the samples to *taken and, once p is
+ * opaque, sets *stop to the segment after the one that made it so. */
+INLINE int64_t flush_run(const Grid *g, int is_float, const Classes *c, const IndexRay *ray, int64_t ra, double t,
+                         double inv_h, Pixel *p, double term, int64_t *taken, int64_t *stop) {
+    int64_t kb = middles_before(t, ray->t0, ray->first, ray->last, c->step, inv_h, ray->ns);
+    int64_t n = kb > ra ? composite_post(g, is_float, c, ray, ra, kb, p, term) : 0;
+    *taken += n;
+    if (p->a >= term) *stop = ra + n;
+    return kb;
+}
+
 /* The post-classified ray's walk: empty bricks passed in a tight loop (or their empty box left in
  * one jump), and each run of visible bricks composited whole (`composite_post`) once the walk
  * leaves it, so that a brick costs a step and a read, not a segment count. The segments composited
@@ -531,11 +555,7 @@ INLINE void walk_post(const Grid *g, int is_float, const Bricks *br, int shift, 
                 if (d > 1) { /* empty bricks all around: leave their box in one jump if that skips */
                     int64_t kk = first_segment_past(t_entry, t0, first, inv_h, 0);
                     k = kk > k ? kk : k;
-                    double e = (double)(d - 1);
-                    double tb = box_exit(ray, ((double)w.brick[0] - e) * B, ((double)w.brick[1] - e) * B,
-                                         ((double)w.brick[2] - e) * B, ((double)w.brick[0] + 1 + e) * B,
-                                         ((double)w.brick[1] + 1 + e) * B, ((double)w.brick[2] + 1 + e) * B);
-                    int64_t kn = first_segment_past(tb, t0, first, inv_h, 0);
+                    int64_t kn = past_empty_box(&w, ray, d, B, inv_h, 0);
                     if (kn > k) {
                         k = kn;
                         jumps++;
@@ -561,13 +581,8 @@ INLINE void walk_post(const Grid *g, int is_float, const Bricks *br, int shift, 
                     break;
                 }
                 if (run_te - run_t0 >= span) { /* a long run: an opaque ray stops within it, walk no further first */
-                    int64_t kb = middles_before(run_te, t0, first, last, h, inv_h, ns);
-                    int64_t n = kb > ra ? composite_post(g, is_float, c, ray, ra, kb, p, term) : 0;
-                    taken += n;
-                    if (p->a >= term) {
-                        stop = ra + n;
-                        goto done;
-                    }
+                    int64_t kb = flush_run(g, is_float, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
+                    if (p->a >= term) goto done;
                     ra = kb > ra ? kb : ra;
                     run_t0 = run_te;
                 }
@@ -578,13 +593,8 @@ INLINE void walk_post(const Grid *g, int is_float, const Bricks *br, int shift, 
                 }
                 d = empty[w.offset];
             }
-            int64_t kb = middles_before(run_te, t0, first, last, h, inv_h, ns);
-            int64_t n = kb > ra ? composite_post(g, is_float, c, ray, ra, kb, p, term) : 0;
-            taken += n;
-            if (p->a >= term) {
-                stop = ra + n;
-                goto done;
-            }
+            int64_t kb = flush_run(g, is_float, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
+            if (p->a >= term) goto done;
             k = kb > k ? kb : k;
             if (!inside || k >= ns) goto done;
         }
@@ -619,11 +629,7 @@ INLINE void walk_pre(const Grid *g, int is_float, const Bricks *br, int shift, c
         int restart = 0;
         for (;;) {
             if (d > 1) { /* empty bricks all around: leave their box in one jump if that skips */
-                double e = (double)(d - 1);
-                double tb = box_exit(ray, ((double)w.brick[0] - e) * B, ((double)w.brick[1] - e) * B,
-                                     ((double)w.brick[2] - e) * B, ((double)w.brick[0] + 1 + e) * B,
-                                     ((double)w.brick[1] + 1 + e) * B, ((double)w.brick[2] + 1 + e) * B);
-                int64_t kn = first_segment_past(tb, t0, first, inv_h, 1);
+                int64_t kn = past_empty_box(&w, ray, d, B, inv_h, 1);
                 if (kn > k) {
                     k = kn;
                     have_front = 0;

@@ -1,0 +1,58 @@
+"""A Markdown table with a row per scene of the shared datasets and the bundled samples, printed as
+it grows and written to a BENCHMARKS.md fragment: what `benchmarks.defaults_ab` and
+`benchmarks.fastest_peer` share (their arguments, the datasets' loop, the load averages)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from volren.bench.datasets import Dataset, sample_datasets, shared_datasets, shared_folder
+
+#: (dataset, its volume, TF style, TF, size, frames) -> the scene's row
+SceneRow = Callable[[Dataset, Any, str, Any, int, int], str]
+
+
+def parser(prog: str, description: str, frames: int, fragment: str) -> argparse.ArgumentParser:
+    """The arguments both take: --shared, --datasets, --size, --frames (default `frames`), --out."""
+    out = argparse.ArgumentParser(prog=prog, description=description)
+    out.add_argument("--shared", help="the folder with data/ and scenes/ (default: $VOLREN_SHARED; without "
+                                      "it, the bundled samples only)")  # fmt: skip
+    out.add_argument("--datasets", default="", help="comma-separated datasets (default: every one)")
+    out.add_argument("--size", type=int, default=512, help="image side in pixels (default 512)")
+    out.add_argument(
+        "--frames", type=int, default=frames, help=f"timed frame pairs per scene, median (default {frames})"
+    )
+    out.add_argument(
+        "--out", help=f"also write the table to this Markdown file (BENCHMARKS.md's fragment: {fragment})"
+    )
+    return out
+
+
+def _load() -> str:
+    return " ".join(f"{v:.2f}" for v in os.getloadavg())
+
+
+def scene_table(args: argparse.Namespace, intro: str, header: tuple[str, str], row: SceneRow) -> int:
+    """`intro`, the load average, the table (`header`: its two first lines) with `row` for every TF
+    of every dataset asked for, and the load average at the end; printed, and written to --out."""
+    shared = shared_folder(args.shared, required=False)
+    found = {**(shared_datasets(shared) if shared else {}), **sample_datasets()}
+    names = args.datasets.split(",") if args.datasets else list(found)
+    lines = [intro, "", f"load average at the start: {_load()}", "", *header]
+    for line in lines:
+        print(line)
+    for name in names:
+        d = found[name]
+        volume = d.load()
+        for style, tf in d.transfer_functions():
+            lines.append(row(d, volume, style, tf, args.size, args.frames))
+            print(lines[-1], flush=True)
+    lines += ["", f"load average at the end: {_load()}"]
+    print(lines[-1])
+    if args.out:
+        Path(args.out).write_text("\n".join(lines) + "\n")
+    return 0
