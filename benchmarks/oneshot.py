@@ -129,7 +129,7 @@ table = np.zeros((2, 2, 4), np.float32)
 table.flags.writeable = False  # read-only, as the renderer hands it: the specialization set-up compiled
 classes = Classification(False, np.zeros((16, 4)), table, 1.0, 0.0, 1.0, False)
 start = time.perf_counter()
-march.march(np.zeros((2, 2, 2), np.uint8), EmptyBricks(np.zeros((1, 1, 1), np.int32), 4), view, classes, 0.99,
+march.march(np.zeros((2, 2, 2), np.uint8), EmptyBricks(np.zeros((1, 1, 1), np.int8), 4), view, classes, 0.99,
             np.zeros(1, np.int64), np.zeros((4, 4), np.float32), np.zeros((1, 4), np.int64))
 print(numba_s, module_s, time.perf_counter() - start)
 """

@@ -132,6 +132,15 @@ def test_the_empty_distance_is_the_chebyshev_distance_to_a_visible_brick(shape):
         assert distance[idx] == min(nearest, 5), idx
 
 
+def test_the_empty_distance_fits_a_byte_and_refuses_a_cap_that_does_not():
+    visible = np.zeros((3, 4, 5), bool)
+    visible[0, 0, 0] = True
+    distance = empty_distance(visible, cap=127)
+    assert distance.dtype == np.int8 and distance.max() == 4  # the far corner, 4 bricks along x
+    with pytest.raises(ValueError, match="127"):
+        empty_distance(np.zeros((3, 4, 5), bool), cap=128)
+
+
 def test_preintegration_beats_post_classification_on_a_spiky_tf():
     volume = field((12, 14, 16))
     camera = Camera.orbit(volume.bounds, 30, 20, zoom=1.2)

@@ -249,3 +249,30 @@ def test_a_new_build_removes_the_libraries_of_older_sources(monkeypatch, tmp_pat
         assert len(list(tmp_path.glob("probe-*.so"))) == 1
     finally:
         native._load.cache_clear()
+
+
+def test_outputs_too_small_for_what_the_c_march_writes_are_refused(monkeypatch):
+    """C checks no bound: an output array smaller than the image, counts without a row for every
+    tile or pixel, or a pixel outside the image is a ValueError before any write."""
+    if march_native._library() is None:
+        pytest.skip("no C compiler here: the numba kernels draw")
+    volume = field((6, 7, 8))
+    inputs = []
+    real = march_native.march
+
+    def spy(*args):
+        inputs.append(args[:5])
+        return real(*args)
+
+    monkeypatch.setattr(march_native, "march", spy)
+    draw(volume, SHELL_TF, Camera.orbit(volume.bounds, 30, 20), (16, 16), step=0.5)
+    args = inputs[0]
+    tiles = np.arange(4, dtype=np.int64)
+    with pytest.raises(ValueError, match="RGBA"):
+        real(*args, tiles, np.zeros((255, 4), np.float32), np.zeros((4, 4), np.int64))
+    with pytest.raises(ValueError, match="counts"):
+        real(*args, tiles, np.zeros((256, 4), np.float32), np.zeros((3, 4), np.int64))
+    with pytest.raises(ValueError, match="in the image"):
+        march_native.march_pixels(*args, np.array([256], np.int64), np.zeros((1, 4), np.float32),
+                                  np.zeros((1, 4), np.int64))  # fmt: skip
+    real(*args, tiles, np.zeros((256, 4), np.float32), np.zeros((4, 4), np.int64))  # the right sizes draw

@@ -37,7 +37,7 @@ typedef struct {
 } Grid;
 
 typedef struct {
-    const int8_t *distance; /* (nbz, nby, nbx): `EmptyBricks.distance`, in a byte (a quarter of the cache lines) */
+    const int8_t *distance; /* (nbz, nby, nbx): `EmptyBricks.distance` */
     int64_t nbx, nby, nbz;
     int64_t size;
 } Bricks;

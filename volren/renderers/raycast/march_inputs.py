@@ -63,7 +63,7 @@ class EmptyBricks(NamedTuple):
     """Empty-space skipping (`occupancy`): `distance[bz, by, bx]` is 0 for a brick to sample, else
     d >= 1 with every brick within Chebyshev distance d - 1 empty too; bricks of `size` cells."""
 
-    distance: NDArray[np.int32]
+    distance: NDArray[np.int8]
     size: int
 
 

@@ -135,17 +135,18 @@ class _Frame:
                 ctypes.byref(self.classes)]  # fmt: skip
 
 
-def _checked(out: NDArray[Any], counts: NDArray[Any], n: int) -> None:
-    """The outputs as the C code writes them: float32 RGBA and int64 counts, C-contiguous."""
-    if out.dtype != np.float32 or not out.flags.c_contiguous or out.shape[-1] != 4:
-        raise ValueError("the C march writes C-contiguous float32 RGBA")
+def _checked(out: NDArray[Any], pixels: int, counts: NDArray[Any], rows: int) -> None:
+    """The outputs as the C code writes them, large enough for what it writes (C checks no bound):
+    float32 RGBA, `pixels` rows, and int64 counts (`march.COUNTS`), `rows` rows, C-contiguous."""
+    if out.dtype != np.float32 or not out.flags.c_contiguous or out.size < 4 * pixels:
+        raise ValueError(f"the C march writes {pixels} C-contiguous float32 RGBA pixels")
     if (
         counts.dtype != np.int64
         or not counts.flags.c_contiguous
         or counts.shape[1:] != (4,)
-        or len(counts) < n
+        or len(counts) < rows
     ):
-        raise ValueError("the C march writes C-contiguous int64 counts, four per row (`march.COUNTS`)")
+        raise ValueError(f"the C march writes {rows} rows of C-contiguous int64 counts, four per row")
 
 
 def march(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification, term: float,
@@ -154,7 +155,9 @@ def march(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: C
     lib = _library()
     assert lib is not None
     tiles = np.ascontiguousarray(tiles, dtype=np.int64)
-    _checked(out, counts, 0)
+    if len(tiles) and tiles.min() < 0:
+        raise ValueError("tile indices must not be negative")
+    _checked(out, int(view.width) * int(view.height), counts, int(tiles.max()) + 1 if len(tiles) else 0)
     frame = _Frame(values, bricks, view, classes)
     lib.march_tiles(*frame.pointers(), float(term), _address(tiles), len(tiles), _address(out), _address(counts),
                     threads())  # fmt: skip
@@ -167,7 +170,9 @@ def march_pixels(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, cla
     lib = _library()
     assert lib is not None
     pixels = np.ascontiguousarray(pixels, dtype=np.int64)
-    _checked(out, counts, len(pixels))
+    if len(pixels) and (pixels.min() < 0 or pixels.max() >= int(view.width) * int(view.height)):
+        raise ValueError("pixel indices must lie in the image")
+    _checked(out, len(pixels), counts, len(pixels))
     frame = _Frame(values, bricks, view, classes)
     lib.march_pixels(*frame.pointers(), float(term), _address(pixels), len(pixels), _address(out), _address(counts),
                      threads(), int(chunk))  # fmt: skip

@@ -256,7 +256,7 @@ class RaycastRenderer(RendererBase):
         super().__init__()
         self._values: NDArray[np.uint8] | NDArray[np.float32] | None = None
         self._grid: tuple[tuple[int, int], BrickGrid] | None = None
-        self._empty: tuple[tuple, NDArray[np.int32]] | None = None
+        self._empty: tuple[tuple, NDArray[np.int8]] | None = None
         self._phases: tuple[tuple, NDArray[np.float64]] | None = None
         self._step: tuple[tuple, tuple[float, float]] | None = (
             None  # (TF and settings, (step, its estimated error))
@@ -282,7 +282,7 @@ class RaycastRenderer(RendererBase):
 
     def _empty_bricks(
         self, tf: TransferFunction1D, brick: int, skipping: bool, reach: int, pad: float
-    ) -> NDArray[np.int32]:
+    ) -> NDArray[np.int8]:
         """Each brick's distance to the nearest brick to sample (`occupancy`), kept while the TF's
         opacity, the brick size, the reach and the table spacing `pad` stay (a colour edit reuses
         it). Bricks are classified over ranges widened by `pad`, one entry of the classification
@@ -463,7 +463,7 @@ class RaycastRenderer(RendererBase):
                        "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size)}  # fmt: skip
 
     def _empty_bricks_2d(self, table: NDArray[np.float32], lo: float, hi: float, brick: int,
-                         skipping: bool) -> NDArray[np.int32]:  # fmt: skip
+                         skipping: bool) -> NDArray[np.int8]:  # fmt: skip
         """Each brick's distance to the nearest brick to sample (`occupancy`) under a 2D TF's table: a
         brick is visible where the table has extinction at any gradient magnitude for a value in its
         range (widened by one entry either side: the table interpolates between entries)."""
@@ -521,10 +521,10 @@ class RaycastRenderer(RendererBase):
                  h: float) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
         """Maximum, minimum or average along each ray, coloured by the TF (DESIGN.md: colour and
         opacity of the projected value, no opacity where no finite value was met)."""
-        width, height = view.width, view.height
-        acc = np.empty((width * height, 2))
         from volren.renderers.raycast import march as K
 
+        width, height = view.width, view.height
+        acc = np.empty((width * height, 2))
         code = {BlendMode.MAXIMUM: K.MAXIMUM, BlendMode.MINIMUM: K.MINIMUM, BlendMode.AVERAGE: K.AVERAGE}[
             mode
         ]
