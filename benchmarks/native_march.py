@@ -6,7 +6,9 @@ found and keeps numba's for machines without one; both must draw the same image,
 must earn its place by time. Each scene is drawn at 512x512 with no options (the level `auto` and
 the renderer set: raycast's default, its error-targeted step), warm, the camera turning 2 degrees a
 frame, the two kernels taking turns frame by frame; the shared grids and hard cases are 8-bit, the
-bundled samples float32 and int16 (raycast marches both as float32). Printed per scene: the median ms of each, their
+bundled samples float32 and int16 (raycast marches both as float32). The `2d blob` scenes are
+2D TFs (value x gradient magnitude: the 1D TF as a band with a Gaussian widget over it, the app's
+2D widget gesture; `benchmarks.tf2d`'s `blob`) on bonsai smooth and the hard cases. Printed per scene: the median ms of each, their
 ratio, the largest pixel difference, and the C march's counters (samples, segments skipped, rays
 terminated early) with its samples per second per core.
 """
@@ -22,14 +24,17 @@ from pathlib import Path
 
 import numpy as np
 
-from volren.bench.datasets import SCENES, hard_datasets, sample_datasets, shared_folder
+from volren.bench.datasets import SCENES, hard_datasets, sample_datasets, scene_inputs, shared_folder
 
 GRIDS = ("bonsai", "engine", "aneurism", "ironProt")
 STYLES = ("smooth", "spiky", "opaque")
 
 
 def scenes(shared: Path | None) -> Iterator[tuple[str, object, object]]:
-    """(name, volume or path, TF or path) of every scene: the shared grids' TFs, then the hard cases."""
+    """(name, volume or path, TF or path) of every scene: the shared grids' TFs, the hard cases, the
+    samples, then the 2D TFs."""
+    from benchmarks.tf2d import two_d_tfs
+
     if shared is not None:
         for dataset in GRIDS:
             for style in STYLES:
@@ -45,6 +50,13 @@ def scenes(shared: Path | None) -> Iterator[tuple[str, object, object]]:
     for name, sample in sample_datasets().items():  # a float32 and an int16 grid (drawn as float32)
         if sample.kind == "uniform":
             yield f"{name}/sample", sample.load(), sample.tf_paths[0][1]
+    if shared is not None:
+        volume, tf = scene_inputs(shared, "bonsai", "smooth")
+        yield "bonsai/smooth/2d blob", volume, two_d_tfs(tf, volume)["blob"]
+    for name, hard in hard_datasets().items():
+        if hard.kind == "uniform":
+            volume = hard.load()
+            yield f"{name}/2d blob", volume, two_d_tfs(next(hard.transfer_functions())[1], volume)["blob"]
 
 
 def compare(volume: object, tf: object, frames: int, size: int) -> dict[str, float]:

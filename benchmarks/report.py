@@ -96,6 +96,12 @@ SECTIONS = (
         "what cost? (`python -m benchmarks.tf2d`)",
     ),
     (
+        "tf2d_drag.md",
+        "Previews of a dragged 2D transfer function",
+        "What does a preview cost while a 2D widget moves, with the full table and with the drag's smaller one, "
+        "and what does the smaller table change? (`python -m benchmarks.tf2d_drag`)",
+    ),
+    (
         "app.md",
         "Desktop app responsiveness",
         "Does each gesture follow the hand: previews per second, release to full "

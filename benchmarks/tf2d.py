@@ -30,7 +30,7 @@ from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction2D
 from volren.model.volume import UniformVolume
 from volren.quality import at_level
-from volren.renderers.raycast.march2d import gradients
+from volren.renderers.raycast.march_inputs import gradients
 from volren.renderers.registry import registry
 from volren.testing.metrics import image_error
 from volren.testing.reference_images import reference_image

@@ -144,9 +144,9 @@ def test_jobs_below_one_is_a_one_line_error(capsys):
 
 
 def test_a_renderer_that_draws_with_c_kernels_compiles_their_numba_stand_ins_too():
-    """raycast's 1D frames draw with its C march where a compiler is found: prepare draws its scenes
-    again with the C kernels off, so that numba's march, which grids the C march cannot take draw
-    with, is compiled at set-up too; the environment is left as it was."""
+    """raycast's frames (1D and 2D TFs) draw with its C march where a compiler is found: prepare draws
+    its scenes again with the C kernels off, so that numba's marches, which grids the C march cannot
+    take draw with, are compiled at set-up too; the environment is left as it was."""
     from volren.kernels import native
     from volren.renderers.raycast import march_native
 
@@ -155,9 +155,9 @@ def test_a_renderer_that_draws_with_c_kernels_compiles_their_numba_stand_ins_too
     seen = []
     real = march_native.kernels
 
-    def spy(values):
-        found = real(values)
-        seen.append(found is not None)
+    def spy(values, two_d=False):
+        found = real(values, two_d)
+        seen.append((two_d, found is not None))
         return found
 
     before = os.environ.get("VOLREN_NATIVE")
@@ -166,6 +166,7 @@ def test_a_renderer_that_draws_with_c_kernels_compiles_their_numba_stand_ins_too
         patch.setattr("volren.prepare._volumes", lambda kind: iter([next(_volumes(kind))]))
         result = prepare_renderer("raycast")
     assert result.error is None
-    assert True in seen and False in seen  # frames with the C march, then with numba's
+    for two_d in (False, True):  # frames with the C march, then with numba's, for both TF dimensions
+        assert (two_d, True) in seen and (two_d, False) in seen
     assert os.environ.get("VOLREN_NATIVE") == before
     assert native.handed_out() > 0

@@ -23,3 +23,16 @@ def test_numba_only_holds_within_its_block_only():
     with numba_only():
         assert kernels(grid) is None
     assert kernels(grid) == before
+
+
+def test_the_2d_scenes_are_2d_tfs_both_kernels_draw_alike():
+    from benchmarks.tf2d import two_d_tfs
+
+    case = CASES["hard_tubes"]
+    volume = case.build()
+    tf = two_d_tfs(case.tf(), volume)["blob"]
+    assert tf.dims == 2
+    row = native_march.compare(volume, tf, frames=2, size=48)
+    assert row["c_ms"] > 0 and row["numba_ms"] > 0
+    assert row["diff"] <= 1e-3
+    assert row["samples"] > 0 and row["rays"] == 48 * 48

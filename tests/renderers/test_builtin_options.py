@@ -14,7 +14,7 @@ from volren.renderers.registry import registry
 BUILTIN_DEFAULTS = {
     "raycast": {"brick_size": 4, "empty_space_skipping": True, "termination_alpha": 0.999,
                 "depth_offsets": "interleaved", "jitter_seed": 0, "table_size": 256, "classification_table": 4096,
-                "image_stride": 1, "refine_tolerance": 0.02, "target_error": 0.0},
+                "image_stride": 1, "refine_tolerance": 0.02, "table_2d": 512, "target_error": 0.0},
     "slicer": {"path": "march", "table_size": 512, "empty_space_skipping": True, "early_termination": True,
                "termination_alpha": 0.999, "brick_size": 8, "jitter_seed": 1, "termination_interval": 16,
                "volume_format": "float"},

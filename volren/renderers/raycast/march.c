@@ -1,14 +1,17 @@
-/* raycast's 1D march compiled from C: the same rays, segments, brick walk and compositing as the
- * numba kernel in march.py (read its docstrings for the why of each step), ported line by line so
- * that both draw the same image up to float rounding.
+/* raycast's march compiled from C: the same rays, segments, brick walk and compositing as the
+ * numba kernels in march.py (1D TFs) and march2d.py (2D TFs: value x gradient magnitude; read their
+ * docstrings for the why of each step), ported line by line so that both draw the same image up to
+ * float rounding.
  *
  * Why C beside numba: numba does not vectorize a ray's samples on this kind of CPU (no gathers in
  * its assembly; benchmarks/packet_probe.py), while C with AVX2 gathers reaches about twice numba's
  * samples per second. Built with AVX2 and FMA (`-mavx2 -mfma`), a run of post-classified samples
  * in visible bricks is sampled eight at a time (`run_values8`): positions in double, the trilinear
  * interpolation in single precision, classification and compositing one sample at a time in
- * double so that early termination stops where the scalar march stops. Without AVX2 every sample
- * goes through `value`, as in numba.
+ * double so that early termination stops where the scalar march stops. A 2D TF's samples also
+ * read the gradient eight at a time (`gradient_length8`: three 32-bit gathers per pair of x
+ * neighbours give their six int16 components). Without AVX2 every sample goes through `value`,
+ * as in numba.
  *
  * Threads: the caller's thread and `threads - 1` POSIX threads take tiles (or pixels) from a shared
  * counter until none is left, and are joined before the call returns (nothing survives a fork).
@@ -60,7 +63,21 @@ typedef struct {
     const float *table; /* (n_table, n_table, 4) */
     int64_t n_table;
     double step, lo, scale;
+    /* a 2D TF (`march2d.Table2D`) where two_d: table2d (n_gradient, n_value, 4) holds (r, g, b,
+     * extinction per unit length) at value lo + i / scale and gradient magnitude j / g_scale, kinds
+     * (n_value - 1 entries, 3 bytes readable past them) each interval's `interval_kinds`; the grid
+     * points' gradients (nz, ny, nx, 3) are int16 times gradient_unit (`march2d.Gradients2D`) */
+    int32_t two_d;
+    const float *table2d;
+    int64_t n_value, n_gradient;
+    double g_scale;
+    const int8_t *kinds;
+    const int16_t *gradients;
+    double gradient_unit;
 } Classes;
+
+#define TRANSPARENT 0
+#define FLAT 1
 
 typedef struct {
     double ox, oy, oz, dx, dy, dz, ix, iy, iz, t0, first, last;
@@ -249,11 +266,78 @@ INLINE int composite_one(const Classes *c, double s, double lk, Pixel *p, double
     return p->a >= term;
 }
 
+/* `_gradient_length`: |trilinear interpolant of the grid points' gradient vectors| at index point p */
+INLINE double gradient_length(const Grid *g, const Classes *c, double px, double py, double pz) {
+    const int64_t nx = g->nx, nxy = g->nx * g->ny;
+    int64_t i = clamp_index(px, g->nx), j = clamp_index(py, g->ny), k = clamp_index(pz, g->nz);
+    double fx = px - (double)i, fy = py - (double)j, fz = pz - (double)k;
+    const int16_t *q = c->gradients + 3 * (k * nxy + j * nx + i);
+    const int64_t sy = 3 * nx, sz = 3 * nxy;
+    double total = 0.0;
+    for (int a = 0; a < 3; a++) {
+        double x00 = q[a] + fx * ((double)q[3 + a] - q[a]);
+        double x10 = q[sy + a] + fx * ((double)q[sy + 3 + a] - q[sy + a]);
+        double x01 = q[sz + a] + fx * ((double)q[sz + 3 + a] - q[sz + a]);
+        double x11 = q[sz + sy + a] + fx * ((double)q[sz + sy + 3 + a] - q[sz + sy + a]);
+        double y0 = x00 + fy * (x10 - x00), y1 = x01 + fy * (x11 - x01);
+        double v = y0 + fz * (y1 - y0);
+        total += v * v;
+    }
+    return sqrt(total) * c->gradient_unit;
+}
+
+/* `_bilinear`: channel ch of the 2D table between rows j0 (t0) and j0 + 1 (t1), entries i0, i0 + 1 */
+INLINE double bilinear(const float *t0, const float *t1, double wi, double wj, int ch) {
+    double a0 = t0[ch] + wi * ((double)t0[4 + ch] - t0[ch]);
+    double a1 = t1[ch] + wi * ((double)t1[4 + ch] - t1[ch]);
+    return a0 + wj * (a1 - a0);
+}
+
+/* `_segment_rgba` composited onto p: a 2D-TF segment lk long at value s, index point (px, py, pz)
+ * (whose gradient is read where the table needs it); 1 once p is opaque */
+INLINE int composite_one_2d(const Grid *g, const Classes *c, double s, double px, double py, double pz, double lk,
+                            Pixel *p, double term) {
+    if (!isfinite(s)) return 0;
+    const int64_t nv = c->n_value, ng = c->n_gradient;
+    double fi = MIN(MAX((s - c->lo) * c->scale, 0.0), (double)nv - 1.0);
+    int64_t i0 = (int64_t)fi;
+    if (i0 > nv - 2) i0 = nv - 2;
+    int kind = c->kinds[i0];
+    if (kind == TRANSPARENT) return 0;
+    double fj = kind == FLAT ? 0.0 : MIN(MAX(gradient_length(g, c, px, py, pz) * c->g_scale, 0.0), (double)ng - 1.0);
+    int64_t j0 = (int64_t)fj;
+    if (j0 > ng - 2) j0 = ng - 2;
+    double wi = fi - (double)i0, wj = fj - (double)j0;
+    const float *t0 = c->table2d + 4 * (j0 * nv + i0), *t1 = t0 + 4 * nv;
+    double tau = bilinear(t0, t1, wi, wj, 3);
+    if (!(tau > 0.0)) return 0;
+    double alpha = -expm1(-tau * lk), tr = 1.0 - p->a;
+    p->r += tr * (bilinear(t0, t1, wi, wj, 0) * alpha);
+    p->g += tr * (bilinear(t0, t1, wi, wj, 1) * alpha);
+    p->b += tr * (bilinear(t0, t1, wi, wj, 2) * alpha);
+    p->a += tr * alpha;
+    return p->a >= term;
+}
+
+/* one post-classified segment at index point (px, py, pz), 1D or 2D TF */
+INLINE int composite_at(const Grid *g, int is_float, int two_d, const Classes *c, double px, double py, double pz,
+                        double lk, Pixel *p, double term) {
+    double s = value(g, is_float, px, py, pz);
+    return two_d ? composite_one_2d(g, c, s, px, py, pz, lk, p, term) : composite_one(c, s, lk, p, term);
+}
+
 #ifdef __AVX2__
+/* the cells of 8 samples: their fractions along each axis, and the offset of their first corner */
+typedef struct {
+    __m256 f[3];
+    __m256i at;
+} Cells8;
+
 /* the values at the middles of 8 whole segments kk0 .. kk0 + 7 (tm = base + kk h): positions in
  * double (as the scalar march), cell indices clamped as `value` clamps them (so every read lies in
  * the array, whatever a lane's position), the interpolation in single precision */
-INLINE __m256 run_values8(const Grid *g, int is_float, const IndexRay *ray, double base, double h, int64_t kk0) {
+INLINE __m256 run_values8(const Grid *g, int is_float, const IndexRay *ray, double base, double h, int64_t kk0,
+                          Cells8 *cells) {
     const double k = (double)kk0;
     const __m256d lanes_lo = _mm256_set_pd(k + 3.0, k + 2.0, k + 1.0, k), lanes_hi = _mm256_set_pd(k + 7.0, k + 6.0, k + 5.0, k + 4.0);
     const __m256d vh = _mm256_set1_pd(h), vbase = _mm256_set1_pd(base);
@@ -277,6 +361,7 @@ INLINE __m256 run_values8(const Grid *g, int is_float, const IndexRay *ray, doub
     const int nx = (int)g->nx, nxy = (int)(g->nx * g->ny);
     __m256i at = _mm256_add_epi32(cell[0], _mm256_add_epi32(_mm256_mullo_epi32(cell[1], _mm256_set1_epi32(nx)),
                                                            _mm256_mullo_epi32(cell[2], _mm256_set1_epi32(nxy))));
+    cells->f[0] = f[0], cells->f[1] = f[1], cells->f[2] = f[2], cells->at = at;
     __m256i at_y = _mm256_add_epi32(at, _mm256_set1_epi32(nx)), at_z = _mm256_add_epi32(at, _mm256_set1_epi32(nxy));
     __m256i at_yz = _mm256_add_epi32(at_z, _mm256_set1_epi32(nx));
     __m256 v000, v001, v010, v011, v100, v101, v110, v111;
@@ -337,12 +422,120 @@ INLINE int run_classes8(const Classes *c, __m256 s, float r[8], float g[8], floa
     _mm256_storeu_ps(b, _mm256_fmadd_ps(w, _mm256_sub_ps(c1, c0), c0));
     return visible;
 }
+
+INLINE __m256 low16(__m256i x) { return _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(x, 16), 16)); }
+INLINE __m256 high16(__m256i x) { return _mm256_cvtepi32_ps(_mm256_srai_epi32(x, 16)); }
+
+/* `gradient_length` of 8 samples in single precision. Per row of x neighbours (y, z corners) three
+ * 32-bit gathers at int16 offsets 3 at, 3 at + 2 and 3 at + 4 hold the six components of the pair:
+ * (g0, g1 of x), (g2 of x, g0 of x + 1), (g1, g2 of x + 1), all inside the array. */
+INLINE __m256 gradient_length8(const Grid *g, const Classes *c, const Cells8 *cells) {
+    const int nx = (int)g->nx, nxy = (int)(g->nx * g->ny);
+    const int *base = (const int *)c->gradients;
+    __m256i row = cells->at;
+    const __m256i rows[4] = {row, _mm256_add_epi32(row, _mm256_set1_epi32(nx)),
+                             _mm256_add_epi32(row, _mm256_set1_epi32(nxy)),
+                             _mm256_add_epi32(row, _mm256_set1_epi32(nxy + nx))};
+    __m256 x[4][3]; /* per row, per component: interpolated along x */
+    for (int r = 0; r < 4; r++) {
+        __m256i at3 = _mm256_add_epi32(rows[r], _mm256_add_epi32(rows[r], rows[r]));
+        __m256i p0 = _mm256_i32gather_epi32(base, at3, 2);
+        __m256i p1 = _mm256_i32gather_epi32(base, _mm256_add_epi32(at3, _mm256_set1_epi32(2)), 2);
+        __m256i p2 = _mm256_i32gather_epi32(base, _mm256_add_epi32(at3, _mm256_set1_epi32(4)), 2);
+        __m256 a0 = low16(p0), a1 = high16(p0), a2 = low16(p1), b0 = high16(p1), b1 = low16(p2), b2 = high16(p2);
+        x[r][0] = _mm256_fmadd_ps(cells->f[0], _mm256_sub_ps(b0, a0), a0);
+        x[r][1] = _mm256_fmadd_ps(cells->f[0], _mm256_sub_ps(b1, a1), a1);
+        x[r][2] = _mm256_fmadd_ps(cells->f[0], _mm256_sub_ps(b2, a2), a2);
+    }
+    __m256 total = _mm256_setzero_ps();
+    for (int a = 0; a < 3; a++) {
+        __m256 y0 = _mm256_fmadd_ps(cells->f[1], _mm256_sub_ps(x[1][a], x[0][a]), x[0][a]);
+        __m256 y1 = _mm256_fmadd_ps(cells->f[1], _mm256_sub_ps(x[3][a], x[2][a]), x[2][a]);
+        __m256 v = _mm256_fmadd_ps(cells->f[2], _mm256_sub_ps(y1, y0), y0);
+        total = _mm256_fmadd_ps(v, v, total);
+    }
+    return _mm256_mul_ps(_mm256_sqrt_ps(total), _mm256_set1_ps((float)c->gradient_unit));
+}
+
+/* 1 - exp(-x) of x >= 0 (NaN-free) in single precision, to a few units in the last place: the
+ * series where x is small (1 - exp(-x) would cancel), else exp(-x) as Cephes' expf computes it
+ * (Moshier 1992: 2^n times a degree-5 polynomial on [-ln 2 / 2, ln 2 / 2]) */
+INLINE __m256 opacity8(__m256 x) {
+    const __m256 one = _mm256_set1_ps(1.0f);
+    __m256 series = _mm256_fnmadd_ps(_mm256_mul_ps(x, _mm256_set1_ps(0.2f)), one, one); /* 1 - x/5 */
+    series = _mm256_fnmadd_ps(_mm256_mul_ps(x, _mm256_set1_ps(0.25f)), series, one);
+    series = _mm256_fnmadd_ps(_mm256_mul_ps(x, _mm256_set1_ps(1.0f / 3.0f)), series, one);
+    series = _mm256_fnmadd_ps(_mm256_mul_ps(x, _mm256_set1_ps(0.5f)), series, one);
+    series = _mm256_mul_ps(x, series);
+    __m256 y = _mm256_max_ps(_mm256_sub_ps(_mm256_setzero_ps(), x), _mm256_set1_ps(-87.0f));
+    __m256 n = _mm256_round_ps(_mm256_mul_ps(y, _mm256_set1_ps(1.44269504088896341f)),
+                               _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+    __m256 r = _mm256_fnmadd_ps(n, _mm256_set1_ps(0.693359375f), y);
+    r = _mm256_fnmadd_ps(n, _mm256_set1_ps(-2.12194440e-4f), r);
+    __m256 q = _mm256_set1_ps(1.9875691500e-4f);
+    q = _mm256_fmadd_ps(q, r, _mm256_set1_ps(1.3981999507e-3f));
+    q = _mm256_fmadd_ps(q, r, _mm256_set1_ps(8.3334519073e-3f));
+    q = _mm256_fmadd_ps(q, r, _mm256_set1_ps(4.1665795894e-2f));
+    q = _mm256_fmadd_ps(q, r, _mm256_set1_ps(1.6666665459e-1f));
+    q = _mm256_fmadd_ps(q, r, _mm256_set1_ps(5.0000001201e-1f));
+    __m256 e = _mm256_add_ps(_mm256_fmadd_ps(_mm256_mul_ps(q, r), r, r), one);
+    __m256i bits = _mm256_slli_epi32(_mm256_add_epi32(_mm256_cvtps_epi32(n), _mm256_set1_epi32(127)), 23);
+    e = _mm256_mul_ps(e, _mm256_castsi256_ps(bits));
+    return _mm256_blendv_ps(_mm256_sub_ps(one, e), series, _mm256_cmp_ps(x, _mm256_set1_ps(0.0625f), _CMP_LT_OQ));
+}
+
+/* channel ch of the 2D table, bilinear at entries e (of (j0, i0)) with weights wi, wj */
+INLINE __m256 bilinear8(const float *table, int64_t nv, __m256i e, __m256 wi, __m256 wj, int ch) {
+    __m256 t00 = _mm256_i32gather_ps(table + ch, e, 4), t01 = _mm256_i32gather_ps(table + 4 + ch, e, 4);
+    __m256 t10 = _mm256_i32gather_ps(table + 4 * nv + ch, e, 4), t11 = _mm256_i32gather_ps(table + 4 * nv + 4 + ch, e, 4);
+    __m256 a0 = _mm256_fmadd_ps(wi, _mm256_sub_ps(t01, t00), t00), a1 = _mm256_fmadd_ps(wi, _mm256_sub_ps(t11, t10), t10);
+    return _mm256_fmadd_ps(wj, _mm256_sub_ps(a1, a0), a0);
+}
+
+/* `run_classes8` for a 2D TF: colour (r, g, b, not premultiplied) and opacity of 8 whole segments
+ * (h long) at values s in `cells`, the gradient read only where some lane's interval needs it; the
+ * lanes with extinction above 0 as a bit mask */
+INLINE int run_classes8_2d(const Grid *g, const Classes *c, __m256 s, const Cells8 *cells, float r[8], float gr[8],
+                           float b[8], float alpha[8]) {
+    const __m256 zero = _mm256_setzero_ps();
+    const int64_t nv = c->n_value, ng = c->n_gradient;
+    __m256 finite = _mm256_and_ps(_mm256_cmp_ps(s, s, _CMP_ORD_Q),
+                                  _mm256_cmp_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), s),
+                                                _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
+    __m256 fi = _mm256_mul_ps(_mm256_sub_ps(s, _mm256_set1_ps((float)c->lo)), _mm256_set1_ps((float)c->scale));
+    fi = _mm256_min_ps(_mm256_max_ps(fi, zero), _mm256_set1_ps((float)(nv - 1))); /* NaN -> 0 */
+    __m256i i0 = _mm256_min_epi32(_mm256_cvttps_epi32(fi), _mm256_set1_epi32((int)(nv - 2)));
+    __m256 wi = _mm256_sub_ps(fi, _mm256_cvtepi32_ps(i0));
+    __m256i kind = _mm256_and_si256(_mm256_i32gather_epi32((const int *)c->kinds, i0, 1), _mm256_set1_epi32(0xff));
+    __m256 live = _mm256_and_ps(finite, _mm256_castsi256_ps(_mm256_cmpgt_epi32(kind, _mm256_set1_epi32(TRANSPARENT))));
+    int lanes = _mm256_movemask_ps(live);
+    if (!lanes) return 0;
+    __m256 fj = zero;
+    __m256 graded = _mm256_and_ps(live, _mm256_castsi256_ps(_mm256_cmpgt_epi32(kind, _mm256_set1_epi32(FLAT))));
+    if (_mm256_movemask_ps(graded)) {
+        fj = _mm256_mul_ps(gradient_length8(g, c, cells), _mm256_set1_ps((float)c->g_scale));
+        fj = _mm256_min_ps(_mm256_max_ps(fj, zero), _mm256_set1_ps((float)(ng - 1)));
+        fj = _mm256_and_ps(fj, graded); /* FLAT intervals read row 0 */
+    }
+    __m256i j0 = _mm256_min_epi32(_mm256_cvttps_epi32(fj), _mm256_set1_epi32((int)(ng - 2)));
+    __m256 wj = _mm256_sub_ps(fj, _mm256_cvtepi32_ps(j0));
+    __m256i e = _mm256_slli_epi32(_mm256_add_epi32(_mm256_mullo_epi32(j0, _mm256_set1_epi32((int)nv)), i0), 2);
+    const float *table = c->table2d;
+    __m256 t = _mm256_and_ps(bilinear8(table, nv, e, wi, wj, 3), live);
+    int visible = _mm256_movemask_ps(_mm256_cmp_ps(t, zero, _CMP_GT_OQ));
+    if (!visible) return 0;
+    _mm256_storeu_ps(alpha, opacity8(_mm256_mul_ps(t, _mm256_set1_ps((float)c->step))));
+    _mm256_storeu_ps(r, bilinear8(table, nv, e, wi, wj, 0));
+    _mm256_storeu_ps(gr, bilinear8(table, nv, e, wi, wj, 1));
+    _mm256_storeu_ps(b, bilinear8(table, nv, e, wi, wj, 2));
+    return visible;
+}
 #endif
 
 /* `_composite_post`: the post-classified segments [ka, kb) composited onto p; returns how many
  * were sampled (up to the one that made p opaque) */
-INLINE int64_t composite_post(const Grid *g, int is_float, const Classes *c, const IndexRay *ray, int64_t ka,
-                              int64_t kb, Pixel *p, double term) {
+INLINE int64_t composite_post(const Grid *g, int is_float, int two_d, const Classes *c, const IndexRay *ray,
+                              int64_t ka, int64_t kb, Pixel *p, double term) {
     double h = c->step, t0 = ray->t0, first = ray->first, last = ray->last;
     int64_t ns = ray->ns;
     double base = t0 + first - 0.5 * h;
@@ -351,8 +544,8 @@ INLINE int64_t composite_post(const Grid *g, int is_float, const Classes *c, con
     if (kk == 0 && kk < kb) { /* the first segment, cut by the box */
         ray_segment(t0, first, last, h, ns, 0, &tk, &lk);
         double tm = tk + 0.5 * lk;
-        if (composite_one(c, value(g, is_float, ray->ox + tm * ray->dx, ray->oy + tm * ray->dy, ray->oz + tm * ray->dz),
-                          lk, p, term))
+        if (composite_at(g, is_float, two_d, c, ray->ox + tm * ray->dx, ray->oy + tm * ray->dy, ray->oz + tm * ray->dz,
+                         lk, p, term))
             return 1;
         kk = 1;
     }
@@ -364,7 +557,23 @@ INLINE int64_t composite_post(const Grid *g, int is_float, const Classes *c, con
     for (int64_t k0 = kk; k0 < whole_end; k0 += 8) {
         kk = k0;
         int lanes = whole_end - kk < 8 ? (1 << (whole_end - kk)) - 1 : 0xff;
-        int visible = run_classes8(c, run_values8(g, is_float, ray, base, h, kk), cr, cg, cb, ca) & lanes;
+        Cells8 cells;
+        __m256 s = run_values8(g, is_float, ray, base, h, kk, &cells);
+        if (two_d) {
+            int visible = run_classes8_2d(g, c, s, &cells, cr, cg, cb, ca) & lanes;
+            while (visible) {
+                int j = __builtin_ctz(visible);
+                visible &= visible - 1;
+                double alpha = ca[j], tr = 1.0 - p->a;
+                p->r += tr * (cr[j] * alpha);
+                p->g += tr * (cg[j] * alpha);
+                p->b += tr * (cb[j] * alpha);
+                p->a += tr * alpha;
+                if (p->a >= term) return kk + j + 1 - ka;
+            }
+            continue;
+        }
+        int visible = run_classes8(c, s, cr, cg, cb, ca) & lanes;
         while (visible) { /* front to back over the lanes with opacity */
             int j = __builtin_ctz(visible);
             visible &= visible - 1;
@@ -387,8 +596,9 @@ INLINE int64_t composite_post(const Grid *g, int is_float, const Classes *c, con
             lk = h;
             tm = base + (double)kk * h;
         }
-        double s = value(g, is_float, ray->ox + tm * ray->dx, ray->oy + tm * ray->dy, ray->oz + tm * ray->dz);
-        if (composite_one(c, s, lk, p, term)) return kk + 1 - ka;
+        if (composite_at(g, is_float, two_d, c, ray->ox + tm * ray->dx, ray->oy + tm * ray->dy, ray->oz + tm * ray->dz,
+                         lk, p, term))
+            return kk + 1 - ka;
     }
     return kb - ka;
 }
@@ -522,10 +732,10 @@ INLINE int64_t past_empty_box(const Walk *w, const IndexRay *ray, int d, int64_t
 /* A run's segments from ra to the last whose middle lies before t composited onto p
  * (`composite_post`); returns the segment after them, adds the samples to *taken and, once p is
  * opaque, sets *stop to the segment after the one that made it so. */
-INLINE int64_t flush_run(const Grid *g, int is_float, const Classes *c, const IndexRay *ray, int64_t ra, double t,
-                         double inv_h, Pixel *p, double term, int64_t *taken, int64_t *stop) {
+INLINE int64_t flush_run(const Grid *g, int is_float, int two_d, const Classes *c, const IndexRay *ray, int64_t ra,
+                         double t, double inv_h, Pixel *p, double term, int64_t *taken, int64_t *stop) {
     int64_t kb = middles_before(t, ray->t0, ray->first, ray->last, c->step, inv_h, ray->ns);
-    int64_t n = kb > ra ? composite_post(g, is_float, c, ray, ra, kb, p, term) : 0;
+    int64_t n = kb > ra ? composite_post(g, is_float, two_d, c, ray, ra, kb, p, term) : 0;
     *taken += n;
     if (p->a >= term) *stop = ra + n;
     return kb;
@@ -535,7 +745,7 @@ INLINE int64_t flush_run(const Grid *g, int is_float, const Classes *c, const In
  * one jump), and each run of visible bricks composited whole (`composite_post`) once the walk
  * leaves it, so that a brick costs a step and a read, not a segment count. The segments composited
  * are those whose middles lie in visible bricks, as numba's `_ray` takes them. */
-INLINE void walk_post(const Grid *g, int is_float, const Bricks *br, int shift, const Classes *c,
+INLINE void walk_post(const Grid *g, int is_float, int two_d, const Bricks *br, int shift, const Classes *c,
                       const IndexRay *ray, double t1, double term, Pixel *p, Counts *counts) {
     const int8_t *empty = br->distance;
     const double h = c->step, inv_h = 1.0 / h, span = MAX_RUN * h;
@@ -581,7 +791,7 @@ INLINE void walk_post(const Grid *g, int is_float, const Bricks *br, int shift, 
                     break;
                 }
                 if (run_te - run_t0 >= span) { /* a long run: an opaque ray stops within it, walk no further first */
-                    int64_t kb = flush_run(g, is_float, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
+                    int64_t kb = flush_run(g, is_float, two_d, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
                     if (p->a >= term) goto done;
                     ra = kb > ra ? kb : ra;
                     run_t0 = run_te;
@@ -593,7 +803,7 @@ INLINE void walk_post(const Grid *g, int is_float, const Bricks *br, int shift, 
                 }
                 d = empty[w.offset];
             }
-            int64_t kb = flush_run(g, is_float, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
+            int64_t kb = flush_run(g, is_float, two_d, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
             if (p->a >= term) goto done;
             k = kb > k ? kb : k;
             if (!inside || k >= ns) goto done;
@@ -689,7 +899,7 @@ INLINE void walk_pre(const Grid *g, int is_float, const Bricks *br, int shift, c
 }
 
 /* `_ray`: one pixel's ray, clipped, cut into segments and walked front to back through the bricks */
-INLINE Pixel march_ray(const Grid *g, int is_float, const Bricks *br, int shift, const View *v, int64_t xx,
+INLINE Pixel march_ray(const Grid *g, int is_float, int two_d, const Bricks *br, int shift, const View *v, int64_t xx,
                        double ny_, double phase, const Classes *c, double term, Counts *counts) {
     const double h = c->step;
     const int64_t nx = g->nx, ny = g->ny, nz = g->nz;
@@ -712,10 +922,10 @@ INLINE Pixel march_ray(const Grid *g, int is_float, const Bricks *br, int shift,
     double first = 0.0, last = 0.0;
     if (!miss && t1 > t0) ray_segments(t1 - t0, h, mod1(phase - t0 / h), &ns, &first, &last);
     ray.t0 = t0, ray.first = first, ray.last = last, ray.ns = ns;
-    if (c->preintegrated)
+    if (c->preintegrated && !two_d)
         walk_pre(g, is_float, br, shift, c, &ray, term, &p, counts);
     else
-        walk_post(g, is_float, br, shift, c, &ray, t1, term, &p, counts);
+        walk_post(g, is_float, two_d, br, shift, c, &ray, t1, term, &p, counts);
     return p;
 }
 
@@ -750,14 +960,14 @@ typedef struct {
     int64_t next;         /* the next item to take (atomic) */
 } Work;
 
-static void run_item(Work *w, int is_float, int shift, int64_t q) {
+static void run_item(Work *w, int is_float, int two_d, int shift, int64_t q) {
     const View *v = w->view;
     const int64_t width = v->width, height = v->height;
     Counts counts = {0, 0, 0, 0};
     if (w->listed) {
         int64_t px = w->items[q], yy = px / width;
         double ny_ = 1.0 - ((double)yy + 0.5) / (double)height * 2.0;
-        Pixel p = march_ray(w->grid, is_float, w->bricks, shift, v, px - yy * width, ny_, v->phases[px], w->classes,
+        Pixel p = march_ray(w->grid, is_float, two_d, w->bricks, shift, v, px - yy * width, ny_, v->phases[px], w->classes,
                             w->term, &counts);
         store(w->out, q, p);
         memcpy(w->counts + 4 * q, &counts, sizeof counts);
@@ -770,7 +980,7 @@ static void run_item(Work *w, int is_float, int shift, int64_t q) {
         double ny_ = 1.0 - ((double)yy + 0.5) / (double)height * 2.0;
         for (int64_t xx = x0; xx < x1; xx++) {
             int64_t px = yy * width + xx;
-            Pixel p = march_ray(w->grid, is_float, w->bricks, shift, v, xx, ny_, v->phases[px], w->classes, w->term,
+            Pixel p = march_ray(w->grid, is_float, two_d, w->bricks, shift, v, xx, ny_, v->phases[px], w->classes, w->term,
                                 &counts);
             store(w->out, px, p);
         }
@@ -785,11 +995,12 @@ static void *worker(void *arg) {
         int64_t start = __atomic_fetch_add(&w->next, w->chunk, __ATOMIC_RELAXED);
         if (start >= w->n_items) break;
         int64_t end = start + w->chunk < w->n_items ? start + w->chunk : w->n_items;
-        for (int64_t q = start; q < end; q++) {
-            if (w->grid->is_float)
-                run_item(w, 1, shift, q);
+        const int is_float = w->grid->is_float, two_d = w->classes->two_d;
+        for (int64_t q = start; q < end; q++) { /* each combination compiled apart (always_inline) */
+            if (is_float)
+                two_d ? run_item(w, 1, 1, shift, q) : run_item(w, 1, 0, shift, q);
             else
-                run_item(w, 0, shift, q);
+                two_d ? run_item(w, 0, 1, shift, q) : run_item(w, 0, 0, shift, q);
         }
     }
     return NULL;

@@ -1,4 +1,5 @@
-"""The numba kernel of `raycast` for 2D transfer functions (value x gradient magnitude).
+"""The numba kernel of `raycast` for 2D transfer functions (value x gradient magnitude); `march.c`
+draws the same image to float rounding where a C compiler is found (`march_native`).
 
 Why a kernel of its own: a 2D TF needs the gradient at every sample, which the 1D march never
 reads, and has no pre-integration; keeping it apart leaves the 1D march's hot loop as it is. The
@@ -17,11 +18,8 @@ left in one jump out of the empty box around them, as in the 1D march.
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
 
-import numpy as np
 from numba import njit, prange
-from numpy.typing import NDArray
 
 from volren.kernels.clip_planes import clip_to_planes
 from volren.kernels.sample_placement import ray_segment, ray_segments
@@ -35,42 +33,7 @@ from volren.renderers.raycast.march import (
     _store,
     _value,
 )
-from volren.renderers.raycast.march_inputs import IndexRay
-
-
-class Table2D(NamedTuple):
-    """A 2D TF as the kernel reads it: `table[j, i]` = (r, g, b, tau per world unit) at value
-    lo + i / vscale and gradient magnitude j / gscale."""
-
-    table: NDArray[np.float32]
-    lo: float
-    vscale: float
-    gscale: float
-    #: the step h (world units) of the segments
-    step: float
-    #: per interval [i, i + 1] of table entries along value: TRANSPARENT (no extinction at any
-    #: gradient: the gradient is not read), FLAT (the same at every gradient: row 0 is read, the
-    #: gradient is not), or else 2 (`interval_kinds`)
-    kinds: NDArray[np.int8]
-
-
-TRANSPARENT, FLAT = 0, 1
-
-
-def interval_kinds(table: NDArray[np.float32]) -> NDArray[np.int8]:
-    """`Table2D.kinds` of a table: where a sample's gradient need not be read (most samples of a
-    2D TF made from a 1D one, and of the values a TF leaves transparent)."""
-    pair = np.concatenate([table[:, :-1, None], table[:, 1:, None]], axis=2)  # (ng, nv - 1, 2, 4)
-    transparent = ~(pair[..., 3] > 0.0).any(axis=(0, 2))
-    flat = (pair == pair[:1]).all(axis=(0, 2, 3))
-    return np.where(transparent, TRANSPARENT, np.where(flat, FLAT, 2)).astype(np.int8)
-
-
-class Gradients2D(NamedTuple):
-    """The grid points' gradients (world units), (nz, ny, nx, 3) int16 times `unit`."""
-
-    values: NDArray[np.int16]
-    unit: float
+from volren.renderers.raycast.march_inputs import FLAT, TRANSPARENT, IndexRay
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
@@ -242,17 +205,3 @@ def march2d_pixels(vol, grad, bricks, view, tab, term, pixels, out, counts):
         counts[q, 2] = sk
         counts[q, 3] = st
         _store(out, q, r, g, b, a)
-
-
-def gradients(values: NDArray[Any], spacing: tuple[float, float, float]) -> Gradients2D:
-    """The grid points' gradients in world units (central differences, one-sided at the borders:
-    the reference's), quantised to int16 over their largest component."""
-    data = np.asarray(values, dtype=np.float32)
-    parts = [np.gradient(data, axis=axis) / np.float32(spacing[2 - axis]) for axis in (2, 1, 0)]
-    finite = [np.where(np.isfinite(p), p, 0.0) for p in parts]
-    top = max(float(np.abs(p).max(initial=0.0)) for p in finite) or 1.0
-    unit = top / 32767.0
-    out = np.empty(data.shape + (3,), np.int16)
-    for c, part in enumerate(finite):
-        out[..., c] = np.rint(part / unit)
-    return Gradients2D(out, unit)

@@ -85,3 +85,54 @@ class IndexRay(NamedTuple):
     first: float
     last: float
     n_segments: int
+
+
+class Table2D(NamedTuple):
+    """A 2D TF as the kernel reads it: `table[j, i]` = (r, g, b, tau per world unit) at value
+    lo + i / vscale and gradient magnitude j / gscale."""
+
+    table: NDArray[np.float32]
+    lo: float
+    vscale: float
+    gscale: float
+    #: the step h (world units) of the segments
+    step: float
+    #: per interval [i, i + 1] of table entries along value: TRANSPARENT (no extinction at any
+    #: gradient: the gradient is not read), FLAT (the same at every gradient: row 0 is read, the
+    #: gradient is not), or else 2 (`interval_kinds`)
+    kinds: NDArray[np.int8]
+
+
+#: `Table2D.kinds`' values (march.c reads the same codes)
+TRANSPARENT, FLAT = 0, 1
+
+
+def interval_kinds(table: NDArray[np.float32]) -> NDArray[np.int8]:
+    """`Table2D.kinds` of a table: where a sample's gradient need not be read (most samples of a
+    2D TF made from a 1D one, and of the values a TF leaves transparent)."""
+    opaque = (table[..., 3] > 0.0).any(axis=0)  # per entry along value: extinction at some gradient
+    constant = (table == table[:1]).all(axis=(0, 2))  # per entry: the same at every gradient
+    transparent = ~(opaque[:-1] | opaque[1:])
+    flat = constant[:-1] & constant[1:]
+    return np.where(transparent, TRANSPARENT, np.where(flat, FLAT, 2)).astype(np.int8)
+
+
+class Gradients2D(NamedTuple):
+    """The grid points' gradients (world units), (nz, ny, nx, 3) int16 times `unit`."""
+
+    values: NDArray[np.int16]
+    unit: float
+
+
+def gradients(values: NDArray[Any], spacing: tuple[float, float, float]) -> Gradients2D:
+    """The grid points' gradients in world units (central differences, one-sided at the borders:
+    the reference's), quantised to int16 over their largest component."""
+    data = np.asarray(values, dtype=np.float32)
+    parts = [np.gradient(data, axis=axis) / np.float32(spacing[2 - axis]) for axis in (2, 1, 0)]
+    finite = [np.where(np.isfinite(p), p, 0.0) for p in parts]
+    top = max(float(np.abs(p).max(initial=0.0)) for p in finite) or 1.0
+    unit = top / 32767.0
+    out = np.empty(data.shape + (3,), np.int16)
+    for c, part in enumerate(finite):
+        out[..., c] = np.rint(part / unit)
+    return Gradients2D(out, unit)

@@ -1,9 +1,10 @@
-"""raycast's 1D march in C (`march.c`), called as the numba kernels `march` and `march_pixels` are.
+"""raycast's march in C (`march.c`), called as the numba kernels `march` and `march_pixels` (1D TFs)
+and `march2d` and `march2d_pixels` (2D TFs) are.
 
 Why: the C build samples eight segments of a ray at a time with AVX2 gathers, which numba does not
 emit here (`benchmarks.packet_probe`); where the library cannot be built or loaded
 (`volren.kernels.native`: no compiler, ``VOLREN_NATIVE=0``) or a grid is too large for its 32-bit
-gather offsets, `kernels` returns None and the numba kernels draw, the same image up to float
+gather offsets (a 2D TF's gradients: three int16 per value), `kernels` returns None and the numba kernels draw, the same image up to float
 rounding.
 """
 
@@ -21,13 +22,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.kernels import native
-from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, PixelView
+from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, Gradients2D, PixelView, Table2D
 
 SOURCE = Path(__file__).with_name("march.c")
 #: Bytes readable past an 8-bit grid's last value: the vector path reads 32 bits at a value's offset.
 SLACK = 4
 #: The vector path's offsets into the grid are 32-bit.
 MAX_VALUES = 2**31 - 1 - SLACK
+#: With a 2D TF, into the gradients too: int16 offsets up to three per value, plus four.
+MAX_VALUES_2D = (2**31 - 1 - 4) // 3
+#: Bytes readable past a 2D table's interval kinds: the vector path reads four at a time.
+KINDS_SLACK = 3
 
 _i64 = ctypes.c_int64
 _f64 = ctypes.c_double
@@ -51,7 +56,9 @@ class _View(ctypes.Structure):
 class _Classes(ctypes.Structure):
     _fields_ = [("preintegrated", ctypes.c_int32), ("cap", ctypes.c_int32), ("post", _ptr), ("post32", _ptr),
                 ("n_post", _i64), ("table", _ptr), ("n_table", _i64), ("step", _f64), ("lo", _f64),
-                ("scale", _f64)]  # fmt: skip
+                ("scale", _f64), ("two_d", ctypes.c_int32), ("table2d", _ptr), ("n_value", _i64),
+                ("n_gradient", _i64), ("g_scale", _f64), ("kinds", _ptr), ("gradients", _ptr),
+                ("gradient_unit", _f64)]  # fmt: skip
 
 
 def padded(values: NDArray[Any]) -> NDArray[Any]:
@@ -101,9 +108,11 @@ def _address(array: NDArray[Any]) -> int:
 
 
 class _Frame:
-    """The C structures of one call's arguments, holding the arrays they point into."""
+    """The C structures of one call's arguments, holding the arrays they point into: a 1D TF's
+    `Classification`, or a 2D TF's table and the grid's gradients."""
 
-    def __init__(self, values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification):
+    def __init__(self, values: NDArray[Any], bricks: EmptyBricks, view: PixelView,
+                 classes: Classification | tuple[Gradients2D, Table2D]) -> None:  # fmt: skip
         nz, ny, nx = values.shape
         self.arrays = [
             np.ascontiguousarray(a, dtype=t)
@@ -112,12 +121,9 @@ class _Frame:
                 (view.inverse, np.float64),
                 (view.phases, np.float64),
                 (view.planes, np.float64),
-                (classes.post, np.float64),
-                (classes.post, np.float32),
-                (classes.table, np.float32),
             )  # fmt: skip
         ]
-        distance, inverse, phases, planes, post, post32, table = self.arrays
+        distance, inverse, phases, planes = self.arrays
         self.values = values
         self.grid = _Grid(_address(values), nx, ny, nz, 1 if values.dtype == np.float32 else 0)
         nbz, nby, nbx = distance.shape
@@ -126,9 +132,34 @@ class _Frame:
                           (_f64 * 3)(*map(float, view.grid_origin)), (_f64 * 3)(*map(float, view.spacing)),
                           (_f64 * 3)(*map(float, view.view_dir)), float(view.far_depth), _address(phases),
                           _address(planes), planes.shape[0])  # fmt: skip
-        self.classes = _Classes(int(classes.preintegrated), int(classes.cap), _address(post), _address(post32),
-                                post.shape[0], _address(table), table.shape[0], float(classes.step),
-                                float(classes.lo), float(classes.scale))  # fmt: skip
+        self.classes = (
+            self._classes_1d(classes) if isinstance(classes, Classification) else self._classes_2d(*classes)
+        )
+
+    def _kept(self, array: NDArray[Any], dtype: type) -> NDArray[Any]:
+        kept = np.ascontiguousarray(array, dtype=dtype)
+        self.arrays.append(kept)
+        return kept
+
+    def _classes_1d(self, classes: Classification) -> _Classes:
+        post, post32 = self._kept(classes.post, np.float64), self._kept(classes.post, np.float32)
+        table = self._kept(classes.table, np.float32)
+        return _Classes(int(classes.preintegrated), int(classes.cap), _address(post), _address(post32),
+                        post.shape[0], _address(table), table.shape[0], float(classes.step), float(classes.lo),
+                        float(classes.scale))  # fmt: skip
+
+    def _classes_2d(self, grad: Gradients2D, tab: Table2D) -> _Classes:
+        table = self._kept(tab.table, np.float32)
+        kinds = self._kept(np.concatenate([tab.kinds, np.zeros(KINDS_SLACK, np.int8)]), np.int8)
+        gradients = self._kept(grad.values, np.int16)
+        if gradients.shape != (*self.values.shape, 3) or table.ndim != 3 or table.shape[2] != 4:
+            raise ValueError("the C march reads (nz, ny, nx, 3) gradients and an (ng, nv, 4) table")
+        if len(tab.kinds) != table.shape[1] - 1 or min(table.shape[:2]) < 2:
+            raise ValueError("the C march reads a kind per interval of a table of at least 2 x 2 entries")
+        none = self._kept(np.zeros(8), np.float64)
+        return _Classes(0, 0, _address(none), _address(none), 2, _address(none), 0, float(tab.step), float(tab.lo),
+                        float(tab.vscale), 1, _address(table), table.shape[1], table.shape[0], float(tab.gscale),
+                        _address(kinds), _address(gradients), float(grad.unit))  # fmt: skip
 
     def pointers(self) -> list[Any]:
         return [ctypes.byref(self.grid), ctypes.byref(self.bricks), ctypes.byref(self.view),
@@ -149,33 +180,57 @@ def _checked(out: NDArray[Any], pixels: int, counts: NDArray[Any], rows: int) ->
         raise ValueError(f"the C march writes {rows} rows of C-contiguous int64 counts, four per row")
 
 
-def march(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification, term: float,
-          tiles: NDArray[np.int64], out: NDArray[np.float32], counts: NDArray[np.int64]) -> None:  # fmt: skip
-    """As numba's `march.march`: the tiles into `out`, their counts (`march.COUNTS`) into `counts`."""
-    lib = _library()
-    assert lib is not None
+def _tiles(lib: ctypes.CDLL, frame: _Frame, term: float, tiles: NDArray[np.int64], out: NDArray[np.float32],
+           counts: NDArray[np.int64]) -> None:  # fmt: skip
     tiles = np.ascontiguousarray(tiles, dtype=np.int64)
     if len(tiles) and tiles.min() < 0:
         raise ValueError("tile indices must not be negative")
-    _checked(out, int(view.width) * int(view.height), counts, int(tiles.max()) + 1 if len(tiles) else 0)
-    frame = _Frame(values, bricks, view, classes)
+    _checked(out, frame.view.width * frame.view.height, counts, int(tiles.max()) + 1 if len(tiles) else 0)
     lib.march_tiles(*frame.pointers(), float(term), _address(tiles), len(tiles), _address(out), _address(counts),
                     threads())  # fmt: skip
+
+
+def _pixels(lib: ctypes.CDLL, frame: _Frame, term: float, pixels: NDArray[np.int64], out: NDArray[np.float32],
+            counts: NDArray[np.int64], chunk: int) -> None:  # fmt: skip
+    pixels = np.ascontiguousarray(pixels, dtype=np.int64)
+    if len(pixels) and (pixels.min() < 0 or pixels.max() >= frame.view.width * frame.view.height):
+        raise ValueError("pixel indices must lie in the image")
+    _checked(out, len(pixels), counts, len(pixels))
+    lib.march_pixels(*frame.pointers(), float(term), _address(pixels), len(pixels), _address(out), _address(counts),
+                     threads(), int(chunk))  # fmt: skip
+
+
+def _loaded() -> ctypes.CDLL:
+    lib = _library()
+    assert lib is not None
+    return lib
+
+
+def march(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification, term: float,
+          tiles: NDArray[np.int64], out: NDArray[np.float32], counts: NDArray[np.int64]) -> None:  # fmt: skip
+    """As numba's `march.march`: the tiles into `out`, their counts (`march.COUNTS`) into `counts`."""
+    _tiles(_loaded(), _Frame(values, bricks, view, classes), term, tiles, out, counts)
 
 
 def march_pixels(values: NDArray[Any], bricks: EmptyBricks, view: PixelView, classes: Classification, term: float,
                  pixels: NDArray[np.int64], out: NDArray[np.float32], counts: NDArray[np.int64],
                  chunk: int = 16) -> None:  # fmt: skip
     """As numba's `march.march_pixels`: out[q] and counts[q] are pixels[q]'s."""
-    lib = _library()
-    assert lib is not None
-    pixels = np.ascontiguousarray(pixels, dtype=np.int64)
-    if len(pixels) and (pixels.min() < 0 or pixels.max() >= int(view.width) * int(view.height)):
-        raise ValueError("pixel indices must lie in the image")
-    _checked(out, len(pixels), counts, len(pixels))
-    frame = _Frame(values, bricks, view, classes)
-    lib.march_pixels(*frame.pointers(), float(term), _address(pixels), len(pixels), _address(out), _address(counts),
-                     threads(), int(chunk))  # fmt: skip
+    _pixels(_loaded(), _Frame(values, bricks, view, classes), term, pixels, out, counts, chunk)
+
+
+def march2d(values: NDArray[Any], grad: Gradients2D, bricks: EmptyBricks, view: PixelView, tab: Table2D,
+            term: float, tiles: NDArray[np.int64], out: NDArray[np.float32],
+            counts: NDArray[np.int64]) -> None:  # fmt: skip
+    """As numba's `march2d.march2d`."""
+    _tiles(_loaded(), _Frame(values, bricks, view, (grad, tab)), term, tiles, out, counts)
+
+
+def march2d_pixels(values: NDArray[Any], grad: Gradients2D, bricks: EmptyBricks, view: PixelView, tab: Table2D,
+                   term: float, pixels: NDArray[np.int64], out: NDArray[np.float32], counts: NDArray[np.int64],
+                   chunk: int = 16) -> None:  # fmt: skip
+    """As numba's `march2d.march2d_pixels`."""
+    _pixels(_loaded(), _Frame(values, bricks, view, (grad, tab)), term, pixels, out, counts, chunk)
 
 
 #: Frames drawn meanwhile use numba's kernels (`numba_only`).
@@ -193,15 +248,16 @@ def numba_only() -> Iterator[None]:
         _NUMBA_ONLY[0] = before
 
 
-def kernels(values: NDArray[Any]) -> tuple[Any, Any] | None:
-    """(march, march_pixels) in C for this grid, or None where the numba kernels must draw it:
-    `numba_only` is on, ``VOLREN_NATIVE`` is 0 (read at each frame), the library is not available, the grid is too large for 32-bit offsets,
-    its values are neither 8-bit nor float32, or an 8-bit grid lacks the slack `padded` gives."""
+def kernels(values: NDArray[Any], two_d: bool = False) -> tuple[Any, Any] | None:
+    """(march, march_pixels) in C for this grid, or (march2d, march2d_pixels) for 2D TFs, or None where
+    the numba kernels must draw it: `numba_only` is on, ``VOLREN_NATIVE`` is 0 (read at each frame), the
+    library is not available, the grid is too large for 32-bit offsets, its values are neither 8-bit nor
+    float32, or an 8-bit grid lacks the slack `padded` gives."""
     if _NUMBA_ONLY[0] or not native.enabled():
         return None
     if (
         values.dtype not in (np.uint8, np.float32)
-        or values.size > MAX_VALUES
+        or values.size > (MAX_VALUES_2D if two_d else MAX_VALUES)
         or not values.flags.c_contiguous
     ):
         return None
@@ -209,7 +265,7 @@ def kernels(values: NDArray[Any]) -> tuple[Any, Any] | None:
         return None
     if _library() is None:
         return None
-    return march, march_pixels
+    return (march2d, march2d_pixels) if two_d else (march, march_pixels)
 
 
 def _has_slack(values: NDArray[Any]) -> bool:

@@ -15,11 +15,12 @@ so, and `auto` picks another renderer for shaded scenes.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,13 +43,20 @@ from volren.renderers.base import (
     RendererBase,
 )
 from volren.renderers.raycast import march_native
-from volren.renderers.raycast.march_inputs import COUNTS, TILE, Classification, EmptyBricks, PixelView
+from volren.renderers.raycast.march_inputs import (
+    COUNTS,
+    TILE,
+    Classification,
+    EmptyBricks,
+    Gradients2D,
+    PixelView,
+    Table2D,
+    gradients,
+    interval_kinds,
+)
 from volren.renderers.raycast.occupancy import empty_distance
 from volren.renderers.raycast.step_cache import remembered_step
 from volren.renderers.raycast.step_choice import largest_step_within, sample_size
-
-if TYPE_CHECKING:
-    from volren.renderers.raycast.march2d import Gradients2D
 
 OFFSET_MODES = ("interleaved", "midpoint")
 OPTIONS: tuple[OptionSpec, ...] = (
@@ -97,6 +105,15 @@ OPTIONS: tuple[OptionSpec, ...] = (
         high=1.0,
     ),
     OptionSpec(
+        "table_2d",
+        512,
+        "int",
+        "entries of a 2D TF's table along value, half as many along gradient magnitude (a 2D TF's "
+        "previews while it is dragged take 128: the table is sampled again at every step)",
+        low=16,
+        high=4096,
+    ),
+    OptionSpec(
         "target_error",
         0.0,
         "float",
@@ -124,10 +141,10 @@ Kernels = tuple[Callable[..., None], Callable[..., None]]
 
 
 def _kernels(two_d: bool, values: NDArray[Any]) -> tuple[Kernels, bool]:
-    """(kernels, whether they are numba's): the 1D march's, in C where they build (`march_native`)
-    else numba's (`march`), or the 2D TF's (`march2d`), looked up when a frame runs. numba's modules
+    """(kernels, whether they are numba's): the 1D or 2D TF's march, in C where they build (`march_native`)
+    else numba's (`march`, `march2d`), looked up when a frame runs. numba's modules
     are imported only here: a frame the C march draws does not pay numba's import and first call."""
-    native = None if two_d else march_native.kernels(values)
+    native = march_native.kernels(values, two_d)
     if native is not None:
         return native, False
     if two_d:
@@ -152,12 +169,17 @@ def _chunks(numba_kernels: bool, size: int) -> Iterator[None]:
         yield
 
 
-#: Entries of a 2D TF's table along value and gradient magnitude (as the slicer's).
-TABLE_2D = (512, 256)
-#: The step (in characteristic lengths) of a 2D TF's frames at a level that targets an error: the
-#: step search models 1D TFs only. At 0.25 the 2D march's RMSE against `reference` equals the
-#: slicer's default on every scene of `python -m benchmarks.tf2d` (0.5 is 1.3-9.1x the slicer's).
-STEP_2D = 0.25
+#: A 2D TF's table entries along value in previews while it is dragged (`table_2d`): sampling the
+#: TF at 512 x 256 points took most of a 160x160 preview's time; at 128 previews take 1.5-4.5x less
+#: time, off by RMSE 0.00002-0.004 where spikes are narrower than an entry (python -m
+#: benchmarks.tf2d_drag). The still frame after the drag uses the full table.
+TF_DRAG_TABLE_2D = 128
+#: The most opacity a 2D TF's table drops on any ray: extinctions below this over the volume's
+#: diagonal are drawn as none. Why: a Gaussian widget's opacity never reaches 0 (1e-9 of its peak
+#: six widths away), so an exact table leaves no brick empty and no sample's gradient unread. A
+#: ray crosses at most the diagonal D, so it loses at most 1 - exp(-tau D) <= this much opacity
+#: and premultiplied colour (400x below an 8-bit step), wherever the dropped entries lie.
+NEGLIGIBLE_OPACITY = 1e-5
 
 
 def _counters(totals: NDArray[np.int64]) -> dict[str, float]:
@@ -200,7 +222,7 @@ class RaycastRenderer(RendererBase):
         "jumps, early ray termination, "
         "adaptive image refinement, the step chosen from an error target",
         # a TF drag's previews march at the level's coarsest step instead of estimating the error per edit
-        tf_drag_options={"target_error": 0.0},
+        tf_drag_options={"target_error": 0.0, "table_2d": TF_DRAG_TABLE_2D},
         still_frame_options={"image_stride": 1},  # the app refines images in previews only
         quality=(
             QualityLevel("step 1", step=1.0, preintegration=False),
@@ -262,8 +284,8 @@ class RaycastRenderer(RendererBase):
             None  # (TF and settings, (step, its estimated error))
         )
         self._gradients: Gradients2D | None = None  # the grid points' gradients, for 2D TFs
-        self._table2d: tuple[tuple, NDArray[np.float32], NDArray[np.int8]] | None = (
-            None  # (TF version, table, kinds)
+        self._table2d: tuple[tuple, NDArray[np.float32], NDArray[np.int8], str] | None = (
+            None  # (TF version, table, kinds, digest)
         )
 
     def _volume_changed(self) -> None:
@@ -327,18 +349,15 @@ class RaycastRenderer(RendererBase):
         if isinstance(tf, TransferFunction2D):  # composite, post-classified (the capabilities)
             if settings.clip.caps:
                 raise VolrenError("raycast: cut faces (clip caps) need a 1D transfer function")
-            if opts["target_error"] > 0:  # no error-targeted step for 2D TFs: the measured one
-                h = min(h, STEP_2D * volume.characteristic_length)
-            return self._render_2d(tf, h, opts, view, progress)
+            return self._render_2d(tf, h, opts, view, mode_key, progress)
         if mode != BlendMode.COMPOSITE:
             return self._project(tf, mode, view, h)
         pre = bool(settings.preintegration)
-        chosen: dict[str, float] = {}
-        if opts["target_error"] > 0:
-            start = time.perf_counter()
-            h, estimate = self._step_within(tf, h, pre, opts, view, mode_key)
-            chosen = {"step": h / volume.characteristic_length, "step_relative_error": estimate,
-                      "step_choice_ms": 1000.0 * (time.perf_counter() - start)}  # fmt: skip
+        key = (tf.color_points.tobytes(), tf.opacity_points.tobytes(), tf.opacity_unit_distance, h, pre,
+               *(opts[k] for k in ("target_error", "table_size", "classification_table", "termination_alpha",
+                                   "brick_size", "empty_space_skipping")))  # fmt: skip
+        h, chosen = self._chosen_step(key, lambda step, at: self._march_args(tf, step, pre, opts, at), False, h,
+                                      opts, view, mode_key)  # fmt: skip
         args = self._march_args(tf, h, pre, opts, view)
         empty = args[1].distance
         stride = int(opts["image_stride"])
@@ -387,15 +406,27 @@ class RaycastRenderer(RendererBase):
         assert self._values is not None
         return self._values, EmptyBricks(empty, brick), view, classes, term
 
-    def _step_within(self, tf: TransferFunction1D, coarsest: float, pre: bool, opts: Mapping[str, Any],
-                     view: PixelView, phase_mode: str) -> tuple[float, float]:  # fmt: skip
+    def _chosen_step(self, key: tuple, args_at: Callable[[float, PixelView], tuple], two_d: bool, coarsest: float,
+                     opts: Mapping[str, Any], view: PixelView,
+                     phase_mode: str) -> tuple[float, dict[str, float]]:  # fmt: skip
+        """(step, the frame's counters that report it): `coarsest` where no error is targeted, else
+        `_step_within`'s step for the TF and settings `key` (the march's arguments at a step and view:
+        `args_at`)."""
+        if not opts["target_error"] > 0:
+            return coarsest, {}
+        start = time.perf_counter()
+        h, estimate = self._step_within(key, args_at, two_d, coarsest, opts, view, phase_mode)
+        length = self.volume.characteristic_length  # type: ignore[union-attr]
+        return h, {"step": h / length, "step_relative_error": estimate,
+                   "step_choice_ms": 1000.0 * (time.perf_counter() - start)}  # fmt: skip
+
+    def _step_within(self, key: tuple, args_at: Callable[[float, PixelView], tuple], two_d: bool,
+                     coarsest: float, opts: Mapping[str, Any], view: PixelView,
+                     phase_mode: str) -> tuple[float, float]:  # fmt: skip
         """(step, its estimated relative RMSE) for the target_error option (`step_choice`), estimated on
         every ray of a ~64x64 image of this frame's view and kept while the TF, the volume and the
-        settings stay (a camera move keeps it: the step must not change from frame to frame of a
-        rotation)."""
-        key = (tf.color_points.tobytes(), tf.opacity_points.tobytes(), tf.opacity_unit_distance, coarsest, pre,
-               *(opts[k] for k in ("target_error", "table_size", "classification_table", "termination_alpha",
-                                   "brick_size", "empty_space_skipping")))  # fmt: skip
+        settings (`key`) stay (a camera move keeps it: the step must not change from frame to frame of
+        a rotation). The search marches what the frame marches, 1D or 2D TF."""
         if self._step is None or self._step[0] != key:
             width, height = sample_size(view.width, view.height)
             phases = pixel_phases(phase_mode, width, height, opts["jitter_seed"])
@@ -404,54 +435,29 @@ class RaycastRenderer(RendererBase):
             pixels = np.arange(width * height, dtype=np.int64)
 
             def march(h: float) -> NDArray[np.float32]:
-                return _march_listed(self._march_args(tf, h, pre, opts, sampled), pixels)[0]
+                return _march_listed(args_at(h, sampled), pixels, two_d)[0]
 
             def search() -> tuple[float, float]:
                 return largest_step_within(march, coarsest, opts["target_error"])
 
             # the view (`step_cache`), and which march searches (C and numba agree to float rounding only)
-            scene = (
-                key,
-                phase_mode,
-                opts["jitter_seed"],
-                sampled[:7],
-                march_native.kernels(self._values) is not None,
-            )
             assert self._values is not None
+            native = march_native.kernels(self._values, two_d) is not None
+            scene = (key, phase_mode, opts["jitter_seed"], sampled[:7], native)
             self._step = (key, remembered_step(self._values, scene, search))
         return self._step[1]
 
-    def _render_2d(self, tf: TransferFunction2D, h: float, opts: Mapping[str, Any], view: PixelView,
+    def _render_2d(self, tf: TransferFunction2D, h: float, opts: Mapping[str, Any], view: PixelView, phase_mode: str,
                    progress: ProgressCallback | None) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
-        """A frame with a 2D TF (`march2d`): the march at the settings' step (the error-targeted step
-        is chosen for 1D TFs), every pixel or adaptively refined."""
-        from volren.renderers.raycast import march2d as K2
-
-        volume = self.volume
-        assert isinstance(volume, UniformVolume) and self._values is not None
-        if self._gradients is None:
-            self._gradients = K2.gradients(self._values, volume.spacing)
-        lo, hi = spanning(*tf.value_range)
-        gmax = float(tf.gradient_range[1])
-        key = (id(tf), tf.version, lo, hi)
-        if self._table2d is None or self._table2d[0] != key:
-            nv, ng = TABLE_2D
-            values = np.linspace(lo, hi, nv)[None, :]
-            magnitudes = np.linspace(0.0, gmax, ng)[:, None]
-            rgb, alpha = tf.sample(values, magnitudes)  # extinction as `tf.extinction`, sampled once
-            tau = -np.log1p(-np.minimum(alpha, MAX_OPACITY)) / tf.opacity_unit_distance
-            table = np.ascontiguousarray(np.concatenate([rgb, tau[..., None]], axis=-1), dtype=np.float32)
-            self._table2d = (key, table, K2.interval_kinds(table))
-        table, kinds = self._table2d[1], self._table2d[2]
-        nv, ng = table.shape[1], table.shape[0]
-        tab = K2.Table2D(
-            table, float(lo), float((nv - 1) / (hi - lo)), float((ng - 1) / gmax), float(h), kinds
-        )
-        empty = self._empty_bricks_2d(
-            table, lo, hi, int(opts["brick_size"]), bool(opts["empty_space_skipping"])
-        )
-        term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
-        args = (self._values, self._gradients, EmptyBricks(empty, int(opts["brick_size"])), view, tab, term)
+        """A frame with a 2D TF (`march2d`): at the settings' step, or the error-targeted one (searched
+        on the 2D march as for 1D TFs), every pixel or adaptively refined."""
+        table, kinds, digest = self._table_2d(tf, int(opts["table_2d"]))
+        key = ("2d", digest, tf.value_range, tf.gradient_range, h, *(opts[k] for k in ("target_error", "termination_alpha", "brick_size",
+                                                    "empty_space_skipping")))  # fmt: skip
+        h, chosen = self._chosen_step(key, lambda step, at: self._march2d_args(tf, step, opts, at), True, h, opts,
+                                      view, phase_mode)  # fmt: skip
+        args = self._march2d_args(tf, h, opts, view)
+        empty = args[2].distance
         stride = int(opts["image_stride"])
         if stride > 1:
             image, totals, rays = self._refined(args, view.width, view.height, stride,
@@ -460,13 +466,65 @@ class RaycastRenderer(RendererBase):
             image, totals = self._every_pixel(args, view.width, view.height, progress, True)
             rays = view.width * view.height
         return image, {**_counters(totals), "rays_cast": float(rays),
-                       "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size)}  # fmt: skip
+                       "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size), **chosen}  # fmt: skip
 
-    def _empty_bricks_2d(self, table: NDArray[np.float32], lo: float, hi: float, brick: int,
+    def _table_2d(self, tf: TransferFunction2D, nv: int) -> tuple[NDArray[np.float32], NDArray[np.int8], str]:
+        """(table, its intervals' kinds, a digest of the table): the 2D TF sampled once per TF version at
+        nv values and nv / 2 gradient magnitudes (the slicer's 512 x 256 by default), (r, g, b,
+        extinction per world unit) with extinctions that cannot add `NEGLIGIBLE_OPACITY` to any ray
+        dropped."""
+        volume = self.volume
+        assert isinstance(volume, UniformVolume)
+        lo, hi = spanning(*tf.value_range)
+        key = (id(tf), tf.version, lo, hi, nv)
+        if self._table2d is None or self._table2d[0] != key:
+            ng = max(2, nv // 2)
+            values = np.linspace(lo, hi, nv)[None, :]
+            magnitudes = np.linspace(0.0, float(tf.gradient_range[1]), ng)[:, None]
+            rgb, alpha = tf.sample(values, magnitudes)  # extinction as `tf.extinction`, sampled once
+            tau = -np.log1p(-np.minimum(alpha, MAX_OPACITY)) / tf.opacity_unit_distance
+            b = volume.bounds
+            tau[tau * math.hypot(b[1] - b[0], b[3] - b[2], b[5] - b[4]) < NEGLIGIBLE_OPACITY] = 0.0
+            table = np.ascontiguousarray(np.concatenate([rgb, tau[..., None]], axis=-1), dtype=np.float32)
+            digest = hashlib.blake2b(table.tobytes(), digest_size=16).hexdigest()
+            self._table2d = (key, table, interval_kinds(table), digest)
+        return self._table2d[1], self._table2d[2], self._table2d[3]
+
+    def _march2d_args(
+        self, tf: TransferFunction2D, h: float, opts: Mapping[str, Any], view: PixelView
+    ) -> tuple:
+        """`march2d`'s arguments at step h (world units) for the view: values, gradients, brick
+        distances, table, termination opacity."""
+        volume = self.volume
+        assert isinstance(volume, UniformVolume) and self._values is not None
+        if self._gradients is None:
+            self._gradients = gradients(self._values, volume.spacing)
+        table, kinds, digest = self._table_2d(tf, int(opts["table_2d"]))
+        lo, hi = spanning(*tf.value_range)
+        nv, ng = table.shape[1], table.shape[0]
+        gmax = float(tf.gradient_range[1])
+        tab = Table2D(table, float(lo), float((nv - 1) / (hi - lo)), float((ng - 1) / gmax), float(h), kinds)
+        brick = int(opts["brick_size"])
+        empty = self._empty_bricks_2d(table, digest, lo, hi, brick, bool(opts["empty_space_skipping"]))
+        term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
+        return self._values, self._gradients, EmptyBricks(empty, brick), view, tab, term
+
+    def _empty_bricks_2d(self, table: NDArray[np.float32], digest: str, lo: float, hi: float, brick: int,
                          skipping: bool) -> NDArray[np.int8]:  # fmt: skip
         """Each brick's distance to the nearest brick to sample (`occupancy`) under a 2D TF's table: a
         brick is visible where the table has extinction at any gradient magnitude for a value in its
-        range (widened by one entry either side: the table interpolates between entries)."""
+        range (widened by one entry either side: the table interpolates between entries). Kept while
+        the table (`digest`) and the bricks stay: the step search marches it at many steps."""
+        volume = self.volume
+        assert isinstance(volume, UniformVolume)
+        key = ("2d", digest, lo, hi, brick, skipping)
+        if self._empty is not None and self._empty[0] == key:
+            return self._empty[1]
+        self._empty = (key, self._distances_2d(table, lo, hi, brick, skipping))
+        return self._empty[1]
+
+    def _distances_2d(self, table: NDArray[np.float32], lo: float, hi: float, brick: int,
+                      skipping: bool) -> NDArray[np.int8]:  # fmt: skip
         volume = self.volume
         assert isinstance(volume, UniformVolume)
         if self._grid is None or self._grid[0] != (brick, 0):
