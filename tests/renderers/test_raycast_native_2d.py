@@ -15,7 +15,7 @@ from volren.renderers.raycast import march_native
 from volren.renderers.raycast.march_inputs import gradients
 from volren.testing.render_helpers import field
 
-from .test_raycast_native import ATOL, STEP_TF, _both, _sheets_and_tubes, _specials
+from .test_raycast_native import ATOL, STEP_TF, _both, _compare, _sheets_and_tubes, _specials
 
 
 def _largest_gradient(volume: UniformVolume) -> float:
@@ -40,13 +40,6 @@ def _tf(volume: UniformVolume, band: bool = True, opacity: float = 0.6) -> Trans
                                                    0.3 * STEP_TF.opacity_points[:, 1:]]))  # fmt: skip
         widgets.append(TFWidget.from_1d(scaled, (0.0, gmax)))
     return TransferFunction2D((lo, hi), (0.0, gmax), widgets, 2.0)
-
-
-def _compare(volume, tf, camera, monkeypatch, size=(36, 30), **settings):
-    numba_image, c_image, numba_samples, c_samples = _both(volume, tf, camera, monkeypatch, size, **settings)
-    assert numba_image[..., 3].max() > 0.05, "the scene must show something"
-    np.testing.assert_allclose(c_image, numba_image, atol=ATOL, rtol=0)
-    assert abs(c_samples - numba_samples) <= 0.002 * numba_samples + 2
 
 
 @pytest.fixture(autouse=True)
@@ -124,3 +117,28 @@ def test_a_grid_too_large_for_the_gradients_offsets_is_left_to_numba(monkeypatch
     monkeypatch.setattr(march_native, "MAX_VALUES_2D", values.size - 1)
     assert march_native.kernels(values, two_d=True) is None
     assert march_native.kernels(values) is not None
+
+
+def test_a_2d_frame_the_c_march_draws_does_not_import_numba():
+    """The 2D inputs are numpy's (`march_inputs`): a frame of a 2D TF drawn by the C march pays no
+    numba import; with ``VOLREN_NATIVE=0`` numba's march draws it."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "import numpy as np\n"
+        "import volren\n"
+        "from volren.model import TFWidget, TransferFunction2D, UniformVolume\n"
+        "z, y, x = np.mgrid[0:12, 0:11, 0:13].astype(np.float32)\n"
+        "vol = UniformVolume(np.exp(-((x - 6) ** 2 + (y - 5) ** 2 + (z - 6) ** 2) / 18).astype(np.float32))\n"
+        "w = TFWidget.gaussian((0.5, 0.1), (0.2, 0.1), (1, 0.5, 0.2), 0.6)\n"
+        "image = volren.render(vol, TransferFunction2D((0.0, 1.0), (0.0, 0.3), [w]), renderer='raycast', size=(16, 16))\n"
+        "print(bool(image[..., 3].max() > 0), 'numba' in sys.modules)\n"
+    )
+    for native, numba_loaded in (("1", False), ("0", True)):
+        result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                                env={**os.environ, "VOLREN_NATIVE": native})  # fmt: skip
+        assert result.returncode == 0, result.stderr
+        assert result.stdout.split() == ["True", str(numba_loaded)]

@@ -221,7 +221,8 @@ class RaycastRenderer(RendererBase):
         summary="image-order ray casting (C with AVX2 where it builds, else numba): brick skipping with distance "
         "jumps, early ray termination, "
         "adaptive image refinement, the step chosen from an error target",
-        # a TF drag's previews march at the level's coarsest step instead of estimating the error per edit
+        # a TF drag's previews march at the level's coarsest step instead of estimating the error per edit,
+        # and sample a 2D TF's table at fewer entries (it is sampled again at every edit)
         tf_drag_options={"target_error": 0.0, "table_2d": TF_DRAG_TABLE_2D},
         still_frame_options={"image_stride": 1},  # the app refines images in previews only
         quality=(
