@@ -184,15 +184,22 @@ INLINE double box_exit(const IndexRay *r, double lx, double ly, double lz, doubl
     return te;
 }
 
+/* where position x (in entries) lies in a table of n entries: clamped to [0, n - 1], the entry i0
+ * before it (at most n - 2) and, returned, the weight of entry i0 + 1 */
+INLINE double table_entry(double x, int64_t n, int64_t *i0_out) {
+    double f = MIN(MAX(x, 0.0), (double)n - 1.0);
+    int64_t i0 = (int64_t)f;
+    if (i0 > n - 2) i0 = n - 2;
+    *i0_out = i0;
+    return f - (double)i0;
+}
+
 /* post-classified opacity at value s (per step), interpolated in the table between entries i0 and
  * i0 + 1 with weight w (both returned for the colour) */
 INLINE double post_alpha(const Classes *c, double s, int64_t *i0_out, double *w_out) {
     const double *post = c->post;
-    int64_t n = c->n_post;
-    double fi = MIN(MAX((s - c->lo) * c->scale, 0.0), (double)n - 1.0);
-    int64_t i0 = (int64_t)fi;
-    if (i0 > n - 2) i0 = n - 2;
-    double w = fi - (double)i0;
+    int64_t i0;
+    double w = table_entry((s - c->lo) * c->scale, c->n_post, &i0);
     *i0_out = i0, *w_out = w;
     return post[4 * i0 + 3] + w * (post[4 * i0 + 7] - post[4 * i0 + 3]);
 }
@@ -216,12 +223,8 @@ INLINE void classify(const Classes *c, double s, double sb, double length, doubl
     double h = c->step;
     if (c->preintegrated) {
         int64_t n = c->n_table;
-        double fi = MIN(MAX((s - c->lo) * c->scale, 0.0), (double)n - 1.0);
-        double fj = MIN(MAX((sb - c->lo) * c->scale, 0.0), (double)n - 1.0);
-        int64_t i0 = (int64_t)fi, j0 = (int64_t)fj;
-        if (i0 > n - 2) i0 = n - 2;
-        if (j0 > n - 2) j0 = n - 2;
-        double wi = fi - (double)i0, wj = fj - (double)j0;
+        int64_t i0, j0;
+        double wi = table_entry((s - c->lo) * c->scale, n, &i0), wj = table_entry((sb - c->lo) * c->scale, n, &j0);
         double w00 = (1.0 - wi) * (1.0 - wj), w01 = (1.0 - wi) * wj, w10 = wi * (1.0 - wj), w11 = wi * wj;
         const float *t00 = c->table + 4 * (i0 * n + j0), *t01 = t00 + 4, *t10 = t00 + 4 * n, *t11 = t10 + 4;
         double a = w00 * t00[3] + w01 * t01[3] + w10 * t10[3] + w11 * t11[3];
@@ -299,15 +302,11 @@ INLINE int composite_one_2d(const Grid *g, const Classes *c, double s, double px
                             Pixel *p, double term) {
     if (!isfinite(s)) return 0;
     const int64_t nv = c->n_value, ng = c->n_gradient;
-    double fi = MIN(MAX((s - c->lo) * c->scale, 0.0), (double)nv - 1.0);
-    int64_t i0 = (int64_t)fi;
-    if (i0 > nv - 2) i0 = nv - 2;
+    int64_t i0, j0;
+    double wi = table_entry((s - c->lo) * c->scale, nv, &i0);
     int kind = c->kinds[i0];
     if (kind == TRANSPARENT) return 0;
-    double fj = kind == FLAT ? 0.0 : MIN(MAX(gradient_length(g, c, px, py, pz) * c->g_scale, 0.0), (double)ng - 1.0);
-    int64_t j0 = (int64_t)fj;
-    if (j0 > ng - 2) j0 = ng - 2;
-    double wi = fi - (double)i0, wj = fj - (double)j0;
+    double wj = table_entry(kind == FLAT ? 0.0 : gradient_length(g, c, px, py, pz) * c->g_scale, ng, &j0);
     const float *t0 = c->table2d + 4 * (j0 * nv + i0), *t1 = t0 + 4 * nv;
     double tau = bilinear(t0, t1, wi, wj, 3);
     if (!(tau > 0.0)) return 0;
@@ -398,16 +397,29 @@ INLINE __m256 run_values8(const Grid *g, int is_float, const IndexRay *ray, doub
  * the single-precision table (`Classes.post32`) as `post_alpha` and `composite_one` do in double;
  * opacity 0 where a value is not finite. Returns the lanes with opacity above 0 as a bit mask (the
  * colours are looked up only when some lane has any). */
+INLINE __m256 finite8(__m256 s) {
+    return _mm256_and_ps(_mm256_cmp_ps(s, s, _CMP_ORD_Q),
+                         _mm256_cmp_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), s), _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
+}
+
+/* `table_entry` of 8 positions x in single precision (NaN at entry 0): the weights, the entries in *i0 */
+INLINE __m256 table_entry8(__m256 x, int64_t n, __m256i *i0) {
+    __m256 f = _mm256_min_ps(_mm256_max_ps(x, _mm256_setzero_ps()), _mm256_set1_ps((float)(n - 1))); /* NaN -> 0 */
+    *i0 = _mm256_min_epi32(_mm256_cvttps_epi32(f), _mm256_set1_epi32((int)(n - 2)));
+    return _mm256_sub_ps(f, _mm256_cvtepi32_ps(*i0));
+}
+
+/* value s's position in the table whose entry 0 is at c->lo, c->scale entries per unit */
+INLINE __m256 value_position8(const Classes *c, __m256 s) {
+    return _mm256_mul_ps(_mm256_sub_ps(s, _mm256_set1_ps((float)c->lo)), _mm256_set1_ps((float)c->scale));
+}
+
 INLINE int run_classes8(const Classes *c, __m256 s, float r[8], float g[8], float b[8], float a[8]) {
     const __m256 zero = _mm256_setzero_ps();
     const float *post = c->post32;
-    __m256 finite = _mm256_and_ps(_mm256_cmp_ps(s, s, _CMP_ORD_Q),
-                                  _mm256_cmp_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), s),
-                                                _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
-    __m256 fi = _mm256_mul_ps(_mm256_sub_ps(s, _mm256_set1_ps((float)c->lo)), _mm256_set1_ps((float)c->scale));
-    fi = _mm256_min_ps(_mm256_max_ps(fi, zero), _mm256_set1_ps((float)(c->n_post - 1))); /* NaN -> 0 */
-    __m256i i0 = _mm256_min_epi32(_mm256_cvttps_epi32(fi), _mm256_set1_epi32((int)(c->n_post - 2)));
-    __m256 w = _mm256_sub_ps(fi, _mm256_cvtepi32_ps(i0));
+    __m256 finite = finite8(s);
+    __m256i i0;
+    __m256 w = table_entry8(value_position8(c, s), c->n_post, &i0);
     __m256i at = _mm256_slli_epi32(i0, 2); /* four floats per entry */
     __m256 a0 = _mm256_i32gather_ps(post + 3, at, 4), a1 = _mm256_i32gather_ps(post + 7, at, 4);
     __m256 ca = _mm256_and_ps(_mm256_fmadd_ps(w, _mm256_sub_ps(a1, a0), a0), finite);
@@ -499,26 +511,18 @@ INLINE int run_classes8_2d(const Grid *g, const Classes *c, __m256 s, const Cell
                            float b[8], float alpha[8]) {
     const __m256 zero = _mm256_setzero_ps();
     const int64_t nv = c->n_value, ng = c->n_gradient;
-    __m256 finite = _mm256_and_ps(_mm256_cmp_ps(s, s, _CMP_ORD_Q),
-                                  _mm256_cmp_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), s),
-                                                _mm256_set1_ps(INFINITY), _CMP_LT_OQ));
-    __m256 fi = _mm256_mul_ps(_mm256_sub_ps(s, _mm256_set1_ps((float)c->lo)), _mm256_set1_ps((float)c->scale));
-    fi = _mm256_min_ps(_mm256_max_ps(fi, zero), _mm256_set1_ps((float)(nv - 1))); /* NaN -> 0 */
-    __m256i i0 = _mm256_min_epi32(_mm256_cvttps_epi32(fi), _mm256_set1_epi32((int)(nv - 2)));
-    __m256 wi = _mm256_sub_ps(fi, _mm256_cvtepi32_ps(i0));
+    __m256 finite = finite8(s);
+    __m256i i0, j0;
+    __m256 wi = table_entry8(value_position8(c, s), nv, &i0);
     __m256i kind = _mm256_and_si256(_mm256_i32gather_epi32((const int *)c->kinds, i0, 1), _mm256_set1_epi32(0xff));
     __m256 live = _mm256_and_ps(finite, _mm256_castsi256_ps(_mm256_cmpgt_epi32(kind, _mm256_set1_epi32(TRANSPARENT))));
     int lanes = _mm256_movemask_ps(live);
     if (!lanes) return 0;
-    __m256 fj = zero;
+    __m256 fj = zero; /* FLAT intervals read row 0 */
     __m256 graded = _mm256_and_ps(live, _mm256_castsi256_ps(_mm256_cmpgt_epi32(kind, _mm256_set1_epi32(FLAT))));
-    if (_mm256_movemask_ps(graded)) {
-        fj = _mm256_mul_ps(gradient_length8(g, c, cells), _mm256_set1_ps((float)c->g_scale));
-        fj = _mm256_min_ps(_mm256_max_ps(fj, zero), _mm256_set1_ps((float)(ng - 1)));
-        fj = _mm256_and_ps(fj, graded); /* FLAT intervals read row 0 */
-    }
-    __m256i j0 = _mm256_min_epi32(_mm256_cvttps_epi32(fj), _mm256_set1_epi32((int)(ng - 2)));
-    __m256 wj = _mm256_sub_ps(fj, _mm256_cvtepi32_ps(j0));
+    if (_mm256_movemask_ps(graded))
+        fj = _mm256_and_ps(_mm256_mul_ps(gradient_length8(g, c, cells), _mm256_set1_ps((float)c->g_scale)), graded);
+    __m256 wj = table_entry8(fj, ng, &j0);
     __m256i e = _mm256_slli_epi32(_mm256_add_epi32(_mm256_mullo_epi32(j0, _mm256_set1_epi32((int)nv)), i0), 2);
     const float *table = c->table2d;
     __m256 t = _mm256_and_ps(bilinear8(table, nv, e, wi, wj, 3), live);
@@ -559,21 +563,7 @@ INLINE int64_t composite_post(const Grid *g, int is_float, int two_d, const Clas
         int lanes = whole_end - kk < 8 ? (1 << (whole_end - kk)) - 1 : 0xff;
         Cells8 cells;
         __m256 s = run_values8(g, is_float, ray, base, h, kk, &cells);
-        if (two_d) {
-            int visible = run_classes8_2d(g, c, s, &cells, cr, cg, cb, ca) & lanes;
-            while (visible) {
-                int j = __builtin_ctz(visible);
-                visible &= visible - 1;
-                double alpha = ca[j], tr = 1.0 - p->a;
-                p->r += tr * (cr[j] * alpha);
-                p->g += tr * (cg[j] * alpha);
-                p->b += tr * (cb[j] * alpha);
-                p->a += tr * alpha;
-                if (p->a >= term) return kk + j + 1 - ka;
-            }
-            continue;
-        }
-        int visible = run_classes8(c, s, cr, cg, cb, ca) & lanes;
+        int visible = lanes & (two_d ? run_classes8_2d(g, c, s, &cells, cr, cg, cb, ca) : run_classes8(c, s, cr, cg, cb, ca));
         while (visible) { /* front to back over the lanes with opacity */
             int j = __builtin_ctz(visible);
             visible &= visible - 1;
