@@ -189,6 +189,20 @@ def _counters(totals: NDArray[np.int64]) -> dict[str, float]:
     return {names.get(name, name): float(total) for name, total in zip(COUNTS, totals, strict=True)}
 
 
+def _visible_under_table(
+    grid: BrickGrid, table: NDArray[np.float32], lo: float, hi: float
+) -> NDArray[np.bool_]:
+    """The bricks a ray must sample under a 2D TF's table: those with extinction at any gradient
+    magnitude for a value in their range (widened by one entry either side: the table interpolates
+    between entries)."""
+    nv = table.shape[1]
+    seen = np.concatenate([[0], np.cumsum(table[..., 3].max(axis=0) > 0.0)])
+    scale = (nv - 1) / (hi - lo)
+    first = np.clip(np.floor((grid.vmin - lo) * scale) - 1, 0, nv - 1).astype(np.int64)
+    last = np.clip(np.ceil((grid.vmax - lo) * scale) + 1, 0, nv - 1).astype(np.int64)
+    return (seen[last + 1] - seen[first] > 0) & ~grid.empty
+
+
 def _march_listed(
     args: tuple, pixels: NDArray[np.int64], two_d: bool = False
 ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
@@ -303,23 +317,21 @@ class RaycastRenderer(RendererBase):
         self._values = self._grid = self._empty = self._phases = None
         super().release()
 
-    def _empty_bricks(
-        self, tf: TransferFunction1D, brick: int, skipping: bool, reach: int, pad: float
-    ) -> NDArray[np.int8]:
-        """Each brick's distance to the nearest brick to sample (`occupancy`), kept while the TF's
-        opacity, the brick size, the reach and the table spacing `pad` stay (a colour edit reuses
-        it). Bricks are classified over ranges widened by `pad`, one entry of the classification
-        table, which interpolates between the entries either side of a value."""
-        volume = self.volume
-        assert isinstance(volume, UniformVolume)
-        key = (tf.opacity_points.tobytes(), brick, skipping, reach, pad)
+    def _empty_bricks(self, key: tuple, brick: int, reach: int, skipping: bool,
+                      visible: Callable[[BrickGrid], NDArray[np.bool_]]) -> NDArray[np.int8]:  # fmt: skip
+        """Each brick's distance to the nearest brick to sample (`occupancy`), kept while `key` (what
+        decides which bricks are visible: the TF's opacity or table, the brick size, the reach) stays,
+        so that a colour edit, a camera move and the step search reuse it. `visible(grid)`: the bricks
+        of `brick` cells (their ranges widened by `reach` cells) a ray must sample; every brick
+        without skipping."""
         if self._empty is not None and self._empty[0] == key:
             return self._empty[1]
+        volume = self.volume
+        assert isinstance(volume, UniformVolume)
         if self._grid is None or self._grid[0] != (brick, reach):
             self._grid = ((brick, reach), BrickGrid.from_volume(volume, brick, reach))
         grid = self._grid[1]
-        visible = grid.visible(tf, pad=pad) if skipping else np.ones(grid.shape, dtype=bool)
-        distance = empty_distance(visible)
+        distance = empty_distance(visible(grid) if skipping else np.ones(grid.shape, dtype=bool))
         self._empty = (key, distance)
         return distance
 
@@ -360,14 +372,20 @@ class RaycastRenderer(RendererBase):
         h, chosen = self._chosen_step(key, lambda step, at: self._march_args(tf, step, pre, opts, at), False, h,
                                       opts, view, mode_key)  # fmt: skip
         args = self._march_args(tf, h, pre, opts, view)
-        empty = args[1].distance
-        stride = int(opts["image_stride"])
+        return self._marched(args, args[1].distance, False, view, opts, progress, chosen)
+
+    def _marched(self, args: tuple, empty: NDArray[np.int8], two_d: bool, view: PixelView, opts: Mapping[str, Any],
+                 progress: ProgressCallback | None,
+                 chosen: Mapping[str, float]) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
+        """The frame the march's arguments draw (1D or 2D TF): a ray through every pixel, or adaptively
+        refined at `image_stride`; its counters with the bricks and the step's choice (`chosen`)."""
+        width, height, stride = view.width, view.height, int(opts["image_stride"])
         if stride > 1:
             image, totals, rays = self._refined(
-                args, width, height, stride, opts["refine_tolerance"], progress
+                args, width, height, stride, opts["refine_tolerance"], progress, two_d
             )
         else:
-            image, totals = self._every_pixel(args, width, height, progress)
+            image, totals = self._every_pixel(args, width, height, progress, two_d)
             rays = width * height
         return image, {**_counters(totals), "rays_cast": float(rays),
                        "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size), **chosen}  # fmt: skip
@@ -403,7 +421,11 @@ class RaycastRenderer(RendererBase):
         table.flags.writeable = False  # combination of writable and read-only arrays
         classes = Classification(pre, post, table, float(h), float(lo), float((n - 1) / (hi - lo)), cap)
         term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
-        empty = self._empty_bricks(tf, brick, bool(opts["empty_space_skipping"]), reach, (hi - lo) / (n - 1))
+        # classified over ranges widened by one entry of the table, which interpolates between the
+        # entries either side of a value
+        pad, skipping = (hi - lo) / (n - 1), bool(opts["empty_space_skipping"])
+        empty = self._empty_bricks((tf.opacity_points.tobytes(), brick, skipping, reach, pad), brick, reach, skipping,
+                                   lambda grid: grid.visible(tf, pad=pad))  # fmt: skip
         assert self._values is not None
         return self._values, EmptyBricks(empty, brick), view, classes, term
 
@@ -452,22 +474,13 @@ class RaycastRenderer(RendererBase):
                    progress: ProgressCallback | None) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
         """A frame with a 2D TF (`march2d`): at the settings' step, or the error-targeted one (searched
         on the 2D march as for 1D TFs), every pixel or adaptively refined."""
-        table, kinds, digest = self._table_2d(tf, int(opts["table_2d"]))
-        key = ("2d", digest, tf.value_range, tf.gradient_range, h, *(opts[k] for k in ("target_error", "termination_alpha", "brick_size",
-                                                    "empty_space_skipping")))  # fmt: skip
+        _, _, digest = self._table_2d(tf, int(opts["table_2d"]))
+        key = ("2d", digest, tf.value_range, tf.gradient_range, h,
+               *(opts[k] for k in ("target_error", "termination_alpha", "brick_size", "empty_space_skipping")))  # fmt: skip
         h, chosen = self._chosen_step(key, lambda step, at: self._march2d_args(tf, step, opts, at), True, h, opts,
                                       view, phase_mode)  # fmt: skip
         args = self._march2d_args(tf, h, opts, view)
-        empty = args[2].distance
-        stride = int(opts["image_stride"])
-        if stride > 1:
-            image, totals, rays = self._refined(args, view.width, view.height, stride,
-                                                opts["refine_tolerance"], progress, True)  # fmt: skip
-        else:
-            image, totals = self._every_pixel(args, view.width, view.height, progress, True)
-            rays = view.width * view.height
-        return image, {**_counters(totals), "rays_cast": float(rays),
-                       "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size), **chosen}  # fmt: skip
+        return self._marched(args, args[2].distance, True, view, opts, progress, chosen)
 
     def _table_2d(self, tf: TransferFunction2D, nv: int) -> tuple[NDArray[np.float32], NDArray[np.int8], str]:
         """(table, its intervals' kinds, a digest of the table): the 2D TF sampled once per TF version at
@@ -506,40 +519,11 @@ class RaycastRenderer(RendererBase):
         gmax = float(tf.gradient_range[1])
         tab = Table2D(table, float(lo), float((nv - 1) / (hi - lo)), float((ng - 1) / gmax), float(h), kinds)
         brick = int(opts["brick_size"])
-        empty = self._empty_bricks_2d(table, digest, lo, hi, brick, bool(opts["empty_space_skipping"]))
+        skipping = bool(opts["empty_space_skipping"])
+        empty = self._empty_bricks(("2d", digest, lo, hi, brick, skipping), brick, 0, skipping,
+                                   lambda grid: _visible_under_table(grid, table, lo, hi))  # fmt: skip
         term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
         return self._values, self._gradients, EmptyBricks(empty, brick), view, tab, term
-
-    def _empty_bricks_2d(self, table: NDArray[np.float32], digest: str, lo: float, hi: float, brick: int,
-                         skipping: bool) -> NDArray[np.int8]:  # fmt: skip
-        """Each brick's distance to the nearest brick to sample (`occupancy`) under a 2D TF's table: a
-        brick is visible where the table has extinction at any gradient magnitude for a value in its
-        range (widened by one entry either side: the table interpolates between entries). Kept while
-        the table (`digest`) and the bricks stay: the step search marches it at many steps."""
-        volume = self.volume
-        assert isinstance(volume, UniformVolume)
-        key = ("2d", digest, lo, hi, brick, skipping)
-        if self._empty is not None and self._empty[0] == key:
-            return self._empty[1]
-        self._empty = (key, self._distances_2d(table, lo, hi, brick, skipping))
-        return self._empty[1]
-
-    def _distances_2d(self, table: NDArray[np.float32], lo: float, hi: float, brick: int,
-                      skipping: bool) -> NDArray[np.int8]:  # fmt: skip
-        volume = self.volume
-        assert isinstance(volume, UniformVolume)
-        if self._grid is None or self._grid[0] != (brick, 0):
-            self._grid = ((brick, 0), BrickGrid.from_volume(volume, brick, 0))
-        grid = self._grid[1]
-        if not skipping:
-            return empty_distance(np.ones(grid.shape, dtype=bool))
-        nv = table.shape[1]
-        seen = np.concatenate([[0], np.cumsum(table[..., 3].max(axis=0) > 0.0)])
-        scale = (nv - 1) / (hi - lo)
-        first = np.clip(np.floor((grid.vmin - lo) * scale) - 1, 0, nv - 1).astype(np.int64)
-        last = np.clip(np.ceil((grid.vmax - lo) * scale) + 1, 0, nv - 1).astype(np.int64)
-        visible = (seen[last + 1] - seen[first] > 0) & ~grid.empty
-        return empty_distance(visible)
 
     @staticmethod
     def _every_pixel(args: tuple, width: int, height: int, progress: ProgressCallback | None,
