@@ -80,3 +80,26 @@ def freeze_count_after(call: str) -> int:
 def test_the_program_leaves_its_objects_to_the_os_and_a_caller_keeps_its_collector():
     assert freeze_count_after("main()") > 0
     assert freeze_count_after("main(['--version'])") == 0
+
+
+def test_a_render_of_a_grid_imports_no_pyvista_and_a_mesh_does(tmp_path):
+    """Image data is read through VTK's own API: PyVista's import (a quarter of a second) is paid
+    only where a mesh or another kind of dataset needs it."""
+    from volren.samples import sample_paths
+
+    for sample, expect in (("phantom_ct", False), ("hollow_cylinder", True)):
+        volume, tf = sample_paths(sample)
+        argv = [
+            "render",
+            str(volume),
+            "--tf",
+            str(tf),
+            "--size",
+            "32x32",
+            "-o",
+            str(tmp_path / f"{sample}.png"),
+        ]
+        code = (f"import os\nos.environ['VOLREN_READ_IN_PROCESS'] = '1'  # the load in this process, not a child\n"
+                f"from volren.cli.main import main\nassert main({argv!r}) == 0")  # fmt: skip
+        assert ("pyvista" in loaded_after(code)) is expect, sample
+        assert (tmp_path / f"{sample}.png").is_file()
