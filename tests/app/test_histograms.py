@@ -37,13 +37,16 @@ def test_integer_volumes_match_np_histogram(dtype, bins):
     np.testing.assert_allclose(hist.edges, edges)
 
 
-def test_integer_path_is_chunked_without_changing_counts(monkeypatch):
+@pytest.mark.parametrize("dtype, chunk", [(np.int16, 100), (np.uint8, 100), (np.uint8, 101), (np.int8, 7)])
+def test_integer_path_is_chunked_without_changing_counts(monkeypatch, dtype, chunk):
+    """Many chunks, of odd sizes too (bytes are tallied in pairs, the odd one alone)."""
     import volren.model.value_histogram as histograms
 
-    monkeypatch.setattr(histograms, "_TALLY_CHUNK", 100)  # many chunks for 990 values
-    values = np.arange(990, dtype=np.int16).reshape(9, 10, 11) - 400
-    hist = compute_histogram(values, 13, (-400.0, 589.0))
-    np.testing.assert_array_equal(hist.counts, np.histogram(values, 13, (-400.0, 589.0))[0])
+    monkeypatch.setattr(histograms, "_TALLY_CHUNK", chunk)
+    values = (np.arange(990).reshape(9, 10, 11) * 7919 % 251).astype(dtype)
+    value_range = (float(values.min()), float(values.max()))
+    hist = compute_histogram(values, 13, value_range)
+    np.testing.assert_array_equal(hist.counts, np.histogram(values, 13, value_range)[0])
 
 
 @pytest.mark.parametrize("dtype", [np.int8, np.uint8, np.int16, np.uint16])

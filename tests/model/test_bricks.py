@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from volren.errors import VolrenError
-from volren.model.bricks import BrickGrid, BrickStats
+from volren.model.bricks import FEW_REGIONS, BrickGrid, BrickStats, _meets, opaque_regions
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import UniformVolume
 
@@ -230,6 +230,49 @@ def test_visible_matches_dense_evaluation(name, threshold):
     expected = np.array([brute_max_opacity(tf, a, b) for a, b in zip(lo, hi)])
     np.testing.assert_allclose(grid.max_opacity(tf).ravel(), expected, atol=1e-12)
     np.testing.assert_array_equal(grid.visible(tf, threshold).ravel(), expected > threshold)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    xs=st.lists(st.sampled_from([-1.0, 0.0, 0.5, 1.0, 2.0, 2.0, 3.0]), min_size=1, max_size=9),
+    alphas=st.lists(st.sampled_from([0.0, 0.0, 0.25, 1.0]), min_size=9, max_size=9),
+    pad=st.sampled_from([0.0, 0.25]),
+)
+def test_opaque_regions_classify_as_the_table_of_maxima(xs, alphas, pad):
+    """At threshold 0, the regions' comparisons (the fast path) and the table of maxima agree on
+    every brick range built from the TF's own points, between them and beyond them, including
+    steps (repeated x) and zero points that split two segments."""
+    xs = sorted(xs)
+    tf = TransferFunction1D([[0, 1, 1, 1]], np.column_stack([xs, alphas[: len(xs)]]))
+    edges = sorted({*xs, *(x + d for x in xs for d in (-0.5, -1e-9, 1e-9, 0.5)), -9.0, 9.0})
+    lo, hi = np.meshgrid(edges, edges, indexing="ij")
+    keep = lo <= hi
+    lo, hi = lo[keep], hi[keep]
+    grid = BrickGrid(
+        lo.reshape(1, 1, -1), hi.reshape(1, 1, -1), np.zeros((1, 1, lo.size), bool), 1, (lo.size + 1, 2, 2)
+    )
+    expected = (grid.max_opacity(tf, pad) > 0.0).ravel()
+    np.testing.assert_array_equal(grid.visible(tf, 0.0, pad).ravel(), expected)
+
+
+def test_many_opaque_regions_take_the_table_and_agree():
+    """A comb of more spikes than FEW_REGIONS is classified through the table of maxima, and the
+    regions, though not used for it, give the same answer."""
+    spikes = FEW_REGIONS + 3
+    points = [[0.0, 0.0]] + [
+        [x, a] for k in range(spikes) for x, a in ((10 * k + 4, 0), (10 * k + 5, 1), (10 * k + 6, 0))
+    ]
+    tf = TransferFunction1D([[0, 1, 1, 1]], points)
+    regions = opaque_regions(tf)
+    assert len(regions) == spikes and regions[0] == (4.0, False, 6.0, False)
+    lo = np.arange(0.0, 10.0 * spikes, 0.5)
+    hi = lo + 0.75
+    grid = BrickGrid(
+        lo.reshape(1, 1, -1), hi.reshape(1, 1, -1), np.zeros((1, 1, lo.size), bool), 1, (lo.size + 1, 2, 2)
+    )
+    visible = grid.visible(tf).ravel()
+    np.testing.assert_array_equal(visible, _meets(regions, lo, hi))
+    assert visible.any() and not visible.all()
 
 
 def test_spike_inside_a_brick_is_found():

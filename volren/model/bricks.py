@@ -70,6 +70,32 @@ def _reduce_axis(a: NDArray, ufunc: np.ufunc, axis: int, starts: NDArray[np.intp
     return out
 
 
+def _all_finite(values: NDArray) -> bool:
+    """Whether every value is finite, a slab of planes at a time (memory stays bounded)."""
+    if not np.issubdtype(values.dtype, np.floating):
+        return True
+    return all(np.isfinite(values[k : k + 16]).all() for k in range(0, len(values), 16))
+
+
+def _closed_blocks(values: NDArray, ufunc: np.ufunc, brick: int, shape: tuple[int, ...]) -> NDArray:
+    """`ufunc` (minimum or maximum) over every brick's closed voxel range, one axis at a time.
+
+    Why this way: the voxel at offset o of every brick along an axis is the slice ``o::brick``, so
+    a brick's range [start, start + brick] is `brick` + 1 such slices, each one call on whole planes
+    or rows (a strided x axis included): about 6 times quicker than `reduceat` on 8-bit data. The
+    slice at offset `brick` is the next brick's first voxel, the boundary both read; the last brick's
+    slices stop at the volume's end."""
+    out = values
+    for axis, count in enumerate(shape):
+        along = np.moveaxis(out, axis, 0)
+        block = np.array(along[::brick][:count])
+        for offset in range(1, brick + 1):
+            part = along[offset::brick][:count]
+            ufunc(block[: len(part)], part, out=block[: len(part)])
+        out = np.moveaxis(block, 0, axis)
+    return out
+
+
 class BrickGrid:
     """Per-brick min/max of a uniform volume, for classifying bricks as empty under a TF."""
 
@@ -154,6 +180,11 @@ class BrickGrid:
         nz, ny, nx = values.shape
         kstarts, jstarts, istarts = (_brick_starts(n, brick) for n in (nz, ny, nx))
         shape = (len(kstarts), len(jstarts), len(istarts))
+        if _all_finite(values):
+            vmin = _closed_blocks(values, np.minimum, brick, shape).astype(np.float64)
+            vmax = _closed_blocks(values, np.maximum, brick, shape).astype(np.float64)
+            return cls(vmin, vmax, np.zeros(shape, dtype=bool), brick, (nx, ny, nz), _spacing(spacing),
+                       _spacing(origin, "origin"))  # fmt: skip
         vmin = np.empty(shape, dtype=np.float64)
         vmax = np.empty(shape, dtype=np.float64)
         bad = np.zeros(shape, dtype=bool)
@@ -269,6 +300,9 @@ class BrickGrid:
             raise VolrenError(f"visibility threshold must be finite, got {threshold!r}")
         if not (np.isfinite(pad) and pad >= 0.0):
             raise VolrenError(f"visibility pad must be finite and non-negative, got {pad!r}")
+        regions = opaque_regions(tf) if threshold == 0.0 and getattr(tf, "dims", 1) == 1 else None
+        if regions is not None and len(regions) <= FEW_REGIONS:
+            return _meets(regions, self.vmin - pad, self.vmax + pad) & ~self.empty
         return (self.max_opacity(tf, float(pad)) > threshold) & ~self.empty
 
     def stats(self, visible: NDArray[np.bool_]) -> BrickStats:
@@ -338,6 +372,53 @@ def _shift_reduce(a: NDArray, ufunc: np.ufunc, axis: int) -> NDArray:
     lead[axis], trail[axis] = slice(1, None), slice(None, -1)
     out[tuple(trail)] = ufunc(out[tuple(trail)], a[tuple(lead)])
     out[tuple(lead)] = ufunc(out[tuple(lead)], a[tuple(trail)])
+    return out
+
+
+#: (start, start included, end, end included) of a connected set of values.
+Region = tuple[float, bool, float, bool]
+#: Up to this many regions `visible` compares every brick with each (a few passes over the bricks);
+#: beyond it, a table of the TF's maxima answers each brick at once (`max_opacity_between`).
+FEW_REGIONS = 8
+
+
+def opaque_regions(tf: TransferFunction1D) -> list[Region]:
+    """The values where a piecewise-linear TF's opacity is above zero, as sorted disjoint regions.
+
+    Why: a brick is visible iff its value range meets one of them, a few comparisons per brick
+    (the table of maxima costs two interpolations and two searches per brick). The opacity is
+    positive at a control point with positive opacity, inside a segment with a positive end (both
+    ends are at least 0), and beyond the first or last point where that point's is (the TF is
+    constant there); a point of zero opacity splits its two segments."""
+    points = tf.opacity_points
+    xs, alphas = points[:, 0].astype(float), np.clip(points[:, 1], 0.0, 1.0)
+    atoms: list[Region] = []
+    if alphas[0] > 0.0:
+        atoms.append((-np.inf, False, float(xs[0]), False))
+    for i in range(len(xs)):
+        if alphas[i] > 0.0:
+            atoms.append((float(xs[i]), True, float(xs[i]), True))
+        if i + 1 < len(xs) and xs[i] < xs[i + 1] and (alphas[i] > 0.0 or alphas[i + 1] > 0.0):
+            atoms.append((float(xs[i]), False, float(xs[i + 1]), False))
+    if alphas[-1] > 0.0:
+        atoms.append((float(xs[-1]), False, np.inf, False))
+    regions: list[Region] = []
+    for atom in atoms:
+        if regions and regions[-1][2] == atom[0] and (regions[-1][3] or atom[1]):
+            start, start_in, _, _ = regions[-1]
+            regions[-1] = (start, start_in, atom[2], atom[3])
+        else:
+            regions.append(atom)
+    return regions
+
+
+def _meets(regions: Sequence[Region], lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Per element: whether the closed range [lo, hi] meets one of the regions."""
+    out = np.zeros(np.shape(lo), dtype=bool)
+    for start, start_in, end, end_in in regions:
+        before_end = lo <= end if end_in else lo < end
+        after_start = hi >= start if start_in else hi > start
+        out |= before_end & after_start
     return out
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import weakref
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
@@ -92,6 +93,18 @@ def _float64_histogram(flat: NDArray, bins: int, lo: float, hi: float) -> tuple[
     return counts, np.histogram_bin_edges(np.empty(0), bins, span) / scale
 
 
+def _byte_tally(chunk: NDArray[np.uint8]) -> NDArray[np.int64]:
+    """np.bincount of bytes, two at a time: the bytes read as 16-bit pairs (half the elements, and
+    np.bincount widens each to 64 bits) tally 65,536 pairs, whose rows and columns sum to the tally
+    of the high and the low byte; about 2x quicker."""
+    even = chunk.size - chunk.size % 2
+    pairs = np.bincount(chunk[:even].view(np.uint16), minlength=1 << 16).reshape(256, 256)
+    tally = pairs.sum(axis=0) + pairs.sum(axis=1)
+    if even < chunk.size:
+        tally[chunk[-1]] += 1
+    return tally
+
+
 def _integer_histogram(flat: NDArray, bins: int, lo: float, hi: float) -> tuple[NDArray, NDArray]:
     """Tally each of the type's levels (a bincount of the values read as unsigned, ~10x faster than
     np.histogram on CT data), then bin the levels in [lo, hi] weighted by their tallies: the same
@@ -99,8 +112,9 @@ def _integer_histogram(flat: NDArray, bins: int, lo: float, hi: float) -> tuple[
     bits = 8 * flat.dtype.itemsize
     unsigned = flat.view(np.dtype(f"u{flat.dtype.itemsize}"))
     tally = np.zeros(1 << bits, np.int64)
+    count = _byte_tally if bits == 8 else partial(np.bincount, minlength=tally.size)
     for start in range(0, flat.size, _TALLY_CHUNK):
-        tally += np.bincount(unsigned[start : start + _TALLY_CHUNK], minlength=tally.size)
+        tally += count(np.ascontiguousarray(unsigned[start : start + _TALLY_CHUNK]))
     offset = 0
     if np.issubdtype(flat.dtype, np.signedinteger):  # two's complement: level i - offset at index i
         offset = 1 << (bits - 1)

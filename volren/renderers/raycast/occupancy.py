@@ -22,18 +22,25 @@ def empty_distance(visible: NDArray[np.bool_], cap: int = MAX_DISTANCE) -> NDArr
     if not 1 <= cap <= 127:
         raise ValueError(f"cap must be 1 to 127 (a byte per brick), got {cap}")
     empty = ~np.asarray(visible, dtype=bool)
-    distance = np.zeros(empty.shape, np.int8)
-    distance[empty] = 1
+    distance = empty.astype(np.int8)
     box = empty
-    for d in range(2, cap + 1):
-        # bricks whose 26-neighbours all lie in `box`: one erosion by a 3x3x3 cube, axis by axis
-        for axis in range(3):
-            pad = [(1, 1) if a == axis else (0, 0) for a in range(3)]
-            padded = np.pad(box, pad, constant_values=True)
-            n = box.shape[axis]
-            box = (padded.take(range(0, n), axis=axis) & padded.take(range(1, n + 1), axis=axis)
-                   & padded.take(range(2, n + 2), axis=axis))  # fmt: skip
+    for _ in range(2, cap + 1):
+        box = _eroded(box)
         if not box.any():
             break
-        distance[box] = d
+        distance += box  # the boxes shrink: a brick in the d-th box is in every one before it
     return distance
+
+
+def _eroded(box: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """The bricks whose 26 neighbours all lie in `box` (outside the grid counts as inside): one
+    erosion by a 3x3x3 cube, axis by axis, on slices in memory order rather than padded copies."""
+    out = box.copy()
+    for axis in range(3):
+        head = tuple(slice(1, None) if a == axis else slice(None) for a in range(3))
+        tail = tuple(slice(None, -1) if a == axis else slice(None) for a in range(3))
+        shrunk = out.copy()
+        shrunk[head] &= out[tail]
+        shrunk[tail] &= out[head]
+        out = shrunk
+    return out
