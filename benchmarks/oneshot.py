@@ -16,6 +16,7 @@ times, less sensitive to a loaded machine than wall times).
 from __future__ import annotations
 
 import argparse
+import compileall
 import datetime
 import os
 import re
@@ -147,6 +148,20 @@ def numba_fixed_seconds(env: dict[str, str]) -> tuple[float, float, float]:
     return numba_s, module_s, first_call_s
 
 
+def user_environment() -> dict[str, str]:
+    """This environment less PYTHONDONTWRITEBYTECODE: a user's Python reads the bytecode that
+    installing volren compiled (a sandbox that sets the variable would compile every module of
+    volren at every start, about 0.13 s here)."""
+    return {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+
+
+def compile_volren() -> None:
+    """volren's modules compiled to bytecode, as `pip install` leaves a wheel's."""
+    import volren
+
+    compileall.compile_dir(Path(volren.__file__).parent, quiet=1)
+
+
 def _with_renderer(flags: list[str], renderer: str) -> list[str]:
     return flags if renderer == DEFAULT else [*flags, "--renderer", renderer]
 
@@ -172,8 +187,9 @@ def measure(args: argparse.Namespace) -> int:
                         _with_renderer([str(shared / "data" / rel), *flags, "--tf", str(tf)], renderer),
                     )
                 )
-    cases = [c for label, renderer, flags in cases
-             for c in ((label, renderer, flags), *([(label, "vtk", [*flags, "--renderer", "vtk"])] if renderer == DEFAULT else []))]  # fmt: skip
+    groups = [[(label, renderer, flags), *([(label, "vtk", [*flags, "--renderer", "vtk"])] if renderer == DEFAULT else [])]
+              for label, renderer, flags in cases]  # fmt: skip
+    cases = [case for group in groups for case in group]
     lines: list[str] = []
 
     def say(text: str = "") -> None:
@@ -182,31 +198,37 @@ def measure(args: argparse.Namespace) -> int:
 
     command = "python -m benchmarks.oneshot" + (f" --shared {args.shared}" if args.shared else "")
     say(f"Measured {datetime.date.today().isoformat()} by `{command}`: each case is `volren render ... --timings` "
-        f"in a new process, {args.runs} times in a row, the first with empty mesh and step caches (numba's cache as "
-        "`volren prepare` left it). Seconds; *wall*: the process from start to exit; *frame: prepare* and *frame: "
-        "tables*: what tetra's first frame paid for its mesh and pre-integration tables; *frame: step_choice*: "
-        f"what raycast's error target paid for its step (a search, or the cached step); *{DEFAULT}*: no --renderer.")  # fmt: skip
+        f"in a new process, {args.runs} times, the first with empty mesh and step caches (numba's cache as "
+        "`volren prepare` left it); a render with no --renderer and its `--renderer vtk` twin run in turns. "
+        "volren's modules are compiled to bytecode first, as installing a wheel leaves them. Seconds; *wall*: the "
+        "process from start to exit; *frame: prepare* and *frame: tables*: what tetra's first frame paid for its "
+        "mesh and pre-integration tables; *frame: step_choice*: what raycast's error target paid for its step (a "
+        f"search, or the cached step); *{DEFAULT}*: no --renderer.")  # fmt: skip
     say()
     say(f"load average at the start: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     say()
     say("| case | renderer | run | wall | " + " | ".join(STAGES) + " |")
     say("|---|---|---|---:|" + "---:|" * len(STAGES))
     summary = []
+    compile_volren()
     with tempfile.TemporaryDirectory(prefix="volren-oneshot-") as tmp:
-        for i, (label, renderer, flags) in enumerate(cases):
-            env = {**os.environ, "VOLREN_MESH_CACHE": str(Path(tmp) / f"meshes-{i}"),
-                   "VOLREN_STEP_CACHE": str(Path(tmp) / f"steps-{i}")}  # fmt: skip
-            walls = []
+        for g, group in enumerate(groups):
+            env = {case[1]: {**user_environment(), "VOLREN_MESH_CACHE": str(Path(tmp) / f"meshes-{g}-{case[1]}"),
+                             "VOLREN_STEP_CACHE": str(Path(tmp) / f"steps-{g}-{case[1]}")} for case in group}  # fmt: skip
+            walls: dict[str, list[float]] = {case[1]: [] for case in group}
+            rows: dict[str, list[str]] = {case[1]: [] for case in group}
             for k in range(args.runs):
-                wall, stages = _render(flags, env, Path(tmp) / "out.png")
-                walls.append(wall)
-                cells = " | ".join(f"{stages[s]:.2f}" if s in stages else "" for s in STAGES)
-                say(
-                    f"| {label} | {renderer} | {'first (no caches)' if k == 0 else k + 1} | {wall:.2f} | {cells} |"
-                )
-            summary.append(
-                (label, renderer, walls[0], statistics.median(walls[1:]) if len(walls) > 1 else walls[0])
-            )
+                for label, renderer, flags in group if k % 2 == 0 else group[::-1]:
+                    wall, stages = _render(flags, env[renderer], Path(tmp) / "out.png")
+                    walls[renderer].append(wall)
+                    cells = " | ".join(f"{stages[s]:.2f}" if s in stages else "" for s in STAGES)
+                    run_name = "first (no caches)" if k == 0 else k + 1
+                    rows[renderer].append(f"| {label} | {renderer} | {run_name} | {wall:.2f} | {cells} |")
+            for label, renderer, _ in group:
+                for row in rows[renderer]:
+                    say(row)
+                w = walls[renderer]
+                summary.append((label, renderer, w[0], statistics.median(w[1:]) if len(w) > 1 else w[0]))
     say()
     say(f"load average at the end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     say()
@@ -222,11 +244,11 @@ def measure(args: argparse.Namespace) -> int:
     label, renderer, flags = next(c for c in cases if (c[0].startswith(args.importtime_case) if args.importtime_case
                                                        else c[1] == DEFAULT))  # fmt: skip
     with tempfile.TemporaryDirectory(prefix="volren-oneshot-") as tmp:
-        total, slowest = import_seconds(flags, dict(os.environ), Path(tmp) / "out.png")
+        total, slowest = import_seconds(flags, user_environment(), Path(tmp) / "out.png")
     say()
     say(f"imports of `volren render` ({label}, {renderer}; `-X importtime`, top-level modules' cumulative): "
         f"{total:.2f} s; slowest: " + ", ".join(f"{name} {s:.2f} s" for name, s in slowest))  # fmt: skip
-    numba_s, module_s, first_call_s = numba_fixed_seconds(dict(os.environ))
+    numba_s, module_s, first_call_s = numba_fixed_seconds(user_environment())
     say()
     say(f"numba's fixed cost in a new interpreter (`benchmarks.oneshot.numba_fixed_seconds`): import numba "
         f"{numba_s:.2f} s, raycast's kernel module {module_s:.2f} s, the first call of its march on a 2x2x2 grid "
