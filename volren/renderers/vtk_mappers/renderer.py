@@ -49,7 +49,7 @@ from volren.renderers.base import (
 )
 from volren.renderers.opengl import require_opengl
 from volren.renderers.vtk_mappers import _vtk
-from volren.renderers.vtk_mappers.convert import FINITE_NAME, image_data, unstructured_grid
+from volren.renderers.vtk_mappers.convert import FINITE_NAME, image_data, set_camera, unstructured_grid
 from volren.renderers.vtk_mappers.transfer import (
     masked_function,
     replace_nonfinite,
@@ -371,13 +371,7 @@ class VtkRenderer(RendererBase):
 
     def _apply_camera(self, camera: Camera) -> None:
         cam = self._vtk_renderer.GetActiveCamera()
-        cam.SetPosition(*camera.position)
-        cam.SetFocalPoint(*camera.focal_point)
-        cam.SetViewUp(*camera.view_up)
-        cam.SetViewAngle(camera.view_angle)
-        cam.SetParallelProjection(int(camera.parallel))
-        cam.SetParallelScale(camera.parallel_scale)
-        cam.SetClippingRange(*camera.clipping_range)
+        set_camera(cam, camera)
         if self._mapper_key is not None and self._mapper_key[0] == "raycast":
             width, height = self._window.GetSize()
             # Half a pixel (2 / size in window units) puts the rays through pixel centres; the
