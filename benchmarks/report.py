@@ -60,6 +60,13 @@ SECTIONS = (
         "ray caster on llvmpipe) that reaches its error? (`python -m benchmarks.fastest_peer`)",
     ),
     (
+        "viewer_peers.md",
+        "No options against what a PyVista or napari user gets, frames interleaved",
+        "How does a render with no options compare with `pyvista.Plotter.add_volume` and with vispy's volume visual "
+        "as napari draws it, each at its defaults on llvmpipe, in error and in time? (`python -m "
+        "benchmarks.viewer_peers`)",
+    ),
+    (
         "plugins.md",
         "The plugin renderers (shear-warp, object order)",
         "How do the papers' CPU algorithms compare with VTK and the slicer at equal error, and with the papers' tables?",

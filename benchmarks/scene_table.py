@@ -36,12 +36,21 @@ def _load() -> str:
     return " ".join(f"{v:.2f}" for v in os.getloadavg())
 
 
-def scene_table(args: argparse.Namespace, intro: str, header: tuple[str, str], row: SceneRow) -> int:
+def scene_table(
+    args: argparse.Namespace,
+    intro: str,
+    header: tuple[str, str],
+    row: SceneRow,
+    kinds: tuple[str, ...] | None = None,
+) -> int:
     """`intro`, the load average, the table (`header`: its two first lines) with `row` for every TF
-    of every dataset asked for, and the load average at the end; printed, and written to --out."""
+    of every dataset asked for (of `kinds` only, when given: the others are not even loaded), and
+    the load average at the end; printed, and written to --out."""
     shared = shared_folder(args.shared, required=False)
     found = {**(shared_datasets(shared) if shared else {}), **sample_datasets()}
     names = args.datasets.split(",") if args.datasets else list(found)
+    if kinds is not None:
+        names = [n for n in names if found[n].kind in kinds]
     lines = [intro, "", f"load average at the start: {_load()}", "", *header]
     for line in lines:
         print(line)

@@ -28,6 +28,8 @@ SAMPLE_TF = REPO / "data_samples" / "marschner_lobb.tf.json"
 OPTIONAL = {
     "pyqt5": "app",
     "matplotlib": "bench",
+    "vispy": "bench",
+    "pyopengl": "bench",
     "imageio": "movie",
     "imageio-ffmpeg": "movie",
     "zarr": "zarr",
