@@ -41,6 +41,7 @@ from pathlib import Path
 from benchmarks._cli import run
 from benchmarks.quality_report import scene_pair
 from volren.bench import sweep
+from volren.bench.viewer_peers import VIEWER_PEERS
 from volren.errors import VolrenError
 from volren.model.scene_class import SceneClass
 from volren.model.tf_class import TFClass, tf_sharpness, tf_visible_fraction
@@ -90,8 +91,9 @@ def scene_of(row: Mapping[str, str]) -> str:
 
 
 def _configs(kind: str, curves: set[str]) -> dict[tuple[str, str], sweep.Config]:
-    """(curve, label) -> Config of every configuration the sweeps define for these curves now."""
-    builtin = [c for c in curves if c in sweep.BUILTIN_CURVES]
+    """(curve, label) -> Config of every configuration the sweeps define for these curves now; not
+    the viewer peers' (PyVista, napari), which are no renderer of ours to choose levels for."""
+    builtin = [c for c in curves if c in sweep.BUILTIN_CURVES and c not in VIEWER_PEERS]
     out = {(c.curve, c.label): c for c in sweep.configs(kind, curves=builtin)} if builtin else {}
     from volren.renderers.registry import registry
 

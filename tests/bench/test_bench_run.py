@@ -57,7 +57,7 @@ def test_quick_run_covers_both_samples_and_every_renderer(rows):
     assert {r["dataset"] for r in rows} == {"marschner_lobb", "hollow_cylinder"}
     by_kind = {k: {r["renderer"] for r in rows if r["kind"] == k} for k in ("uniform", "tet")}
     assert by_kind == {
-        "uniform": {"slicer", "vtk-smart", "vtk-gpu", "vtk-fixed_point"},
+        "uniform": {"slicer", "vtk-smart", "vtk-gpu", "vtk-fixed_point", "pyvista", "vispy"},
         "tet": {"tetra", "vtk-raycast", "vtk-projected", "vtk-zsweep"},
     }
     assert all(r["size"] == "128" for r in rows)
@@ -123,6 +123,11 @@ def test_plots_summary_and_reference_cache(quick_run, rows):
         assert f"## {dataset} " in text and f"]({dataset}.png)" in text
     ratio_lines = [line for line in text.splitlines() if line.startswith("At VTK's best error")]
     assert len(ratio_lines) == 2, text
+    # what a PyVista or napari user gets: a table of its own, on the grid only
+    assert text.count("What a PyVista or napari user gets:") == 1, text
+    lines = text.splitlines()
+    for peer in ("pyvista", "vispy"):
+        assert len([line for line in lines if line.startswith(f"| sample | {peer} default |")]) == 1
     # one reference image per scene, rendered once into the cache
     assert len(list(cache.glob("*.npy"))) == 2
 

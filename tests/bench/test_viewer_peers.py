@@ -1,16 +1,19 @@
 """The PyVista and napari (vispy) peers: each draws our camera's view of a small scene (against
-`reference`, with a bound a camera mistake exceeds), the closed forms they rest on and the
-benchmark's row."""
+`reference`, with a bound a camera mistake exceeds), the closed forms they rest on, the benchmark's
+row and `volren bench run`'s curves."""
 
 from __future__ import annotations
 
+import csv
 import math
 
 import numpy as np
 import pytest
 
 from benchmarks import viewer_peers as peers_table
+from volren.bench import sweep
 from volren.bench import viewer_peers as vp
+from volren.cli.main import main
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.transfer_function import TransferFunction1D
@@ -120,6 +123,13 @@ def test_peers_take_uniform_grids_and_1d_tfs_only():
         vp.open_peer("paraview", volume, tf)
 
 
+def test_viewer_curves_are_one_default_setting_on_grids():
+    assert [c.curve for c in sweep.configs("uniform", curves=["pyvista", "vispy"])] == ["pyvista", "vispy"]
+    assert [c.label for c in sweep.configs("uniform", quick=True) if c.viewer] == ["default", "default"]
+    assert not [c for c in sweep.configs("tet") if c.viewer]
+    assert not sweep.Config("pyvista").ours and sweep.Config("pyvista").renderer == "pyvista"
+
+
 @pytest.mark.slow  # 7 s: PyVista's first frame, our renderer's
 def test_table_row_with_a_peer_that_cannot_draw(capsys, tmp_path, monkeypatch, renders_with_vtk):
     """The benchmark's row on a bundled grid: ours and PyVista timed, vispy (made to find no EGL)
@@ -150,3 +160,32 @@ def test_table_row_with_a_peer_that_cannot_draw(capsys, tmp_path, monkeypatch, r
     assert abs(float(row[6].rstrip("x")) - pv_ms / ours_ms) <= 0.01 * pv_ms / ours_ms + 0.01
     assert row[8] == "cannot draw: VolrenError: no EGL here" and row[9:] == ["-", "-", "-"]
     assert lines[1] in out.read_text()
+
+
+def test_bench_run_measures_the_viewer_curves(tmp_path, renders_with_vtk):
+    out = tmp_path / "run"
+    argv = ["bench", "run", "--renderers", "pyvista,vispy", "--datasets", "marschner_lobb", "--size", "24"]
+    assert main([*argv, "--frames", "2", "--out", str(out)]) == 0
+    with (out / "runs.csv").open(newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    assert [(r["renderer"], r["settings"], r["frames"]) for r in rows] == [
+        ("pyvista", "default", "2"),
+        ("vispy", "default", "2"),
+    ]
+    for r in rows:
+        assert float(r["ms"]) > 0 and 0 < float(r["rmse"]) <= float(r["max_abs"]) <= 1
+    summary = (out / "summary.md").read_text()
+    assert "| sample | pyvista default |" in summary and "| sample | vispy default |" in summary
+
+
+def test_quality_levels_leave_the_viewer_peers_out():
+    """runs.csv rows of the viewer peers are no renderer of ours: no quality levels come of them."""
+    from benchmarks.quality_levels import derive
+    from volren.model.scene_class import SceneClass
+
+    rows = [
+        {"dataset": "a", "tf": "smooth", "kind": "uniform", "renderer": curve, "settings": "default",
+         "ms": str(ms), "rmse": "0.01"}
+        for curve, ms in (("vtk-smart", 300), ("pyvista", 100), ("vispy", 50))
+    ]  # fmt: skip
+    assert set(derive(rows, "test").levels[SceneClass("uniform")]) == {"vtk"}

@@ -2,7 +2,8 @@
 
 Log-log axes (both quantities span decades); every setting of a renderer is a faint marker and
 its Pareto front a line through bold markers, so the reader sees at once which renderer gives the
-least error for a time budget. Our renderers are drawn solid, VTK's mappers dashed. Figures are
+least error for a time budget. Our renderers are drawn solid, VTK's mappers dashed, what a PyVista
+or napari user gets (one setting each) dotted. Figures are
 made with matplotlib's object API (no pyplot state), which renders with Agg and needs no display.
 matplotlib is the `bench` extra and loads only when a plot is drawn (`require_matplotlib`).
 """
@@ -13,13 +14,14 @@ from pathlib import Path
 
 from volren.bench.pareto import Row, group, pareto_front
 from volren.bench.sweep import BUILTIN_CURVES
+from volren.bench.viewer_peers import VIEWER_PEERS
 from volren.extras import require
 
 #: RMSE below this is drawn at it: a log axis has no zero (an exact match is possible on a sample).
 RMSE_FLOOR = 1e-6
 _ORDER = list(BUILTIN_CURVES)
-_COLORS = dict(zip(_ORDER, ["C0", "C2", "C1", "C3", "C0", "C1", "C4", "C5"], strict=True))
-_MARKERS = dict(zip(_ORDER, ["o", "^", "s", "D", "o", "s", "v", "P"], strict=True))
+_COLORS = dict(zip(_ORDER, ["C0", "C2", "C1", "C3", "C4", "C5", "C0", "C1", "C4", "C5"], strict=True))
+_MARKERS = dict(zip(_ORDER, ["o", "^", "s", "D", "p", "d", "o", "s", "v", "P"], strict=True))
 #: Colours and markers of other renderers (plugins), in the order they first appear.
 _OTHER_STYLES = [("C6", "X"), ("C7", "*"), ("C8", "h"), ("C9", "<"), ("C5", ">")]
 
@@ -56,7 +58,7 @@ def plot_dataset(rows: list[Row], dataset: str, path: Path) -> Path:
         curves = group(sorted(scene, key=lambda r: _order(str(r["renderer"]))), lambda r: r["renderer"])
         for curve, points in curves.items():
             color, marker = _style(str(curve), others)
-            style = "--" if str(curve).startswith("vtk-") else "-"
+            style = "--" if str(curve).startswith("vtk-") else ":" if curve in VIEWER_PEERS else "-"
             ax.scatter(
                 [p["ms"] for p in points],
                 [max(p["rmse"], RMSE_FLOOR) for p in points],

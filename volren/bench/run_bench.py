@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset
 from volren.bench.sweep import Config
+from volren.bench.viewer_peers import open_peer
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.transfer_function import TransferFunction1D
@@ -82,7 +83,11 @@ def measure(
     """One row: the configuration timed while turning and scored against the reference image."""
     if config.one_frame:
         frames = 1
-    with prepared_renderer(config.renderer, volume, tf, config.settings()) as renderer:
+    if config.viewer:  # drawn as a PyVista or napari user draws it, not by a registered renderer
+        drawer = open_peer(config.curve, volume, tf)
+    else:
+        drawer = prepared_renderer(config.renderer, volume, tf, config.settings())
+    with drawer as renderer:
         ms, image, counters = time_turning(
             renderer, camera_at, size, frames, turn, warmup=not config.one_frame
         )

@@ -4,7 +4,10 @@ best at equal error, with the time/error plots beside the tables.
 Per scene (dataset and TF), VTK's mappers are pooled and their Pareto front taken; for each point
 on it, the fastest of our settings (`slicer`, `tetra`) with equal or lower RMSE is found. The time
 ratio (ours over VTK's, below 1: ours is faster) is stated at VTK's most accurate setting, which is
-the comparison that matters for quality, and as a range over the whole front.
+the comparison that matters for quality, and as a range over the whole front. What a PyVista or
+a napari user gets (the viewer peers, `volren.bench.viewer_peers`) is compared the same way, each
+at its one setting, in a table of its own: pooling it with VTK's settings would change what "VTK's
+best" means.
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 from volren.bench.pareto import Match, Row, equal_error, group, pareto_front
+from volren.bench.viewer_peers import VIEWER_PEERS
 
 
 @dataclass(frozen=True)
@@ -31,6 +35,7 @@ class SceneComparison:
     dataset: str
     tf: str
     front: list[Match]  # VTK's Pareto front, fastest first, each with our fastest match
+    viewers: list[Match] = field(default_factory=list)  # each viewer peer's row with our fastest match
 
     @property
     def at_best(self) -> Match | None:
@@ -46,13 +51,18 @@ def is_vtk(row: Row) -> bool:
     return str(row["renderer"]).startswith("vtk-")
 
 
+def is_viewer(row: Row) -> bool:
+    return str(row["renderer"]) in VIEWER_PEERS
+
+
 def compare(rows: Iterable[Row]) -> list[SceneComparison]:
     """One comparison per scene, in the order the rows came."""
     out = []
     for (dataset, tf), scene in group(rows, lambda r: (r["dataset"], r["tf"])).items():
-        ours = [r for r in scene if not is_vtk(r)]
+        ours = [r for r in scene if not (is_vtk(r) or is_viewer(r))]
         front = pareto_front(r for r in scene if is_vtk(r))
-        out.append(SceneComparison(str(dataset), str(tf), equal_error(front, ours)))
+        viewers = equal_error((r for r in scene if is_viewer(r)), ours)
+        out.append(SceneComparison(str(dataset), str(tf), equal_error(front, ours), viewers))
     return out
 
 
@@ -82,6 +92,23 @@ TABLE_HEAD = (
 )
 
 
+VIEWER_HEAD = (
+    "| TF | viewer (its defaults) | ms | RMSE | our fastest at equal or lower RMSE | ms | RMSE | time ratio |\n"
+    "|---|---|---|---|---|---|---|---|"
+)
+
+
+def viewer_table(scenes: list[SceneComparison]) -> list[str]:
+    """What a PyVista or napari user gets against our fastest setting at that error (none: no rows)."""
+    lines = [
+        f"| {s.tf} | {_setting(m.peer)} | {_cells(m.peer)} | {_setting(m.ours)} | {_cells(m.ours)} | "
+        f"{_ratio(m.ratio)} |"
+        for s in scenes
+        for m in s.viewers
+    ]
+    return ["What a PyVista or napari user gets:", "", VIEWER_HEAD, *lines, ""] if lines else []
+
+
 def dataset_section(dataset: str, kind: str, scenes: list[SceneComparison]) -> list[str]:
     lines = [f"## {dataset} ({kind})", "", f"![{dataset}: time against error]({dataset}.png)", "", TABLE_HEAD]
     for s in scenes:
@@ -106,7 +133,7 @@ def dataset_section(dataset: str, kind: str, scenes: list[SceneComparison]) -> l
         ]
     else:
         lines += ["", "None of our settings reaches the error of VTK's most accurate setting here."]
-    return lines + [""]
+    return lines + [""] + viewer_table(scenes)
 
 
 def markdown(rows: list[Row], info: RunInfo) -> str:
@@ -121,8 +148,9 @@ def markdown(rows: list[Row], info: RunInfo) -> str:
         "frame around the scene's view (VTK's ZSweep: one cold frame). Error: RMSE over the premultiplied RGBA "
         "pixels against `reference` at the scene's view. Time ratio: the fastest of our renderers (slicer, "
         "tetra) whose RMSE is at most that of a VTK setting, over that setting's time (below 1: ours is "
-        "faster), at VTK's most accurate setting and over VTK's Pareto front (all of VTK's mappers pooled). "
-        "Every run is in runs.csv.",
+        "faster), at VTK's most accurate setting and over VTK's Pareto front (all of VTK's mappers pooled); "
+        "what a PyVista or napari user gets (`pyvista`, `vispy`: the tools' defaults) in a table of its own per "
+        "dataset. Every run is in runs.csv.",
         "",
         "| dataset | TF | time ratio at VTK's best error | over VTK's Pareto front |",
         "|---|---|---|---|",

@@ -5,9 +5,11 @@ trades time for error most directly (the step for `slicer` and VTK's stepped map
 size for `tetra`, whose rays step cell to cell) and, at one middle setting, turns the other knobs
 one at a time (pre-integration, table size, jitter, skipping, `tetra`'s adaptive image refinement),
 so that the sweep stays linear in the number of knobs instead of their product. VTK's mappers are
-peers: each one is a curve.
+peers: each one is a curve. So is what a PyVista or a napari user gets (`pyvista`, `vispy`:
+`volren.bench.viewer_peers`), on grids, at the tool's defaults: one configuration each.
 
-`curve` names the renderer as plotted and compared: `slicer`, `tetra` (ours) or `vtk-<mapper>`.
+`curve` names the renderer as plotted and compared: `slicer`, `tetra` (ours), `vtk-<mapper>` or
+a viewer peer.
 Any other registered renderer (a plugin) is swept along the quality axis it declares in its
 capabilities (`Capabilities.quality`, fast to accurate; its defaults when it declares none), as the
 curve of its own name.
@@ -18,13 +20,14 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
+from volren.bench.viewer_peers import VIEWER_PEERS
 from volren.errors import VolrenError
 from volren.model.settings import RenderSettings
 from volren.renderers.base import QualityLevel
 
 #: Every curve a sweep can hold, by volume kind, in plotting order.
 CURVES: dict[str, tuple[str, ...]] = {
-    "uniform": ("slicer", "vtk-smart", "vtk-gpu", "vtk-fixed_point"),
+    "uniform": ("slicer", "vtk-smart", "vtk-gpu", "vtk-fixed_point", *VIEWER_PEERS),
     "tet": ("tetra", "vtk-raycast", "vtk-projected", "vtk-zsweep"),
 }
 #: Every built-in curve, in plotting order; any other name is a registered renderer's own axis.
@@ -70,13 +73,18 @@ class Config:
     quality: QualityLevel | None = field(default=None, compare=False)
 
     @property
+    def viewer(self) -> bool:
+        """Whether a viewer peer draws it (`volren.bench.viewer_peers`), not a registered renderer."""
+        return self.curve in VIEWER_PEERS
+
+    @property
     def ours(self) -> bool:
-        return not self.curve.startswith("vtk-")
+        return not (self.curve.startswith("vtk-") or self.viewer)
 
     @property
     def renderer(self) -> str:
-        """The registry name of the renderer that draws this configuration."""
-        return "vtk" if not self.ours else self.curve
+        """The registry name of the renderer that draws this configuration (a viewer peer: its name)."""
+        return "vtk" if self.curve.startswith("vtk-") else self.curve
 
     @property
     def one_frame(self) -> bool:
@@ -205,6 +213,7 @@ def configs(
     steps = given_steps or list(QUICK_STEPS if quick else FULL_STEPS)
     if kind == "uniform":
         out = _slicer(steps, (64,) if quick else (64, 2048)) + _vtk_uniform(steps)
+        out += [Config(name) for name in VIEWER_PEERS]  # the tools' defaults: nothing to sweep
     else:
         tables = (32, TETRA_TABLE) if quick else (32, 64, 128, TETRA_TABLE, 512)
         refinement = QUICK_TETRA_REFINEMENT if quick else TETRA_REFINEMENT
