@@ -6,7 +6,8 @@ tetrahedra, how ParaView's colour and opacity interpolation behave) live in one 
 
 Image data is seen through VTK's own API, and PyVista is imported only where a mesh, a write or a
 dataset that is not image data needs it: its import takes a quarter of a second, a third of what a
-one-shot `volren render` of a grid spends starting up.
+one-shot `volren render` of a grid spends starting up. VTK's modules are imported where a reader,
+filter or colour function needs them, for the same reason (60 ms of a render's imports).
 """
 
 from __future__ import annotations
@@ -21,11 +22,6 @@ from numpy.typing import NDArray
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkDataArray, vtkStringArray
 from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction
-from vtkmodules.vtkFiltersCore import vtkCellDataToPointData
-from vtkmodules.vtkIOImage import vtkMetaImageReader, vtkNIFTIImageReader, vtkNrrdReader
-from vtkmodules.vtkIOLegacy import vtkStructuredPointsReader, vtkUnstructuredGridReader
-from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLUnstructuredGridReader
-from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
 
 try:  # VTK >= 9.6 moved the static cell-type helpers here
     from vtkmodules.vtkCommonDataModel import vtkCellTypeUtilities as _CellTypes
@@ -186,6 +182,8 @@ def cell_to_point(v: DatasetView) -> DatasetView:
     """Average cell data onto the points (VTK's vtkCellDataToPointData, as pyvista runs it)."""
     with vtk_messages():
         if v.kind == "image":
+            from vtkmodules.vtkFiltersCore import vtkCellDataToPointData
+
             average = vtkCellDataToPointData()
             average.SetInputDataObject(v.handle)
             average.SetPassCellData(False)
@@ -220,21 +218,26 @@ def _matrix(m: Any) -> NDArray | None:
 
 def _make_reader(reader: ReaderName) -> Any:
     if reader == "vti":
+        from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+
         return vtkXMLImageDataReader()
     if reader == "vtu":
+        from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+
         return vtkXMLUnstructuredGridReader()
     if reader in ("legacy-image", "legacy-unstructured"):
+        from vtkmodules.vtkIOLegacy import vtkStructuredPointsReader, vtkUnstructuredGridReader
+
         r = vtkStructuredPointsReader() if reader == "legacy-image" else vtkUnstructuredGridReader()
         # Legacy readers keep only the first array of each attribute kind unless told otherwise.
         for flag in ("Scalars", "Vectors", "Normals", "Tensors", "ColorScalars", "TCoords", "Fields"):
             getattr(r, f"ReadAll{flag}On")()
         return r
-    if reader == "metaimage":
-        return vtkMetaImageReader()
-    if reader == "nrrd":
-        return vtkNrrdReader()
-    if reader == "nifti":
-        return vtkNIFTIImageReader()
+    if reader in ("metaimage", "nrrd", "nifti"):
+        from vtkmodules import vtkIOImage
+
+        return {"metaimage": vtkIOImage.vtkMetaImageReader, "nrrd": vtkIOImage.vtkNrrdReader,
+                "nifti": vtkIOImage.vtkNIFTIImageReader}[reader]()  # fmt: skip
     # "slc" and "dicom" are read by volren itself (formats/slc.py, formats/dicom.py): VTK's readers
     # of those formats crash or return uninitialized memory on malformed files.
     raise ValueError(f"unknown reader {reader!r}")  # pragma: no cover - programming error
@@ -400,15 +403,16 @@ def tetrahedralize(v: DatasetView) -> TetCells:
 
 # ----------------------------------------------------------------- ParaView colour interpolation
 
-_COLOR_SPACES: dict[str, Callable[[vtkColorTransferFunction], None]] = {
-    "rgb": vtkColorTransferFunction.SetColorSpaceToRGB,
-    "hsv": vtkColorTransferFunction.SetColorSpaceToHSV,
-    "lab": vtkColorTransferFunction.SetColorSpaceToLab,
-    "cielab": vtkColorTransferFunction.SetColorSpaceToLab,
-    "lab/ciede2000": vtkColorTransferFunction.SetColorSpaceToLabCIEDE2000,
-    "ciede2000": vtkColorTransferFunction.SetColorSpaceToLabCIEDE2000,
-    "diverging": vtkColorTransferFunction.SetColorSpaceToDiverging,
-    "step": vtkColorTransferFunction.SetColorSpaceToStep,
+#: ParaView's colour space names -> vtkColorTransferFunction's setter of that space.
+_COLOR_SPACES: dict[str, str] = {
+    "rgb": "SetColorSpaceToRGB",
+    "hsv": "SetColorSpaceToHSV",
+    "lab": "SetColorSpaceToLab",
+    "cielab": "SetColorSpaceToLab",
+    "lab/ciede2000": "SetColorSpaceToLabCIEDE2000",
+    "ciede2000": "SetColorSpaceToLabCIEDE2000",
+    "diverging": "SetColorSpaceToDiverging",
+    "step": "SetColorSpaceToStep",
 }
 
 COLOR_SPACES = tuple(sorted(_COLOR_SPACES))
@@ -427,8 +431,10 @@ def color_table(
 
     Tables, not single values: VTK's Lab/CIEDE2000 space rebuilds its colour path on every call.
     """
+    from vtkmodules.vtkRenderingCore import vtkColorTransferFunction
+
     ctf = vtkColorTransferFunction()
-    _COLOR_SPACES[color_space.lower()](ctf)
+    getattr(ctf, _COLOR_SPACES[color_space.lower()])()
     ctf.SetHSVWrap(bool(hsv_wrap))
     if log_scale:
         ctf.SetScaleToLog10()
