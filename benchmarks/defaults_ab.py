@@ -19,18 +19,12 @@ from __future__ import annotations
 import argparse
 import datetime
 import statistics
-import time
 from contextlib import ExitStack
 
-from benchmarks._cli import run
 from benchmarks.quality_levels import VTK_DEFAULT, _configs
-from benchmarks.scene_table import parser as table_parser
-from benchmarks.scene_table import scene_table
+from benchmarks.scene_table import ms_text, no_options_choice, scene_table, table_main, timed_frame
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset
-from volren.model import RenderSettings
-from volren.model.scene_class import SceneClass
-from volren.quality import resolve
 from volren.renderers.base import render_frame
 from volren.testing import image_error
 from volren.testing.reference_images import reference_image
@@ -38,22 +32,11 @@ from volren.testing.reference_images import reference_image
 TURN = 2.0  # degrees of azimuth between frame pairs, as `volren bench run` turns
 
 
-def _timed(renderer, camera, size: int) -> float:
-    start = time.perf_counter()
-    render_frame(renderer, camera, size, size)
-    return (time.perf_counter() - start) * 1000.0
-
-
-def _ms(value: float) -> str:
-    return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
-
-
 def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str:
     """One scene: both renderers prepared, a warm-up frame each at the scene's view (scored against
     the reference), then `frames` pairs of turning frames."""
     camera_at = lambda turn: d.camera(volume.bounds, turn=turn)  # noqa: E731
-    name, settings, _ = resolve(SceneClass.of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
-                                cameras=(camera_at(0.0),), bounds=volume.bounds)  # fmt: skip
+    name, settings = no_options_choice(volume, tf, camera_at(0.0))
     curve, label = VTK_DEFAULT[d.kind]
     peer = _configs(d.kind, {curve})[(curve, label)]
     truth = reference_image(volume, tf, camera_at(0.0), size, size)
@@ -68,12 +51,12 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
             camera = camera_at(TURN * (f + 1))
             order = (0, 1) if f % 2 == 0 else (1, 0)
             for which in order:
-                ms[which].append(_timed((ours, vtk)[which], camera, size))
+                ms[which].append(timed_frame((ours, vtk)[which], camera, size)[0])
     ours_ms, vtk_ms = statistics.median(ms[0]), statistics.median(ms[1])
     chosen = f"{name}: {settings.step:g} step{', pre-integrated' if settings.preintegration else ''}"
     if settings.options:
         chosen += ", " + ", ".join(f"{k} {v}" for k, v in sorted(settings.options.items()))
-    return (f"| {d.name}/{style} | {chosen} | {_ms(ours_ms)} | {_ms(vtk_ms)} | {vtk_ms / ours_ms:.1f}x "
+    return (f"| {d.name}/{style} | {chosen} | {ms_text(ours_ms)} | {ms_text(vtk_ms)} | {vtk_ms / ours_ms:.1f}x "
             f"| {errors[0]:.3g} | {errors[1]:.3g} | {errors[0] / errors[1]:.2f} |")  # fmt: skip
 
 
@@ -87,10 +70,7 @@ def measure(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = table_parser(
-        "python -m benchmarks.defaults_ab", __doc__.split("\n")[0], 7, "docs/bench/defaults_ab.md"
-    )
-    return run(measure, parser, argv)
+    return table_main("defaults_ab", __doc__, 7, measure, argv)
 
 
 if __name__ == "__main__":

@@ -19,19 +19,13 @@ from __future__ import annotations
 import argparse
 import datetime
 import statistics
-import time
 from contextlib import ExitStack
 
-from benchmarks._cli import run
-from benchmarks.scene_table import parser as table_parser
-from benchmarks.scene_table import scene_table
+from benchmarks.scene_table import ms_text, no_options_choice, scene_table, table_main, timed_frame
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset
 from volren.bench.sweep import Config
 from volren.errors import VolrenError
-from volren.model import RenderSettings
-from volren.model.scene_class import SceneClass
-from volren.quality import resolve
 from volren.renderers.base import render_frame
 from volren.testing import image_error
 from volren.testing.reference_images import reference_image
@@ -48,16 +42,6 @@ PEERS: dict[str, tuple[Config, ...]] = {
 }
 
 
-def _timed(renderer, camera, size: int) -> tuple[float, object]:
-    start = time.perf_counter()
-    image, _ = render_frame(renderer, camera, size, size)
-    return (time.perf_counter() - start) * 1000.0, image
-
-
-def _ms(value: float) -> str:
-    return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
-
-
 def _peer_errors(d: Dataset, volume, tf, camera, truth, size: int) -> list[tuple[Config, float, float]]:
     """(config, RMSE, ms of its first warm frame) of every VTK setting of this kind that draws here."""
     found = []
@@ -65,7 +49,7 @@ def _peer_errors(d: Dataset, volume, tf, camera, truth, size: int) -> list[tuple
         try:
             with prepared_renderer(config.renderer, volume, tf, config.settings()) as renderer:
                 render_frame(renderer, camera, size, size)  # warm-up: shaders, uploads
-                ms, image = _timed(renderer, camera, size)
+                ms, image = timed_frame(renderer, camera, size)
         except VolrenError:
             continue
         found.append((config, image_error(image, truth).rmse, ms))
@@ -74,8 +58,7 @@ def _peer_errors(d: Dataset, volume, tf, camera, truth, size: int) -> list[tuple
 
 def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str:
     camera_at = lambda turn: d.camera(volume.bounds, turn=turn)  # noqa: E731
-    name, settings, _ = resolve(SceneClass.of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
-                                cameras=(camera_at(0.0),), bounds=volume.bounds)  # fmt: skip
+    name, settings = no_options_choice(volume, tf, camera_at(0.0))
     truth = reference_image(volume, tf, camera_at(0.0), size, size)
     with prepared_renderer(name, volume, tf, settings) as ours:
         our_rmse = image_error(render_frame(ours, camera_at(0.0), size, size)[0], truth).rmse
@@ -92,13 +75,15 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
         for f in range(frames):
             camera = camera_at(TURN * (f + 1))
             for which in (0, 1) if f % 2 == 0 else (1, 0):
-                ms[which].append(_timed((ours, vtk)[which], camera, size)[0])
+                ms[which].append(timed_frame((ours, vtk)[which], camera, size)[0])
     ours_ms, vtk_ms = statistics.median(ms[0]), statistics.median(ms[1])
     peer = f"{config.curve.removeprefix('vtk-')} {config.label}" + ("" if reached else " (its most accurate: "
                                                                        "none reaches ours)")  # fmt: skip
     quick, quick_rmse, quick_ms = min(peers, key=lambda p: p[2])
-    quickest = f"{quick.curve.removeprefix('vtk-')} {quick.label}: {_ms(quick_ms)} ms, RMSE {quick_rmse:.3g}"
-    return (f"| {d.name}/{style} | {name} | {_ms(ours_ms)} | {our_rmse:.3g} | {peer} | {_ms(vtk_ms)} | "
+    quickest = (
+        f"{quick.curve.removeprefix('vtk-')} {quick.label}: {ms_text(quick_ms)} ms, RMSE {quick_rmse:.3g}"
+    )
+    return (f"| {d.name}/{style} | {name} | {ms_text(ours_ms)} | {our_rmse:.3g} | {peer} | {ms_text(vtk_ms)} | "
             f"{peer_rmse:.3g} | {vtk_ms / ours_ms:.2f}x | {quickest} |")  # fmt: skip
 
 
@@ -113,10 +98,7 @@ def measure(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = table_parser(
-        "python -m benchmarks.fastest_peer", __doc__.split("\n")[0], 5, "docs/bench/fastest_peer.md"
-    )
-    return run(measure, parser, argv)
+    return table_main("fastest_peer", __doc__, 5, measure, argv)
 
 
 if __name__ == "__main__":

@@ -1,16 +1,23 @@
 """A Markdown table with a row per scene of the shared datasets and the bundled samples, printed as
-it grows and written to a BENCHMARKS.md fragment: what `benchmarks.defaults_ab` and
-`benchmarks.fastest_peer` share (their arguments, the datasets' loop, the load averages)."""
+it grows and written to a BENCHMARKS.md fragment: what `benchmarks.defaults_ab`,
+`benchmarks.fastest_peer` and `benchmarks.viewer_peers` share (their arguments, the datasets'
+loop, the load averages, the renderer a render with no options picks, a timed frame)."""
 
 from __future__ import annotations
 
 import argparse
 import os
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from benchmarks._cli import run
 from volren.bench.datasets import Dataset, sample_datasets, shared_datasets, shared_folder
+from volren.model import RenderSettings
+from volren.model.scene_class import SceneClass
+from volren.quality import resolve
+from volren.renderers.base import render_frame
 
 #: (dataset, its volume, TF style, TF, size, frames) -> the scene's row
 SceneRow = Callable[[Dataset, Any, str, Any, int, int], str]
@@ -65,3 +72,29 @@ def scene_table(
     if args.out:
         Path(args.out).write_text("\n".join(lines) + "\n")
     return 0
+
+
+def no_options_choice(volume: Any, tf: Any, camera: Any) -> tuple[str, RenderSettings]:
+    """(renderer, settings) that `volren render` picks with no options (`auto` at quality `default`)."""
+    name, settings, _ = resolve(SceneClass.of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
+                                cameras=(camera,), bounds=volume.bounds)  # fmt: skip
+    return name, settings
+
+
+def timed_frame(renderer: Any, camera: Any, size: int) -> tuple[float, Any]:
+    """(milliseconds, image) of one size x size frame."""
+    start = time.perf_counter()
+    image, _ = render_frame(renderer, camera, size, size)
+    return (time.perf_counter() - start) * 1000.0, image
+
+
+def ms_text(value: float) -> str:
+    """Milliseconds as a table shows them: whole from 100, else three figures."""
+    return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
+
+
+def table_main(module: str, doc: str, frames: int, measure: Callable[[argparse.Namespace], int],
+               argv: list[str] | None) -> int:  # fmt: skip
+    """`python -m benchmarks.MODULE`: its arguments (`parser`), run by `measure`."""
+    fragment = f"docs/bench/{module}.md"
+    return run(measure, parser(f"python -m benchmarks.{module}", doc.split("\n")[0], frames, fragment), argv)

@@ -23,15 +23,10 @@ import statistics
 import time
 from contextlib import ExitStack
 
-from benchmarks._cli import run
-from benchmarks.scene_table import parser as table_parser
-from benchmarks.scene_table import scene_table
+from benchmarks.scene_table import ms_text, no_options_choice, scene_table, table_main, timed_frame
 from volren.api import prepared_renderer
 from volren.bench.datasets import Dataset
 from volren.bench.viewer_peers import VIEWER_PEERS, open_peer
-from volren.model import RenderSettings
-from volren.model.scene_class import SceneClass
-from volren.quality import resolve
 from volren.renderers.base import render_frame
 from volren.testing import image_error
 from volren.testing.reference_images import reference_image
@@ -39,16 +34,6 @@ from volren.testing.reference_images import reference_image
 TURN = 2.0  # degrees of azimuth between frames, as `volren bench run` turns
 #: The cells of a peer that did not draw: ms, RMSE, ratio, one-shot.
 PEER_CELLS = 4
-
-
-def _timed(renderer, camera, size: int) -> tuple[float, object]:
-    start = time.perf_counter()
-    image, _ = render_frame(renderer, camera, size, size)
-    return (time.perf_counter() - start) * 1000.0, image
-
-
-def _ms(value: float) -> str:
-    return f"{value:.0f}" if value >= 100 else f"{value:.3g}"
 
 
 def _preload() -> None:
@@ -74,8 +59,7 @@ def _open(stack: ExitStack, name: str, volume, tf, camera, truth, size: int):
 
 def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str:
     camera_at = lambda turn: d.camera(volume.bounds, turn=turn)  # noqa: E731
-    name, settings, _ = resolve(SceneClass.of(volume, tf), tf.dims, "auto", "default", RenderSettings(),
-                                cameras=(camera_at(0.0),), bounds=volume.bounds)  # fmt: skip
+    name, settings = no_options_choice(volume, tf, camera_at(0.0))
     truth = reference_image(volume, tf, camera_at(0.0), size, size)
     with ExitStack() as stack:
         ours = stack.enter_context(prepared_renderer(name, volume, tf, settings))
@@ -87,15 +71,15 @@ def scene_row(d: Dataset, volume, style: str, tf, size: int, frames: int) -> str
             camera = camera_at(TURN * (f + 1))
             k = f % len(drawers)
             for who, drawer in drawers[k:] + drawers[:k]:
-                ms[who].append(_timed(drawer, camera, size)[0])
+                ms[who].append(timed_frame(drawer, camera, size)[0])
     ours_ms = statistics.median(ms["ours"])
-    cells = [d.name + "/" + style, name, _ms(ours_ms), f"{our_rmse:.3g}"]
+    cells = [d.name + "/" + style, name, ms_text(ours_ms), f"{our_rmse:.3g}"]
     for p, (peer, first, rmse) in opened.items():
         if peer is None:
             cells += [f"cannot draw: {first}"] + ["-"] * (PEER_CELLS - 1)
             continue
         peer_ms = statistics.median(ms[p])
-        cells += [_ms(peer_ms), f"{rmse:.3g}", f"{peer_ms / ours_ms:.2f}x", _ms(first)]
+        cells += [ms_text(peer_ms), f"{rmse:.3g}", f"{peer_ms / ours_ms:.2f}x", ms_text(first)]
     return "| " + " | ".join(cells) + " |"
 
 
@@ -114,10 +98,7 @@ def measure(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = table_parser(
-        "python -m benchmarks.viewer_peers", __doc__.split("\n")[0], 5, "docs/bench/viewer_peers.md"
-    )
-    return run(measure, parser, argv)
+    return table_main("viewer_peers", __doc__, 5, measure, argv)
 
 
 if __name__ == "__main__":
