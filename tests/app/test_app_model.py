@@ -164,6 +164,28 @@ def test_frame_cost_fits_fixed_and_per_pixel_parts_from_full_frames_and_the_late
     assert cost.model() == (0.0, 47.0 / 81_000)
 
 
+def test_frame_cost_forgets_a_largest_size_whose_times_previews_contradict():
+    """A 2D TF drag's trace on bonsai: the largest preview size paid a table build at each of its
+    frames, then previews of 8,550 pixels took 25 ms. A line through both meets zero pixels below
+    zero ms (the cost grew faster than the pixels), which only once-paid times explain: the
+    previews become the reference, so the next size is sized from what they cost."""
+    cost = FrameCost()
+    cost.note(22_484, 176.0)
+    cost.note(22_484, 184.0)
+    cost.note(8_550, 25.0)
+    assert cost.model() == (0.0, 25.0 / 8_550)
+    full = 947 * 896
+    scale = adaptive_preview_scale(cost.model()[1], full, 80.0, 0.5, fixed_ms=cost.model()[0])
+    assert (scale * scale * full) == pytest.approx(80.0 / (25.0 / 8_550))  # the budget's pixels at that rate
+    cost.note(27_000, 78.0)  # the larger preview drawn: the largest size now, at its own rate
+    assert cost.model() == (0.0, 78.0 / 27_000)
+    # a largest size whose cost is mostly fixed keeps its times: the line meets zero pixels above zero
+    cost = FrameCost()
+    cost.note(200_000, 60.0)
+    cost.note(50_000, 40.0)
+    assert cost.model() == pytest.approx((100.0 / 3, 20.0 / 150_000))
+
+
 def test_pick_renderer_keeps_current_else_takes_the_measured_choice():
     opts = [
         RendererOption("reference", None),

@@ -43,6 +43,9 @@ def adaptive_preview_scale(
 #: right after a TF edit also pays the renderer's reclassification, which previews of a rotation
 #: do not, and one such frame taken as the full size's cost made the previews 2 % of the pixels.
 FRAMES_PER_SIZE = 5
+#: How far above the latest previews' time the model may predict it before the largest size's
+#: times are taken as stale (`FrameCost._full_is_stale`).
+STALE_FACTOR = 2.0
 
 
 class FrameCost:
@@ -63,6 +66,23 @@ class FrameCost:
         else:
             times = self._preview[1] if self._preview is not None and self._preview[0] == pixels else []
             self._preview = (pixels, (times + [ms])[-FRAMES_PER_SIZE:])
+            if self._full_is_stale():
+                self._full, self._preview = self._preview, None
+
+    def _full_is_stale(self) -> bool:
+        """Whether the largest size's times make the model predict more than `STALE_FACTOR` times
+        what the latest preview size takes. A frame's cost grows at most in proportion to its pixels
+        (its fixed part does not grow), so a line through both sizes that meets zero pixels below
+        zero ms holds times the largest size paid once (a table built for a new TF, shear-warp's
+        first frame along an axis), which no newer frame of that size replaces while the previews
+        stay smaller: sized from them, bonsai's previews stayed at 8-10 % of the pixels, drawn in
+        a third of their budget."""
+        model = self.model()
+        if model is None or self._preview is None:
+            return False
+        fixed, per_pixel = model
+        pixels, ms = self._preview[0], min(self._preview[1])
+        return fixed + per_pixel * pixels > STALE_FACTOR * ms
 
     def model(self) -> tuple[float, float] | None:
         """(fixed ms, ms per pixel), or None before any frame; all of it per pixel, at the cheaper
