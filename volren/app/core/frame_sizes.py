@@ -76,7 +76,7 @@ class FrameCost:
         zero ms holds times the largest size paid once (a table built for a new TF, shear-warp's
         first frame along an axis), which no newer frame of that size replaces while the previews
         stay smaller: sized from them, bonsai's previews stayed at 8-10 % of the pixels, drawn in
-        a third of their budget."""
+        half their budget or less."""
         model = self.model()
         if model is None or self._preview is None:
             return False
