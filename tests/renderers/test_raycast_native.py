@@ -68,12 +68,47 @@ def _compare(volume, tf, camera, monkeypatch, size=(36, 30), **settings):
     assert abs(c_samples - numba_samples) <= 0.002 * numba_samples + 2
 
 
+# The hard cases both marches draw, with the camera each is seen from (the 2D comparison's too).
+def thin_structures_scene(parallel: bool) -> tuple[UniformVolume, Camera]:
+    volume = _sheets_and_tubes()
+    return volume, Camera.orbit(volume.bounds, 37, 21, zoom=1.3, parallel=parallel)
+
+
+def special_values_scene() -> tuple[UniformVolume, Camera]:
+    volume = _specials()
+    return volume, Camera.orbit(volume.bounds, -50, 35, zoom=1.1)
+
+
+def anisotropic_scene() -> tuple[UniformVolume, Camera]:
+    volume = field((20, 22, 24), spacing=(0.5, 1.0, 2.5))
+    return volume, Camera.orbit(volume.bounds, 120, -40, zoom=1.4)
+
+
+def clipped_scene() -> tuple[UniformVolume, Camera, tuple[ClipPlane, ClipPlane]]:
+    """A smooth field, two clip planes through it and a camera that sees both cuts."""
+    volume = field((20, 22, 24))
+    lo, hi = np.array(volume.bounds[::2]), np.array(volume.bounds[1::2])
+    middle = (lo + hi) / 2
+    planes = (ClipPlane(tuple(middle), (0.6, 0.0, 0.8)), ClipPlane(tuple(middle + 1.5), (0.0, -1.0, 0.2)))
+    return volume, Camera.orbit(volume.bounds, 30, 25, zoom=1.2), planes
+
+
+def tiny_grid_scene(shape: tuple[int, int, int]) -> tuple[UniformVolume, list[Camera]]:
+    """A grid of steps of `shape` and three cameras: along x, along y and from above at an angle."""
+    volume = UniformVolume((np.arange(np.prod(shape)).reshape(shape) % 5 * 50).astype(np.uint8))
+    return volume, [Camera.orbit(volume.bounds, a, e, zoom=1.2) for a, e in ((0, 0), (90, 0), (30, 60))]
+
+
+def inside_scene() -> tuple[UniformVolume, Camera]:
+    volume = field((30, 30, 30))
+    return volume, Camera.orbit(volume.bounds, 20, 10, zoom=6.0)
+
+
 @pytest.mark.parametrize("pre", [False, True])
 @pytest.mark.parametrize("parallel", [False, True])
 @pytest.mark.parametrize("brick", [1, 3, 4, 8])
 def test_thin_and_tiny_structures_draw_alike(pre, parallel, brick, monkeypatch):
-    volume = _sheets_and_tubes()
-    camera = Camera.orbit(volume.bounds, 37, 21, zoom=1.3, parallel=parallel)
+    volume, camera = thin_structures_scene(parallel)
     _compare(
         volume, STEP_TF, camera, monkeypatch, step=0.6, preintegration=pre, options={"brick_size": brick}
     )
@@ -82,8 +117,7 @@ def test_thin_and_tiny_structures_draw_alike(pre, parallel, brick, monkeypatch):
 @pytest.mark.parametrize("pre", [False, True])
 @pytest.mark.parametrize("termination", [0.9, 1.0])
 def test_nan_and_infinite_values_draw_alike(pre, termination, monkeypatch):
-    volume = _specials()
-    camera = Camera.orbit(volume.bounds, -50, 35, zoom=1.1)
+    volume, camera = special_values_scene()
     _compare(volume, SHELL_TF, camera, monkeypatch, step=0.4, preintegration=pre,
              options={"termination_alpha": termination})  # fmt: skip
 
@@ -91,8 +125,7 @@ def test_nan_and_infinite_values_draw_alike(pre, termination, monkeypatch):
 @pytest.mark.parametrize("skipping", [True, False])
 @pytest.mark.parametrize("offsets", ["interleaved", "midpoint"])
 def test_smooth_fields_draw_alike(skipping, offsets, monkeypatch):
-    volume = field((20, 22, 24), spacing=(0.5, 1.0, 2.5))
-    camera = Camera.orbit(volume.bounds, 120, -40, zoom=1.4)
+    volume, camera = anisotropic_scene()
     _compare(volume, SMOOTH_TF, camera, monkeypatch, step=0.35,
              options={"empty_space_skipping": skipping, "depth_offsets": offsets})  # fmt: skip
 
@@ -100,11 +133,7 @@ def test_smooth_fields_draw_alike(skipping, offsets, monkeypatch):
 @pytest.mark.parametrize("pre", [False, True])
 @pytest.mark.parametrize("cap", [False, True])
 def test_clipped_and_capped_frames_draw_alike(pre, cap, monkeypatch):
-    volume = field((20, 22, 24))
-    lo, hi = np.array(volume.bounds[::2]), np.array(volume.bounds[1::2])
-    middle = (lo + hi) / 2
-    planes = (ClipPlane(tuple(middle), (0.6, 0.0, 0.8)), ClipPlane(tuple(middle + 1.5), (0.0, -1.0, 0.2)))
-    camera = Camera.orbit(volume.bounds, 30, 25, zoom=1.2)
+    volume, camera, planes = clipped_scene()
     _compare(volume, SHELL_TF, camera, monkeypatch, step=0.5, preintegration=pre,
              clip=ClipRegion(planes, None, cap))  # fmt: skip
 
@@ -112,17 +141,14 @@ def test_clipped_and_capped_frames_draw_alike(pre, cap, monkeypatch):
 @pytest.mark.parametrize("shape", [(2, 2, 2), (2, 9, 8), (7, 2, 6), (5, 6, 2)])
 def test_tiny_and_flat_grids_draw_alike(shape, monkeypatch):
     """A grid of one cell, and grids one cell thick (the cell index is 0 on that axis)."""
-    values = (np.arange(np.prod(shape)).reshape(shape) % 5 * 50).astype(np.uint8)
-    volume = UniformVolume(values)
-    for azimuth, elevation in ((0, 0), (90, 0), (30, 60)):
-        camera = Camera.orbit(volume.bounds, azimuth, elevation, zoom=1.2)
+    volume, cameras = tiny_grid_scene(shape)
+    for camera in cameras:
         numba_image, c_image, _, _ = _both(volume, STEP_TF, camera, monkeypatch, step=0.3)
         np.testing.assert_allclose(c_image, numba_image, atol=ATOL, rtol=0)
 
 
 def test_a_camera_inside_the_grid_draws_alike(monkeypatch):
-    volume = field((30, 30, 30))
-    camera = Camera.orbit(volume.bounds, 20, 10, zoom=6.0)
+    volume, camera = inside_scene()
     _compare(volume, SMOOTH_TF, camera, monkeypatch, step=0.5)
 
 

@@ -10,12 +10,22 @@ import numpy as np
 import pytest
 
 from volren.model import Camera, TFWidget, TransferFunction2D, UniformVolume
-from volren.model.clip_region import ClipPlane, ClipRegion
+from volren.model.clip_region import ClipRegion
 from volren.renderers.raycast import march_native
 from volren.renderers.raycast.march_inputs import gradients
-from volren.testing.render_helpers import field
 
-from .test_raycast_native import ATOL, STEP_TF, _both, _compare, _sheets_and_tubes, _specials
+from .test_raycast_native import (
+    ATOL,
+    STEP_TF,
+    _both,
+    _compare,
+    anisotropic_scene,
+    clipped_scene,
+    inside_scene,
+    special_values_scene,
+    thin_structures_scene,
+    tiny_grid_scene,
+)
 
 
 def _largest_gradient(volume: UniformVolume) -> float:
@@ -52,49 +62,39 @@ def needs_the_c_build():
 @pytest.mark.parametrize("parallel", [False, True])
 @pytest.mark.parametrize("brick", [1, 3, 4, 8])
 def test_thin_and_tiny_structures_draw_alike(band, parallel, brick, monkeypatch):
-    volume = _sheets_and_tubes()
-    camera = Camera.orbit(volume.bounds, 37, 21, zoom=1.3, parallel=parallel)
+    volume, camera = thin_structures_scene(parallel)
     _compare(volume, _tf(volume, band), camera, monkeypatch, step=0.6, options={"brick_size": brick})
 
 
 @pytest.mark.parametrize("termination", [0.9, 1.0])
 def test_nan_and_infinite_values_draw_alike(termination, monkeypatch):
-    volume = _specials()
-    camera = Camera.orbit(volume.bounds, -50, 35, zoom=1.1)
+    volume, camera = special_values_scene()
     _compare(volume, _tf(volume), camera, monkeypatch, step=0.4, options={"termination_alpha": termination})
 
 
 @pytest.mark.parametrize("skipping", [True, False])
 @pytest.mark.parametrize("offsets", ["interleaved", "midpoint"])
 def test_smooth_anisotropic_fields_draw_alike(skipping, offsets, monkeypatch):
-    volume = field((20, 22, 24), spacing=(0.5, 1.0, 2.5))
-    camera = Camera.orbit(volume.bounds, 120, -40, zoom=1.4)
+    volume, camera = anisotropic_scene()
     _compare(volume, _tf(volume), camera, monkeypatch, step=0.35,
              options={"empty_space_skipping": skipping, "depth_offsets": offsets})  # fmt: skip
 
 
 def test_clipped_frames_draw_alike(monkeypatch):
-    volume = field((20, 22, 24))
-    lo, hi = np.array(volume.bounds[::2]), np.array(volume.bounds[1::2])
-    middle = (lo + hi) / 2
-    planes = (ClipPlane(tuple(middle), (0.6, 0.0, 0.8)), ClipPlane(tuple(middle + 1.5), (0.0, -1.0, 0.2)))
-    camera = Camera.orbit(volume.bounds, 30, 25, zoom=1.2)
+    volume, camera, planes = clipped_scene()
     _compare(volume, _tf(volume), camera, monkeypatch, step=0.5, clip=ClipRegion(planes))
 
 
 @pytest.mark.parametrize("shape", [(2, 2, 2), (2, 9, 8), (7, 2, 6), (5, 6, 2)])
 def test_tiny_and_flat_grids_draw_alike(shape, monkeypatch):
-    values = (np.arange(np.prod(shape)).reshape(shape) % 5 * 50).astype(np.uint8)
-    volume = UniformVolume(values)
-    for azimuth, elevation in ((0, 0), (90, 0), (30, 60)):
-        camera = Camera.orbit(volume.bounds, azimuth, elevation, zoom=1.2)
+    volume, cameras = tiny_grid_scene(shape)
+    for camera in cameras:
         numba_image, c_image, _, _ = _both(volume, _tf(volume), camera, monkeypatch, step=0.3)
         np.testing.assert_allclose(c_image, numba_image, atol=ATOL, rtol=0)
 
 
 def test_a_camera_inside_the_grid_draws_alike(monkeypatch):
-    volume = field((30, 30, 30))
-    camera = Camera.orbit(volume.bounds, 20, 10, zoom=6.0)
+    volume, camera = inside_scene()
     _compare(volume, _tf(volume), camera, monkeypatch, step=0.5)
 
 
