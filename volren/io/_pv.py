@@ -68,18 +68,6 @@ class DatasetView:
     type_name: str = ""
 
 
-def _arrays(data: Any) -> dict[str, NDArray]:
-    """A pyvista attribute set's arrays by name."""
-    out = {}
-    for name in data.keys():
-        try:
-            arr = data[name]
-        except (KeyError, ValueError, TypeError):  # arrays pyvista cannot wrap (e.g. unnamed)
-            continue
-        out[str(name)] = np.asarray(arr)
-    return out
-
-
 def _vtk_array(array: Any) -> NDArray | None:
     """A VTK array as numpy (a view that keeps the VTK array alive), or None for other kinds."""
     if isinstance(array, vtkDataArray):
@@ -90,7 +78,7 @@ def _vtk_array(array: Any) -> NDArray | None:
 
 
 def _vtk_arrays(data: Any) -> dict[str, NDArray]:
-    """A VTK attribute set's (or field data's) named arrays, as `_arrays` reads pyvista's."""
+    """A VTK attribute set's (or field data's) named arrays (pyvista's datasets are VTK's too)."""
     out = {}
     for i in range(data.GetNumberOfArrays()):
         array = data.GetAbstractArray(i)
@@ -99,14 +87,6 @@ def _vtk_arrays(data: Any) -> dict[str, NDArray]:
         if values is not None:
             out[str(name)] = values
     return out
-
-
-def _active_name(data: Any) -> str | None:
-    try:
-        name = data.active_scalars_name
-    except AttributeError:  # pragma: no cover - older pyvista
-        return None
-    return str(name) if name else None
 
 
 def _vtk_active_name(data: Any) -> str | None:
@@ -168,11 +148,11 @@ def view(dataset: Any) -> DatasetView:
         kind="unstructured",
         n_points=int(dataset.n_points),
         n_cells=int(dataset.n_cells),
-        point_arrays=_arrays(dataset.point_data),
-        cell_arrays=_arrays(dataset.cell_data),
-        field_arrays=_arrays(dataset.field_data),
-        active_point=_active_name(dataset.point_data),
-        active_cell=_active_name(dataset.cell_data),
+        point_arrays=_vtk_arrays(dataset.GetPointData()),
+        cell_arrays=_vtk_arrays(dataset.GetCellData()),
+        field_arrays=_vtk_arrays(dataset.GetFieldData()),
+        active_point=_vtk_active_name(dataset.GetPointData()),
+        active_cell=_vtk_active_name(dataset.GetCellData()),
         n_connectivity=int(dataset.cell_connectivity.size),
         type_name=type(dataset).__name__,
     )
