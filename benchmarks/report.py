@@ -162,6 +162,12 @@ SECTIONS = (
         "(`python -m benchmarks.native_march`)",
     ),
     (
+        "tetra_walk.md",
+        "tetra's C walk against its numba walk",
+        "How much faster is tetra's C cell walk than numba's, and do they draw the same image? "
+        "(`python -m benchmarks.tetra_walk`)",
+    ),
+    (
         "gpu.md",
         "On a GPU",
         "How fast are the OpenGL renderers on a real GPU, at what error? "

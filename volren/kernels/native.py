@@ -17,6 +17,7 @@ import os
 import platform
 import shutil
 import subprocess
+import sys
 import tempfile
 from functools import cache
 from pathlib import Path
@@ -132,3 +133,20 @@ def _build(cc: str, flags: tuple[str, ...], source: Path, target: Path) -> bool:
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def threads() -> int:
+    """The threads a frame runs on: numba's count where numba is loaded (the app and the benchmarks
+    set it), else $NUMBA_NUM_THREADS, else the cores this process may run on. numba is not imported
+    for it: a frame a C kernel draws must not pay numba's import."""
+    numba = sys.modules.get("numba")
+    if numba is not None:
+        return int(numba.get_num_threads())
+    try:
+        return max(1, int(os.environ["NUMBA_NUM_THREADS"]))
+    except (KeyError, ValueError):
+        pass
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1

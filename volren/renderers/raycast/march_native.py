@@ -11,8 +11,6 @@ rounding.
 from __future__ import annotations
 
 import ctypes
-import os
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -84,23 +82,6 @@ def _library() -> ctypes.CDLL | None:
         lib.has_vector_path.restype = ctypes.c_int
         lib._volren_typed = True
     return lib
-
-
-def threads() -> int:
-    """The threads a frame runs on: numba's count where numba is loaded (the app and the benchmarks
-    set it), else $NUMBA_NUM_THREADS, else the cores this process may run on. numba is not imported
-    for it: a frame the C march draws must not pay numba's import."""
-    numba = sys.modules.get("numba")
-    if numba is not None:
-        return int(numba.get_num_threads())
-    try:
-        return max(1, int(os.environ["NUMBA_NUM_THREADS"]))
-    except (KeyError, ValueError):
-        pass
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        return os.cpu_count() or 1
 
 
 def _address(array: NDArray[Any]) -> int:
@@ -187,7 +168,7 @@ def _tiles(lib: ctypes.CDLL, frame: _Frame, term: float, tiles: NDArray[np.int64
         raise ValueError("tile indices must not be negative")
     _checked(out, frame.view.width * frame.view.height, counts, int(tiles.max()) + 1 if len(tiles) else 0)
     lib.march_tiles(*frame.pointers(), float(term), _address(tiles), len(tiles), _address(out), _address(counts),
-                    threads())  # fmt: skip
+                    native.threads())  # fmt: skip
 
 
 def _pixels(lib: ctypes.CDLL, frame: _Frame, term: float, pixels: NDArray[np.int64], out: NDArray[np.float32],
@@ -197,7 +178,7 @@ def _pixels(lib: ctypes.CDLL, frame: _Frame, term: float, pixels: NDArray[np.int
         raise ValueError("pixel indices must lie in the image")
     _checked(out, len(pixels), counts, len(pixels))
     lib.march_pixels(*frame.pointers(), float(term), _address(pixels), len(pixels), _address(out), _address(counts),
-                     threads(), int(chunk))  # fmt: skip
+                     native.threads(), int(chunk))  # fmt: skip
 
 
 def _loaded() -> ctypes.CDLL:

@@ -49,6 +49,7 @@ from volren.renderers.base import (
     QualityLevel,
     RendererBase,
 )
+from volren.renderers.tetra import walk_native
 from volren.renderers.tetra.entry_bins import (
     EntryFaces,
     bin_tiles,
@@ -173,6 +174,7 @@ class TetraRenderer(RendererBase):
         self._planes: tuple | None = None
         self._neighbor_faces: NDArray | None = None  # in the cells' Morton order, like _planes
         self._corner: NDArray | None = None
+        self._records: walk_native.CellRecords | None = None  # the C walk's cells, built at its first frame
         self._table_key: tuple | None = None
         self._table: tuple | None = None
         self._cell_ranges: tuple[NDArray, NDArray, NDArray] | None = (
@@ -187,6 +189,7 @@ class TetraRenderer(RendererBase):
 
     def _volume_changed(self) -> None:
         self._mesh = None
+        self._records = None
         self._planes = None
         self._table_key = None
         self._table = None
@@ -219,7 +222,9 @@ class TetraRenderer(RendererBase):
             self._neighbor_faces = np.ascontiguousarray(mesh.neighbor_faces[order], dtype=np.int64)
             # the planes of the ordered cells in one numba pass (`mesh.planes` and `pack_planes` in
             # numpy, then reordered, took 1.5 s of a one-shot render of oxygen)
-            packed = packed_face_planes(mesh.points, tets)
+            packed = walk_native.packed_planes(mesh.points, tets)
+            if packed is None:
+                packed = packed_face_planes(mesh.points, tets)
             usable_cells = np.ascontiguousarray(~(mesh.flat | mesh.nonfinite)[order])
             fields = (np.ascontiguousarray(mesh.values[tets]), np.ascontiguousarray(mesh.gradients[order]))
             # flat and non-finite cells are holes the rays step over to the next entry
@@ -428,13 +433,21 @@ class TetraRenderer(RendererBase):
         tf = self.transfer_function
         assert isinstance(tf, TransferFunction1D)
         packed_tf = pack_tf(tf)
+        in_c = walk_native.available(len(cells.neighbors))
+        if in_c and self._records is None:
+            self._records = walk_native.CellRecords(cells)
+        records = self._records
 
         def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray, out: NDArray) -> NDArray:
             """The rays' walk output into `out` (n, 4); the counters summed into `totals`."""
             stats = np.zeros((len(origins), 4), np.int64)
             rays = BinnedRays(np.ascontiguousarray(origins), np.ascontiguousarray(dirs),
                               np.ascontiguousarray(ray_far(camera, dirs)), offsets, cand, clip, caps)  # fmt: skip
-            cast_rays(rays, cells, walked, table, packed_tf, options, sp, out, stats)
+            if in_c:
+                assert records is not None
+                walk_native.cast_rays(records, rays, cells, walked, table, packed_tf, options, sp, out, stats)
+            else:
+                cast_rays(rays, cells, walked, table, packed_tf, options, sp, out, stats)
             totals[:4] += stats.sum(axis=0)
             totals[4] += np.count_nonzero(stats[:, 0])
             return out

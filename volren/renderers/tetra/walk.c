@@ -1,0 +1,537 @@
+/* tetra's cell walk compiled from C: the same entries, exits, segments and compositing as the numba
+ * kernel `traversal.cast_rays` (read its module docstring and `traversal.py` for the why of each
+ * step), ported line by line so that both draw the same image up to float rounding.
+ *
+ * Why C beside numba: the C walk reads the cells it steps through from one record each (`Cell`: planes,
+ * gradient, neighbours and flags in three cache lines), where the numba kernel reads six arrays, and the
+ * pre-integration table with both length layers of an entry side by side: 1.2-1.6x numba's frames
+ * (`benchmarks.tetra_walk`).
+ *
+ * Threads: the caller's thread and `threads - 1` POSIX threads take blocks of rays from a shared
+ * counter until none is left, and are joined before the call returns (nothing survives a fork).
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define COMPOSITE 0
+#define MAXIMUM 1
+#define MINIMUM 2
+#define AVERAGE 3
+#define MAX_ENTRIES 512
+#define RAY_BLOCK 16
+#define PARALLEL 1e-12
+#define MAX_THREADS 256
+#define INLINE static inline __attribute__((always_inline))
+#define MIN(a, b) ((b) < (a) ? (b) : (a))
+#define MAX(a, b) ((b) > (a) ? (b) : (a))
+
+/* flags of a `Cell` */
+#define USABLE 1u    /* neither flat nor non-finite (the others are holes) */
+#define WALKABLE 2u  /* a walk may run through it at positive length */
+#define VISIBLE 4u   /* the TF gives it some opacity */
+
+/* One tetrahedron as the walk reads it at each step (`walk_native.cell_records`), 192 bytes:
+ * inward unit face planes (N, D) with a = N . o + D the signed distance, the linear field's
+ * gradient, the cell across each face (-1: none), and the flags above. */
+typedef struct {
+    double plane[4][4];
+    double gradient[3];
+    int32_t neighbor[4];
+    uint32_t flags;
+    uint32_t pad[5];
+} Cell;
+
+typedef struct {
+    const Cell *cells;
+    const double *values;   /* (m, 4) corner values: the first is the field at `corner` */
+    const double *corner;   /* (m, 3) */
+    const uint8_t *boundary; /* (m, 4) faces where a walk enters the walked cells */
+    double on_plane;        /* a ray closer than this to a face plane lies in it */
+} Mesh;
+
+typedef struct {
+    const double *origins, *directions, *far; /* (n, 3), (n, 3), (n,) */
+    const int64_t *offsets, *candidates;      /* ray q's candidate cells: candidates[offsets[q]:offsets[q + 1]] */
+    const double *planes;                     /* (n_planes, 4) the kept half-spaces */
+    int64_t n_planes;
+    int32_t cap;                              /* draw cut faces where rays enter through a plane */
+} Rays;
+
+typedef struct {
+    const double *depth;    /* (n, n) optical depth per unit length */
+    const double *ratio;    /* (n, n, layers, 3) colour per unit opacity */
+    int64_t n, layers;
+    double lo, scale, lmax;
+} Table;
+
+typedef struct {
+    const double *cx, *crgb, *ox, *oa; /* colour and opacity control points (`tf_eval.PackedTF`) */
+    int64_t nc, no;
+} TF;
+
+typedef struct {
+    int32_t on;
+    double ambient, diffuse, specular, power, gradient_threshold, lx, ly, lz;
+} Shade;
+
+typedef struct {
+    int32_t mode;
+    double termination;
+    int64_t max_steps;
+} Options;
+
+/* ---------------------------------------------------------------- the TF, shading, clipping */
+
+/* k with xs[k] <= s < xs[k + 1] (numpy's searchsorted(side="right") - 1); xs[0] <= s < xs[n - 1] */
+INLINE int64_t find_interval(const double *xs, int64_t n, double s) {
+    int64_t lo = 0, hi = n;
+    while (lo < hi) {
+        int64_t mid = (lo + hi) / 2;
+        if (xs[mid] <= s) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo - 1;
+}
+
+static double tf_opacity(const TF *tf, double s) {
+    const double *xs = tf->ox, *ys = tf->oa;
+    int64_t n = tf->no;
+    if (s <= xs[0]) return ys[0];
+    if (s >= xs[n - 1]) return ys[n - 1];
+    int64_t k = find_interval(xs, n, s);
+    double w = (s - xs[k]) / (xs[k + 1] - xs[k]);
+    return ys[k] + (ys[k + 1] - ys[k]) * w;
+}
+
+static void tf_color(const TF *tf, double s, double rgb[3]) {
+    const double *xs = tf->cx, *c = tf->crgb;
+    int64_t n = tf->nc;
+    if (s <= xs[0]) {
+        for (int i = 0; i < 3; i++) rgb[i] = c[i];
+        return;
+    }
+    if (s >= xs[n - 1]) {
+        for (int i = 0; i < 3; i++) rgb[i] = c[3 * (n - 1) + i];
+        return;
+    }
+    int64_t k = find_interval(xs, n, s);
+    double w = (s - xs[k]) / (xs[k + 1] - xs[k]);
+    for (int i = 0; i < 3; i++) rgb[i] = c[3 * k + i] + (c[3 * (k + 1) + i] - c[3 * k + i]) * w;
+}
+
+/* `shading.blinn_phong_factors`: (diffuse factor, specular term) */
+INLINE void blinn_phong(double gx, double gy, double gz, double hx, double hy, double hz, const Shade *sp,
+                        double *diffuse, double *specular) {
+    double mag = sqrt(gx * gx + gy * gy + gz * gz);
+    if (!(mag > sp->gradient_threshold) || !isfinite(mag)) {
+        *diffuse = 1.0;
+        *specular = 0.0;
+        return;
+    }
+    double nx = -gx / mag, ny = -gy / mag, nz = -gz / mag;
+    double ndl = nx * sp->lx + ny * sp->ly + nz * sp->lz;
+    if (ndl < 0.0) {
+        nx = -nx, ny = -ny, nz = -nz, ndl = -ndl;
+    }
+    double ndh = nx * hx + ny * hy + nz * hz;
+    *diffuse = sp->ambient + sp->diffuse * ndl;
+    *specular = sp->specular * pow(MAX(ndh, 0.0), sp->power);
+}
+
+INLINE double clamp01(double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); }
+
+/* `shading.headlight_half_vector` */
+INLINE void half_vector(double lx, double ly, double lz, double dx, double dy, double dz, double h[3]) {
+    double hx = lx - dx, hy = ly - dy, hz = lz - dz;
+    double n = sqrt(hx * hx + hy * hy + hz * hz);
+    if (n > 0.0) {
+        h[0] = hx / n, h[1] = hy / n, h[2] = hz / n;
+    } else {
+        h[0] = h[1] = h[2] = 0.0;
+    }
+}
+
+/* `cut_faces.cut_face`: the face's colour into rgb; 0 where it is not visible */
+static int cut_face(const TF *tf, double s, double nx, double ny, double nz, const Shade *sp, double dx, double dy,
+                    double dz, double rgb[3]) {
+    if (!isfinite(s) || !(tf_opacity(tf, s) > 0.0)) return 0;
+    tf_color(tf, s, rgb);
+    if (sp->on) {
+        double scale = 1.0 + 4.0 * sp->gradient_threshold, h[3], k, spec;
+        half_vector(sp->lx, sp->ly, sp->lz, dx, dy, dz, h);
+        blinn_phong(nx * scale, ny * scale, nz * scale, h[0], h[1], h[2], sp, &k, &spec);
+        for (int i = 0; i < 3; i++) rgb[i] = clamp01(rgb[i] * k + spec);
+    }
+    return 1;
+}
+
+/* `clip_planes.clip_entry`: (t0, t1) narrowed to the kept region; the plane the ray enters through, or -1 */
+INLINE int64_t clip_entry(const double o[3], const double d[3], const double *planes, int64_t n, double *t0,
+                          double *t1) {
+    int64_t entering = -1;
+    for (int64_t p = 0; p < n; p++) {
+        const double *pl = planes + 4 * p;
+        double at_origin = pl[0] * o[0] + pl[1] * o[1] + pl[2] * o[2] + pl[3];
+        double rate = pl[0] * d[0] + pl[1] * d[1] + pl[2] * d[2];
+        if (rate > 0.0) {
+            if (-at_origin / rate > *t0) {
+                *t0 = -at_origin / rate;
+                entering = p;
+            }
+        } else if (rate < 0.0) {
+            *t1 = MIN(*t1, -at_origin / rate);
+        } else if (at_origin < 0.0) {
+            *t1 = MIN(*t1, *t0);
+            return -1;
+        }
+    }
+    return entering;
+}
+
+/* ---------------------------------------------------------------- segments */
+
+INLINE double bilinear(const double *t, int64_t n, int64_t stride, int64_t i0, int64_t j0, double fi, double fj) {
+    const double *a = t + (i0 * n + j0) * stride;
+    const double *b = a + n * stride;
+    return (1.0 - fi) * ((1.0 - fj) * a[0] + fj * a[stride]) + fi * ((1.0 - fj) * b[0] + fj * b[stride]);
+}
+
+/* `traversal.integrate_segment`: premultiplied (r, g, b, alpha) of a segment from the 3D table. The colour ratios
+ * are laid out (n, n, layers, 3) (`walk_native.cast_rays`), so that the two length layers of an entry are six
+ * doubles in a row; alpha is 1 - exp(-depth), whose absolute error (1e-16) is expm1's at three quarters of its
+ * cost (libm's exp is table-driven, its expm1 is not). */
+INLINE void integrate_segment(const Table *tab, double s_front, double s_back, double length, double rgba[4]) {
+    const int64_t n = tab->n, layers = tab->layers;
+    double x = MIN(MAX((s_front - tab->lo) * tab->scale, 0.0), n - 1.0);
+    double y = MIN(MAX((s_back - tab->lo) * tab->scale, 0.0), n - 1.0);
+    int64_t i0 = MIN((int64_t)x, n - 2), j0 = MIN((int64_t)y, n - 2);
+    double fi = x - i0, fj = y - j0;
+    const double w00 = (1.0 - fi) * (1.0 - fj), w01 = (1.0 - fi) * fj, w10 = fi * (1.0 - fj), w11 = fi * fj;
+    const double *dp = tab->depth + i0 * n + j0;
+    double depth = length * (w00 * dp[0] + w01 * dp[1] + w10 * dp[n] + w11 * dp[n + 1]);
+    double alpha = 1.0 - exp(-depth);
+    double u = MIN(MAX(layers * length / tab->lmax - 1.0, 0.0), layers - 1.0);
+    int64_t k0 = MIN((int64_t)u, layers - 2); /* the layers k0 and k0 + 1, w = 1 at the last */
+    double w = u - k0;
+    const int64_t entry = 3 * layers, row = n * entry;
+    const double *p00 = tab->ratio + i0 * row + j0 * entry + 3 * k0, *p01 = p00 + entry, *p10 = p00 + row,
+                 *p11 = p10 + entry;
+    double v[6];
+    for (int i = 0; i < 6; i++) v[i] = w00 * p00[i] + w01 * p01[i] + w10 * p10[i] + w11 * p11[i];
+    for (int c = 0; c < 3; c++) rgba[c] = ((1.0 - w) * v[c] + w * v[3 + c]) * alpha;
+    rgba[3] = alpha;
+}
+
+/* ---------------------------------------------------------------- the walk */
+
+/* (a, b) of face f of cell c: the ray is inside the face's half-space where a + b t >= 0 */
+INLINE void plane_ab(const Cell *c, int f, const double o[3], const double d[3], double *a, double *b) {
+    const double *p = c->plane[f];
+    *a = p[0] * o[0] + p[1] * o[1] + p[2] * o[2] + p[3];
+    *b = p[0] * d[0] + p[1] * d[1] + p[2] * d[2];
+}
+
+/* `traversal._symbolic_inside` */
+INLINE int symbolic_inside(const Cell *c, int f) {
+    for (int k = 0; k < 3; k++)
+        if (c->plane[f][k] != 0.0) return c->plane[f][k] > 0.0;
+    return 0;
+}
+
+/* `traversal._exit`: the face the ray leaves cell c through (its parameter in *t_out), or -1 */
+INLINE int exit_face(const Cell *c, const double o[3], const double d[3], double on_plane, double *t_out) {
+    double best = INFINITY;
+    int face = -1;
+    for (int f = 0; f < 4; f++) {
+        double a, b;
+        plane_ab(c, f, o, d, &a, &b);
+        if (b < -PARALLEL) {
+            if (-a / b < best) {
+                best = -a / b;
+                face = f;
+            }
+        } else if (b <= PARALLEL && fabs(a) <= on_plane && !symbolic_inside(c, f)) {
+            *t_out = -INFINITY;
+            return f;
+        }
+    }
+    *t_out = best;
+    return face;
+}
+
+/* `traversal._entries`: ray q's entries sorted by t into ts, ids, svals; their count (*dropped: those past MAX_ENTRIES) */
+static int64_t entries(const Rays *rays, const Mesh *mesh, int64_t q, const double o[3], const double d[3],
+                       double *ts, int64_t *ids, double *svals, int64_t *dropped) {
+    const double tmax = rays->far[q], on_plane = mesh->on_plane;
+    int64_t count = 0;
+    *dropped = 0;
+    for (int64_t k = rays->offsets[q]; k < rays->offsets[q + 1]; k++) {
+        int64_t t = rays->candidates[k];
+        const Cell *c = mesh->cells + t;
+        const uint8_t *boundary = mesh->boundary + 4 * t;
+        double t0 = -1.0;
+        int inside_at_origin = 1;
+        for (int f = 0; f < 4; f++) {
+            double a, b;
+            plane_ab(c, f, o, d, &a, &b);
+            if (a < -on_plane) inside_at_origin = 0;
+            if (!boundary[f] || !(b > PARALLEL)) continue;
+            double t_hit = -a / b;
+            if (!(0.0 <= t_hit && t_hit <= tmax) || (t0 >= 0.0 && t_hit >= t0)) continue;
+            int on_triangle = 1;
+            for (int g = 0; g < 4; g++) {
+                if (g == f) continue;
+                double ag, bg;
+                plane_ab(c, g, o, d, &ag, &bg);
+                if (ag + bg * t_hit < -on_plane) on_triangle = 0;
+            }
+            if (on_triangle) t0 = t_hit;
+        }
+        if (inside_at_origin) t0 = 0.0;
+        if (t0 < 0.0) continue;
+        const double *g = c->gradient, *p = mesh->corner + 3 * t;
+        double s0 = mesh->values[4 * t] + g[0] * (o[0] + t0 * d[0] - p[0]) + g[1] * (o[1] + t0 * d[1] - p[1]) +
+                    g[2] * (o[2] + t0 * d[2] - p[2]);
+        if (count == MAX_ENTRIES) {
+            (*dropped)++;
+            continue;
+        }
+        int64_t i = count;
+        while (i > 0 && ts[i - 1] > t0) {
+            ts[i] = ts[i - 1], ids[i] = ids[i - 1], svals[i] = svals[i - 1];
+            i--;
+        }
+        ts[i] = t0, ids[i] = t, svals[i] = s0;
+        count++;
+    }
+    return count;
+}
+
+typedef struct {
+    const Rays *rays;
+    const Mesh *mesh;
+    const Table *table;
+    const TF *tf;
+    const Shade *sp;
+    const Options *options;
+    int64_t n;
+    double *out;    /* (n, 4) */
+    int64_t *stats; /* (n, 4) cell steps, cells integrated, walks cut, entries dropped */
+    int64_t next;   /* the next block of rays to take (atomic) */
+} Work;
+
+static void cast_ray(const Work *w, int64_t q, double *ts, int64_t *ids, double *svals) {
+    const Rays *rays = w->rays;
+    const Mesh *mesh = w->mesh;
+    const Cell *cells = mesh->cells;
+    const Shade *sp = w->sp;
+    const int mode = w->options->mode;
+    const double termination = w->options->termination, on_plane = mesh->on_plane;
+    const int64_t max_steps = w->options->max_steps;
+    double *out = w->out + 4 * q;
+    int64_t *stats = w->stats + 4 * q;
+    for (int c = 0; c < 4; c++) out[c] = 0.0, stats[c] = 0;
+    if (rays->offsets[q + 1] == rays->offsets[q]) return;
+    const double o[3] = {rays->origins[3 * q], rays->origins[3 * q + 1], rays->origins[3 * q + 2]};
+    const double d[3] = {rays->directions[3 * q], rays->directions[3 * q + 1], rays->directions[3 * q + 2]};
+    /* the part of the ray the clip region keeps, the far plane included */
+    double keep0 = 0.0, keep1 = rays->far[q];
+    int64_t entering = clip_entry(o, d, rays->planes, rays->n_planes, &keep0, &keep1);
+    if (!(keep1 > keep0)) return;
+    int face_pending = rays->cap && entering >= 0 && mode == COMPOSITE;
+    int64_t dropped;
+    int64_t count = entries(rays, mesh, q, o, d, ts, ids, svals, &dropped);
+    stats[3] = dropped;
+    if (count == 0) return;
+    double h[3];
+    half_vector(sp->lx, sp->ly, sp->lz, d[0], d[1], d[2], h);
+    double cr = 0.0, cg = 0.0, cb = 0.0, trans = 1.0, best = 0.0, integral = 0.0, total = 0.0;
+    int found = 0, done = 0;
+    int64_t steps = 0, integrated = 0, cut = 0;
+    double t_done = -INFINITY;
+    for (int64_t e = 0; e < count && !done; e++) {
+        if (ts[e] < t_done) continue;
+        if (ts[e] >= keep1) break;
+        int64_t t = ids[e];
+        double t_in = ts[e], s_in = svals[e], t_out = t_in;
+        int64_t walked = 0;
+        for (;;) {
+            const Cell *c = cells + t;
+            int face = exit_face(c, o, d, on_plane, &t_out);
+            if (face < 0) break;
+            if (t_out < t_in) t_out = t_in;
+            if (t_out > keep1) t_out = keep1;
+            if (t_out > t_in && !(c->flags & WALKABLE)) {
+                t_out = t_in; /* the ray leaves the walked cells here */
+                break;
+            }
+            /* the field is linear in the cell: exact along the ray from the entry value */
+            const double *g = c->gradient;
+            double slope = g[0] * d[0] + g[1] * d[1] + g[2] * d[2];
+            double s_out = s_in + slope * (t_out - t_in);
+            double t_kept = MAX(t_in, keep0);
+            double s_kept = t_kept > t_in ? s_in + slope * (t_kept - t_in) : s_in;
+            double length = t_out - t_kept;
+            steps++;
+            walked++;
+            if (face_pending && t_in <= keep0 && keep0 < t_out) { /* the cell where the ray enters through a plane */
+                face_pending = 0;
+                const double *pn = rays->planes + 4 * entering;
+                double rgb[3];
+                if (cut_face(w->tf, s_kept, pn[0], pn[1], pn[2], sp, d[0], d[1], d[2], rgb)) {
+                    cr = rgb[0], cg = rgb[1], cb = rgb[2], trans = 0.0; /* opaque: nothing behind it shows */
+                    done = 1;
+                    break;
+                }
+            }
+            if (length > 0.0) {
+                if (mode != COMPOSITE) {
+                    if (mode == AVERAGE) {
+                        integral += 0.5 * (s_kept + s_out) * length;
+                        total += length;
+                    } else {
+                        double v = mode == MAXIMUM ? MAX(s_kept, s_out) : MIN(s_kept, s_out);
+                        if (!found || (mode == MAXIMUM && v > best) || (mode == MINIMUM && v < best)) best = v;
+                    }
+                    found = 1;
+                } else if (c->flags & VISIBLE) {
+                    double rgba[4];
+                    integrate_segment(w->table, s_kept, s_out, length, rgba);
+                    if (sp->on) {
+                        double diffuse, specular;
+                        blinn_phong(g[0], g[1], g[2], h[0], h[1], h[2], sp, &diffuse, &specular);
+                        for (int i = 0; i < 3; i++) rgba[i] = MIN(rgba[i] * diffuse + specular * rgba[3], rgba[3]);
+                    }
+                    cr += trans * rgba[0];
+                    cg += trans * rgba[1];
+                    cb += trans * rgba[2];
+                    trans *= 1.0 - rgba[3];
+                    integrated++;
+                    if (1.0 - trans >= termination) {
+                        done = 1;
+                        break;
+                    }
+                }
+            }
+            if (t_out >= keep1) {
+                done = 1;
+                break;
+            }
+            int32_t nb = c->neighbor[face];
+            if (nb < 0 || !(cells[nb].flags & USABLE)) break;
+            if (walked >= max_steps) {
+                cut++;
+                break;
+            }
+            t = nb;
+            t_in = t_out;
+            s_in = s_out;
+        }
+        t_done = t_out;
+    }
+    stats[0] = steps, stats[1] = integrated, stats[2] = cut;
+    if (mode != COMPOSITE) {
+        if (found) {
+            out[0] = mode == AVERAGE ? integral / total : best;
+            out[1] = 1.0;
+        }
+    } else {
+        out[0] = cr, out[1] = cg, out[2] = cb, out[3] = 1.0 - trans;
+    }
+}
+
+static void *worker(void *arg) {
+    Work *w = (Work *)arg;
+    double ts[MAX_ENTRIES], svals[MAX_ENTRIES];
+    int64_t ids[MAX_ENTRIES];
+    for (;;) {
+        int64_t start = __atomic_fetch_add(&w->next, RAY_BLOCK, __ATOMIC_RELAXED);
+        if (start >= w->n) break;
+        int64_t end = MIN(start + RAY_BLOCK, w->n);
+        for (int64_t q = start; q < end; q++) cast_ray(w, q, ts, ids, svals);
+    }
+    return NULL;
+}
+
+/* n rays through the mesh: numba's `traversal.cast_rays`, out (n, 4) and stats (n, 4) as it writes them */
+int cast_rays(const Rays *rays, const Mesh *mesh, const Table *table, const TF *tf, const Shade *sp,
+              const Options *options, int64_t n, double *out, int64_t *stats, int threads) {
+    Work w = {rays, mesh, table, tf, sp, options, n, out, stats, 0};
+    pthread_t ids[MAX_THREADS];
+    int started = 0;
+    if (threads > MAX_THREADS) threads = MAX_THREADS;
+    for (int t = 1; t < threads && (int64_t)t * RAY_BLOCK < n; t++) {
+        if (pthread_create(&ids[started], NULL, worker, &w) != 0) break;
+        started++;
+    }
+    worker(&w);
+    for (int t = 0; t < started; t++) pthread_join(ids[t], NULL);
+    return 0;
+}
+
+/* ---------------------------------------------------------------- the face planes */
+
+typedef struct {
+    const double *points; /* (p, 3) */
+    const int64_t *tets;  /* (m, 4) */
+    int64_t m;
+    double *out;          /* (m, 4, 4) */
+    int64_t next;         /* the next block of cells to take (atomic) */
+} Planes;
+
+/* face f's corners (opposite corner f), as `model.tet_mesh.FACE_VERTICES` */
+static const int FACES[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+static void cell_planes(const double *points, const int64_t *tet, double *out) {
+    for (int f = 0; f < 4; f++) {
+        int64_t a = tet[FACES[f][0]], b = tet[FACES[f][1]], c = tet[FACES[f][2]], s;
+        if (a > b) s = a, a = b, b = s;
+        if (b > c) s = b, b = c, c = s;
+        if (a > b) s = a, a = b, b = s;
+        const double *pa = points + 3 * a, *pb = points + 3 * b, *pc = points + 3 * c, *po = points + 3 * tet[f];
+        double ux = pb[0] - pa[0], uy = pb[1] - pa[1], uz = pb[2] - pa[2];
+        double vx = pc[0] - pa[0], vy = pc[1] - pa[1], vz = pc[2] - pa[2];
+        double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+        double side = nx * (po[0] - pa[0]) + ny * (po[1] - pa[1]) + nz * (po[2] - pa[2]);
+        double sigma = side > 0.0 ? 1.0 : -1.0;
+        double length = sqrt(nx * nx + ny * ny + nz * nz);
+        double scale = sigma / (length > 0.0 ? length : 1.0);
+        double ix = nx * scale, iy = ny * scale, iz = nz * scale;
+        double *p = out + 4 * f;
+        p[0] = ix, p[1] = iy, p[2] = iz;
+        p[3] = -(ix * pa[0] + iy * pa[1] + iz * pa[2]);
+    }
+}
+
+static void *planes_worker(void *arg) {
+    Planes *w = (Planes *)arg;
+    const int64_t block = 4096;
+    for (;;) {
+        int64_t start = __atomic_fetch_add(&w->next, block, __ATOMIC_RELAXED);
+        if (start >= w->m) break;
+        int64_t end = MIN(start + block, w->m);
+        for (int64_t t = start; t < end; t++) cell_planes(w->points, w->tets + 4 * t, w->out + 16 * t);
+    }
+    return NULL;
+}
+
+/* `tet_planes.packed_face_planes`: the (m, 4, 4) inward unit face planes of the cells */
+int packed_planes(const double *points, const int64_t *tets, int64_t m, double *out, int threads) {
+    Planes w = {points, tets, m, out, 0};
+    pthread_t ids[MAX_THREADS];
+    int started = 0;
+    if (threads > MAX_THREADS) threads = MAX_THREADS;
+    for (int t = 1; t < threads && (int64_t)t * 4096 < m; t++) {
+        if (pthread_create(&ids[started], NULL, planes_worker, &w) != 0) break;
+        started++;
+    }
+    planes_worker(&w);
+    for (int t = 0; t < started; t++) pthread_join(ids[t], NULL);
+    return 0;
+}
+
+/* bytes of a `Cell` (the Python side checks its layout against it) */
+int64_t cell_bytes(void) { return (int64_t)sizeof(Cell); }
