@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from tests.renderers.tetra.test_tetra import SIZE, cube_grid, ramp, render, shell_cameras, shells
+from volren.kernels import native
 from volren.kernels.tet_planes import packed_face_planes
 from volren.model.camera import Camera
 from volren.model.clip_region import ClipPlane, ClipRegion
@@ -130,3 +131,19 @@ def test_off_means_numba(monkeypatch):
         monkeypatch.setenv("VOLREN_NATIVE", "1")
         assert not walk_native.available(10)
     assert walk_native.available(10) and not walk_native.available(2**31)
+
+
+def test_the_portable_build_draws_the_same(monkeypatch, tmp_path):
+    """A CPU without AVX2 gets walk.c built without its vector exit test: the same walk."""
+    monkeypatch.setenv("VOLREN_NATIVE_CACHE", str(tmp_path))
+    monkeypatch.setattr(native, "cpu_has_vector_units", lambda: False)
+    native._load.cache_clear()
+    try:
+        mesh, tf = shells()
+        camera, size = shell_cameras(mesh)["along_edges"]
+        expected, image = both(mesh, tf, camera, size)
+        assert image[..., 3].max() > 0.3
+        assert np.abs(image - expected).max() <= ATOL
+        assert [p.name.startswith("walk-") for p in tmp_path.glob("*.so")] == [True]
+    finally:
+        native._load.cache_clear()

@@ -15,6 +15,9 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __AVX2__
+#include <immintrin.h>
+#endif
 
 #define COMPOSITE 0
 #define MAXIMUM 1
@@ -33,9 +36,10 @@
 #define WALKABLE 2u  /* a walk may run through it at positive length */
 #define VISIBLE 4u   /* the TF gives it some opacity */
 
-/* One tetrahedron as the walk reads it at each step (`walk_native.cell_records`), 192 bytes:
- * inward unit face planes (N, D) with a = N . o + D the signed distance, the linear field's
- * gradient, the cell across each face (-1: none), and the flags above. */
+/* One tetrahedron as the walk reads it at each step (`walk_native.CellRecords`), 192 bytes:
+ * inward unit face planes (N, D) with a = N . o + D the signed distance, component by component
+ * (plane[k][f]: component k of face f, so that one vector holds a component of all four faces),
+ * the linear field's gradient, the cell across each face (-1: none), and the flags above. */
 typedef struct {
     double plane[4][4];
     double gradient[3];
@@ -227,22 +231,23 @@ INLINE void integrate_segment(const Table *tab, double s_front, double s_back, d
 
 /* ---------------------------------------------------------------- the walk */
 
-/* (a, b) of face f of cell c: the ray is inside the face's half-space where a + b t >= 0 */
+/* (a, b) of face f of cell c: the ray is inside the face's half-space where a + b t >= 0 (the sums in
+ * numba's order, without fused multiply-adds, so that both walks round alike) */
 INLINE void plane_ab(const Cell *c, int f, const double o[3], const double d[3], double *a, double *b) {
-    const double *p = c->plane[f];
-    *a = p[0] * o[0] + p[1] * o[1] + p[2] * o[2] + p[3];
-    *b = p[0] * d[0] + p[1] * d[1] + p[2] * d[2];
+    *a = c->plane[0][f] * o[0] + c->plane[1][f] * o[1] + c->plane[2][f] * o[2] + c->plane[3][f];
+    *b = c->plane[0][f] * d[0] + c->plane[1][f] * d[1] + c->plane[2][f] * d[2];
 }
 
 /* `traversal._symbolic_inside` */
 INLINE int symbolic_inside(const Cell *c, int f) {
     for (int k = 0; k < 3; k++)
-        if (c->plane[f][k] != 0.0) return c->plane[f][k] > 0.0;
+        if (c->plane[k][f] != 0.0) return c->plane[k][f] > 0.0;
     return 0;
 }
 
-/* `traversal._exit`: the face the ray leaves cell c through (its parameter in *t_out), or -1 */
-INLINE int exit_face(const Cell *c, const double o[3], const double d[3], double on_plane, double *t_out) {
+/* `traversal._exit`: the face the ray leaves cell c through (its parameter in *t_out), or -1; one face after
+ * another, as numba does */
+INLINE int exit_face_scalar(const Cell *c, const double o[3], const double d[3], double on_plane, double *t_out) {
     double best = INFINITY;
     int face = -1;
     for (int f = 0; f < 4; f++) {
@@ -261,6 +266,39 @@ INLINE int exit_face(const Cell *c, const double o[3], const double d[3], double
     *t_out = best;
     return face;
 }
+
+#ifdef __AVX2__
+/* `exit_face_scalar` with the four faces in one vector: the same a, b and -a / b bit for bit (multiplies and adds
+ * apart, in the same order), the first face of the least parameter, and the rare face the ray lies in left to the
+ * scalar path. */
+INLINE int exit_face(const Cell *c, const double o[3], const double d[3], double on_plane, double *t_out) {
+    const __m256d nx = _mm256_load_pd(c->plane[0]), ny = _mm256_load_pd(c->plane[1]),
+                  nz = _mm256_load_pd(c->plane[2]), dd = _mm256_load_pd(c->plane[3]);
+    __m256d a = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(o[0])),
+                                                          _mm256_mul_pd(ny, _mm256_set1_pd(o[1]))),
+                                            _mm256_mul_pd(nz, _mm256_set1_pd(o[2]))),
+                              dd);
+    __m256d b = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(nx, _mm256_set1_pd(d[0])), _mm256_mul_pd(ny, _mm256_set1_pd(d[1]))),
+                              _mm256_mul_pd(nz, _mm256_set1_pd(d[2])));
+    const __m256d sign = _mm256_set1_pd(-0.0);
+    __m256d flat = _mm256_and_pd(_mm256_cmp_pd(_mm256_andnot_pd(sign, b), _mm256_set1_pd(PARALLEL), _CMP_LE_OQ),
+                                 _mm256_cmp_pd(_mm256_andnot_pd(sign, a), _mm256_set1_pd(on_plane), _CMP_LE_OQ));
+    if (__builtin_expect(_mm256_movemask_pd(flat) != 0, 0)) return exit_face_scalar(c, o, d, on_plane, t_out);
+    __m256d leaving = _mm256_cmp_pd(b, _mm256_set1_pd(-PARALLEL), _CMP_LT_OQ);
+    __m256d t = _mm256_blendv_pd(_mm256_set1_pd(INFINITY), _mm256_div_pd(_mm256_xor_pd(a, sign), b), leaving);
+    __m256d m = _mm256_min_pd(t, _mm256_permute_pd(t, 0x5));
+    m = _mm256_min_pd(m, _mm256_permute2f128_pd(m, m, 0x01));
+    int at = _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(t, m, _CMP_EQ_OQ), leaving));
+    if (at == 0) {
+        *t_out = INFINITY;
+        return -1;
+    }
+    *t_out = _mm256_cvtsd_f64(m);
+    return __builtin_ctz(at);
+}
+#else
+#define exit_face exit_face_scalar
+#endif
 
 /* `traversal._entries`: ray q's entries sorted by t into ts, ids, svals; their count (*dropped: those past MAX_ENTRIES) */
 static int64_t entries(const Rays *rays, const Mesh *mesh, int64_t q, const double o[3], const double d[3],

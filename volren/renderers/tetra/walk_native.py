@@ -123,7 +123,7 @@ class CellRecords:
     def __init__(self, cells: TetCells) -> None:
         m = len(cells.neighbors)
         self.records = _aligned(m)
-        self.records["plane"] = cells.planes
+        self.records["plane"] = np.transpose(cells.planes, (0, 2, 1))  # component by component
         self.records["gradient"] = cells.gradients
         self.records["neighbor"] = cells.neighbors
         self._usable = np.where(cells.usable, np.uint32(USABLE), np.uint32(0))
