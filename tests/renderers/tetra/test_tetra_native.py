@@ -100,6 +100,19 @@ def test_shading_clip_planes_cut_faces_one_layer_and_termination():
         assert np.abs(image - expected).max() <= ATOL, settings
 
 
+@pytest.mark.parametrize("stride", [1, 8])
+def test_the_eye_inside_the_mesh(stride):
+    """Rays that start in the cells the near plane cuts (listed per pixel), with boundary faces behind the
+    eye (covering every pixel), a ray per pixel and refined."""
+    mesh, grid = cube_grid(4, "kuhn")
+    camera = Camera(position=(2.1, 1.9, 1.2), focal_point=(2.0, 2.0, 4.0), view_angle=60.0,
+                    clipping_range=(0.05, 20.0))  # fmt: skip
+    expected, image = both(mesh, ramp(*grid.value_range), camera, 64,
+                           options={"image_stride": stride, "refine_tolerance": 0.0})  # fmt: skip
+    assert image[..., 3].min() > 0.05  # every ray starts in the mesh
+    assert np.abs(image - expected).max() <= ATOL
+
+
 def test_adaptive_refinement_casts_the_same_rays():
     mesh, grid = cube_grid(4, "five")
     tf = ramp(*grid.value_range)

@@ -51,6 +51,7 @@ from volren.renderers.base import (
 )
 from volren.renderers.tetra import walk_native
 from volren.renderers.tetra.entry_bins import (
+    TILE,
     EntryFaces,
     bin_tiles,
     bin_triangles,
@@ -438,19 +439,33 @@ class TetraRenderer(RendererBase):
             self._records = walk_native.CellRecords(cells)
         records = self._records
 
-        def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray, out: NDArray) -> NDArray:
-            """The rays' walk output into `out` (n, 4); the counters summed into `totals`."""
+        # the C walk finds each pixel's entry faces through these tile lists itself
+        tiles = walk_native.FaceTiles(faces, *bin_tiles(faces), TILE) if in_c else None
+        no_lists = no_lists_of(width * height)
+
+        def walk(origins: NDArray, dirs: NDArray, offsets: NDArray, cand: NDArray, out: NDArray,
+                 pixels: NDArray[np.int64]) -> NDArray:  # fmt: skip
+            """The rays' walk output into `out` (n, 4); the counters summed into `totals`. numba's walk
+            meets the cells listed per ray (offsets, cand); the C walk the cells of `pixels`' entry faces
+            first, then those listed."""
             stats = np.zeros((len(origins), 4), np.int64)
             rays = BinnedRays(np.ascontiguousarray(origins), np.ascontiguousarray(dirs),
                               np.ascontiguousarray(ray_far(camera, dirs)), offsets, cand, clip, caps)  # fmt: skip
-            if in_c:
+            if tiles is not None:
                 assert records is not None
-                walk_native.cast_rays(records, rays, cells, walked, table, packed_tf, options, sp, out, stats)
+                walk_native.cast_rays(records, rays, cells, walked, table, packed_tf, options, sp, out, stats,
+                                      tiles, pixels)  # fmt: skip
             else:
                 cast_rays(rays, cells, walked, table, packed_tf, options, sp, out, stats)
             totals[:4] += stats.sum(axis=0)
             totals[4] += np.count_nonzero(stats[:, 0])
             return out
+
+        def near_lists(row0: int, row1: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+            """The cells the near plane cuts, listed per pixel of rows row0 .. row1 - 1."""
+            if not len(near_cells):
+                return no_lists[0][: (row1 - row0) * width + 1], no_lists[1]
+            return bin_rows(near_cells, width, row0, row1)
 
         stride = opts["image_stride"]
         if stride == 1:
@@ -458,24 +473,26 @@ class TetraRenderer(RendererBase):
             out = np.empty((width * height, 4))
 
             def rows(a: int, b: int) -> None:
-                offsets, cand = merge_lists(
-                    *bin_triangles(faces, a // width, b // width),
-                    *bin_rows(near_cells, width, a // width, b // width),
+                near = near_lists(a // width, b // width)
+                lists = (
+                    near
+                    if tiles is not None
+                    else merge_lists(*bin_triangles(faces, a // width, b // width), *near)
                 )
-                walk(origins[a:b], dirs[a:b], offsets, cand, out[a:b])
+                walk(origins[a:b], dirs[a:b], *lists, out[a:b], np.arange(a, b, dtype=np.int64))
 
             run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, rows, progress)
             rgba, rays = self._pixels(out, mode), width * height
         else:
-            near_lists = bin_rows(near_cells, width, 0, height) if len(near_cells) else None
-            tiles = bin_tiles(faces)
+            near_all = near_lists(0, height) if len(near_cells) else None
+            pixel_tiles = tiles[1:3] if tiles is not None else bin_tiles(faces)
 
             def cast(pixels: NDArray[np.int64]) -> NDArray:
                 origins, dirs = pixel_rays(camera, width, height, pixels % width, pixels // width)
-                offsets, cand = bin_triangles_at(faces, tiles, pixels)
-                if near_lists is not None:
-                    offsets, cand = merge_lists(offsets, cand, *gather_lists(*near_lists, pixels))
-                return self._pixels(walk(origins, dirs, offsets, cand, np.empty((len(pixels), 4))), mode)
+                near = gather_lists(*near_all, pixels) if near_all is not None else no_lists_of(len(pixels))
+                if tiles is None:
+                    near = merge_lists(*bin_triangles_at(faces, pixel_tiles, pixels), *near)
+                return self._pixels(walk(origins, dirs, *near, np.empty((len(pixels), 4)), pixels), mode)
 
             with parallel_chunk_size(CHUNK_SIZE):
                 rgba, rays = refine_image(
@@ -490,6 +507,11 @@ class TetraRenderer(RendererBase):
             "entries_dropped": float(totals[3]),
         }
         return rgba, counters
+
+
+def no_lists_of(n: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Empty CSR lists of n pixels."""
+    return np.zeros(n + 1, np.int64), np.zeros(0, np.int64)
 
 
 def _morton_order(centres: NDArray[np.float64]) -> NDArray[np.int64]:

@@ -56,9 +56,22 @@ typedef struct {
     double on_plane;        /* a ray closer than this to a face plane lies in it */
 } Mesh;
 
+/* A frame's projected entry faces (`entry_bins.EntryFaces`) and their lists per tile of pixels (`entry_bins.bin_tiles`):
+ * a ray's candidate cells are those of the faces whose triangle covers its pixel (`covers`). */
+typedef struct {
+    const int64_t *boxes;   /* (k, 5) whole, x0, x1, y0, y1 */
+    const double *edges;    /* (k, 3, 3) each edge's line in pixels, positive inside */
+    const int64_t *cells;   /* (k,) the cell of each face */
+    const int64_t *tile_offsets, *tile_members; /* tile b's faces: tile_members[tile_offsets[b]:tile_offsets[b + 1]] */
+    int64_t width, tile;
+    double margin;
+} Faces;
+
 typedef struct {
     const double *origins, *directions, *far; /* (n, 3), (n, 3), (n,) */
-    const int64_t *offsets, *candidates;      /* ray q's candidate cells: candidates[offsets[q]:offsets[q + 1]] */
+    const int64_t *pixels;                    /* (n,) ray q's pixel, whose faces come first; NULL: none */
+    const Faces *faces;
+    const int64_t *offsets, *candidates;      /* then these cells: candidates[offsets[q]:offsets[q + 1]] */
     const double *planes;                     /* (n_planes, 4) the kept half-spaces */
     int64_t n_planes;
     int32_t cap;                              /* draw cut faces where rays enter through a plane */
@@ -300,51 +313,76 @@ INLINE int exit_face(const Cell *c, const double o[3], const double d[3], double
 #define exit_face exit_face_scalar
 #endif
 
-/* `traversal._entries`: ray q's entries sorted by t into ts, ids, svals; their count (*dropped: those past MAX_ENTRIES) */
+/* `entry_bins._covers`: whether pixel centre (x, y) lies in face i's box and within the margin of its triangle */
+INLINE int covers(const Faces *f, int64_t i, int64_t x, int64_t y) {
+    const int64_t *b = f->boxes + 5 * i;
+    if (!(b[1] <= x && x <= b[2] && b[3] <= y && y <= b[4])) return 0;
+    if (b[0]) return 1;
+    const double *e = f->edges + 9 * i;
+    for (int k = 0; k < 3; k++)
+        if (e[3 * k] * (double)x + e[3 * k + 1] * (double)y + e[3 * k + 2] < -f->margin) return 0;
+    return 1;
+}
+
+/* `traversal._entries` for candidate cell t: inserts its entry into the sorted lists (count, dropped updated) */
+INLINE void entry(const Rays *rays, const Mesh *mesh, int64_t q, int64_t t, const double o[3], const double d[3],
+                  double *ts, int64_t *ids, double *svals, int64_t *count, int64_t *dropped) {
+    const double tmax = rays->far[q], on_plane = mesh->on_plane;
+    const Cell *c = mesh->cells + t;
+    const uint8_t *boundary = mesh->boundary + 4 * t;
+    double t0 = -1.0;
+    int inside_at_origin = 1;
+    for (int f = 0; f < 4; f++) {
+        double a, b;
+        plane_ab(c, f, o, d, &a, &b);
+        if (a < -on_plane) inside_at_origin = 0;
+        if (!boundary[f] || !(b > PARALLEL)) continue;
+        double t_hit = -a / b;
+        if (!(0.0 <= t_hit && t_hit <= tmax) || (t0 >= 0.0 && t_hit >= t0)) continue;
+        int on_triangle = 1;
+        for (int g = 0; g < 4; g++) {
+            if (g == f) continue;
+            double ag, bg;
+            plane_ab(c, g, o, d, &ag, &bg);
+            if (ag + bg * t_hit < -on_plane) on_triangle = 0;
+        }
+        if (on_triangle) t0 = t_hit;
+    }
+    if (inside_at_origin) t0 = 0.0;
+    if (t0 < 0.0) return;
+    const double *g = c->gradient, *p = mesh->corner + 3 * t;
+    double s0 = mesh->values[4 * t] + g[0] * (o[0] + t0 * d[0] - p[0]) + g[1] * (o[1] + t0 * d[1] - p[1]) +
+                g[2] * (o[2] + t0 * d[2] - p[2]);
+    if (*count == MAX_ENTRIES) {
+        (*dropped)++;
+        return;
+    }
+    int64_t i = *count;
+    while (i > 0 && ts[i - 1] > t0) {
+        ts[i] = ts[i - 1], ids[i] = ids[i - 1], svals[i] = svals[i - 1];
+        i--;
+    }
+    ts[i] = t0, ids[i] = t, svals[i] = s0;
+    (*count)++;
+}
+
+/* ray q's entries sorted by t into ts, ids, svals, from the faces covering its pixel (in face order, as
+ * `entry_bins.bin_triangles` lists them) and then its listed cells; their count (*dropped: those past MAX_ENTRIES) */
 static int64_t entries(const Rays *rays, const Mesh *mesh, int64_t q, const double o[3], const double d[3],
                        double *ts, int64_t *ids, double *svals, int64_t *dropped) {
-    const double tmax = rays->far[q], on_plane = mesh->on_plane;
     int64_t count = 0;
     *dropped = 0;
-    for (int64_t k = rays->offsets[q]; k < rays->offsets[q + 1]; k++) {
-        int64_t t = rays->candidates[k];
-        const Cell *c = mesh->cells + t;
-        const uint8_t *boundary = mesh->boundary + 4 * t;
-        double t0 = -1.0;
-        int inside_at_origin = 1;
-        for (int f = 0; f < 4; f++) {
-            double a, b;
-            plane_ab(c, f, o, d, &a, &b);
-            if (a < -on_plane) inside_at_origin = 0;
-            if (!boundary[f] || !(b > PARALLEL)) continue;
-            double t_hit = -a / b;
-            if (!(0.0 <= t_hit && t_hit <= tmax) || (t0 >= 0.0 && t_hit >= t0)) continue;
-            int on_triangle = 1;
-            for (int g = 0; g < 4; g++) {
-                if (g == f) continue;
-                double ag, bg;
-                plane_ab(c, g, o, d, &ag, &bg);
-                if (ag + bg * t_hit < -on_plane) on_triangle = 0;
-            }
-            if (on_triangle) t0 = t_hit;
+    if (rays->pixels != NULL) {
+        const Faces *f = rays->faces;
+        const int64_t px = rays->pixels[q], x = px % f->width, y = px / f->width;
+        const int64_t b = (y / f->tile) * ((f->width + f->tile - 1) / f->tile) + x / f->tile;
+        for (int64_t k = f->tile_offsets[b]; k < f->tile_offsets[b + 1]; k++) {
+            int64_t i = f->tile_members[k];
+            if (covers(f, i, x, y)) entry(rays, mesh, q, f->cells[i], o, d, ts, ids, svals, &count, dropped);
         }
-        if (inside_at_origin) t0 = 0.0;
-        if (t0 < 0.0) continue;
-        const double *g = c->gradient, *p = mesh->corner + 3 * t;
-        double s0 = mesh->values[4 * t] + g[0] * (o[0] + t0 * d[0] - p[0]) + g[1] * (o[1] + t0 * d[1] - p[1]) +
-                    g[2] * (o[2] + t0 * d[2] - p[2]);
-        if (count == MAX_ENTRIES) {
-            (*dropped)++;
-            continue;
-        }
-        int64_t i = count;
-        while (i > 0 && ts[i - 1] > t0) {
-            ts[i] = ts[i - 1], ids[i] = ids[i - 1], svals[i] = svals[i - 1];
-            i--;
-        }
-        ts[i] = t0, ids[i] = t, svals[i] = s0;
-        count++;
     }
+    for (int64_t k = rays->offsets[q]; k < rays->offsets[q + 1]; k++)
+        entry(rays, mesh, q, rays->candidates[k], o, d, ts, ids, svals, &count, dropped);
     return count;
 }
 
@@ -372,7 +410,7 @@ static void cast_ray(const Work *w, int64_t q, double *ts, int64_t *ids, double 
     double *out = w->out + 4 * q;
     int64_t *stats = w->stats + 4 * q;
     for (int c = 0; c < 4; c++) out[c] = 0.0, stats[c] = 0;
-    if (rays->offsets[q + 1] == rays->offsets[q]) return;
+    if (rays->pixels == NULL && rays->offsets[q + 1] == rays->offsets[q]) return;
     const double o[3] = {rays->origins[3 * q], rays->origins[3 * q + 1], rays->origins[3 * q + 2]};
     const double d[3] = {rays->directions[3 * q], rays->directions[3 * q + 1], rays->directions[3 * q + 2]};
     /* the part of the ray the clip region keeps, the far plane included */

@@ -15,7 +15,7 @@ import ctypes
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,6 +24,7 @@ from volren.kernels import native
 from volren.kernels.ray_block import BinnedRays
 from volren.kernels.shading import ShadeParams
 from volren.kernels.tf_eval import PackedTF
+from volren.renderers.tetra.entry_bins import EntryFaces
 from volren.renderers.tetra.walk_inputs import SegmentTable, TetCells, WalkedSet, WalkOptions
 
 SOURCE = Path(__file__).with_name("walk.c")
@@ -44,9 +45,24 @@ class _Mesh(ctypes.Structure):
     _fields_ = [("cells", _ptr), ("values", _ptr), ("corner", _ptr), ("boundary", _ptr), ("on_plane", _f64)]
 
 
+class _Faces(ctypes.Structure):
+    _fields_ = [("boxes", _ptr), ("edges", _ptr), ("cells", _ptr), ("tile_offsets", _ptr), ("tile_members", _ptr),
+                ("width", _i64), ("tile", _i64), ("margin", _f64)]  # fmt: skip
+
+
 class _Rays(ctypes.Structure):
-    _fields_ = [("origins", _ptr), ("directions", _ptr), ("far", _ptr), ("offsets", _ptr), ("candidates", _ptr),
-                ("planes", _ptr), ("n_planes", _i64), ("cap", _i32)]  # fmt: skip
+    _fields_ = [("origins", _ptr), ("directions", _ptr), ("far", _ptr), ("pixels", _ptr), ("faces", _ptr),
+                ("offsets", _ptr), ("candidates", _ptr), ("planes", _ptr), ("n_planes", _i64), ("cap", _i32)]  # fmt: skip
+
+
+class FaceTiles(NamedTuple):
+    """A frame's entry faces and their lists per `tile` x `tile` block of pixels (`entry_bins.bin_tiles`): the C walk
+    finds each ray's faces itself, where numba's is handed them per pixel (`entry_bins.bin_triangles`)."""
+
+    faces: EntryFaces
+    offsets: NDArray[np.int64]
+    members: NDArray[np.int64]
+    tile: int
 
 
 class _Table(ctypes.Structure):
@@ -143,8 +159,10 @@ class CellRecords:
 
 def cast_rays(records: CellRecords, rays: BinnedRays, cells: TetCells, walked: WalkedSet, table: SegmentTable,
               tf: PackedTF, options: WalkOptions, sp: ShadeParams, out: NDArray[np.float64],
-              stats: NDArray[np.int64]) -> None:  # fmt: skip
-    """As numba's `traversal.cast_rays`, with `records` built from `cells`."""
+              stats: NDArray[np.int64], tiles: FaceTiles | None = None,
+              pixels: NDArray[np.int64] | None = None) -> None:  # fmt: skip
+    """As numba's `traversal.cast_rays`, with `records` built from `cells`; with `tiles`, ray q's candidates are
+    first the cells of the faces covering its pixel `pixels[q]`, then its listed ones (`rays.offsets`)."""
     lib = _library()
     assert lib is not None
     n = len(rays.origins)
@@ -163,7 +181,20 @@ def cast_rays(records: CellRecords, rays: BinnedRays, cells: TetCells, walked: W
     kept.append(planes)
     mesh = _Mesh(_address(records.records), arr(cells.values, np.float64), arr(cells.corner, np.float64),
                  arr(walked.boundary, np.uint8), float(cells.on_plane))  # fmt: skip
+    faces = None
+    if tiles is not None:
+        face = tiles.faces
+        if pixels is None or len(pixels) != n:
+            raise ValueError(f"the C walk reads a pixel for each of the {n} rays")
+        if len(pixels) and (pixels.min() < 0 or pixels.max() >= face.width * face.height):
+            raise ValueError("pixel indices must lie in the image")
+        if len(tiles.offsets) != -(-face.width // tiles.tile) * -(-face.height // tiles.tile) + 1:
+            raise ValueError("the C walk reads a face list per tile of the image")
+        faces = _Faces(arr(face.boxes, np.int64), arr(face.edges, np.float64), arr(face.cells, np.int64),
+                       arr(tiles.offsets, np.int64), arr(tiles.members, np.int64), int(face.width), int(tiles.tile),
+                       float(face.margin))  # fmt: skip
     ray = _Rays(arr(rays.origins, np.float64), arr(rays.directions, np.float64), arr(rays.far, np.float64),
+                0 if faces is None else arr(pixels, np.int64), 0 if faces is None else ctypes.addressof(faces),
                 arr(rays.offsets, np.int64), arr(rays.candidates, np.int64), _address(planes), len(planes),
                 int(bool(rays.cap)))  # fmt: skip
     depth = np.ascontiguousarray(table.depth_per_length[..., 0], dtype=np.float64)
