@@ -514,15 +514,30 @@ def no_lists_of(n: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     return np.zeros(n + 1, np.int64), np.zeros(0, np.int64)
 
 
+#: (shift, mask) steps that spread 21 bits to every third bit of 63 (the "magic numbers" of Morton codes)
+_SPREAD = ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF), (8, 0x100F00F00F00F00F), (4, 0x10C30C30C30C30C3),
+           (2, 0x1249249249249249))  # fmt: skip
+
+
+def _spread_bits(v: NDArray[np.uint64]) -> NDArray[np.uint64]:
+    """Bit k of v moved to bit 3 k (v < 2^21)."""
+    for shift, mask in _SPREAD:
+        v = (v | (v << np.uint64(shift))) & np.uint64(mask)
+    return v
+
+
 def _morton_order(centres: NDArray[np.float64]) -> NDArray[np.int64]:
     """The permutation that sorts points along a Z-order curve (21 bits per axis)."""
     lo = centres.min(axis=0)
     extent = np.maximum(centres.max(axis=0) - lo, 1e-300)
-    cells = np.minimum(((centres - lo) / extent * (1 << 21)).astype(np.int64), (1 << 21) - 1)
-    code = np.zeros(len(centres), dtype=np.int64)
-    for bit in range(21):
-        for axis in range(3):
-            code |= ((cells[:, axis] >> bit) & 1) << (3 * bit + axis)
+    cells = np.minimum(((centres - lo) / extent * (1 << 21)).astype(np.int64), (1 << 21) - 1).astype(
+        np.uint64
+    )
+    code = (
+        _spread_bits(cells[:, 0])
+        | (_spread_bits(cells[:, 1]) << np.uint64(1))
+        | (_spread_bits(cells[:, 2]) << np.uint64(2))
+    )
     return np.argsort(code, kind="stable")
 
 
