@@ -111,10 +111,14 @@ def volume_histogram(volume: Volume) -> Histogram:
     volume of each tetrahedron they are a corner of."""
     if not isinstance(volume, TetVolume):
         return value_histogram(volume)
-    corners = volume.points[volume.tets]
-    edges = corners[:, 1:] - corners[:, :1]
-    tet_volume = np.abs(np.einsum("ij,ij->i", edges[:, 0], np.cross(edges[:, 1], edges[:, 2]))) / 6
-    weights = np.bincount(volume.tets.reshape(-1), np.repeat(tet_volume / 4, 4), minlength=len(volume.points))
+    points, tets = volume.points, volume.tets
+    first = points[tets[:, 0]]
+    a, b, c = (points[tets[:, k]] - first for k in (1, 2, 3))
+    # the triple product a . (b x c) by components: np.cross and a (m, 4, 3) gather of the corners
+    # took 4x as long on 513k cells
+    det = (a[:, 0] * (b[:, 1] * c[:, 2] - b[:, 2] * c[:, 1]) - a[:, 1] * (b[:, 0] * c[:, 2] - b[:, 2] * c[:, 0])
+           + a[:, 2] * (b[:, 0] * c[:, 1] - b[:, 1] * c[:, 0]))  # fmt: skip
+    weights = np.bincount(tets.reshape(-1), np.repeat(np.abs(det) / 24, 4), minlength=len(points))
     values = volume.values.astype(np.float64)
     finite = np.isfinite(values)
     counts, bin_edges = np.histogram(

@@ -279,9 +279,12 @@ class TetVolume:
     def mean_edge_length(self) -> float:
         """Mean length of the six edges of every tetrahedron: the unit of the `step` setting
         (computed once: renderers ask for it every frame)."""
-        p = self.points[self.tets]
+        corners = [self.points[self.tets[:, k]] for k in range(4)]  # four (m, 3) gathers, not one (m, 4, 3)
         pairs = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
-        lengths = [np.linalg.norm(p[:, a] - p[:, b], axis=1) for a, b in pairs]
+        lengths = np.empty((len(pairs), len(self.tets)))
+        for row, (a, b) in zip(lengths, pairs, strict=True):
+            d = corners[a] - corners[b]
+            np.sqrt(np.add.reduce(d * d, axis=1), out=row)  # np.linalg.norm's sums, without its copies
         return float(np.mean(lengths))
 
     @property
