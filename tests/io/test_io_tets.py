@@ -150,3 +150,13 @@ def test_duplicated_tets_are_merged_and_reported():
     with pytest.warns(VolrenWarning, match="^d: 1 duplicated tetrahedron merged$"):
         volume = from_pyvista(doubled, name="d")
     assert len(volume.tets) == 1 and volume.merged_tet_count == 1
+
+
+def test_the_cell_types_known_without_pyvista_are_pyvistas():
+    """A cell of a type VTK does not define is broken (`_pv.broken_cells`): the list kept to read meshes
+    without importing PyVista is its CellType enum."""
+    import pyvista as pv
+
+    from volren.io import _pv
+
+    assert sorted(_pv.VTK_CELL_TYPES) == sorted(int(c) for c in pv.CellType)

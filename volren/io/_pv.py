@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkDataArray, vtkStringArray
-from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction
+from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction, vtkUnstructuredGrid
 
 try:  # VTK >= 9.6 moved the static cell-type helpers here
     from vtkmodules.vtkCommonDataModel import vtkCellTypeUtilities as _CellTypes
@@ -96,9 +96,9 @@ def _vtk_active_name(data: Any) -> str | None:
 
 
 def as_dataset(obj: Any) -> Any | None:
-    """Image data as it is (VTK's or pyvista's), any other dataset wrapped by pyvista, or None
-    when it is not a dataset."""
-    if isinstance(obj, vtkImageData):
+    """Image data and unstructured grids as they are (VTK's or pyvista's), any other dataset wrapped
+    by pyvista, or None when it is not a dataset."""
+    if isinstance(obj, vtkImageData | vtkUnstructuredGrid):
         return obj
     pv = _pyvista()
     if isinstance(obj, pv.DataSet):
@@ -138,39 +138,69 @@ def _image_view(image: Any) -> DatasetView:
 
 def view(dataset: Any) -> DatasetView:
     """A `DatasetView` of a dataset from `as_dataset`: image data stays a grid, anything else
-    becomes cells."""
+    becomes cells (read through VTK's API: a mesh needs no pyvista, whose import costs 0.2-0.4 s)."""
     if isinstance(dataset, vtkImageData):
         return _image_view(dataset)
-    if not isinstance(dataset, _pyvista().UnstructuredGrid):
+    if not isinstance(dataset, vtkUnstructuredGrid):
         dataset = dataset.cast_to_unstructured_grid()
     return DatasetView(
         handle=dataset,
         kind="unstructured",
-        n_points=int(dataset.n_points),
-        n_cells=int(dataset.n_cells),
+        n_points=int(dataset.GetNumberOfPoints()),
+        n_cells=int(dataset.GetNumberOfCells()),
         point_arrays=_vtk_arrays(dataset.GetPointData()),
         cell_arrays=_vtk_arrays(dataset.GetCellData()),
         field_arrays=_vtk_arrays(dataset.GetFieldData()),
         active_point=_vtk_active_name(dataset.GetPointData()),
         active_cell=_vtk_active_name(dataset.GetCellData()),
-        n_connectivity=int(dataset.cell_connectivity.size),
-        type_name=type(dataset).__name__,
+        n_connectivity=len(_connectivity(dataset)),
+        type_name="UnstructuredGrid",
     )
+
+
+def _numpy(array: Any, dtype: type) -> NDArray:
+    """A VTK array as numpy (empty for None)."""
+    return np.zeros(0, dtype) if array is None else np.asarray(vtk_to_numpy(array), dtype=dtype)
+
+
+def _grid_points(grid: Any) -> NDArray[np.float64]:
+    points = grid.GetPoints()
+    return np.zeros((0, 3)) if points is None else _numpy(points.GetData(), np.float64).reshape(-1, 3)
+
+
+def _cell_types(grid: Any) -> NDArray[np.int64]:
+    try:  # VTK >= 9.6 (where GetCellTypesArray is deprecated)
+        types = grid.GetCellTypes()
+    except TypeError:  # pragma: no cover - older VTK, whose GetCellTypes fills a vtkCellTypes
+        types = grid.GetCellTypesArray()
+    return _numpy(types, np.int64)
+
+
+def _connectivity(grid: Any) -> NDArray[np.int64]:
+    cells = grid.GetCells()
+    return _numpy(None if cells is None else cells.GetConnectivityArray(), np.int64)
+
+
+def _cell_offsets(grid: Any) -> NDArray[np.int64]:
+    cells = grid.GetCells()
+    return _numpy(None if cells is None else cells.GetOffsetsArray(), np.int64)
+
+
+def _original_point_ids(grid: Any) -> NDArray[np.int64]:
+    """The point ids a VTK filter (extract_cells) carried over from its input."""
+    return _numpy(grid.GetPointData().GetArray("vtkOriginalPointIds"), np.int64)
 
 
 def cell_to_point(v: DatasetView) -> DatasetView:
     """Average cell data onto the points (VTK's vtkCellDataToPointData, as pyvista runs it)."""
-    with vtk_messages():
-        if v.kind == "image":
-            from vtkmodules.vtkFiltersCore import vtkCellDataToPointData
+    from vtkmodules.vtkFiltersCore import vtkCellDataToPointData
 
-            average = vtkCellDataToPointData()
-            average.SetInputDataObject(v.handle)
-            average.SetPassCellData(False)
-            average.Update()
-            converted = average.GetOutputDataObject(0)
-        else:
-            converted = v.handle.cell_data_to_point_data()
+    with vtk_messages():
+        average = vtkCellDataToPointData()
+        average.SetInputDataObject(v.handle)
+        average.SetPassCellData(False)
+        average.Update()
+        converted = average.GetOutputDataObject(0)
     return view(converted)
 
 
@@ -297,27 +327,28 @@ _SIZE_OF_TYPE = np.full(256, -1, np.int64)  # -1: the type lists its own count
 _SIZE_OF_TYPE[list(_CELL_SIZES)] = list(_CELL_SIZES.values())
 
 
-def _cell_offsets(grid: Any) -> NDArray[np.int64]:
-    # pyvista renamed `offset` to `cell_offsets` in 0.47
-    return np.asarray(grid.cell_offsets if hasattr(type(grid), "cell_offsets") else grid.offset, np.int64)
+#: The cell types VTK defines (vtkCellType.h's enum: what pyvista.CellType lists), by value.
+VTK_CELL_TYPES = (0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31,
+                  32, 33, 34, 35, 36, 37, 41, 42, 51, 52, 53, 54, 55, 56, 60, 61, 62, 63, 64, 65, 66, 67, 68, 69, 70,
+                  71, 72, 73, 74, 75, 76, 77, 78, 79, 80, 81)  # fmt: skip
 
 
 def broken_cells(grid: Any) -> tuple[NDArray[np.bool_], dict[str, int]]:
     """Cells no VTK filter may touch: an unknown cell type, a point index outside the points
     (VTK reads past its arrays, or -1 as the last point), or a fixed-size type with another count.
     Returns the mask of broken cells and their counts by reason."""
-    types = np.asarray(grid.celltypes).astype(np.int64)
+    types = _cell_types(grid)
     offsets = _cell_offsets(grid)
-    conn = np.asarray(grid.cell_connectivity, dtype=np.int64)
+    conn = _connectivity(grid)
     sizes = np.diff(offsets)
     if len(sizes) != len(types) or (offsets.size and (offsets[-1] != conn.size or (sizes < 0).any())):
         return np.ones(len(types), bool), {
             "in a cell list that disagrees with its types and offsets": len(types)
         }
-    known = np.isin(types, [int(c) for c in _pyvista().CellType])
+    known = np.isin(types, VTK_CELL_TYPES)
     expected = np.where((types >= 0) & (types < 256), _SIZE_OF_TYPE[np.clip(types, 0, 255)], -1)
     wrong_size = (expected >= 0) & (sizes != expected)
-    outside = (conn < 0) | (conn >= int(grid.n_points))
+    outside = (conn < 0) | (conn >= int(grid.GetNumberOfPoints()))
     cell_of = np.repeat(np.arange(len(sizes)), np.maximum(sizes, 0))
     bad_index = np.zeros(len(sizes), bool)
     if outside.any() and cell_of.size == conn.size:
@@ -342,25 +373,25 @@ def cell_type_class(cell_type: int) -> str:
 def tetrahedralize(v: DatasetView) -> TetCells:
     """Tetrahedra of the 3D cells; lower-dimensional cells are dropped and counted."""
     grid = v.handle
-    points = np.asarray(grid.points, dtype=np.float64)
-    types = np.asarray(grid.celltypes)
+    points = _grid_points(grid)
+    types = _cell_types(grid)
     if types.size == 0:
         return TetCells(points, np.zeros((0, 4), np.int64), {}, {})
     broken, why = broken_cells(grid)
     if broken.any():
         with vtk_messages():
-            grid = grid.extract_cells(np.flatnonzero(~broken))
+            grid = _pyvista().wrap(grid).extract_cells(np.flatnonzero(~broken))
         if grid.n_cells == 0:
             return TetCells(points, np.zeros((0, 4), np.int64), {}, {}, why)
         cells = tetrahedralize(view(grid))
-        ids = np.asarray(grid.point_data["vtkOriginalPointIds"], dtype=np.int64)
+        ids = _original_point_ids(grid)
         return TetCells(points, ids[cells.tets], cells.tetrahedralized, cells.dropped, why)
     unique, counts = np.unique(types, return_counts=True)
     dims = {int(t): cell_type_dimension(int(t)) for t in unique}
     dropped = {int(t): int(c) for t, c in zip(unique, counts) if dims[int(t)] != 3}
     converted = {int(t): int(c) for t, c in zip(unique, counts) if dims[int(t)] == 3 and t != VTK_TETRA}
     if not dropped and not converted:  # the common case: nothing but tetrahedra
-        tets = np.asarray(grid.cell_connectivity, dtype=np.int64).reshape(-1, 4)
+        tets = _connectivity(grid).reshape(-1, 4)
         return TetCells(points, tets, {}, {})
     keep = np.flatnonzero(np.isin(types, [t for t, d in dims.items() if d == 3]))
     if keep.size == 0:
@@ -368,17 +399,16 @@ def tetrahedralize(v: DatasetView) -> TetCells:
     with vtk_messages():
         # extract_cells renumbers the points; its vtkOriginalPointIds map them back, so the
         # tetrahedra index the dataset's own points (and their values) unchanged.
-        solid = grid.extract_cells(keep)
+        solid = _pyvista().wrap(grid).extract_cells(keep)
         tetra = solid.triangulate() if converted else solid
-    tet_types = np.asarray(tetra.celltypes)
-    conn = np.asarray(tetra.cell_connectivity, dtype=np.int64)
+    tet_types = _cell_types(tetra)
+    conn = _connectivity(tetra)
     offsets = _cell_offsets(tetra)
     sizes = np.diff(offsets)
     is_tet = (tet_types == VTK_TETRA) & (sizes == 4)
     starts = offsets[:-1][is_tet]
     local = conn[starts[:, None] + np.arange(4)]
-    original_ids = np.asarray(tetra.point_data["vtkOriginalPointIds"], dtype=np.int64)
-    return TetCells(points, original_ids[local], converted, dropped)
+    return TetCells(points, _original_point_ids(tetra)[local], converted, dropped)
 
 
 # ----------------------------------------------------------------- ParaView colour interpolation
