@@ -27,6 +27,7 @@
 #define RAY_BLOCK 16
 #define PARALLEL 1e-12
 #define MAX_THREADS 256
+#define CELL_BLOCK 4096 /* cells a thread takes at a time where it prepares them */
 #define INLINE static inline __attribute__((always_inline))
 #define MIN(a, b) ((b) < (a) ? (b) : (a))
 #define MAX(a, b) ((b) > (a) ? (b) : (a))
@@ -99,6 +100,20 @@ typedef struct {
     double termination;
     int64_t max_steps;
 } Options;
+
+/* `worker(work)` on the caller's thread and up to `threads - 1` POSIX threads (no more than there are chunks of
+ * `chunk` of the `items`), all joined before it returns */
+static void run_threads(void *(*worker)(void *), void *work, int threads, int64_t items, int64_t chunk) {
+    pthread_t ids[MAX_THREADS];
+    int started = 0;
+    if (threads > MAX_THREADS) threads = MAX_THREADS;
+    for (int t = 1; t < threads && (int64_t)t * chunk < items; t++) {
+        if (pthread_create(&ids[started], NULL, worker, work) != 0) break;
+        started++;
+    }
+    worker(work);
+    for (int t = 0; t < started; t++) pthread_join(ids[t], NULL);
+}
 
 /* ---------------------------------------------------------------- the TF, shading, clipping */
 
@@ -536,15 +551,7 @@ static void *worker(void *arg) {
 int cast_rays(const Rays *rays, const Mesh *mesh, const Table *table, const TF *tf, const Shade *sp,
               const Options *options, int64_t n, double *out, int64_t *stats, int threads) {
     Work w = {rays, mesh, table, tf, sp, options, n, out, stats, 0};
-    pthread_t ids[MAX_THREADS];
-    int started = 0;
-    if (threads > MAX_THREADS) threads = MAX_THREADS;
-    for (int t = 1; t < threads && (int64_t)t * RAY_BLOCK < n; t++) {
-        if (pthread_create(&ids[started], NULL, worker, &w) != 0) break;
-        started++;
-    }
-    worker(&w);
-    for (int t = 0; t < started; t++) pthread_join(ids[t], NULL);
+    run_threads(worker, &w, threads, n, RAY_BLOCK);
     return 0;
 }
 
@@ -584,11 +591,10 @@ static void cell_planes(const double *points, const int64_t *tet, double *out) {
 
 static void *planes_worker(void *arg) {
     Planes *w = (Planes *)arg;
-    const int64_t block = 4096;
     for (;;) {
-        int64_t start = __atomic_fetch_add(&w->next, block, __ATOMIC_RELAXED);
+        int64_t start = __atomic_fetch_add(&w->next, CELL_BLOCK, __ATOMIC_RELAXED);
         if (start >= w->m) break;
-        int64_t end = MIN(start + block, w->m);
+        int64_t end = MIN(start + CELL_BLOCK, w->m);
         for (int64_t t = start; t < end; t++) cell_planes(w->points, w->tets + 4 * t, w->out + 16 * t);
     }
     return NULL;
@@ -597,15 +603,47 @@ static void *planes_worker(void *arg) {
 /* `tet_planes.packed_face_planes`: the (m, 4, 4) inward unit face planes of the cells */
 int packed_planes(const double *points, const int64_t *tets, int64_t m, double *out, int threads) {
     Planes w = {points, tets, m, out, 0};
-    pthread_t ids[MAX_THREADS];
-    int started = 0;
-    if (threads > MAX_THREADS) threads = MAX_THREADS;
-    for (int t = 1; t < threads && (int64_t)t * 4096 < m; t++) {
-        if (pthread_create(&ids[started], NULL, planes_worker, &w) != 0) break;
-        started++;
+    run_threads(planes_worker, &w, threads, m, CELL_BLOCK);
+    return 0;
+}
+
+/* ---------------------------------------------------------------- the cell records */
+
+typedef struct {
+    const double *planes;    /* (m, 4, 4) face by face, as `packed_planes` writes them */
+    const double *gradients; /* (m, 3) */
+    const int64_t *neighbors; /* (m, 4) */
+    const uint8_t *usable;   /* (m,) */
+    int64_t m;
+    Cell *out;
+    int64_t next; /* the next block of cells to take (atomic) */
+} Fill;
+
+static void *fill_worker(void *arg) {
+    Fill *w = (Fill *)arg;
+    for (;;) {
+        int64_t start = __atomic_fetch_add(&w->next, CELL_BLOCK, __ATOMIC_RELAXED);
+        if (start >= w->m) break;
+        int64_t end = MIN(start + CELL_BLOCK, w->m);
+        for (int64_t t = start; t < end; t++) {
+            Cell *c = w->out + t;
+            memset(c, 0, sizeof *c);
+            for (int f = 0; f < 4; f++) {
+                for (int k = 0; k < 4; k++) c->plane[k][f] = w->planes[16 * t + 4 * f + k];
+                c->neighbor[f] = (int32_t)w->neighbors[4 * t + f];
+            }
+            for (int k = 0; k < 3; k++) c->gradient[k] = w->gradients[3 * t + k];
+            c->flags = w->usable[t] ? USABLE : 0u;
+        }
     }
-    planes_worker(&w);
-    for (int t = 0; t < started; t++) pthread_join(ids[t], NULL);
+    return NULL;
+}
+
+/* the walk's records of m cells (flags: USABLE only; `walk_native.CellRecords` sets the others) */
+int fill_cells(const double *planes, const double *gradients, const int64_t *neighbors, const uint8_t *usable,
+               int64_t m, Cell *out, int threads) {
+    Fill w = {planes, gradients, neighbors, usable, m, out, 0};
+    run_threads(fill_worker, &w, threads, m, CELL_BLOCK);
     return 0;
 }
 

@@ -93,6 +93,8 @@ def _library() -> ctypes.CDLL | None:
         lib.cast_rays.restype = ctypes.c_int
         lib.packed_planes.argtypes = [_ptr, _ptr, _i64, _ptr, ctypes.c_int]
         lib.packed_planes.restype = ctypes.c_int
+        lib.fill_cells.argtypes = [_ptr, _ptr, _ptr, _ptr, _i64, _ptr, ctypes.c_int]
+        lib.fill_cells.restype = ctypes.c_int
         lib.cell_bytes.restype = _i64
         if lib.cell_bytes() != CELL.itemsize:
             return None
@@ -126,8 +128,8 @@ def _address(array: NDArray[Any]) -> int:
 
 
 def _aligned(n: int) -> NDArray[np.void]:
-    """n zeroed `CELL` records starting on an `ALIGN`-byte boundary."""
-    raw = np.zeros(n * CELL.itemsize + ALIGN, np.uint8)
+    """Room for n `CELL` records starting on an `ALIGN`-byte boundary."""
+    raw = np.empty(n * CELL.itemsize + ALIGN, np.uint8)
     start = (-_address(raw)) % ALIGN
     return raw[start : start + n * CELL.itemsize].view(CELL)
 
@@ -138,11 +140,25 @@ class CellRecords:
 
     def __init__(self, cells: TetCells) -> None:
         m = len(cells.neighbors)
+        arrays = [np.ascontiguousarray(a, dtype=t) for a, t in ((cells.planes, np.float64), (cells.gradients, np.float64),
+                  (cells.neighbors, np.int64), (cells.usable, np.uint8))]  # fmt: skip
+        planes, gradients, neighbors, usable = arrays
+        if (
+            planes.shape != (m, 4, 4)
+            or gradients.shape != (m, 3)
+            or neighbors.shape != (m, 4)
+            or usable.shape != (m,)
+        ):
+            raise ValueError(
+                "the C walk reads (m, 4, 4) planes, (m, 3) gradients, (m, 4) neighbours and (m,) flags"
+            )
+        if m and (neighbors.min() < -1 or neighbors.max() >= m):
+            raise ValueError("neighbours must be cell ids or -1")
         self.records = _aligned(m)
-        self.records["plane"] = np.transpose(cells.planes, (0, 2, 1))  # component by component
-        self.records["gradient"] = cells.gradients
-        self.records["neighbor"] = cells.neighbors
-        self._usable = np.where(cells.usable, np.uint32(USABLE), np.uint32(0))
+        lib = _library()
+        assert lib is not None
+        lib.fill_cells(*(_address(a) for a in arrays), m, _address(self.records), native.threads())
+        self._usable = np.where(usable, np.uint32(USABLE), np.uint32(0))
         self._flags_of: tuple[Any, Any] | None = None
 
     def flags(self, walked: WalkedSet) -> None:
