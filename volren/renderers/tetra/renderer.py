@@ -428,7 +428,7 @@ class TetraRenderer(RendererBase):
         enter the mesh through the `entries` of `_entry_candidates`."""
         faces, near_cells = entries
         mode = options.mode
-        totals = np.zeros(5)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
+        totals = np.zeros(5, np.int64)  # cell steps, cells integrated, walks cut, entries dropped, rays hit
         clip = self.settings.clip.half_spaces()
         caps = self.settings.clip.caps
         tf = self.transfer_function
@@ -448,18 +448,22 @@ class TetraRenderer(RendererBase):
             """The rays' walk output into `out` (n, 4); the counters summed into `totals`. numba's walk
             meets the cells listed per ray (offsets, cand); the C walk the cells of `pixels`' entry faces
             first, then those listed."""
-            stats = np.zeros((len(origins), 4), np.int64)
             rays = BinnedRays(np.ascontiguousarray(origins), np.ascontiguousarray(dirs),
                               np.ascontiguousarray(ray_far(camera, dirs)), offsets, cand, clip, caps)  # fmt: skip
             if tiles is not None:
                 assert records is not None
-                walk_native.cast_rays(records, rays, cells, walked, table, packed_tf, options, sp, out, stats,
+                walk_native.cast_rays(records, rays, cells, walked, table, packed_tf, options, sp, out, None, totals,
                                       tiles, pixels)  # fmt: skip
-            else:
-                cast_rays(rays, cells, walked, table, packed_tf, options, sp, out, stats)
+                return out
+            stats = np.zeros((len(origins), 4), np.int64)
+            cast_rays(rays, cells, walked, table, packed_tf, options, sp, out, stats)
             totals[:4] += stats.sum(axis=0)
             totals[4] += np.count_nonzero(stats[:, 0])
             return out
+
+        def finished(out: NDArray) -> NDArray:
+            """Premultiplied RGBA of the walk's output (the C walk clips composites itself)."""
+            return out if tiles is not None and mode == COMPOSITE else self._pixels(out, mode)
 
         def near_lists(row0: int, row1: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
             """The cells the near plane cuts, listed per pixel of rows row0 .. row1 - 1."""
@@ -482,7 +486,7 @@ class TetraRenderer(RendererBase):
                 walk(origins[a:b], dirs[a:b], *lists, out[a:b], np.arange(a, b, dtype=np.int64))
 
             run_in_row_blocks(width, height, BLOCKS, CHUNK_SIZE, rows, progress)
-            rgba, rays = self._pixels(out, mode), width * height
+            rgba, rays = finished(out), width * height
         else:
             near_all = near_lists(0, height) if len(near_cells) else None
             pixel_tiles = tiles[1:3] if tiles is not None else bin_tiles(faces)
@@ -492,7 +496,7 @@ class TetraRenderer(RendererBase):
                 near = gather_lists(*near_all, pixels) if near_all is not None else no_lists_of(len(pixels))
                 if tiles is None:
                     near = merge_lists(*bin_triangles_at(faces, pixel_tiles, pixels), *near)
-                return self._pixels(walk(origins, dirs, *near, np.empty((len(pixels), 4)), pixels), mode)
+                return finished(walk(origins, dirs, *near, np.empty((len(pixels), 4)), pixels))
 
             with parallel_chunk_size(CHUNK_SIZE):
                 rgba, rays = refine_image(

@@ -409,12 +409,15 @@ typedef struct {
     const Shade *sp;
     const Options *options;
     int64_t n;
-    double *out;    /* (n, 4) */
-    int64_t *stats; /* (n, 4) cell steps, cells integrated, walks cut, entries dropped */
-    int64_t next;   /* the next block of rays to take (atomic) */
+    double *out;     /* (n, 4) */
+    int64_t *stats;  /* (n, 4) cell steps, cells integrated, walks cut, entries dropped; NULL: not kept */
+    int64_t *totals; /* (5,) their sums and the rays that took a step */
+    int64_t next;    /* the next block of rays to take (atomic) */
 } Work;
 
-static void cast_ray(const Work *w, int64_t q, double *ts, int64_t *ids, double *svals) {
+/* ray q's pixel into out[q]: composites clipped to valid premultiplied colours (0 <= rgb <= alpha <= 1), as
+ * `TetraRenderer._pixels` clips numba's; its counters added to `sums` (`Work.totals`) and kept in w->stats */
+static void cast_ray(const Work *w, int64_t q, double *ts, int64_t *ids, double *svals, int64_t sums[5]) {
     const Rays *rays = w->rays;
     const Mesh *mesh = w->mesh;
     const Cell *cells = mesh->cells;
@@ -423,7 +426,7 @@ static void cast_ray(const Work *w, int64_t q, double *ts, int64_t *ids, double 
     const double termination = w->options->termination, on_plane = mesh->on_plane;
     const int64_t max_steps = w->options->max_steps;
     double *out = w->out + 4 * q;
-    int64_t *stats = w->stats + 4 * q;
+    int64_t none[4], *stats = w->stats != NULL ? w->stats + 4 * q : none;
     for (int c = 0; c < 4; c++) out[c] = 0.0, stats[c] = 0;
     if (rays->pixels == NULL && rays->offsets[q + 1] == rays->offsets[q]) return;
     const double o[3] = {rays->origins[3 * q], rays->origins[3 * q + 1], rays->origins[3 * q + 2]};
@@ -436,6 +439,7 @@ static void cast_ray(const Work *w, int64_t q, double *ts, int64_t *ids, double 
     int64_t dropped;
     int64_t count = entries(rays, mesh, q, o, d, ts, ids, svals, &dropped);
     stats[3] = dropped;
+    sums[3] += dropped;
     if (count == 0) return;
     double h[3];
     half_vector(sp->lx, sp->ly, sp->lz, d[0], d[1], d[2], h);
@@ -524,13 +528,16 @@ static void cast_ray(const Work *w, int64_t q, double *ts, int64_t *ids, double 
         t_done = t_out;
     }
     stats[0] = steps, stats[1] = integrated, stats[2] = cut;
+    sums[0] += steps, sums[1] += integrated, sums[2] += cut, sums[4] += steps > 0;
     if (mode != COMPOSITE) {
         if (found) {
             out[0] = mode == AVERAGE ? integral / total : best;
             out[1] = 1.0;
         }
     } else {
-        out[0] = cr, out[1] = cg, out[2] = cb, out[3] = 1.0 - trans;
+        double a = MIN(MAX(1.0 - trans, 0.0), 1.0);
+        out[0] = MIN(MIN(MAX(cr, 0.0), 1.0), a), out[1] = MIN(MIN(MAX(cg, 0.0), 1.0), a);
+        out[2] = MIN(MIN(MAX(cb, 0.0), 1.0), a), out[3] = a;
     }
 }
 
@@ -538,19 +545,22 @@ static void *worker(void *arg) {
     Work *w = (Work *)arg;
     double ts[MAX_ENTRIES], svals[MAX_ENTRIES];
     int64_t ids[MAX_ENTRIES];
+    int64_t sums[5] = {0, 0, 0, 0, 0};
     for (;;) {
         int64_t start = __atomic_fetch_add(&w->next, RAY_BLOCK, __ATOMIC_RELAXED);
         if (start >= w->n) break;
         int64_t end = MIN(start + RAY_BLOCK, w->n);
-        for (int64_t q = start; q < end; q++) cast_ray(w, q, ts, ids, svals);
+        for (int64_t q = start; q < end; q++) cast_ray(w, q, ts, ids, svals, sums);
     }
+    for (int k = 0; k < 5; k++) __atomic_fetch_add(&w->totals[k], sums[k], __ATOMIC_RELAXED);
     return NULL;
 }
 
-/* n rays through the mesh: numba's `traversal.cast_rays`, out (n, 4) and stats (n, 4) as it writes them */
+/* n rays through the mesh: numba's `traversal.cast_rays`, out (n, 4) (composites clipped) and stats (n, 4) as it
+ * writes them (stats NULL: not kept); totals (5,) += the sums of the stats and the rays that took a step */
 int cast_rays(const Rays *rays, const Mesh *mesh, const Table *table, const TF *tf, const Shade *sp,
-              const Options *options, int64_t n, double *out, int64_t *stats, int threads) {
-    Work w = {rays, mesh, table, tf, sp, options, n, out, stats, 0};
+              const Options *options, int64_t n, double *out, int64_t *stats, int64_t *totals, int threads) {
+    Work w = {rays, mesh, table, tf, sp, options, n, out, stats, totals, 0};
     run_threads(worker, &w, threads, n, RAY_BLOCK);
     return 0;
 }

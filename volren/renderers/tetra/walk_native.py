@@ -89,7 +89,7 @@ def _library() -> ctypes.CDLL | None:
     if lib is None:
         return None
     if not getattr(lib, "_volren_typed", False):
-        lib.cast_rays.argtypes = [_ptr] * 6 + [_i64, _ptr, _ptr, ctypes.c_int]
+        lib.cast_rays.argtypes = [_ptr] * 6 + [_i64, _ptr, _ptr, _ptr, ctypes.c_int]
         lib.cast_rays.restype = ctypes.c_int
         lib.packed_planes.argtypes = [_ptr, _ptr, _i64, _ptr, ctypes.c_int]
         lib.packed_planes.restype = ctypes.c_int
@@ -173,19 +173,33 @@ class CellRecords:
         self._flags_of = key
 
 
+def _bytes(flags: NDArray[np.bool_], kept: list[NDArray[Any]]) -> int:
+    """The address of boolean flags as bytes: a view where they are contiguous (a copy of oxygen's (m, 4) faces took
+    2 ms, once per block of rows)."""
+    flags = np.ascontiguousarray(flags, dtype=np.bool_)
+    kept.append(flags)
+    return _address(flags.view(np.uint8))
+
+
 def cast_rays(records: CellRecords, rays: BinnedRays, cells: TetCells, walked: WalkedSet, table: SegmentTable,
               tf: PackedTF, options: WalkOptions, sp: ShadeParams, out: NDArray[np.float64],
-              stats: NDArray[np.int64], tiles: FaceTiles | None = None,
+              stats: NDArray[np.int64] | None, totals: NDArray[np.int64], tiles: FaceTiles | None = None,
               pixels: NDArray[np.int64] | None = None) -> None:  # fmt: skip
-    """As numba's `traversal.cast_rays`, with `records` built from `cells`; with `tiles`, ray q's candidates are
-    first the cells of the faces covering its pixel `pixels[q]`, then its listed ones (`rays.offsets`)."""
+    """As numba's `traversal.cast_rays`, with `records` built from `cells`, composites clipped to valid premultiplied
+    colours as `TetraRenderer._pixels` clips numba's; the per-ray `stats` kept only where given, their sums and the
+    rays that took a step added to `totals` (5,). With `tiles`, ray q's candidates are first the cells of the faces
+    covering its pixel `pixels[q]`, then its listed ones (`rays.offsets`)."""
     lib = _library()
     assert lib is not None
     n = len(rays.origins)
     if out.dtype != np.float64 or not out.flags.c_contiguous or out.shape != (n, 4):
         raise ValueError(f"the C walk writes ({n}, 4) C-contiguous float64 pixels")
-    if stats.dtype != np.int64 or not stats.flags.c_contiguous or stats.shape != (n, 4):
+    if stats is not None and (
+        stats.dtype != np.int64 or not stats.flags.c_contiguous or stats.shape != (n, 4)
+    ):
         raise ValueError(f"the C walk writes ({n}, 4) C-contiguous int64 counters")
+    if totals.dtype != np.int64 or not totals.flags.c_contiguous or totals.shape != (5,):
+        raise ValueError("the C walk adds to 5 C-contiguous int64 totals")
     records.flags(walked)
     kept: list[NDArray[Any]] = []
 
@@ -196,7 +210,7 @@ def cast_rays(records: CellRecords, rays: BinnedRays, cells: TetCells, walked: W
     planes = np.ascontiguousarray(rays.planes, dtype=np.float64).reshape(-1, 4)
     kept.append(planes)
     mesh = _Mesh(_address(records.records), arr(cells.values, np.float64), arr(cells.corner, np.float64),
-                 arr(walked.boundary, np.uint8), float(cells.on_plane))  # fmt: skip
+                 _bytes(walked.boundary, kept), float(cells.on_plane))  # fmt: skip
     faces = None
     if tiles is not None:
         face = tiles.faces
@@ -226,7 +240,8 @@ def cast_rays(records: CellRecords, rays: BinnedRays, cells: TetCells, walked: W
                    float(sp.gradient_threshold), float(sp.lx), float(sp.ly), float(sp.lz))  # fmt: skip
     opts = _Options(int(options.mode), float(options.termination), int(options.max_steps))
     lib.cast_rays(ctypes.byref(ray), ctypes.byref(mesh), ctypes.byref(tab), ctypes.byref(packed), ctypes.byref(shade),
-                  ctypes.byref(opts), n, _address(out), _address(stats), native.threads())  # fmt: skip
+                  ctypes.byref(opts), n, _address(out), 0 if stats is None else _address(stats), _address(totals),
+                  native.threads())  # fmt: skip
 
 
 #: (the last table, its colour ratios laid out by entry): a frame walks its rows in several calls
