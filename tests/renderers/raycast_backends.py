@@ -17,7 +17,7 @@ def use_backend(backend: str, monkeypatch: pytest.MonkeyPatch) -> ModuleType:
     """Make raycast's frames use `backend`'s kernels meanwhile; the module whose `march` and
     `march_pixels` they call. The C build is skipped where this machine cannot build it."""
     if backend == "numba":
-        monkeypatch.setattr(march_native, "_NUMBA_ONLY", [True])
+        monkeypatch.setattr(march_native.numba_only, "on", True)
         return K
     if march_native._library() is None:
         pytest.skip("no C compiler here: the numba kernels draw")

@@ -19,6 +19,8 @@ import shutil
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import cache
 from pathlib import Path
 
@@ -150,3 +152,20 @@ def threads() -> int:
         return len(os.sched_getaffinity(0))
     except (AttributeError, OSError):
         return os.cpu_count() or 1
+
+
+class NumbaOnly:
+    """A switch that hands one C kernel's frames to the numba kernels it stands in for, meanwhile: benchmarks and tests
+    compare the two (`with numba_only(): ...`; `numba_only.on` while inside)."""
+
+    def __init__(self) -> None:
+        self.on = False
+
+    @contextmanager
+    def __call__(self) -> Iterator[None]:
+        before = self.on
+        self.on = True
+        try:
+            yield
+        finally:
+            self.on = before

@@ -11,8 +11,6 @@ rounding.
 from __future__ import annotations
 
 import ctypes
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -214,19 +212,8 @@ def march2d_pixels(values: NDArray[Any], grad: Gradients2D, bricks: EmptyBricks,
     _pixels(_loaded(), _Frame(values, bricks, view, (grad, tab)), term, pixels, out, counts, chunk)
 
 
-#: Frames drawn meanwhile use numba's kernels (`numba_only`).
-_NUMBA_ONLY = [False]
-
-
-@contextmanager
-def numba_only() -> Iterator[None]:
-    """raycast's frames use numba's kernels meanwhile (benchmarks and tests compare the two)."""
-    before = _NUMBA_ONLY[0]
-    _NUMBA_ONLY[0] = True
-    try:
-        yield
-    finally:
-        _NUMBA_ONLY[0] = before
+#: raycast's frames use numba's kernels meanwhile (`with numba_only(): ...`).
+numba_only = native.NumbaOnly()
 
 
 def kernels(values: NDArray[Any], two_d: bool = False) -> tuple[Any, Any] | None:
@@ -234,7 +221,7 @@ def kernels(values: NDArray[Any], two_d: bool = False) -> tuple[Any, Any] | None
     the numba kernels must draw it: `numba_only` is on, ``VOLREN_NATIVE`` is 0 (read at each frame), the
     library is not available, the grid is too large for 32-bit offsets, its values are neither 8-bit nor
     float32, or an 8-bit grid lacks the slack `padded` gives."""
-    if _NUMBA_ONLY[0] or not native.enabled():
+    if numba_only.on or not native.enabled():
         return None
     if (
         values.dtype not in (np.uint8, np.float32)

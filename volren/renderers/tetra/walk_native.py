@@ -12,8 +12,6 @@ float rounding.
 from __future__ import annotations
 
 import ctypes
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -102,25 +100,14 @@ def _library() -> ctypes.CDLL | None:
     return lib
 
 
-#: Walks drawn meanwhile use numba's kernel (`numba_only`).
-_NUMBA_ONLY = [False]
-
-
-@contextmanager
-def numba_only() -> Iterator[None]:
-    """tetra's CPU walks use numba's kernel meanwhile (benchmarks and tests compare the two)."""
-    before = _NUMBA_ONLY[0]
-    _NUMBA_ONLY[0] = True
-    try:
-        yield
-    finally:
-        _NUMBA_ONLY[0] = before
+#: tetra's CPU walks use numba's kernels meanwhile (`with numba_only(): ...`).
+numba_only = native.NumbaOnly()
 
 
 def available(cells: int) -> bool:
     """Whether the C walk draws a mesh of `cells` cells: `numba_only` is off, ``VOLREN_NATIVE`` is not 0
     (read at each call), the library builds and loads, and the cell ids fit 32 bits."""
-    return not _NUMBA_ONLY[0] and native.enabled() and cells < 2**31 - 1 and _library() is not None
+    return not numba_only.on and native.enabled() and cells < 2**31 - 1 and _library() is not None
 
 
 def _address(array: NDArray[Any]) -> int:
@@ -263,7 +250,7 @@ def _entry_major(ratio: NDArray[Any]) -> NDArray[np.float64]:
 
 def packed_planes(points: NDArray[np.float64], tets: NDArray[np.int64]) -> NDArray[np.float64] | None:
     """`tet_planes.packed_face_planes` in C, or None where the library is not available."""
-    if _NUMBA_ONLY[0] or not native.enabled():
+    if numba_only.on or not native.enabled():
         return None
     lib = _library()
     if lib is None:
