@@ -3,9 +3,10 @@
  * step), ported line by line so that both draw the same image up to float rounding.
  *
  * Why C beside numba: the C walk reads the cells it steps through from one record each (`Cell`: planes,
- * gradient, neighbours and flags in three cache lines), where the numba kernel reads six arrays, and the
- * pre-integration table with both length layers of an entry side by side: 1.2-1.6x numba's frames
- * (`benchmarks.tetra_walk`).
+ * gradient, neighbours and flags in three cache lines), where the numba kernel reads six arrays; it tests a
+ * cell's four exit faces in one AVX2 vector; it reads both length layers of a pre-integration table entry side
+ * by side; and it finds each pixel's entry faces itself, in its threads: 1.8-2.3x numba's frames
+ * (`benchmarks.tetra_walk`; what helped and what did not: docs/tetra-benchmark.md).
  *
  * Threads: the caller's thread and `threads - 1` POSIX threads take blocks of rays from a shared
  * counter until none is left, and are joined before the call returns (nothing survives a fork).

@@ -1,12 +1,11 @@
 """tetra's cell walk in C (`walk.c`), called as numba's `traversal.cast_rays` is.
 
 Why: the C walk reads each cell it steps through from one 192-byte record (`CellRecords`: planes,
-gradient, neighbours and flags, three cache lines), where numba's reads six arrays, and both length
-layers of a pre-integration table entry from one run of six doubles: 1.2-1.6x numba's frames
-(`benchmarks.tetra_walk`). Where the library cannot be built or
-loaded (`volren.kernels.native`: no compiler, ``VOLREN_NATIVE=0``) or a mesh has more cells than
-32-bit neighbour ids hold, `available` is False and numba's kernel draws, the same image up to
-float rounding.
+gradient, neighbours and flags, three cache lines), where numba's reads six arrays, tests the four exit
+faces at once, and finds each pixel's entry faces in its own threads (`FaceTiles`): 1.8-2.3x numba's
+frames (`benchmarks.tetra_walk`). Where the library cannot be built or loaded (`volren.kernels.native`:
+no compiler, ``VOLREN_NATIVE=0``) or a mesh has more cells than 32-bit neighbour ids hold, `available`
+is False and numba's kernel draws, the same image up to float rounding.
 """
 
 from __future__ import annotations
