@@ -186,6 +186,27 @@ def test_frame_cost_forgets_a_largest_size_whose_times_previews_contradict():
     assert cost.model() == pytest.approx((100.0 / 3, 20.0 / 150_000))
 
 
+def test_frame_cost_forgets_the_first_frames_along_a_new_axis():
+    """Shear-warp's rotation previews on bonsai at 947x896: its first two frames at a quarter of the
+    pixels paid the slice stacks of a new axis (505 and 411 ms), then previews of about 40,000 pixels
+    took 45-62 ms, most of it fixed. The line through both sizes predicted 1.7x what the previews
+    took, and sized from it they stayed at 5 % of the pixels. Taken as stale, the previews become
+    the reference and grow back to a quarter of the pixels within the gesture."""
+    full = 947 * 896
+    cost = FrameCost()
+    cost.note(212_352, 504.9)
+    cost.note(212_352, 410.9)
+    cost.note(41_382, 52.3)
+    assert cost.model() == (0.0, 52.3 / 41_382)
+    scales = []
+    for _ in range(12):
+        fixed, per_pixel = cost.model()
+        scales.append(adaptive_preview_scale(per_pixel, full, 80.0, 0.5, fixed_ms=fixed))
+        pixels = round(scales[-1] ** 2 * full)
+        cost.note(pixels, 40.0 + 1.5e-4 * pixels)  # what such a preview costs: 40 ms fixed
+    assert scales[-1] == 0.5 and scales[0] < 0.3
+
+
 def test_pick_renderer_keeps_current_else_takes_the_measured_choice():
     opts = [
         RendererOption("reference", None),

@@ -44,8 +44,10 @@ def adaptive_preview_scale(
 #: do not, and one such frame taken as the full size's cost made the previews 2 % of the pixels.
 FRAMES_PER_SIZE = 5
 #: How far above the latest previews' time the model may predict it before the largest size's
-#: times are taken as stale (`FrameCost._full_is_stale`).
-STALE_FACTOR = 2.0
+#: times are taken as stale (`FrameCost._full_is_stale`). At 2, shear-warp's first frames along a
+#: new axis (505 and 411 ms at a quarter of bonsai's 947x896 view), through which the line
+#: predicted 1.7x what the previews then took, kept the rotation's previews at 5 % of the pixels.
+STALE_FACTOR = 1.25
 
 
 class FrameCost:
