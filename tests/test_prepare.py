@@ -155,9 +155,9 @@ def test_a_renderer_that_draws_with_c_kernels_compiles_their_numba_stand_ins_too
     seen = []
     real = march_native.kernels
 
-    def spy(values, two_d=False):
-        found = real(values, two_d)
-        seen.append((two_d, found is not None))
+    def spy(values, kind="1d"):
+        found = real(values, kind)
+        seen.append((kind, found is not None))
         return found
 
     before = os.environ.get("VOLREN_NATIVE")
@@ -166,7 +166,7 @@ def test_a_renderer_that_draws_with_c_kernels_compiles_their_numba_stand_ins_too
         patch.setattr("volren.prepare._volumes", lambda kind: iter([next(_volumes(kind))]))
         result = prepare_renderer("raycast")
     assert result.error is None
-    for two_d in (False, True):  # frames with the C march, then with numba's, for both TF dimensions
-        assert (two_d, True) in seen and (two_d, False) in seen
+    for kind in ("1d", "2d"):  # frames with the C march, then with numba's, for both TF dimensions
+        assert (kind, True) in seen and (kind, False) in seen
     assert os.environ.get("VOLREN_NATIVE") == before
     assert native.handed_out() > 0

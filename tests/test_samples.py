@@ -57,3 +57,19 @@ def test_installed_copies_regenerate_the_samples(tmp_path, monkeypatch):
     assert folder == tmp_path / "cache" / "volren" / "data_samples"
     volume_path, tf_path = samples.sample_paths("phantom_ct")
     assert volume_path.exists() and json.loads(tf_path.read_text())["version"] == 1
+
+
+def test_the_phantoms_labels_match_the_generator_and_name_every_label():
+    from volren.io.label_info import load_label_info
+    from volren.io.label_io import load_labels
+
+    labels_path, info_path = (samples.REPO_SAMPLES / f for f in samples.SAMPLE_LABELS["phantom_ct"])
+    volume = load_volume(samples.sample_paths("phantom_ct")[0])
+    labels = load_labels(labels_path, volume)
+    generated = samples.shepp_logan_labels()
+    np.testing.assert_array_equal(labels.values, generated.values)
+    assert labels.present == tuple(range(11))  # the air and every ellipsoid
+    info = load_label_info(info_path)
+    assert info.names == generated.names and info.colors == generated.colors
+    assert np.all(volume.values[labels.values == 2] < 100)  # the brain: soft tissue
+    assert np.all(volume.values[labels.values == 1] > 0)  # the skull: bone

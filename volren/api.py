@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
-from os import PathLike
+from os import PathLike, fspath
 from typing import Any
 
 import numpy as np
@@ -23,8 +23,10 @@ from volren.draw import (
 )
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
 from volren.model.clip_region import ClipRegion, check_box
 from volren.model.default_tf import default_transfer_function
+from volren.model.labels import LabelTransferFunction
 from volren.model.scene import Scene
 from volren.model.settings import RenderSettings, is_finite
 from volren.model.transfer_function import TransferFunction1D
@@ -58,18 +60,33 @@ def as_volume(volume: Any, scalars: str | None = None) -> Volume:
     return io.from_pyvista(volume, scalars=scalars)
 
 
-def as_transfer_function(tf: Any, volume: Volume) -> TransferFunction:
-    """A TF (1D or 2D) from a TF, a path, a TF JSON dict, or None (the default, 1D, for this volume)."""
+def as_transfer_function(
+    tf: Any, volume: Volume
+) -> TransferFunction | LabelTransferFunction | ChannelTransferFunction:
+    """A TF (1D or 2D, a TF per label, or a TF per channel) from a TF, a path, a TF JSON dict, or
+    None (the default for this volume: 1D, or for a volume with channels a TF per channel,
+    `volren.io.channel_io.default_channel_tf`)."""
     if tf is None:
+        channels = getattr(volume, "channels", None)
+        if channels is not None:
+            from volren.io.channel_io import default_channel_tf
+
+            return default_channel_tf(channels)
         return default_transfer_function(volume)
-    if isinstance(tf, TransferFunction1D | TransferFunction2D):
+    if isinstance(
+        tf, TransferFunction1D | TransferFunction2D | LabelTransferFunction | ChannelTransferFunction
+    ):
         return tf
     if isinstance(tf, Mapping):
+        if tf.get("kind") == "labels":
+            return LabelTransferFunction.from_dict(tf)
+        if tf.get("kind") == "channels":
+            return ChannelTransferFunction.from_dict(tf)
         return transfer_function_from_dict(tf)
     if isinstance(tf, str | PathLike):
-        from volren import io
+        from volren.io.tf_io import load_any_transfer_function
 
-        return io.load_transfer_function(tf)
+        return load_any_transfer_function(fspath(tf))
     raise VolrenError(f"cannot use a {type(tf).__name__} as a transfer function")
 
 
@@ -111,6 +128,14 @@ def drawing(
     clip_planes: Sequence[Any] = (),
     crop: Sequence[float] | None = None,
     clip_cap: bool = False,
+    labels: Any = None,
+    label_tfs: Mapping[int, Any] | None = None,
+    hidden_labels: Sequence[int] = (),
+    label_info: Any = None,
+    channels: bool | Sequence[int] | None = None,
+    channel_tfs: Mapping[int, Any] | None = None,
+    channel_weights: Mapping[int, float] | None = None,
+    hidden_channels: Sequence[int] = (),
     **settings: Any,
 ) -> Drawing:
     """What `render` draws, ready for many frames: the input read, `auto` and the quality resolved
@@ -118,11 +143,14 @@ def drawing(
     the renderer is prepared once, on the first frame, and kept: ``d.frame(d.orbit(azimuth=a))``
     draws another view and ``d.set_transfer_function(tf)`` another TF without preparing the
     volume again (`volren.draw.Drawing`)."""
+    from volren.draw.channels import wants_channels
+    from volren.draw.labelled import labelled, wants_labels
+
     if clip_planes or crop is not None:
         settings["clip"] = ClipRegion(tuple(clip_planes), None if crop is None else check_box(crop), clip_cap)
     elif clip_cap:
         raise VolrenError("clip_cap: give clip_planes or crop (there is nothing cut to cap)")
-    source = _open_input(volume, scalars, memory, level)
+    source = _open_input(volume, scalars, memory, level, channels)
     vol = source.stand_in()
     transfer = as_transfer_function(tf, vol)
     width, height = parse_size(size)
@@ -130,6 +158,21 @@ def drawing(
         if not is_finite(value):
             raise VolrenError(f"{name} must be finite, got {value!r:.40}")
     on_cluster = cluster is not None or scheduler is not None  # an empty one is refused, not ignored
+    if wants_labels(vol, transfer, labels, label_info, label_tfs, hidden_labels):
+        if source.bricks or on_cluster:
+            raise VolrenError("labels: label volumes are drawn from a volume read whole (not an OME-Zarr "
+                              "image streamed by level, nor on a cluster)")  # fmt: skip
+        if wants_channels(vol, transfer, channels, channel_tfs, channel_weights, hidden_channels):
+            raise VolrenError(
+                "channels: a volume is drawn with labels or with channels, not both at once yet"
+            )
+        vol, transfer = labelled(vol, transfer, labels, label_info, label_tfs, hidden_labels)  # type: ignore[arg-type]
+        source = VolumeInput(vol)
+    elif wants_channels(vol, transfer, channels, channel_tfs, channel_weights, hidden_channels):
+        vol, transfer = _with_channels(
+            vol, tf, transfer, channel_tfs, channel_weights, hidden_channels, on_cluster
+        )
+        source = VolumeInput(vol)
     cam = camera or Camera.orbit(source.bounds, azimuth, elevation, zoom, parallel, width / height)
     # the level's settings on the defaults, then the caller's fields again on top (they win; options merge)
     scene = Scene(None, transfer, cam, RenderSettings().with_(**settings), renderer=renderer, size=(width, height),
@@ -163,6 +206,14 @@ def render(
     clip_planes: Sequence[Any] = (),
     crop: Sequence[float] | None = None,
     clip_cap: bool = False,
+    labels: Any = None,
+    label_tfs: Mapping[int, Any] | None = None,
+    hidden_labels: Sequence[int] = (),
+    label_info: Any = None,
+    channels: bool | Sequence[int] | None = None,
+    channel_tfs: Mapping[int, Any] | None = None,
+    channel_weights: Mapping[int, float] | None = None,
+    hidden_channels: Sequence[int] = (),
     **settings: Any,
 ) -> NDArray[np.float32]:
     """Render offscreen; returns float32 (H, W, 4) premultiplied RGBA over black, row 0 on top.
@@ -184,22 +235,92 @@ def render(
     given, else the full resolution (the level the view needs at quality draft and interactive),
     read whole within `memory` (bytes or "2GB"; default 8 GB) or streamed brick by brick. `cluster` ("local" or "local:N") or `scheduler` (an address) draws
     the bricks on a dask.distributed cluster (`volren.bricked.cluster`).
+
+    A segmented volume (Real-Time Volume Graphics, chapter 16: a TF per label) draws with `labels`:
+    a segmentation file on the volume's grid (NIfTI, NRRD or 3D Slicer's .seg.nrrd, MetaImage,
+    .vti, ...: `volren.io.label_io.load_labels`), an array indexed [k, j, i] as the volume's values,
+    or a `LabelMap`; or with a volume that has labels already. Each label draws with `tf` recoloured
+    (label 0 as it is), unless `tf` is a `LabelTransferFunction`; `label_info` (a label-info JSON
+    file or dict: names, colours, opacities, TFs), `label_tfs` ({label: a 1D TF or TF file}) and
+    `hidden_labels` (labels not drawn) change that, in this order (`volren.draw.labelled`). `auto`
+    then picks among the renderers that draw labels.
+
+    A multi-channel volume (Max 1995, section 2: the channels' extinctions and emissions add, a TF
+    each) draws with `channels`: True for every component of a vector array (or every channel of an
+    OME-Zarr image's c axis, with its ``omero`` colours, windows, labels and active flags), or a
+    list of the file's channel numbers; or with a `UniformVolume` that has `channels`. Each channel
+    draws with its default ramp (`volren.io.channel_io.default_channel_tf`), unless `tf` is a
+    `ChannelTransferFunction` (or its file), or a 1D TF for every channel; `channel_tfs`
+    ({channel: a 1D TF or TF file}), `channel_weights` ({channel: weight >= 0}) and
+    `hidden_channels` change that, in this order (`volren.draw.channels`). Channels are the file's
+    numbers. `auto` then picks among the renderers that mix channels, with pre-integration off.
     """
     ready = drawing(volume, tf, renderer, size, azimuth, elevation, zoom, parallel, camera, scalars, quality, memory,
-                    level, cluster, scheduler, clip_planes, crop, clip_cap, **settings)  # fmt: skip
+                    level, cluster, scheduler, clip_planes, crop, clip_cap, labels=labels, label_tfs=label_tfs,
+                    hidden_labels=hidden_labels, label_info=label_info, channels=channels, channel_tfs=channel_tfs,
+                    channel_weights=channel_weights, hidden_channels=hidden_channels, **settings)  # fmt: skip
     return ready.frame(progress=progress).image
 
 
-def _open_input(volume: Any, scalars: str | None, memory: int | str | None, level: int | None) -> DrawInput:
+def _open_input(volume: Any, scalars: str | None, memory: int | str | None, level: int | None,
+                channels: Any = None) -> DrawInput:  # fmt: skip
     """What `volume` names, to draw from: an OME-Zarr image (within `memory`, at `level`), or a
-    volume (`as_volume`); `memory` and `level` are refused for anything but an OME-Zarr image."""
+    volume (`as_volume`); `memory` and `level` are refused for anything but an OME-Zarr image.
+    `channels` (True or channel numbers): the channels read too, the volume read whole."""
+    from volren.io.channel_io import wants_pick
     from volren.io.ome_zarr_io import parse_memory
 
     if not is_ome_zarr_path(volume):
         if memory is not None or level is not None:
             raise VolrenError("memory and level apply to an OME-Zarr image (a .zarr folder or URL)")
+        if wants_pick(channels):
+            return VolumeInput(_channel_volume(volume, scalars, channels))
         return VolumeInput(as_volume(volume, scalars))
     budget = parse_memory(memory) if isinstance(memory, str) else memory
     if budget is not None and (isinstance(budget, bool) or budget < 1):
         raise VolrenError(f"memory must be a positive number of bytes or a size like 2GB, got {memory!r}")
+    if wants_pick(channels):
+        from volren.io.volume_io import load_ome_zarr
+
+        return VolumeInput(_named_channels(lambda: load_ome_zarr(volume, level, budget, channels)))
     return open_ome_zarr(volume, budget, level)
+
+
+def _named_channels(load: Any) -> Any:
+    """`load()`, its one-line errors starting with the argument's name, `channels`."""
+    try:
+        return load()
+    except VolrenError as exc:
+        raise VolrenError(f"channels: {exc}") from None
+
+
+def _channel_volume(volume: Any, scalars: str | None, channels: Any) -> Volume:
+    """A volume with channels: a file or PyVista dataset read with them, or a volume in memory
+    with channels, `channels` picking among them."""
+    from volren import io
+    from volren.draw.channels import picked_volume
+
+    if isinstance(volume, UniformVolume | TetVolume):
+        if not isinstance(volume, UniformVolume) or volume.channels is None:
+            raise VolrenError(f"channels: {volume.name} has one field; give a UniformVolume with channels (a "
+                              "ChannelSet), or a file or dataset whose array has several components")  # fmt: skip
+        return picked_volume(volume, channels, "channels")
+    if isinstance(volume, str | PathLike):
+        return _named_channels(lambda: io.load_volume(fspath(volume), scalars=scalars, channels=channels))
+    return _named_channels(lambda: io.from_pyvista(volume, scalars=scalars, channels=channels))
+
+
+def _with_channels(vol: Volume, tf: Any, transfer: Any, tfs: Any, weights: Any, hidden: Any,
+                   on_cluster: bool) -> tuple[UniformVolume, ChannelTransferFunction]:  # fmt: skip
+    """The volume and its TF per channel (`volren.draw.channels.channelled`): `tf` None gives the
+    channels' default look, a 1D TF is every channel's."""
+    from volren.draw.channels import channelled
+
+    if on_cluster:
+        raise VolrenError(
+            "channels: multi-channel volumes are drawn from a volume read whole, not on a cluster"
+        )
+    given = transfer if tf is not None or isinstance(transfer, ChannelTransferFunction) else None
+    if given is not None and not isinstance(given, TransferFunction1D | ChannelTransferFunction):
+        raise VolrenError("channels: channels draw with a 1D transfer function each; got a 2D one")
+    return channelled(vol, given, tfs, weights, hidden)

@@ -40,7 +40,7 @@ from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
-from volren.renderers.base import QualityLevel
+from volren.renderers.base import Capabilities, QualityLevel
 
 LEVELS = ("draft", "interactive", "default", "high", "exact")
 DEFAULT_LEVEL = "default"
@@ -235,13 +235,19 @@ def ranked(scene: SceneClass, level: str, names: Iterable[str], quality: Quality
 def choose_renderer(scene: SceneClass, level: str, tf_dim: int, settings: RenderSettings, names: Iterable[str],
                     quality: QualityTable | None = None,
                     can_draw: Callable[[str], bool] | None = None, cameras: Sequence[Camera] = (),
-                    bounds: Sequence[float] | None = None) -> tuple[str, str]:  # fmt: skip
+                    bounds: Sequence[float] | None = None, labels: bool = False,
+                    channels: bool = False) -> tuple[str, str]:  # fmt: skip
     """(`auto`'s renderer, why) for a scene of this class, TF dimension and settings at `level`,
     among the registered `names`. Candidates are tried fastest first (`ranked`), so only the chosen
     renderer and the faster ones that cannot draw the scene are imported. `can_draw` replaces the
     capabilities test (the app has its own list). `cameras` (with the volume's `bounds`): the views
     to be drawn, every one of which the renderer must be able to draw
-    (`Capabilities.camera_reason`: an eye inside the volume)."""
+    (`Capabilities.camera_reason`: an eye inside the volume). `labels`: the scene is drawn by a
+    label volume with a TF per label, so only renderers whose capabilities say `labels` take part,
+    each checked with its level's settings as `resolve` gives them to it (`label_settings`).
+    `channels`: several channels mixed, a TF each, so only renderers whose capabilities say
+    `channels` take part, each checked at its level's settings without pre-integration
+    (`channel_settings`)."""
     from volren.renderers.registry import registry
 
     quality = quality or table()
@@ -256,7 +262,14 @@ def choose_renderer(scene: SceneClass, level: str, tf_dim: int, settings: Render
             return can_draw is not None
         if can_draw is None:
             level_settings = _with_level(quality.measurement(name, scene, level), settings)
-            if capabilities.unsupported_reason(scene.kind, tf_dim, level_settings) is not None:
+            if labels:
+                level_settings = label_settings(capabilities, scene.kind, level_settings)
+            if channels:
+                level_settings = channel_settings(capabilities, scene.kind, level_settings)
+            if (
+                capabilities.unsupported_reason(scene.kind, tf_dim, level_settings, labels, channels)
+                is not None
+            ):
                 return False
         return bounds is None or all(
             capabilities.camera_reason(scene.kind, c, bounds) is None for c in cameras
@@ -270,18 +283,55 @@ def choose_renderer(scene: SceneClass, level: str, tf_dim: int, settings: Render
     for name in names:
         if name not in measured and drawable(name):
             return name, f"no measured renderer draws this scene; {name} can"
-    raise VolrenError(f"no registered renderer can draw this {scene.kind} scene (see `volren renderers`)")
+    what = f"{scene.kind} scene" + (" with labels" if labels else " with channels" if channels else "")
+    raise VolrenError(f"no registered renderer can draw this {what} (see `volren renderers`)")
+
+
+def label_settings(capabilities: Capabilities, kind: str, settings: RenderSettings) -> RenderSettings:
+    """The settings a renderer draws a label scene with: `settings` with pre-integration off where
+    it draws labels but does not pre-integrate them (`KindSupport.labels_preintegration`). Why: a
+    pre-integration table is built for one TF (RTVG section 4.5), and with a TF per label the
+    renderer would need one per pair of labels meeting in a ray segment (section 16.5), which it
+    does not build; the level's other settings (its step, its options) stay as measured. Where the
+    renderer pre-integrates labels, or draws no labels (it is then refused for its own reason), as
+    they are."""
+    support = capabilities.kinds.get(kind)  # type: ignore[call-overload]
+    if (
+        support is not None
+        and support.labels
+        and not support.labels_preintegration
+        and settings.preintegration
+    ):
+        return settings.with_(preintegration=False)
+    return settings
+
+
+def channel_settings(capabilities: Capabilities, kind: str, settings: RenderSettings) -> RenderSettings:
+    """The settings a renderer mixes channels with: `settings` with pre-integration off where it
+    mixes channels (`KindSupport.channels`). Why: a pre-integration table (RTVG section 4.5) is
+    indexed by the scalar at a segment's two ends for one TF; with a TF per channel the segment's
+    extinction is a sum over channels of integrals of each (Max 1995, section 2), which would need a
+    table per channel and a sum of their exponents, which no renderer builds. The level's other
+    settings stay as measured; a renderer that mixes no channels is refused for its own reason."""
+    support = capabilities.kinds.get(kind)  # type: ignore[call-overload]
+    if support is not None and support.channels and settings.preintegration:
+        return settings.with_(preintegration=False)
+    return settings
 
 
 def resolve(scene: SceneClass, tf_dim: int, renderer: str, level: str | None, settings: RenderSettings,
-            bricks: bool = False, cameras: Sequence[Camera] = (),
-            bounds: Sequence[float] | None = None) -> tuple[str, RenderSettings, str | None]:  # fmt: skip
+            bricks: bool = False, cameras: Sequence[Camera] = (), bounds: Sequence[float] | None = None,
+            labels: bool = False, channels: bool = False) -> tuple[str, RenderSettings, str | None]:  # fmt: skip
     """(renderer, settings, why): `auto` resolved at `level` (`default` when None), the level's
     measured settings applied (none when `level` is None; the caller's options win over the
     level's), and why `auto` chose its renderer (None when one was named). With `bricks`, `auto`
     chooses among the renderers that draw bricks (a bricked volume, a cluster); with `cameras` and
-    the volume's `bounds`, among those that draw every one of those views. The one place the CLI
-    and the API turn a request into what is drawn."""
+    the volume's `bounds`, among those that draw every one of those views. With `labels` (a label
+    volume drawn with a TF per label, RTVG chapter 16), among those that draw labels; and the
+    level's settings are applied with pre-integration off where the renderer draws labels but does
+    not pre-integrate them (`label_settings`: no per-label pre-integration tables are built). With
+    `channels` (several channels mixed, a TF each), among those that mix channels, with
+    pre-integration off (`channel_settings`). The one place the CLI and the API turn a request into what is drawn."""
     from volren.renderers.registry import registry
 
     if level is not None:
@@ -292,9 +342,18 @@ def resolve(scene: SceneClass, tf_dim: int, renderer: str, level: str | None, se
         if bricks:
             names = [n for n in names if _draws_bricks(registry, n, scene.kind)]
         renderer, why = choose_renderer(scene, level or DEFAULT_LEVEL, tf_dim, settings, names, cameras=cameras,
-                                        bounds=bounds)  # fmt: skip
+                                        bounds=bounds, labels=labels, channels=channels)  # fmt: skip
     if level is not None:
         settings = _with_level(table().measurement(renderer, scene, level), settings)
+        if labels or channels:
+            try:
+                capabilities = registry.capabilities(renderer)
+            except VolrenError:  # an unknown renderer: refused, by name, where it is made
+                capabilities = None
+            if capabilities is not None and labels:
+                settings = label_settings(capabilities, scene.kind, settings)
+            if capabilities is not None and channels:
+                settings = channel_settings(capabilities, scene.kind, settings)
     return renderer, settings, why
 
 

@@ -6,19 +6,23 @@ output of this code (no data from elsewhere is shipped):
 
 - ``marschner_lobb.vti``: the Marschner-Lobb test signal (1994) on a 41^3 grid over [-1, 1]^3,
   float32: a classic test of reconstruction and sampling accuracy.
-- ``phantom_ct.vti``: a CT-like 3D Shepp-Logan head phantom, 64^3 int16 in Hounsfield-like units.
+- ``phantom_ct.vti``: a CT-like 3D Shepp-Logan head phantom, 64^3 int16 in Hounsfield-like units,
+  with ``phantom_ct.labels.vti`` (its ellipsoids as labels: skull, brain, ventricles, a cyst and
+  nodules) and their names and colours in ``phantom_ct.labels.json``.
 - ``hollow_cylinder.vtu``: a tetrahedral mesh of a hollow cylinder (non-convex) carrying an
   analytic field, for the tetrahedral renderers.
 """
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
 import numpy as np
 
 from volren.model.colormaps import VIRIDIS, color_stops
+from volren.model.labels import PALETTE, LabelMap
 from volren.model.tet_repair import repair_tets
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import TetVolume, UniformVolume
@@ -28,7 +32,12 @@ SAMPLES = {
     "phantom_ct": ("phantom_ct.vti", "phantom_ct.tf.json"),
     "hollow_cylinder": ("hollow_cylinder.vtu", "hollow_cylinder.tf.json"),
 }
+#: Samples with a segmentation: (label volume file, label names and colours file).
+SAMPLE_LABELS = {"phantom_ct": ("phantom_ct.labels.vti", "phantom_ct.labels.json")}
 REPO_SAMPLES = Path(__file__).resolve().parent.parent / "data_samples"
+#: The phantom's labels, one per ellipsoid (0 is the air around it).
+PHANTOM_LABELS = ("skull", "brain", "ventricle 1", "ventricle 2", "cyst", "nodule 1", "nodule 2", "nodule 3",
+                  "nodule 4", "nodule 5")  # fmt: skip
 
 
 def marschner_lobb(n: int = 41, f_m: float = 6.0, alpha: float = 0.25) -> UniformVolume:
@@ -73,6 +82,23 @@ def shepp_logan_ct(n: int = 64) -> UniformVolume:
     hu = np.interp(density, [0.0, 1.0, 1.05, 2.0], [-1000.0, -20.0, 60.0, 1000.0])
     step = 2.0 / (n - 1)
     return UniformVolume(np.round(hu).astype(np.int16), (step,) * 3, (-1.0,) * 3, name="phantom_ct")
+
+
+def shepp_logan_labels(n: int = 64) -> LabelMap:
+    """The phantom's segmentation: at each grid point the last of its ellipsoids that holds it
+    (ellipsoid k is label k + 1, named in `PHANTOM_LABELS`; the skull is the first ellipsoid less
+    the second), 0 outside, coloured from the label palette."""
+    t = np.linspace(-1.0, 1.0, n)
+    z, y, x = np.meshgrid(t, t, t, indexing="ij")
+    labels = np.zeros(x.shape, np.uint8)
+    for k, ((cx, cy, cz), (a, b, c), angle, _) in enumerate(_ELLIPSOIDS):
+        phi = np.radians(angle)
+        xr = (x - cx) * np.cos(phi) + (y - cy) * np.sin(phi)
+        yr = -(x - cx) * np.sin(phi) + (y - cy) * np.cos(phi)
+        labels[(xr / a) ** 2 + (yr / b) ** 2 + ((z - cz) / c) ** 2 <= 1.0] = k + 1
+    names = dict(enumerate(PHANTOM_LABELS, start=1))
+    colors = {label: PALETTE[label - 1] for label in names}
+    return LabelMap(labels, names, colors, name="phantom_ct.labels")
 
 
 def hollow_cylinder(n_r: int = 5, n_theta: int = 32, n_z: int = 12) -> TetVolume:
@@ -160,15 +186,33 @@ def write_samples(folder: str | Path) -> list[Path]:
         save_volume(volume, folder / volume_file)
         save_transfer_function(tfs[name], folder / tf_file)
         written += [folder / volume_file, folder / tf_file]
+    for name, (labels_file, info_file) in SAMPLE_LABELS.items():
+        labels = shepp_logan_labels()
+        volume = sample_volumes()[name]
+        assert isinstance(volume, UniformVolume)
+        save_volume(
+            UniformVolume(labels.values, volume.spacing, volume.origin, name=labels.name),
+            folder / labels_file,
+        )
+        entries = [
+            {"value": v, "name": labels.names[v], "color": list(labels.colors[v])}
+            for v in sorted(labels.names)
+        ]
+        (folder / info_file).write_text(json.dumps({"version": 1, "labels": entries}, indent=1) + "\n")
+        written += [folder / labels_file, folder / info_file]
     return written
+
+
+def _sample_files() -> list[str]:
+    return [f for pair in (*SAMPLES.values(), *SAMPLE_LABELS.values()) for f in pair]
 
 
 def samples_folder() -> Path:
     """The folder with the sample files: the repository's, else a generated cache copy."""
-    if all((REPO_SAMPLES / f).exists() for pair in SAMPLES.values() for f in pair):
+    if all((REPO_SAMPLES / f).exists() for f in _sample_files()):
         return REPO_SAMPLES
     cache = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "volren" / "data_samples"
-    if not all((cache / f).exists() for pair in SAMPLES.values() for f in pair):
+    if not all((cache / f).exists() for f in _sample_files()):
         write_samples(cache)
     return cache
 
@@ -203,5 +247,6 @@ __all__ = [
     "sample_volumes",
     "samples_folder",
     "shepp_logan_ct",
+    "shepp_logan_labels",
     "write_samples",
 ]

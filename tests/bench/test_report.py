@@ -19,7 +19,7 @@ def test_benchmarks_md_collects_the_fragments_and_relinks_plots(tmp_path):
     assert "![engine](docs/bench/engine.png)" in text
     assert text.index("## Run time against error") < text.index("## Numerical stress")
     assert (
-        "Not in this run: skip.md, quality.md, defaults_fidelity.md, defaults_fidelity_shared.md, defaults_ab.md, fastest_peer.md, viewer_peers.md, plugins.md, shearwarp_peers.md, occlusion_bound.md, resampling_floor.md, clipping.md, tf2d.md, tf2d_drag.md, app.md, app_latency.md, first_preview.md, zarr_levels.md, scale.md, oneshot.md, step_search.md, packet_probe.md, native_march.md, tetra_walk.md, gpu.md."
+        "Not in this run: skip.md, quality.md, defaults_fidelity.md, defaults_fidelity_shared.md, defaults_ab.md, fastest_peer.md, viewer_peers.md, plugins.md, shearwarp_peers.md, occlusion_bound.md, resampling_floor.md, clipping.md, tf2d.md, tf2d_drag.md, app.md, app_latency.md, first_preview.md, zarr_levels.md, scale.md, oneshot.md, step_search.md, packet_probe.md, native_march.md, tetra_walk.md, labels.md, channels.md, gpu.md."
         in text
     )
 

@@ -56,3 +56,19 @@ def test_malformed_boxes_are_one_line_errors(box):
     with pytest.raises(VolrenError) as info:
         check_box(box)
     assert "\n" not in str(info.value) and "crop box" in str(info.value)
+
+
+def test_a_crop_cuts_the_labels_and_the_channels_with_the_values():
+    from volren.model.channels import ChannelSet
+    from volren.model.labels import LabelMap
+
+    values = np.arange(4 * 5 * 6, dtype=np.float32).reshape(4, 5, 6)
+    labels = (values.astype(np.int64) % 7).astype(np.uint8)
+    volume = UniformVolume(values, labels=LabelMap(labels, names={3: "three"}),
+                           channels=ChannelSet(np.stack([values, -values])))  # fmt: skip
+    cropped = crop_volume(volume, (1.0, 3.0, 0.0, 2.0, 1.0, 3.0))
+    assert isinstance(cropped, UniformVolume)
+    np.testing.assert_array_equal(cropped.labels.values, labels[1:4, 0:3, 1:4])
+    assert cropped.labels.names == {3: "three"}
+    np.testing.assert_array_equal(cropped.channels.values[1], -values[1:4, 0:3, 1:4])
+    np.testing.assert_array_equal(cropped.values, values[1:4, 0:3, 1:4])

@@ -113,9 +113,9 @@ def test_an_opaque_ray_stops_where_numba_stops(monkeypatch):
 
 def test_a_grid_too_large_for_the_gradients_offsets_is_left_to_numba(monkeypatch):
     values = march_native.padded(np.zeros((4, 5, 6), np.uint8))
-    assert march_native.kernels(values, two_d=True) is not None
+    assert march_native.kernels(values, "2d") is not None
     monkeypatch.setattr(march_native, "MAX_VALUES_2D", values.size - 1)
-    assert march_native.kernels(values, two_d=True) is None
+    assert march_native.kernels(values, "2d") is None
     assert march_native.kernels(values) is not None
 
 

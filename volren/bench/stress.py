@@ -37,6 +37,8 @@ from volren.bench.stress_cases import (
     table_cases,
 )
 from volren.errors import VolrenError
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
 from volren.model.settings import RenderSettings
 from volren.renderers.registry import RendererRegistry
 from volren.testing.metrics import image_error
@@ -193,7 +195,16 @@ def configs_for(registry: RendererRegistry, name: str, case: Case, quick: bool) 
                 if with_pre or not p
             ]
     caps = registry.capabilities(name)
-    return [c for c in out if caps.unsupported_reason(case.volume.kind, case.tf.dims, c.settings) is None]
+    return [
+        c
+        for c in out
+        if caps.unsupported_reason(case.volume.kind, case.tf.dims, c.settings, *_mixing(case)) is None
+    ]
+
+
+def _mixing(case: Case) -> tuple[bool, bool]:
+    """(labels, channels): whether the case draws a label volume or mixes channels."""
+    return isinstance(case.tf, LabelTransferFunction), isinstance(case.tf, ChannelTransferFunction)
 
 
 @dataclass(frozen=True)
@@ -232,7 +243,9 @@ def image_jobs(
         refs = [
             c
             for c in refs
-            if registry.capabilities(REFERENCE).unsupported_reason(case.volume.kind, case.tf.dims, c.settings)
+            if registry.capabilities(REFERENCE).unsupported_reason(
+                case.volume.kind, case.tf.dims, c.settings, *_mixing(case)
+            )
             is None
         ]
         jobs += [ImageJob(case, c) for c in (*refs, *others)]

@@ -5,8 +5,10 @@ float64, ranges of 1e-30 and 1e300, a float32 range of a few ulps, constant valu
 1e-6 and 1e6, NaN and Inf samples, zero-volume, inverted and sliver tetrahedra, duplicated
 points) and extreme transfer functions (opacity 0 and 1 everywhere, an opacity spike far
 narrower than the value change across one voxel, a jump, control points outside the data).
-Everything is small (a 24 x 20 x 16 grid, a 5^3 box of 750 tetrahedra) and seeded, so a run is
-quick and repeatable.
+Label volumes (every label 0..65535 at once, styles for labels the volume does not hold, nine in
+ten hidden) and channels (one NaN in a slab, Inf at points) are cases too. Everything is small
+(a 24 x 20 x 16 grid, a 41^3 one for the labels, a 5^3 box of 750 tetrahedra) and seeded, so a
+run is quick and repeatable.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.model.camera import Camera
+from volren.model.channels import ChannelSet, ChannelTransferFunction
+from volren.model.labels import MAX_LABEL, LabelMap, LabelStyle, LabelTransferFunction
 from volren.model.preintegration import LightingTables
 from volren.model.tet_repair import signed_volumes
 from volren.model.transfer_function import MIN_UNIT_DISTANCE, TransferFunction1D
@@ -210,14 +214,43 @@ def tf_2d(lo: float, hi: float, unit: float, gmax: float) -> TransferFunction2D:
     return TransferFunction2D((lo, hi), (0.0, gmax), widgets, unit)
 
 
-def make_tf(name: str, volume: Volume, seed: int) -> TransferFunction:
-    """TF `name` (a TF1D_BUILDERS key or "2d") over the volume's value range, its unit distance
-    the volume's characteristic length (so a voxel of opacity a has about that opacity)."""
+def tf_labels(volume: UniformVolume, base: TransferFunction1D, name: str) -> LabelTransferFunction:
+    """A TF per label over `base`: "labels", each label in its palette colour (label 0 as `base`);
+    "labels-absent", styles given for labels the volume does not hold (past its largest, and a
+    gap), the labels it holds unstyled; "labels-hidden", all but every tenth label hidden."""
+    assert volume.labels is not None
+    present = volume.labels.present
+    if name == "labels-absent":
+        missing = sorted(set(range(0, present[-1] + 3, 7)) - set(present))[:50] + [MAX_LABEL]
+        return LabelTransferFunction(
+            base, {label: LabelStyle(color=(1.0, 0.2, 0.1), opacity=3.0) for label in missing}
+        )
+    tf = LabelTransferFunction.for_labels(base, volume.labels)
+    if name == "labels-hidden":
+        tf.hide(label for n, label in enumerate(present) if n % 10)
+    return tf
+
+
+def make_tf(
+    name: str, volume: Volume, seed: int
+) -> TransferFunction | LabelTransferFunction | ChannelTransferFunction:
+    """TF `name` (a TF1D_BUILDERS key, "2d", "labels...": a TF per label over "random", or
+    "channels": each channel's default ramp, the second at weight 3) over the volume's value range,
+    its unit distance the volume's characteristic length (so a voxel of opacity a has about that
+    opacity)."""
     lo, hi = tf_span(*volume.value_range)
     unit = max(volume.characteristic_length, MIN_UNIT_DISTANCE)
     if name == "2d":
         assert isinstance(volume, UniformVolume)
         return tf_2d(lo, hi, unit, (hi - lo) / volume.mean_spacing)
+    if name.startswith("labels"):
+        assert isinstance(volume, UniformVolume)
+        return tf_labels(volume, tf_random(lo, hi, unit, seed), name)
+    if name == "channels":
+        assert isinstance(volume, UniformVolume) and volume.channels is not None
+        channels = ChannelTransferFunction.for_channels(volume.channels)
+        channels.set_weight(1, 3.0)
+        return channels
     return TF1D_BUILDERS[name](lo, hi, unit, seed)
 
 
@@ -241,7 +274,24 @@ def uniform_volumes() -> dict[str, Callable[[], UniformVolume]]:
         v[(u >= 0.04) & (u < 0.05)] = -np.inf
         return _uniform(v, name="nonfinite")
 
+    def many_labels() -> UniformVolume:
+        # every label 0..65535 somewhere, most of them once: the most a label volume holds
+        shape = (41, 41, 41)
+        field = grid_field(shape).astype(np.float32)
+        labels = (np.arange(field.size) % (MAX_LABEL + 1)).reshape(shape)
+        return UniformVolume(field, name="labels-65535", labels=LabelMap(labels))
+
+    def channels_nan() -> UniformVolume:
+        # two channels, the second NaN in a slab and Inf at scattered points
+        second = (1.0 - f).astype(np.float32)
+        second[:, :, 5:9] = np.nan
+        second[np.random.default_rng(seed_of("channels-nan")).random(second.shape) < 0.02] = np.inf
+        stack = np.stack([f.astype(np.float32), second])
+        return UniformVolume(stack[0], name="channels-nan", channels=ChannelSet(stack))
+
     return {
+        "labels-65535": many_labels,
+        "channels-nan": channels_nan,
         "f32-blob": lambda: _uniform(f.astype(np.float32), name="f32-blob"),
         "u8-full": lambda: _uniform(np.round(255 * f).astype(np.uint8), name="u8-full"),
         "u8-binary": lambda: _uniform(np.where(f > 0.5, 255, 0).astype(np.uint8), name="u8-binary"),
@@ -311,13 +361,15 @@ class Case:
     tf_name: str
     camera_name: str
     volume: Volume
-    tf: TransferFunction
+    tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction
     camera: Camera
 
 
 #: (data, TFs, camera) of the full suite; the quick subset is QUICK_SCENES.
 _ALL_TFS = tuple(TF1D_BUILDERS)
 FULL_SCENES: tuple[tuple[str, tuple[str, ...], str], ...] = (
+    ("labels-65535", ("labels", "labels-absent", "labels-hidden"), "orbit"),
+    ("channels-nan", ("channels",), "orbit"),
     ("f32-blob", (*_ALL_TFS, "2d"), "orbit"),
     ("f32-blob", ("random", "one"), "axis"),
     ("u8-full", ("random", "spike"), "orbit"),
@@ -351,6 +403,8 @@ FULL_SCENES: tuple[tuple[str, tuple[str, ...], str], ...] = (
     ("tet-scale-1e6", ("random", "spike"), "orbit"),
 )
 QUICK_SCENES: tuple[tuple[str, tuple[str, ...], str], ...] = (
+    ("labels-65535", ("labels-absent",), "orbit"),
+    ("channels-nan", ("channels",), "orbit"),
     ("f32-blob", ("spike", "one", "zero"), "orbit"),
     ("i16-full", ("random",), "orbit"),
     ("f64-1e300", ("random",), "orbit"),

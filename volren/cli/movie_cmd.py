@@ -106,7 +106,9 @@ def run(args: argparse.Namespace) -> int:
         raise VolrenError(
             f"{args.output}: --lossless applies to MP4 movies only (a GIF has 256 colours a frame)"
         )
-    inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
+    inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene),
+              ("--labels file", args.labels), ("--label-info file", args.label_info),
+              *(("--channel-tf file", path) for _, path in args.channel_tf)]  # fmt: skip
     check_outputs((("-o", args.output),), inputs, args.force)
     series = input_series(args)
     if series is not None and args.time_step is not None:
@@ -121,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
     except VolrenError as exc:
         raise VolrenError(f"{args.scene}: {exc}" if args.scene else str(exc)) from None
     check_movie_fps(args.output, animation.fps)
+    _check_labels(args, scene, animation, series is not None)
+    _check_channels(args, scene, animation, series is not None)
     width, height = scene.size
     assert source is not None  # a scene without a volume was refused above
     scene, stream = _level_for_movie(args, scene, source)
@@ -138,6 +142,41 @@ def run(args: argparse.Namespace) -> int:
           f"({result.frames / result.fps:.1f} s of movie) in {seconds:.1f} s, median {result.median_frame_ms:.0f} ms "
           f"a frame -> {args.output}")  # fmt: skip
     return 0
+
+
+def _check_labels(args: argparse.Namespace, scene: Scene, animation: Animation, series: bool) -> None:
+    """A movie of a label volume draws that volume with its TF per label throughout: a time series
+    (a volume read a step, without labels) and TF keyframes (one TF for all labels) are refused."""
+    from volren.cli.label_flags import label_flag
+    from volren.model.labels import LabelTransferFunction
+
+    if not isinstance(scene.transfer_function, LabelTransferFunction):
+        return
+    what = label_flag(args) or f"{args.scene}: labels"
+    if series:
+        raise VolrenError(
+            f"{what}: a label volume lies on one volume's grid; a time series' movie reads a volume a step"
+        )
+    if animation.tf_keys:
+        raise VolrenError(f"{what}: the scene's movie has TF keyframes, which do not apply to a TF per label")
+
+
+def _check_channels(args: argparse.Namespace, scene: Scene, animation: Animation, series: bool) -> None:
+    """A movie of a multi-channel volume draws it with its TF per channel throughout: a time series
+    (read a step at a time, one field each) and TF keyframes (one TF) are refused."""
+    from volren.cli.channel_flags import channel_flag
+    from volren.model.channels import ChannelTransferFunction
+
+    if not isinstance(scene.transfer_function, ChannelTransferFunction):
+        return
+    what = channel_flag(args) or f"{args.scene}: channels"
+    if series:
+        raise VolrenError(f"{what}: a time series' movie reads a volume a step, one field each; channels are "
+                          "drawn from one volume")  # fmt: skip
+    if animation.tf_keys:
+        raise VolrenError(
+            f"{what}: the scene's movie has TF keyframes, which do not apply to a TF per channel"
+        )
 
 
 def _level_for_movie(

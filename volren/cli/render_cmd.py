@@ -15,7 +15,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from volren.cli.channel_flags import add_channel_arguments, load_channel_input, pick_of, with_channel_flags
 from volren.cli.cluster_frame import add_cluster_arguments, check_cluster_flag, wants_cluster
+from volren.cli.label_flags import add_label_arguments, with_label_flags
 from volren.cli.raw_flags import add_raw_arguments, check_raw_flags, raw_load_arguments
 from volren.cli.stage_clock import StageClock
 from volren.draw import Drawing, DrawInput, VolumeInput, Watch
@@ -134,6 +136,8 @@ def add_scene_arguments(p: argparse.ArgumentParser) -> None:
         "default: default, or the scene file's settings as they are); explicit flags win",
     )
     p.add_argument("--tf", help="transfer function JSON (DESIGN.md format or a ParaView preset)")
+    add_label_arguments(p)
+    add_channel_arguments(p)
     p.add_argument("--time-step", type=int, metavar="N",
                    help="for a time series INPUT (a .pvd, or a folder of volume files): the step to render, from 0 "
                         "(default 0)")  # fmt: skip
@@ -250,12 +254,23 @@ def _check_zarr_flags(args: argparse.Namespace) -> None:
         raise VolrenError(f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL), not to {what}")
 
 
-def _load_input(args: argparse.Namespace) -> DrawInput:
-    """INPUT (or the time step asked for) to draw from: an OME-Zarr image, or a volume read whole."""
+def _load_input(args: argparse.Namespace, channels: Any = None) -> DrawInput:
+    """INPUT (or the time step asked for) to draw from: an OME-Zarr image, or a volume read whole
+    (with the channels --channels, else `channels`, picks)."""
     from volren import io
 
     kwargs: dict[str, Any] = {"scalars": args.scalars, **raw_load_arguments(args)}
     path = _step_path(args)
+    pick = pick_of(args, channels)
+    if pick is not None:
+        from volren.draw import is_ome_zarr_path
+
+        flag = _zarr_flag(args)
+        if flag and (args.raw_shape or not is_ome_zarr_path(path)):
+            raise VolrenError(
+                f"{flag} applies to an OME-Zarr INPUT (a .zarr folder or URL); {path} is not one"
+            )
+        return load_channel_input(args, path, pick)
     image = None if args.raw_shape else _ome_zarr_image(args, path)
     return image if image is not None else VolumeInput(io.load_volume(path, **kwargs))
 
@@ -266,26 +281,37 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None, DrawInput 
     frames are drawn from (None when the scene names no volume)."""
     from volren import io
     from volren.api import as_transfer_function
+    from volren.io.tf_io import load_any_transfer_function
 
     check_raw_flags(args, "render")
     _check_zarr_flags(args)
     source: DrawInput | None = None
     if args.scene:
-        scene = io.load_scene(args.scene, load_volume=args.input is None)
+        scene = io.load_scene(args.scene, load_volume=args.input is None and args.channels is None)
         if args.input is not None:
-            source = _load_input(args)
+            source = _load_input(args, scene.channels)
             scene = replace(scene, volume=source.stand_in(), volume_path=args.input)
+        elif (
+            args.channels is not None and scene.volume_path is not None
+        ):  # the scene's volume, these channels
+            source = load_channel_input(args, scene.volume_path, args.channels)
+            scene = replace(scene, volume=source.stand_in())
         elif scene.volume is not None:
             source = VolumeInput(scene.volume)
     elif args.input is not None:
         source = _load_input(args)
         volume = source.stand_in()
-        tf = io.load_transfer_function(args.tf) if args.tf else as_transfer_function(None, volume)
+        tf = load_any_transfer_function(args.tf) if args.tf else as_transfer_function(None, volume)
         scene = Scene(args.input, tf, volume=volume, scalars=args.scalars)
     else:
         raise VolrenError("give an INPUT volume or --scene SCENE.json")
     if args.tf and args.scene:
-        scene = replace(scene, transfer_function=io.load_transfer_function(args.tf))
+        scene = replace(
+            scene,
+            transfer_function=_over_labels(scene.transfer_function, load_any_transfer_function(args.tf)),
+        )
+    scene, source = with_channel_flags(args, scene, source, wants_cluster(args))
+    scene, source = with_label_flags(args, scene, source, wants_cluster(args))
     if args.renderer is not None:
         if not args.renderer.strip():
             raise VolrenError("--renderer: give a renderer name (see `volren renderers`), got an empty one")
@@ -328,6 +354,19 @@ def build_scene(args: argparse.Namespace) -> tuple[Scene, str | None, DrawInput 
     if sampling:
         scene = replace(scene, settings=scene.settings.with_(**sampling))
     return scene, why, source
+
+
+def _over_labels(old: object, new: Any) -> Any:
+    """--tf over a scene file's TF: over a TF per label, the new 1D TF is its base (the labels keep
+    their styles); else the new TF."""
+    from volren.model.labels import LabelTransferFunction
+    from volren.model.transfer_function import TransferFunction1D
+
+    if isinstance(old, LabelTransferFunction) and isinstance(new, TransferFunction1D):
+        tf = old.copy()
+        tf.set_base(new)
+        return tf
+    return new
 
 
 def _check_option_names(options: dict[str, Any], renderer: str, why: str | None) -> None:
@@ -423,7 +462,9 @@ def run(args: argparse.Namespace) -> int:
     for flag, target in outputs:
         if target:
             check_output(target, flag)  # the folder a link leads to, too: before the render, not after
-    inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene)]
+    inputs = [("input volume", args.input), ("--tf file", args.tf), ("--scene file", args.scene),
+              ("--labels file", args.labels), ("--label-info file", args.label_info),
+              *(("--channel-tf file", path) for _, path in args.channel_tf)]  # fmt: skip
     check_outputs(outputs, inputs, args.force)  # before the (maybe long) load
     check_cluster_flag(args)
     clock = StageClock()

@@ -21,6 +21,8 @@ from volren.draw.inputs import DrawInput, FrameData
 from volren.draw.prepared import FROM_REGISTRY, Preparation, prepare
 from volren.errors import VolrenWarning
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
 from volren.model.scene import Scene
 from volren.model.settings import RenderSettings, check_step
 from volren.model.tf_coverage import coverage_problem
@@ -34,22 +36,27 @@ def resolve_scene(scene: Scene, source: DrawInput, level: str | None, cameras: S
                   on_cluster: bool = False) -> tuple[Scene, str | None]:  # fmt: skip
     """`scene` with its renderer resolved (`auto`: the fastest measured one that draws it: bricks
     for an OME-Zarr image or a cluster, every one of `cameras`, default the scene's own) and its
-    settings at quality `level` (as they are when None); and why `auto` chose (`volren.quality`)."""
+    settings at quality `level` (as they are when None); and why `auto` chose (`volren.quality`). A
+    scene drawn with a TF per label (`LabelTransferFunction`) is one of the volume kind's class,
+    drawn by a renderer that draws labels; one with a TF per channel (`ChannelTransferFunction`),
+    by a renderer that mixes channels."""
     from volren.model.scene_class import SceneClass
     from volren.quality import resolve
 
     volume = scene.volume if scene.volume is not None else source.stand_in()
     bounds = source.bounds
     views = tuple(cameras) if cameras is not None else (scene.resolved_camera(bounds),)
-    renderer, settings, why = resolve(SceneClass.of(volume, scene.transfer_function), scene.transfer_function.dims,
-                                      scene.renderer, level, scene.settings, source.bricks or on_cluster,
-                                      cameras=views, bounds=bounds)  # fmt: skip
+    tf = scene.transfer_function
+    renderer, settings, why = resolve(SceneClass.of(volume, tf), tf.dims, scene.renderer, level, scene.settings,
+                                      source.bricks or on_cluster, cameras=views, bounds=bounds,
+                                      labels=isinstance(tf, LabelTransferFunction),
+                                      channels=isinstance(tf, ChannelTransferFunction))  # fmt: skip
     return replace(scene, renderer=renderer, settings=settings), why
 
 
 def check_scene(
     volume: Volume,
-    tf: TransferFunction,
+    tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction,
     settings: RenderSettings,
     tf_name: str | None = None,
     step_name: str = "render setting step",
@@ -57,11 +64,49 @@ def check_scene(
     """What `volren render` and `volren.render` check before drawing, so that bad input is an error
     or a warning instead of a black image and success: a step too small to honour (an error naming
     it as `step_name`), and a TF that shows nothing of the data (a VolrenWarning naming `tf_name`,
-    the TF file, where there is one)."""
+    the TF file, where there is one). With a TF per label, the TFs of the labels that occur are
+    checked: a warning when none of them shows anything; with a TF per channel, each shown
+    channel's TF over its own values."""
     check_step(settings.step, volume.bounds, volume.characteristic_length, step_name)
-    problem = coverage_problem(tf, volume.value_range)
+    if isinstance(tf, LabelTransferFunction):
+        problem = _labels_problem(tf, volume)
+    elif isinstance(tf, ChannelTransferFunction):
+        problem = _channels_problem(tf, volume)
+    else:
+        problem = coverage_problem(tf, volume.value_range)
     if problem:
         warnings.warn(f"{tf_name or 'transfer function'}: {problem}", VolrenWarning, stacklevel=2)
+
+
+def _labels_problem(tf: LabelTransferFunction, volume: Volume) -> str | None:
+    """Why a TF per label shows nothing of `volume`: every label that occurs hidden, or each of
+    their TFs showing nothing (the first label's reason); None when some label shows."""
+    label_map = getattr(volume, "labels", None)
+    present = label_map.present if label_map is not None else (0,)
+    drawn = [(label, t) for label in present if (t := tf.effective_tf(label)) is not None]
+    if not drawn:
+        return "every label in the label volume is hidden, so the image is black"
+    problems = [(label, coverage_problem(t, volume.value_range)) for label, t in drawn]
+    if all(problem for _, problem in problems):
+        label, problem = problems[0]
+        return f"no label shows anything; label {label}: {problem}"
+    return None
+
+
+def _channels_problem(tf: ChannelTransferFunction, volume: Volume) -> str | None:
+    """Why a TF per channel shows nothing of `volume`: every channel hidden or weighted 0, or each
+    shown channel's TF showing nothing of that channel's values (the first one's reason)."""
+    channels = getattr(volume, "channels", None)
+    drawn = [c for c in range(tf.count) if tf.drawn_weight(c) > 0]
+    if not drawn:
+        return "every channel is hidden or weighted 0, so the image is black"
+    if channels is None or channels.count != tf.count:
+        return None  # refused by the renderer, in its words
+    problems = [(c, coverage_problem(tf.tfs[c], channels.value_ranges[c])) for c in drawn]
+    if all(problem for _, problem in problems):
+        c, problem = problems[0]
+        return f"no channel shows anything; channel {channels.names[c]!r}: {problem}"
+    return None
 
 
 class Watch:
@@ -150,7 +195,9 @@ class Drawing:
             raise RuntimeError("a Drawing keeps its renderer only inside a with block")
         return self._prepared(self.scene.volume)  # type: ignore[arg-type]
 
-    def set_transfer_function(self, tf: TransferFunction) -> None:
+    def set_transfer_function(
+        self, tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction
+    ) -> None:
         """Draw the next frames with `tf`: the kept renderer gets it (its TF tables), nothing else
         is prepared again. The renderer and settings stay those chosen for the scene's TF."""
         self.scene = replace(self.scene, transfer_function=tf)
@@ -193,6 +240,9 @@ class Drawing:
         width, height = size or scene.size
         watch = watch or Watch(progress)
         if self.on_cluster:
+            assert not isinstance(
+                scene.transfer_function, LabelTransferFunction | ChannelTransferFunction
+            )  # refused by `volren.draw.labelled`'s and `volren.draw.channels`' callers
             with watch.stage("frame"), watch.progress(f"{scene.renderer} {width}x{height} bricks") as within:
                 return draw_on_cluster(self.cluster, self.scheduler, self.source, scene.renderer, scene.settings,
                                        scene.transfer_function, camera, width, height, within, self.quality)  # fmt: skip

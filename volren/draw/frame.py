@@ -15,6 +15,8 @@ from numpy.typing import NDArray
 
 from volren.draw.inputs import DrawInput, FrameData
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.quality import DEFAULT_LEVEL
@@ -30,7 +32,7 @@ class Drawn(NamedTuple):
     note: str
 
 
-def draw_prepared(renderer: Renderer, data: FrameData, tf: TransferFunction, camera: Camera, width: int, height: int,
+def draw_prepared(renderer: Renderer, data: FrameData, tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction, camera: Camera, width: int, height: int,
                   progress: ProgressCallback | None = None, label: str | None = None) -> Drawn:  # fmt: skip
     """A frame of `data` by `renderer`, which holds `data.volume` (or, streamed, the scene's
     stand-in), `tf` and its settings."""
@@ -39,6 +41,9 @@ def draw_prepared(renderer: Renderer, data: FrameData, tf: TransferFunction, cam
         return Drawn(image, stats, data.note)
     from volren.bricked.sort_last import render_streamed
 
+    assert not isinstance(
+        tf, LabelTransferFunction | ChannelTransferFunction
+    )  # read whole (`draw.labelled`, `draw.channels`)
     image, stats = render_streamed(renderer, data.source, tf, camera, width, height, progress)
     note = (
         data.note[:-1]

@@ -11,6 +11,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
 from volren.model.settings import RenderSettings, check_step
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
@@ -43,7 +45,7 @@ def _registry_create(name: str) -> Renderer:
     return registry.create(name)
 
 
-def prepare(name: str, volume: Volume, tf: TransferFunction, settings: RenderSettings | None = None,
+def prepare(name: str, volume: Volume, tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction, settings: RenderSettings | None = None,
             how: Preparation = FROM_REGISTRY) -> Renderer:  # fmt: skip
     """A new renderer `name` holding the volume, TF and settings; the caller releases it."""
     settings = settings or RenderSettings()
@@ -65,7 +67,7 @@ def prepare(name: str, volume: Volume, tf: TransferFunction, settings: RenderSet
 
 @contextmanager
 def prepared_renderer(
-    name: str, volume: Volume, tf: TransferFunction, settings: RenderSettings | None = None,
+    name: str, volume: Volume, tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction, settings: RenderSettings | None = None,
     how: Preparation = FROM_REGISTRY,
 ) -> Iterator[Renderer]:  # fmt: skip
     """``with prepared_renderer(...) as r``: `prepare`, released at the end of the block (the

@@ -66,6 +66,8 @@ class DatasetView:
     # unstructured grids only
     n_connectivity: int = 0
     type_name: str = ""
+    #: the names VTK gives an array's components (None where unnamed), for arrays of several
+    component_names: Mapping[str, tuple[str | None, ...]] = field(default_factory=dict)
 
 
 def _vtk_array(array: Any) -> NDArray | None:
@@ -86,6 +88,19 @@ def _vtk_arrays(data: Any) -> dict[str, NDArray]:
         values = _vtk_array(array) if name else None
         if values is not None:
             out[str(name)] = values
+    return out
+
+
+def _component_names(*sets: Any) -> dict[str, tuple[str | None, ...]]:
+    """The component names of the arrays of several components in these attribute sets."""
+    out: dict[str, tuple[str | None, ...]] = {}
+    for data in sets:
+        for i in range(data.GetNumberOfArrays()):
+            array = data.GetAbstractArray(i)
+            count = array.GetNumberOfComponents() if array is not None else 0
+            if count > 1 and array.GetName() and array.HasAComponentName():
+                names = tuple(array.GetComponentName(c) for c in range(count))
+                out.setdefault(str(array.GetName()), tuple(str(n) if n else None for n in names))
     return out
 
 
@@ -133,6 +148,7 @@ def _image_view(image: Any) -> DatasetView:
         origin=origin,  # type: ignore[arg-type]
         direction=direction,
         type_name="ImageData",
+        component_names=_component_names(image.GetPointData(), image.GetCellData()),
     )
 
 

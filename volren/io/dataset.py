@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError, VolrenWarning
 from volren.io import _pv
+from volren.io.channel_io import ChannelPick, PickedChannels, check_pick, nonfinite_notes, wants_pick
 from volren.io.formats.base import Grid, is_identity
 from volren.model.anatomy import patient_axes
 from volren.model.tet_mesh import folded_cells
@@ -184,11 +185,16 @@ def point_values(
 # ------------------------------------------------------------------------------- uniform grids
 
 
-def grid_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name: str) -> Grid:
-    """values[k, j, i] and geometry of image data (VTK's point order is x fastest)."""
+def grid_from_view(
+    view: _pv.DatasetView, scalars: str | None, source: str, name: str, channels: ChannelPick = None
+) -> Grid:
+    """values[k, j, i] and geometry of image data (VTK's point order is x fastest); with `channels`
+    (True or the component numbers, `volren.io.channel_io`), the array's components as channels."""
     if view.n_points == 0:
         raise VolrenError(f"{source}: the grid is empty (0 points)")
     choices = array_choices(view)
+    if wants_pick(channels):
+        return _channel_grid(view, scalars, source, name, channels, choices)
     view, values, notes, info, chosen = point_values(view, scalars, source, name)
     nx, ny, nz = view.dimensions
     if values.size != nx * ny * nz:
@@ -197,6 +203,39 @@ def grid_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name
         )
     return Grid(values.reshape(nz, ny, nx), view.spacing, view.origin, view.direction, notes, info, scalars=chosen,
                 arrays=choices)  # fmt: skip
+
+
+def _channel_grid(view: _pv.DatasetView, scalars: str | None, source: str, name: str, channels: ChannelPick,
+                  choices: tuple[str, ...]) -> Grid:  # fmt: skip
+    """The grid of an array's components as channels (Max 1995's several media on one grid): the
+    picked ones, [c, k, j, i], named by VTK's component names where the file has them, else NAME:c."""
+    array, where, component = choose_array(view, scalars, source)
+    if component is not None:
+        raise VolrenError(f"{source}: channels are an array's components; give the array's name ({array!r}), "
+                          f"not {scalars!r}")  # fmt: skip
+    arrays = view.point_arrays if where == "point" else view.cell_arrays
+    count = _components(arrays[array])
+    if arrays[array].dtype.kind not in "biuf" or arrays[array].ndim > 2:
+        _scalar_field(arrays[array], array, None, source)  # refused there, in its words
+    if count == 1:
+        raise VolrenError(f"{source}: array '{array}' has one component; channels come from an array of several "
+                          "components (or an OME-Zarr image's c axis)")  # fmt: skip
+    picked = check_pick(channels, count, f"{source}: array '{array}' has {count} components")
+    given = view.component_names.get(array, ())
+    names = tuple(str(given[c]) if c < len(given) and given[c] else f"{array}:{c}" for c in picked)
+    notes: list[str] = []
+    if where == "cell":
+        view = _pv.cell_to_point(view)
+        notes.append(f"{name}: array '{array}' is cell data; averaged it onto the points")
+    values = view.point_arrays[array]
+    nx, ny, nz = view.dimensions
+    if values.shape[0] != nx * ny * nz:
+        raise VolrenError(f"{source}: dimensions do not match the data: {nx}x{ny}x{nz} points but "
+                          f"{values.shape[0]} values")  # fmt: skip
+    stacked = np.ascontiguousarray(values[:, list(picked)].T).reshape(len(picked), nz, ny, nx)
+    info = [f"{name}: array '{array}' read as {len(picked)} channels ({', '.join(names)})"]
+    return Grid(stacked[0], view.spacing, view.origin, view.direction, notes, info, scalars=names[0],
+                arrays=choices, channels=stacked, channel_names=names, channel_indices=picked)  # fmt: skip
 
 
 def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
@@ -208,6 +247,7 @@ def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
         matrix = np.round(np.asarray(grid.direction), 4).tolist()
         notes.append(f"{name}: ignored the direction matrix {matrix}; the volume is drawn axis-aligned")
     values = grid.values
+    stacked = grid.channels
     spacing, origin = list(grid.spacing), list(grid.origin)
     for axis in range(3):  # x, y, z; numpy axis 2 - axis
         if spacing[axis] < 0:
@@ -215,6 +255,13 @@ def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
             origin[axis] += spacing[axis] * (n - 1)
             spacing[axis] = -spacing[axis]
             values = np.flip(values, axis=2 - axis)
+            stacked = None if stacked is None else np.flip(stacked, axis=3 - axis)
+    channels = None
+    if stacked is not None:
+        channels = PickedChannels(np.ascontiguousarray(stacked), grid.channel_names, name=name,
+                                  indices=grid.channel_indices)  # fmt: skip
+        values = channels.values[0]  # a view: the channels hold the one copy
+        notes += nonfinite_notes(channels, name)
     volume = UniformVolume(
         np.ascontiguousarray(values),
         tuple(spacing),
@@ -224,6 +271,7 @@ def volume_from_grid(grid: Grid, name: str) -> UniformVolume:
         scalars=grid.scalars,
         arrays=grid.arrays,
         patient_axes=anatomy,
+        channels=channels,
     )
     _report(volume, notes)
     return volume
@@ -289,19 +337,26 @@ def _folds_note(points: NDArray, tets: NDArray, values: NDArray, name: str) -> l
 # ------------------------------------------------------------------------------------ pyvista
 
 
-def volume_from_view(view: _pv.DatasetView, scalars: str | None, source: str, name: str) -> Volume:
+def volume_from_view(
+    view: _pv.DatasetView, scalars: str | None, source: str, name: str, channels: ChannelPick = None
+) -> Volume:
     if view.kind == "image":
-        return volume_from_grid(grid_from_view(view, scalars, source, name), name)
+        return volume_from_grid(grid_from_view(view, scalars, source, name, channels), name)
+    if wants_pick(channels):
+        raise VolrenError(f"{source}: channels are read from image data (a uniform grid), not from a mesh")
     return tets_from_view(view, scalars, source, name)
 
 
-def from_pyvista(dataset: Any, scalars: str | None = None, name: str = "dataset") -> Volume:
+def from_pyvista(
+    dataset: Any, scalars: str | None = None, name: str = "dataset", channels: ChannelPick = None
+) -> Volume:
     """A model volume from an in-memory pyvista (or VTK) dataset.
 
     Image data becomes a `UniformVolume`; anything else is cast to an unstructured grid and
-    tetrahedralized into a `TetVolume`.
+    tetrahedralized into a `TetVolume`. `channels` (True or component numbers): the array's
+    components as a multi-channel volume (`volren.io.channel_io`).
     """
     wrapped = _pv.as_dataset(dataset)
     if wrapped is None:
         raise VolrenError(f"{name}: expected a pyvista or VTK dataset, got {type(dataset).__name__}")
-    return volume_from_view(_pv.view(wrapped), scalars, name, name)
+    return volume_from_view(_pv.view(wrapped), scalars, name, name, channels)

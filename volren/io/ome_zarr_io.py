@@ -8,7 +8,9 @@ a renderer can skip bricks a TF makes transparent without reading them.
 
 Reading (`open_multiscale`, `load_level`): the metadata alone first; a level's values brick by
 brick, so that a corrupt brick is a one-line error naming it. Images with time or channel axes are
-read when those axes have one entry. Local folders and fsspec URLs (http://, s3://, ...) both work:
+read when those axes have one entry; a channel (c) axis of several is read whole, the channels
+picked, as a multi-channel volume (`load_channels`: ``omero.channels``' colours, windows, labels
+and active flags), and refused by the bricked path, which streams one field. Local folders and fsspec URLs (http://, s3://, ...) both work:
 zarr opens either.
 """
 
@@ -159,6 +161,8 @@ class LevelInfo:
     dtype: np.dtype
     #: what a brick without a chunk file reads as
     fill_value: float = 0.0
+    #: the sizes of the leading axes (time, channel) before z, y, x
+    leading_shape: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -172,6 +176,11 @@ class Multiscale:
     brick_ranges: tuple[tuple[tuple[float, float] | None, ...], ...] | None
     #: leading singleton axes (time, channel) to drop from each array's index
     leading: int = 0
+    #: the leading axes' names, and the image's channels (the c axis' size; 1 without one)
+    leading_axes: tuple[str, ...] = ()
+    channel_count: int = 1
+    #: the group's "omero" attributes (channel colours, windows, labels), if any
+    omero: Mapping[str, Any] | None = None
 
     def array(self, level: int) -> Any:
         """The zarr array of `level` (lazy: nothing is read until it is indexed)."""
@@ -270,10 +279,6 @@ def _level(where: str, dataset: Any, axes: list[str]) -> LevelInfo:
     leading = len(axes) - 3
     if array.ndim != len(axes):
         raise VolrenError(f"level {key!r} has {array.ndim} axes, the metadata {len(axes)}")
-    extra = [n for n, ax in zip(array.shape[:leading], axes, strict=False) if n != 1]
-    if extra:
-        raise VolrenError(f"axes {axes[:leading]} hold {array.shape[:leading]} entries; volren reads one "
-                          "volume (one time point, one channel)")  # fmt: skip
     shape, chunks = tuple(array.shape[leading:]), tuple(array.chunks[leading:])
     if min(shape) < 1 or min(chunks) < 1:
         raise VolrenError(
@@ -285,11 +290,38 @@ def _level(where: str, dataset: Any, axes: list[str]) -> LevelInfo:
         raise VolrenError(f"level {key!r}: its scale {scale} and translation {translation} place voxels beyond "
                           f"+-{MAX_COORDINATE:g}")  # fmt: skip
     return LevelInfo(key, shape, chunks, tuple(reversed(scale[leading:])), tuple(reversed(translation[leading:])),
-                     np.dtype(array.dtype), _number_or_zero(array.fill_value))  # fmt: skip
+                     np.dtype(array.dtype), _number_or_zero(array.fill_value),
+                     tuple(int(n) for n in array.shape[:leading]))  # fmt: skip
 
 
-def open_multiscale(path: str | Path) -> Multiscale:
-    """The metadata of the OME-Zarr image at `path`; one-line errors name the path and the problem."""
+def _channel_count(axes: list[str], levels: Sequence[LevelInfo], channels_ok: bool) -> int:
+    """The size of the c axis (1 without one); leading axes of several entries other than c, and c
+    where channels are not asked for, refused in one line."""
+    lead = axes[:-3]
+    first = levels[0].leading_shape
+    for level in levels[1:]:
+        if level.leading_shape != first:
+            raise VolrenError(f"level {level.key!r} has {level.leading_shape} entries on axes {lead}, "
+                              f"level {levels[0].key!r} {first}: the levels must agree")  # fmt: skip
+    count = 1
+    for axis, n in zip(lead, first, strict=True):
+        if n == 1:
+            continue
+        if axis == "t":
+            raise VolrenError(f"axis 't' holds {n} time points; volren reads one time point of an OME-Zarr image "
+                              "(save the one to draw as its own image)")  # fmt: skip
+        if axis != "c":
+            raise VolrenError(f"axis {axis!r} holds {n} entries; volren reads one volume of it")
+        if not channels_ok:
+            raise VolrenError(f"axis 'c' holds {n} channels; pick them with --channels (Python: channels=) to draw "
+                              "them read whole as a multi-channel volume (not streamed by bricks)")  # fmt: skip
+        count = n
+    return count
+
+
+def open_multiscale(path: str | Path, channels_ok: bool = False) -> Multiscale:
+    """The metadata of the OME-Zarr image at `path`; one-line errors name the path and the problem.
+    An image of several channels (a c axis) is refused unless `channels_ok` (`load_channels`)."""
     zarr = require_zarr()
     where = str(path)
     try:
@@ -303,6 +335,7 @@ def open_multiscale(path: str | Path) -> Multiscale:
         levels = [_level(where, dataset, axes) for dataset in datasets]
         if not levels:
             raise VolrenError("the multiscale image lists no levels")
+        count = _channel_count(axes, levels, channels_ok)
         ranges = _brick_ranges(attrs.get(VOLREN_KEY), levels)
         _check_chunk_files(where, levels, ranges)
     except VolrenError as exc:
@@ -314,7 +347,9 @@ def open_multiscale(path: str | Path) -> Multiscale:
         ) from None
     name = meta.get("name")
     shown = str(name) if isinstance(name, str | int) and str(name) else Path(where.rstrip("/")).name
-    return Multiscale(where, shown, tuple(levels), ranges, len(axes) - 3)
+    omero = attrs.get("omero") or (attrs.get("ome") or {}).get("omero")
+    return Multiscale(where, shown, tuple(levels), ranges, len(axes) - 3, tuple(axes[:-3]), count,
+                      omero if isinstance(omero, Mapping) else None)  # fmt: skip
 
 
 def _brick_range(entry: Any) -> tuple[float, float] | None:
@@ -471,15 +506,18 @@ def load_level(path: str | Path, level: int | None = 0, name: str | None = None,
     return UniformVolume(values, info.spacing, info.origin, name=name or image.name)
 
 
-def read_brick(image: Multiscale, level: int, array: Any, index: tuple[int, ...]) -> np.ndarray:
-    """The values of brick (chunk) `index` (kz, ky, kx) of `level`, whose zarr array is `array`;
-    a brick that cannot be read is a one-line error naming it."""
+def read_brick(
+    image: Multiscale, level: int, array: Any, index: tuple[int, ...], channel: int = 0
+) -> np.ndarray:
+    """The values of brick (chunk) `index` (kz, ky, kx) of `level` (of `channel`, on a c axis),
+    whose zarr array is `array`; a brick that cannot be read is a one-line error naming it."""
     info = image.levels[level]
     where = tuple(
         slice(k * c, min((k + 1) * c, n)) for k, c, n in zip(index, info.chunks, info.shape, strict=True)
     )
     try:
-        return np.asarray(array[(0,) * image.leading + where])
+        lead = tuple(channel if axis == "c" else 0 for axis in image.leading_axes) or (0,) * image.leading
+        return np.asarray(array[lead + where])
     except Exception as exc:  # noqa: BLE001 - a codec's error, whatever its type, names the brick
         key = ".".join(str(k) for k in index)
         raise VolrenError(
@@ -591,3 +629,53 @@ def write_pyramid(values: Any, spacing: Sequence[float], origin: Sequence[float]
 
 def _bricks(shape, chunk: int) -> int:
     return math.prod(math.ceil(n / chunk) for n in shape)
+
+
+# ---------------------------------------------------------------------------- channels (c axis)
+def load_channels(path: str | Path, pick: Any, level: int | None = None, name: str | None = None,
+                  memory: int = MAX_IN_MEMORY_BYTES) -> UniformVolume:  # fmt: skip
+    """The channels `pick` names (True: all; else the c axis' numbers) of level `level` of the
+    image at `path` (None: the finest whose picked channels fit in `memory` bytes), read brick by
+    brick into memory as a multi-channel volume: names, colours, windows and active flags from
+    ``omero.channels`` (`volren.io.omero_channels`), `values` the first active channel picked."""
+    from volren.io.channel_io import PickedChannels, check_pick, first_shown, nonfinite_notes
+    from volren.io.omero_channels import channel_hints
+
+    image = open_multiscale(path, channels_ok=True)
+    if "c" not in image.leading_axes:
+        raise VolrenError(f"{path}: the image has no channel axis (c); it holds one field")
+    picked = check_pick(pick, image.channel_count, f"{path}: the image has {image.channel_count} channels")
+    shown = name or image.name
+    copies = image.levels[0].dtype.itemsize * (len(picked) - 1)  # the other channels' bytes a voxel
+    if level is None:
+        level = finest_level_said(image, memory, shown, f" ({len(picked)} channels)", copies)
+        if level is None:
+            coarsest = level_bytes(image.levels[-1]) * len(picked)
+            raise VolrenError(f"{path}: even the coarsest level's {len(picked)} channels ({human_size(coarsest)}) are "
+                              f"more than the memory allowed ({human_size(memory)})")  # fmt: skip
+    if not 0 <= level < len(image.levels):
+        raise VolrenError(f"{path}: no level {level}; the image has levels 0 to {len(image.levels) - 1}")
+    info = image.levels[level]
+    size, limit = level_bytes(info) * len(picked), min(memory, MAX_IN_MEMORY_BYTES)
+    if size > limit:
+        raise VolrenError(f"{path}: level {level}'s {len(picked)} channels are {human_size(size)}, more than the "
+                          f"{human_size(limit)} allowed read whole; pick fewer channels or a coarser level")  # fmt: skip
+    array = image.array(level)
+    values = np.empty((len(picked), *info.shape), info.dtype)
+    for slot, channel in enumerate(picked):
+        for index, where in _level_bricks(info):
+            values[slot][where] = read_brick(image, level, array, index, channel)
+    hints = [channel_hints(image.omero, image.channel_count)[c] for c in picked]
+    channels = PickedChannels(
+        values,
+        tuple(h.name or f"channel {c}" for h, c in zip(hints, picked, strict=True)),
+        tuple(h.color for h in hints),
+        tuple(h.window for h in hints),
+        name=shown,
+        indices=picked,
+        active=tuple(h.active for h in hints),
+    )
+    for note in nonfinite_notes(channels, shown):
+        warnings.warn(note, VolrenWarning, stacklevel=2)
+    return UniformVolume(channels.values[first_shown(channels)], info.spacing, info.origin, name=shown,
+                         channels=channels)  # fmt: skip

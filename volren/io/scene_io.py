@@ -4,21 +4,27 @@ A scene refers to its volume by path, and may refer to its transfer function by 
 holding it inline; both are resolved against the scene file's folder, so a folder of scenes and
 data can be moved as a whole. Saving writes the volume path relative to the scene's folder and
 the transfer function inline. A scene saved on a step of a time series names the series too
-(`TIME_SERIES_KEY`, relative in the same way): its step's file is the volume read.
+(`TIME_SERIES_KEY`, relative in the same way): its step's file is the volume read. A scene's
+label volume (``volume.labels``) is a path relative in the same way, read onto the volume
+(`volren.io.label_io.load_labels`) when the volume is. A scene's channel pick (``volume.channels``)
+is read with the volume (`load_volume`'s `channels`).
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 
 from volren.errors import VolrenError, file_error
 from volren.io.json_text import read_json, write_json
+from volren.io.label_io import load_labels
 from volren.io.series_io import TimeSeries, load_series
-from volren.io.tf_io import load_transfer_function
+from volren.io.tf_io import load_transfer_function, tf_from_data
 from volren.io.volume_io import load_volume as _load_volume
 from volren.model.scene import TIME_SERIES_KEY, Scene
+from volren.model.volume import UniformVolume
 
 
 def _resolve(folder: Path, relative: str) -> str:
@@ -37,24 +43,51 @@ def load_scene(path: str | Path, load_volume: bool = True) -> Scene:
     tf = data.get("transfer_function")
     if isinstance(tf, str):
         try:
-            data["transfer_function"] = load_transfer_function(_resolve(folder, tf)).to_dict()
+            data["transfer_function"] = _tf_file_data(Path(_resolve(folder, tf)))
         except VolrenError as exc:
             raise file_error(path, f"transfer function: {exc}") from None
     _inline_keyframe_tfs(data, folder, path)
     _volume_from_series(data, folder, path)
     volume = data.get("volume")
     if isinstance(volume, Mapping) and isinstance(volume.get("path"), str):
-        data["volume"] = {**volume, "path": _resolve(folder, volume["path"])}
+        data["volume"] = volume = {**volume, "path": _resolve(folder, volume["path"])}
+    if isinstance(volume, Mapping) and isinstance(volume.get("labels"), str):
+        data["volume"] = {**volume, "labels": _resolve(folder, volume["labels"])}
     try:
         scene = Scene.from_dict(data)
     except VolrenError as exc:
         raise file_error(path, str(exc)) from None
     if load_volume and scene.volume_path is not None:
         try:
-            scene = scene.with_volume(_load_volume(scene.volume_path, scene.scalars))
+            scene = scene.with_volume(_load_volume(scene.volume_path, scene.scalars, channels=scene.channels))
         except VolrenError as exc:
             raise file_error(path, f"volume: {exc}") from None
+        if scene.labels_path is not None:
+            scene = scene.with_volume(_with_labels(path, scene))
     return scene
+
+
+def _with_labels(path: Path, scene: Scene) -> UniformVolume:
+    """The scene's volume with its label file read onto it (errors name the scene file)."""
+    volume = scene.volume
+    if not isinstance(volume, UniformVolume):
+        raise file_error(
+            path, "labels: label volumes are for uniform grids; the scene's volume is a tetrahedral mesh"
+        )
+    try:
+        return replace(volume, labels=load_labels(scene.labels_path, volume))  # type: ignore[arg-type]
+    except VolrenError as exc:
+        raise file_error(path, f"labels: {exc}") from None
+
+
+def _tf_file_data(path: Path) -> dict:
+    """The inline form of a scene's TF file: a 1D or 2D TF or ParaView preset
+    (`load_transfer_function`), a TF per label (kind "labels", `LabelTransferFunction`) or a TF
+    per channel (kind "channels", `ChannelTransferFunction`)."""
+    data = read_json(path)
+    if isinstance(data, Mapping) and data.get("kind") in ("labels", "channels"):
+        return dict(data)  # checked with the scene (`Scene.from_dict`)
+    return tf_from_data(data, path).to_dict()
 
 
 def _inline_keyframe_tfs(data: dict, folder: Path, path: Path) -> None:
@@ -134,6 +167,8 @@ def save_scene(scene: Scene, path: str | Path) -> None:
     data = scene.to_dict()
     if scene.volume_path is not None:
         data["volume"] = {**data["volume"], "path": _relative(scene.volume_path, path.parent)}
+    if scene.labels_path is not None:
+        data["volume"] = {**data["volume"], "labels": _relative(scene.labels_path, path.parent)}
     series = data.get(TIME_SERIES_KEY)
     if isinstance(series, Mapping) and isinstance(series.get("path"), str):
         data[TIME_SERIES_KEY] = {**series, "path": _relative(series["path"], path.parent)}

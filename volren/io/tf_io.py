@@ -8,6 +8,7 @@ from pathlib import Path
 from volren.errors import VolrenError, file_error
 from volren.io.json_text import read_json, write_json
 from volren.io.paraview_presets import is_preset_data, preset_to_tf, select_preset
+from volren.model.channels import ChannelTransferFunction
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import (
     TransferFunction,
@@ -42,9 +43,22 @@ def load_transfer_function(path: str | Path, name: str | None = None) -> Transfe
     return tf_from_data(read_json(path), path, name)
 
 
-def save_transfer_function(tf: TransferFunction, path: str | Path) -> None:
-    """Write DESIGN.md's TF JSON (version 1, either kind), keeping keys this version does not know."""
-    if not isinstance(tf, TransferFunction1D | TransferFunction2D):
+def load_any_transfer_function(path: str | Path) -> TransferFunction | ChannelTransferFunction:
+    """`load_transfer_function`, or a TF per channel (kind "channels", `ChannelTransferFunction`)."""
+    path = Path(path)
+    data = read_json(path)
+    if isinstance(data, dict) and data.get("kind") == "channels":
+        try:
+            return ChannelTransferFunction.from_dict(data)
+        except VolrenError as exc:
+            raise file_error(path, str(exc)) from None
+    return tf_from_data(data, path)
+
+
+def save_transfer_function(tf: TransferFunction | ChannelTransferFunction, path: str | Path) -> None:
+    """Write DESIGN.md's TF JSON (version 1, either kind, or a TF per channel), keeping keys this
+    version does not know."""
+    if not isinstance(tf, TransferFunction1D | TransferFunction2D | ChannelTransferFunction):
         raise VolrenError(
             f"{path}: expected a TransferFunction1D or TransferFunction2D to save, got {type(tf).__name__}"
         )

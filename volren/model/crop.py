@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import cast
 
 import numpy as np
@@ -64,11 +65,18 @@ def _crop_uniform(volume: UniformVolume, box: Box) -> UniformVolume:
     ranges = _index_ranges(volume, box)
     sx, sy, sz = (slice(first, stop) for first, stop in ranges)
     origin = tuple(volume.origin[axis] + ranges[axis][0] * volume.spacing[axis] for axis in range(3))
+    labels = channels = None
+    if volume.labels is not None:  # the segmentation and the channels are cut with the values
+        labels = replace(volume.labels, values=volume.labels.values[sz, sy, sx])
+    if volume.channels is not None:
+        channels = replace(volume.channels, values=volume.channels.values[:, sz, sy, sx])
     return UniformVolume(
         volume.values[sz, sy, sx],
         spacing=volume.spacing,
         origin=cast(tuple[float, float, float], origin),
         name=volume.name,
+        labels=labels,
+        channels=channels,
     )
 
 

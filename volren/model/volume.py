@@ -23,6 +23,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.errors import VolrenError
+from volren.model.channels import ChannelSet
+from volren.model.labels import LabelMap
 from volren.model.settings import MAX_SAMPLES_PER_RAY
 from volren.model.tet_repair import repeated_tets
 
@@ -115,6 +117,11 @@ class UniformVolume:
     arrays: tuple[str, ...] = ()
     #: the anatomical letter +x, +y, +z point toward ("L", "P", "S"), where the file says (`model.anatomy`)
     patient_axes: tuple[str, str, str] | None = None
+    #: a segmentation on the same grid (`model.labels`): what a `LabelTransferFunction` classifies by
+    labels: LabelMap | None = None
+    #: several fields on the same grid (`model.channels`), `values` being one of them: what a
+    #: `ChannelTransferFunction` mixes
+    channels: ChannelSet | None = None
     value_range: tuple[float, float] = field(init=False)
     nonfinite_count: int = field(init=False)
 
@@ -137,6 +144,19 @@ class UniformVolume:
         if min(spacing) <= 0:
             raise VolrenError(f"{self.name}: spacing must be positive, got {spacing}")
         origin = _as_triple(self.origin, f"{self.name}: origin")
+        if self.labels is not None:
+            if not isinstance(self.labels, LabelMap):
+                raise VolrenError(f"{self.name}: labels must be a LabelMap, got {type(self.labels).__name__}")
+            self.labels.check_grid(values.shape, self.name)
+        if self.channels is not None:
+            if not isinstance(self.channels, ChannelSet):
+                raise VolrenError(
+                    f"{self.name}: channels must be a ChannelSet, got {type(self.channels).__name__}"
+                )
+            if self.channels.shape != values.shape:
+                got, want = self.channels.shape[::-1], values.shape[::-1]
+                raise VolrenError(f"{self.name}: the channels are {'x'.join(map(str, got))} but the volume is "
+                                  f"{'x'.join(map(str, want))}: channels must lie on the volume's grid")  # fmt: skip
         value_range, n_bad = finite_range(values)
         if n_bad == values.size:
             raise VolrenError(f"{self.name}: no finite values (all {n_bad} are NaN or Inf)")

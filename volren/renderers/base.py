@@ -31,6 +31,8 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
 from volren.model.option_rule import OptionRule
 from volren.model.progress import ProgressCallback
 from volren.model.region import Region
@@ -305,6 +307,16 @@ class KindSupport:
     #: Draws the cut faces opaque when the clip region asks for it (`ClipRegion.cap`; the kit's
     #: `clip_cap` check). False: such a scene is refused and passed over as above.
     clip_cap: bool = False
+    #: Draws a volume's label map with a `LabelTransferFunction` (a TF per label, blended across
+    #: label boundaries: `volren.model.labels`; the kit's `labels` check). False: such a scene is
+    #: refused with a one-line VolrenError, and `auto` passes the renderer over for it.
+    labels: bool = False
+    #: Pre-integrates label scenes too; False: a label scene with pre-integration on is refused.
+    labels_preintegration: bool = False
+    #: Mixes a volume's channels with a `ChannelTransferFunction` (a TF per channel, their
+    #: extinctions and emissions added: `volren.model.channels`; the kit's `channels` check).
+    #: False: refused and passed over as labels are. Post-classified (no pre-integration) only.
+    channels: bool = False
 
 
 @dataclass(frozen=True)
@@ -334,14 +346,25 @@ class Capabilities:
         volume_kind: str,
         tf_dim: int = 1,
         settings: RenderSettings | None = None,
+        labels: bool = False,
+        channels: bool = False,
     ) -> str | None:
-        """Why this renderer cannot draw such a scene, or None when it can."""
+        """Why this renderer cannot draw such a scene (`labels`: drawn by a label map with a TF per
+        label; `channels`: several channels mixed, a TF each), or None when it can."""
         support = self.kinds.get(volume_kind)  # type: ignore[call-overload]
         if support is None:
             kinds = ", ".join(sorted(self.kinds)) or "none"
             return f"does not render {volume_kind} volumes (only {kinds})"
         if tf_dim not in support.tf_dims:
             return f"does not support {tf_dim}D transfer functions on {volume_kind} volumes"
+        if labels and not support.labels:
+            return f"does not draw label volumes (a transfer function per label) on {volume_kind} volumes"
+        if labels and settings is not None and settings.preintegration and not support.labels_preintegration:
+            return f"has no pre-integration with label volumes on {volume_kind} volumes"
+        if channels and not support.channels:
+            return f"does not mix channels (a transfer function per channel) on {volume_kind} volumes"
+        if channels and settings is not None and settings.preintegration:
+            return f"has no pre-integration of several channels on {volume_kind} volumes"
         if settings is not None:
             if settings.preintegration and not support.preintegration:
                 return f"has no pre-integration for {volume_kind} volumes"
@@ -393,6 +416,10 @@ class Capabilities:
                 extras.append("bricks")
             if s.clip_region:
                 extras.append("clip planes" + (" and cut faces" if s.clip_cap else ""))
+            if s.labels:
+                extras.append("labels")
+            if s.channels:
+                extras.append("channels")
             extras.append("blend " + "/".join(sorted(str(m) for m in s.blend_modes)))
             modes_2d = s.blend_modes_2d & s.blend_modes
             if 2 in s.tf_dims and modes_2d != s.blend_modes:
@@ -427,7 +454,9 @@ class Renderer(Protocol):
 
     def set_volume(self, volume: Volume) -> None: ...
 
-    def set_transfer_function(self, tf: TransferFunction) -> None: ...
+    def set_transfer_function(
+        self, tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction
+    ) -> None: ...
 
     def set_settings(self, settings: RenderSettings) -> None: ...
 
@@ -471,7 +500,7 @@ class RendererBase(ABC):
 
     def __init__(self) -> None:
         self._volume: Volume | None = None
-        self._tf: TransferFunction | None = None
+        self._tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction | None = None
         self._settings = RenderSettings()
         self._opts = self._parse_options(self._settings.options)
         self._region: Region | None = None
@@ -484,7 +513,7 @@ class RendererBase(ABC):
         return self._volume
 
     @property
-    def transfer_function(self) -> TransferFunction | None:
+    def transfer_function(self) -> TransferFunction | LabelTransferFunction | ChannelTransferFunction | None:
         return self._tf
 
     @property
@@ -509,18 +538,30 @@ class RendererBase(ABC):
         with _ONE_AT_A_TIME:
             self._volume_changed()
 
-    def set_transfer_function(self, tf: TransferFunction) -> None:
-        """Use `tf` (a TransferFunction1D or TransferFunction2D); a TF of a dimension this renderer
-        cannot draw (on the current volume's kind, or on any kind before a volume is set) is refused."""
+    def set_transfer_function(
+        self, tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction
+    ) -> None:
+        """Use `tf` (a TransferFunction1D or TransferFunction2D, or a LabelTransferFunction where the
+        capabilities say `labels`); a TF this renderer cannot draw (on the current volume's kind, or
+        on any kind before a volume is set) is refused."""
         self._check_alive()
-        if not isinstance(tf, TransferFunction1D | TransferFunction2D):
+        if not isinstance(
+            tf, TransferFunction1D | TransferFunction2D | LabelTransferFunction | ChannelTransferFunction
+        ):
             raise VolrenError(
                 f"renderer {self.name} needs a TransferFunction1D or TransferFunction2D, got {type(tf).__name__}"
             )
+        labels, channels = isinstance(tf, LabelTransferFunction), isinstance(tf, ChannelTransferFunction)
         if self._volume is not None:
-            reason = self.capabilities.unsupported_reason(self._volume.kind, tf.dims)
+            reason = self.capabilities.unsupported_reason(
+                self._volume.kind, tf.dims, labels=labels, channels=channels
+            )
         elif not any(tf.dims in support.tf_dims for support in self.capabilities.kinds.values()):
             reason = f"does not support {tf.dims}D transfer functions"
+        elif labels and not any(support.labels for support in self.capabilities.kinds.values()):
+            reason = "does not draw label volumes (a transfer function per label)"
+        elif channels and not any(support.channels for support in self.capabilities.kinds.values()):
+            reason = "does not mix channels (a transfer function per channel)"
         else:
             reason = None
         if reason:
@@ -595,7 +636,24 @@ class RendererBase(ABC):
             raise VolrenError(f"renderer {self.name}: no volume set")
         if self._tf is None:
             raise VolrenError(f"renderer {self.name}: no transfer function set")
-        reason = self.capabilities.unsupported_reason(self._volume.kind, self._tf.dims, self._settings)
+        labels, channels = (
+            isinstance(self._tf, LabelTransferFunction),
+            isinstance(self._tf, ChannelTransferFunction),
+        )
+        reason = self.capabilities.unsupported_reason(
+            self._volume.kind, self._tf.dims, self._settings, labels, channels
+        )
+        if labels and getattr(self._volume, "labels", None) is None:
+            reason = (
+                f"was given a transfer function per label, but the volume {self._volume.name!r} has no labels"
+            )
+        given = getattr(self._volume, "channels", None)
+        if isinstance(self._tf, ChannelTransferFunction) and (given is None or given.count != self._tf.count):
+            have = "no channels" if given is None else f"{given.count} channels"
+            reason = (
+                f"was given a transfer function for {self._tf.count} channels, but the volume "
+                f"{self._volume.name!r} has {have}"
+            )
         reason = reason or self.capabilities.camera_reason(self._volume.kind, camera, self._volume.bounds)
         if reason:
             raise VolrenError(f"renderer {self.name} {reason}")

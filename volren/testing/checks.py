@@ -23,15 +23,20 @@ from numpy.typing import NDArray
 
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
 from volren.model.clip_region import ClipPlane, ClipRegion
+from volren.model.labels import LabelTransferFunction
 from volren.model.scene_class import SceneClass
 from volren.model.settings import BlendMode, RenderSettings
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TFWidget, TransferFunction, TransferFunction2D
-from volren.model.volume import Volume
+from volren.model.volume import UniformVolume, Volume
 from volren.renderers.base import Accuracy, Capabilities, OptionSpec, Renderer, option_help_of, render_frame
 from volren.testing import oracles
+from volren.testing.channel_scenes import channel_scene, channel_slab, channel_slab_rgba
+from volren.testing.label_scenes import label_scene, label_slab, label_slab_rgba
 from volren.testing.metrics import image_error
+from volren.testing.reference_images import reference_image
 from volren.testing.scenes import axis_camera, column_camera, lattice_volume
 
 #: The volume kinds the kit has scenes for.
@@ -112,7 +117,11 @@ class CheckContext:
         return self.capabilities.kinds[kind].accuracy  # type: ignore[index]
 
     def feed(
-        self, renderer: Renderer, volume: Volume, tf: TransferFunction, settings: RenderSettings
+        self,
+        renderer: Renderer,
+        volume: Volume,
+        tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction,
+        settings: RenderSettings,
     ) -> None:
         """Give the renderer what changed since its last frame (as the app does)."""
         last = self._inputs.get(id(renderer), (None, None, None))
@@ -121,14 +130,14 @@ class CheckContext:
         if last[0] is not volume:
             renderer.set_volume(volume)
         if last[1] is not tf:
-            renderer.set_transfer_function(tf)
+            renderer.set_transfer_function(tf)  # type: ignore[arg-type]  # a Protocol renderer may take labels
         self._inputs[id(renderer)] = (volume, tf, settings)
 
     def draw(
         self,
         renderer: Renderer,
         volume: Volume,
-        tf: TransferFunction,
+        tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction,
         camera: Camera,
         width: int,
         height: int,
@@ -827,6 +836,87 @@ def check_capabilities(ctx: CheckContext) -> list[Measurement]:
     return out
 
 
+def check_labels(ctx: CheckContext) -> list[Measurement]:
+    """Label volumes (a TF per label, `volren.model.labels`) where uniform grids declare `labels`:
+    a constant slab of one label beside a hidden one, seen along x from both sides, against the
+    closed form (the label's weight ramps over the boundary cell, adding half a cell), and a smooth
+    field with a hidden label and one in its own colour against the `reference` renderer, at the
+    default settings (pre-integrated too where `labels_preintegration` is declared). A renderer
+    whose grids do not declare `labels` refuses such a frame in one line; one that declares
+    `labels` without `labels_preintegration` refuses it pre-integrated."""
+    support = ctx.capabilities.kinds.get("uniform")
+    if support is None:
+        return [Measurement("labels", "no uniform grids claimed (label maps lie on grids)", "skipped", 0, 0)]
+    slab, slab_tf = label_slab()
+    scene, scene_tf = label_scene()
+    n = 32
+    camera = Camera.orbit(scene.bounds, 30, 25, zoom=1.2)
+    if not support.labels:
+        draw = functools.partial(ctx.draw, ctx.renderer(), scene, scene_tf, camera, n, n)
+        return [_refusal("labels", "uniform, declared not drawn", draw)]
+    out = []
+    renderer = ctx.renderer()
+    b = slab.bounds
+    signs = (1.0,) if ctx.quick else (1.0, -1.0)
+    for sign in signs:
+        view = axis_camera(b, 0, sign, 0.35 * min(b[3] - b[2], b[5] - b[4]))
+        image = ctx.draw(renderer, slab, slab_tf, view, 16, 16)
+        expected = np.broadcast_to(label_slab_rgba(), image.shape)
+        out.append(Measurement("labels", f"slab, from {'+' if sign > 0 else '-'}x", "RMSE", _rmse(image, expected),
+                               support.accuracy.rmse))  # fmt: skip
+    reference = reference_image(scene, scene_tf, camera, n, n).astype(np.float64)
+    assert reference[..., 3].max() > 0.5
+    modes = [False, True] if support.labels_preintegration and support.preintegration else [False]
+    for pre in modes:
+        image = ctx.draw(renderer, scene, scene_tf, camera, n, n, RenderSettings(preintegration=pre))
+        out.append(Measurement("labels", f"three labels, pre-integration {pre}", "RMSE to reference",
+                               _rmse(image, reference), support.accuracy.rmse))  # fmt: skip
+    if support.preintegration and not support.labels_preintegration:
+        draw = functools.partial(ctx.draw, ctx.renderer(), scene, scene_tf, camera, n, n,
+                                 RenderSettings(preintegration=True))  # fmt: skip
+        out.append(_refusal("labels", "pre-integrated, declared not drawn", draw))
+    return out
+
+
+def check_channels(ctx: CheckContext) -> list[Measurement]:
+    """Multi-channel volumes (a TF per channel, their extinctions and emissions added:
+    `volren.model.channels`) where uniform grids declare `channels`: a constant two-channel slab
+    seen along x from both sides against the closed form of the summed extinction, and three smooth
+    overlapping channels (one at weight 2) against the `reference` renderer, within the grids'
+    `accuracy.rmse`. A renderer whose grids do not declare `channels` refuses such a frame in one
+    line, and one that pre-integrates refuses it pre-integrated (channels are post-classified)."""
+    support = ctx.capabilities.kinds.get("uniform")
+    if support is None:
+        return [Measurement("channels", "no uniform grids claimed (channels lie on grids)", "skipped", 0, 0)]
+    slab, slab_tf = channel_slab()
+    scene, scene_tf = channel_scene()
+    n = 32
+    camera = Camera.orbit(scene.bounds, 30, 25, zoom=1.2)
+    if not support.channels:
+        draw = functools.partial(ctx.draw, ctx.renderer(), scene, scene_tf, camera, n, n)
+        return [_refusal("channels", "uniform, declared not drawn", draw)]
+    out = []
+    renderer = ctx.renderer()
+    b = slab.bounds
+    signs = (1.0,) if ctx.quick else (1.0, -1.0)
+    for sign in signs:
+        view = axis_camera(b, 0, sign, 0.35 * min(b[3] - b[2], b[5] - b[4]))
+        image = ctx.draw(renderer, slab, slab_tf, view, 16, 16)
+        expected = np.broadcast_to(channel_slab_rgba(), image.shape)
+        out.append(Measurement("channels", f"two-channel slab, from {'+' if sign > 0 else '-'}x", "RMSE",
+                               _rmse(image, expected), support.accuracy.rmse))  # fmt: skip
+    reference = reference_image(scene, scene_tf, camera, n, n).astype(np.float64)
+    assert reference[..., 3].max() > 0.5
+    image = ctx.draw(renderer, scene, scene_tf, camera, n, n, RenderSettings())
+    out.append(Measurement("channels", "three channels", "RMSE to reference", _rmse(image, reference),
+                           support.accuracy.rmse))  # fmt: skip
+    if support.preintegration:
+        draw = functools.partial(ctx.draw, ctx.renderer(), scene, scene_tf, camera, n, n,
+                                 RenderSettings(preintegration=True))  # fmt: skip
+        out.append(_refusal("channels", "pre-integrated, declared not drawn", draw))
+    return out
+
+
 #: The composite of a bricked render equals the whole render to float rounding (DESIGN.md).
 BRICK_RMSE = 1e-5
 
@@ -845,6 +935,7 @@ def check_bricks(ctx: CheckContext) -> list[Measurement]:
     volume = lattice_volume(
         "uniform", lambda x, y, z: np.sin(x) + np.cos(1.3 * y) + 0.5 * z, (8, 7, 6), (1.2, 0.8, 1.0)
     )
+    assert isinstance(volume, UniformVolume)
     tf = TransferFunction1D([[-2, 0.2, 0.3, 1.0], [4, 1.0, 0.8, 0.1]], [[-1, 0.0], [4, 0.3]], 1.0)
     if support is None or not support.regions:
         layout = BrickLayout(volume.dimensions, volume.spacing, volume.origin, volume.value_range, 3)
@@ -900,5 +991,5 @@ CHECKS: Sequence[Check] = tuple(
     Check(fn.__name__.removeprefix("check_"), fn)
     for fn in (check_output, check_empty, check_box, check_clip, check_clip_region, check_clip_cap, check_ramp, check_projection, check_nan, check_point,
                check_step, check_thin, check_shading, check_eye_inside, check_progress, check_cancel, check_release,
-               check_capabilities, check_options, check_bricks)
+               check_capabilities, check_options, check_bricks, check_labels, check_channels)
 )  # fmt: skip

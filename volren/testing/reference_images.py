@@ -18,6 +18,8 @@ from numpy.typing import NDArray
 
 from volren.api import prepared_renderer
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import TetVolume, UniformVolume, Volume
@@ -41,6 +43,14 @@ def volume_digest(volume: Volume) -> str:
             ).encode()
         )
         h.update(np.ascontiguousarray(volume.values).tobytes())
+        # a label map changes the image of a label TF; volumes without one keep their keys
+        if volume.labels is not None:
+            h.update(f"labels {volume.labels.values.dtype} {volume.labels.values.shape}".encode())
+            h.update(np.ascontiguousarray(volume.labels.values).tobytes())
+        # so do the channels for a channel TF; volumes without them keep their keys as well
+        if volume.channels is not None:
+            h.update(f"channels {volume.channels.values.dtype} {volume.channels.values.shape}".encode())
+            h.update(np.ascontiguousarray(volume.channels.values).tobytes())
     else:
         assert isinstance(volume, TetVolume)
         for array in (volume.points, volume.tets, volume.values):
@@ -64,7 +74,12 @@ def reference_settings(settings: RenderSettings) -> RenderSettings:
 
 
 def scene_key(
-    volume: Volume, tf: TransferFunction, camera: Camera, width: int, height: int, settings: RenderSettings
+    volume: Volume,
+    tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction,
+    camera: Camera,
+    width: int,
+    height: int,
+    settings: RenderSettings,
 ) -> str:
     payload = {
         "reference_version": REFERENCE_VERSION,
@@ -79,7 +94,7 @@ def scene_key(
 
 def reference_image(
     volume: Volume,
-    tf: TransferFunction,
+    tf: TransferFunction | LabelTransferFunction | ChannelTransferFunction,
     camera: Camera,
     width: int,
     height: int,

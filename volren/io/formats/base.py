@@ -44,6 +44,11 @@ class Grid:
     arrays: tuple[str, ...] = ()
     #: the patient coordinate system `direction` is given in ("LPS" for DICOM), if the format has one
     space: str | None = None
+    #: several fields read as channels, [c, k, j, i] (`volren.io.channel_io`), `values` being the first
+    channels: NDArray | None = None
+    #: the channels' names and their numbers in the file's array
+    channel_names: tuple[str, ...] = ()
+    channel_indices: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,7 @@
 /* raycast's march compiled from C: the same rays, segments, brick walk and compositing as the
- * numba kernels in march.py (1D TFs) and march2d.py (2D TFs: value x gradient magnitude; read their
+ * numba kernels in march.py (1D TFs), march2d.py (2D TFs: value x gradient magnitude) and
+ * march_mixed.py (label volumes: a TF per label, blended across label boundaries, `march_labels`;
+ * multi-channel volumes: a TF per channel, their depths added, `march_channels`; read their
  * docstrings for the why of each step), ported line by line so that both draw the same image up to
  * float rounding.
  *
@@ -74,7 +76,30 @@ typedef struct {
     const int8_t *kinds;
     const int16_t *gradients;
     double gradient_unit;
+    /* a label volume (`march_labels.LabelClassification`) where labelled: labels (nz, ny, nx), 16-bit
+     * where labels_wide else 8-bit; lookup (n_lookup) each label's class, -1 hidden (labels past it
+     * hidden too); post holds the classes' tables one after the other, n_post entries each */
+    int32_t labelled, labels_wide;
+    const void *labels;
+    const int32_t *lookup;
+    int64_t n_lookup;
+    const int16_t *cells; /* per cell its corners' class, else MIXED (`volren.model.labels.cell_classes`) */
+    /* a multi-channel volume (`march_inputs.ChannelClassification`) where n_channels > 0: channels
+     * (n_channels, nz, ny, nx) of the grid's type, post (n_channels, n_post, 4) each channel's (r, g,
+     * b, depth per step) at value channel_lo[c] + i / channel_scale[c] */
+    int64_t n_channels;
+    const void *channels;
+    const double *channel_lo, *channel_scale;
 } Classes;
+
+#define MIXED (-2)
+
+/* which march a call runs: a 1D TF's, a 2D TF's, a label volume's (`Classes.labelled`) or a
+ * multi-channel volume's (`Classes.n_channels`) */
+#define KIND_1D 0
+#define KIND_2D 1
+#define KIND_LABELS 2
+#define KIND_CHANNELS 3
 
 #define TRANSPARENT 0
 #define FLAT 1
@@ -318,11 +343,108 @@ INLINE int composite_one_2d(const Grid *g, const Classes *c, double s, double px
     return p->a >= term;
 }
 
-/* one post-classified segment at index point (px, py, pz), 1D or 2D TF */
-INLINE int composite_at(const Grid *g, int is_float, int two_d, const Classes *c, double px, double py, double pz,
+/* the class of the label at offset `at` (`march_labels.label_sample`) */
+INLINE int32_t label_class(const Classes *c, int64_t at) {
+    int64_t label = c->labels_wide ? ((const uint16_t *)c->labels)[at] : ((const uint8_t *)c->labels)[at];
+    return label < c->n_lookup ? c->lookup[label] : -1;
+}
+
+/* `march_labels.label_sample` composited onto p: a segment lk long at value s, index point (px, py,
+ * pz), its cell's corner classes blended by their trilinear weights; 1 once p is opaque */
+INLINE int composite_labels(const Grid *g, const Classes *c, double s, double px, double py, double pz, double lk,
+                            Pixel *p, double term) {
+    if (!isfinite(s)) return 0;
+    const int64_t nx = g->nx, nxy = g->nx * g->ny, n = c->n_post;
+    int64_t i = clamp_index(px, g->nx), j = clamp_index(py, g->ny), k = clamp_index(pz, g->nz);
+    const int64_t at = k * nxy + j * nx + i;
+    const int32_t cell = c->cells[at];
+    int64_t i0;
+    double w = table_entry((s - c->lo) * c->scale, n, &i0);
+    double h = c->step, ca, cr, cg, cb;
+    if (cell != MIXED) { /* the fast path: one class at all eight corners */
+        if (cell < 0) return 0;
+        const double *q = c->post + 4 * (cell * n + i0);
+        ca = q[3] + w * (q[7] - q[3]);
+        if (ca <= 0.0) return 0;
+        if (lk != h) ca = -expm1(lk / h * log1p(-MIN(ca, MAX_OPACITY)));
+        cr = q[0] + w * (q[4] - q[0]), cg = q[1] + w * (q[5] - q[1]), cb = q[2] + w * (q[6] - q[2]);
+    } else {
+        const int64_t corner[8] = {at, at + 1, at + nx, at + nx + 1, at + nxy, at + nxy + 1, at + nxy + nx,
+                                   at + nxy + nx + 1};
+        double fx = px - (double)i, fy = py - (double)j, fz = pz - (double)k;
+        double depth = 0.0, er = 0.0, eg = 0.0, eb = 0.0; /* tau h, and tau h times colour, summed */
+        for (int q = 0; q < 8; q++) {
+            int32_t cls = label_class(c, corner[q]);
+            if (cls < 0) continue;
+            double wq = (q & 1 ? fx : 1.0 - fx) * (q & 2 ? fy : 1.0 - fy) * (q & 4 ? fz : 1.0 - fz);
+            if (wq <= 0.0) continue;
+            const double *e = c->post + 4 * (cls * n + i0);
+            double a = e[3] + w * (e[7] - e[3]);
+            if (a <= 0.0) continue;
+            double d = -wq * log1p(-MIN(a, MAX_OPACITY));
+            depth += d;
+            er += d * (e[0] + w * (e[4] - e[0]));
+            eg += d * (e[1] + w * (e[5] - e[1]));
+            eb += d * (e[2] + w * (e[6] - e[2]));
+        }
+        if (depth <= 0.0) return 0;
+        ca = -expm1(-depth * (lk / h));
+        cr = er / depth, cg = eg / depth, cb = eb / depth;
+    }
+    double tr = (1.0 - p->a) * ca;
+    p->r += tr * cr;
+    p->g += tr * cg;
+    p->b += tr * cb;
+    p->a += tr;
+    return p->a >= term;
+}
+
+/* channel ch of a multi-channel volume as a grid */
+INLINE Grid channel_grid(const Grid *g, int is_float, const Classes *c, int64_t ch) {
+    Grid one = *g;
+    const int64_t at = ch * g->nx * g->ny * g->nz;
+    one.values = is_float ? (const void *)((const float *)c->channels + at) : (const void *)((const uint8_t *)c->channels + at);
+    return one;
+}
+
+/* `march_channels.channel_sample` composited onto p: a segment lk long at index point (px, py, pz),
+ * every channel looked up at its own value, the depths added; 1 once p is opaque */
+INLINE int composite_channels(const Grid *g, int is_float, const Classes *c, double px, double py, double pz,
+                              double lk, Pixel *p, double term) {
+    const int64_t n = c->n_post;
+    double depth = 0.0, er = 0.0, eg = 0.0, eb = 0.0;
+    for (int64_t ch = 0; ch < c->n_channels; ch++) {
+        Grid one = channel_grid(g, is_float, c, ch);
+        double s = value(&one, is_float, px, py, pz);
+        if (!isfinite(s)) continue;
+        int64_t i0;
+        double w = table_entry((s - c->channel_lo[ch]) * c->channel_scale[ch], n, &i0);
+        const double *e = c->post + 4 * (ch * n + i0);
+        double d = e[3] + w * (e[7] - e[3]);
+        if (d <= 0.0) continue;
+        depth += d;
+        er += d * (e[0] + w * (e[4] - e[0]));
+        eg += d * (e[1] + w * (e[5] - e[1]));
+        eb += d * (e[2] + w * (e[6] - e[2]));
+    }
+    if (depth <= 0.0) return 0;
+    double ca = -expm1(-depth * (lk / c->step));
+    double tr = (1.0 - p->a) * ca;
+    p->r += tr * (er / depth);
+    p->g += tr * (eg / depth);
+    p->b += tr * (eb / depth);
+    p->a += tr;
+    return p->a >= term;
+}
+
+/* one post-classified segment at index point (px, py, pz): a 1D or 2D TF's, a label volume's or a
+ * multi-channel volume's */
+INLINE int composite_at(const Grid *g, int is_float, int kind, const Classes *c, double px, double py, double pz,
                         double lk, Pixel *p, double term) {
+    if (kind == KIND_CHANNELS) return composite_channels(g, is_float, c, px, py, pz, lk, p, term);
     double s = value(g, is_float, px, py, pz);
-    return two_d ? composite_one_2d(g, c, s, px, py, pz, lk, p, term) : composite_one(c, s, lk, p, term);
+    if (kind == KIND_LABELS) return composite_labels(g, c, s, px, py, pz, lk, p, term);
+    return kind == KIND_2D ? composite_one_2d(g, c, s, px, py, pz, lk, p, term) : composite_one(c, s, lk, p, term);
 }
 
 #ifdef __AVX2__
@@ -435,6 +557,37 @@ INLINE int run_classes8(const Classes *c, __m256 s, float r[8], float g[8], floa
     return visible;
 }
 
+/* `run_classes8` for a label volume: the classes of the 8 samples' cells (`Classes.cells`), each
+ * lane looked up in its class's table; the lanes in cells of several classes (MIXED) in *mixed, to be
+ * composited one at a time (`composite_labels`), and the other lanes with opacity above 0 returned */
+INLINE int run_label_classes8(const Classes *c, __m256 s, const Cells8 *cells, float r[8], float g[8], float b[8],
+                              float a[8], int *mixed) {
+    const __m256 zero = _mm256_setzero_ps();
+    const float *post = c->post32;
+    __m256i cls = _mm256_i32gather_epi32((const int *)c->cells, cells->at, 2);
+    cls = _mm256_srai_epi32(_mm256_slli_epi32(cls, 16), 16); /* the int16 at each cell, sign extended */
+    __m256 finite = finite8(s);
+    *mixed = _mm256_movemask_ps(_mm256_and_ps(finite, _mm256_castsi256_ps(_mm256_cmpeq_epi32(cls, _mm256_set1_epi32(MIXED)))));
+    __m256 shown = _mm256_and_ps(finite, _mm256_castsi256_ps(_mm256_cmpgt_epi32(cls, _mm256_set1_epi32(-1))));
+    if (!_mm256_movemask_ps(shown)) return 0;
+    __m256i i0;
+    __m256 w = table_entry8(value_position8(c, s), c->n_post, &i0);
+    __m256i row = _mm256_mullo_epi32(_mm256_max_epi32(cls, _mm256_setzero_si256()), _mm256_set1_epi32((int)c->n_post));
+    __m256i at = _mm256_slli_epi32(_mm256_add_epi32(row, i0), 2); /* four floats per entry */
+    __m256 a0 = _mm256_i32gather_ps(post + 3, at, 4), a1 = _mm256_i32gather_ps(post + 7, at, 4);
+    __m256 ca = _mm256_and_ps(_mm256_fmadd_ps(w, _mm256_sub_ps(a1, a0), a0), shown);
+    int visible = _mm256_movemask_ps(_mm256_cmp_ps(ca, zero, _CMP_GT_OQ));
+    if (!visible) return 0;
+    _mm256_storeu_ps(a, ca);
+    __m256 c0 = _mm256_i32gather_ps(post, at, 4), c1 = _mm256_i32gather_ps(post + 4, at, 4);
+    _mm256_storeu_ps(r, _mm256_fmadd_ps(w, _mm256_sub_ps(c1, c0), c0));
+    c0 = _mm256_i32gather_ps(post + 1, at, 4), c1 = _mm256_i32gather_ps(post + 5, at, 4);
+    _mm256_storeu_ps(g, _mm256_fmadd_ps(w, _mm256_sub_ps(c1, c0), c0));
+    c0 = _mm256_i32gather_ps(post + 2, at, 4), c1 = _mm256_i32gather_ps(post + 6, at, 4);
+    _mm256_storeu_ps(b, _mm256_fmadd_ps(w, _mm256_sub_ps(c1, c0), c0));
+    return visible;
+}
+
 INLINE __m256 low16(__m256i x) { return _mm256_cvtepi32_ps(_mm256_srai_epi32(_mm256_slli_epi32(x, 16), 16)); }
 INLINE __m256 high16(__m256i x) { return _mm256_cvtepi32_ps(_mm256_srai_epi32(x, 16)); }
 
@@ -496,6 +649,47 @@ INLINE __m256 opacity8(__m256 x) {
     return _mm256_blendv_ps(_mm256_sub_ps(one, e), series, _mm256_cmp_ps(x, _mm256_set1_ps(0.0625f), _CMP_LT_OQ));
 }
 
+/* `run_classes8` for a multi-channel volume: the 8 whole segments' channels each interpolated
+ * (`run_values8`) and looked up in their tables, the depths added; the colour (r, g, b, not
+ * premultiplied) and opacity 1 - exp(-depth); the lanes with opacity above 0 returned */
+INLINE int run_channel_classes8(const Grid *g, int is_float, const Classes *c, const IndexRay *ray, double base,
+                                double h, int64_t kk, float r[8], float gr[8], float b[8], float a[8]) {
+    const __m256 zero = _mm256_setzero_ps();
+    const float *post = c->post32;
+    const int64_t n = c->n_post;
+    __m256 depth = zero, er = zero, eg = zero, eb = zero;
+    for (int64_t ch = 0; ch < c->n_channels; ch++) {
+        Grid one = channel_grid(g, is_float, c, ch);
+        Cells8 cells;
+        __m256 s = run_values8(&one, is_float, ray, base, h, kk, &cells);
+        __m256 finite = finite8(s);
+        __m256i i0;
+        __m256 pos = _mm256_mul_ps(_mm256_sub_ps(s, _mm256_set1_ps((float)c->channel_lo[ch])),
+                                   _mm256_set1_ps((float)c->channel_scale[ch]));
+        __m256 w = table_entry8(pos, n, &i0);
+        __m256i at = _mm256_slli_epi32(_mm256_add_epi32(i0, _mm256_set1_epi32((int)(ch * n))), 2);
+        __m256 d0 = _mm256_i32gather_ps(post + 3, at, 4), d1 = _mm256_i32gather_ps(post + 7, at, 4);
+        __m256 d = _mm256_and_ps(_mm256_max_ps(_mm256_fmadd_ps(w, _mm256_sub_ps(d1, d0), d0), zero), finite);
+        if (!_mm256_movemask_ps(_mm256_cmp_ps(d, zero, _CMP_GT_OQ))) continue;
+        depth = _mm256_add_ps(depth, d);
+        __m256 c0 = _mm256_i32gather_ps(post, at, 4), c1 = _mm256_i32gather_ps(post + 4, at, 4);
+        er = _mm256_fmadd_ps(d, _mm256_fmadd_ps(w, _mm256_sub_ps(c1, c0), c0), er);
+        c0 = _mm256_i32gather_ps(post + 1, at, 4), c1 = _mm256_i32gather_ps(post + 5, at, 4);
+        eg = _mm256_fmadd_ps(d, _mm256_fmadd_ps(w, _mm256_sub_ps(c1, c0), c0), eg);
+        c0 = _mm256_i32gather_ps(post + 2, at, 4), c1 = _mm256_i32gather_ps(post + 6, at, 4);
+        eb = _mm256_fmadd_ps(d, _mm256_fmadd_ps(w, _mm256_sub_ps(c1, c0), c0), eb);
+    }
+    __m256 live = _mm256_cmp_ps(depth, zero, _CMP_GT_OQ);
+    int visible = _mm256_movemask_ps(live);
+    if (!visible) return 0;
+    __m256 inv = _mm256_and_ps(_mm256_div_ps(_mm256_set1_ps(1.0f), depth), live);
+    _mm256_storeu_ps(a, opacity8(depth));
+    _mm256_storeu_ps(r, _mm256_mul_ps(er, inv));
+    _mm256_storeu_ps(gr, _mm256_mul_ps(eg, inv));
+    _mm256_storeu_ps(b, _mm256_mul_ps(eb, inv));
+    return visible;
+}
+
 /* channel ch of the 2D table, bilinear at entries e (of (j0, i0)) with weights wi, wj */
 INLINE __m256 bilinear8(const float *table, int64_t nv, __m256i e, __m256 wi, __m256 wj, int ch) {
     __m256 t00 = _mm256_i32gather_ps(table + ch, e, 4), t01 = _mm256_i32gather_ps(table + 4 + ch, e, 4);
@@ -538,7 +732,7 @@ INLINE int run_classes8_2d(const Grid *g, const Classes *c, __m256 s, const Cell
 
 /* `_composite_post`: the post-classified segments [ka, kb) composited onto p; returns how many
  * were sampled (up to the one that made p opaque) */
-INLINE int64_t composite_post(const Grid *g, int is_float, int two_d, const Classes *c, const IndexRay *ray,
+INLINE int64_t composite_post(const Grid *g, int is_float, int kind, const Classes *c, const IndexRay *ray,
                               int64_t ka, int64_t kb, Pixel *p, double term) {
     double h = c->step, t0 = ray->t0, first = ray->first, last = ray->last;
     int64_t ns = ray->ns;
@@ -548,25 +742,41 @@ INLINE int64_t composite_post(const Grid *g, int is_float, int two_d, const Clas
     if (kk == 0 && kk < kb) { /* the first segment, cut by the box */
         ray_segment(t0, first, last, h, ns, 0, &tk, &lk);
         double tm = tk + 0.5 * lk;
-        if (composite_at(g, is_float, two_d, c, ray->ox + tm * ray->dx, ray->oy + tm * ray->dy, ray->oz + tm * ray->dz,
+        if (composite_at(g, is_float, kind, c, ray->ox + tm * ray->dx, ray->oy + tm * ray->dy, ray->oz + tm * ray->dz,
                          lk, p, term))
             return 1;
         kk = 1;
     }
 #ifdef __AVX2__
     /* every whole segment (h long) eight at a time, the last chunk's lanes past the run masked: a
-     * segment's colour is the same whichever run and chunk holds it, so skipping changes no pixel */
+     * segment's colour is the same whichever run and chunk holds it, so skipping changes no pixel.
+     * A label volume's samples in cells of several classes are composited one at a time. */
     int64_t whole_end = kb < ns - 1 ? kb : ns - 1; /* segments [kk, whole_end) are h long */
     float cr[8], cg[8], cb[8], ca[8];
     for (int64_t k0 = kk; k0 < whole_end; k0 += 8) {
         kk = k0;
         int lanes = whole_end - kk < 8 ? (1 << (whole_end - kk)) - 1 : 0xff;
-        Cells8 cells;
-        __m256 s = run_values8(g, is_float, ray, base, h, kk, &cells);
-        int visible = lanes & (two_d ? run_classes8_2d(g, c, s, &cells, cr, cg, cb, ca) : run_classes8(c, s, cr, cg, cb, ca));
-        while (visible) { /* front to back over the lanes with opacity */
-            int j = __builtin_ctz(visible);
-            visible &= visible - 1;
+        int mixed = 0, visible;
+        if (kind == KIND_CHANNELS) {
+            visible = lanes & run_channel_classes8(g, is_float, c, ray, base, h, kk, cr, cg, cb, ca);
+        } else {
+            Cells8 cells;
+            __m256 s = run_values8(g, is_float, ray, base, h, kk, &cells);
+            visible = lanes & (kind == KIND_LABELS ? run_label_classes8(c, s, &cells, cr, cg, cb, ca, &mixed)
+                               : kind == KIND_2D   ? run_classes8_2d(g, c, s, &cells, cr, cg, cb, ca)
+                                                   : run_classes8(c, s, cr, cg, cb, ca));
+        }
+        mixed &= lanes;
+        int todo = visible | mixed;
+        while (todo) { /* front to back over the lanes with opacity */
+            int j = __builtin_ctz(todo);
+            todo &= todo - 1;
+            if (kind == KIND_LABELS && (mixed >> j & 1)) {
+                double tm = base + (double)(kk + j) * h;
+                double px = ray->ox + tm * ray->dx, py = ray->oy + tm * ray->dy, pz = ray->oz + tm * ray->dz;
+                if (composite_labels(g, c, value(g, is_float, px, py, pz), px, py, pz, h, p, term)) return kk + j + 1 - ka;
+                continue;
+            }
             double tr = (1.0 - p->a) * ca[j];
             p->r += tr * cr[j];
             p->g += tr * cg[j];
@@ -586,7 +796,7 @@ INLINE int64_t composite_post(const Grid *g, int is_float, int two_d, const Clas
             lk = h;
             tm = base + (double)kk * h;
         }
-        if (composite_at(g, is_float, two_d, c, ray->ox + tm * ray->dx, ray->oy + tm * ray->dy, ray->oz + tm * ray->dz,
+        if (composite_at(g, is_float, kind, c, ray->ox + tm * ray->dx, ray->oy + tm * ray->dy, ray->oz + tm * ray->dz,
                          lk, p, term))
             return kk + 1 - ka;
     }
@@ -722,10 +932,10 @@ INLINE int64_t past_empty_box(const Walk *w, const IndexRay *ray, int d, int64_t
 /* A run's segments from ra to the last whose middle lies before t composited onto p
  * (`composite_post`); returns the segment after them, adds the samples to *taken and, once p is
  * opaque, sets *stop to the segment after the one that made it so. */
-INLINE int64_t flush_run(const Grid *g, int is_float, int two_d, const Classes *c, const IndexRay *ray, int64_t ra,
+INLINE int64_t flush_run(const Grid *g, int is_float, int kind, const Classes *c, const IndexRay *ray, int64_t ra,
                          double t, double inv_h, Pixel *p, double term, int64_t *taken, int64_t *stop) {
     int64_t kb = middles_before(t, ray->t0, ray->first, ray->last, c->step, inv_h, ray->ns);
-    int64_t n = kb > ra ? composite_post(g, is_float, two_d, c, ray, ra, kb, p, term) : 0;
+    int64_t n = kb > ra ? composite_post(g, is_float, kind, c, ray, ra, kb, p, term) : 0;
     *taken += n;
     if (p->a >= term) *stop = ra + n;
     return kb;
@@ -735,7 +945,7 @@ INLINE int64_t flush_run(const Grid *g, int is_float, int two_d, const Classes *
  * one jump), and each run of visible bricks composited whole (`composite_post`) once the walk
  * leaves it, so that a brick costs a step and a read, not a segment count. The segments composited
  * are those whose middles lie in visible bricks, as numba's `_ray` takes them. */
-INLINE void walk_post(const Grid *g, int is_float, int two_d, const Bricks *br, int shift, const Classes *c,
+INLINE void walk_post(const Grid *g, int is_float, int kind, const Bricks *br, int shift, const Classes *c,
                       const IndexRay *ray, double t1, double term, Pixel *p, Counts *counts) {
     const int8_t *empty = br->distance;
     const double h = c->step, inv_h = 1.0 / h, span = MAX_RUN * h;
@@ -781,7 +991,7 @@ INLINE void walk_post(const Grid *g, int is_float, int two_d, const Bricks *br, 
                     break;
                 }
                 if (run_te - run_t0 >= span) { /* a long run: an opaque ray stops within it, walk no further first */
-                    int64_t kb = flush_run(g, is_float, two_d, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
+                    int64_t kb = flush_run(g, is_float, kind, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
                     if (p->a >= term) goto done;
                     ra = kb > ra ? kb : ra;
                     run_t0 = run_te;
@@ -793,7 +1003,7 @@ INLINE void walk_post(const Grid *g, int is_float, int two_d, const Bricks *br, 
                 }
                 d = empty[w.offset];
             }
-            int64_t kb = flush_run(g, is_float, two_d, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
+            int64_t kb = flush_run(g, is_float, kind, c, ray, ra, run_te, inv_h, p, term, &taken, &stop);
             if (p->a >= term) goto done;
             k = kb > k ? kb : k;
             if (!inside || k >= ns) goto done;
@@ -889,7 +1099,7 @@ INLINE void walk_pre(const Grid *g, int is_float, const Bricks *br, int shift, c
 }
 
 /* `_ray`: one pixel's ray, clipped, cut into segments and walked front to back through the bricks */
-INLINE Pixel march_ray(const Grid *g, int is_float, int two_d, const Bricks *br, int shift, const View *v, int64_t xx,
+INLINE Pixel march_ray(const Grid *g, int is_float, int kind, const Bricks *br, int shift, const View *v, int64_t xx,
                        double ny_, double phase, const Classes *c, double term, Counts *counts) {
     const double h = c->step;
     const int64_t nx = g->nx, ny = g->ny, nz = g->nz;
@@ -912,10 +1122,10 @@ INLINE Pixel march_ray(const Grid *g, int is_float, int two_d, const Bricks *br,
     double first = 0.0, last = 0.0;
     if (!miss && t1 > t0) ray_segments(t1 - t0, h, mod1(phase - t0 / h), &ns, &first, &last);
     ray.t0 = t0, ray.first = first, ray.last = last, ray.ns = ns;
-    if (c->preintegrated && !two_d)
+    if (c->preintegrated && kind == KIND_1D)
         walk_pre(g, is_float, br, shift, c, &ray, term, &p, counts);
     else
-        walk_post(g, is_float, two_d, br, shift, c, &ray, t1, term, &p, counts);
+        walk_post(g, is_float, kind, br, shift, c, &ray, t1, term, &p, counts);
     return p;
 }
 
@@ -950,14 +1160,14 @@ typedef struct {
     int64_t next;         /* the next item to take (atomic) */
 } Work;
 
-static void run_item(Work *w, int is_float, int two_d, int shift, int64_t q) {
+static void run_item(Work *w, int is_float, int kind, int shift, int64_t q) {
     const View *v = w->view;
     const int64_t width = v->width, height = v->height;
     Counts counts = {0, 0, 0, 0};
     if (w->listed) {
         int64_t px = w->items[q], yy = px / width;
         double ny_ = 1.0 - ((double)yy + 0.5) / (double)height * 2.0;
-        Pixel p = march_ray(w->grid, is_float, two_d, w->bricks, shift, v, px - yy * width, ny_, v->phases[px], w->classes,
+        Pixel p = march_ray(w->grid, is_float, kind, w->bricks, shift, v, px - yy * width, ny_, v->phases[px], w->classes,
                             w->term, &counts);
         store(w->out, q, p);
         memcpy(w->counts + 4 * q, &counts, sizeof counts);
@@ -970,7 +1180,7 @@ static void run_item(Work *w, int is_float, int two_d, int shift, int64_t q) {
         double ny_ = 1.0 - ((double)yy + 0.5) / (double)height * 2.0;
         for (int64_t xx = x0; xx < x1; xx++) {
             int64_t px = yy * width + xx;
-            Pixel p = march_ray(w->grid, is_float, two_d, w->bricks, shift, v, xx, ny_, v->phases[px], w->classes, w->term,
+            Pixel p = march_ray(w->grid, is_float, kind, w->bricks, shift, v, xx, ny_, v->phases[px], w->classes, w->term,
                                 &counts);
             store(w->out, px, p);
         }
@@ -985,12 +1195,25 @@ static void *worker(void *arg) {
         int64_t start = __atomic_fetch_add(&w->next, w->chunk, __ATOMIC_RELAXED);
         if (start >= w->n_items) break;
         int64_t end = start + w->chunk < w->n_items ? start + w->chunk : w->n_items;
-        const int is_float = w->grid->is_float, two_d = w->classes->two_d;
+        const int is_float = w->grid->is_float;
+        const Classes *c = w->classes;
+        const int kind = c->labelled ? KIND_LABELS : c->n_channels > 0 ? KIND_CHANNELS : c->two_d ? KIND_2D : KIND_1D;
         for (int64_t q = start; q < end; q++) { /* each combination compiled apart (always_inline) */
-            if (is_float)
-                two_d ? run_item(w, 1, 1, shift, q) : run_item(w, 1, 0, shift, q);
-            else
-                two_d ? run_item(w, 0, 1, shift, q) : run_item(w, 0, 0, shift, q);
+            if (is_float) {
+                switch (kind) {
+                    case KIND_LABELS: run_item(w, 1, KIND_LABELS, shift, q); break;
+                    case KIND_CHANNELS: run_item(w, 1, KIND_CHANNELS, shift, q); break;
+                    case KIND_2D: run_item(w, 1, KIND_2D, shift, q); break;
+                    default: run_item(w, 1, KIND_1D, shift, q);
+                }
+            } else {
+                switch (kind) {
+                    case KIND_LABELS: run_item(w, 0, KIND_LABELS, shift, q); break;
+                    case KIND_CHANNELS: run_item(w, 0, KIND_CHANNELS, shift, q); break;
+                    case KIND_2D: run_item(w, 0, KIND_2D, shift, q); break;
+                    default: run_item(w, 0, KIND_1D, shift, q);
+                }
+            }
         }
     }
     return NULL;

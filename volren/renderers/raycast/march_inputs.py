@@ -136,3 +136,38 @@ def gradients(values: NDArray[Any], spacing: tuple[float, float, float]) -> Grad
     for c, part in enumerate(finite):
         out[..., c] = np.rint(part / unit)
     return Gradients2D(out, unit)
+
+
+class LabelClassification(NamedTuple):
+    """How a label volume's segment gets its colour (`march_labels`): the classes of its cell's
+    corner labels (`LabelTransferFunction.classes`), each post-classified from its own table."""
+
+    #: (nz, ny, nx) uint8 or uint16 labels on the values' grid
+    labels: NDArray[Any]
+    #: label -> class (-1: hidden); labels past its end are hidden
+    lookup: NDArray[np.int32]
+    #: each cell's class where its corners share one, else `volren.model.labels.MIXED`
+    #: (`volren.model.labels.cell_classes`: (nz, ny, nx) at the cell's first corner)
+    cells: NDArray[np.int16]
+    #: (classes, n, 4) colour and opacity per step at n values evenly spaced from lo
+    post: NDArray[np.float64]
+    #: the step h
+    step: float
+    #: a value s sits at table entry (s - lo) * scale
+    lo: float
+    scale: float
+
+
+class ChannelClassification(NamedTuple):
+    """How a multi-channel volume's segment gets its colour (`march_channels`): every drawn channel
+    looked up at its own value in its own table, the depths added."""
+
+    #: (channels, nz, ny, nx): the drawn channels, in the values' type (8-bit or float32)
+    channels: NDArray[Any]
+    #: (channels, n, 4): colour and depth w tau h per step at n values evenly spaced from lo[c]
+    post: NDArray[np.float64]
+    #: the step h
+    step: float
+    #: channel c's value s sits at entry (s - lo[c]) * scale[c] of its table
+    lo: NDArray[np.float64]
+    scale: NDArray[np.float64]

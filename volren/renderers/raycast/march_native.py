@@ -1,5 +1,5 @@
-"""raycast's march in C (`march.c`), called as the numba kernels `march` and `march_pixels` (1D TFs)
-and `march2d` and `march2d_pixels` (2D TFs) are.
+"""raycast's march in C (`march.c`), called as the numba kernels `march` and `march_pixels` (1D TFs
+and label volumes) and `march2d` and `march2d_pixels` (2D TFs) are.
 
 Why: the C build samples eight segments of a ray at a time with AVX2 gathers, which numba does not
 emit here (`benchmarks.packet_probe`); where the library cannot be built or loaded
@@ -18,7 +18,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from volren.kernels import native
-from volren.renderers.raycast.march_inputs import Classification, EmptyBricks, Gradients2D, PixelView, Table2D
+from volren.renderers.raycast.march_inputs import (
+    ChannelClassification,
+    Classification,
+    EmptyBricks,
+    Gradients2D,
+    LabelClassification,
+    PixelView,
+    Table2D,
+)
 
 SOURCE = Path(__file__).with_name("march.c")
 #: Bytes readable past an 8-bit grid's last value: the vector path reads 32 bits at a value's offset.
@@ -54,7 +62,9 @@ class _Classes(ctypes.Structure):
                 ("n_post", _i64), ("table", _ptr), ("n_table", _i64), ("step", _f64), ("lo", _f64),
                 ("scale", _f64), ("two_d", ctypes.c_int32), ("table2d", _ptr), ("n_value", _i64),
                 ("n_gradient", _i64), ("g_scale", _f64), ("kinds", _ptr), ("gradients", _ptr),
-                ("gradient_unit", _f64)]  # fmt: skip
+                ("gradient_unit", _f64), ("labelled", ctypes.c_int32), ("labels_wide", ctypes.c_int32),
+                ("labels", _ptr), ("lookup", _ptr), ("n_lookup", _i64), ("cells", _ptr), ("n_channels", _i64),
+                ("channels", _ptr), ("channel_lo", _ptr), ("channel_scale", _ptr)]  # fmt: skip
 
 
 def padded(values: NDArray[Any]) -> NDArray[Any]:
@@ -91,7 +101,7 @@ class _Frame:
     `Classification`, or a 2D TF's table and the grid's gradients."""
 
     def __init__(self, values: NDArray[Any], bricks: EmptyBricks, view: PixelView,
-                 classes: Classification | tuple[Gradients2D, Table2D]) -> None:  # fmt: skip
+                 classes: Classification | LabelClassification | ChannelClassification | tuple[Gradients2D, Table2D]) -> None:  # fmt: skip
         nz, ny, nx = values.shape
         self.arrays = [
             np.ascontiguousarray(a, dtype=t)
@@ -111,9 +121,14 @@ class _Frame:
                           (_f64 * 3)(*map(float, view.grid_origin)), (_f64 * 3)(*map(float, view.spacing)),
                           (_f64 * 3)(*map(float, view.view_dir)), float(view.far_depth), _address(phases),
                           _address(planes), planes.shape[0])  # fmt: skip
-        self.classes = (
-            self._classes_1d(classes) if isinstance(classes, Classification) else self._classes_2d(*classes)
-        )
+        if isinstance(classes, LabelClassification):
+            self.classes = self._classes_labels(classes)
+        elif isinstance(classes, ChannelClassification):
+            self.classes = self._classes_channels(classes)
+        elif isinstance(classes, Classification):
+            self.classes = self._classes_1d(classes)
+        else:
+            self.classes = self._classes_2d(*classes)
 
     def _kept(self, array: NDArray[Any], dtype: type) -> NDArray[Any]:
         kept = np.ascontiguousarray(array, dtype=dtype)
@@ -126,6 +141,44 @@ class _Frame:
         return _Classes(int(classes.preintegrated), int(classes.cap), _address(post), _address(post32),
                         post.shape[0], _address(table), table.shape[0], float(classes.step), float(classes.lo),
                         float(classes.scale))  # fmt: skip
+
+    def _classes_labels(self, classes: LabelClassification) -> _Classes:
+        post, post32 = self._kept(classes.post, np.float64), self._kept(classes.post, np.float32)
+        labels, lookup, cells = classes.labels, self._kept(classes.lookup, np.int32), classes.cells
+        if labels.shape != self.values.shape or labels.dtype not in (np.uint8, np.uint16) or post.ndim != 3:
+            raise ValueError(
+                "the C march reads 8- or 16-bit labels on the values' grid and (classes, n, 4) tables"
+            )
+        if cells.shape != self.values.shape or cells.dtype != np.int16 or not _has_slack(cells, 2):
+            raise ValueError(
+                "the C march reads int16 cell classes on the values' grid, 2 bytes readable past them"
+            )
+        labels = self._kept(labels, labels.dtype.type)
+        none = self._kept(np.zeros(8), np.float64)
+        return _Classes(0, 0, _address(post), _address(post32), post.shape[1], _address(none), 0, float(classes.step),
+                        float(classes.lo), float(classes.scale), 0, _address(none), 0, 0, 0.0, _address(none),
+                        _address(none), 0.0, 1, int(labels.dtype == np.uint16), _address(labels), _address(lookup),
+                        lookup.shape[0], _address(cells))  # fmt: skip
+
+    def _classes_channels(self, classes: ChannelClassification) -> _Classes:
+        post, post32 = self._kept(classes.post, np.float64), self._kept(classes.post, np.float32)
+        channels = classes.channels
+        lo, scale = self._kept(classes.lo, np.float64), self._kept(classes.scale, np.float64)
+        if channels.shape[1:] != self.values.shape or channels.dtype != self.values.dtype or post.ndim != 3:
+            raise ValueError(
+                "the C march reads channels on the values' grid, of their type, and (channels, n, 4) tables"
+            )
+        if len(channels) != len(post) or len(lo) != len(post) or len(scale) != len(post):
+            raise ValueError("the C march reads a table, a lo and a scale per channel")
+        if not channels.flags.c_contiguous or (channels.dtype == np.uint8 and not _has_slack(channels)):
+            raise ValueError(
+                f"the C march reads C-contiguous channels, 8-bit ones with {SLACK} bytes readable past them"
+            )
+        none = self._kept(np.zeros(8), np.float64)
+        return _Classes(0, 0, _address(post), _address(post32), post.shape[1], _address(none), 0, float(classes.step),
+                        0.0, 1.0, 0, _address(none), 0, 0, 0.0, _address(none), _address(none), 0.0, 0, 0,
+                        _address(none), _address(none), 0, _address(none), len(channels), _address(channels),
+                        _address(lo), _address(scale))  # fmt: skip
 
     def _classes_2d(self, grad: Gradients2D, tab: Table2D) -> _Classes:
         table = self._kept(tab.table, np.float32)
@@ -216,8 +269,10 @@ def march2d_pixels(values: NDArray[Any], grad: Gradients2D, bricks: EmptyBricks,
 numba_only = native.NumbaOnly()
 
 
-def kernels(values: NDArray[Any], two_d: bool = False) -> tuple[Any, Any] | None:
-    """(march, march_pixels) in C for this grid, or (march2d, march2d_pixels) for 2D TFs, or None where
+def kernels(values: NDArray[Any], kind: str = "1d") -> tuple[Any, Any] | None:
+    """(march, march_pixels) in C for this grid (`kind` "1d", or "labels" and "channels": a
+    `LabelClassification`'s or `ChannelClassification`'s march), or (march2d, march2d_pixels) for 2D
+    TFs (`kind` "2d"), or None where
     the numba kernels must draw it: `numba_only` is on, ``VOLREN_NATIVE`` is 0 (read at each frame), the
     library is not available, the grid is too large for 32-bit offsets, its values are neither 8-bit nor
     float32, or an 8-bit grid lacks the slack `padded` gives."""
@@ -225,7 +280,7 @@ def kernels(values: NDArray[Any], two_d: bool = False) -> tuple[Any, Any] | None
         return None
     if (
         values.dtype not in (np.uint8, np.float32)
-        or values.size > (MAX_VALUES_2D if two_d else MAX_VALUES)
+        or values.size > (MAX_VALUES_2D if kind == "2d" else MAX_VALUES)
         or not values.flags.c_contiguous
     ):
         return None
@@ -233,15 +288,15 @@ def kernels(values: NDArray[Any], two_d: bool = False) -> tuple[Any, Any] | None
         return None
     if _library() is None:
         return None
-    return (march2d, march2d_pixels) if two_d else (march, march_pixels)
+    return (march2d, march2d_pixels) if kind == "2d" else (march, march_pixels)
 
 
-def _has_slack(values: NDArray[Any]) -> bool:
-    """Whether `SLACK` bytes past the grid's last value lie inside the array that owns its memory."""
+def _has_slack(values: NDArray[Any], slack: int = SLACK) -> bool:
+    """Whether `slack` bytes past the array's last value lie inside the array that owns its memory."""
     owner = values.base
     if not isinstance(owner, np.ndarray):
         return False
-    end = _address(values) + values.nbytes + SLACK
+    end = _address(values) + values.nbytes + slack
     return _address(owner) <= _address(values) and end <= _address(owner) + owner.nbytes
 
 

@@ -20,7 +20,7 @@ import math
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +30,8 @@ from volren.kernels.image_stride import STRIDE_RULE
 from volren.kernels.pixel_phases import pixel_phases
 from volren.model import BlendMode, Camera, TransferFunction1D, TransferFunction2D, UniformVolume
 from volren.model.bricks import BrickGrid
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelClasses, LabelTransferFunction, cell_classes
 from volren.model.settings import check_step
 from volren.model.transfer_function import MAX_OPACITY
 from volren.model.volume import spanning
@@ -46,9 +48,11 @@ from volren.renderers.raycast import march_native
 from volren.renderers.raycast.march_inputs import (
     COUNTS,
     TILE,
+    ChannelClassification,
     Classification,
     EmptyBricks,
     Gradients2D,
+    LabelClassification,
     PixelView,
     Table2D,
     gradients,
@@ -138,22 +142,30 @@ MarchArgs = tuple[NDArray[Any], EmptyBricks, PixelView, Classification, float]
 
 #: The kernels a frame runs: (every pixel in tiles, listed pixels).
 Kernels = tuple[Callable[..., None], Callable[..., None]]
+#: Which march draws a frame: a 1D TF's, a 2D TF's, a label volume's (`march_labels`) or a
+#: multi-channel volume's (`march_channels`).
+MarchKind = Literal["1d", "2d", "labels", "channels"]
 
 
-def _kernels(two_d: bool, values: NDArray[Any]) -> tuple[Kernels, bool]:
-    """(kernels, whether they are numba's): the 1D or 2D TF's march, in C where they build (`march_native`)
-    else numba's (`march`, `march2d`), looked up when a frame runs. numba's modules
-    are imported only here: a frame the C march draws does not pay numba's import and first call."""
-    native = march_native.kernels(values, two_d)
+def _kernels(march: MarchKind, values: NDArray[Any]) -> tuple[Kernels, bool]:
+    """(kernels, whether they are numba's): the 1D TF's, the 2D TF's, or the label or multi-channel
+    volume's march, in C where they build (`march_native`) else numba's (`march`, `march2d`,
+    `march_mixed`), looked up when a frame runs. numba's modules are imported only here: a frame the
+    C march draws does not pay numba's import and first call."""
+    native = march_native.kernels(values, march)
     if native is not None:
         return native, False
-    if two_d:
+    if march in ("labels", "channels"):
+        from volren.renderers.raycast import march_mixed
+
+        return (march_mixed.march_mixed, march_mixed.march_mixed_pixels), True
+    if march == "2d":
         from volren.renderers.raycast import march2d
 
         return (march2d.march2d, march2d.march2d_pixels), True
-    from volren.renderers.raycast import march
+    from volren.renderers.raycast import march as march_1d
 
-    return (march.march, march.march_pixels), True
+    return (march_1d.march, march_1d.march_pixels), True
 
 
 @contextmanager
@@ -203,13 +215,51 @@ def _visible_under_table(
     return (seen[last + 1] - seen[first] > 0) & ~grid.empty
 
 
+#: The most memory a label volume's classification tables take together (`classification_table`
+#: entries per class, fewer where many classes would exceed it; at least 16).
+LABEL_TABLES_BYTES = 256 * 2**20
+#: Above this many label classes, bricks are classified by the union of the visible classes (one
+#: pass over the labels) instead of class by class (a pass each).
+MAX_CLASSES_PER_BRICK = 16
+
+
+def _visible_classes(
+    grid: BrickGrid, labels: NDArray[Any], classes: LabelClasses, pad: float
+) -> NDArray[np.bool_]:
+    """The bricks a label volume's rays must sample: those where a class present at some corner of
+    the brick's cells has opacity in the brick's value range (widened by `pad`). Past
+    `MAX_CLASSES_PER_BRICK` classes, the bricks holding any visible label where any class has opacity."""
+    class_of = classes.lookup[labels]
+    visible = np.zeros(grid.shape, dtype=bool)
+    if len(classes.tfs) > MAX_CLASSES_PER_BRICK:
+        present = BrickGrid.from_array((class_of >= 0).view(np.uint8), grid.brick).vmax > 0
+        for tf in classes.tfs:
+            visible |= grid.visible(tf, pad=pad)
+        return visible & present
+    for c, tf in enumerate(classes.tfs):
+        shown = grid.visible(tf, pad=pad)
+        if shown.any():
+            visible |= shown & (BrickGrid.from_array((class_of == c).view(np.uint8), grid.brick).vmax > 0)
+    return visible
+
+
+def _visible_channels(grid: BrickGrid, values: NDArray[Any], drawn: list[int], tf: ChannelTransferFunction,
+                      pads: tuple[float, ...]) -> NDArray[np.bool_]:  # fmt: skip
+    """The bricks a multi-channel volume's rays must sample: those where some drawn channel's TF has
+    opacity over that channel's range in the brick (widened by its table's `pads`)."""
+    visible = np.zeros(grid.shape, dtype=bool)
+    for row, c in enumerate(drawn):
+        visible |= BrickGrid.from_array(values[row], grid.brick).visible(tf.tfs[c], pad=pads[row])
+    return visible
+
+
 def _march_listed(
-    args: tuple, pixels: NDArray[np.int64], two_d: bool = False
+    args: tuple, pixels: NDArray[np.int64], march: MarchKind = "1d"
 ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
     """(premultiplied RGBA (n, 4), counts (n, 4): `march.COUNTS`) of the listed pixels' rays (`march_pixels`)."""
     rgba = np.empty((len(pixels), 4), np.float32)
     counts = np.zeros((len(pixels), len(COUNTS)), np.int64)
-    (_, listed), numba_kernels = _kernels(two_d, args[0])
+    (_, listed), numba_kernels = _kernels(march, args[0])
     with _chunks(numba_kernels, PIXEL_CHUNK):
         listed(*args, np.ascontiguousarray(pixels, dtype=np.int64), rgba, counts)
     return rgba, counts
@@ -229,6 +279,8 @@ class RaycastRenderer(RendererBase):
                 accuracy=Accuracy(rmse=0.02, position_px=0.05),
                 clip_region=True,
                 clip_cap=True,
+                labels=True,  # composite, post-classified (`march_labels`)
+                channels=True,  # composite, post-classified (`march_channels`)
             )
         },
         backend="cpu",
@@ -299,6 +351,9 @@ class RaycastRenderer(RendererBase):
             None  # (TF and settings, (step, its estimated error))
         )
         self._gradients: Gradients2D | None = None  # the grid points' gradients, for 2D TFs
+        self._cells: tuple[tuple, NDArray[np.int16]] | None = None  # a label volume's `cell_classes`
+        self._channel_values: tuple[tuple, NDArray[Any]] | None = None  # the drawn channels, as marched
+        self._tables: tuple[tuple, NDArray[np.float64]] | None = None  # a label or channel scene's tables
         self._table2d: tuple[tuple, NDArray[np.float32], NDArray[np.int8], str] | None = (
             None  # (TF version, table, kinds, digest)
         )
@@ -312,9 +367,13 @@ class RaycastRenderer(RendererBase):
         self._empty = None
         self._step = None
         self._gradients = None
+        self._cells = None
+        self._channel_values = None
+        self._tables = None
 
     def release(self) -> None:
         self._values = self._grid = self._empty = self._phases = None
+        self._cells = self._channel_values = self._tables = None
         super().release()
 
     def _empty_bricks(self, key: tuple, brick: int, reach: int, skipping: bool,
@@ -340,7 +399,10 @@ class RaycastRenderer(RendererBase):
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         volume = self.volume
         tf = self.transfer_function
-        assert isinstance(volume, UniformVolume) and isinstance(tf, TransferFunction1D | TransferFunction2D)
+        assert isinstance(volume, UniformVolume)
+        assert isinstance(
+            tf, TransferFunction1D | TransferFunction2D | LabelTransferFunction | ChannelTransferFunction
+        )
         assert self._values is not None
         settings = self.settings
         opts = self.opts
@@ -363,18 +425,22 @@ class RaycastRenderer(RendererBase):
             if settings.clip.caps:
                 raise VolrenError("raycast: cut faces (clip caps) need a 1D transfer function")
             return self._render_2d(tf, h, opts, view, mode_key, progress)
+        if isinstance(tf, LabelTransferFunction):
+            return self._render_labels(tf, h, opts, view, mode_key, progress)
+        if isinstance(tf, ChannelTransferFunction):
+            return self._render_channels(tf, h, opts, view, mode_key, progress)
         if mode != BlendMode.COMPOSITE:
             return self._project(tf, mode, view, h)
         pre = bool(settings.preintegration)
         key = (tf.color_points.tobytes(), tf.opacity_points.tobytes(), tf.opacity_unit_distance, h, pre,
                *(opts[k] for k in ("target_error", "table_size", "classification_table", "termination_alpha",
                                    "brick_size", "empty_space_skipping")))  # fmt: skip
-        h, chosen = self._chosen_step(key, lambda step, at: self._march_args(tf, step, pre, opts, at), False, h,
+        h, chosen = self._chosen_step(key, lambda step, at: self._march_args(tf, step, pre, opts, at), "1d", h,
                                       opts, view, mode_key)  # fmt: skip
         args = self._march_args(tf, h, pre, opts, view)
-        return self._marched(args, args[1].distance, False, view, opts, progress, chosen)
+        return self._marched(args, args[1].distance, "1d", view, opts, progress, chosen)
 
-    def _marched(self, args: tuple, empty: NDArray[np.int8], two_d: bool, view: PixelView, opts: Mapping[str, Any],
+    def _marched(self, args: tuple, empty: NDArray[np.int8], march: MarchKind, view: PixelView, opts: Mapping[str, Any],
                  progress: ProgressCallback | None,
                  chosen: Mapping[str, float]) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
         """The frame the march's arguments draw (1D or 2D TF): a ray through every pixel, or adaptively
@@ -382,10 +448,10 @@ class RaycastRenderer(RendererBase):
         width, height, stride = view.width, view.height, int(opts["image_stride"])
         if stride > 1:
             image, totals, rays = self._refined(
-                args, width, height, stride, opts["refine_tolerance"], progress, two_d
+                args, width, height, stride, opts["refine_tolerance"], progress, march
             )
         else:
-            image, totals = self._every_pixel(args, width, height, progress, two_d)
+            image, totals = self._every_pixel(args, width, height, progress, march)
             rays = width * height
         return image, {**_counters(totals), "rays_cast": float(rays),
                        "bricks_empty": float(np.count_nonzero(empty)), "bricks": float(empty.size), **chosen}  # fmt: skip
@@ -429,7 +495,7 @@ class RaycastRenderer(RendererBase):
         assert self._values is not None
         return self._values, EmptyBricks(empty, brick), view, classes, term
 
-    def _chosen_step(self, key: tuple, args_at: Callable[[float, PixelView], tuple], two_d: bool, coarsest: float,
+    def _chosen_step(self, key: tuple, args_at: Callable[[float, PixelView], tuple], march: MarchKind, coarsest: float,
                      opts: Mapping[str, Any], view: PixelView,
                      phase_mode: str) -> tuple[float, dict[str, float]]:  # fmt: skip
         """(step, the frame's counters that report it): `coarsest` where no error is targeted, else
@@ -438,18 +504,18 @@ class RaycastRenderer(RendererBase):
         if not opts["target_error"] > 0:
             return coarsest, {}
         start = time.perf_counter()
-        h, estimate = self._step_within(key, args_at, two_d, coarsest, opts, view, phase_mode)
+        h, estimate = self._step_within(key, args_at, march, coarsest, opts, view, phase_mode)
         length = self.volume.characteristic_length  # type: ignore[union-attr]
         return h, {"step": h / length, "step_relative_error": estimate,
                    "step_choice_ms": 1000.0 * (time.perf_counter() - start)}  # fmt: skip
 
-    def _step_within(self, key: tuple, args_at: Callable[[float, PixelView], tuple], two_d: bool,
+    def _step_within(self, key: tuple, args_at: Callable[[float, PixelView], tuple], march: MarchKind,
                      coarsest: float, opts: Mapping[str, Any], view: PixelView,
                      phase_mode: str) -> tuple[float, float]:  # fmt: skip
         """(step, its estimated relative RMSE) for the target_error option (`step_choice`), estimated on
         every ray of a ~64x64 image of this frame's view and kept while the TF, the volume and the
         settings (`key`) stay (a camera move keeps it: the step must not change from frame to frame of
-        a rotation). The search marches what the frame marches, 1D or 2D TF."""
+        a rotation). The search marches what the frame marches: a 1D or 2D TF, or labels."""
         if self._step is None or self._step[0] != key:
             width, height = sample_size(view.width, view.height)
             phases = pixel_phases(phase_mode, width, height, opts["jitter_seed"])
@@ -457,15 +523,15 @@ class RaycastRenderer(RendererBase):
             sampled = view._replace(width=width, height=height, phases=phases, planes=NO_PLANES)
             pixels = np.arange(width * height, dtype=np.int64)
 
-            def march(h: float) -> NDArray[np.float32]:
-                return _march_listed(args_at(h, sampled), pixels, two_d)[0]
+            def image_at(h: float) -> NDArray[np.float32]:
+                return _march_listed(args_at(h, sampled), pixels, march)[0]
 
             def search() -> tuple[float, float]:
-                return largest_step_within(march, coarsest, opts["target_error"])
+                return largest_step_within(image_at, coarsest, opts["target_error"])
 
             # the view (`step_cache`), and which march searches (C and numba agree to float rounding only)
             assert self._values is not None
-            native = march_native.kernels(self._values, two_d) is not None
+            native = march_native.kernels(self._values, march) is not None
             scene = (key, phase_mode, opts["jitter_seed"], sampled[:7], native)
             self._step = (key, remembered_step(self._values, scene, search))
         return self._step[1]
@@ -477,10 +543,139 @@ class RaycastRenderer(RendererBase):
         _, _, digest = self._table_2d(tf, int(opts["table_2d"]))
         key = ("2d", digest, tf.value_range, tf.gradient_range, h,
                *(opts[k] for k in ("target_error", "termination_alpha", "brick_size", "empty_space_skipping")))  # fmt: skip
-        h, chosen = self._chosen_step(key, lambda step, at: self._march2d_args(tf, step, opts, at), True, h, opts,
+        h, chosen = self._chosen_step(key, lambda step, at: self._march2d_args(tf, step, opts, at), "2d", h, opts,
                                       view, phase_mode)  # fmt: skip
         args = self._march2d_args(tf, h, opts, view)
-        return self._marched(args, args[2].distance, True, view, opts, progress, chosen)
+        return self._marched(args, args[2].distance, "2d", view, opts, progress, chosen)
+
+    def _render_labels(self, tf: LabelTransferFunction, h: float, opts: Mapping[str, Any], view: PixelView,
+                       phase_mode: str,
+                       progress: ProgressCallback | None) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
+        """A frame of a label volume (`march_labels`): composite and post-classified (the capabilities),
+        at the settings' step or the error-targeted one, every pixel or adaptively refined."""
+        settings = self.settings
+        if settings.blend_mode != BlendMode.COMPOSITE:
+            raise VolrenError(
+                f"raycast: label volumes are drawn composite only, not with {settings.blend_mode}"
+            )
+        if settings.clip.caps:
+            raise VolrenError("raycast: cut faces (clip caps) are not drawn on label volumes")
+        labels = self.volume.labels  # type: ignore[union-attr]
+        assert labels is not None  # `render` refuses a label TF on a volume without labels
+        key = ("labels", tf.digest(), labels.digest, h,
+               *(opts[k] for k in ("target_error", "classification_table", "termination_alpha", "brick_size",
+                                   "empty_space_skipping")))  # fmt: skip
+        h, chosen = self._chosen_step(key, lambda step, at: self._label_args(tf, step, opts, at), "labels", h, opts,
+                                      view, phase_mode)  # fmt: skip
+        args = self._label_args(tf, h, opts, view)
+        return self._marched(args, args[1].distance, "labels", view, opts, progress, chosen)
+
+    def _label_args(
+        self, tf: LabelTransferFunction, h: float, opts: Mapping[str, Any], view: PixelView
+    ) -> tuple:
+        """`march_labels`' arguments at step h (world units) for the view: the values, the bricks where
+        some visible class has opacity in the brick's range, each class's table, the termination opacity."""
+        volume = self.volume
+        assert isinstance(volume, UniformVolume) and volume.labels is not None and self._values is not None
+        labels = volume.labels
+        classes = tf.classes(labels.max_label)
+        key = (labels.digest, classes.lookup.tobytes())
+        if self._cells is None or self._cells[0] != key:
+            self._cells = (key, cell_classes(labels.values, classes.lookup))
+        vlo, vhi = volume.value_range
+        tlo, thi = tf.value_range
+        lo, hi = spanning(min(vlo, tlo), max(vhi, thi))
+        # many classes share the tables' memory: fewer entries each
+        n = max(
+            16, min(int(opts["classification_table"]), LABEL_TABLES_BYTES // (32 * max(len(classes.tfs), 1)))
+        )
+        table_key = ("labels", tf.state(), h, n, lo, hi)
+        if self._tables is None or self._tables[0] != table_key:  # a table per class: kept while they stay
+            post = np.zeros((max(len(classes.tfs), 1), n, 4))
+            for c, class_tf in enumerate(classes.tfs):
+                rgb, a = class_tf.sample(np.linspace(lo, hi, n))
+                post[c, :, :3] = rgb
+                post[c, :, 3] = -np.expm1(
+                    h / class_tf.opacity_unit_distance * np.log1p(-np.minimum(a, MAX_OPACITY))
+                )
+            self._tables = (table_key, post)
+        post = self._tables[1]
+        brick, skipping = int(opts["brick_size"]), bool(opts["empty_space_skipping"])
+        pad = (hi - lo) / (n - 1)
+        empty = self._empty_bricks(("labels", tf.digest(), labels.digest, brick, skipping, pad), brick, 0, skipping,
+                                   lambda grid: _visible_classes(grid, labels.values, classes, pad))  # fmt: skip
+        table = LabelClassification(labels.values, classes.lookup, self._cells[1], post, float(h), float(lo),
+                                    float((n - 1) / (hi - lo)))  # fmt: skip
+        term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
+        return self._values, EmptyBricks(empty, brick), view, table, term
+
+    def _render_channels(self, tf: ChannelTransferFunction, h: float, opts: Mapping[str, Any], view: PixelView,
+                         phase_mode: str,
+                         progress: ProgressCallback | None) -> tuple[NDArray[np.float32], Mapping[str, float]]:  # fmt: skip
+        """A frame of a multi-channel volume (`march_channels`): composite and post-classified (the
+        capabilities), at the settings' step or the error-targeted one, every pixel or refined."""
+        settings = self.settings
+        if settings.blend_mode != BlendMode.COMPOSITE:
+            raise VolrenError(f"raycast: channels are mixed composite only, not with {settings.blend_mode}")
+        if settings.clip.caps:
+            raise VolrenError("raycast: cut faces (clip caps) are not drawn on multi-channel volumes")
+        channels = self.volume.channels  # type: ignore[union-attr]
+        assert channels is not None  # `render` refuses a channel TF on a volume without its channels
+        key = ("channels", tf.digest(), channels.digest, h,
+               *(opts[k] for k in ("target_error", "classification_table", "termination_alpha", "brick_size",
+                                   "empty_space_skipping")))  # fmt: skip
+        h, chosen = self._chosen_step(key, lambda step, at: self._channel_args(tf, step, opts, at), "channels", h,
+                                      opts, view, phase_mode)  # fmt: skip
+        args = self._channel_args(tf, h, opts, view)
+        return self._marched(args, args[1].distance, "channels", view, opts, progress, chosen)
+
+    def _drawn_channels(self, tf: ChannelTransferFunction) -> tuple[list[int], NDArray[Any]]:
+        """(the drawn channels: shown, weight above 0; their values as the march reads them: 8-bit
+        where the volume's are, else float32, with the C march's slack), kept while they stay."""
+        channels = self.volume.channels  # type: ignore[union-attr]
+        assert channels is not None
+        drawn = [c for c in range(tf.count) if tf.drawn_weight(c) > 0.0]
+        key = (channels.digest, tuple(drawn))
+        if self._channel_values is None or self._channel_values[0] != key:
+            picked = channels.values[drawn] if drawn else channels.values[:1]
+            kept = picked if picked.dtype == np.uint8 else picked.astype(np.float32)
+            self._channel_values = (key, march_native.padded(kept))
+        return drawn, self._channel_values[1]
+
+    def _channel_args(
+        self, tf: ChannelTransferFunction, h: float, opts: Mapping[str, Any], view: PixelView
+    ) -> tuple:
+        """The mixed march's arguments at step h (world units) for the view: the first drawn channel
+        (the grid the march walks), the bricks where some drawn channel has opacity in its range,
+        the channels' depth tables, the termination opacity."""
+        volume = self.volume
+        assert isinstance(volume, UniformVolume) and volume.channels is not None
+        drawn, values = self._drawn_channels(tf)
+        n = int(opts["classification_table"])
+        post = np.zeros((len(values), n, 4))
+        lo = np.zeros(len(values))
+        scale = np.ones(len(values))
+        for row, c in enumerate(drawn):
+            class_tf = tf.tfs[c]
+            vlo, vhi = volume.channels.value_ranges[c]
+            tlo, thi = class_tf.value_range
+            lo[row], hi = spanning(min(vlo, tlo), max(vhi, thi))
+            scale[row] = (n - 1) / (hi - lo[row])
+            rgb, a = class_tf.sample(np.linspace(lo[row], hi, n))
+            post[row, :, :3] = rgb
+            post[row, :, 3] = (
+                tf.drawn_weight(c)
+                * h
+                / class_tf.opacity_unit_distance
+                * -np.log1p(-np.minimum(a, MAX_OPACITY))
+            )
+        brick, skipping = int(opts["brick_size"]), bool(opts["empty_space_skipping"])
+        pads = tuple(float(1.0 / s) for s in scale)
+        empty = self._empty_bricks(("channels", tf.digest(), volume.channels.digest, brick, skipping, pads), brick, 0,
+                                   skipping, lambda grid: _visible_channels(grid, values, drawn, tf, pads))  # fmt: skip
+        table = ChannelClassification(values, post, float(h), lo, scale)
+        term = float(opts["termination_alpha"]) if opts["termination_alpha"] < 1.0 else 2.0
+        return values[0], EmptyBricks(empty, brick), view, table, term
 
     def _table_2d(self, tf: TransferFunction2D, nv: int) -> tuple[NDArray[np.float32], NDArray[np.int8], str]:
         """(table, its intervals' kinds, a digest of the table): the 2D TF sampled once per TF version at
@@ -527,13 +722,13 @@ class RaycastRenderer(RendererBase):
 
     @staticmethod
     def _every_pixel(args: tuple, width: int, height: int, progress: ProgressCallback | None,
-                     two_d: bool = False) -> tuple[NDArray[np.float32], NDArray[np.int64]]:  # fmt: skip
+                     march: MarchKind = "1d") -> tuple[NDArray[np.float32], NDArray[np.int64]]:  # fmt: skip
         """(image, the counts' totals): a ray through every pixel, in tiles."""
         image = np.empty((height, width, 4), np.float32)
         n_tiles = ((width + TILE - 1) // TILE) * ((height + TILE - 1) // TILE)
         counts = np.zeros((n_tiles, len(COUNTS)), np.int64)
         order = np.arange(n_tiles, dtype=np.int64)
-        (kernel, _), numba_kernels = _kernels(two_d, args[0])
+        (kernel, _), numba_kernels = _kernels(march, args[0])
         with _chunks(numba_kernels, 1):  # tiles differ widely in cost: one at a time
             for start in range(0, n_tiles, TILES_PER_CALL):
                 kernel(*args, order[start : start + TILES_PER_CALL], image.reshape(-1, 4), counts)
@@ -544,7 +739,7 @@ class RaycastRenderer(RendererBase):
     @staticmethod
     def _refined(args: tuple, width: int, height: int, stride: int, tolerance: float,
                  progress: ProgressCallback | None,
-                 two_d: bool = False) -> tuple[NDArray[np.float32], NDArray[np.int64], int]:  # fmt: skip
+                 march: MarchKind = "1d") -> tuple[NDArray[np.float32], NDArray[np.int64], int]:  # fmt: skip
         """(image, the counts' totals, rays cast): adaptive image refinement (`refine_image`), rays cast
         where a block's corner rays disagree, the rest interpolated."""
         from volren.kernels.image_refinement import refine_image
@@ -552,7 +747,7 @@ class RaycastRenderer(RendererBase):
         totals = np.zeros(len(COUNTS), np.int64)
 
         def cast(pixels: NDArray[np.int64]) -> NDArray[np.float32]:
-            rgba, counts = _march_listed(args, pixels, two_d)
+            rgba, counts = _march_listed(args, pixels, march)
             totals[:] += counts.sum(axis=0)
             return rgba
 

@@ -4,7 +4,9 @@ DESIGN.md's emission-absorption model integrated in float64 along each pixel ray
 two successive levels agree to a tolerance. Modules: `ray_integral` (the adaptive per-ray
 quadrature and exact max / min / average: the reference's own integrator, shared with no other
 renderer), `tf2d` (its quadrature of 2D transfer functions on grids), `refinement` (the levels
-around either quadrature and the rule that stops them), `uniform` (trilinear grids), `tets`
+around either quadrature and the rule that stops them), `uniform` (trilinear grids), `labelled`
+and `label_classes` (label volumes on grids: a TF per label, blended across labels), `channels`
+(multi-channel volumes on grids: a TF per channel, their extinctions added), `tets`
 (tetrahedral meshes), `segment` (one linear segment's integral, the oracle of pre-integration
 tables) and `renderer` (the `ReferenceRenderer` class). What it shares with other renderers (TF
 evaluation, shading, projection, clipping) is in `volren.kernels`, and the tetrahedra's face
