@@ -9,7 +9,10 @@ Why two paths over the same planes (option `path`):
 Both classify the segment between two consecutive planes with `shaders/common.glsl`: post-
 classified 1D TF (opacity corrected for the segment's length), pre-integrated 1D TF (a table for
 the plane spacing, corrected per segment for the real length along the ray, Schulze et al. 2003) with
-interpolated pre-integrated lighting (Lum et al.) when shading, or a post-classified 2D TF. The
+interpolated pre-integrated lighting (Lum et al.) when shading, a post-classified 2D TF, a label
+volume's TF per label (blended in cells whose corners differ: Real-Time Volume Graphics, section 16.5)
+or several channels' TFs with their extinctions added (Max 1995); the last two composite, unshaded and
+post-classified only, as raycast and the reference draw them. The
 segment from where a ray enters the box to its first plane and the one from its last plane to the
 exit are integrated too (in the slice path the polygons are cut from a slightly grown box, so the
 planes just before the box own the entry segments), so a homogeneous block looks the same at every
@@ -36,6 +39,8 @@ from volren.errors import VolrenError
 from volren.kernels.shading import gradient_threshold
 from volren.model.bricks import BrickGrid
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction, cell_classes
 from volren.model.settings import BlendMode
 from volren.model.volume import UniformVolume
 from volren.renderers.base import (
@@ -82,6 +87,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                 accuracy=Accuracy(rmse=0.03, position_px=0.1),
                 regions=True,
                 clip_region=True,
+                # composite, post-classified, unshaded, whole volumes (`_refuse_labels_channels`)
+                labels=True,
+                channels=True,
             )
         },
         backend="opengl",
@@ -154,6 +162,8 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         self._mask_state: tuple[tuple, NDArray[np.bool_]] | None = None
         self._mask_tex: Any = None
         self._counter_buffer: Any = None  # the march path's work counters (4 x uint32)
+        #: Label, cell-class, lookup and channel textures: (key, texture) by name, dropped with the volume.
+        self._data: dict[str, tuple[tuple, Any]] = {}
         #: How often each kind of data went to the GPU (or was rebuilt) since the renderer was made.
         self.uploads: dict[str, int] = {"volume": 0, "gradient": 0, "tables": 0, "brick_mask": 0}
 
@@ -164,9 +174,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             import moderngl
 
             try:
-                self._ctx = moderngl.create_standalone_context(backend="egl", require=430)
+                self._ctx = moderngl.create_standalone_context(backend="egl", require=430)  # type: ignore[arg-type]
             except Exception:
-                self._ctx = moderngl.create_standalone_context(backend="egl")
+                self._ctx = moderngl.create_standalone_context(backend="egl")  # type: ignore[arg-type]
         return self._ctx
 
     def _program(self, kind: str, defines: Mapping[str, int]) -> Any:
@@ -209,6 +219,9 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             mask = self._tables.pop("brick_mask", None)
             if mask is not None:
                 self._drop(mask[1])
+            for _, tex in self._data.values():
+                self._drop(tex)
+            self._data.clear()
         self._volume_info = None
         self._bricks = None
         self._mask_state = None
@@ -336,7 +349,11 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
 
     # ----------------------------------------------------------------------- frame setup
     def _mode(self) -> int:
-        """0 post-classified 1D TF, 1 pre-integrated 1D TF, 2 post-classified 2D TF."""
+        """0 post-classified 1D TF, 1 pre-integrated 1D TF, 2 post-classified 2D TF, 3 labels, 4 channels."""
+        if isinstance(self._tf, LabelTransferFunction):
+            return 3
+        if isinstance(self._tf, ChannelTransferFunction):
+            return 4
         if getattr(self._tf, "dims", 1) == 2:
             return 2
         return 1 if self._settings.preintegration else 0
@@ -358,7 +375,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             self._bricks = BrickGrid.from_volume(volume, opts["brick_size"])
             self._mask_state = None
         grid = self._bricks
-        tf = self._tf
+        tf: Any = self._tf  # a 1D or 2D TF: `_defines` skips bricks for labels and channels
         assert tf is not None
         reach = self._skip_reach(spacing, opts["brick_size"], min_cosine)
         key = (tf.version, opts["brick_size"], reach)
@@ -372,14 +389,23 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     def _defines(self, opts: Mapping[str, Any]) -> dict[str, int]:
         s = self._settings
         composite = s.blend_mode == BlendMode.COMPOSITE
-        return {
-            "CLASSIFY": self._mode() if composite else 0,
+        mode = self._mode() if composite else 0
+        defines = {
+            "CLASSIFY": mode,
             "SHADE": int(s.shade and composite),
             "BLEND": _BLEND_CODES[s.blend_mode],
-            "SKIP": int(opts["empty_space_skipping"] and composite),
+            # the brick mask classifies the volume's values by a 1D or 2D TF, not labels or channels
+            "SKIP": int(opts["empty_space_skipping"] and composite and mode < 3),
             "NONFINITE": int(self._uniform_volume().nonfinite_count > 0),
             "REGION": int(self._region is not None),
         }
+        if mode == 3:
+            defines["LOOKUP_WIDTH"] = textures.LOOKUP_WIDTH
+        elif mode == 4:
+            drawn = len(self._drawn_channels())
+            defines["CHANNELS"] = drawn
+            defines["CHANNEL_TEXTURES"] = max(1, -(-drawn // 4))
+        return defines
 
     def _bind_clip(self, program: Any) -> None:
         """The clip region's half-spaces (world) for `clip_interval` in common.glsl."""
@@ -398,7 +424,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         """Set the uniforms and textures both paths share; returns the next free texture unit."""
         volume = self._uniform_volume()
         info = self._ensure_volume(opts)
-        tf = self._tf
+        tf: Any = self._tf  # the kind `defines["CLASSIFY"]` was chosen for
         assert tf is not None
         spacing = self._spacing()
         region = self._region
@@ -470,6 +496,10 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
                 self._set(program, "u_preint", unit)
                 unit += 1
             self._set(program, "u_preint_size", float(n))
+        elif mode == 3:
+            unit = self._bind_labels(program, unit, lo, hi)
+        elif mode == 4:
+            unit = self._bind_channels(program, unit)
         elif mode == 2:
             n_values, n_gradients = TF2D_TABLE_SIZE
             tex = self._table(
@@ -505,6 +535,137 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             unit += 1
         return unit
 
+    def _data_texture(self, name: str, key: tuple, build) -> Any:
+        """The texture `name` (label, cell-class, lookup or channel data), made by `build` (which
+        uploads it) only when `key` changes."""
+        held = self._data.get(name)
+        if held is not None and held[0] == key:
+            return held[1]
+        if held is not None:
+            self._drop(held[1])
+        tex = self._track(build())
+        self._data[name] = (key, tex)
+        return tex
+
+    def _integer_texture3d(self, data: NDArray, dtype: str) -> Any:
+        """A one-component integer 3D texture of `data` (nz, ny, nx), read with texelFetch."""
+        nz, ny, nx = data.shape
+        tex = self._context().texture3d((nx, ny, nz), 1, np.ascontiguousarray(data), dtype=dtype)
+        tex.filter = (self._nearest(), self._nearest())
+        tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+        return tex
+
+    def _bind_labels(self, program: Any, unit: int, lo: float, hi: float) -> int:
+        """The label volume's textures: per cell its class (`cell_classes`), per point its label,
+        label -> class, and the classes' tables over the volume's value range [lo, hi]."""
+        tf = self._tf
+        volume = self._uniform_volume()
+        assert isinstance(tf, LabelTransferFunction) and volume.labels is not None
+        labels = volume.labels
+        classes = tf.classes(labels.max_label)
+        n = textures.class_table_size(len(classes.tfs))
+        rows = max(len(classes.tfs), 1)
+        limit = self._context().info["GL_MAX_TEXTURE_SIZE"]
+        if rows > limit:
+            raise VolrenError(
+                f"slicer: {rows} label styles that draw differently, but this OpenGL driver holds at most {limit}"
+            )
+        key = (labels.digest, classes.lookup.tobytes())
+        cells = self._data_texture(
+            "cells", key, lambda: self._integer_texture3d(cell_classes(labels.values, classes.lookup), "i2")
+        )
+        points = self._data_texture(
+            "labels",
+            (labels.digest,),
+            lambda: self._integer_texture3d(labels.values, f"u{labels.values.itemsize}"),
+        )
+
+        def lookup_texture() -> Any:
+            data = textures.label_lookup(classes.lookup)
+            tex = self._context().texture((data.shape[1], data.shape[0]), 1, data, dtype="i4")
+            tex.filter = (self._nearest(), self._nearest())
+            return tex
+
+        lookup = self._data_texture("lookup", key, lookup_texture)
+        table = self._table(
+            "classes", (tf.version, tf.digest(), labels.max_label, lo, hi, n),
+            lambda: textures.class_tables(classes.tfs, lo, hi, n),
+        )  # fmt: skip
+        for name, tex in (
+            ("u_cells", cells),
+            ("u_labels", points),
+            ("u_lookup", lookup),
+            ("u_classes", table),
+        ):
+            tex.use(location=unit)
+            self._set(program, name, unit)
+            unit += 1
+        self._set(program, "u_lookup_count", len(classes.lookup))
+        self._set(program, "u_classes_size", float(n))
+        self._set(program, "u_dims", tuple(int(d) for d in volume.dimensions))
+        return unit
+
+    def _drawn_channels(self) -> list[int]:
+        """The channels that draw: shown, with a weight above 0."""
+        tf = self._tf
+        assert isinstance(tf, ChannelTransferFunction)
+        return [c for c in range(tf.count) if tf.drawn_weight(c) > 0.0]
+
+    def _bind_channels(self, program: Any, unit: int) -> int:
+        """The drawn channels, four to an RGBA texture normalised over each one's range, and their
+        depth tables (`textures.channel_tables`)."""
+        tf = self._tf
+        volume = self._uniform_volume()
+        assert isinstance(tf, ChannelTransferFunction) and volume.channels is not None
+        channels = volume.channels
+        drawn = self._drawn_channels() or [0]  # none drawn: channel 0's texture, no table row draws
+        ranges = [channels.value_ranges[c] for c in drawn]
+        spans = [textures.value_range_of(r) for r in ranges]
+        key = (channels.digest, tuple(drawn))
+        n = textures.POST_TF_SIZE
+        for t in range(0, len(drawn), 4):
+
+            def build(first: int = t) -> Any:
+                data = textures.channel_textures(
+                    channels.values[drawn[first : first + 4]], ranges[first : first + 4]
+                )
+                nz, ny, nx, _ = data.shape
+                tex = self._context().texture3d((nx, ny, nz), 4, data, dtype="f4")
+                tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+                return tex
+
+            tex = self._data_texture(f"channels{t // 4}", key, build)
+            tex.use(location=unit)
+            self._set(program, f"u_channels{t // 4}", unit)
+            unit += 1
+        weights = [tf.drawn_weight(c) for c in drawn]  # 0 for channel 0 where none is drawn
+        table = self._table(
+            "channel_tables", (tf.version, tf.digest(), tuple(drawn), tuple(spans), n),
+            lambda: textures.channel_tables([tf.tfs[c] for c in drawn], weights, spans, n),
+        )  # fmt: skip
+        table.use(location=unit)
+        self._set(program, "u_channel_tables", unit)
+        self._set(program, "u_channel_table_size", float(n))
+        return unit + 1
+
+    def _refuse_labels_channels(self) -> None:
+        """What the label and channel models are not drawn with here (raycast's refusals and more):
+        other blend modes, shading, bricks of a bricked render; one line each."""
+        tf = self._tf
+        what = (
+            "label volumes" if isinstance(tf, LabelTransferFunction)
+            else "multi-channel volumes" if isinstance(tf, ChannelTransferFunction) else None
+        )  # fmt: skip
+        if what is None:
+            return
+        s = self._settings
+        if s.blend_mode != BlendMode.COMPOSITE:
+            raise VolrenError(f"slicer: {what} are drawn composite only, not with {s.blend_mode}")
+        if s.shade:
+            raise VolrenError(f"slicer: {what} are drawn unshaded: switch shading off")
+        if self._region is not None:
+            raise VolrenError(f"slicer: {what} are not drawn as bricks of a bricked render")
+
     # ------------------------------------------------------------------------------ render
     def _render(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
@@ -527,6 +688,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             raise VolrenError(
                 "slicer: pre-integration needs a 1D transfer function; switch it off for 2D TFs"
             )
+        self._refuse_labels_channels()
         defines = self._defines(opts)
         counters: dict[str, float] = {}
         before = dict(self.uploads)
@@ -732,7 +894,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
     def _project_to_rgba(self, raw: NDArray[np.float32]) -> NDArray[np.float32]:
         """Maximum / minimum / average images: the normalised value per pixel through the TF."""
         info = self._volume_info
-        tf = self._tf
+        tf: Any = self._tf  # a 1D TF: labels and channels are drawn composite only
         assert info is not None and tf is not None
         mode = self._settings.blend_mode
         if mode == BlendMode.AVERAGE:
@@ -755,6 +917,7 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
         self._release_gl_objects(self._ctx)
         self._programs.clear()
         self._tables.clear()
+        self._data.clear()
         self._targets.clear()
         self._volume_tex = self._gradient_tex = self._counter_buffer = None
         if self._ctx is not None:

@@ -11,6 +11,7 @@ tables over [lo, hi] are exact for every segment a renderer can meet.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,11 +45,8 @@ class VolumeTexture:
 def value_range(volume: UniformVolume, whole: tuple[float, float] | None = None) -> tuple[float, float]:
     """The range the tables cover: the finite data range (`whole`: the whole volume's, for a
     brick), widened when it is a single value."""
-    lo, hi = (float(v) for v in (whole if whole is not None else volume.value_range))
-    if not hi > lo:
-        pad = max(abs(lo) * 1e-6, 0.5)
-        lo, hi = lo - pad, hi + pad
-    return lo, hi
+    lo, hi = whole if whole is not None else volume.value_range
+    return value_range_of((lo, hi))
 
 
 #: Integers in this range are exact in a half float, and llvmpipe filters half floats in float32.
@@ -144,3 +142,66 @@ def lighting_textures(
     front = np.array(tables.front, dtype=np.float32)
     front[..., 3] = _optical_depth(tables.front[..., 3])
     return front, np.array(tables.back, dtype=np.float32)
+
+
+#: Labels per row of the label -> class lookup texture (a 2D texture: 65536 labels exceed the
+#: width of a 1D one on many drivers).
+LOOKUP_WIDTH = 1024
+#: Bytes the per-class tables may take together: many classes share it, fewer entries each.
+LABEL_TABLES_BYTES = 64 << 20
+
+
+def label_lookup(lookup: NDArray[np.int32]) -> NDArray[np.int32]:
+    """(rows, LOOKUP_WIDTH) label -> class (`LabelClasses.lookup`), -1 (hidden) past its end."""
+    rows = -(-len(lookup) // LOOKUP_WIDTH)
+    out = np.full(rows * LOOKUP_WIDTH, -1, np.int32)
+    out[: len(lookup)] = lookup
+    return out.reshape(rows, LOOKUP_WIDTH)
+
+
+def class_table_size(n_classes: int, n: int = POST_TF_SIZE) -> int:
+    """Entries per class table: `n`, fewer where many classes would outgrow LABEL_TABLES_BYTES."""
+    return max(16, min(n, LABEL_TABLES_BYTES // (16 * max(n_classes, 1))))
+
+
+def class_tables(tfs: Sequence[TransferFunction1D], lo: float, hi: float, n: int) -> NDArray[np.float32]:
+    """(classes, n, 4): each class's colour and extinction tau per world unit at lo + (hi - lo) k / (n - 1),
+    the rows of `post_tf_table`; one zero row where no class draws."""
+    out = np.zeros((max(len(tfs), 1), n, 4), np.float32)
+    for c, tf in enumerate(tfs):
+        out[c] = post_tf_table(tf, lo, hi, n)[0]
+    return out
+
+
+def channel_textures(values: NDArray, ranges: Sequence[tuple[float, float]]) -> NDArray[np.float32]:
+    """Up to four drawn channels `values` (c, nz, ny, nx) as one RGBA float32 texture (nz, ny, nx, 4),
+    each normalised over its own finite range (`value_range_of`; NaN and Inf kept), as the volume is:
+    every table then covers [0, 1]. Unused lanes hold 0 (their tables draw nothing)."""
+    out = np.zeros(values.shape[1:] + (4,), np.float32)
+    for lane in range(min(len(values), 4)):
+        lo, hi = value_range_of(ranges[lane])
+        out[..., lane] = (np.asarray(values[lane], dtype=np.float64) - lo) / (hi - lo)
+    return out
+
+
+def value_range_of(given: tuple[float, float]) -> tuple[float, float]:
+    """A value range widened as `value_range` widens a single value."""
+    lo, hi = float(given[0]), float(given[1])
+    if not hi > lo:
+        pad = max(abs(lo) * 1e-6, 0.5)
+        lo, hi = lo - pad, hi + pad
+    return lo, hi
+
+
+def channel_tables(
+    tfs: Sequence[TransferFunction1D], weights: Sequence[float], spans: Sequence[tuple[float, float]], n: int
+) -> NDArray[np.float32]:
+    """(rows, n, 4), rows a multiple of 4: channel c's colour and weighted extinction w_c tau_c per world
+    unit over its own range (Max 1995: the channels' densities add); zero rows pad the last texture."""
+    rows = max(4, -(-len(tfs) // 4) * 4)
+    out = np.zeros((rows, n, 4), np.float32)
+    for c, (tf, w, (lo, hi)) in enumerate(zip(tfs, weights, spans, strict=True)):
+        row = post_tf_table(tf, lo, hi, n)[0]
+        row[:, 3] *= np.float32(w)
+        out[c] = row
+    return out

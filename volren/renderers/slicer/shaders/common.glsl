@@ -2,7 +2,7 @@
 // classify each segment between them with these functions, so the two paths agree.
 //
 // Defines (from the renderer): CLASSIFY 0 post-classified 1D TF, 1 pre-integrated 1D TF,
-// 2 post-classified 2D TF; SHADE 0/1; BLEND 0 composite, 1 maximum, 2 minimum, 3 average;
+// 2 post-classified 2D TF, 3 label volume (LOOKUP_WIDTH), 4 CHANNELS channels in CHANNEL_TEXTURES textures; SHADE 0/1; BLEND 0 composite, 1 maximum, 2 minimum, 3 average;
 // SKIP 0/1 (empty-space skipping by the brick mask); NONFINITE 0/1 (the volume holds NaN or Inf);
 // REGION 0/1 (a brick of a bricked render: only the segments it owns, see plane_t and owned).
 #pragma once
@@ -162,7 +162,113 @@ vec4 tf2d_lookup(float v, float gradient_magnitude) {
 }
 #endif
 
-#if CLASSIFY == 0 || CLASSIFY == 2
+#if CLASSIFY == 3
+// Label volumes (Real-Time Volume Graphics, section 16.5; volren.model.labels): a TF per class of
+// labels, blended where a cell's corners differ, as raycast's march_labels.label_sample.
+const int MIXED = -2;
+uniform isampler3D u_cells;          // per cell (at its first corner): the class its corners share, -1, MIXED
+uniform usampler3D u_labels;         // per grid point: its label
+uniform isampler2D u_lookup;         // label -> class (-1 hidden), LOOKUP_WIDTH labels per row
+uniform int u_lookup_count;
+uniform sampler2D u_classes;         // (entry, class): r, g, b, extinction tau per world unit
+uniform float u_classes_size;
+uniform ivec3 u_dims;                // grid points along x, y, z
+#elif CLASSIFY == 4
+// Multi-channel volumes (volren.model.channels): each drawn channel's TF at its own value, the
+// weighted extinctions added (Max 1995), as raycast's march_channels.channel_sample.
+uniform sampler3D u_channels0;       // four drawn channels each, normalised over their own ranges
+#if CHANNEL_TEXTURES > 1
+uniform sampler3D u_channels1;
+#endif
+#if CHANNEL_TEXTURES > 2
+uniform sampler3D u_channels2;
+#endif
+#if CHANNEL_TEXTURES > 3
+uniform sampler3D u_channels3;
+#endif
+uniform sampler2D u_channel_tables;  // (entry, channel): r, g, b, weighted extinction w tau per world unit
+uniform float u_channel_table_size;
+#endif
+
+#if CLASSIFY == 3 || CLASSIFY == 4
+// Row `row` of a table of n entries over [0, 1], linearly interpolated by hand as tf_lookup.
+vec4 row_lookup(sampler2D table, float n, int row, float x01) {
+    float x = clamp(x01, 0.0, 1.0) * (n - 1.0);
+    int i = min(int(x), int(n) - 2);
+    return mix(texelFetch(table, ivec2(i, row), 0), texelFetch(table, ivec2(i + 1, row), 0), x - float(i));
+}
+#endif
+
+#if CLASSIFY == 3
+#define PREINTEGRATED 0
+// Premultiplied RGBA of a segment `len` long whose middle `p` has the normalised scalar v: one
+// class's entry where the cell's corners share it, else the classes' extinctions weighted by the
+// trilinear weights of their corners and the colour weighted by extinction.
+vec4 classify_sample(vec3 p, float v, float len, vec3 dir) {
+    if (!is_valid(v)) return vec4(0.0);
+    vec3 q = (p * u_world_to_tex_scale + u_world_to_tex_offset) * vec3(u_dims) - 0.5;
+    ivec3 cell = max(min(ivec3(floor(q)), u_dims - 2), ivec3(0));
+    int c0 = texelFetch(u_cells, cell, 0).r;
+    if (c0 != MIXED) {
+        if (c0 < 0) return vec4(0.0);
+        vec4 e = row_lookup(u_classes, u_classes_size, c0, v);
+        float alpha = one_minus_exp(e.a * len);
+        return vec4(e.rgb * alpha, alpha);
+    }
+    vec3 f = q - vec3(cell);
+    float depth = 0.0;   // tau len, summed over the corners' classes
+    vec3 emitted = vec3(0.0);
+    for (int k = 0; k < 8; ++k) {
+        ivec3 o = ivec3(k & 1, (k >> 1) & 1, k >> 2);
+        int label = int(texelFetch(u_labels, cell + o, 0).r);
+        if (label >= u_lookup_count) continue;
+        int c = texelFetch(u_lookup, ivec2(label % LOOKUP_WIDTH, label / LOOKUP_WIDTH), 0).r;
+        if (c < 0) continue;
+        vec3 wv = mix(1.0 - f, f, vec3(o));
+        float w = wv.x * wv.y * wv.z;
+        if (!(w > 0.0)) continue;
+        vec4 e = row_lookup(u_classes, u_classes_size, c, v);
+        float d = w * e.a;
+        depth += d;
+        emitted += d * e.rgb;
+    }
+    if (!(depth > 0.0)) return vec4(0.0);
+    float alpha = one_minus_exp(depth * len);
+    return vec4(emitted * (alpha / depth), alpha);
+}
+#elif CLASSIFY == 4
+#define PREINTEGRATED 0
+// One texture's four channels (from row `first` of the tables) added to depth and emission.
+void add_channels(vec4 s, int first, inout float depth, inout vec3 emitted) {
+    for (int lane = 0; lane < 4; ++lane) {
+        float x = s[lane];
+        if (first + lane >= CHANNELS || isnan(x) || isinf(x)) continue;
+        vec4 e = row_lookup(u_channel_tables, u_channel_table_size, first + lane, x);
+        if (!(e.a > 0.0)) continue;
+        depth += e.a;
+        emitted += e.a * e.rgb;
+    }
+}
+// Premultiplied RGBA of a segment `len` long whose middle is `p` (the volume's own value v unused).
+vec4 classify_sample(vec3 p, float v, float len, vec3 dir) {
+    vec3 t = p * u_world_to_tex_scale + u_world_to_tex_offset;
+    float depth = 0.0;   // sum of w tau per world unit
+    vec3 emitted = vec3(0.0);
+    add_channels(texture(u_channels0, t), 0, depth, emitted);
+#if CHANNEL_TEXTURES > 1
+    add_channels(texture(u_channels1, t), 4, depth, emitted);
+#endif
+#if CHANNEL_TEXTURES > 2
+    add_channels(texture(u_channels2, t), 8, depth, emitted);
+#endif
+#if CHANNEL_TEXTURES > 3
+    add_channels(texture(u_channels3, t), 12, depth, emitted);
+#endif
+    if (!(depth > 0.0)) return vec4(0.0);
+    float alpha = one_minus_exp(depth * len);
+    return vec4(emitted * (alpha / depth), alpha);
+}
+#elif CLASSIFY == 0 || CLASSIFY == 2
 #define PREINTEGRATED 0
 // Post-classification by the midpoint rule: premultiplied RGBA of a segment `len` world units long
 // whose middle is `p` with data value `v` (second order in the step, unlike a sample at the front).
