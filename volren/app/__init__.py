@@ -55,12 +55,14 @@ the other subpackages do.
   - `two_d/editor`: the 2D editor panel (add and delete widgets, colour, opacity, gradient axis).
   - `two_d/widget_canvas`: the widgets drawn and dragged over the joint histogram.
 - `panels/` (Qt): the settings panels (lighting, sampling, blend mode, crop box, background,
-  dataset facts) and their shared base and controls.
+  dataset facts) and their shared base and controls; `labels`, the Labels panel: a row per label
+  of a segmentation (show, colour, name, opacity, solo).
 - `window/` (Qt):
   - `main_window`: `MainWindow`, which builds the parts below and wires them to the state,
     viewport, render thread, menus, toolbar and status bar.
   - `file_actions`: File > Open, Open DICOM folder, Open Recent, loading in the background.
   - `scene_actions`: File > Save Scene.
+  - `label_actions`: File > Open Labels and Close Labels (a segmentation read in the background).
   - `screenshot_actions`: File > Save Screenshot.
   - `movie_actions`: File > Export Movie.
   - `time_control`: the time bar of a time series (slider, step label, Play).

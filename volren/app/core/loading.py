@@ -17,7 +17,9 @@ between stages.
 Scenes carry two optional keys of the app's own besides DESIGN.md's fields, `crop` (six numbers)
 and `background` (r, g, b in [0, 1]); `Scene` keeps unknown keys in `extra`, so other readers
 ignore them. A scene saved on a step of a time series names the series and the step
-(`volren.model.scene.TIME_SERIES_KEY`): it reopens as that series, at that step.
+(`volren.model.scene.TIME_SERIES_KEY`): it reopens as that series, at that step. A scene with
+labels (Real-Time Volume Graphics, chapter 16) brings its label volume, read onto the volume, and
+its TF per label, whose base becomes the TF shown (the one the 1D editor edits).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import json
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from os import PathLike
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -34,10 +36,11 @@ from typing import TYPE_CHECKING, Any
 from volren.errors import VolrenError, file_error
 from volren.model.camera import Camera
 from volren.model.crop import Box, check_box
+from volren.model.labels import LabelTransferFunction
 from volren.model.scene import TIME_SERIES_KEY, OrbitView, Scene
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
-from volren.model.volume import TetVolume, Volume
+from volren.model.volume import TetVolume, UniformVolume, Volume
 
 if TYPE_CHECKING:
     from volren.io.series_io import TimeSeries
@@ -79,6 +82,10 @@ class LoadedInput:
     background: RGB | None = None
     series: TimeSeries | None = None
     step: int = 0
+    #: a scene's TF per label (its base is `transfer_function`), for a volume with labels
+    label_tf: LabelTransferFunction | None = None
+    #: the file the volume's labels came from (absolute), for a scene saved later
+    labels_path: str | None = None
 
     def resolve_camera(self, aspect: float) -> Camera | None:
         """The explicit camera, or the orbit description fitted to the viewport; None: app default."""
@@ -186,9 +193,17 @@ def _load_scene(path: Path, override: TransferFunction | None, progress: Progres
         raise file_error(path, f"volume: {exc}") from None
     prepare_for_rendering(volume, progress)
     series, step = io.scene_time_series(scene) or (None, 0)
+    tf: TransferFunction = scene.transfer_function  # type: ignore[assignment]  # a TF per label: below
+    label_tf = None
+    if isinstance(scene.transfer_function, LabelTransferFunction):  # over the base the 1D editor edits
+        tf, label_tf = scene.transfer_function.base, scene.transfer_function
+    labels_path = None
+    if scene.labels_path is not None:
+        volume = _with_labels(path, scene.labels_path, volume, progress)
+        labels_path = os.path.abspath(scene.labels_path)
     return LoadedInput(
         volume,
-        override or scene.transfer_function,
+        override or tf,
         scene.camera,
         scene.settings,
         scene.renderer,
@@ -199,7 +214,24 @@ def _load_scene(path: Path, override: TransferFunction | None, progress: Progres
         background=background,
         series=series,
         step=step,
+        label_tf=label_tf,
+        labels_path=labels_path,
     )
+
+
+def _with_labels(path: Path, labels_path: str, volume: Volume, progress: Progress) -> Volume:
+    """`volume` with the scene's label volume read onto it (errors name the scene file)."""
+    from volren.io.label_io import load_labels
+
+    progress(f"Reading {Path(labels_path).name}…", None)
+    if not isinstance(volume, UniformVolume):
+        raise file_error(
+            path, "labels: label volumes are for uniform grids; the scene's volume is a tetrahedral mesh"
+        )
+    try:
+        return replace(volume, labels=load_labels(labels_path, volume))
+    except VolrenError as exc:
+        raise file_error(path, f"labels: {exc}") from None
 
 
 def _view_extras(extra: Mapping[str, Any], path: Path) -> tuple[Box | None, RGB | None]:
@@ -230,7 +262,7 @@ def _rgb(value: Any) -> RGB:
 
 def view_scene(
     volume_path: PathArg,
-    transfer_function: TransferFunction,
+    transfer_function: TransferFunction | LabelTransferFunction,
     camera: Camera,
     settings: RenderSettings,
     renderer: str,
@@ -240,9 +272,11 @@ def view_scene(
     crop: Box | None = None,
     background: RGB | None = None,
     time_series: tuple[PathArg, int] | None = None,
+    labels_path: PathArg | None = None,
 ) -> Scene:
     """The `Scene` of what the app shows, for `volren.io.save_scene`; `load_input` reads it back
-    (crop, background and the time series with its step included)."""
+    (crop, background, the time series with its step, and the labels' file included); with labels,
+    `transfer_function` is their TF per label."""
     extra: dict[str, Any] = {}
     if crop is not None:
         extra[CROP_KEY] = list(crop)
@@ -259,6 +293,7 @@ def view_scene(
         renderer=renderer,
         size=(max(1, int(size[0])), max(1, int(size[1]))),
         extra=extra,
+        labels_path=os.fspath(labels_path) if labels_path is not None else None,
     )
 
 

@@ -35,9 +35,12 @@ def renderer_options(
     settings: RenderSettings | None = None,
     registry: RendererRegistry = default_registry,
     tf_dims: int = 1,
+    labels: bool = False,
 ) -> tuple[list[RendererOption], list[str]]:
     """Every registered renderer with why it cannot draw `volume_kind` with a `tf_dims`-D TF and
-    `settings` (None: it can).
+    `settings` (None: it can); with `labels`, drawn by label with a TF per label (RTVG chapter 16),
+    at the settings it draws labels with (`volren.quality.label_settings`: no pre-integration
+    where it has none for labels).
 
     Also returns the warnings the registry raised while importing renderers (a broken plugin), so
     the app can show them instead of letting them escape; the registry reports each one once.
@@ -52,10 +55,28 @@ def renderer_options(
                     reasons[name] = None
                 except Exception as exc:  # noqa: BLE001 - any import failure disables the entry
                     reasons[name] = str(exc)
+        elif labels:
+            reasons = _label_reasons(registry, volume_kind, tf_dims, settings)
         else:
             reasons = registry.compatible(volume_kind, tf_dims, settings)
     options = [RendererOption(name, reasons.get(name)) for name in registry.names()]
     return options, [str(w.message) for w in caught]
+
+
+def _label_reasons(registry: RendererRegistry, kind: str, tf_dims: int,
+                   settings: RenderSettings | None) -> dict[str, str | None]:  # fmt: skip
+    from volren.quality import label_settings
+
+    reasons: dict[str, str | None] = {}
+    for name in registry.names():
+        try:
+            caps = registry.capabilities(name)
+        except Exception as exc:  # noqa: BLE001 - any import failure disables the entry
+            reasons[name] = str(exc)
+            continue
+        drawn = label_settings(caps, kind, settings) if settings is not None else None
+        reasons[name] = caps.unsupported_reason(kind, tf_dims, drawn, labels=True)
+    return reasons
 
 
 def pick_renderer(options: list[RendererOption], current: str | None,

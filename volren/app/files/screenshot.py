@@ -28,6 +28,7 @@ from volren.draw import Drawing, Preparation, VolumeInput, draw
 from volren.errors import VolrenError
 from volren.io.safe_write import check_output
 from volren.model.camera import Camera
+from volren.model.labels import LabelTransferFunction
 from volren.model.scene import Scene
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
@@ -44,7 +45,7 @@ class ScreenshotJob:
     height: int
     renderer: str
     volume: Volume
-    tf: TransferFunction
+    tf: TransferFunction | LabelTransferFunction
     settings: RenderSettings
     camera: Camera
     background: tuple[float, float, float]
@@ -55,7 +56,11 @@ class ScreenshotJob:
     def of_view(cls, state: ViewState, path: PathArg, width: int, height: int) -> ScreenshotJob:
         """The job for what `state` shows now (cropped volume included); VolrenError if nothing is."""
         volume, settings = state.frame_inputs(state.renderer, state.settings)
-        tf, camera, bounds = state.transfer_function, state.camera, state.shown_bounds
+        tf, camera, bounds = (
+            state.drawn_transfer_function,
+            state.camera,
+            state.shown_bounds,
+        )  # by label where drawn
         if volume is None or tf is None or camera is None or bounds is None:
             raise VolrenError("nothing to render: open a volume first")
         if width < 1 or height < 1:

@@ -11,6 +11,7 @@ from volren.app.panels.blend import BlendPanel
 from volren.app.panels.clipping import ClippingPanel
 from volren.app.panels.crop import CropPanel
 from volren.app.panels.dataset_info import DatasetInfoPanel, volume_facts
+from volren.app.panels.labels import LabelsPanel
 from volren.app.panels.lighting import LightingPanel
 from volren.app.panels.sampling import SamplingPanel
 
@@ -20,6 +21,7 @@ __all__ = [
     "ClippingPanel",
     "CropPanel",
     "DatasetInfoPanel",
+    "LabelsPanel",
     "LightingPanel",
     "SamplingPanel",
     "StatePanel",

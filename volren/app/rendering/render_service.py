@@ -11,7 +11,7 @@ always belongs to the latest camera, and the GUI never waits for the renderer.
 
 The transfer function is the one mutable input; each request carries a private copy made on the
 GUI thread, keyed by (identity, version) of the original so the renderer is updated only when the
-TF actually changed.
+TF actually changed (`tf_key`: a TF per label also by its base TF's, which is edited in place).
 """
 
 from __future__ import annotations
@@ -29,10 +29,24 @@ from PyQt5.QtCore import QObject, QThread, pyqtSignal, pyqtSlot
 
 from volren.io.image_io import to_png_pixels
 from volren.model.camera import Camera
+from volren.model.labels import LabelTransferFunction
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import Volume
 from volren.renderers.base import Renderer, render_frame
+
+#: What tells one state of a TF from another: its identity and version(s).
+TFKey = tuple[int, ...]
+#: A TF a frame is drawn with: 1D, 2D, or one per label (RTVG chapter 16).
+DrawnTF = TransferFunction | LabelTransferFunction
+
+
+def tf_key(tf: DrawnTF) -> TFKey:
+    """(identity, version) of `tf`; for a TF per label also its base TF's, which the 1D editor
+    edits in place without changing the label TF's own version."""
+    if isinstance(tf, LabelTransferFunction):
+        return (id(tf), tf.version, id(tf.base), tf.base.version)
+    return (id(tf), tf.version)
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,8 +56,8 @@ class RenderRequest:
     serial: int
     renderer: str
     volume: Volume
-    tf: TransferFunction
-    tf_key: tuple[int, int]
+    tf: DrawnTF
+    tf_key: TFKey
     settings: RenderSettings
     camera: Camera
     width: int
@@ -72,7 +86,7 @@ class Frame:
     setup: bool = False  #: its time includes a renderer set-up (a new renderer or volume)
     tf_changed: bool = False  #: the renderer was given a new TF for it (its tables, an error estimate)
     volume: Volume | None = None  #: what it drew (the crop applied), to tell a frame of the current state
-    tf_key: tuple[int, int] | None = None  #: (identity, version) of the TF it drew
+    tf_key: TFKey | None = None  #: (identity, version) of the TF it drew (`tf_key`)
 
 
 #: The side of a warm-up's frame (`RenderService.warm`): enough to build tables and compile nothing.
@@ -144,7 +158,7 @@ class _Slot:
 
     renderer: Renderer
     volume: Volume | None = None
-    tf_key: tuple[int, int] | None = None
+    tf_key: TFKey | None = None
     settings: RenderSettings | None = None
 
 
@@ -336,7 +350,7 @@ class RenderService(QObject):
         self,
         renderer: str,
         volume: Volume,
-        tf: TransferFunction,
+        tf: DrawnTF,
         settings: RenderSettings,
         camera: Camera,
         width: int,
@@ -353,7 +367,7 @@ class RenderService(QObject):
             renderer,
             volume,
             tf.copy(),
-            (id(tf), tf.version),
+            tf_key(tf),
             settings,
             camera,
             int(width),
@@ -365,7 +379,7 @@ class RenderService(QObject):
         self._wake.emit()
         return self._serial
 
-    def warm(self, renderer: str, volume: Volume, tf: TransferFunction, settings: RenderSettings) -> None:
+    def warm(self, renderer: str, volume: Volume, tf: DrawnTF, settings: RenderSettings) -> None:
         """Set `renderer` up for `volume`, `tf` and `settings` now, while nothing else waits: it
         draws a WARM_SIZE frame that is not shown, so that its first real frame (the first preview
         of a drag, by another renderer than the still frames') does not pay the set-up (0.7 s for
@@ -373,7 +387,7 @@ class RenderService(QObject):
         warm-up takes no serial, so `latest_serial` still names the newest frame to show."""
         if not self._running:
             return
-        request = RenderRequest(0, renderer, volume, tf.copy(), (id(tf), tf.version), settings,
+        request = RenderRequest(0, renderer, volume, tf.copy(), tf_key(tf), settings,
                                 Camera.orbit(volume.bounds), WARM_SIZE, WARM_SIZE, False, (0.0, 0.0, 0.0), warm=True)  # fmt: skip
         self._warming = True
         self._mailbox.put(request)

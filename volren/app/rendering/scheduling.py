@@ -23,7 +23,7 @@ from PyQt5.QtCore import QObject, QTimer
 from volren.app.core.frame_sizes import FrameCost, adaptive_preview_scale, preview_size
 from volren.app.core.preview_settings import preview_choice, still_settings
 from volren.app.core.state import Change, ViewState
-from volren.app.rendering.render_service import Frame, RenderRequest, RenderService
+from volren.app.rendering.render_service import Frame, RenderRequest, RenderService, tf_key
 from volren.model.clip_region import NO_CLIP
 from volren.model.scene_class import SceneClass
 from volren.model.settings import RenderSettings
@@ -75,6 +75,7 @@ class FrameScheduler(QObject):
         self._warmed: tuple[str, int] | None = None  # (renderer, id(volume)) last warmed up for previews
         self._cost_keys: tuple[RenderSettings | None, str] | None = None  # (settings, its repr) last asked
         self._tf_dims = 1  # of the TF last seen: a change of dimension may change renderer or settings
+        self._labels_drawn = False  # labels opened or closed: the renderer control may change renderer first
         self._pending_final: tuple[int, tuple] | None = (
             None  # (coarse frame's serial, the still frame's request)
         )
@@ -96,11 +97,13 @@ class FrameScheduler(QObject):
     def _on_change(self, change: Change) -> None:
         tf = self._state.transfer_function
         dims = tf.dims if tf is not None else self._tf_dims
-        if dims != self._tf_dims and not change.interactive:
-            # a 1D TF turned 2D (or back): the renderer control may move to another renderer or drop
-            # pre-integration in the listeners after this one; a frame asked for now would go to a
-            # renderer that refuses it (an error box for a state that lasts microseconds)
-            self._tf_dims = dims
+        labels = self._state.labels_drawn
+        if (dims != self._tf_dims or labels != self._labels_drawn) and not change.interactive:
+            # a 1D TF turned 2D (or back), or labels came or went: the renderer control may move to
+            # another renderer (one that draws labels) or drop pre-integration in the listeners after
+            # this one; a frame asked for now would go to a renderer that refuses it (an error box for
+            # a state that lasts microseconds)
+            self._tf_dims, self._labels_drawn = dims, labels
             self._timer.stop()
             self._after_listeners.start()
             return
@@ -141,7 +144,7 @@ class FrameScheduler(QObject):
         s = self._state
         renderer, settings = self.preview(tf_dragged=False)
         volume, settings = s.frame_inputs(renderer, settings)
-        tf = s.transfer_function
+        tf = s.drawn_transfer_function
         if volume is None or tf is None:
             return
         key = (renderer, id(volume))
@@ -160,14 +163,16 @@ class FrameScheduler(QObject):
             if self._registry is not None else [s.renderer]  # fmt: skip
         refused = self._refusing_the_view(names)
         # the kind (with the TF's class) and the renderers refusing this view compared by value
-        inputs = (s.renderer, kind, s.settings, dragged, dims, refused, s.crop is not None)
+        inputs = (s.renderer, kind, s.settings, dragged, dims, refused, s.crop is not None, s.labels_drawn)
         if self._preview is None or any(
-            a is not b and not (isinstance(a, str | frozenset) and a == b)
+            a is not b and not (isinstance(a, str | frozenset | bool) and a == b)
             for a, b in zip(self._preview[0], inputs, strict=True)
         ):
             usable = [n for n in names if n not in refused or n == s.renderer]
             if s.crop is not None and s.clips():  # previews clip too: a crop drag prepares nothing again
                 usable = [n for n in usable if s.clips(n)]
+            if s.labels_drawn:  # previews by label too (RTVG chapter 16), not of the unlabelled volume
+                usable = [n for n in usable if n == s.renderer or self._draws_labels(n)]
             self._preview = (
                 inputs,
                 preview_choice(s.renderer, kind, dims, s.settings, usable, self._capabilities, dragged),
@@ -203,6 +208,12 @@ class FrameScheduler(QObject):
         self._preview = None  # chosen again, without it
         self._last_full = None
         self.request_full()
+
+    def _draws_labels(self, name: str) -> bool:
+        """Whether renderer `name` draws the shown volume's labels (`KindSupport.labels`)."""
+        caps, volume = self._capabilities(name), self._state.volume
+        support = caps.kinds.get(volume.kind) if caps is not None and volume is not None else None  # type: ignore[call-overload]
+        return bool(support is not None and support.labels)
 
     def _capabilities(self, name: str) -> Capabilities | None:
         if self._registry is None:
@@ -264,7 +275,8 @@ class FrameScheduler(QObject):
         width, height = self._viewport_size()
         if s.volume is None or s.transfer_function is None or s.camera is None or width < 1 or height < 1:
             return None
-        tf = s.transfer_function
+        tf = s.drawn_transfer_function
+        assert tf is not None
         renderer, settings = s.renderer, s.settings
         if full:
             settings = still_settings(settings, self._capabilities(renderer))
@@ -274,8 +286,7 @@ class FrameScheduler(QObject):
                 s.renderer,
                 id(s.volume),
                 s.crop,
-                id(tf),
-                tf.version,
+                tf_key(tf),
                 s.settings,
                 s.camera,
                 width,
@@ -296,7 +307,7 @@ class FrameScheduler(QObject):
         request = (
             renderer,
             volume,
-            s.transfer_function,
+            tf,
             settings,
             s.camera,
             width,

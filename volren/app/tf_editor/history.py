@@ -5,7 +5,9 @@ opened, or a whole drag between `begin_interaction` and `end_interaction`) is no
 comparing the TF's JSON form with the last one recorded. So each editor, present or future, gets
 undo for free, a drag is one undo step, and an edit that changes nothing records nothing.
 Undo puts a fresh TF object built from the JSON into the state (editors follow the state).
-A new volume starts a new history: the old TFs belong to the old data range.
+A new volume starts a new history: the old TFs belong to the old data range. With labels shown,
+their styles (Real-Time Volume Graphics, chapter 16: a TF per label over the 1D TF) are part of
+what is recorded, so the Labels panel's edits undo as TF edits do.
 """
 
 from __future__ import annotations
@@ -17,12 +19,23 @@ from PyQt5.QtCore import QObject
 from PyQt5.QtWidgets import QUndoCommand, QUndoStack
 
 from volren.app.core.state import Change, ViewState
+from volren.model.labels import LabelStyle
 from volren.model.transfer_function_2d import transfer_function_from_dict
+
+#: The snapshot's key of the label styles (`LabelTransferFunction.to_dict` without its base).
+LABELS_KEY = "label_styles"
 
 
 def _snapshot(state: ViewState) -> dict[str, Any] | None:
     tf = state.transfer_function
-    return None if tf is None else tf.to_dict()
+    if tf is None:
+        return None
+    data = tf.to_dict()
+    label_tf = state.label_transfer_function
+    if label_tf is not None:
+        labels = label_tf.to_dict()
+        data[LABELS_KEY] = {"default": labels["default"], "labels": labels["labels"]}
+    return data
 
 
 class _TFChange(QUndoCommand):
@@ -44,7 +57,7 @@ class _TFChange(QUndoCommand):
 
 
 #: TF JSON keys as the editors name them (the JSON says "color", the editors "colour").
-_UI_WORDS = {"color": "colour"}
+_UI_WORDS = {"color": "colour", LABELS_KEY: "labels"}
 
 
 def _label(before: dict[str, Any] | None, after: dict[str, Any]) -> str:
@@ -71,6 +84,8 @@ class TFHistory(QObject):
         if change.what == "volume" and not change.same_scene:  # a time step keeps the TF and its history
             self.stack.clear()
             self._recorded = _snapshot(self.state)
+        elif change.what == "volume":  # labels opened or closed: not an edit to undo
+            self._recorded = _snapshot(self.state)
         elif change.what in ("tf", "interaction") and not change.interactive and not self._applying:
             self.record()
 
@@ -87,7 +102,12 @@ class TFHistory(QObject):
     def _apply(self, data: dict[str, Any]) -> None:
         self._applying = True
         try:
-            self.state.set_transfer_function(transfer_function_from_dict(data))
+            tf = {k: v for k, v in data.items() if k != LABELS_KEY}
+            self.state.set_transfer_function(transfer_function_from_dict(tf))
+            labels = data.get(LABELS_KEY)
+            if labels is not None:
+                styles = {int(k): LabelStyle.from_dict(v, f"label {k}") for k, v in labels["labels"].items()}
+                self.state.set_label_styles(styles, LabelStyle.from_dict(labels["default"], "default"))
         finally:
             self._applying = False
         self._recorded = data

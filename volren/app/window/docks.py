@@ -2,7 +2,7 @@
 
 Right: the transfer-function editors (1D and 2D, with undo and redo). Left: the rendering
 settings (lighting, sampling, blend mode, crop box, background) and, tabbed with them, the dataset
-facts. Every panel edits the window's `ViewState`; this module only places them, forwards their
+facts and the labels of a segmentation (`panels.labels`). Every panel edits the window's `ViewState`; this module only places them, forwards their
 errors to the window's one-line reporter, tells the settings panels what the current renderer can
 do, and turns a Ctrl+click on the volume into a 2D TF widget at the picked value and gradient.
 """
@@ -30,6 +30,7 @@ from volren.app.panels import (
     ClippingPanel,
     CropPanel,
     DatasetInfoPanel,
+    LabelsPanel,
     LightingPanel,
     SamplingPanel,
 )
@@ -38,6 +39,7 @@ from volren.app.tf_editor.history import TFHistory
 from volren.app.tf_editor.panel import TransferFunctionPanel
 from volren.app.window.field_undo import FieldUndoKeys, set_undo_shortcuts
 from volren.app.window.file_actions import FileActions
+from volren.model.labels import LabelMap
 from volren.renderers.base import KindSupport
 from volren.renderers.registry import RendererRegistry
 
@@ -104,6 +106,7 @@ class Docks:
         self.clipping = ClippingPanel(state)
         self.background = BackgroundPanel(state)
         self.dataset = DatasetInfoPanel(state)
+        self.labels = LabelsPanel(state)
         self.dataset.arrayChosen.connect(window.files.show_array)
 
         self.tf_dock = self._dock(
@@ -128,7 +131,9 @@ class Docks:
         self.dataset_dock = self._dock(
             "Dataset", "dataset-dock", _scrolled(self.dataset), Qt.LeftDockWidgetArea
         )
+        self.labels_dock = self._dock("Labels", "labels-dock", self.labels, Qt.LeftDockWidgetArea)
         window.tabifyDockWidget(self.settings_dock, self.dataset_dock)
+        window.tabifyDockWidget(self.dataset_dock, self.labels_dock)
         self.settings_dock.raise_()
 
         self.undo_action = self.history.stack.createUndoAction(window, "&Undo")
@@ -136,12 +141,12 @@ class Docks:
         set_undo_shortcuts(self.undo_action, self.redo_action)
         #: Ctrl+Z in a number field undoes the app's edit once the value typed is entered.
         self.field_undo = FieldUndoKeys(self.undo_action, self.redo_action, window)
-        self.field_undo.watch((self.tf_dock, self.settings_dock, self.dataset_dock))
+        self.field_undo.watch((self.tf_dock, self.settings_dock, self.dataset_dock, self.labels_dock))
         edit_menu = window.menuBar().addMenu("&Edit")
         edit_menu.addAction(self.undo_action)
         edit_menu.addAction(self.redo_action)
         window.view_menu.addSeparator()
-        for dock in (self.tf_dock, self.settings_dock, self.dataset_dock):
+        for dock in (self.tf_dock, self.settings_dock, self.dataset_dock, self.labels_dock):
             window.view_menu.addAction(dock.toggleViewAction())
 
         for source in (self.tf_panel, self.crop):
@@ -149,6 +154,7 @@ class Docks:
         window.viewport.pointPicked.connect(self.pick)
         self._unsubscribe = state.subscribe(self._on_change)
         self._shown_tf_dims = 1
+        self._shown_labels: LabelMap | None = None
         self._update_capabilities()
 
     def _dock(self, title: str, name: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
@@ -201,6 +207,12 @@ class Docks:
         if change.what in ("renderer", "volume") or (change.what == "tf" and dims != self._shown_tf_dims):
             self._shown_tf_dims = dims
             self._update_capabilities()
+        if change.what == "volume":
+            labels = self.window.state.labels
+            if labels is not None and labels is not self._shown_labels:  # labels opened: their list in front
+                self.labels_dock.show()
+                self.labels_dock.raise_()
+            self._shown_labels = labels
 
     def current_support(self) -> KindSupport | None:
         """What the current renderer can do with the loaded volume (None: unknown, allow all)."""

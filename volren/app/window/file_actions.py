@@ -273,11 +273,13 @@ class FileActions(QObject):
         self._scenes.remember_volume_file(loaded.volume_path, loaded.scalars)
         try:
             state.load(volume, loaded.transfer_function, camera, settings, loaded.source, renderer=renderer,
-                       crop=loaded.crop, background=loaded.background)  # fmt: skip
+                       crop=loaded.crop, background=loaded.background, label_tf=loaded.label_tf,
+                       labels_path=loaded.labels_path)  # fmt: skip
         except VolrenError as exc:  # the crop box leaves nothing of this volume: show it whole
             self._report_error("Cannot crop", f"{loaded.source}: {exc}")
             state.load(volume, loaded.transfer_function, camera, settings, loaded.source, renderer=renderer,
-                       background=loaded.background)  # fmt: skip
+                       background=loaded.background, label_tf=loaded.label_tf,
+                       labels_path=loaded.labels_path)  # fmt: skip
         if notes:
             self._window.statusBar().showMessage("; ".join(notes), 15000)
 

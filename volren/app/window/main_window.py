@@ -8,6 +8,7 @@ here with what it needs and placed in the menus, toolbar and status bar here:
 
 - `files` (`FileActions`): opening files in the background, Open Recent, cancelling a load;
 - `scenes` (`SceneActions`): Save Scene;
+- `labels` (`LabelActions`): Open Labels, Close Labels;
 - `screenshots` (`ScreenshotActions`): Save Screenshot;
 - `movies` (`MovieActions`): Export Movie;
 - `renderers` (`RendererControl`): the chooser, keeping a usable renderer, the frame label;
@@ -41,6 +42,7 @@ from volren.app.rendering.viewport import Viewport
 from volren.app.window.docks import Docks
 from volren.app.window.file_actions import FileActions
 from volren.app.window.file_drops import FileDrops
+from volren.app.window.label_actions import LabelActions
 from volren.app.window.movie_actions import MovieActions
 from volren.app.window.quality_control import QualityControl
 from volren.app.window.renderer_control import RendererControl
@@ -116,6 +118,7 @@ class MainWindow(QMainWindow):
             self.time,
         )
         self.addAction(self.files.cancel_action)  # its Esc shortcut works without a menu entry
+        self.labels = LabelActions(self, self.state, self.report_error, recent.folder)
 
         self._build_view_actions()
         self._build_menus_and_toolbar()
@@ -186,6 +189,9 @@ class MainWindow(QMainWindow):
         file_menu.addAction(self.files.open_action)
         file_menu.addAction(self.files.open_folder_action)
         file_menu.addMenu(self.files.recent_menu)
+        file_menu.addSeparator()
+        file_menu.addAction(self.labels.open_action)
+        file_menu.addAction(self.labels.close_action)
         file_menu.addSeparator()
         file_menu.addAction(self.scenes.save_action)
         file_menu.addAction(self.screenshots.action)
@@ -291,6 +297,7 @@ class MainWindow(QMainWindow):
         self.movies.shutdown()
         self.time.shutdown()
         self.files.shutdown(5000)
+        self.labels.shutdown(5000)
 
     def resizeEvent(self, event: QResizeEvent) -> None:
         super().resizeEvent(event)

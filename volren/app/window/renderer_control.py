@@ -95,7 +95,8 @@ class RendererControl:
     def _options(self) -> tuple[list[RendererOption], list[str]]:
         volume, tf = self._state.volume, self._state.transfer_function
         dims = tf.dims if tf is not None else 1
-        return renderer_options(volume.kind if volume else None, self._state.settings, self._registry, dims)
+        return renderer_options(volume.kind if volume else None, self._state.settings, self._registry, dims,
+                                labels=self._state.labels_drawn)  # fmt: skip
 
     def refresh(self) -> None:
         """List the renderers again (after a change, or plugins registered later)."""
@@ -119,7 +120,8 @@ class RendererControl:
         the fastest measured renderer that can (`volren.quality`). A new scene also clears the
         memory of the last failure, so it is reported again.
         """
-        options, notes = renderer_options(volume.kind, settings, self._registry, tf.dims)
+        labels = getattr(volume, "labels", None) is not None and tf.dims == 1
+        options, notes = renderer_options(volume.kind, settings, self._registry, tf.dims, labels=labels)
         self.auto = wanted == AUTO
         if wanted == AUTO:  # the fastest measured renderer that draws this (volren.quality)
             drawable = {o.name for o in options if o.reason is None}
@@ -162,6 +164,8 @@ class RendererControl:
         if change.what == "volume":
             self._tf_dims_changed()
             self.refresh()
+            if change.same_scene:  # labels opened or closed (or a time step): the renderer may not draw them
+                self._keep_a_usable_renderer()
         elif change.what == "settings" or (change.what == "tf" and self._tf_dims_changed()):
             self.refresh()
             self._keep_a_usable_renderer()
@@ -187,7 +191,8 @@ class RendererControl:
         plain = None
         if chosen is None:  # a level's setting no renderer has for this TF (pre-integration of a 2D TF)
             plain = state.settings.with_(preintegration=False)
-            plain_options = renderer_options(volume.kind, plain, self._registry, tf.dims)[0]
+            plain_options = renderer_options(volume.kind, plain, self._registry, tf.dims,
+                                             labels=state.labels_drawn)[0]  # fmt: skip
             chosen = pick_renderer(plain_options, state.renderer, self._measured(volume, tf, plain))
         if chosen is None:
             return
@@ -208,6 +213,14 @@ class RendererControl:
             self._failure_key = None
         cheaper = frame.settings is not None and frame.settings != self._state.settings
         quality = "" if frame.full else (", preview at lower quality" if cheaper else ", preview")
+        if (
+            frame.full
+            and self._state.labels_drawn
+            and self._state.settings.preintegration
+            and frame.settings is not None
+            and not frame.settings.preintegration
+        ):  # `ViewState.label_settings`: no pre-integration tables per label
+            quality = ", labels without pre-integration"
         self.frame_label.setText(
             f"{frame.renderer} ({self._level_drawn(frame)})  |  {frame.width} x {frame.height}{quality}  |  "
             f"{frame.ms:.1f} ms"

@@ -4,7 +4,9 @@ A scene refers to its volume by path, so this part remembers which file (and sca
 volume came from (`remember_volume_file`, told by the opening part). A volume made in memory has
 no file: it is written beside the scene first, as `<scene>.volume.vti` (or .vtu). A step of a time
 series is saved with its series (the .pvd or folder opened) and the step's number, so the scene
-reopens the series at that step.
+reopens the series at that step. A volume with labels (Real-Time Volume Graphics, chapter 16)
+names its label file too (one made in memory is written beside the scene, `<scene>.labels.vti`),
+and the TF saved is the TF per label, whose base is the 1D TF shown.
 """
 
 from __future__ import annotations
@@ -73,17 +75,23 @@ class SceneActions:
         try:
             check_writable(path)  # before a volume is written beside it
             volume_path = self._volume_path or self._write_volume_beside(Path(path))
+            label_tf = s.label_transfer_function
+            labels_path = None
+            if label_tf is not None:
+                labels_path = s.labels_path or self._write_labels_beside(Path(path))
+            drawn = label_tf if label_tf is not None and s.labels_drawn else s.transfer_function
             scene = view_scene(
                 volume_path,
-                s.transfer_function,
+                drawn,
                 s.camera,
-                s.settings,
+                s.label_settings(s.renderer, s.settings),  # as drawn: `volren render` draws them so
                 s.renderer,
                 self._viewport.pixel_size(),
                 scalars=self._volume_scalars,
                 crop=s.crop,
                 background=s.background,
                 time_series=self._series_step(),
+                labels_path=labels_path,
             )
             io.save_scene(scene, path)
         except (VolrenError, OSError) as exc:
@@ -111,6 +119,19 @@ class SceneActions:
         io.save_volume(volume, target)
         self._volume_path, self._volume_scalars = str(target.absolute()), None
         return self._volume_path
+
+    def _write_labels_beside(self, scene_path: Path) -> str:
+        """Labels made in memory, written beside the scene as `<scene>.labels.vti`."""
+        from volren import io
+        from volren.model.volume import UniformVolume
+
+        volume, labels = self._state.volume, self._state.labels
+        assert isinstance(volume, UniformVolume) and labels is not None
+        target = scene_path.with_name(f"{scene_path.stem}.labels.vti")
+        grid = UniformVolume(labels.values, spacing=volume.spacing, origin=volume.origin, name=labels.name)
+        io.save_volume(grid, target)
+        self._state.labels_path = str(target.absolute())
+        return self._state.labels_path
 
     def suggested_path(self) -> str:
         """Where Save Scene proposes to write: named after the volume, in the folder the person
