@@ -168,6 +168,18 @@ SECTIONS = (
         "(`python -m benchmarks.tetra_walk`)",
     ),
     (
+        "labels.md",
+        "Label volumes: a transfer function per label",
+        "What does drawing a segmentation with a TF per label cost against the volume without labels, what do hidden "
+        "labels save, and how close is it to `reference`? (`python -m benchmarks.labels`)",
+    ),
+    (
+        "channels.md",
+        "Multi-channel volumes: channels mixed in one optical model",
+        "What does mixing a volume's channels cost against its first channel alone, and how close is it to "
+        "`reference`? (`python -m benchmarks.channels`)",
+    ),
+    (
         "gpu.md",
         "On a GPU",
         "How fast are the OpenGL renderers on a real GPU, at what error? "

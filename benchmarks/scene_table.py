@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -67,6 +67,26 @@ def scene_table(
         for style, tf in d.transfer_functions():
             lines.append(row(d, volume, style, tf, args.size, args.frames))
             print(lines[-1], flush=True)
+    lines += ["", f"load average at the end: {_load()}"]
+    print(lines[-1])
+    if args.out:
+        Path(args.out).write_text("\n".join(lines) + "\n")
+    return 0
+
+
+def named_scene_table(args: argparse.Namespace, intro: str, header: tuple[str, str],
+                      rows: Iterator[tuple[str, Callable[[], str]]]) -> int:  # fmt: skip
+    """`scene_table` for scenes that are not the datasets': `intro`, the load averages, and the table
+    (`header`) with the row of every (name, row maker) of `rows` whose dataset (the name before its
+    "/") --datasets asks for; printed as it grows and written to --out."""
+    lines = [intro, "", f"load average at the start: {_load()}", "", *header]
+    for line in lines:
+        print(line, flush=True)
+    for name, row in rows:
+        if args.datasets and name.split("/")[0] not in args.datasets.split(","):
+            continue
+        lines.append(row())
+        print(lines[-1], flush=True)
     lines += ["", f"load average at the end: {_load()}"]
     print(lines[-1])
     if args.out:
