@@ -129,3 +129,24 @@ def test_the_models_extinction_is_the_weighted_sum_of_the_labels() -> None:
     np.testing.assert_allclose(
         q, ([0.25, 0.5] * base_tau)[:, None] * rgb + ([0.5, 0.25] * base_tau)[:, None] * [1, 0, 0]
     )
+
+
+def test_cell_classes_are_the_class_all_eight_corners_share() -> None:
+    """Against the definition, cell by cell: labels of one class meeting (a uniform cell), a
+    hidden label, and the last plane, row and column (no cell starts there)."""
+    from volren.model.labels import MIXED, boundary_cells, cell_classes
+
+    rng = np.random.default_rng(5)
+    labels = rng.choice(np.array([0, 1, 2, 3, 7], np.uint8), size=(5, 6, 7), p=[0.5, 0.2, 0.1, 0.1, 0.1])
+    lookup = np.array([0, 1, 1, -1, 2, 2, 2, 3], np.int32)  # labels 1 and 2 share a class; 3 is hidden
+    cells = cell_classes(labels, lookup, boundary_cells(labels))
+    np.testing.assert_array_equal(cells, cell_classes(labels, lookup))
+    nz, ny, nx = labels.shape
+    for k in range(nz):
+        for j in range(ny):
+            for i in range(nx):
+                if k == nz - 1 or j == ny - 1 or i == nx - 1:
+                    assert cells[k, j, i] == MIXED
+                    continue
+                corners = {int(lookup[v]) for v in labels[k : k + 2, j : j + 2, i : i + 2].reshape(-1)}
+                assert cells[k, j, i] == (corners.pop() if len(corners) == 1 else MIXED)

@@ -124,6 +124,11 @@ class LabelMap:
         h.update(self.values.tobytes())
         return h.hexdigest()
 
+    @cached_property
+    def boundary(self) -> NDArray[np.int64]:
+        """`boundary_cells` of these labels, found once."""
+        return boundary_cells(self.values)
+
     def label_name(self, label: int) -> str:
         return self.names.get(label, f"label {label}")
 
@@ -433,24 +438,44 @@ def cell_label_weights(corners: ArrayLike, fx: ArrayLike, fy: ArrayLike, fz: Arr
 MIXED = -2
 
 
-def cell_classes(labels: NDArray[Any], lookup: NDArray[np.int32]) -> NDArray[np.int16]:
-    """Per cell, at the index of its first corner ([k, j, i] of the cell [i, i + 1] x ...): the class
-    (`LabelClasses.lookup`) its eight corners share, -1 where that is hidden, or `MIXED` where they
-    differ (and at the last plane, row and column, where no cell starts). Why: a sample then reads
-    one number to know that its cell takes the fast path, instead of eight labels; only samples in
-    boundary cells read their corners. One element past the end is readable (32-bit gathers)."""
-    classes = lookup.astype(np.int16)[labels]
-    out = np.full(labels.size + 1, MIXED, np.int16)
-    cells = out[: labels.size].reshape(labels.shape)
-    first = classes[:-1, :-1, :-1]
+def boundary_cells(labels: NDArray[Any]) -> NDArray[np.int64]:
+    """Flat indices (into `labels`) of the first corners of the cells whose eight corners hold more
+    than one label: the only cells where a style change can make corners of different classes meet
+    or part (`cell_classes`). A few per cent of the cells of a segmentation."""
+    first = labels[:-1, :-1, :-1]
     same = np.ones(first.shape, dtype=bool)
     for dz in (0, 1):
         for dy in (0, 1):
             for dx in (0, 1):
                 if dz or dy or dx:
                     same &= (
-                        classes[dz : dz + first.shape[0], dy : dy + first.shape[1], dx : dx + first.shape[2]]
+                        labels[dz : dz + first.shape[0], dy : dy + first.shape[1], dx : dx + first.shape[2]]
                         == first
                     )
-    cells[:-1, :-1, :-1] = np.where(same, first, MIXED)
+    return np.ravel_multi_index(np.nonzero(~same), labels.shape)
+
+
+def cell_classes(
+    labels: NDArray[Any], lookup: NDArray[np.int32], boundary: NDArray[np.int64] | None = None
+) -> NDArray[np.int16]:
+    """Per cell, at the index of its first corner ([k, j, i] of the cell [i, i + 1] x ...): the class
+    (`LabelClasses.lookup`) its eight corners share, -1 where that is hidden, or `MIXED` where they
+    differ (and at the last plane, row and column, where no cell starts). Why: a sample then reads
+    one number to know that its cell takes the fast path, instead of eight labels; only samples in
+    boundary cells read their corners. One element past the end is readable (32-bit gathers).
+    `boundary`: the label map's `boundary_cells`, kept from one style to the next (`LabelMap.boundary`),
+    so that a style change looks up every cell once and compares corners only there."""
+    if boundary is None:
+        boundary = boundary_cells(labels)
+    table = lookup.astype(np.int16)
+    out = np.full(labels.size + 1, MIXED, np.int16)
+    cells = out[: labels.size].reshape(labels.shape)
+    cells[:-1, :-1, :-1] = table[labels[:-1, :-1, :-1]]  # the label shared by every corner
+    nz, ny, nx = labels.shape
+    flat = labels.reshape(-1)
+    first = table[flat[boundary]]
+    same = np.ones(len(boundary), dtype=bool)
+    for offset in (1, nx, nx + 1, nx * ny, nx * ny + 1, nx * ny + nx, nx * ny + nx + 1):
+        same &= table[flat[boundary + offset]] == first
+    out[boundary] = np.where(same, first, MIXED)
     return cells

@@ -854,16 +854,10 @@ def check_labels(ctx: CheckContext) -> list[Measurement]:
     if not support.labels:
         draw = functools.partial(ctx.draw, ctx.renderer(), scene, scene_tf, camera, n, n)
         return [_refusal("labels", "uniform, declared not drawn", draw)]
-    out = []
     renderer = ctx.renderer()
-    b = slab.bounds
-    signs = (1.0,) if ctx.quick else (1.0, -1.0)
-    for sign in signs:
-        view = axis_camera(b, 0, sign, 0.35 * min(b[3] - b[2], b[5] - b[4]))
-        image = ctx.draw(renderer, slab, slab_tf, view, 16, 16)
-        expected = np.broadcast_to(label_slab_rgba(), image.shape)
-        out.append(Measurement("labels", f"slab, from {'+' if sign > 0 else '-'}x", "RMSE", _rmse(image, expected),
-                               support.accuracy.rmse))  # fmt: skip
+    out = _slab_along_x(
+        ctx, renderer, "labels", "slab", slab, slab_tf, label_slab_rgba(), support.accuracy.rmse
+    )
     reference = reference_image(scene, scene_tf, camera, n, n).astype(np.float64)
     assert reference[..., 3].max() > 0.5
     modes = [False, True] if support.labels_preintegration and support.preintegration else [False]
@@ -875,6 +869,19 @@ def check_labels(ctx: CheckContext) -> list[Measurement]:
         draw = functools.partial(ctx.draw, ctx.renderer(), scene, scene_tf, camera, n, n,
                                  RenderSettings(preintegration=True))  # fmt: skip
         out.append(_refusal("labels", "pre-integrated, declared not drawn", draw))
+    return out
+
+
+def _slab_along_x(ctx: CheckContext, renderer: Renderer, check: str, what: str, slab: Volume, tf: Any,
+                  rgba: NDArray[np.float64], bound: float) -> list[Measurement]:  # fmt: skip
+    """A slab seen along x (from both sides unless quick), every pixel against the closed form `rgba`."""
+    b = slab.bounds
+    out = []
+    for sign in (1.0,) if ctx.quick else (1.0, -1.0):
+        view = axis_camera(b, 0, sign, 0.35 * min(b[3] - b[2], b[5] - b[4]))
+        image = ctx.draw(renderer, slab, tf, view, 16, 16)
+        error = _rmse(image, np.broadcast_to(rgba, image.shape))
+        out.append(Measurement(check, f"{what}, from {'+' if sign > 0 else '-'}x", "RMSE", error, bound))
     return out
 
 
@@ -895,16 +902,9 @@ def check_channels(ctx: CheckContext) -> list[Measurement]:
     if not support.channels:
         draw = functools.partial(ctx.draw, ctx.renderer(), scene, scene_tf, camera, n, n)
         return [_refusal("channels", "uniform, declared not drawn", draw)]
-    out = []
     renderer = ctx.renderer()
-    b = slab.bounds
-    signs = (1.0,) if ctx.quick else (1.0, -1.0)
-    for sign in signs:
-        view = axis_camera(b, 0, sign, 0.35 * min(b[3] - b[2], b[5] - b[4]))
-        image = ctx.draw(renderer, slab, slab_tf, view, 16, 16)
-        expected = np.broadcast_to(channel_slab_rgba(), image.shape)
-        out.append(Measurement("channels", f"two-channel slab, from {'+' if sign > 0 else '-'}x", "RMSE",
-                               _rmse(image, expected), support.accuracy.rmse))  # fmt: skip
+    out = _slab_along_x(ctx, renderer, "channels", "two-channel slab", slab, slab_tf, channel_slab_rgba(),
+                        support.accuracy.rmse)  # fmt: skip
     reference = reference_image(scene, scene_tf, camera, n, n).astype(np.float64)
     assert reference[..., 3].max() > 0.5
     image = ctx.draw(renderer, scene, scene_tf, camera, n, n, RenderSettings())

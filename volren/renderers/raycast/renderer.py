@@ -581,7 +581,7 @@ class RaycastRenderer(RendererBase):
         classes = tf.classes(labels.max_label)
         key = (labels.digest, classes.lookup.tobytes())
         if self._cells is None or self._cells[0] != key:
-            self._cells = (key, cell_classes(labels.values, classes.lookup))
+            self._cells = (key, cell_classes(labels.values, classes.lookup, labels.boundary))
         vlo, vhi = volume.value_range
         tlo, thi = tf.value_range
         lo, hi = spanning(min(vlo, tlo), max(vhi, thi))

@@ -572,7 +572,11 @@ class SlicerRenderer(GLObjectOwner, RendererBase):
             )
         key = (labels.digest, classes.lookup.tobytes())
         cells = self._data_texture(
-            "cells", key, lambda: self._integer_texture3d(cell_classes(labels.values, classes.lookup), "i2")
+            "cells",
+            key,
+            lambda: self._integer_texture3d(
+                cell_classes(labels.values, classes.lookup, labels.boundary), "i2"
+            ),
         )
         points = self._data_texture(
             "labels",
