@@ -6,7 +6,7 @@ and plugins/ alike):
   skip (a missing package, a renderer that cannot draw, a tool not on PATH) means the machine is
   not set up the way CI is, and hiding that is how failures went unnoticed. Allowed reasons start
   with one of `ALLOWED_SKIP_PREFIXES`: use `SHARED_MISSING` / `NO_GPU` in the reason.
-- **Caches are per session.** volren's on-disk caches (prepared meshes, reference images, the
+- **Caches are per session** (per worker under pytest-xdist). volren's on-disk caches (prepared meshes, reference images, the
   generated samples) and everything else that follows ``$XDG_CACHE_HOME`` point into a temporary
   folder made when this module is imported (before any test runs and before volren reads the
   variables, which it does at each use), so a test can neither pass on stale data from an earlier
