@@ -85,6 +85,43 @@ def trilinear_cubic(corners, start, rate, out):
 
 
 @njit(nogil=True, cache=True)
+def cell_frame(o, d, org, sp, dims, t, tn, cell, loc, rate):
+    """The cell that the ray piece [t, tn] crosses (its midpoint's, clamped to the grid), the
+    piece's start in the cell's local coordinates and their rates per unit t: the frame in which
+    `trilinear_cubic` turns the cell's corners into cubics along the piece."""
+    tm = 0.5 * (t + tn)
+    for a in range(3):
+        u = (o[a] + tm * d[a] - org[a]) / sp[a]
+        c = int(math.floor(u))
+        c = min(max(c, 0), dims[a] - 2)
+        cell[a] = c
+        loc[a] = (o[a] + t * d[a] - org[a]) / sp[a] - c
+        rate[a] = d[a] / sp[a]
+
+
+@njit(nogil=True, cache=True)
+def corners(V, k, j, i):
+    """The eight corners of cell (k, j, i) of V[z, y, x] in `trilinear_cubic`'s order."""
+    return (V[k, j, i], V[k, j, i + 1], V[k, j + 1, i], V[k, j + 1, i + 1],
+            V[k + 1, j, i], V[k + 1, j, i + 1], V[k + 1, j + 1, i], V[k + 1, j + 1, i + 1])  # fmt: skip
+
+
+@njit(nogil=True, cache=True)
+def ray_span(orig, dirs, tfar, p, grid, out, stats):
+    """Ray p's origin, direction, its span (t0, t1) inside the `GridBox` grid's box and clip planes
+    and the plane it enters through (-1: none); clears its pixel and statistics."""
+    ox, oy, oz = orig[p, 0], orig[p, 1], orig[p, 2]
+    dx, dy, dz = dirs[p, 0], dirs[p, 1], dirs[p, 2]
+    t0, t1 = clip_box(ox, oy, oz, dx, dy, dz, grid.lo, grid.hi, 0.0, tfar[p])
+    t0, t1, entering = clip_entry(ox, oy, oz, dx, dy, dz, grid.planes, t0, t1)
+    for c in range(4):
+        out[p, c] = 0.0
+    for c in range(5):
+        stats[p, c] = 0
+    return (ox, oy, oz), (dx, dy, dz), t0, t1, entering
+
+
+@njit(nogil=True, cache=True)
 def _diff(V, k, j, i, axis, h):
     """d s / d axis at grid point (k, j, i): central inside, one-sided at the borders."""
     if axis == 0:
@@ -139,25 +176,11 @@ def build_intervals(o, d, t_in, t_out, grid, shading, ta, tb, P, G):
         tn = min(min(tnext[0], tnext[1]), min(tnext[2], t_out))
         if tn > t:
             if m < cap:
-                tm = 0.5 * (t + tn)
-                for a in range(3):
-                    u = (o[a] + tm * d[a] - org[a]) / sp[a]
-                    c = int(math.floor(u))
-                    c = min(max(c, 0), dims[a] - 2)
-                    cell[a] = c
-                    loc[a] = (o[a] + t * d[a] - org[a]) / sp[a] - c
-                    rate[a] = d[a] / sp[a]
+                cell_frame(o, d, org, sp, dims, t, tn, cell, loc, rate)
                 i = cell[0]
                 j = cell[1]
                 k = cell[2]
-                v000 = V[k, j, i]
-                v100 = V[k, j, i + 1]
-                v010 = V[k, j + 1, i]
-                v110 = V[k, j + 1, i + 1]
-                v001 = V[k + 1, j, i]
-                v101 = V[k + 1, j, i + 1]
-                v011 = V[k + 1, j + 1, i]
-                v111 = V[k + 1, j + 1, i + 1]
+                v000, v100, v010, v110, v001, v101, v011, v111 = corners(V, k, j, i)
                 finite = (
                     math.isfinite(v000) and math.isfinite(v100) and math.isfinite(v010) and math.isfinite(v110)
                     and math.isfinite(v001) and math.isfinite(v101) and math.isfinite(v011) and math.isfinite(v111)
@@ -222,22 +245,16 @@ def render_uniform(orig, dirs, tfar, grid, tf, tf2d, spar, quad, out, stats):
     and `tf2d` (2D, composite) is None."""
     n = orig.shape[0]
     nz, ny, nx = grid.values.shape
-    lo, hi = grid.lo, grid.hi
     cap = nx + ny + nz + 4
     gradients = spar.on  # shading
     if tf2d is not None:
         gradients = True  # |grad s| is the 2D TF's second axis
     for p in prange(n):
-        ox, oy, oz = orig[p, 0], orig[p, 1], orig[p, 2]
-        dx, dy, dz = dirs[p, 0], dirs[p, 1], dirs[p, 2]
-        t0, t1 = clip_box(ox, oy, oz, dx, dy, dz, lo, hi, 0.0, tfar[p])
-        t0, t1, entering = clip_entry(ox, oy, oz, dx, dy, dz, grid.planes, t0, t1)
-        for c in range(4):
-            out[p, c] = 0.0
-        for c in range(5):
-            stats[p, c] = 0
+        o, d, t0, t1, entering = ray_span(orig, dirs, tfar, p, grid, out, stats)
         if not (t1 > t0):
             continue
+        ox, oy, oz = o
+        dx, dy, dz = d
         if grid.cap and entering >= 0 and tf is not None:  # an opaque cut face first
             n = grid.planes[entering]
             s = value_at(grid, ox + t0 * dx, oy + t0 * dy, oz + t0 * dz)
@@ -249,6 +266,6 @@ def render_uniform(orig, dirs, tfar, grid, tf, tf2d, spar, quad, out, stats):
         tb = np.empty(cap)
         P = np.empty((cap, 4))
         G = np.empty((cap if gradients else 0, 3, 4))
-        m = build_intervals((ox, oy, oz), (dx, dy, dz), t0, t1, grid, gradients, ta, tb, P, G)
+        m = build_intervals(o, d, t0, t1, grid, gradients, ta, tb, P, G)
         result = integrate_ray(RayIntervals(ta, tb, P, G, m), quad, tf, tf2d, spar, dx, dy, dz)
         store_pixel(out, stats, p, result, m)
