@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from volren.errors import VolrenError
+from volren.kernels.label_sample import label_sample
+from volren.kernels.mixed_inputs import LabelClassification
 from volren.model import BlendMode, Camera, RenderSettings, TransferFunction1D, UniformVolume
 from volren.model.clip_region import ClipRegion
 from volren.model.labels import LabelMap, LabelStyle, LabelTransferFunction, cell_classes, cell_label_weights
 from volren.renderers.raycast import march_native
-from volren.renderers.raycast.march_inputs import LabelClassification
-from volren.renderers.raycast.march_labels import label_sample
 from volren.renderers.raycast.renderer import MAX_CLASSES_PER_BRICK, RaycastRenderer
 
 TF = TransferFunction1D([[0.0, 1.0, 1.0, 1.0], [1.0, 1.0, 0.5, 0.2]], [[0.0, 0.0], [0.2, 0.05], [1.0, 0.3]])

@@ -14,7 +14,11 @@ internals; what several of them need lives here, neutral, and is tested on its o
 - `box_clipping`: a ray clipped to a box (slab test);
 - `clip_planes`: a ray clipped to the kept side of the clip region's planes (`RenderSettings.clip`);
 - `cut_faces`: the opaque face where a ray enters the clip region through a plane (`ClipRegion.cap`);
-- `ray_block`: a block of pixel rays with their candidate cells, as one kernel parameter.
+- `ray_block`: a block of pixel rays with their candidate cells, as one kernel parameter;
+- `trilinear`: a grid's trilinear value at an index point, the samplers' fetch;
+- `label_sample`, `channel_sample`, `mixed_sample`: one post-classified sample of a label volume
+  (a TF per label, blended across label boundaries) or of mixed channels, and the overload that
+  picks between them, for every sample-based renderer (raycast, objectorder, shearwarp);
 - `native`: a C source built with the machine's compiler on first use and loaded with ctypes
   (a renderer keeps a numba kernel for machines where none builds).
 

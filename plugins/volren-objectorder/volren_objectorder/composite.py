@@ -35,6 +35,7 @@ from numba import njit, prange
 from volren.kernels.sample_placement import segment_length
 from volren.kernels.shading import blinn_phong_factors, headlight_half_vector
 from volren_objectorder.bundles import Band, CellBlock, Occlusion, PixelRay, Rect, Sample, Scratch
+from volren_objectorder.mixed_samples import is_mixed, mixed_rgba
 from volren_objectorder.occlusion import hom_covered, hom_finish, hom_init, hom_layout
 from volren_objectorder.octree import bracket
 from volren_objectorder.patterns import ray_end, sample_t
@@ -432,6 +433,54 @@ def _pixel_post(ray, kk, thi, blk, use_post, tables, frame, shading, rgba, scrat
 
 
 @njit(nogil=True, cache=True, inline="always")
+def _pixel_mixed(ray, kk, thi, blk, ro, grid, classes, frame, rgba):
+    """Composite, post-classified, of a label or multi-channel volume: the `PixelRay`'s samples kk..
+    with t < thi in the current cell, front to back, each classified by `mixed_rgba` at its point in
+    the grid (the shared kernels read the corners they need: a label cell's classes, every channel).
+    Samples in cells the classification leaves transparent are not taken, as in `_pixel_post`.
+    Returns (next sample, samples taken, 1 if it saturated)."""
+    p, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns = ray
+    vol = grid.values
+    h = frame.h
+    term = frame.term
+    gx = ro[p, 0]
+    gy = ro[p, 1]
+    gz = ro[p, 2]
+    r = rgba[p, 0]
+    g = rgba[p, 1]
+    b = rgba[p, 2]
+    a = rgba[p, 3]
+    taken = 0
+    saturated = 0
+    while kk < ns:
+        t = sample_t(t0, first, h, ns, last, kk)
+        if t >= thi:
+            break
+        visible, base, fx, fy, fz = _locate_in(blk, ox + t * dx, oy + t * dy, oz + t * dz)
+        if not visible:  # in a cell where no visible label or drawn channel has opacity
+            kk += 1
+            continue
+        taken += 1
+        cr, cg, cb, ca = mixed_rgba(vol, classes, gx + t * dx, gy + t * dy, gz + t * dz,
+                                    segment_length(first, last, h, ns, kk))  # fmt: skip
+        if ca > 0.0:
+            tr = 1.0 - a
+            r += tr * cr
+            g += tr * cg
+            b += tr * cb
+            a += tr * ca
+        kk += 1
+        if a >= term:  # term is 2 without hidden volume removal
+            saturated = 1
+            break
+    rgba[p, 0] = r
+    rgba[p, 1] = g
+    rgba[p, 2] = b
+    rgba[p, 3] = a
+    return kk, taken, saturated
+
+
+@njit(nogil=True, cache=True, inline="always")
 def _pixel_pre(ray, kk, thi, blk, grid, rays, tables, frame, shading, state, scratch):
     """Composite, pre-integrated: the `PixelRay`'s samples kk.. with t < thi in the current cell, each
     closing the segment from the ray's previous sample. Returns (next sample, samples taken, 1 if it
@@ -598,7 +647,7 @@ def _node_rect(view, grid, lv, i, j, k, r0, r1):
 
 
 @njit(nogil=True, cache=True, inline="always")
-def _block(at, rect, r0, grid, view, rays, tables, frame, shading, state, occlusion, scratch):
+def _block(at, rect, r0, grid, view, rays, tables, frame, shading, state, occlusion, scratch, classes):
     """The `CellBlock` of up to size^3 leaf cells from cell (x0, y0, z0), `cells` = bits + 256 size: size 1
     (a cell) or 2 (an octree node one level above the cells); its grid points loaded once, then the
     samples of every unfinished pixel of the `Rect` (rows q0..q1 of the band from r0) that lie in it, none in the
@@ -611,7 +660,8 @@ def _block(at, rect, r0, grid, view, rays, tables, frame, shading, state, occlus
     footprint rectangle holds about a third of the pixels of its cells' rectangles at 1-2 pixels a
     voxel); the samples, and so the image, are the cells' own. The walk takes cells one by one where
     the occlusion map may hide some of them (`_walk_band`). The arrays come in bundles: numba inlines a
-    call of at most 30 arguments only (more are passed as *args)."""
+    call of at most 30 arguments only (more are passed as *args). `classes`: the frame's label or
+    channel classification (`mixed_samples`; its samples replace the post-classified ones), or `PLAIN`."""
     x0, y0, z0, cells = at
     c0, c1, q0, q1 = rect
     ncx = grid.ncx
@@ -642,7 +692,8 @@ def _block(at, rect, r0, grid, view, rays, tables, frame, shading, state, occlus
     sy = min(size, ncy - y0)
     sz = min(size, ncz - z0)
     blk = (np.int64(bits), np.int64(sx), np.int64(sy), np.int64(sz), np.int64(size))  # one type: indexable
-    _load_block(grid, x0, y0, z0, sx, sy, sz, shade, c8, g8)
+    if not is_mixed(classes):  # the mixed samples read the grid themselves
+        _load_block(grid, x0, y0, z0, sx, sy, sz, shade, c8, g8)
     for r in range(q0, q1 + 1):
         for c in range(c0, c1 + 1):
             p = r * width + c
@@ -667,7 +718,9 @@ def _block(at, rect, r0, grid, view, rays, tables, frame, shading, state, occlus
             if shade:
                 hx, hy, hz = _half_vector(rwd, dp, shading)
             ray = PixelRay(p, ox, oy, oz, dx, dy, dz, hx, hy, hz, t0, first, last, ns)
-            if post_path:
+            if post_path and is_mixed(classes):
+                kk, taken, sat = _pixel_mixed(ray, kk, thi, blk, ro, grid, classes, frame, rgba)
+            elif post_path:
                 kk, taken, sat = _pixel_post(
                     ray, kk, thi, blk, use_post, tables, frame, shading, rgba, scratch
                 )
@@ -687,7 +740,7 @@ def _block(at, rect, r0, grid, view, rays, tables, frame, shading, state, occlus
 
 
 @njit(nogil=True, cache=True)
-def render_band(band, grid, octree, view, rays, tables, frame, shading, state):
+def render_band(band, grid, octree, view, rays, tables, frame, shading, state, classes):
     """The `Band`'s rows (`_walk_band`), with the band's scratch arrays allocated here: the walk is
     compiled without numba's reference counting, which otherwise left atomic increments and
     decrements of shared arrays' counts in the per-pixel loop (slow on one thread, and the two
@@ -702,11 +755,11 @@ def render_band(band, grid, octree, view, rays, tables, frame, shading, state):
     e8 = np.empty(27)  # one cell's grid points for `_fetch`, as `_load_block` lays them out
     eg8 = np.zeros((27, 3))
     _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, Occlusion(hom, hl, hoff, hcols),
-               Scratch(stack, c8, g8, e8, eg8))  # fmt: skip
+               Scratch(stack, c8, g8, e8, eg8), classes)  # fmt: skip
 
 
 @njit(nogil=True, cache=True, _nrt=False)
-def _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, occlusion, scratch):
+def _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, occlusion, scratch, classes):
     """The `Band`'s rows r0..r1 - 1: walk the `Octree` front to back, skipping transparent nodes and (with hidden
     volume removal) nodes on finished pixels, and sample every leaf cell's rays. The counters are
     kept in locals and written once at the end (`stats` rows of neighbouring bands share cache
@@ -806,7 +859,7 @@ def _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, oc
             continue
         n_cells += count * own
         taken, sat = _block(CellBlock(x0, y0, z0, cells), Rect(c0, c1, q0, q1), r0, grid, view, rays, tables, frame,
-                            shading, state, occlusion, scratch)  # fmt: skip
+                            shading, state, occlusion, scratch, classes)  # fmt: skip
         n_samples += taken
         n_saturated += sat
     stats[S_NODES] += n_nodes
@@ -818,15 +871,16 @@ def _walk_band(band, grid, octree, view, rays, tables, frame, shading, state, oc
 
 
 @njit(nogil=True, cache=True, parallel=True)
-def render_bands(bands, band_rows, grid, octree, view, rays, tables, frame, shading, state, stats):
+def render_bands(bands, band_rows, grid, octree, view, rays, tables, frame, shading, state, stats, classes):
     """The bands listed in `bands` (of band_rows rows each; counters in stats[band]), in parallel
     (each band's rows belong to it alone), lit with the frame's `ShadeParams` `shading` (its own
-    parameter, no bundle's member: numba's parallel loops take a bundle apart one level only)."""
+    parameter, no bundle's member: numba's parallel loops take a bundle apart one level only), and with
+    `classes` (`mixed_samples.PLAIN`, or a label or channel classification drawn post-classified)."""
     for q in prange(bands.shape[0]):
         b = bands[q]
         r0 = b * band_rows
         r1 = min(view.height, r0 + band_rows)
-        render_band(Band(r0, r1, stats[b]), grid, octree, view, rays, tables, frame, shading, state)
+        render_band(Band(r0, r1, stats[b]), grid, octree, view, rays, tables, frame, shading, state, classes)
 
 
 @njit(nogil=True, cache=True, parallel=True)

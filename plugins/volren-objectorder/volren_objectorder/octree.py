@@ -22,6 +22,7 @@ runs ahead, so the cells along the faces the rays leave through take the box bot
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -312,7 +313,6 @@ class MinMaxOctree:
         found = self._cache.get(key)
         if found is not None:
             return found
-        counts = np.empty(int(self.offsets[-1]), np.int32)
         level0 = np.empty(self.cell_shape, np.uint8)
         if tf is None:
             level0[...] = self.lo <= self.hi
@@ -325,6 +325,26 @@ class MinMaxOctree:
             if any(r > 0 for r in reach.radius) and any(max(r) > 0 for r in reach.rim):
                 _classify_rim(self.lo, self.hi, np.array(reach.rim, np.int64), np.array(reach.radius, np.int64),
                               xs, alphas, level0)  # fmt: skip
+        return self._store(key, self.pyramid(key, level0))
+
+    def classify_cells(self, key: tuple, level0: Callable[[], NDArray[np.uint8]]) -> Classification:
+        """The visibility pyramid over the cells that `level0()` marks visible (1, else 0; shape
+        `cell_shape`), cached on `key`: for label and multi-channel volumes (`mixed_classes`), whose
+        cells are visible by the TFs of their labels or channels rather than by one TF."""
+        found = self._cache.get(key)
+        if found is not None:
+            return found
+        return self._store(key, self.pyramid(key, level0()))
+
+    def _store(self, key: tuple, result: Classification) -> Classification:
+        if len(self._cache) > 8:
+            self._cache.clear()
+        self._cache[key] = result
+        return result
+
+    def pyramid(self, key: tuple, level0: NDArray[np.uint8]) -> Classification:
+        """The classification whose visible cells are level0's (1, else 0)."""
+        counts = np.empty(int(self.offsets[-1]), np.int32)
         shape1 = tuple(int(n) for n in self.shapes[min(1, self.levels - 1)])
         leaves = np.empty(shape1, np.uint8)
         _pack_leaves(level0, leaves)
@@ -341,8 +361,4 @@ class MinMaxOctree:
                 counts[self.offsets[level] : self.offsets[level + 1]],
                 self.shapes[level],
             )
-        result = Classification(key, counts, self.offsets, self.shapes, leaves)
-        if len(self._cache) > 8:
-            self._cache.clear()
-        self._cache[key] = result
-        return result
+        return Classification(key, counts, self.offsets, self.shapes, leaves)

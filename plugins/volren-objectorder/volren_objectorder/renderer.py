@@ -15,6 +15,10 @@ How a frame goes (module per step):
 3. `composite`: bands of rows in parallel, each walking the octree front to back (`traversal`),
    skipping transparent nodes and nodes on finished pixels (`occlusion`), sampling leaf cells.
 
+Label volumes and multi-channel volumes (a `LabelTransferFunction`, a `ChannelTransferFunction`) are
+drawn by the same walk with volren's shared sample kernels (`mixed_samples`) over an octree classified
+by their TFs (`mixed_classes`): composite, post-classified, unshaded.
+
 Perspective is exact too: each pixel keeps its own ray (no shared templates), and the octree's
 child order is taken per node from the side of its split planes the eye is on.
 
@@ -35,9 +39,13 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from volren.errors import VolrenError
+from volren.kernels.mixed_inputs import ChannelClassification, LabelClassification
 from volren.kernels.sample_placement import pixel_phases
 from volren.kernels.shading import ShadeParams, gradient_threshold
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
 from volren.model.preintegration import lighting_tables, preintegrate
 from volren.model.settings import check_step
 from volren.model.volume import spanning
@@ -53,6 +61,8 @@ from volren.renderers.base import (
 )
 from volren_objectorder import composite as K
 from volren_objectorder.bundles import Compositing, Grid, Octree, PixelState, Rays, Tables, View
+from volren_objectorder.mixed_classes import MixedClasses
+from volren_objectorder.mixed_samples import PLAIN
 from volren_objectorder.octree import Classification, MinMaxOctree, Reach
 from volren_objectorder.patterns import (
     OFFSET_MODES,
@@ -99,7 +109,7 @@ OPTIONS: tuple[OptionSpec, ...] = (
         4096,
         "int",
         "entries of the post-classification table, colour and opacity per full step (0: classify every "
-        "sample exactly, a search and an exp and a log each)",
+        "sample exactly, a search and an exp and a log each; label and channel tables then take 4096)",
         rule=CLASSIFICATION_TABLE_RULE,
     ),
     OptionSpec(
@@ -160,7 +170,7 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 
 class ObjectOrderRenderer(RendererBase):
     """Object-order ray casting on uniform grids: composite, maximum, minimum, average, shading,
-    pre-integration; parallel and perspective."""
+    pre-integration; parallel and perspective; label and multi-channel volumes (composite)."""
 
     name: ClassVar[str] = "objectorder"
     capabilities: ClassVar[Capabilities] = Capabilities(
@@ -175,6 +185,9 @@ class ObjectOrderRenderer(RendererBase):
                 # (the ramp), the point 0.024 px off
                 accuracy=Accuracy(rmse=0.02, position_px=0.05),
                 clip_region=True,
+                labels=True,  # composite, post-classified, unshaded (`mixed_samples`)
+                labels_preintegration=False,
+                channels=True,  # composite, post-classified, unshaded (`mixed_samples`)
             )
         },
         backend="cpu",
@@ -198,17 +211,20 @@ class ObjectOrderRenderer(RendererBase):
         self._phases: tuple[tuple[str, int, int, int], NDArray[np.float64]] | None = None
         self._rays: RayTable | None = None
         self._buffers: dict[str, NDArray[Any]] = {}
+        self._mixed = MixedClasses()
 
     # ------------------------------------------------------------------------- state
     def _volume_changed(self) -> None:
         volume = self.volume
         assert isinstance(volume, UniformVolume)
         self._octree = MinMaxOctree(volume)
+        self._mixed = MixedClasses()
 
     def release(self) -> None:
         self._octree = None
         self._rays = None
         self._buffers = {}
+        self._mixed = MixedClasses()
         super().release()
 
     def _buffer(self, name: str, shape: tuple[int, ...], dtype: type) -> NDArray[Any]:
@@ -243,16 +259,49 @@ class ObjectOrderRenderer(RendererBase):
         clipped = not self.settings.clip.is_empty
         return octree.classify(tf, segment_reach(camera, volume, rays, h, clipped) if pre else Reach())
 
+    def _mixed_classes(
+        self, tf: LabelTransferFunction | ChannelTransferFunction, h: float
+    ) -> tuple[LabelClassification | ChannelClassification, Classification]:
+        """(the shared kernels' classification, the octree's visible cells) of a label or channel frame:
+        composite, post-classified and unshaded only (refused otherwise, in one line, before any work)."""
+        settings = self.settings
+        what = "label volumes" if isinstance(tf, LabelTransferFunction) else "channels"
+        if settings.blend_mode != BlendMode.COMPOSITE:
+            raise VolrenError(f"objectorder: {what} are drawn composite only, not with {settings.blend_mode}")
+        if settings.shade:
+            raise VolrenError(f"objectorder: shading is not drawn with {what}; set shade off")
+        volume = self.volume
+        octree = self._octree
+        assert isinstance(volume, UniformVolume) and octree is not None
+        entries = int(self.opts["classification_table"])
+        classes: LabelClassification | ChannelClassification
+        if isinstance(tf, LabelTransferFunction):
+            classes, cls = self._mixed.labels(volume, tf, h, entries, octree)
+        else:
+            classes, cls = self._mixed.channels(volume, tf, h, entries, octree)
+        if not self.opts["octree_skipping"]:  # every cell (the kernels leave non-finite values out)
+            cls = octree.classify_cells(("every",), lambda: np.ones(octree.cell_shape, np.uint8))
+        return classes, cls
+
     def _render(
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         volume = self.volume
-        tf = self.transfer_function
-        assert isinstance(volume, UniformVolume) and isinstance(tf, TransferFunction1D)
+        given = self.transfer_function
+        assert isinstance(volume, UniformVolume)
+        assert isinstance(given, TransferFunction1D | LabelTransferFunction | ChannelTransferFunction)
         assert self._octree is not None
         settings = self.settings
         opts = self.opts
         check_step(settings.step, volume.bounds, volume.characteristic_length)
+        classes: Any = PLAIN
+        mixed: tuple[LabelClassification | ChannelClassification, Classification] | None = None
+        if not isinstance(given, TransferFunction1D):  # labels or channels: their own tables and cells
+            mixed = self._mixed_classes(given, float(settings.step * volume.characteristic_length))
+            classes = mixed[0]
+        # a label or channel frame reads none of the 1D tables below: they are made for one of its TFs
+        tf = given if isinstance(given, TransferFunction1D) else (
+            given.base if isinstance(given, LabelTransferFunction) else given.tfs[0])  # fmt: skip
         h = float(settings.step * volume.characteristic_length)
         mode = _MODES[settings.blend_mode]
         composite = mode == K.COMPOSITE
@@ -266,7 +315,10 @@ class ObjectOrderRenderer(RendererBase):
         rays = ray_table(camera, volume, width, height, h, self._offsets(offset_mode, width, height, opts["jitter_seed"]),
                          self._rays, planes)  # fmt: skip
         self._rays = rays
-        cls = self._classification(tf, composite, bool(opts["octree_skipping"]), pre, h, camera, rays)
+        if mixed is None:
+            cls = self._classification(tf, composite, bool(opts["octree_skipping"]), pre, h, camera, rays)
+        else:
+            cls = mixed[1]
         M = screen_matrix(camera, volume, width, height)
         spacing = np.asarray(volume.spacing, dtype=np.float64)
         eye = (np.asarray(camera.position, dtype=np.float64) - np.asarray(volume.origin)) / spacing
@@ -293,7 +345,7 @@ class ObjectOrderRenderer(RendererBase):
         table, front, back = (_read_only(t) for t in (table, front, back))
         post = np.zeros((1, 4))  # one row: no table, every sample classified exactly
         n_post = int(opts["classification_table"])
-        if composite and not pre and n_post:
+        if composite and not pre and n_post and mixed is None:
             rgb, a = tf.sample(np.linspace(lo, hi, n_post))
             alpha = -np.expm1(h / tf.opacity_unit_distance * np.log1p(-np.minimum(a, K.MAX_OPACITY)))
             post = np.ascontiguousarray(np.concatenate([rgb, alpha[:, None]], axis=1), dtype=np.float64)
@@ -347,9 +399,8 @@ class ObjectOrderRenderer(RendererBase):
             bands = order[g0 : g0 + group]
             old = numba.set_parallel_chunksize(1)
             try:
-                K.render_bands(
-                    bands, band_rows, grid, octree, view, ray_set, tables, frame, shading, state, stats
-                )
+                K.render_bands(bands, band_rows, grid, octree, view, ray_set, tables, frame, shading, state, stats,
+                               classes)  # fmt: skip
             finally:
                 numba.set_parallel_chunksize(old)
             if progress is not None:

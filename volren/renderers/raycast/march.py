@@ -26,6 +26,7 @@ from numba import njit, prange
 
 from volren.kernels.clip_planes import clip_entry, clip_to_planes
 from volren.kernels.sample_placement import ray_segment, ray_segments
+from volren.kernels.trilinear import trilinear_value as _value
 from volren.model.transfer_function import MAX_OPACITY
 from volren.renderers.raycast.march_inputs import COUNTS, TILE, IndexRay
 
@@ -101,32 +102,6 @@ def _composite_post(vol, classes, ray, ka, kb, r, g, b, a, term):
             sampled = kk + 1 - ka
             break
     return r, g, b, a, sampled
-
-
-@njit(nogil=True, cache=True, inline="always", fastmath=FAST)
-def _value(vol, px, py, pz):
-    """Trilinear value at index point (px, py, pz) inside the grid's box. Every sample of a ray lies
-    between its entry and exit points, so only the cell index is clamped (against rounding, and to
-    keep every read inside the array): the weights' clamps and a floor cost 5-12 % of a frame on
-    the smooth TFs (bonsai, ironProt; interleaved in one process) and changed no pixel."""
-    nz, ny, nx = vol.shape
-    i = max(min(int(px), nx - 2), 0)  # int() truncates: the floor for px >= 0
-    j = max(min(int(py), ny - 2), 0)
-    k = max(min(int(pz), nz - 2), 0)
-    fx = px - i
-    fy = py - j
-    fz = pz - k
-    v000, v001 = float(vol[k, j, i]), float(vol[k, j, i + 1])  # float(): 8-bit volumes stay 8-bit
-    v010, v011 = float(vol[k, j + 1, i]), float(vol[k, j + 1, i + 1])
-    v100, v101 = float(vol[k + 1, j, i]), float(vol[k + 1, j, i + 1])
-    v110, v111 = float(vol[k + 1, j + 1, i]), float(vol[k + 1, j + 1, i + 1])
-    x00 = v000 + fx * (v001 - v000)
-    x10 = v010 + fx * (v011 - v010)
-    x01 = v100 + fx * (v101 - v100)
-    x11 = v110 + fx * (v111 - v110)
-    y0 = x00 + fy * (x10 - x00)
-    y1 = x01 + fy * (x11 - x01)
-    return y0 + fz * (y1 - y0)
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)

@@ -4,7 +4,8 @@ Why bundles: the kernels took 15-22 positional parameters (arrays, a float array
 constants), where moving one place still compiled and drew a wrong image. numba types a
 `typing.NamedTuple` as a named tuple (arrays allowed as members, fields read by name in nopython
 mode, cached kernels keep working while the class is defined at module level), so each bundle
-below reaches a kernel as one parameter at no cost per sample.
+below reaches a kernel as one parameter at no cost per sample. The label and channel bundles are
+the shared kernels' (`volren.kernels.label_sample`, `volren.kernels.channel_sample`), re-exported here.
 """
 
 from __future__ import annotations
@@ -13,6 +14,13 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
+
+from volren.kernels.mixed_inputs import ChannelClassification, LabelClassification
+
+__all__ = [
+    "COUNTS", "TILE", "ChannelClassification", "Classification", "EmptyBricks", "FLAT", "Gradients2D", "IndexRay",
+    "LabelClassification", "PixelView", "TRANSPARENT", "Table2D", "gradients", "interval_kinds",
+]  # fmt: skip
 
 #: Tiles of TILE x TILE pixels are handed to threads one at a time (neighbouring rays share cache lines).
 TILE = 8
@@ -136,38 +144,3 @@ def gradients(values: NDArray[Any], spacing: tuple[float, float, float]) -> Grad
     for c, part in enumerate(finite):
         out[..., c] = np.rint(part / unit)
     return Gradients2D(out, unit)
-
-
-class LabelClassification(NamedTuple):
-    """How a label volume's segment gets its colour (`march_labels`): the classes of its cell's
-    corner labels (`LabelTransferFunction.classes`), each post-classified from its own table."""
-
-    #: (nz, ny, nx) uint8 or uint16 labels on the values' grid
-    labels: NDArray[Any]
-    #: label -> class (-1: hidden); labels past its end are hidden
-    lookup: NDArray[np.int32]
-    #: each cell's class where its corners share one, else `volren.model.labels.MIXED`
-    #: (`volren.model.labels.cell_classes`: (nz, ny, nx) at the cell's first corner)
-    cells: NDArray[np.int16]
-    #: (classes, n, 4) colour and opacity per step at n values evenly spaced from lo
-    post: NDArray[np.float64]
-    #: the step h
-    step: float
-    #: a value s sits at table entry (s - lo) * scale
-    lo: float
-    scale: float
-
-
-class ChannelClassification(NamedTuple):
-    """How a multi-channel volume's segment gets its colour (`march_channels`): every drawn channel
-    looked up at its own value in its own table, the depths added."""
-
-    #: (channels, nz, ny, nx): the drawn channels, in the values' type (8-bit or float32)
-    channels: NDArray[Any]
-    #: (channels, n, 4): colour and depth w tau h per step at n values evenly spaced from lo[c]
-    post: NDArray[np.float64]
-    #: the step h
-    step: float
-    #: channel c's value s sits at entry (s - lo[c]) * scale[c] of its table
-    lo: NDArray[np.float64]
-    scale: NDArray[np.float64]

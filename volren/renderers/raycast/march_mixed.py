@@ -1,7 +1,8 @@
 """The numba march of label and multi-channel volumes: each sample classified by several TFs.
 
 Why a march of its own: a label volume's sample blends the TFs of its cell's corner labels
-(`march_labels`), a multi-channel volume's adds every channel's (`march_channels`); neither is a
+(`volren.kernels.label_sample`), a multi-channel volume's adds every channel's
+(`volren.kernels.channel_sample`), both through `volren.kernels.mixed_sample`; neither is a
 lookup of one value in one table, which the plain march (`march`) is built around. Samples lie
 where the plain post-classified march puts them (`volren.kernels.sample_placement`, the midpoint
 of each segment), so a scene that reduces to one TF gives the plain march's image; a sample whose
@@ -12,31 +13,13 @@ march (`march.c`) draws the same samples with a brick walk and eight samples at 
 
 from __future__ import annotations
 
-from numba import njit, prange, types
-from numba.extending import overload
+from numba import njit, prange
 
 from volren.kernels.clip_planes import clip_entry
+from volren.kernels.mixed_sample import sample_rgba
 from volren.kernels.sample_placement import ray_segment, ray_segments
 from volren.renderers.raycast.march import FAST, _brick_shift, _pixel_ray, _store
-from volren.renderers.raycast.march_channels import channel_sample
-from volren.renderers.raycast.march_inputs import TILE, ChannelClassification, LabelClassification
-from volren.renderers.raycast.march_labels import label_sample
-
-
-def sample_rgba(vol, classes, px, py, pz, length):  # type: ignore[no-untyped-def]
-    """Premultiplied (r, g, b, a) of a segment `length` long at index point (px, py, pz): the
-    label sample or the channel sample, chosen by the type of `classes` when numba compiles."""
-    raise NotImplementedError("numba's: called from compiled kernels only")
-
-
-@overload(sample_rgba, inline="always", fastmath=FAST)
-def _sample_rgba(vol, classes, px, py, pz, length):  # type: ignore[no-untyped-def]
-    kind = getattr(classes, "instance_class", None) if isinstance(classes, types.BaseNamedTuple) else None
-    if kind is LabelClassification:
-        return lambda vol, classes, px, py, pz, length: label_sample(vol, classes, px, py, pz, length)
-    if kind is ChannelClassification:
-        return lambda vol, classes, px, py, pz, length: channel_sample(vol, classes, px, py, pz, length)
-    return None
+from volren.renderers.raycast.march_inputs import TILE
 
 
 @njit(nogil=True, cache=True, inline="always", fastmath=FAST)
