@@ -64,10 +64,13 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from volren.errors import VolrenError
 from volren.kernels.shading import ShadeParams, gradient_threshold
 from volren.model import BlendMode, Camera, TransferFunction1D, UniformVolume
+from volren.model.channels import ChannelTransferFunction
 from volren.model.downsample import FACTORS as DOWNSAMPLE_FACTORS
 from volren.model.downsample import downsample
+from volren.model.labels import LabelTransferFunction
 from volren.model.volume import spanning
 from volren.renderers.base import (
     Accuracy,
@@ -91,6 +94,8 @@ from volren_shearwarp.bundles import (
 from volren_shearwarp.classified import ClassifiedVolume, OpacitySupport, slab_pairs
 from volren_shearwarp.composite import AVERAGE, MAXIMUM, MINIMUM, composite_slabs, project_slabs
 from volren_shearwarp.factorization import Factorization, factorize, index_frame
+from volren_shearwarp.mixed_composite import composite_classes
+from volren_shearwarp.mixed_frame import MixedScenes
 from volren_shearwarp.tables import (
     GRID_MARGIN,
     LENGTH_RATIO,
@@ -326,6 +331,12 @@ class ShearWarpRenderer(RendererBase):
                 # from inside, the slices lie on both sides of the eye along every axis (`choose_axis`)
                 eye_inside=False,
                 clip_region=True,
+                # composite and post-classified, each sample classified on the slices (`mixed_composite`): a
+                # label's or several channels' classification is not a function of one scalar, so it has no
+                # 1D LUT or pre-integration table per segment length
+                labels=True,
+                labels_preintegration=False,
+                channels=True,
             )
         },
         backend="cpu",
@@ -376,12 +387,14 @@ class ShearWarpRenderer(RendererBase):
         self._pools: dict[str, TablePool] = {}
         self._buffers: dict[str, NDArray] = {}
         self._slab_ms: float | None = None  # the last frame's slab loop (ms), which sets the block count
+        self._mixed: MixedScenes | None = None  # label and channel layouts (`mixed_frame`)
 
     # ------------------------------------------------------------------------- state
     def _volume_changed(self) -> None:
         volume = self.volume
         assert isinstance(volume, UniformVolume)
         self._classified = ClassifiedVolume(volume)
+        self._mixed = MixedScenes(volume)
         self._coarse.clear()
         self._support = None
         self._pools.clear()
@@ -399,6 +412,7 @@ class ShearWarpRenderer(RendererBase):
 
     def release(self) -> None:
         self._classified = None
+        self._mixed = None
         self._coarse.clear()
         self._support = None
         self._pools.clear()
@@ -438,6 +452,8 @@ class ShearWarpRenderer(RendererBase):
         self, camera: Camera, width: int, height: int, progress: ProgressCallback | None
     ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
         tf = self.transfer_function
+        if isinstance(tf, LabelTransferFunction | ChannelTransferFunction):
+            return self._render_mixed(tf, camera, width, height, progress)
         assert isinstance(tf, TransferFunction1D)
         settings = self.settings
         opts = self.opts
@@ -622,6 +638,111 @@ class ShearWarpRenderer(RendererBase):
         totals = per_row.sum(axis=0)
         counters.update(samples=float(totals[0]), empty_pixels_skipped=float(totals[1]),
                         pixels_terminated=float(totals[2]), runs=1.0 if use_runs else 0.0)  # fmt: skip
+        return image, counters
+
+    def _render_mixed(
+        self,
+        tf: LabelTransferFunction | ChannelTransferFunction,
+        camera: Camera,
+        width: int,
+        height: int,
+        progress: ProgressCallback | None,
+    ) -> tuple[NDArray[np.float32], Mapping[str, float]]:
+        """A frame of a label or multi-channel volume (`mixed_composite`): composite, post-classified, each
+        sample classified on the slices; the plain frame's factorization, stride, clipping and runs."""
+        settings, opts = self.settings, self.opts
+        labels = isinstance(tf, LabelTransferFunction)
+        what = "label volumes" if labels else "multi-channel volumes"
+        if settings.blend_mode is not BlendMode.COMPOSITE:
+            raise VolrenError(f"renderer {self.name} draws {what} composite only, not {settings.blend_mode}")
+        for flag, why in ((settings.shade, "shading"), (settings.jitter, "jitter"),
+                          (int(opts["downsample"]) != 1, "the option downsample")):  # fmt: skip
+            if flag:
+                raise VolrenError(f"renderer {self.name} draws {what} without {why}")
+        volume = self.volume
+        assert isinstance(volume, UniformVolume) and self._classified is not None and self._mixed is not None
+        classified, mixed = self._classified, self._mixed
+        counters: dict[str, float] = {"samples": 0.0, "empty_pixels_skipped": 0.0, "pixels_terminated": 0.0}
+        if isinstance(tf, LabelTransferFunction):
+            assert volume.labels is not None
+            classes = tf.classes(volume.labels.max_label)
+            taus = [voxel_optical_depth(class_tf, volume.mean_spacing) for class_tf in classes.tfs]
+        else:
+            drawn = [c for c in range(tf.count) if tf.drawn_weight(c) > 0.0]
+            taus = [tf.drawn_weight(c) * voxel_optical_depth(tf.tfs[c], volume.mean_spacing) for c in drawn]
+        if not taus:  # every label or channel hidden
+            return np.zeros((height, width, 4), np.float32), counters
+        tau = max(taus)
+        oversampling = auto_oversampling(tau) if opts["oversampling"] == "auto" else opts["oversampling"]
+        fac = factorize(camera, volume, width, height, oversampling, min_scale=opts["pixels_per_voxel"])
+        values = classified.copy(fac.axis).values
+        spacing_c = float(fac.spacing[2])
+        step_length = settings.step * volume.characteristic_length
+        planes = int(min(MAX_PLANES_PER_SLAB, max(1, math.ceil(spacing_c / (2.0 * step_length) - 1e-9))))
+        n = auto_table_size(tau) if opts["table_size"] == "auto" else int(opts["table_size"])
+        limits = fac.clip_limits(camera, volume)
+        near_far = limits is not None
+        grid_origin, grid_spacing = index_frame(volume)[:2]
+        limits = _with_region(
+            fac, limits, settings.clip.half_spaces_in_grid(grid_origin.tolist(), grid_spacing.tolist())
+        )
+        clip_lo, clip_hi = limits if limits is not None else (np.zeros((1, 1)), np.zeros((1, 1)))
+        order = fac.order
+        stride = (
+            1
+            if near_far
+            else slice_stride(settings.step, spacing_c, volume.characteristic_length, len(order))
+        )
+        order, slab_frac = strided_order(order, stride)
+        pairs, run_slab = slab_pairs(order)
+        extent = run_extent(stride, fac.max_shear)
+        use_runs = bool(opts["empty_space_skipping"]) and fac.max_shear <= MAX_RUN_SHEAR
+        per_slab = stride / planes
+        halves = fac.pixel_lengths() * per_slab * 0.5  # half of each ray's segment (world units)
+        # the tables' segment: every ray's under a parallel view, else the axial one (`label_sample` corrects)
+        h = float(halves[0, 0]) if not fac.perspective else 0.5 * per_slab * spacing_c
+        if isinstance(tf, LabelTransferFunction):
+            classification: Any = mixed.label_classification(fac.axis, tf, classes, n, h, volume.value_range)
+            runs, visible = mixed.label_runs(fac.axis, values, classes, classification.cells, volume.value_range,
+                                             extent, pairs, use_runs, 1.0 / classification.scale)  # fmt: skip
+        else:
+            classification, runs, visible = mixed.channel_frame(
+                fac.axis, tf, drawn, n, h, extent, pairs, use_runs
+            )
+        counters.update(rays=float(fac.width * fac.height), slices=float(len(order)), planes_per_slab=float(planes),
+                        intermediate_width=float(fac.width), intermediate_height=float(fac.height),
+                        clipped=float(limits is not None), slice_stride=float(stride),
+                        runs=float(runs is not None))  # fmt: skip
+        if not visible:
+            if progress is not None:
+                progress(1.0)
+            return np.zeros((height, width, 4), np.float32), counters
+        if runs is None:
+            run_set = Runs(
+                False, np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32), extent, run_slab
+            )
+        else:
+            run_set = Runs(True, runs.offsets, runs.starts, runs.ends, extent, run_slab)
+        shape = (fac.height, fac.width)
+        rgba = self._scratch("rgba", shape + (4,), np.float32)
+        front = self._scratch("front", shape + (4,), np.float32)
+        stamp = self._scratch("stamp", shape, np.int32)
+        skip = self._scratch("skip", shape, np.int32)
+        per_row = self._scratch("per_row", (fac.height, 4), np.int64)
+        geom = SlabGeometry(values, classified.has_nan, order, slab_frac, planes, fac.alpha_a, fac.beta_a, fac.alpha_b,
+                            fac.beta_b, _rows(fac.height), ROW_BLOCK, 1.0 / fac.spacing)  # fmt: skip
+        termination = Termination(bool(opts["early_termination"]), float(opts["termination_alpha"]))
+        clip = Clipping(limits is not None, clip_lo, clip_hi)
+
+        def block(m0: int, m1: int) -> None:
+            composite_classes(geom, m0, m1, rgba, front, stamp, skip, per_row, classification, halves, run_set,
+                              termination, clip)  # fmt: skip
+
+        self._blocks(progress, len(order), block)
+        image = self._warp(rgba, fac, width, height, opts)
+        totals = per_row.sum(axis=0)
+        counters.update(samples=float(totals[0]), empty_pixels_skipped=float(totals[1]),
+                        pixels_terminated=float(totals[2]))  # fmt: skip
         return image, counters
 
     def _blocks(
