@@ -11,6 +11,7 @@ from vtkmodules.vtkCommonDataModel import (
     vtkPlaneCollection,
     vtkUnstructuredGrid,
 )
+from vtkmodules.vtkCommonExecutionModel import vtkTrivialProducer
 from vtkmodules.vtkRenderingCore import (
     vtkColorTransferFunction,
     vtkRenderer,
@@ -20,6 +21,7 @@ from vtkmodules.vtkRenderingCore import (
 )
 from vtkmodules.vtkRenderingVolume import (
     vtkFixedPointVolumeRayCastMapper,
+    vtkMultiVolume,
     vtkProjectedTetrahedraMapper,
     vtkUnstructuredGridLinearRayIntegrator,
     vtkUnstructuredGridPreIntegration,
@@ -35,7 +37,7 @@ from vtkmodules.vtkRenderingVolumeOpenGL2 import (
 try:  # the offscreen window class; absent in VTK builds without EGL
     from vtkmodules.vtkRenderingOpenGL2 import vtkEGLRenderWindow
 except ImportError:  # pragma: no cover - depends on the VTK build
-    vtkEGLRenderWindow = None
+    vtkEGLRenderWindow = None  # type: ignore[misc,assignment]
 
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401,E402  (registers the OpenGL factories)
 
@@ -52,6 +54,7 @@ __all__ = [
     "vtkEGLRenderWindow",
     "vtkFixedPointVolumeRayCastMapper",
     "vtkImageData",
+    "vtkMultiVolume",
     "vtkOpenGLGPUVolumeRayCastMapper",
     "vtkOpenGLProjectedTetrahedraMapper",
     "vtkPiecewiseFunction",
@@ -60,6 +63,7 @@ __all__ = [
     "vtkRenderWindow",
     "vtkRenderer",
     "vtkSmartVolumeMapper",
+    "vtkTrivialProducer",
     "vtkUnsignedCharArray",
     "vtkUnstructuredGrid",
     "vtkUnstructuredGridLinearRayIntegrator",
