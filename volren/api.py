@@ -159,9 +159,11 @@ def drawing(
             raise VolrenError(f"{name} must be finite, got {value!r:.40}")
     on_cluster = cluster is not None or scheduler is not None  # an empty one is refused, not ignored
     if wants_labels(vol, transfer, labels, label_info, label_tfs, hidden_labels):
-        if source.bricks or on_cluster:
-            raise VolrenError("labels: label volumes are drawn from a volume read whole (not an OME-Zarr "
-                              "image streamed by level, nor on a cluster)")  # fmt: skip
+        if on_cluster:
+            raise VolrenError("labels: label volumes are drawn from a volume read whole, not on a cluster")
+        if source.bricks:  # an OME-Zarr image: its label images lie on its full resolution (NGFF)
+            vol = _whole_image(volume, level, memory)
+            transfer = as_transfer_function(tf, vol)  # a default one from the whole image's values
         if wants_channels(vol, transfer, channels, channel_tfs, channel_weights, hidden_channels):
             raise VolrenError(
                 "channels: a volume is drawn with labels or with channels, not both at once yet"
@@ -284,6 +286,22 @@ def _open_input(volume: Any, scalars: str | None, memory: int | str | None, leve
 
         return VolumeInput(_named_channels(lambda: load_ome_zarr(volume, level, budget, channels)))
     return open_ome_zarr(volume, budget, level)
+
+
+def _whole_image(volume: Any, level: int | None, memory: int | str | None) -> Any:
+    """An OME-Zarr image read whole at full resolution (within `memory`), to draw with labels."""
+    from volren.io.ome_zarr_io import parse_memory
+    from volren.io.volume_io import load_ome_zarr
+
+    if level not in (None, 0):
+        raise VolrenError(
+            f"labels: label images lie on the image's full resolution; level {level} does not apply"
+        )
+    budget = parse_memory(memory) if isinstance(memory, str) else memory
+    try:
+        return load_ome_zarr(volume, 0, budget)
+    except VolrenError as exc:
+        raise VolrenError(f"labels: {exc}") from None
 
 
 def _named_channels(load: Any) -> Any:

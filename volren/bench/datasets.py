@@ -1,6 +1,7 @@
 """The scenes `volren bench run` measures: the shared datasets with their TFs, the bundled samples,
-and the hard procedural scenes (`volren.testing.hard_cases`: thin tubes and sheets, tiny objects,
-noise, steps, anisotropic spacing; `--datasets hard` names them all).
+the hard procedural scenes (`volren.testing.hard_cases`: thin tubes and sheets, tiny objects,
+noise, steps, anisotropic spacing; `--datasets hard` names them all), and the label and channel
+scenes (`volren.bench.mixed_datasets`; `--datasets labels`, `--datasets channels`).
 
 A shared dataset comes with one TF per style in the shared folder's scenes/ (`<dataset>-<style>.json`) and the
 camera of shared/scenes/README.md (`SCENES`); a bundled sample (`volren.samples`)
@@ -15,7 +16,15 @@ import os
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+from volren.bench.mixed_datasets import (
+    CHANNELS_GROUP,
+    LABELS_GROUP,
+    MixedDataset,
+    channel_datasets,
+    label_datasets,
+)
 from volren.errors import VolrenError
 from volren.model.camera import Camera
 from volren.model.transfer_function import TransferFunction1D
@@ -154,18 +163,25 @@ def hard_datasets() -> dict[str, HardDataset]:
 
 def select(
     names: Iterable[str] | None, shared: Path | None, quick: bool = False
-) -> list[Dataset | HardDataset]:
-    """The datasets asked for by name (`hard`: every hard scene); by default every shared one and
-    every sample (--quick: two samples)."""
+) -> list[Dataset | HardDataset | MixedDataset]:
+    """The datasets asked for by name (`hard`: every hard scene; `labels`, `channels`: every label or
+    channel scene, `volren.bench.mixed_datasets`); by default every shared one and every sample
+    (--quick: two samples)."""
     hard = hard_datasets()
-    available = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets(), **hard}
+    groups: dict[str, dict[str, Any]] = {HARD_GROUP: hard, LABELS_GROUP: label_datasets(shared),
+                                         CHANNELS_GROUP: channel_datasets(shared)}  # fmt: skip
+    grouped = {n for group in groups.values() for n in group}
+    available = {**(shared_datasets(shared) if shared is not None else {}), **sample_datasets(),
+                 **{n: d for group in groups.values() for n, d in group.items()}}  # fmt: skip
     if names is None:
-        names = QUICK_DATASETS if quick else [n for n in available if n not in hard]
-    names = [n for name in names for n in (hard if name == HARD_GROUP else [name])]
+        names = QUICK_DATASETS if quick else [n for n in available if n not in grouped]
+    names = [n for name in names for n in (groups[name] if name in groups else [name])]
     unknown = [n for n in names if n not in available]
     if unknown:
         where = "" if shared is not None else " (no shared folder found: give --shared)"
-        raise VolrenError(f"unknown datasets {unknown}; choose from {', '.join(available)}{where}")
+        raise VolrenError(
+            f"unknown datasets {unknown}; choose from {', '.join([*available, *groups])}{where}"
+        )
     return [available[n] for n in names]
 
 

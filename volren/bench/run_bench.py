@@ -10,6 +10,9 @@ against `reference` at that view, from the on-disk reference cache
 Curves in `sweep.ONE_FRAME_CURVES` (VTK's ZSweep) time one frame at the scene's view, with no
 warm-up: at 30-80 s a frame, a warm-up and a median would cost minutes per scene.
 
+Label and channel scenes (`volren.bench.mixed_datasets`) are drawn by the renderers whose
+capabilities say they draw them; the others are reported refused (`Progress.refused`), not failed.
+
 Rows are dicts with `COLUMNS` as keys, written to CSV as they come.
 """
 
@@ -19,20 +22,25 @@ import csv
 import statistics
 import time
 from collections.abc import Callable, Iterable, Iterator
-from typing import IO
+from typing import IO, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from volren.api import prepared_renderer
-from volren.bench.datasets import Dataset
+from volren.bench.datasets import Dataset, HardDataset
+from volren.bench.mixed_datasets import MixedDataset
+from volren.bench.summary import REFUSED
 from volren.bench.sweep import Config
 from volren.bench.viewer_peers import open_peer
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.volume import Volume
 from volren.renderers.base import Renderer, render_frame
+from volren.renderers.registry import registry
 from volren.testing.metrics import image_error
 from volren.testing.reference_images import reference_image
 
@@ -67,13 +75,14 @@ def time_turning(
         times.append((time.perf_counter() - start) * 1000.0)
         if offset == 0.0:
             image, counters = frame, dict(stats.counters)
+    assert image is not None  # offset 0 is always among the turns
     return statistics.median(times), image, counters
 
 
 def measure(
     config: Config,
     volume: Volume,
-    tf: TransferFunction1D,
+    tf: TransferFunction1D | LabelTransferFunction | ChannelTransferFunction,
     camera_at: Callable[[float], Camera],
     reference: NDArray[np.float32],
     size: int,
@@ -83,7 +92,10 @@ def measure(
     """One row: the configuration timed while turning and scored against the reference image."""
     if config.one_frame:
         frames = 1
+    drawer: Any
     if config.viewer:  # drawn as a PyVista or napari user draws it, not by a registered renderer
+        if not isinstance(tf, TransferFunction1D):
+            raise VolrenError(f"{config.curve}: {refusal(config, 'uniform', tf)}")
         drawer = open_peer(config.curve, volume, tf)
     else:
         drawer = prepared_renderer(config.renderer, volume, tf, config.settings())
@@ -113,6 +125,23 @@ def measure(
     }
 
 
+def refusal(config: Config, kind: str, tf: Any) -> str | None:
+    """Why the configuration's renderer declines to draw a label or channel scene (its
+    `Capabilities`: a TF per label or per channel, pre-integrated or not), or None. A viewer peer
+    draws one field with one 1D TF, as its users do."""
+    labels, channels = isinstance(tf, LabelTransferFunction), isinstance(tf, ChannelTransferFunction)
+    if not (labels or channels):
+        return None
+    if config.viewer:
+        return f"{config.curve} draws one field with one 1D TF, as its users draw it"
+    try:
+        capabilities = registry.capabilities(config.renderer)
+    except VolrenError:
+        return None  # an unknown renderer: measuring it says why
+    reason = capabilities.unsupported_reason(kind, 1, config.settings(), labels=labels, channels=channels)
+    return f"{config.renderer} {reason}" if reason else None
+
+
 class Progress:
     """What the run reports as it goes (the CLI draws a bar from it)."""
 
@@ -125,9 +154,18 @@ class Progress:
     def skipped(self, what: str, reason: str) -> None:
         """One configuration could not run."""
 
+    def refused(self, what: str, reason: str) -> None:
+        """One configuration's renderer declines the scene (`refusal`): not a failure. Reported as
+        skipped with `REFUSED` before the reason unless overridden."""
+        self.skipped(what, REFUSED + reason)
+
+
+#: What `run` measures: a shared dataset or sample, a hard procedural scene, a label or channel scene.
+AnyDataset = Dataset | HardDataset | MixedDataset
+
 
 def run(
-    datasets: Iterable[Dataset],
+    datasets: Iterable[AnyDataset],
     sweep: Callable[[str], list[Config]],
     size: int,
     frames: int,
@@ -149,7 +187,7 @@ def run(
 
 
 def _dataset_rows(
-    dataset: Dataset,
+    dataset: AnyDataset,
     configs: list[Config],
     size: int,
     frames: int,
@@ -172,6 +210,10 @@ def _dataset_rows(
         for config in configs:
             what = f"{dataset.name} {style} {config.curve} {config.label}"
             progress.status(what)
+            reason = refusal(config, dataset.kind, tf)
+            if reason is not None:
+                progress.refused(what, reason)
+                continue
             try:
                 row = measure(config, volume, tf, camera_at, reference, size, frames, turn)
             except VolrenError as exc:

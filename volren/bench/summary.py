@@ -14,9 +14,14 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from typing import cast
 
 from volren.bench.pareto import Match, Row, equal_error, group, pareto_front
 from volren.bench.viewer_peers import VIEWER_PEERS
+
+#: How a refused configuration's reason starts (`run_bench.Progress.refused`): listed apart from
+#: the skipped ones, as a renderer declining a scene it does not draw is no failure.
+REFUSED = "refused: "
 
 
 @dataclass(frozen=True)
@@ -58,7 +63,8 @@ def is_viewer(row: Row) -> bool:
 def compare(rows: Iterable[Row]) -> list[SceneComparison]:
     """One comparison per scene, in the order the rows came."""
     out = []
-    for (dataset, tf), scene in group(rows, lambda r: (r["dataset"], r["tf"])).items():
+    for key, scene in group(rows, lambda r: (r["dataset"], r["tf"])).items():
+        dataset, tf = cast(tuple[str, str], key)  # the pair made just above
         ours = [r for r in scene if not (is_vtk(r) or is_viewer(r))]
         front = pareto_front(r for r in scene if is_vtk(r))
         viewers = equal_error((r for r in scene if is_viewer(r)), ours)
@@ -131,8 +137,10 @@ def dataset_section(dataset: str, kind: str, scenes: list[SceneComparison]) -> l
             f"At VTK's best error our best renderer takes {span} of VTK's time ({per_tf}; below 1: ours is "
             f"faster{missing}).",
         ]
-    else:
+    elif ratios:
         lines += ["", "None of our settings reaches the error of VTK's most accurate setting here."]
+    else:
+        lines += ["", "No VTK rows here (VTK was not run, or does not draw such a scene: see Refused)."]
     return lines + [""] + viewer_table(scenes)
 
 
@@ -161,6 +169,11 @@ def markdown(rows: list[Row], info: RunInfo) -> str:
     lines.append("")
     for dataset, group_scenes in group(scenes, lambda s: s.dataset).items():
         lines += dataset_section(str(dataset), str(kinds[dataset]), group_scenes)
-    if info.skipped:
-        lines += ["## Skipped", "", *(f"- {s}" for s in info.skipped), ""]
+    refused = [s for s in info.skipped if f": {REFUSED}" in s]
+    failed = [s for s in info.skipped if s not in refused]
+    if failed:
+        lines += ["## Skipped", "", *(f"- {s}" for s in failed), ""]
+    if refused:
+        lines += ["## Refused", "", "Renderers that do not draw such a scene (their capabilities); not failures.", "",
+                  *(f"- {s.replace(REFUSED, '', 1)}" for s in refused), ""]  # fmt: skip
     return "\n".join(lines)

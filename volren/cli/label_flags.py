@@ -4,6 +4,9 @@ function per label (Real-Time Volume Graphics, chapter 16).
     volren render CT.nii.gz --labels seg.nii.gz [--label-info labels.json] [--label-tf 3=bone.json ...]
                   [--hide-labels 0,7]
 
+An OME-Zarr INPUT with labels (its own label image: ``--labels image.zarr/labels/NAME``) is read
+whole at full resolution, where label images lie, instead of streamed by bricks.
+
 What they make is `volren.draw.labelled`'s (the API's too): each label in the volume's TF
 recoloured (label 0 as it is), then the label info, then the per-label TFs, then the hidden labels.
 """
@@ -20,6 +23,7 @@ from volren.model.labels import MAX_LABEL, parse_label
 if TYPE_CHECKING:
     from volren.draw import DrawInput
     from volren.model.scene import Scene
+    from volren.model.volume import UniformVolume
 
 
 def label_tf_item(text: str) -> tuple[int, str]:
@@ -53,7 +57,8 @@ def label_list(text: str) -> tuple[int, ...]:
 
 def add_label_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--labels", metavar="SEG",
-                   help="a segmentation on INPUT's grid (NIfTI, NRRD or 3D Slicer's .seg.nrrd, MetaImage, .vti, ...: "
+                   help="a segmentation on INPUT's grid (NIfTI, NRRD or 3D Slicer's .seg.nrrd, MetaImage, .vti, an OME-Zarr "
+                        "label image IMAGE.zarr/labels/NAME, ...: "
                         "whole numbers 0..65535): each label drawn with its own transfer function, by default the "
                         "volume's TF in the label's colour (label 0 as the TF is)")  # fmt: skip
     p.add_argument("--label-info", metavar="LABELS.json",
@@ -92,12 +97,26 @@ def with_label_flags(args: argparse.Namespace, scene: Scene, source: DrawInput |
     if not wants_labels(volume, scene.transfer_function, labels, args.label_info, tfs, hidden):
         return scene, source
     flag = label_flag(args) or "--labels"
-    if source.bricks:
-        raise VolrenError(
-            f"{flag}: label volumes are drawn from a volume read whole, not from an OME-Zarr image"
-        )
     if on_cluster:
         raise VolrenError(f"{flag}: label volumes are not drawn on a cluster")
-    volume, tf = labelled(volume, scene.transfer_function, labels, args.label_info, tfs, hidden, names)
+    if source.bricks:  # labels are drawn from a volume read whole: the image's full resolution
+        volume = _whole_image(args, flag)
+    volume, tf = labelled(volume, scene.transfer_function, labels, args.label_info, tfs, hidden, names)  # type: ignore[arg-type]
     scene = replace(scene, volume=volume, transfer_function=tf, labels_path=labels or scene.labels_path)
     return scene, VolumeInput(volume)
+
+
+def _whole_image(args: argparse.Namespace, flag: str) -> UniformVolume:
+    """An OME-Zarr INPUT (or its time step) read whole at full resolution, where its label images
+    lie (NGFF: a label image has its image's grid); within --memory, else one line naming `flag`."""
+    from volren.cli.time_steps import step_path
+    from volren.io.volume_io import load_ome_zarr
+
+    if args.level not in (None, 0):
+        raise VolrenError(
+            f"{flag}: labels lie on the image's full resolution; --level {args.level} does not apply"
+        )
+    try:
+        return load_ome_zarr(step_path(args), 0, args.memory)
+    except VolrenError as exc:
+        raise VolrenError(f"{flag}: {exc}") from None

@@ -22,10 +22,10 @@ from volren.cli.render_cmd import (
     check_scene_input,
     explained,
     finite_float,
-    input_series,
     quality_asked,
     settings_level,
 )
+from volren.cli.time_steps import input_series
 from volren.errors import VolrenError
 from volren.model.animation import MAX_FPS, MAX_FRAMES, MIN_FPS, Animation, check_fps, check_frames
 from volren.model.scene import Scene

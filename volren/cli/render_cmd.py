@@ -20,6 +20,7 @@ from volren.cli.cluster_frame import add_cluster_arguments, check_cluster_flag, 
 from volren.cli.label_flags import add_label_arguments, with_label_flags
 from volren.cli.raw_flags import add_raw_arguments, check_raw_flags, raw_load_arguments
 from volren.cli.stage_clock import StageClock
+from volren.cli.time_steps import step_path
 from volren.draw import Drawing, DrawInput, VolumeInput, Watch
 from volren.errors import VolrenError
 from volren.model.camera import check_zoom
@@ -199,29 +200,6 @@ def parse_options(items: list[str]) -> dict[str, Any]:
     return options
 
 
-def input_series(args: argparse.Namespace):
-    """The time series INPUT names (None: INPUT is one volume); --time-step refused without one."""
-    from volren.io.series_io import is_series, load_series
-
-    if args.input is not None and not args.raw_shape and is_series(args.input):
-        return load_series(args.input)
-    if args.time_step is not None:
-        raise VolrenError(f"--time-step applies to a time series INPUT (a .pvd, or a folder of volume files); "
-                          f"{args.input or 'the scene'} is one volume")  # fmt: skip
-    return None
-
-
-def _step_path(args: argparse.Namespace) -> str:
-    """INPUT itself, or the file of the time step asked for when INPUT is a series."""
-    series = input_series(args)
-    if series is None:
-        return args.input
-    step = 0 if args.time_step is None else args.time_step
-    if not 0 <= step < len(series):
-        raise VolrenError(f"--time-step {step}: {args.input} has steps 0 to {len(series) - 1}")
-    return str(series.steps[step])
-
-
 def _ome_zarr_image(args: argparse.Namespace, path: str) -> DrawInput | None:
     """For an OME-Zarr INPUT, the opened image (the scene is set up on its coarsest level; the
     level drawn is decided once the renderer and camera are known: `ZarrInput.frame`); the flags
@@ -260,7 +238,7 @@ def _load_input(args: argparse.Namespace, channels: Any = None) -> DrawInput:
     from volren import io
 
     kwargs: dict[str, Any] = {"scalars": args.scalars, **raw_load_arguments(args)}
-    path = _step_path(args)
+    path = step_path(args)
     pick = pick_of(args, channels)
     if pick is not None:
         from volren.draw import is_ome_zarr_path

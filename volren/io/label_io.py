@@ -4,7 +4,9 @@ A segmentation is read like any volume (`load_volume`: every grid format, its he
 one-line errors), then checked to be a label map (Real-Time Volume Graphics, chapter 16: one
 object id per voxel, never interpolated as a number): whole numbers in 0..`MAX_LABEL`, one
 component, on the intensity volume's grid. 3D Slicer's ``.seg.nrrd`` brings its segments' names,
-colours and label values in ``SegmentN_*`` header keys, which are read too.
+colours and label values in ``SegmentN_*`` header keys, which are read too, and an OME-Zarr
+image-label (``image.zarr/labels/NAME``: `volren.io.ome_zarr_labels`) its ``image-label`` colours and
+properties.
 """
 
 from __future__ import annotations
@@ -18,9 +20,11 @@ import numpy as np
 
 from volren.errors import VolrenError, file_error
 from volren.io.formats.base import read_head
+from volren.io.ome_zarr_io import is_ome_zarr
+from volren.io.ome_zarr_labels import load_label_image
 from volren.io.volume_io import load_volume
 from volren.model.labels import MAX_LABEL, LabelMap
-from volren.model.volume import UniformVolume
+from volren.model.volume import TetVolume, UniformVolume
 
 #: Spacings that differ by at most this fraction are the same (NIfTI keeps float32, other tools
 #: print six digits: 0.976562 for 0.9765625 is off by 5e-7).
@@ -41,7 +45,12 @@ def load_labels(path: str | Path, volume: UniformVolume) -> LabelMap:
     colors: dict[int, tuple[float, float, float]] = {}
     if path.is_file() and path.name.lower().endswith((".nrrd", ".nhdr")):
         names, colors = slicer_segments(path)
-    read = load_volume(path)
+    read: UniformVolume | TetVolume
+    if is_ome_zarr(path):  # an OME-Zarr label image, or the labels group (or image) that has one
+        read, names, colors, where = load_label_image(path)
+        path = Path(where)
+    else:
+        read = load_volume(path)
     if not isinstance(read, UniformVolume):
         raise file_error(path, "is a tetrahedral mesh; a label volume is a uniform grid on the volume's grid")
     if read.scalars.endswith(":magnitude"):

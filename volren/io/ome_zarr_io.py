@@ -10,8 +10,10 @@ Reading (`open_multiscale`, `load_level`): the metadata alone first; a level's v
 brick, so that a corrupt brick is a one-line error naming it. Images with time or channel axes are
 read when those axes have one entry; a channel (c) axis of several is read whole, the channels
 picked, as a multi-channel volume (`load_channels`: ``omero.channels``' colours, windows, labels
-and active flags), and refused by the bricked path, which streams one field. Local folders and fsspec URLs (http://, s3://, ...) both work:
-zarr opens either.
+and active flags), and refused by the bricked path, which streams one field. A time (t) axis of
+several is a time series (`volren.io.series_io`): each step, ``image.zarr#t=N``, reads that time
+point alone, whole or streamed, with its channels if asked. Local folders and fsspec URLs
+(http://, s3://, ...) both work: zarr opens either.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import shutil
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -138,10 +141,31 @@ def read_problem(exc: BaseException) -> str:
     return server_problem(exc) or _first_words(exc)
 
 
+#: How one time point of an image with a t axis is named: ``image.zarr#t=3`` (a time series' step).
+_TIME_POINT = re.compile(r"#t=(\d+)$")
+
+
+def split_time_point(path: str | Path) -> tuple[str, int | None]:
+    """(the image's own path, the time point named after it, or None): ``a.zarr#t=3`` is time point 3
+    of ``a.zarr``. A path that exists as written is never split (a folder may have '#' in its name)."""
+    text = str(path)
+    match = _TIME_POINT.search(text)
+    if match is None or (not is_url(text) and Path(text).exists()):
+        return text, None
+    return text[: match.start()], int(match.group(1))
+
+
+def time_point_path(path: str | Path, index: int) -> str:
+    """The name of time point `index` of the image at `path` (`split_time_point` reads it back)."""
+    return f"{split_time_point(path)[0]}#t={index}"
+
+
 def is_ome_zarr(path: str | Path) -> bool:
     """A folder (or URL) holding a Zarr group, taken as an OME-Zarr image: Zarr v2 (.zgroup or
     .zattrs) or v3 (zarr.json), or a URL naming a .zarr. One without OME metadata is then an error
-    that says so, not a DICOM folder that is not one."""
+    that says so, not a DICOM folder that is not one. ``image.zarr#t=3`` (one time point of it) is
+    one too."""
+    path = split_time_point(path)[0]
     if is_url(path):
         return str(path).rstrip("/").lower().endswith(".zarr")
     path = Path(path)
@@ -181,6 +205,10 @@ class Multiscale:
     channel_count: int = 1
     #: the group's "omero" attributes (channel colours, windows, labels), if any
     omero: Mapping[str, Any] | None = None
+    #: the time point read (on a t axis) and the times of all of them (the t axis' scale and
+    #: translation; (0.0,) without a t axis)
+    time: int = 0
+    times: tuple[float, ...] = (0.0,)
 
     def array(self, level: int) -> Any:
         """The zarr array of `level` (lazy: nothing is read until it is indexed)."""
@@ -219,7 +247,7 @@ def _axes(meta: Mapping[str, Any]) -> list[str]:
     listed = meta.get("axes", ["z", "y", "x"])
     if not isinstance(listed, list):
         raise VolrenError(f"'axes' must be a list of axes, got {_shown(listed)}")
-    axes = [a.get("name") if isinstance(a, Mapping) else a for a in listed]
+    axes: list[Any] = [a.get("name") if isinstance(a, Mapping) else a for a in listed]
     if axes[-3:] != ["z", "y", "x"]:
         raise VolrenError(f"axes {_shown(axes)}: volren reads volumes whose last three axes are z, y, x")
     return axes
@@ -289,14 +317,16 @@ def _level(where: str, dataset: Any, axes: list[str]) -> LevelInfo:
     if not all(abs(v) <= MAX_COORDINATE for v in (*translation[leading:], *ends)):
         raise VolrenError(f"level {key!r}: its scale {scale} and translation {translation} place voxels beyond "
                           f"+-{MAX_COORDINATE:g}")  # fmt: skip
-    return LevelInfo(key, shape, chunks, tuple(reversed(scale[leading:])), tuple(reversed(translation[leading:])),
-                     np.dtype(array.dtype), _number_or_zero(array.fill_value),
+    spacing, origin = (scale[-1], scale[-2], scale[-3]), (translation[-1], translation[-2], translation[-3])
+    return LevelInfo(key, shape, chunks, spacing, origin, np.dtype(array.dtype), _number_or_zero(array.fill_value),
                      tuple(int(n) for n in array.shape[:leading]))  # fmt: skip
 
 
-def _channel_count(axes: list[str], levels: Sequence[LevelInfo], channels_ok: bool) -> int:
-    """The size of the c axis (1 without one); leading axes of several entries other than c, and c
-    where channels are not asked for, refused in one line."""
+def _channel_count(
+    axes: list[str], levels: Sequence[LevelInfo], channels_ok: bool, times_ok: bool = False
+) -> int:
+    """The size of the c axis (1 without one); leading axes of several entries other than c and t, c
+    where channels are not asked for, and t where no time point is named, refused in one line."""
     lead = axes[:-3]
     first = levels[0].leading_shape
     for level in levels[1:]:
@@ -308,8 +338,10 @@ def _channel_count(axes: list[str], levels: Sequence[LevelInfo], channels_ok: bo
         if n == 1:
             continue
         if axis == "t":
-            raise VolrenError(f"axis 't' holds {n} time points; volren reads one time point of an OME-Zarr image "
-                              "(save the one to draw as its own image)")  # fmt: skip
+            if times_ok:
+                continue
+            raise VolrenError(f"axis 't' holds {n} time points; volren reads one time point at a time: open the "
+                              "image as a time series, or name one as IMAGE.zarr#t=N")  # fmt: skip
         if axis != "c":
             raise VolrenError(f"axis {axis!r} holds {n} entries; volren reads one volume of it")
         if not channels_ok:
@@ -319,11 +351,13 @@ def _channel_count(axes: list[str], levels: Sequence[LevelInfo], channels_ok: bo
     return count
 
 
-def open_multiscale(path: str | Path, channels_ok: bool = False) -> Multiscale:
+def open_multiscale(path: str | Path, channels_ok: bool = False, times_ok: bool = False) -> Multiscale:
     """The metadata of the OME-Zarr image at `path`; one-line errors name the path and the problem.
-    An image of several channels (a c axis) is refused unless `channels_ok` (`load_channels`)."""
+    An image of several channels (a c axis) is refused unless `channels_ok` (`load_channels`); one
+    of several time points (a t axis) unless `path` names one (``image.zarr#t=3``: read as a time
+    series' step, `volren.io.series_io`) or `times_ok` (its metadata only: time point 0 is read)."""
     zarr = require_zarr()
-    where = str(path)
+    where, time = split_time_point(path)
     try:
         group = zarr.open_group(where, mode="r", **_store_options(where))
         attrs = dict(group.attrs)
@@ -335,7 +369,10 @@ def open_multiscale(path: str | Path, channels_ok: bool = False) -> Multiscale:
         levels = [_level(where, dataset, axes) for dataset in datasets]
         if not levels:
             raise VolrenError("the multiscale image lists no levels")
-        count = _channel_count(axes, levels, channels_ok)
+        count = _channel_count(axes, levels, channels_ok, times_ok or time is not None)
+        times = _times(axes, levels[0], datasets[0])
+        if time is not None and time >= len(times):
+            raise VolrenError(f"no time point {time}; the image has time points 0 to {len(times) - 1}")
         ranges = _brick_ranges(attrs.get(VOLREN_KEY), levels)
         _check_chunk_files(where, levels, ranges)
     except VolrenError as exc:
@@ -349,7 +386,17 @@ def open_multiscale(path: str | Path, channels_ok: bool = False) -> Multiscale:
     shown = str(name) if isinstance(name, str | int) and str(name) else Path(where.rstrip("/")).name
     omero = attrs.get("omero") or (attrs.get("ome") or {}).get("omero")
     return Multiscale(where, shown, tuple(levels), ranges, len(axes) - 3, tuple(axes[:-3]), count,
-                      omero if isinstance(omero, Mapping) else None)  # fmt: skip
+                      omero if isinstance(omero, Mapping) else None, time or 0, times)  # fmt: skip
+
+
+def _times(axes: list[str], level: LevelInfo, dataset: Mapping[str, Any]) -> tuple[float, ...]:
+    """The time of each time point: the t axis' scale and translation of the finest level (NGFF's
+    coordinateTransformations cover every axis); (0.0,) without a t axis."""
+    if "t" not in axes[:-3]:
+        return (0.0,)
+    axis = axes.index("t")
+    scale, translation = _transforms(dataset, len(axes))
+    return tuple(translation[axis] + scale[axis] * k for k in range(level.leading_shape[axis]))
 
 
 def _brick_range(entry: Any) -> tuple[float, float] | None:
@@ -516,7 +563,10 @@ def read_brick(
         slice(k * c, min((k + 1) * c, n)) for k, c, n in zip(index, info.chunks, info.shape, strict=True)
     )
     try:
-        lead = tuple(channel if axis == "c" else 0 for axis in image.leading_axes) or (0,) * image.leading
+        lead = (
+            tuple(channel if axis == "c" else image.time if axis == "t" else 0 for axis in image.leading_axes)
+            or (0,) * image.leading
+        )
         return np.asarray(array[lead + where])
     except Exception as exc:  # noqa: BLE001 - a codec's error, whatever its type, names the brick
         key = ".".join(str(k) for k in index)

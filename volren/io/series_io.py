@@ -1,9 +1,12 @@
-"""Time series: a ParaView `.pvd` collection, or a folder of volume files, as a list of steps.
+"""Time series: a ParaView `.pvd` collection, a folder of volume files, or an OME-Zarr image's t
+axis, as a list of steps.
 
 A `.pvd` names its steps' files (relative to itself) with their times; a folder's volume files
-are its steps in natural order ("step_2" before "step_10"), at times 0, 1, 2, ... A folder of
-DICOM slices is one volume, not a series, and so is a folder with fewer than two volume files.
-Only the list is read here: each step is a volume file that `load_volume` reads when needed.
+are its steps in natural order ("step_2" before "step_10"), at times 0, 1, 2, ...; an OME-Zarr
+image's t axis gives steps ``image.zarr#t=N`` at the times its scale and translation say (local
+images; over a URL, name a time point). A folder of DICOM slices is one volume, not a series, and
+so is a folder with fewer than two volume files. Only the list is read here: each step is a volume
+file (or time point) that `load_volume` reads when needed.
 """
 
 from __future__ import annotations
@@ -49,9 +52,26 @@ def _folder_steps(folder: Path) -> list[Path]:
     )
 
 
+def _zarr_times(path: Path) -> tuple[float, ...] | None:
+    """The times of an OME-Zarr image's time points (None: not an OME-Zarr image, or one that
+    cannot be opened: reading it says why)."""
+    from volren.io.ome_zarr_io import is_ome_zarr, open_multiscale, split_time_point
+
+    if not is_ome_zarr(path) or split_time_point(path)[1] is not None:
+        return None
+    try:
+        return open_multiscale(path, channels_ok=True, times_ok=True).times
+    except VolrenError:
+        return None
+
+
 def is_series(path: str | Path) -> bool:
-    """Whether `path` is a time series: a .pvd file, or a folder with two or more volume files."""
+    """Whether `path` is a time series: a .pvd file, a folder with two or more volume files, or an
+    OME-Zarr image whose t axis holds two or more time points."""
     path = Path(path)
+    zarr_times = _zarr_times(path)
+    if zarr_times is not None:
+        return len(zarr_times) >= 2
     if path.is_file():
         return path.suffix.lower() == ".pvd"
     if path.is_dir():
@@ -103,6 +123,9 @@ def load_series(path: str | Path) -> TimeSeries:
     path = Path(path)
     if not path.exists():
         raise file_error(path, "no such file or folder")
+    zarr_times = _zarr_times(path)
+    if zarr_times is not None:
+        return _zarr_series(path, zarr_times)
     if path.is_dir():
         steps = _folder_steps(path)
         if len(steps) < 2:
@@ -123,3 +146,15 @@ def load_series(path: str | Path) -> TimeSeries:
     else:
         raise VolrenError(f"{path}: not a time series (a .pvd file, or a folder of volume files)")
     return TimeSeries(path, tuple(steps), tuple(times))
+
+
+def _zarr_series(path: Path, times: tuple[float, ...]) -> TimeSeries:
+    """An OME-Zarr image's time points as steps named ``image.zarr#t=N`` (`load_volume` reads one;
+    the image's t axis is never read whole)."""
+    from volren.io.ome_zarr_io import time_point_path
+
+    if len(times) < 2:
+        raise file_error(path, "an OME-Zarr time series needs a t axis of two or more time points")
+    if len(times) > MAX_STEPS:
+        raise file_error(path, f"{len(times):,} time points; a time series has at most {MAX_STEPS:,}")
+    return TimeSeries(path, tuple(Path(time_point_path(path, k)) for k in range(len(times))), times)
