@@ -19,6 +19,7 @@ import pytest
 from PyQt5.QtGui import QColor
 
 from tests.app.conftest import FRAME_TIMEOUT_MS
+from tests.app.renderer_picks import renderer_without
 from volren import io
 from volren.app.core.loading import LoadedInput
 from volren.app.core.tf_seeding import seeded_2d
@@ -210,10 +211,10 @@ def test_the_renderer_box_refuses_renderers_without_labels(labelled):
     window, _ = labelled
     chooser = window.renderers.chooser
     assert chooser.is_enabled("raycast") and window.state.renderer == "raycast"
-    caps = registry.capabilities("vtk")
-    reason = caps.unsupported_reason("uniform", 1, None, labels=True)
-    assert reason is not None and not chooser.is_enabled("vtk")
-    assert chooser.tooltip("vtk") == reason
+    lacking = renderer_without("labels")
+    reason = registry.capabilities(lacking).unsupported_reason("uniform", 1, None, labels=True)
+    assert reason is not None and not chooser.is_enabled(lacking)
+    assert chooser.tooltip(lacking) == reason
 
 
 def test_opening_labels_moves_off_a_renderer_that_cannot_draw_them(make_window, qtbot, files, error_boxes):
@@ -222,10 +223,11 @@ def test_opening_labels_moves_off_a_renderer_that_cannot_draw_them(make_window, 
     window.resize(700, 360)
     assert not window.labels.open_action.isEnabled()  # no volume to label yet
     loaded = LoadedInput(io.load_volume(volume_path), _tf(), source="head", volume_path=str(volume_path))
-    _frame_after(window, qtbot, lambda: window.files.apply_loaded(loaded, "vtk"))
+    lacking = renderer_without("labels")
+    _frame_after(window, qtbot, lambda: window.files.apply_loaded(loaded, lacking))
     assert window.labels.open_action.isEnabled() and not window.labels.close_action.isEnabled()
     _frame_after(window, qtbot, lambda: window.labels.open_labels(label_path), FIRST_FRAME_TIMEOUT_MS)
-    assert window.state.renderer != "vtk" and error_boxes == []
+    assert window.state.renderer != lacking and error_boxes == []
     assert registry.capabilities(window.state.renderer).kinds["uniform"].labels
 
 

@@ -24,6 +24,7 @@ the other subpackages do.
   - `overlay_geometry`: where the viewport's outline and orientation axes fall on screen.
   - `crop_handles`: the crop box's face handles on screen, which one a pixel hits, the box a
     drag makes.
+  - `label_picking`: the first visible label along a pixel's ray (Ctrl+click with labels drawn).
 - `rendering/` (Qt):
   - `render_service`: the render worker thread that owns the renderer, newest request only.
   - `scheduling`: state changes -> reduced-size and full-quality frame requests.
@@ -56,7 +57,9 @@ the other subpackages do.
   - `two_d/widget_canvas`: the widgets drawn and dragged over the joint histogram.
 - `panels/` (Qt): the settings panels (lighting, sampling, blend mode, crop box, background,
   dataset facts) and their shared base and controls; `labels`, the Labels panel: a row per label
-  of a segmentation (show, colour, name, opacity, solo).
+  of a segmentation (show, colour, name, opacity, solo; the selected label's TF is the one the 1D
+  editor edits); `channels`, the Channels panel: a row per channel of a multi-channel volume
+  (show, colour, name, weight; the selected channel's TF is the one the 1D editor edits).
 - `window/` (Qt):
   - `main_window`: `MainWindow`, which builds the parts below and wires them to the state,
     viewport, render thread, menus, toolbar and status bar.
@@ -69,7 +72,8 @@ the other subpackages do.
   - `job_progress`: the progress dialog of a screenshot or movie, with Cancel.
   - `renderer_control`: the renderer in use: chooser, fallbacks, the frame label.
   - `file_drops`: files dropped on the window open like File > Open.
-  - `docks`: places the TF editors and settings panels, and Ctrl+click picking.
+  - `docks`: places the TF editors and settings panels, and Ctrl+click picking (a 2D TF widget,
+    or with labels drawn the label seen there).
   - `quality_control`: the Quality box (the measured settings of each level).
 - `timing/` (Qt): the app timing itself for `volren bench app`:
   - `drive`: the QApplication of a measurement, waiting in its event loop, input at 60 Hz.

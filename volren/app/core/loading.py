@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 
 from volren.errors import VolrenError, file_error
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
 from volren.model.crop import Box, check_box
 from volren.model.labels import LabelTransferFunction
 from volren.model.scene import TIME_SERIES_KEY, OrbitView, Scene
@@ -168,7 +169,10 @@ def load_input(
         if _is_scene_json(p):
             return _load_scene(p, override, progress)
         return LoadedInput(None, io.load_transfer_function(p), source=p.name)
-    volume = io.load_volume(p, scalars=scalars, **dict(raw or {}))
+    if scalars is None and not raw:
+        volume = _read_with_channels(p, progress)
+    else:
+        volume = io.load_volume(p, scalars=scalars, **dict(raw or {}))
     prepare_for_rendering(volume, progress)
     if override is None:
         from volren.api import default_transfer_function
@@ -177,6 +181,36 @@ def load_input(
     return LoadedInput(
         volume, override, source=p.name or str(p), volume_path=os.path.abspath(p), scalars=scalars
     )
+
+
+def _read_with_channels(path: Path, progress: Progress) -> Volume:
+    """The volume in `path`, with every channel where it has several (an OME-Zarr image's c axis, an
+    array of several components), as napari's and OMERO's channel lists show them: each channel a
+    TF of its own (Max 1995, section 2), named, coloured and windowed as the file says
+    (`volren.io.omero_channels`). The first `MAX_CHANNELS` of an image with more, with a note."""
+    io = _io()
+    from volren.io.ome_zarr_io import is_ome_zarr, open_multiscale
+    from volren.model.channels import MAX_CHANNELS
+
+    if is_ome_zarr(path):
+        count = open_multiscale(path, channels_ok=True).channel_count
+        if count > 1:
+            pick: bool | list[int] = True if count <= MAX_CHANNELS else list(range(MAX_CHANNELS))
+            volume = io.load_volume(path, channels=pick)
+            if count > MAX_CHANNELS:
+                note = f"{path.name}: {count} channels; the first {MAX_CHANNELS} are drawn (volren --channels picks others)"
+                volume = replace(volume, notes=(*volume.notes, note))
+            return volume  # type: ignore[no-any-return]
+        return io.load_volume(path)  # type: ignore[no-any-return]
+    volume = io.load_volume(path)
+    scalars = getattr(volume, "scalars", None) or ""
+    if isinstance(volume, UniformVolume) and scalars.endswith(":magnitude"):  # an array of several components
+        progress(f"Reading the channels of {path.name}…", None)
+        try:
+            return io.load_volume(path, channels=True)  # type: ignore[no-any-return]
+        except VolrenError:  # more components than are drawn at once: the magnitude, as before
+            return volume
+    return volume  # type: ignore[no-any-return]
 
 
 def _load_scene(path: Path, override: TransferFunction | None, progress: Progress) -> LoadedInput:
@@ -188,12 +222,13 @@ def _load_scene(path: Path, override: TransferFunction | None, progress: Progres
     crop, background = _view_extras(scene.extra, path)
     progress(f"Reading {Path(scene.volume_path).name}…", None)
     try:
-        volume = io.load_volume(scene.volume_path, scene.scalars)
+        volume = io.load_volume(scene.volume_path, scene.scalars, channels=scene.channels)
     except VolrenError as exc:  # worded as volren.io.load_scene words it
         raise file_error(path, f"volume: {exc}") from None
     prepare_for_rendering(volume, progress)
     series, step = io.scene_time_series(scene) or (None, 0)
-    tf: TransferFunction = scene.transfer_function  # type: ignore[assignment]  # a TF per label: below
+    tf: TransferFunction = scene.transfer_function  # type: ignore[assignment]  # a TF per label: below; per
+    # channel: `ViewState.load` takes it for the volume's channels
     label_tf = None
     if isinstance(scene.transfer_function, LabelTransferFunction):  # over the base the 1D editor edits
         tf, label_tf = scene.transfer_function.base, scene.transfer_function
@@ -262,7 +297,7 @@ def _rgb(value: Any) -> RGB:
 
 def view_scene(
     volume_path: PathArg,
-    transfer_function: TransferFunction | LabelTransferFunction,
+    transfer_function: TransferFunction | LabelTransferFunction | ChannelTransferFunction,
     camera: Camera,
     settings: RenderSettings,
     renderer: str,
@@ -273,10 +308,12 @@ def view_scene(
     background: RGB | None = None,
     time_series: tuple[PathArg, int] | None = None,
     labels_path: PathArg | None = None,
+    channels: bool | tuple[int, ...] | None = None,
 ) -> Scene:
     """The `Scene` of what the app shows, for `volren.io.save_scene`; `load_input` reads it back
     (crop, background, the time series with its step, and the labels' file included); with labels,
-    `transfer_function` is their TF per label."""
+    `transfer_function` is their TF per label; with `channels` (the file's channels read: True for
+    all), their TF per channel."""
     extra: dict[str, Any] = {}
     if crop is not None:
         extra[CROP_KEY] = list(crop)
@@ -294,6 +331,7 @@ def view_scene(
         size=(max(1, int(size[0])), max(1, int(size[1]))),
         extra=extra,
         labels_path=os.fspath(labels_path) if labels_path is not None else None,
+        channels=channels,
     )
 
 

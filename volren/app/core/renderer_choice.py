@@ -36,11 +36,13 @@ def renderer_options(
     registry: RendererRegistry = default_registry,
     tf_dims: int = 1,
     labels: bool = False,
+    channels: bool = False,
 ) -> tuple[list[RendererOption], list[str]]:
     """Every registered renderer with why it cannot draw `volume_kind` with a `tf_dims`-D TF and
     `settings` (None: it can); with `labels`, drawn by label with a TF per label (RTVG chapter 16),
     at the settings it draws labels with (`volren.quality.label_settings`: no pre-integration
-    where it has none for labels).
+    where it has none for labels); with `channels`, mixing several channels with a TF each (Max
+    1995, section 2), without pre-integration (`volren.quality.channel_settings`).
 
     Also returns the warnings the registry raised while importing renderers (a broken plugin), so
     the app can show them instead of letting them escape; the registry reports each one once.
@@ -55,8 +57,8 @@ def renderer_options(
                     reasons[name] = None
                 except Exception as exc:  # noqa: BLE001 - any import failure disables the entry
                     reasons[name] = str(exc)
-        elif labels:
-            reasons = _label_reasons(registry, volume_kind, tf_dims, settings)
+        elif labels or channels:
+            reasons = _label_reasons(registry, volume_kind, tf_dims, settings, channels=channels)
         else:
             reasons = registry.compatible(volume_kind, tf_dims, settings)
     options = [RendererOption(name, reasons.get(name)) for name in registry.names()]
@@ -64,8 +66,12 @@ def renderer_options(
 
 
 def _label_reasons(registry: RendererRegistry, kind: str, tf_dims: int,
-                   settings: RenderSettings | None) -> dict[str, str | None]:  # fmt: skip
-    from volren.quality import label_settings
+                   settings: RenderSettings | None, channels: bool = False) -> dict[str, str | None]:  # fmt: skip
+    """Why each renderer cannot draw labels (or, with `channels`, mix channels) at the settings it
+    draws them with."""
+    from volren.quality import channel_settings, label_settings
+
+    adjust = channel_settings if channels else label_settings
 
     reasons: dict[str, str | None] = {}
     for name in registry.names():
@@ -74,8 +80,8 @@ def _label_reasons(registry: RendererRegistry, kind: str, tf_dims: int,
         except Exception as exc:  # noqa: BLE001 - any import failure disables the entry
             reasons[name] = str(exc)
             continue
-        drawn = label_settings(caps, kind, settings) if settings is not None else None
-        reasons[name] = caps.unsupported_reason(kind, tf_dims, drawn, labels=True)
+        drawn = adjust(caps, kind, settings) if settings is not None else None
+        reasons[name] = caps.unsupported_reason(kind, tf_dims, drawn, labels=not channels, channels=channels)
     return reasons
 
 

@@ -7,7 +7,13 @@ transfer-function editors all stay in step without knowing about each other.
 
 A volume with labels (a segmentation, Real-Time Volume Graphics chapter 16) is drawn with a TF per
 label whose base is the state's 1D TF, the one the 1D editor edits (`drawn_transfer_function`); its
-style edits are announced as TF changes.
+style edits are announced as TF changes. A label selected for editing (`edit_label`) has the 1D
+editor edit its own TF (`transfer_function` is then that TF; `base_transfer_function` stays the
+base); an unstyled label gets its own TF, a copy of the base, on its first edit.
+
+A volume with channels (Max 1995, section 2: several media whose extinctions and emissions add) is
+drawn with a `ChannelTransferFunction`; `transfer_function` is then the selected channel's 1D TF
+(`select_channel`), edited in place by the 1D editor like any 1D TF.
 
 Changes made while an interaction is in progress (a mouse drag in the viewport, later a drag in a
 TF editor) are flagged `interactive`: the frame scheduler answers them with cheap preview frames
@@ -24,6 +30,7 @@ from typing import Literal
 from volren.app.core.crop_handles import shown_box
 from volren.errors import VolrenError
 from volren.model.camera import Camera
+from volren.model.channels import ChannelSet, ChannelTransferFunction
 from volren.model.crop import Box, check_box, covers, crop_volume
 from volren.model.labels import LabelMap, LabelStyle, LabelTransferFunction
 from volren.model.settings import RenderSettings
@@ -93,6 +100,14 @@ class ViewState:
         self._label_tf: LabelTransferFunction | None = None  # over the 1D TF, while the volume has labels
         self._label_unhook: Callable[[], None] | None = None
         self._quiet_labels = False
+        self._quiet_channels = False
+        self._channel_tf: ChannelTransferFunction | None = None  # while the volume has channels
+        self._channel_unhook: Callable[[], None] | None = None
+        self._channel = 0  # the channel whose TF `transfer_function` is
+        self._edit_label: int | None = None  # the label whose TF the 1D editor edits (None: the base)
+        #: the edited label's own TF, or a copy of the base until its first edit
+        self._label_edit_tf: TransferFunction1D | None = None
+        self._label_edit_unhook: Callable[[], None] | None = None
         self._replaced: dict[int, TransferFunction] = {}  # by dimension: the last TF replaced by another
         self._interaction_depth = 0
         #: What is loaded, for titles and messages (a file name or "sample ...").
@@ -155,7 +170,41 @@ class ViewState:
 
     @property
     def transfer_function(self) -> TransferFunction | None:
+        """The TF the editors edit: the selected label's own TF (`edit_label`) where labels are
+        drawn, else the volume's TF (with channels, the selected channel's: `select_channel`)."""
+        if self._label_edit_tf is not None and self.labels_drawn:
+            return self._label_edit_tf
         return self._tf
+
+    @property
+    def base_transfer_function(self) -> TransferFunction | None:
+        """The volume's TF: the base of the TF per label, whichever label's TF is edited."""
+        return self._tf
+
+    @property
+    def edited_label(self) -> int | None:
+        """The label whose own TF the 1D editor edits (None: the base TF)."""
+        return self._edit_label if self._label_tf is not None else None
+
+    @property
+    def channels(self) -> ChannelSet | None:
+        """The shown volume's channels (several fields on its grid), or None."""
+        return getattr(self._volume, "channels", None)
+
+    @property
+    def channel_transfer_function(self) -> ChannelTransferFunction | None:
+        """The TF per channel (a 1D TF, weight and visibility each) while the volume has channels."""
+        return self._channel_tf if self.channels is not None else None
+
+    @property
+    def selected_channel(self) -> int:
+        """The channel whose TF `transfer_function` is (with channels)."""
+        return self._channel
+
+    @property
+    def channels_drawn(self) -> bool:
+        """Whether frames mix the channels: the volume has channels and the TF is 1D."""
+        return self.channel_transfer_function is not None and self._tf is not None and self._tf.dims == 1
 
     @property
     def labels(self) -> LabelMap | None:
@@ -175,24 +224,34 @@ class ViewState:
         return self.label_transfer_function is not None and self._tf is not None and self._tf.dims == 1
 
     @property
-    def drawn_transfer_function(self) -> TransferFunction | LabelTransferFunction | None:
-        """What frames are drawn with: the TF per label where labels are drawn, else the TF."""
-        return self._label_tf if self.labels_drawn else self._tf
+    def drawn_transfer_function(
+        self,
+    ) -> TransferFunction | LabelTransferFunction | ChannelTransferFunction | None:
+        """What frames are drawn with: the TF per label where labels are drawn, the TF per channel
+        where channels are, else the TF."""
+        if self.labels_drawn:
+            return self._label_tf
+        if self.channels_drawn:
+            return self._channel_tf
+        return self._tf
 
     def label_settings(self, renderer: str, settings: RenderSettings) -> RenderSettings:
         """`settings` as `renderer` draws this view with them: pre-integration off where labels are
         drawn and the renderer does not pre-integrate them (`volren.quality.label_settings`: a
-        pre-integration table is made for one TF, RTVG section 4.5)."""
-        if not self.labels_drawn or self._volume is None or not settings.preintegration:
+        pre-integration table is made for one TF, RTVG section 4.5); likewise where channels are
+        mixed (`volren.quality.channel_settings`)."""
+        labels, channels = self.labels_drawn, self.channels_drawn
+        if not (labels or channels) or self._volume is None or not settings.preintegration:
             return settings
-        from volren.quality import label_settings
+        from volren.quality import channel_settings, label_settings
         from volren.renderers.registry import registry
 
         try:
             capabilities = registry.capabilities(renderer)
         except Exception:  # noqa: BLE001 - a renderer that does not import is refused where it is used
             return settings
-        return label_settings(capabilities, self._volume.kind, settings)
+        adjust = label_settings if labels else channel_settings
+        return adjust(capabilities, self._volume.kind, settings)
 
     @property
     def crop(self) -> Box | None:
@@ -304,6 +363,8 @@ class ViewState:
         if background is not None:
             self._background = (float(background[0]), float(background[1]), float(background[2]))
         self._replaced = {}  # the old volume's TFs do not fit the new one
+        self._edit_label = None
+        tf = self._hook_channels(volume, tf)
         self._hook_tf(tf)
         self._hook_labels(volume, label_tf)
         self.labels_path = labels_path if self._label_tf is not None else None
@@ -321,6 +382,11 @@ class ViewState:
         the labels' styles where the step has labels too."""
         if getattr(volume, "labels", None) is None or self._label_tf is None:
             self._hook_labels(volume, None)  # else the same segmentation's styles go on
+        channels = getattr(volume, "channels", None)
+        if channels is None or self._channel_tf is None or self._channel_tf.count != channels.count:
+            tf = self._hook_channels(volume, self._channel_tf)  # else the same channels' TFs go on
+            if channels is not None and (self._tf is None or self._tf.dims == 1):
+                self._hook_tf(tf)
         self._volume = volume
         self._cropped = None
         if self._crop is not None and not self.clips():
@@ -335,6 +401,14 @@ class ViewState:
     def set_transfer_function(self, tf: TransferFunction) -> None:
         """Use another TF object; in-place edits of the current one are announced as well. The
         one replaced is remembered by its dimension (`replaced_transfer_function`)."""
+        if self._label_edit_tf is not None and self.labels_drawn and isinstance(tf, TransferFunction1D):
+            self._set_own_label_tf(tf)  # the edited label's TF replaced (a preset, a file)
+            return
+        self.set_base_transfer_function(tf)
+
+    def set_base_transfer_function(self, tf: TransferFunction) -> None:
+        """Use another TF object as the volume's TF (the base of the labels' TFs; with channels, the
+        selected channel's TF), whichever label's TF is edited: what undo puts back."""
         if self._tf is not None and self._tf is not tf:
             self._replaced[self._tf.dims] = self._tf
         self._hook_tf(tf)
@@ -344,6 +418,13 @@ class ViewState:
                 self._label_tf.set_base(tf)
             finally:
                 self._quiet_labels = False
+            self._bind_label_edit()  # an unstyled label's copy was of the old base
+        if self._channel_tf is not None and isinstance(tf, TransferFunction1D):
+            self._quiet_channels = True
+            try:
+                self._channel_tf.set_tf(self._channel, tf)
+            finally:
+                self._quiet_channels = False
         self._emit("tf")
 
     def replaced_transfer_function(self, dims: int) -> TransferFunction | None:
@@ -375,6 +456,126 @@ class ViewState:
             label_tf = LabelTransferFunction(base, label_tf.styles, label_tf.default)
         self._label_tf = label_tf
         self._label_unhook = label_tf.on_change(lambda _tf: None if self._quiet_labels else self._emit("tf"))
+        if self._edit_label not in labels.present:
+            self._edit_label = None
+        self._bind_label_edit()
+
+    # ------------------------------------------------------------------ a label's own TF
+    def edit_label(self, label: int | None) -> None:
+        """Have the 1D editor edit `label`'s own TF (None: the base TF): the label's own TF where it
+        has one, else a copy of the base that becomes its own on the first edit (RTVG chapter 16: a
+        TF per object). Nothing happens without labels."""
+        labels = self.labels
+        if self._label_tf is None or labels is None or label not in labels.present:
+            label = None
+        if label == self._edit_label:
+            return
+        self._edit_label = label
+        self._bind_label_edit()
+        self._emit("tf")
+
+    def _bind_label_edit(self) -> None:
+        """Follow the edited label's TF: its own, or a fresh copy of the base."""
+        if self._label_edit_unhook is not None:
+            self._label_edit_unhook()
+            self._label_edit_unhook = None
+        self._label_edit_tf = None
+        label, label_tf = self._edit_label, self._label_tf
+        if label is None or label_tf is None:
+            self._edit_label = None
+            return
+        tf = label_tf.style(label).tf or label_tf.base.copy()
+        self._label_edit_tf = tf
+        self._label_edit_unhook = tf.on_change(self._label_tf_edited)
+
+    def _label_tf_edited(self, tf: object) -> None:
+        """An edit of the edited label's TF in place: the first one makes it the label's own."""
+        label_tf, label = self._label_tf, self._edit_label
+        if label_tf is None or label is None or not isinstance(tf, TransferFunction1D):
+            return
+        style = label_tf.style(label)
+        if style.tf is not tf:
+            label_tf.set_style(label, replace(style, tf=tf))  # announced by its hook
+        else:
+            self._emit("tf")  # the label TF's `state` follows its own TFs' versions
+
+    def _set_own_label_tf(self, tf: TransferFunction1D) -> None:
+        label_tf, label = self._label_tf, self._edit_label
+        assert label_tf is not None and label is not None
+        self._quiet_labels = True  # announced once, below, with the editor's TF already the new one
+        try:
+            label_tf.set_style(label, replace(label_tf.style(label), tf=tf))
+        finally:
+            self._quiet_labels = False
+        self._bind_label_edit()
+        self._emit("tf")
+
+    # ------------------------------------------------------------------ channels
+    def _hook_channels(self, volume: Volume, tf: object) -> TransferFunction:
+        """Draw `volume`'s channels (if any) with `tf` when it is a TF per channel for them, else
+        with their default look (`channel_io.default_channel_tf`); returns the TF the 1D editor
+        edits: the first shown channel's (or `tf` itself without channels)."""
+        if self._channel_unhook is not None:
+            self._channel_unhook()
+            self._channel_unhook = None
+        self._channel_tf = None
+        channels = getattr(volume, "channels", None)
+        if channels is None:
+            if isinstance(tf, ChannelTransferFunction):
+                return tf.tfs[0]
+            return tf  # type: ignore[return-value]
+        from volren.io.channel_io import default_channel_tf
+
+        if not isinstance(tf, ChannelTransferFunction) or tf.count != channels.count:
+            tf = default_channel_tf(channels)
+        self._channel_tf = tf
+        self._channel = next((c for c, shown in enumerate(tf.visible) if shown), 0)
+        self._channel_unhook = tf.on_change(self._channels_edited)
+        return tf.tfs[self._channel]
+
+    def _channels_edited(self, ctf: object) -> None:
+        """A weight, a visibility or a channel's TF changed; a replaced TF of the selected channel is
+        the one the editor edits from now on."""
+        assert isinstance(ctf, ChannelTransferFunction)
+        if self._tf is not None and self._tf.dims == 1 and ctf.tfs[self._channel] is not self._tf:
+            self._hook_tf(ctf.tfs[self._channel])
+        if not self._quiet_channels:
+            self._emit("tf")
+
+    def select_channel(self, channel: int) -> None:
+        """Have the 1D editor edit channel `channel`'s TF (its histogram shown)."""
+        ctf = self.channel_transfer_function
+        if ctf is None:
+            return
+        if not 0 <= channel < ctf.count:
+            raise VolrenError(f"channel {channel} is not one of 0..{ctf.count - 1}")
+        if channel == self._channel:
+            return
+        self._channel = channel
+        if self._tf is None or self._tf.dims == 1:
+            self._hook_tf(ctf.tfs[channel])
+        self._emit("tf")
+
+    def set_channel_transfer_function(self, ctf: ChannelTransferFunction) -> None:
+        """Draw the channels with `ctf` (what undo puts back); the selected channel stays selected."""
+        channels = self.channels
+        if channels is None or self._volume is None:
+            return
+        if ctf.count != channels.count:
+            raise VolrenError(f"the transfer function has {ctf.count} channels, the volume {channels.count}")
+        if (
+            self.channels_drawn
+            and self._channel_tf is not None
+            and ctf.to_dict() == self._channel_tf.to_dict()
+        ):
+            return
+        channel = self._channel
+        self._hook_channels(self._volume, ctf)
+        self._channel = min(channel, ctf.count - 1)
+        if self._tf is not None and self._tf.dims != 1:  # back from a 2D TF: it is remembered
+            self._replaced[self._tf.dims] = self._tf
+        self._hook_tf(ctf.tfs[self._channel])
+        self._emit("tf")
 
     def set_labels(self, labels: LabelMap | None, label_tf: LabelTransferFunction | None = None,
                    path: str | None = None) -> None:  # fmt: skip
@@ -386,7 +587,12 @@ class ViewState:
             raise VolrenError("labels are for uniform grids: open a uniform volume first")
         if labels is not None:
             labels.check_grid(volume.values.shape, volume.name)
+            if volume.channels is not None:
+                raise VolrenError(
+                    f"{volume.name}: a volume is drawn with labels or with channels, not both at once yet"
+                )
         volume = replace(volume, labels=labels)
+        self._edit_label = None
         self._hook_labels(volume, label_tf)
         self.labels_path = path if labels is not None else None
         self._volume = volume

@@ -8,6 +8,7 @@ echoing them back, and changes it only through its setters. The window decides w
 from volren.app.panels.background import BackgroundPanel
 from volren.app.panels.base import StatePanel
 from volren.app.panels.blend import BlendPanel
+from volren.app.panels.channels import ChannelsPanel
 from volren.app.panels.clipping import ClippingPanel
 from volren.app.panels.crop import CropPanel
 from volren.app.panels.dataset_info import DatasetInfoPanel, volume_facts
@@ -18,6 +19,7 @@ from volren.app.panels.sampling import SamplingPanel
 __all__ = [
     "BackgroundPanel",
     "BlendPanel",
+    "ChannelsPanel",
     "ClippingPanel",
     "CropPanel",
     "DatasetInfoPanel",

@@ -4,7 +4,10 @@ Each row shows a label's name and edits its `LabelStyle` (Real-Time Volume Graph
 transfer function per object): shown or hidden, its colour (in place of the 1D TF's colours), and
 its opacity scale over the 1D TF's opacity. "Solo" shows one label alone; turning it off brings
 back the visibility the labels had before. Edits go through `LabelTransferFunction.set_style(s)`,
-so the frame follows like any TF edit. The colour dialog is opened through `choose_color` alone, so
+so the frame follows like any TF edit. Selecting a row has the 1D editor edit that label's own TF
+(`ViewState.edit_label`: an unstyled label gets its own on the first edit, a copy of the base TF);
+"Edit base TF" goes back to the TF every label without its own draws with. A Ctrl+click on the
+view selects the label seen there (`select_label`). The colour dialog is opened through `choose_color` alone, so
 tests replace one method instead of a modal dialog.
 """
 
@@ -66,10 +69,18 @@ class LabelsPanel(StatePanel):
         for column in range(len(COLUMNS)):
             header.setSectionResizeMode(column, QHeaderView.ResizeToContents)
         header.setSectionResizeMode(NAME, QHeaderView.Stretch)
+        self.table.currentCellChanged.connect(lambda row, *_: self._row_selected(row))
+        self.editing = QLabel(self)
+        self.editing.setWordWrap(True)
+        self.base_button = QPushButton("Edit base TF", self)
+        self.base_button.setToolTip("Have the 1D editor edit the TF that labels without their own draw with")
+        self.base_button.clicked.connect(self.edit_base)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addWidget(self.note)
         layout.addWidget(self.table)
+        layout.addWidget(self.editing)
+        layout.addWidget(self.base_button)
         self._labels: tuple[int, ...] = ()  # the label of each row
         self._before_solo: dict[int, bool] | None = None  # visibility before a label was soloed
         self._solo: int | None = None
@@ -116,10 +127,27 @@ class LabelsPanel(StatePanel):
         present = labels.present if labels is not None else ()
         if present != self._labels:
             self._rebuild(present)
+        edited = state.edited_label
+        with signals_blocked(self.table):
+            if edited is None:
+                self.table.setCurrentCell(-1, -1)
+            else:
+                self.table.setCurrentCell(self.row_of(edited), NAME)
+        self.base_button.setEnabled(edited is not None)
         if labels is None or label_tf is None:
             self.note.setText(NO_LABELS)
             self.note.show()
+            self.editing.hide()
             return
+        self.editing.show()
+        if edited is None:
+            self.editing.setText("The 1D editor edits the base TF (select a label to edit its own)")
+        elif label_tf.style(edited).tf is None:
+            self.editing.setText(
+                f"The 1D editor edits {labels.label_name(edited)}: its own TF from the first edit"
+            )
+        else:
+            self.editing.setText(f"The 1D editor edits {labels.label_name(edited)}'s own TF")
         if state.labels_drawn:
             self.note.hide()
         else:
@@ -151,7 +179,8 @@ class LabelsPanel(StatePanel):
         """One row per label, for another label map (solo forgotten: it belonged to the old one)."""
         self._labels = present
         self._solo, self._before_solo = None, None
-        self.table.setRowCount(len(present))
+        with signals_blocked(self.table):
+            self.table.setRowCount(len(present))
         for row, label in enumerate(present):
             check = QCheckBox(self.table)
             check.setToolTip(f"Draw label {label}")
@@ -175,6 +204,19 @@ class LabelsPanel(StatePanel):
             self.table.setItem(row, NAME, name)
             for column, widget in ((SHOW, check), (COLOUR, button), (OPACITY, spin), (SOLO, solo)):
                 self.table.setCellWidget(row, column, widget)
+
+    # ------------------------------------------------------------------ selection
+    def _row_selected(self, row: int) -> None:
+        self.state.edit_label(self._labels[row] if 0 <= row < len(self._labels) else None)
+
+    def select_label(self, label: int) -> None:
+        """Select `label`'s row: the 1D editor edits its TF (a pick in the view)."""
+        if label in self._labels:
+            self.table.setCurrentCell(self.row_of(label), NAME)
+
+    def edit_base(self) -> None:
+        """No label selected: the 1D editor edits the base TF."""
+        self.state.edit_label(None)
 
     # ------------------------------------------------------------------ edits
     def _edit(self, label: int, **fields: object) -> None:

@@ -11,7 +11,7 @@ always belongs to the latest camera, and the GUI never waits for the renderer.
 
 The transfer function is the one mutable input; each request carries a private copy made on the
 GUI thread, keyed by (identity, version) of the original so the renderer is updated only when the
-TF actually changed (`tf_key`: a TF per label also by its base TF's, which is edited in place).
+TF actually changed (`tf_key`: a TF per label or per channel also by the 1D TFs in it, edited in place).
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from PyQt5.QtCore import QObject, QThread, pyqtSignal, pyqtSlot
 
 from volren.io.image_io import to_png_pixels
 from volren.model.camera import Camera
+from volren.model.channels import ChannelTransferFunction
 from volren.model.labels import LabelTransferFunction
 from volren.model.settings import RenderSettings
 from volren.model.transfer_function_2d import TransferFunction
@@ -37,15 +38,18 @@ from volren.renderers.base import Renderer, render_frame
 
 #: What tells one state of a TF from another: its identity and version(s).
 TFKey = tuple[int, ...]
-#: A TF a frame is drawn with: 1D, 2D, or one per label (RTVG chapter 16).
-DrawnTF = TransferFunction | LabelTransferFunction
+#: A TF a frame is drawn with: 1D, 2D, one per label (RTVG chapter 16) or one per channel (Max 1995).
+DrawnTF = TransferFunction | LabelTransferFunction | ChannelTransferFunction
 
 
 def tf_key(tf: DrawnTF) -> TFKey:
-    """(identity, version) of `tf`; for a TF per label also its base TF's, which the 1D editor
-    edits in place without changing the label TF's own version."""
+    """(identity, version) of `tf`; for a TF per label also its base TF's and its labels' own TFs'
+    (`LabelTransferFunction.state`), and for a TF per channel each channel's TF's: the 1D editor
+    edits those in place without changing the combined TF's own version."""
     if isinstance(tf, LabelTransferFunction):
-        return (id(tf), tf.version, id(tf.base), tf.base.version)
+        return (id(tf), id(tf.base), *tf.state())
+    if isinstance(tf, ChannelTransferFunction):
+        return (id(tf), tf.version, *(n for channel in tf.tfs for n in (id(channel), channel.version)))
     return (id(tf), tf.version)
 
 

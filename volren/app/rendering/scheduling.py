@@ -97,7 +97,7 @@ class FrameScheduler(QObject):
     def _on_change(self, change: Change) -> None:
         tf = self._state.transfer_function
         dims = tf.dims if tf is not None else self._tf_dims
-        labels = self._state.labels_drawn
+        labels = self._state.labels_drawn or self._state.channels_drawn
         if (dims != self._tf_dims or labels != self._labels_drawn) and not change.interactive:
             # a 1D TF turned 2D (or back), or labels came or went: the renderer control may move to
             # another renderer (one that draws labels) or drop pre-integration in the listeners after
@@ -163,7 +163,8 @@ class FrameScheduler(QObject):
             if self._registry is not None else [s.renderer]  # fmt: skip
         refused = self._refusing_the_view(names)
         # the kind (with the TF's class) and the renderers refusing this view compared by value
-        inputs = (s.renderer, kind, s.settings, dragged, dims, refused, s.crop is not None, s.labels_drawn)
+        inputs = (s.renderer, kind, s.settings, dragged, dims, refused, s.crop is not None, s.labels_drawn,
+                  s.channels_drawn)  # fmt: skip
         if self._preview is None or any(
             a is not b and not (isinstance(a, str | frozenset | bool) and a == b)
             for a, b in zip(self._preview[0], inputs, strict=True)
@@ -173,6 +174,8 @@ class FrameScheduler(QObject):
                 usable = [n for n in usable if s.clips(n)]
             if s.labels_drawn:  # previews by label too (RTVG chapter 16), not of the unlabelled volume
                 usable = [n for n in usable if n == s.renderer or self._draws_labels(n)]
+            if s.channels_drawn:  # previews mix the channels too
+                usable = [n for n in usable if n == s.renderer or self._draws_labels(n, "channels")]
             self._preview = (
                 inputs,
                 preview_choice(s.renderer, kind, dims, s.settings, usable, self._capabilities, dragged),
@@ -209,11 +212,12 @@ class FrameScheduler(QObject):
         self._last_full = None
         self.request_full()
 
-    def _draws_labels(self, name: str) -> bool:
-        """Whether renderer `name` draws the shown volume's labels (`KindSupport.labels`)."""
+    def _draws_labels(self, name: str, what: str = "labels") -> bool:
+        """Whether renderer `name` draws the shown volume's labels (`KindSupport.labels`; `what`
+        "channels": mixes its channels, `KindSupport.channels`)."""
         caps, volume = self._capabilities(name), self._state.volume
         support = caps.kinds.get(volume.kind) if caps is not None and volume is not None else None  # type: ignore[call-overload]
-        return bool(support is not None and support.labels)
+        return bool(support is not None and getattr(support, what))
 
     def _capabilities(self, name: str) -> Capabilities | None:
         if self._registry is None:

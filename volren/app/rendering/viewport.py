@@ -105,7 +105,8 @@ class Viewport(QWidget):
         self.setMinimumSize(64, 64)
         self.setToolTip(
             "Left-drag: rotate; right-drag or wheel: zoom; middle-drag: pan; R: reset view; "
-            "Ctrl+click: place a 2D transfer-function widget at that point; with View > Edit crop box, "
+            "Ctrl+click: place a 2D transfer-function widget at that point (with labels drawn: select the "
+            "label seen there); with View > Edit crop box, "
             "drag a face's handle to crop"
         )
 

@@ -7,7 +7,10 @@ undo for free, a drag is one undo step, and an edit that changes nothing records
 Undo puts a fresh TF object built from the JSON into the state (editors follow the state).
 A new volume starts a new history: the old TFs belong to the old data range. With labels shown,
 their styles (Real-Time Volume Graphics, chapter 16: a TF per label over the 1D TF) are part of
-what is recorded, so the Labels panel's edits undo as TF edits do.
+what is recorded, so the Labels panel's edits undo as TF edits do, and so are the labels' own TFs
+(the 1D editor edits the selected label's). With channels mixed (Max 1995, section 2), what is
+recorded is the whole TF per channel (every channel's TF, weight and visibility), so the Channels
+panel's edits undo too, and selecting another channel to edit records nothing.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from PyQt5.QtCore import QObject
 from PyQt5.QtWidgets import QUndoCommand, QUndoStack
 
 from volren.app.core.state import Change, ViewState
+from volren.model.channels import ChannelTransferFunction
 from volren.model.labels import LabelStyle
 from volren.model.transfer_function_2d import transfer_function_from_dict
 
@@ -27,7 +31,10 @@ LABELS_KEY = "label_styles"
 
 
 def _snapshot(state: ViewState) -> dict[str, Any] | None:
-    tf = state.transfer_function
+    channel_tf = state.channel_transfer_function
+    if channel_tf is not None and state.channels_drawn:
+        return channel_tf.to_dict()
+    tf = state.base_transfer_function
     if tf is None:
         return None
     data = tf.to_dict()
@@ -102,8 +109,12 @@ class TFHistory(QObject):
     def _apply(self, data: dict[str, Any]) -> None:
         self._applying = True
         try:
+            if data.get("kind") == "channels":
+                self.state.set_channel_transfer_function(ChannelTransferFunction.from_dict(data))
+                self._recorded = data
+                return
             tf = {k: v for k, v in data.items() if k != LABELS_KEY}
-            self.state.set_transfer_function(transfer_function_from_dict(tf))
+            self.state.set_base_transfer_function(transfer_function_from_dict(tf))
             labels = data.get(LABELS_KEY)
             if labels is not None:
                 styles = {int(k): LabelStyle.from_dict(v, f"label {k}") for k, v in labels["labels"].items()}

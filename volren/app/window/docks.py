@@ -2,9 +2,11 @@
 
 Right: the transfer-function editors (1D and 2D, with undo and redo). Left: the rendering
 settings (lighting, sampling, blend mode, crop box, background) and, tabbed with them, the dataset
-facts and the labels of a segmentation (`panels.labels`). Every panel edits the window's `ViewState`; this module only places them, forwards their
+facts, the labels of a segmentation (`panels.labels`) and the channels of a multi-channel volume
+(`panels.channels`). Every panel edits the window's `ViewState`; this module only places them, forwards their
 errors to the window's one-line reporter, tells the settings panels what the current renderer can
-do, and turns a Ctrl+click on the volume into a 2D TF widget at the picked value and gradient.
+do, and turns a Ctrl+click on the volume into a 2D TF widget at the picked value and gradient, or,
+with labels drawn, into the selection of the label seen there (`core.label_picking`).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from volren.app.core.state import Change, ViewState
 from volren.app.panels import (
     BackgroundPanel,
     BlendPanel,
+    ChannelsPanel,
     ClippingPanel,
     CropPanel,
     DatasetInfoPanel,
@@ -40,6 +43,7 @@ from volren.app.tf_editor.panel import TransferFunctionPanel
 from volren.app.window.field_undo import FieldUndoKeys, set_undo_shortcuts
 from volren.app.window.file_actions import FileActions
 from volren.model.labels import LabelMap
+from volren.model.volume import UniformVolume
 from volren.renderers.base import KindSupport
 from volren.renderers.registry import RendererRegistry
 
@@ -107,6 +111,7 @@ class Docks:
         self.background = BackgroundPanel(state)
         self.dataset = DatasetInfoPanel(state)
         self.labels = LabelsPanel(state)
+        self.channels = ChannelsPanel(state)
         self.dataset.arrayChosen.connect(window.files.show_array)
 
         self.tf_dock = self._dock(
@@ -133,7 +138,10 @@ class Docks:
         )
         self.labels_dock = self._dock("Labels", "labels-dock", self.labels, Qt.LeftDockWidgetArea)
         window.tabifyDockWidget(self.settings_dock, self.dataset_dock)
+        self.channels_dock = self._dock("Channels", "channels-dock", self.channels, Qt.LeftDockWidgetArea)
         window.tabifyDockWidget(self.dataset_dock, self.labels_dock)
+        window.tabifyDockWidget(self.labels_dock, self.channels_dock)
+        self.channels_dock.hide()  # shown when a volume with channels opens (View menu: any time)
         self.settings_dock.raise_()
 
         self.undo_action = self.history.stack.createUndoAction(window, "&Undo")
@@ -141,12 +149,20 @@ class Docks:
         set_undo_shortcuts(self.undo_action, self.redo_action)
         #: Ctrl+Z in a number field undoes the app's edit once the value typed is entered.
         self.field_undo = FieldUndoKeys(self.undo_action, self.redo_action, window)
-        self.field_undo.watch((self.tf_dock, self.settings_dock, self.dataset_dock, self.labels_dock))
+        self.field_undo.watch(
+            (self.tf_dock, self.settings_dock, self.dataset_dock, self.labels_dock, self.channels_dock)
+        )
         edit_menu = window.menuBar().addMenu("&Edit")
         edit_menu.addAction(self.undo_action)
         edit_menu.addAction(self.redo_action)
         window.view_menu.addSeparator()
-        for dock in (self.tf_dock, self.settings_dock, self.dataset_dock, self.labels_dock):
+        for dock in (
+            self.tf_dock,
+            self.settings_dock,
+            self.dataset_dock,
+            self.labels_dock,
+            self.channels_dock,
+        ):
             window.view_menu.addAction(dock.toggleViewAction())
 
         for source in (self.tf_panel, self.crop):
@@ -155,6 +171,7 @@ class Docks:
         self._unsubscribe = state.subscribe(self._on_change)
         self._shown_tf_dims = 1
         self._shown_labels: LabelMap | None = None
+        self._shown_channels: object = None
         self._update_capabilities()
 
     def _dock(self, title: str, name: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
@@ -213,6 +230,11 @@ class Docks:
                 self.labels_dock.show()
                 self.labels_dock.raise_()
             self._shown_labels = labels
+            channels = self.window.state.channels
+            if channels is not None and channels is not self._shown_channels:  # their list in front
+                self.channels_dock.show()
+                self.channels_dock.raise_()
+            self._shown_channels = channels
 
     def current_support(self) -> KindSupport | None:
         """What the current renderer can do with the loaded volume (None: unknown, allow all)."""
@@ -232,12 +254,16 @@ class Docks:
 
     # ------------------------------------------------------------------ picking
     def pick(self, x: int, y: int) -> None:
-        """Ctrl+click on the volume: a 2D TF widget at the value and gradient seen there."""
+        """Ctrl+click on the volume: a 2D TF widget at the value and gradient seen there; with labels
+        drawn, the label seen there selected in the Labels panel (`pick_label`)."""
         from volren.app.core.picking import pick
 
         window, state = self.window, self.window.state
         frame = window.viewport.frame
         if state.volume is None or state.transfer_function is None or state.camera is None or frame is None:
+            return
+        if state.labels_drawn:
+            self.pick_label(x, y)
             return
         if state.transfer_function.dims != 2:
             window.statusBar().showMessage(
@@ -257,6 +283,30 @@ class Docks:
         window.statusBar().showMessage(
             f"Widget placed at value {hit.value:.4g}, gradient magnitude {hit.gradient_magnitude:.4g}", 8000
         )
+
+    def pick_label(self, x: int, y: int) -> None:
+        """Select the first visible label along the ray through pixel (x, y) in the Labels panel."""
+        from volren.app.core.label_picking import pick_label
+
+        window, state = self.window, self.window.state
+        volume, label_tf, camera = state.render_volume, state.label_transfer_function, state.camera
+        if not isinstance(volume, UniformVolume) or label_tf is None or camera is None:
+            return
+        width, height = window.viewport.pixel_size()
+        try:
+            hit = pick_label(volume, label_tf, camera, x, y, width, height)
+        except Exception as exc:  # noqa: BLE001 - picking must never take the app down
+            window.report_error("Cannot pick", f"picking a label failed: {exc}")
+            return
+        if hit is None:
+            window.statusBar().showMessage("No label drawn there", 5000)
+            return
+        self.labels.select_label(hit.label)
+        self.labels_dock.show()
+        self.labels_dock.raise_()
+        labels = state.labels
+        name = labels.label_name(hit.label) if labels is not None else str(hit.label)
+        window.statusBar().showMessage(f"Picked {name} (label {hit.label}): the 1D editor edits its TF", 8000)
 
     def detach(self) -> None:
         self._unsubscribe()

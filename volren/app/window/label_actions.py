@@ -89,15 +89,20 @@ class LabelActions(QObject):
     def _on_change(self, change: Change) -> None:
         if change.what != "volume":
             return
-        self.open_action.setEnabled(isinstance(self._state.volume, UniformVolume))
+        volume = self._state.volume  # labels or channels, not both at once yet
+        self.open_action.setEnabled(isinstance(volume, UniformVolume) and volume.channels is None)
         self.close_action.setEnabled(self._state.labels is not None)
 
     def open_labels(self, path: PathArg) -> bool:
         """Read the segmentation in `path` in the background; it is shown when read. False (and a
         one-line error) when no uniform volume is shown."""
-        volume, tf = self._state.volume, self._state.transfer_function
+        volume, tf = self._state.volume, self._state.base_transfer_function
         if not isinstance(volume, UniformVolume):
             self._report_error("Cannot open labels", f"{path}: labels need a uniform volume: open one first")
+            return False
+        if volume.channels is not None:
+            self._report_error("Cannot open labels", f"{path}: a volume is drawn with labels or with channels, "
+                               "not both at once yet")  # fmt: skip
             return False
         base = tf.copy() if isinstance(tf, TransferFunction1D) else default_transfer_function(volume)
         self._status(f"Reading labels {Path(path).name}…", 0)

@@ -96,7 +96,7 @@ class RendererControl:
         volume, tf = self._state.volume, self._state.transfer_function
         dims = tf.dims if tf is not None else 1
         return renderer_options(volume.kind if volume else None, self._state.settings, self._registry, dims,
-                                labels=self._state.labels_drawn)  # fmt: skip
+                                labels=self._state.labels_drawn, channels=self._state.channels_drawn)  # fmt: skip
 
     def refresh(self) -> None:
         """List the renderers again (after a change, or plugins registered later)."""
@@ -121,7 +121,9 @@ class RendererControl:
         memory of the last failure, so it is reported again.
         """
         labels = getattr(volume, "labels", None) is not None and tf.dims == 1
-        options, notes = renderer_options(volume.kind, settings, self._registry, tf.dims, labels=labels)
+        channels = getattr(volume, "channels", None) is not None and tf.dims == 1
+        options, notes = renderer_options(volume.kind, settings, self._registry, tf.dims, labels=labels,
+                                          channels=channels)  # fmt: skip
         self.auto = wanted == AUTO
         if wanted == AUTO:  # the fastest measured renderer that draws this (volren.quality)
             drawable = {o.name for o in options if o.reason is None}
@@ -192,7 +194,7 @@ class RendererControl:
         if chosen is None:  # a level's setting no renderer has for this TF (pre-integration of a 2D TF)
             plain = state.settings.with_(preintegration=False)
             plain_options = renderer_options(volume.kind, plain, self._registry, tf.dims,
-                                             labels=state.labels_drawn)[0]  # fmt: skip
+                                             labels=state.labels_drawn, channels=state.channels_drawn)[0]  # fmt: skip
             chosen = pick_renderer(plain_options, state.renderer, self._measured(volume, tf, plain))
         if chosen is None:
             return

@@ -79,7 +79,8 @@ class SceneActions:
             labels_path = None
             if label_tf is not None:
                 labels_path = s.labels_path or self._write_labels_beside(Path(path))
-            drawn = label_tf if label_tf is not None and s.labels_drawn else s.transfer_function
+            drawn = s.drawn_transfer_function  # a TF per label or per channel where they are drawn
+            assert drawn is not None
             scene = view_scene(
                 volume_path,
                 drawn,
@@ -92,6 +93,7 @@ class SceneActions:
                 background=s.background,
                 time_series=self._series_step(),
                 labels_path=labels_path,
+                channels=_channel_pick(s),
             )
             io.save_scene(scene, path)
         except (VolrenError, OSError) as exc:
@@ -147,3 +149,13 @@ class SceneActions:
         path, _ = QFileDialog.getSaveFileName(self._window, "Save scene", self.suggested_path(), SCENE_FILTER)
         if path:
             self.save(path if Path(path).suffix else path + ".json")
+
+
+def _channel_pick(state: ViewState) -> bool | tuple[int, ...] | None:
+    """The channels of the file shown, as a scene names them: True for every one, else the file's
+    channel numbers (`PickedChannels.indices`); None without channels."""
+    channels = state.channels
+    if channels is None:
+        return None
+    indices = tuple(getattr(channels, "indices", range(channels.count)))
+    return True if indices == tuple(range(channels.count)) else indices

@@ -61,7 +61,7 @@ from volren.errors import VolrenError
 from volren.model.transfer_function import TransferFunction1D
 from volren.model.transfer_function_2d import TransferFunction
 from volren.model.value_histogram import DEFAULT_BINS, Histogram, compute_histogram
-from volren.model.volume import Volume
+from volren.model.volume import UniformVolume, Volume
 
 TF_FILTER = "Transfer functions: volren or ParaView preset JSON (*.json);;All files (*)"
 PRESET_PLACEHOLDER = "Colour map…"
@@ -130,6 +130,9 @@ class TransferFunction1DEditor(QWidget):
         self._shown_tf: TransferFunction | None = None
         self._last_folder = ""
         self._histograms = BackgroundHistogram(self)
+        #: (id of the channels, channel) -> a volume of that channel's values
+        self._channel_volumes: dict[tuple[int, int], Volume] = {}
+        self._shown_data: Volume | None = None
         self._histograms.ready.connect(self._histogram_ready)
         self._build()
         self._unsubscribe = subscribe_while_alive(state, self, "_on_state_change")
@@ -297,10 +300,31 @@ class TransferFunction1DEditor(QWidget):
             self._set_volume()
             self.refresh()
         elif change.what == "tf" or (change.what == "interaction" and not change.interactive):
+            if self.data_volume() is not self._shown_data:  # another channel selected: its histogram
+                self._set_volume()
             self.refresh()
 
+    def data_volume(self) -> Volume | None:
+        """The field the edited TF classifies: the volume's, or with channels the selected channel's
+        (a volume of its values, made once per channel), whose histogram and range are shown."""
+        volume, channels = self._state.volume, self._state.channels
+        if channels is None or volume is None:
+            self._channel_volumes.clear()
+            return volume
+        key = (id(channels), self._state.selected_channel)
+        found = self._channel_volumes.get(key)
+        if found is None:
+            if any(k[0] != key[0] for k in self._channel_volumes):
+                self._channel_volumes.clear()  # another volume's channels
+            c = key[1]
+            found = UniformVolume(channels.values[c], volume.spacing, volume.origin,  # type: ignore[union-attr]
+                                  name=f"{volume.name} {channels.names[c]}")  # fmt: skip
+            self._channel_volumes[key] = found
+        return found
+
     def _set_volume(self) -> None:
-        volume = self._state.volume
+        volume = self.data_volume()
+        self._shown_data = volume
         self._zoom = None  # another data range: start from all of it
         self._zoom_histogram = None
         self._rebin_timer.stop()
@@ -310,7 +334,7 @@ class TransferFunction1DEditor(QWidget):
     def _histogram_ready(self, volume: Volume, histogram: Histogram) -> None:
         """A large volume's histogram, computed in the background (`BackgroundHistogram`), shown
         unless another volume or a zoomed view came meanwhile."""
-        if volume is self._state.volume and self._zoom is None:
+        if volume is self.data_volume() and self._zoom is None:
             self.curve.set_histogram(histogram)
 
     def _refresh_tissue_presets(self, volume) -> None:
@@ -330,7 +354,7 @@ class TransferFunction1DEditor(QWidget):
     def refresh(self) -> None:
         """Show the state's TF as it is now (it may be another object than last time)."""
         tf = self._state.transfer_function
-        volume = self._state.volume
+        volume = self.data_volume()
         replaced = tf is not self._shown_tf
         self._shown_tf = tf
         if not self._shifting and not self._left_by_slider(tf):  # edited otherwise: the slider starts again
@@ -442,7 +466,7 @@ class TransferFunction1DEditor(QWidget):
 
     def _show_histogram_for(self, view: ValueAxis) -> None:
         """The histogram for a new view: one that covers it at once, finer bins once it rests."""
-        volume = self._state.volume
+        volume = self.data_volume()
         if volume is None:
             return
         if self._zoom is None:
@@ -457,7 +481,7 @@ class TransferFunction1DEditor(QWidget):
     def update_histogram(self) -> None:
         """The histogram over the view: the volume's (cached) unzoomed, else binned over the view."""
         self._rebin_timer.stop()
-        volume = self._state.volume
+        volume = self.data_volume()
         if volume is None:
             self.curve.set_histogram(None)
             return
@@ -503,7 +527,7 @@ class TransferFunction1DEditor(QWidget):
 
     def shift_step(self) -> float:
         """The value one step of the shift slider moves the TF: a thousandth of the data range."""
-        volume = self._state.volume
+        volume = self.data_volume()
         if volume is None:
             return 0.0
         lo, hi = volume.value_range
@@ -554,7 +578,7 @@ class TransferFunction1DEditor(QWidget):
         return True
 
     def reset_to_data_range(self) -> None:
-        volume = self._state.volume
+        volume = self.data_volume()
         if volume is not None:
             self.set_value_range(*volume.value_range)
 
@@ -598,7 +622,7 @@ class TransferFunction1DEditor(QWidget):
 
         preset = select_preset(data, None, path)
         imported = preset_to_tf(preset, path)
-        current, volume = self.transfer_function(), self._state.volume
+        current, volume = self.transfer_function(), self.data_volume()
         colors = imported.color_points
         p0, p1 = colors[0, 0], colors[-1, 0]
         if current is not None:
