@@ -48,6 +48,21 @@ def write_nrrd(path: Path, n: int) -> None:
             f.write((plane + 4000 * k / n).astype("<u2").tobytes())
 
 
+#: Runs its arguments as a child and prints the child's peak resident memory last. Why a process
+#: between: Linux keeps the largest resident size a process ever had across exec (exec_mmap records
+#: the old image's high-water mark), and a child started from a large process (a test worker that
+#: holds gigabytes) starts as that process's image, so its own peak would read as the parent's.
+#: This small process's children start from its image instead.
+_MEASURE = """
+import os, subprocess, sys
+child = subprocess.Popen(sys.argv[1:])
+_, status, usage = os.wait4(child.pid, 0)
+print(f"{PEAK_TAG} {usage.ru_maxrss}", flush=True)
+sys.exit(os.waitstatus_to_exitcode(status))
+"""
+PEAK_TAG = "volren-memory-budget-peak-KiB"
+
+
 def peak(argv: list[str], code: str | None, cwd: Path) -> tuple[float, float, str]:
     """(peak resident MiB, seconds, last output line) of `volren ARGV` in a child process."""
     env = dict(os.environ, NUMBA_NUM_THREADS="1")
@@ -56,22 +71,23 @@ def peak(argv: list[str], code: str | None, cwd: Path) -> tuple[float, float, st
     command = [
         sys.executable,
         "-c",
+        _MEASURE.replace("PEAK_TAG", repr(PEAK_TAG)),
+        sys.executable,
+        "-c",
         "import sys; from volren.cli.main import main; sys.exit(main(sys.argv[1:]))",
         *argv,
     ]
-    start = (
-        time.perf_counter()
-    )  # run from the temporary folder: a checkout in the working folder would come first
-    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, cwd=cwd)
-    output = child.stdout.read().decode(errors="replace") if child.stdout else ""
-    _, status, usage = os.wait4(child.pid, 0)
-    child.returncode = os.waitstatus_to_exitcode(status)
+    start = time.perf_counter()
+    # run from the temporary folder: a checkout in the working folder would come first
+    child = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env, cwd=cwd)
     seconds = time.perf_counter() - start
-    lines = [line for line in output.splitlines() if line.strip()]
+    lines = [line for line in child.stdout.decode(errors="replace").splitlines() if line.strip()]
+    kib = [float(line.split()[1]) for line in lines if line.startswith(PEAK_TAG)]
+    lines = [line for line in lines if not line.startswith(PEAK_TAG)]
     said = lines[-1] if lines else ""
     if child.returncode != 0:
         said = f"FAILED ({child.returncode}): {said}"
-    return usage.ru_maxrss / 1024, seconds, said
+    return (kib[-1] if kib else float("nan")) / 1024, seconds, said
 
 
 def main() -> int:

@@ -23,3 +23,13 @@ def test_the_volume_reads_back_and_a_commands_peak_is_measured(tmp_path):
     mib, seconds, said = peak(["convert", "v.nrrd", "v.zarr", "--memory", "64MB"], None, tmp_path)
     assert said == "v.nrrd: 8x8x8 uint16 -> v.zarr (1 levels, 64^3 bricks)"
     assert 20 < mib < 2000 and seconds > 0
+
+
+def test_a_large_parent_does_not_count_in_its_childs_peak(tmp_path):
+    """Linux keeps a process's largest resident size across exec, so a child started straight from
+    a process holding 600 MB would read as 600 MB: the peak is the command's own (about 100 MB)."""
+    held = np.ones(600 * 2**20 // 8)  # touched: resident in this process
+    write_nrrd(tmp_path / "v.nrrd", 8)
+    mib, _, said = peak(["convert", "v.nrrd", "v.zarr", "--memory", "64MB"], None, tmp_path)
+    assert said.endswith("(1 levels, 64^3 bricks)") and 20 < mib < 400
+    assert held.sum() == held.size
