@@ -61,13 +61,27 @@ class Leveled(Counting):
         return np.zeros((height, width, 4), np.float32), {}
 
 
+class Mixing(Counting):
+    """Claims label volumes and channels: what the drawn frames carry."""
+
+    name = "prepare-mixing"
+    capabilities = Capabilities({"uniform": KindSupport(labels=True, channels=True)}, backend="test")
+
+    def _render(self, camera, width, height, progress):
+        labels, channels = self.volume.labels, self.volume.channels
+        Counting.drawn.append((type(self.transfer_function).__name__, self.volume.values.dtype,
+                               None if labels is None else labels.values.dtype,
+                               None if channels is None else channels.values.shape[0], self.settings.preintegration))  # fmt: skip
+        return np.zeros((height, width, 4), np.float32), {}
+
+
 @pytest.fixture
 def fakes():
-    for cls in (Counting, Broken, Leveled):
+    for cls in (Counting, Broken, Leveled, Mixing):
         registry.register(cls.name, cls, replace=True)
     Counting.drawn = []
     yield
-    for cls in (Counting, Broken, Leveled):
+    for cls in (Counting, Broken, Leveled, Mixing):
         registry.unregister(cls.name)
 
 
@@ -84,6 +98,24 @@ def test_every_claimed_combination_scalar_type_and_projection_is_drawn(fakes):
         (pre, mode, parallel) for pre in (False, True) for mode in (BlendMode.COMPOSITE, BlendMode.MAXIMUM)
         for parallel in (False, True)}  # fmt: skip
     assert not any(d[2] for d in drawn if d[0] == "tet")  # not claimed there
+
+
+def test_label_volumes_in_each_label_type_and_channels_are_drawn_where_claimed(fakes):
+    """A label volume's march and a multi-channel march are kernels of their own (and compile per
+    label type): each scalar type gets both label types and the channels, post-classified."""
+    assert prepare_renderer(Mixing.name).error is None
+    mixed = [d for d in Counting.drawn if d[0] != "TransferFunction1D"]
+    scalar_types = {np.dtype(t) for t in ("uint8", "int16", "uint16", "float32", "float64")}
+    labels = {(d[1], d[2]) for d in mixed if d[0] == "LabelTransferFunction"}
+    assert labels == {(s, np.dtype(t)) for s in scalar_types for t in ("uint8", "uint16")}
+    assert {(d[1], d[3]) for d in mixed if d[0] == "ChannelTransferFunction"} == {
+        (s, 2) for s in scalar_types
+    }
+    assert len(mixed) == 5 * 3 * 2 and not any(d[4] for d in mixed)  # both projections, none pre-integrated
+    # a renderer that claims neither draws neither
+    Counting.drawn = []
+    assert prepare_renderer(Counting.name).error is None
+    assert all(d[0] == "uniform" or d[0] == "tet" for d in Counting.drawn)
 
 
 def test_every_quality_level_is_drawn_where_it_applies(fakes):

@@ -5,7 +5,7 @@ types, and a fresh install has no cache: the first `tetra` frame waited 37-46 s 
 `reference` frame 54 s while numba compiled. `scripts/setup.sh` runs `volren prepare` once per
 change of the sources, which draws a tiny scene with every registered renderer in every
 combination its capabilities claim and at every level of its quality axis (TF dimensions,
-pre-integration, shading, blend modes, the levels' options; both
+pre-integration, shading, blend modes, the levels' options, label volumes and channels; both
 projections; every kept scalar type of a uniform grid), so that every specialization a real scene
 needs is compiled and cached (and the OpenGL drivers' shader caches are warm). numba checks each
 cached function against its source file's time stamp, and packages whose kernels span modules drop
@@ -17,15 +17,24 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from volren.errors import VolrenError
-from volren.model import Camera, TransferFunction1D, UniformVolume, Volume
+from volren.model import Camera, RenderSettings, TransferFunction1D, UniformVolume, Volume
+from volren.model.channels import ChannelTransferFunction
+from volren.model.labels import LabelTransferFunction
+from volren.model.transfer_function_2d import TransferFunction
 from volren.model.volume import KEPT_DTYPES
+from volren.renderers.base import KindSupport
 from volren.testing.checks import contract_combinations, kit_tf_2d
 from volren.testing.scenes import lattice_volume
+
+#: A frame to draw: (TF, settings, camera, optional: a refusal passes it over).
+Frame = tuple[
+    TransferFunction | LabelTransferFunction | ChannelTransferFunction, RenderSettings, Camera, bool
+]
 
 #: Side of the images drawn (small: only the compilation matters).
 SIZE = 12
@@ -54,7 +63,7 @@ def _volumes(kind: str) -> Iterator[Volume]:
         )
 
 
-def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Camera, bool]]]]:
+def _scenes(name: str) -> Iterator[tuple[Volume, list[Frame]]]:
     """Per small volume, the (TF, settings, camera, optional) of every combination `name`'s
     capabilities claim, then of every level of its quality axis with a 1D TF (and a 2D one where
     claimed): a level's options (adaptive image refinement, an error target) reach kernels the
@@ -70,17 +79,51 @@ def _scenes(name: str) -> Iterator[tuple[Volume, list[tuple[object, object, Came
             tf1 = TransferFunction1D([[lo, 0.2, 0.4, 0.9], [hi, 1.0, 0.6, 0.1]], [[lo, 0.0], [hi, 0.8]])
             tf2 = kit_tf_2d()
             cameras = [Camera.orbit(volume.bounds, 30, 20, parallel=parallel) for parallel in (False, True)]
-            claimed = [(tf1 if dims == 1 else tf2, settings, camera, False)
+            claimed: list[Frame] = [(tf1 if dims == 1 else tf2, settings, camera, False)
                        for dims, settings, is_claimed in contract_combinations(support) if is_claimed
                        for camera in cameras]  # fmt: skip
             tfs = (tf1, tf2) if 2 in support.tf_dims else (tf1,)  # a 2D TF runs kernels of its own
-            levels = [
+            levels: list[Frame] = [
                 (tf, level.apply(), camera, True)
                 for level in capabilities.quality
                 for tf in tfs
                 for camera in cameras
             ]
             yield volume, claimed + levels
+            if isinstance(volume, UniformVolume):
+                yield from _mixed_scenes(volume, support, tf1, cameras)
+
+
+#: The types a label volume is kept in (`volren.model.labels`): each compiles kernels of its own.
+LABEL_DTYPES = (np.uint8, np.uint16)
+
+
+def _mixed_scenes(volume: UniformVolume, support: KindSupport, tf: TransferFunction1D, cameras: list[Camera]
+                  ) -> Iterator[tuple[Volume, list[Frame]]]:  # fmt: skip
+    """The label volumes (in each kept label type) and the two channels on `volume`'s grid that
+    `support` claims, drawn composite and post-classified (the contract's only label and channel
+    settings, renderer-contract.md section 2): their kernels are the march's own, not the plain ones."""
+    from volren.model.channels import ChannelSet
+    from volren.model.labels import LabelMap, LabelStyle
+
+    post = RenderSettings(preintegration=False)
+    values = volume.values
+    if support.labels:
+        label_tf = LabelTransferFunction(
+            tf, {2: LabelStyle(color=(0.1, 0.9, 0.2)), 3: LabelStyle(visible=False)}
+        )
+        for dtype in LABEL_DTYPES:
+            labels = (np.indices(values.shape).sum(axis=0) % 4).astype(dtype)
+            if dtype == np.uint16:
+                labels[0, 0, 0] = 300  # past 8 bits: kept as uint16
+            labelled = replace(
+                volume, labels=LabelMap(labels), name=f"{volume.name} labels {np.dtype(dtype).name}"
+            )
+            yield labelled, [(label_tf, post, camera, False) for camera in cameras]
+    if support.channels:
+        channels = ChannelSet(np.stack([values, values[::-1]]), name=f"{volume.name} channels")
+        channel_tf = ChannelTransferFunction([tf, tf.copy()], [1.0, 0.5])
+        yield replace(volume, channels=channels), [(channel_tf, post, camera, False) for camera in cameras]
 
 
 def prepare_renderer(name: str) -> Prepared:
