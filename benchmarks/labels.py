@@ -85,13 +85,15 @@ def _row(name: str, volume: Any, base: Any, size: int, frames: int, error_size: 
     present = volume.labels.present
     hidden = LabelTransferFunction.for_labels(base, volume.labels)
     hidden.hide(present[: int(round(HIDDEN_SHARE * len(present)))])
+    nothing = LabelTransferFunction.for_labels(base, volume.labels)
+    nothing.hide(present)
 
     def view(turn: float) -> Any:
         return Camera.orbit(volume.bounds, 30.0 + turn, 20.0)
 
     renderer_name, settings, _ = resolve(SceneClass.of(volume, base), 1, "auto", "default", RenderSettings(),
                                          cameras=(view(0.0),), bounds=volume.bounds, labels=True)  # fmt: skip
-    tfs = {"plain": base, "labels": labelled, "hidden": hidden}
+    tfs = {"plain": base, "labels": labelled, "hidden": hidden, "nothing": nothing}
     times: dict[str, list[float]] = {key: [] for key in tfs}
     edited: dict[str, list[float]] = {key: [] for key in tfs}
     samples: dict[str, float] = {}
@@ -108,7 +110,7 @@ def _row(name: str, volume: Any, base: Any, size: int, frames: int, error_size: 
         renderer.set_transfer_function(labelled)
         renderer.render(camera, size, size)
         step = renderer.last_frame.counters.get("step", settings.step)
-        # the three TFs timed at one step, the one the label scene's search chose: the cost of labels
+        # the four TFs timed at one step, the one the label scene's search chose: the cost of labels
         renderer.set_settings(settings.with_(step=step, options={**settings.options, "target_error": 0.0}))
         for tf in tfs.values():  # warm: tables, bricks
             renderer.set_transfer_function(tf)
@@ -127,7 +129,8 @@ def _row(name: str, volume: Any, base: Any, size: int, frames: int, error_size: 
     after = {key: statistics.median(values) for key, values in edited.items()}
     return (f"| {name} | {len(present)} | {renderer_name} {step:.3g} | {ms_text(ms['plain'])} | "
             f"{ms_text(ms['labels'])} | {ms['labels'] / ms['plain']:.2f} | {ms_text(ms['hidden'])} | "
-            f"{ms['labels'] / ms['hidden']:.1f} | {samples['plain'] / 1e6:.2f} / {samples['labels'] / 1e6:.2f} / "
+            f"{ms['labels'] / ms['hidden']:.1f} | {ms_text(ms['nothing'])} | {ms['labels'] / ms['nothing']:.1f} | "
+            f"{samples['plain'] / 1e6:.2f} / {samples['labels'] / 1e6:.2f} / "
             f"{samples['hidden'] / 1e6:.3f} | {ms_text(after['labels'])} / {ms_text(after['hidden'])} | "
             f"{errors['plain']:.4f} | {errors['labels']:.4f} |")  # fmt: skip
 
@@ -137,15 +140,17 @@ def measure(args: argparse.Namespace) -> int:
     intro = (f"Measured by `python -m benchmarks.labels --shared ../shared --size {args.size} --frames {args.frames}"
              f"`: {args.size}x{args.size}, the renderer and settings a render with no options picks for the label "
              f"scene, at the step its error target chose for the labels (*step*, in voxels), warm, median of "
-             f"{args.frames} turning frames each, the three TFs in turns (each frame timed is the second after its TF "
+             f"{args.frames} turning frames each, the four TFs in turns (each frame timed is the second after its TF "
              f"was set: *after an edit* is the first, which rebuilds the tables and bricks); {os.cpu_count()} "
              f"cores. *plain*: the base TF without labels; *labels*: every label in its colour over the base TF's "
-             f"opacity; *90 % hidden*: the background and the first labels hidden. RMSE against `reference` at {args.error_size}x"
+             f"opacity; *90 % hidden*: the background and the first labels hidden; *all hidden*: every label hidden, no sample "
+             f"taken, what the frame costs besides sampling (its rays, their walk through the empty bricks, the image): "
+             f"*labels / all hidden* bounds what hiding labels can gain. RMSE against `reference` at {args.error_size}x"
              f"{args.error_size}, each at the settings a render with no options has.")  # fmt: skip
     header = ("| scene | labels | renderer, step | plain ms | labels ms | labels / plain | 90 % hidden ms | "
-             "labels / hidden | M samples (plain / labels / hidden) | after an edit ms (labels / hidden) | "
-             "RMSE plain | RMSE labels |",
-             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")  # fmt: skip
+             "labels / hidden | all hidden ms | labels / all hidden | M samples (plain / labels / hidden) | "
+             "after an edit ms (labels / hidden) | RMSE plain | RMSE labels |",
+             "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")  # fmt: skip
     rows = ((name, partial(_row, name, volume, base, args.size, args.frames, args.error_size))
             for name, volume, base in _scenes(shared))  # fmt: skip
     return named_scene_table(args, intro, header, rows)

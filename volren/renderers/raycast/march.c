@@ -373,19 +373,34 @@ INLINE int composite_labels(const Grid *g, const Classes *c, double s, double px
                                    at + nxy + nx + 1};
         double fx = px - (double)i, fy = py - (double)j, fz = pz - (double)k;
         double depth = 0.0, er = 0.0, eg = 0.0, eb = 0.0; /* tau h, and tau h times colour, summed */
+        /* each class's log transparency and colour, looked up once however many corners it has: the
+         * same numbers as per corner, so the sums (in corner order) are numba's to the bit */
+        int32_t seen[8];
+        double seen_log[8], seen_rgb[8][3];
+        int n_seen = 0;
         for (int q = 0; q < 8; q++) {
             int32_t cls = label_class(c, corner[q]);
             if (cls < 0) continue;
             double wq = (q & 1 ? fx : 1.0 - fx) * (q & 2 ? fy : 1.0 - fy) * (q & 4 ? fz : 1.0 - fz);
             if (wq <= 0.0) continue;
-            const double *e = c->post + 4 * (cls * n + i0);
-            double a = e[3] + w * (e[7] - e[3]);
-            if (a <= 0.0) continue;
-            double d = -wq * log1p(-MIN(a, MAX_OPACITY));
+            int e = 0;
+            while (e < n_seen && seen[e] != cls) e++;
+            if (e == n_seen) {
+                const double *row = c->post + 4 * (cls * n + i0);
+                double a = row[3] + w * (row[7] - row[3]);
+                seen[e] = cls;
+                seen_log[e] = a <= 0.0 ? 0.0 : log1p(-MIN(a, MAX_OPACITY)); /* 0: adds nothing */
+                seen_rgb[e][0] = row[0] + w * (row[4] - row[0]);
+                seen_rgb[e][1] = row[1] + w * (row[5] - row[1]);
+                seen_rgb[e][2] = row[2] + w * (row[6] - row[2]);
+                n_seen++;
+            }
+            if (seen_log[e] == 0.0) continue;
+            double d = -wq * seen_log[e];
             depth += d;
-            er += d * (e[0] + w * (e[4] - e[0]));
-            eg += d * (e[1] + w * (e[5] - e[1]));
-            eb += d * (e[2] + w * (e[6] - e[2]));
+            er += d * seen_rgb[e][0];
+            eg += d * seen_rgb[e][1];
+            eb += d * seen_rgb[e][2];
         }
         if (depth <= 0.0) return 0;
         ca = -expm1(-depth * (lk / h));
