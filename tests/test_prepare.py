@@ -67,8 +67,12 @@ class Mixing(Counting):
     name = "prepare-mixing"
     capabilities = Capabilities({"uniform": KindSupport(labels=True, channels=True)}, backend="test")
 
+    refuse_wide = False
+
     def _render(self, camera, width, height, progress):
         labels, channels = self.volume.labels, self.volume.channels
+        if self.refuse_wide and labels is not None and labels.max_label > 255:
+            raise VolrenError("renderer prepare-mixing draws labels up to 255 only")
         Counting.drawn.append((type(self.transfer_function).__name__, self.volume.values.dtype,
                                None if labels is None else labels.values.dtype,
                                None if channels is None else channels.values.shape[0], self.settings.preintegration))  # fmt: skip
@@ -112,6 +116,14 @@ def test_label_volumes_in_each_label_type_and_channels_are_drawn_where_claimed(f
         (s, 2) for s in scalar_types
     }
     assert len(mixed) == 5 * 3 * 2 and not any(d[4] for d in mixed)  # both projections, none pre-integrated
+    # a label type refused at render time (vtk's 8-bit mask) is passed over, not an error
+    Counting.drawn = []
+    Mixing.refuse_wide = True
+    try:
+        assert prepare_renderer(Mixing.name).error is None
+    finally:
+        Mixing.refuse_wide = False
+    assert {d[2] for d in Counting.drawn if d[0] == "LabelTransferFunction"} == {np.dtype("uint8")}
     # a renderer that claims neither draws neither
     Counting.drawn = []
     assert prepare_renderer(Counting.name).error is None

@@ -102,7 +102,8 @@ def _mixed_scenes(volume: UniformVolume, support: KindSupport, tf: TransferFunct
                   ) -> Iterator[tuple[Volume, list[Frame]]]:  # fmt: skip
     """The label volumes (in each kept label type) and the two channels on `volume`'s grid that
     `support` claims, drawn composite and post-classified (the contract's only label and channel
-    settings, renderer-contract.md section 2): their kernels are the march's own, not the plain ones."""
+    settings, renderer-contract.md section 2): their kernels are the march's own, not the plain ones.
+    Optional: a renderer may refuse some of them at render time (vtk: labels above 255)."""
     from volren.model.channels import ChannelSet
     from volren.model.labels import LabelMap, LabelStyle
 
@@ -119,11 +120,11 @@ def _mixed_scenes(volume: UniformVolume, support: KindSupport, tf: TransferFunct
             labelled = replace(
                 volume, labels=LabelMap(labels), name=f"{volume.name} labels {np.dtype(dtype).name}"
             )
-            yield labelled, [(label_tf, post, camera, False) for camera in cameras]
+            yield labelled, [(label_tf, post, camera, True) for camera in cameras]
     if support.channels:
         channels = ChannelSet(np.stack([values, values[::-1]]), name=f"{volume.name} channels")
         channel_tf = ChannelTransferFunction([tf, tf.copy()], [1.0, 0.5])
-        yield replace(volume, channels=channels), [(channel_tf, post, camera, False) for camera in cameras]
+        yield replace(volume, channels=channels), [(channel_tf, post, camera, True) for camera in cameras]
 
 
 def prepare_renderer(name: str) -> Prepared:
