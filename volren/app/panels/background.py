@@ -10,11 +10,7 @@ from PyQt5.QtGui import QColor, QIcon, QPixmap
 from PyQt5.QtWidgets import QColorDialog, QFormLayout, QPushButton, QWidget
 
 from volren.app.core.state import ViewState
-from volren.app.panels.base import StatePanel
-
-
-def _qcolor(rgb: tuple[float, float, float]) -> QColor:
-    return QColor.fromRgbF(*(min(max(float(c), 0.0), 1.0) for c in rgb))
+from volren.app.panels.base import StatePanel, qcolor
 
 
 class BackgroundPanel(StatePanel):
@@ -38,14 +34,14 @@ class BackgroundPanel(StatePanel):
 
     def pick(self) -> None:
         """Let the person choose the background; an unchanged colour changes nothing."""
-        current = _qcolor(self.state.background)
+        current = qcolor(self.state.background)
         color = self.choose_color(current)
         if color is None or color.name() == current.name():
             return
         self.state.set_background((color.redF(), color.greenF(), color.blueF()))
 
     def refresh(self) -> None:
-        color = _qcolor(self.state.background)
+        color = qcolor(self.state.background)
         swatch = QPixmap(16, 16)
         swatch.fill(color)
         self.button.setIcon(QIcon(swatch))

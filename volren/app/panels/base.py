@@ -13,7 +13,8 @@ from contextlib import contextmanager
 from typing import ClassVar
 
 from PyQt5.QtCore import QObject
-from PyQt5.QtWidgets import QWidget
+from PyQt5.QtGui import QColor
+from PyQt5.QtWidgets import QAbstractItemView, QHeaderView, QTableWidget, QWidget
 
 from volren.app.core.state import Change, ViewState, What
 from volren.app.qt_subscription import subscribe_while_alive
@@ -60,3 +61,28 @@ def unsupported(state: ViewState, feature: str) -> str:
     volume = state.volume
     where = f" for {volume.kind} volumes" if volume is not None else ""
     return f"The {state.renderer} renderer has no {feature}{where}"
+
+
+def qcolor(rgb: tuple[float, float, float]) -> QColor:
+    """A colour (r, g, b) in 0..1, clamped, as Qt takes it."""
+    return QColor.fromRgbF(*(min(max(float(c), 0.0), 1.0) for c in rgb))
+
+
+def row_table(parent: QWidget, columns: tuple[str, ...], stretch: int) -> QTableWidget:
+    """A list of items as rows (the Labels and Channels panels): one row selected at a time, cells
+    edited by their own widgets only, columns as wide as their contents but `stretch`, which takes
+    the rest."""
+    table = QTableWidget(0, len(columns), parent)
+    table.setHorizontalHeaderLabels(columns)
+    rows = table.verticalHeader()
+    assert rows is not None
+    rows.hide()
+    table.setSelectionBehavior(QAbstractItemView.SelectRows)
+    table.setSelectionMode(QAbstractItemView.SingleSelection)
+    table.setEditTriggers(QAbstractItemView.NoEditTriggers)
+    header = table.horizontalHeader()
+    assert header is not None
+    for column in range(len(columns)):
+        header.setSectionResizeMode(column, QHeaderView.ResizeToContents)
+    header.setSectionResizeMode(stretch, QHeaderView.Stretch)
+    return table

@@ -15,21 +15,18 @@ import numpy as np
 from PyQt5.QtCore import Qt
 from PyQt5.QtGui import QColor, QIcon, QPixmap
 from PyQt5.QtWidgets import (
-    QAbstractItemView,
     QCheckBox,
     QColorDialog,
     QDoubleSpinBox,
-    QHeaderView,
     QLabel,
     QPushButton,
-    QTableWidget,
     QTableWidgetItem,
     QVBoxLayout,
     QWidget,
 )
 
 from volren.app.core.state import ViewState
-from volren.app.panels.base import StatePanel, signals_blocked
+from volren.app.panels.base import StatePanel, qcolor, row_table, signals_blocked
 from volren.model.transfer_function import TransferFunction1D
 
 #: The largest weight offered: ten times a channel's density makes a faint channel solid.
@@ -41,10 +38,6 @@ NO_CHANNELS = (
     "several components)"
 )
 TWO_D = "Channels are not mixed with a 2D transfer function: switch the editor to 1D to draw them"
-
-
-def _qcolor(rgb: tuple[float, float, float]) -> QColor:
-    return QColor.fromRgbF(*(min(max(float(c), 0.0), 1.0) for c in rgb))
 
 
 def channel_color(tf: TransferFunction1D) -> tuple[float, float, float]:
@@ -72,19 +65,7 @@ class ChannelsPanel(StatePanel):
         super().__init__(state, parent)
         self.note = QLabel(self)
         self.note.setWordWrap(True)
-        self.table = QTableWidget(0, len(COLUMNS), self)
-        self.table.setHorizontalHeaderLabels(COLUMNS)
-        rows = self.table.verticalHeader()
-        assert rows is not None
-        rows.hide()
-        self.table.setSelectionBehavior(QAbstractItemView.SelectRows)
-        self.table.setSelectionMode(QAbstractItemView.SingleSelection)
-        self.table.setEditTriggers(QAbstractItemView.NoEditTriggers)
-        header = self.table.horizontalHeader()
-        assert header is not None
-        for column in range(len(COLUMNS)):
-            header.setSectionResizeMode(column, QHeaderView.ResizeToContents)
-        header.setSectionResizeMode(NAME, QHeaderView.Stretch)
+        self.table = row_table(self, COLUMNS, NAME)
         self.table.currentCellChanged.connect(lambda row, *_: self.select(row))
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
@@ -142,10 +123,10 @@ class ChannelsPanel(StatePanel):
                 spin.setValue(ctf.weights[c])
             rgb = channel_color(ctf.tfs[c])
             swatch = QPixmap(14, 14)
-            swatch.fill(_qcolor(rgb))
+            swatch.fill(qcolor(rgb))
             button = self.color_button(c)
             button.setIcon(QIcon(swatch))
-            button.setToolTip(f"{_qcolor(rgb).name()}: click to draw the channel in another colour")
+            button.setToolTip(f"{qcolor(rgb).name()}: click to draw the channel in another colour")
         with signals_blocked(self.table):
             self.table.setCurrentCell(state.selected_channel, NAME)
 
@@ -208,6 +189,6 @@ class ChannelsPanel(StatePanel):
         ctf = self.state.channel_transfer_function
         if ctf is None:
             return
-        color = self.choose_color(_qcolor(channel_color(ctf.tfs[channel])))
+        color = self.choose_color(qcolor(channel_color(ctf.tfs[channel])))
         if color is not None:
             self.set_color(channel, (color.redF(), color.greenF(), color.blueF()))

@@ -18,21 +18,18 @@ from dataclasses import replace
 from PyQt5.QtCore import Qt
 from PyQt5.QtGui import QColor, QIcon, QPixmap
 from PyQt5.QtWidgets import (
-    QAbstractItemView,
     QCheckBox,
     QColorDialog,
     QDoubleSpinBox,
-    QHeaderView,
     QLabel,
     QPushButton,
-    QTableWidget,
     QTableWidgetItem,
     QVBoxLayout,
     QWidget,
 )
 
 from volren.app.core.state import ViewState
-from volren.app.panels.base import StatePanel, signals_blocked
+from volren.app.panels.base import StatePanel, qcolor, row_table, signals_blocked
 from volren.model.labels import LabelStyle
 
 #: The largest opacity scale offered: four times the 1D TF's opacity makes a faint label solid.
@@ -41,10 +38,6 @@ COLUMNS = ("Show", "Colour", "Name", "Opacity", "Solo")
 SHOW, COLOUR, NAME, OPACITY, SOLO = range(len(COLUMNS))
 NO_LABELS = "No labels: File > Open Labels… draws a segmentation of the volume"
 TWO_D = "Labels are not drawn with a 2D transfer function: switch the editor to 1D to draw them"
-
-
-def _qcolor(rgb: tuple[float, float, float]) -> QColor:
-    return QColor.fromRgbF(*(min(max(float(c), 0.0), 1.0) for c in rgb))
 
 
 class LabelsPanel(StatePanel):
@@ -56,19 +49,7 @@ class LabelsPanel(StatePanel):
         super().__init__(state, parent)
         self.note = QLabel(self)
         self.note.setWordWrap(True)
-        self.table = QTableWidget(0, len(COLUMNS), self)
-        self.table.setHorizontalHeaderLabels(COLUMNS)
-        rows = self.table.verticalHeader()
-        assert rows is not None
-        rows.hide()
-        self.table.setSelectionBehavior(QAbstractItemView.SelectRows)
-        self.table.setSelectionMode(QAbstractItemView.SingleSelection)
-        self.table.setEditTriggers(QAbstractItemView.NoEditTriggers)
-        header = self.table.horizontalHeader()
-        assert header is not None
-        for column in range(len(COLUMNS)):
-            header.setSectionResizeMode(column, QHeaderView.ResizeToContents)
-        header.setSectionResizeMode(NAME, QHeaderView.Stretch)
+        self.table = row_table(self, COLUMNS, NAME)
         self.table.currentCellChanged.connect(lambda row, *_: self._row_selected(row))
         self.editing = QLabel(self)
         self.editing.setWordWrap(True)
@@ -170,10 +151,10 @@ class LabelsPanel(StatePanel):
                 button.setToolTip("Drawn in the transfer function's colours; click to give it one colour")
             else:
                 swatch = QPixmap(14, 14)
-                swatch.fill(_qcolor(style.color))
+                swatch.fill(qcolor(style.color))
                 button.setIcon(QIcon(swatch))
                 button.setText("")
-                button.setToolTip(f"{_qcolor(style.color).name()}: click to change the label's colour")
+                button.setToolTip(f"{qcolor(style.color).name()}: click to change the label's colour")
 
     def _rebuild(self, present: tuple[int, ...]) -> None:
         """One row per label, for another label map (solo forgotten: it belonged to the old one)."""
@@ -273,6 +254,6 @@ class LabelsPanel(StatePanel):
         if label_tf is None:
             return
         style: LabelStyle = label_tf.style(label)
-        color = self.choose_color(_qcolor(style.color or (1.0, 1.0, 1.0)))
+        color = self.choose_color(qcolor(style.color or (1.0, 1.0, 1.0)))
         if color is not None:
             self.set_color(label, (color.redF(), color.greenF(), color.blueF()))
